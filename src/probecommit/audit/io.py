@@ -1,0 +1,281 @@
+"""Read and validate episode tables: our run directories and a user's own log.
+
+The audit accepts any table with the documented episode columns
+(``store.schema.EPISODE_COLUMNS``), a real robot's CSV log included, and refuses
+a malformed one with ONE message that names the problem, the column and the first
+offending row. Row numbers are 0-based data rows; for CSV input the file line
+(header = line 1) is given too, so a user can jump to it in an editor.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Iterable
+
+import numpy as np
+import pandas as pd
+import pyarrow as pa
+
+from probecommit.store.schema import AUDIT_REQUIRED, EPISODE_COLUMNS
+
+#: Columns that identify one episode within a (method, variant) group.
+KEY_COLUMNS = ("instance_id", "repeat", "k")
+#: Optional grouping columns; metrics are reported per group when present.
+GROUP_COLUMNS = ("method", "variant")
+#: Required float columns that may not be NaN on an ok episode.
+FINITE_REQUIRED = tuple(c for c in AUDIT_REQUIRED if c not in ("instance_id", "repeat", "k"))
+
+_TYPES = {c.name: c.type for c in EPISODE_COLUMNS}
+_OK_STATUS = ("ok", "failed")
+
+
+class EpisodeTableError(ValueError):
+    """An episode table that the audit cannot use; the message names the problem."""
+
+
+def _where(row: int, csv: bool) -> str:
+    return f"row {row} (CSV line {row + 2})" if csv else f"row {row}"
+
+
+def _load(path: Path) -> tuple[pd.DataFrame, str, bool]:
+    if path.is_dir():
+        candidate = path / "episodes.parquet"
+        if not candidate.exists():
+            raise EpisodeTableError(f"run directory {path} has no episodes.parquet")
+        path = candidate
+    if not path.exists():
+        raise EpisodeTableError(f"no episode table at {path}")
+    suffix = path.suffix.lower()
+    try:
+        if suffix in (".parquet", ".pq"):
+            return pd.read_parquet(path), str(path), False
+        if suffix in (".csv", ".txt"):
+            # Read everything as text first: type problems are then reported by
+            # column and row instead of as a pandas parser error.
+            return pd.read_csv(path, dtype=str, keep_default_na=False, skipinitialspace=True), str(path), True
+    except (OSError, ValueError, pa.ArrowException) as exc:
+        raise EpisodeTableError(f"cannot read episode table {path}: {exc}") from exc
+    raise EpisodeTableError(f"unsupported episode table format {path.suffix!r} for {path}; "
+                            "use a run directory, .parquet or .csv")
+
+
+_NA_TEXT = {"", "nan", "NaN", "NA", "N/A", "null", "None", "none"}
+
+
+def _numeric(df: pd.DataFrame, name: str, csv: bool, source: str) -> pd.Series:
+    col = df[name]
+    if pd.api.types.is_bool_dtype(col):
+        return col.astype(float)
+    if pd.api.types.is_numeric_dtype(col):
+        return col.astype(float)
+    text = col.astype(object)
+    is_na = text.isna() | text.map(lambda v: isinstance(v, str) and v.strip() in _NA_TEXT)
+    values = pd.to_numeric(text.where(~is_na, np.nan), errors="coerce")
+    bad = values.isna() & ~is_na
+    if bad.any():
+        row = int(np.flatnonzero(bad.to_numpy())[0])
+        raise EpisodeTableError(f"{source}: column '{name}' must be numeric ({_TYPES[name]}), "
+                                f"found {text.iloc[row]!r} at {_where(row, csv)}")
+    return values.astype(float)
+
+
+def _integer(df: pd.DataFrame, name: str, csv: bool, source: str) -> pd.Series:
+    values = _numeric(df, name, csv, source)
+    nan = values.isna().to_numpy()
+    if nan.any():
+        row = int(np.flatnonzero(nan)[0])
+        raise EpisodeTableError(f"{source}: column '{name}' is empty at {_where(row, csv)}")
+    frac = (values != np.round(values)).to_numpy()
+    if frac.any():
+        row = int(np.flatnonzero(frac)[0])
+        raise EpisodeTableError(f"{source}: column '{name}' must be an integer, "
+                                f"found {df[name].iloc[row]!r} at {_where(row, csv)}")
+    neg = (values < 0).to_numpy()
+    if neg.any():
+        row = int(np.flatnonzero(neg)[0])
+        raise EpisodeTableError(f"{source}: column '{name}' must be >= 0, "
+                                f"found {df[name].iloc[row]!r} at {_where(row, csv)}")
+    return values.astype(np.int64)
+
+
+_TRUE = {"true", "1", "1.0", "yes", "t", "y"}
+_FALSE = {"false", "0", "0.0", "no", "f", "n"}
+
+
+def _boolean(df: pd.DataFrame, name: str, csv: bool, source: str) -> pd.Series | None:
+    col = df[name]
+    if pd.api.types.is_bool_dtype(col) and not col.isna().any():
+        return col.astype(bool)
+    out = []
+    for row, v in enumerate(col.astype(object)):
+        if isinstance(v, (bool, np.bool_)):
+            out.append(bool(v))
+            continue
+        if v is None or (isinstance(v, float) and np.isnan(v)):
+            return None  # incomplete: derive from the intervals instead
+        t = str(v).strip().lower()
+        if t in _NA_TEXT or t == "":
+            return None
+        if t in _TRUE:
+            out.append(True)
+        elif t in _FALSE:
+            out.append(False)
+        else:
+            raise EpisodeTableError(f"{source}: column '{name}' must be true/false or 1/0, "
+                                    f"found {v!r} at {_where(row, csv)}")
+    return pd.Series(out, index=col.index, dtype=bool)
+
+
+def validate_episodes(table: pd.DataFrame, source: str = "episode table", *, csv: bool = False) -> pd.DataFrame:
+    """Validate an in-memory episode table and return its normalized copy.
+
+    The returned table keeps every row (failed ones included, see
+    :func:`ok_episodes`), has ``instance_id`` as string, ``repeat``/``k`` as
+    int64, every float column of the schema as float64, ``status`` filled
+    (``"ok"`` when absent) and ``covered``/``escaped`` derived from the
+    intervals when absent or incomplete. ``attrs`` carries ``source``,
+    ``n_total`` and ``n_failed``.
+
+    Args:
+        table: The raw table.
+        source: Name used in error messages (a path).
+        csv: Whether row numbers should also be given as CSV line numbers.
+
+    Returns:
+        The validated table.
+
+    Raises:
+        EpisodeTableError: With one message naming the problem.
+    """
+    df = table.copy()
+    df.columns = [str(c).strip() for c in df.columns]
+    missing = [c for c in AUDIT_REQUIRED if c not in df.columns]
+    if missing:
+        raise EpisodeTableError(f"{source}: missing required column(s) {', '.join(missing)}; "
+                                f"the audit needs {', '.join(AUDIT_REQUIRED)}")
+    dupcols = df.columns[df.columns.duplicated()]
+    if len(dupcols):
+        raise EpisodeTableError(f"{source}: column '{dupcols[0]}' appears more than once")
+    if len(df) == 0:
+        raise EpisodeTableError(f"{source}: the table has no rows")
+    df = df.reset_index(drop=True)
+
+    ids = df["instance_id"]
+    id_na = ids.isna() | ids.astype(str).str.strip().isin(["", "nan", "None"])
+    if id_na.any():
+        row = int(np.flatnonzero(id_na.to_numpy())[0])
+        raise EpisodeTableError(f"{source}: column 'instance_id' is empty at {_where(row, csv)}")
+    # Integer-like ids from a user's log (1, 2.0) become the strings '1', '2'.
+    if pd.api.types.is_float_dtype(ids) and np.all(ids == np.round(ids)):
+        ids = ids.astype(np.int64)
+    df["instance_id"] = ids.astype(str).str.strip()
+    for name in ("repeat", "k"):
+        df[name] = _integer(df, name, csv, source)
+
+    # Status first: NaN outcomes are allowed on failed episodes.
+    if "status" in df.columns:
+        status = df["status"].astype(object).map(
+            lambda v: "ok" if v is None or (isinstance(v, float) and np.isnan(v)) or str(v).strip() == ""
+            else str(v).strip().lower())
+        bad = ~status.isin(_OK_STATUS)
+        if bad.any():
+            row = int(np.flatnonzero(bad.to_numpy())[0])
+            raise EpisodeTableError(f"{source}: column 'status' must be 'ok' or 'failed', "
+                                    f"found {df['status'].iloc[row]!r} at {_where(row, csv)}")
+        df["status"] = status.astype(str)
+    else:
+        df["status"] = "ok"
+    ok = (df["status"] == "ok").to_numpy()
+
+    for c in EPISODE_COLUMNS:
+        if c.name in df.columns and pa.types.is_floating(c.type):
+            df[c.name] = _numeric(df, c.name, csv, source)
+        elif c.name in df.columns and pa.types.is_integer(c.type) and c.name not in ("repeat", "k"):
+            vals = _numeric(df, c.name, csv, source)
+            df[c.name] = vals  # optional integer column (n_retained): keep as float if it has gaps
+    for name in FINITE_REQUIRED:
+        bad = ~np.isfinite(df[name].to_numpy()) & ok
+        if bad.any():
+            row = int(np.flatnonzero(bad)[0])
+            kind = "NaN" if np.isnan(df[name].iloc[row]) else "an infinite value"
+            raise EpisodeTableError(f"{source}: column '{name}' has {kind} at {_where(row, csv)} "
+                                    f"({int(bad.sum())} ok row(s) affected); mark the episode "
+                                    "status 'failed' or drop it")
+    for lo, hi in (("retained_lo", "retained_hi"), ("hull_lo", "hull_hi")):
+        bad = (df[lo] > df[hi]).to_numpy() & ok
+        if bad.any():
+            row = int(np.flatnonzero(bad)[0])
+            raise EpisodeTableError(f"{source}: {lo} > {hi} at {_where(row, csv)} "
+                                    f"({df[lo].iloc[row]!r} > {df[hi].iloc[row]!r})")
+
+    for name in GROUP_COLUMNS:
+        if name in df.columns:
+            df[name] = df[name].astype(object).where(df[name].notna(), "").astype(str)
+    groups = [c for c in GROUP_COLUMNS if c in df.columns]
+
+    dup = df.duplicated(groups + list(KEY_COLUMNS), keep="first")
+    if dup.any():
+        row = int(np.flatnonzero(dup.to_numpy())[0])
+        key = ", ".join(f"{c}={df[c].iloc[row]!r}" for c in groups + list(KEY_COLUMNS))
+        raise EpisodeTableError(f"{source}: duplicate episode ({key}) at {_where(row, csv)}")
+    _check_repeats(df, groups, source)
+
+    # Derived indicators, measured on the set as recorded (closed intervals).
+    z = df["z_true"]
+    derived_cov = (df["retained_lo"] <= z) & (z <= df["retained_hi"])
+    derived_esc = (z < df["hull_lo"]) | (z > df["hull_hi"])
+    for name, derived in (("covered", derived_cov), ("escaped", derived_esc)):
+        given = _boolean(df, name, csv, source) if name in df.columns else None
+        df[name] = derived.astype(bool) if given is None else given
+    df.attrs = {"source": source, "n_total": int(len(df)), "n_failed": int((~ok).sum())}
+    return df
+
+
+def _check_repeats(df: pd.DataFrame, groups: list[str], source: str) -> None:
+    """Every instance must carry the same number of repeats at a budget (per group)."""
+    counts = df.groupby(groups + ["k", "instance_id"], sort=True)["repeat"].nunique()
+    per_budget = counts.groupby(level=list(range(len(groups) + 1)))
+    for budget_key, c in per_budget:
+        if c.nunique() > 1:
+            modal = int(c.mode().iloc[0])
+            odd = c[c != modal]
+            inst = odd.index[0][-1]
+            budget_key = budget_key if isinstance(budget_key, tuple) else (budget_key,)
+            where = ", ".join(f"{g}={v!r}" for g, v in zip(groups + ["k"], budget_key))
+            raise EpisodeTableError(
+                f"{source}: repeats of unequal count at {where}: instance {inst!r} has "
+                f"{int(odd.iloc[0])} repeat(s) but most instances have {modal} "
+                f"({len(odd)} instance(s) differ); cluster coverage needs every repeat")
+
+
+def read_episodes(path: str | Path) -> pd.DataFrame:
+    """Read and validate an episode table.
+
+    Args:
+        path: A run directory (its ``episodes.parquet``), or a Parquet/CSV file
+            with the documented episode columns (a real robot's log).
+
+    Returns:
+        The validated table (all rows, failed ones included; metrics exclude
+        them). ``attrs``: ``source``, ``n_total``, ``n_failed``.
+
+    Raises:
+        EpisodeTableError: Unreadable file, missing column(s), a non-numeric or
+            NaN value where a number is required (column and first row named),
+            ``retained_lo > retained_hi``, duplicate episodes, or repeats of
+            unequal count across instances at a budget.
+    """
+    df, source, csv = _load(Path(path))
+    return validate_episodes(df, source, csv=csv)
+
+
+def ok_episodes(df: pd.DataFrame) -> pd.DataFrame:
+    """Rows whose status is not ``failed`` (all rows when there is no status column)."""
+    if "status" not in df.columns:
+        return df
+    return df.loc[df["status"].astype(str) != "failed"]
+
+
+def group_columns(df: pd.DataFrame, extra: Iterable[str] = ()) -> list[str]:
+    """Grouping columns present in ``df`` (method, variant) plus ``extra``."""
+    return [c for c in GROUP_COLUMNS if c in df.columns] + list(extra)

@@ -1,0 +1,373 @@
+"""Cluster bootstrap, paired differences, exact sign-flip test and rank AUC.
+
+Every interval here is a percentile interval from a cluster bootstrap over
+instances: a resample draws ``M`` instances with replacement and keeps each
+instance's repeats (and budgets) together, because repeats of one instance share
+its truth and are not independent. Resamples are represented as a count matrix
+``W[B, M]`` (how often instance ``m`` appears in resample ``b``), so any statistic
+that is a ratio of per-instance sums is one matrix product, with no Python loop
+over resamples.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from dataclasses import dataclass
+from typing import Sequence
+
+import numpy as np
+import pandas as pd
+
+#: Defaults used everywhere in the audit (recorded in docs/decisions.md).
+DEFAULT_RESAMPLES = 2000
+DEFAULT_SEED = 0
+DEFAULT_LEVEL = 0.95
+
+#: Keys that identify one episode; paired comparisons join on them.
+EPISODE_KEYS = ("instance_id", "repeat", "k")
+
+
+@dataclass(frozen=True)
+class Interval:
+    """A point estimate with its cluster-bootstrap percentile interval.
+
+    Attributes:
+        estimate: Statistic on the original sample.
+        lo: Lower percentile bound.
+        hi: Upper percentile bound.
+        n_clusters: Number of clusters (instances) resampled.
+        resamples: Number of bootstrap resamples.
+        level: Nominal coverage of the interval.
+    """
+
+    estimate: float
+    lo: float
+    hi: float
+    n_clusters: int = 0
+    resamples: int = DEFAULT_RESAMPLES
+    level: float = DEFAULT_LEVEL
+
+    def __str__(self) -> str:
+        return f"{self.estimate:+.3f} [{self.lo:+.3f}, {self.hi:+.3f}]"
+
+    def as_tuple(self) -> tuple[float, float, float]:
+        return (self.estimate, self.lo, self.hi)
+
+
+def _rng(seed: int | np.random.Generator | None) -> np.random.Generator:
+    if isinstance(seed, np.random.Generator):
+        return seed
+    return np.random.default_rng(seed)
+
+
+def resample_counts(n_clusters: int, resamples: int = DEFAULT_RESAMPLES,
+                    seed: int | np.random.Generator | None = DEFAULT_SEED) -> np.ndarray:
+    """Cluster multiplicities of ``resamples`` bootstrap draws.
+
+    Args:
+        n_clusters: ``M``, the number of clusters.
+        resamples: ``B``, the number of bootstrap resamples.
+        seed: Integer seed or a Generator.
+
+    Returns:
+        ``[B, M]`` integer counts; each row sums to ``M``.
+    """
+    if n_clusters < 1:
+        raise ValueError("cluster bootstrap needs at least one cluster")
+    if resamples < 1:
+        raise ValueError("resamples must be positive")
+    rng = _rng(seed)
+    draws = rng.integers(0, n_clusters, size=(resamples, n_clusters))
+    # One bincount over all rows: shift row b's indices into [b*M, (b+1)*M).
+    flat = draws + (np.arange(resamples) * n_clusters)[:, None]
+    return np.bincount(flat.ravel(), minlength=resamples * n_clusters).reshape(resamples, n_clusters)
+
+
+def percentile_interval(draws: np.ndarray, level: float = DEFAULT_LEVEL) -> tuple[float, float]:
+    """Percentile interval of bootstrap draws, ignoring NaN draws (empty resamples)."""
+    draws = np.asarray(draws, dtype=float)
+    finite = draws[np.isfinite(draws)]
+    if finite.size == 0:
+        return (math.nan, math.nan)
+    tail = 100.0 * (1.0 - level) / 2.0
+    lo, hi = np.percentile(finite, [tail, 100.0 - tail])
+    return (float(lo), float(hi))
+
+
+def _ratio(num: np.ndarray, den: np.ndarray) -> np.ndarray:
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.where(den > 0, num / np.where(den > 0, den, 1.0), np.nan)
+
+
+def bootstrap_ratio(numerators: np.ndarray, denominators: np.ndarray, *,
+                    resamples: int = DEFAULT_RESAMPLES, seed: int | np.random.Generator | None = DEFAULT_SEED,
+                    level: float = DEFAULT_LEVEL, counts: np.ndarray | None = None) -> Interval:
+    """Cluster bootstrap of ``sum(num) / sum(den)`` from per-cluster sums.
+
+    With ``den`` the per-cluster episode counts this is the episode mean (a
+    ratio estimator, so clusters with fewer valid episodes weigh less); with
+    ``den = 1`` it is the mean over clusters.
+
+    Args:
+        numerators: ``[M]`` per-cluster sums.
+        denominators: ``[M]`` per-cluster counts (or weights).
+        resamples: Bootstrap resamples ``B``.
+        seed: Seed or Generator (ignored when ``counts`` is given).
+        level: Interval level.
+        counts: Optional precomputed ``[B, M]`` multiplicities, to share draws
+            across several statistics of one sample.
+
+    Returns:
+        The estimate and its percentile interval.
+    """
+    num = np.asarray(numerators, dtype=float)
+    den = np.asarray(denominators, dtype=float)
+    if counts is None:
+        counts = resample_counts(num.shape[0], resamples, seed)
+    estimate = float(_ratio(num.sum(), den.sum()))
+    draws = _ratio(counts @ num, counts @ den)
+    lo, hi = percentile_interval(draws, level)
+    return Interval(estimate, lo, hi, num.shape[0], counts.shape[0], level)
+
+
+def cluster_sums(values: np.ndarray, clusters: Sequence) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Per-cluster sums and counts of finite ``values``.
+
+    Returns:
+        ``(cluster_labels, sums, counts)``, clusters in sorted label order.
+    """
+    values = np.asarray(values, dtype=float)
+    labels, inverse = np.unique(np.asarray(clusters), return_inverse=True)
+    ok = np.isfinite(values)
+    sums = np.bincount(inverse[ok], weights=values[ok], minlength=labels.size)
+    counts = np.bincount(inverse[ok], minlength=labels.size).astype(float)
+    return labels, sums, counts
+
+
+def cluster_bootstrap_mean(values: np.ndarray, clusters: Sequence, *, resamples: int = DEFAULT_RESAMPLES,
+                           seed: int | np.random.Generator | None = DEFAULT_SEED,
+                           level: float = DEFAULT_LEVEL) -> Interval:
+    """Mean of episode ``values`` with a cluster-bootstrap percentile interval.
+
+    Args:
+        values: ``[E]`` per-episode values (NaN entries are ignored).
+        clusters: ``[E]`` cluster label (instance id) of each episode.
+        resamples: Bootstrap resamples.
+        seed: Integer seed or Generator.
+        level: Interval level.
+
+    Returns:
+        The episode mean and its interval.
+    """
+    _, sums, counts = cluster_sums(values, clusters)
+    return bootstrap_ratio(sums, counts, resamples=resamples, seed=seed, level=level)
+
+
+# ----------------------------------------------------------------------------- paired
+
+
+@dataclass(frozen=True)
+class PairedDifference:
+    """Paired difference ``treatment - baseline`` on identical episodes.
+
+    Attributes:
+        baseline_mean: Mean of the baseline arm over the paired episodes.
+        treatment_mean: Mean of the treatment arm.
+        difference: ``treatment_mean - baseline_mean`` with its interval.
+        p_sign_flip: Two-sided sign-flip p-value over cluster mean differences.
+        n_pairs: Paired episodes.
+        n_clusters: Paired clusters.
+    """
+
+    baseline_mean: float
+    treatment_mean: float
+    difference: Interval
+    p_sign_flip: float
+    n_pairs: int
+    n_clusters: int
+
+
+def pair_episodes(baseline: pd.DataFrame, treatment: pd.DataFrame, value: str = "realized",
+                  keys: Sequence[str] = EPISODE_KEYS, strict: bool = True) -> pd.DataFrame:
+    """Join two episode tables on identical episodes.
+
+    Args:
+        baseline: Episode table of the baseline arm.
+        treatment: Episode table of the treatment arm.
+        value: Column compared.
+        keys: Columns identifying one episode (instance, repeat, budget).
+        strict: Raise when the two tables do not hold the same episodes.
+
+    Returns:
+        DataFrame with the key columns, ``baseline``, ``treatment`` and ``diff``.
+
+    Raises:
+        ValueError: Duplicate keys in an arm, or (strict) unmatched episodes.
+    """
+    keys = list(keys)
+    a = baseline[keys + [value]].rename(columns={value: "baseline"})
+    b = treatment[keys + [value]].rename(columns={value: "treatment"})
+    for name, t in (("baseline", a), ("treatment", b)):
+        dup = t.duplicated(keys)
+        if dup.any():
+            first = t.loc[dup, keys].iloc[0].to_dict()
+            raise ValueError(f"{name} arm has duplicate episodes for keys {keys}, e.g. {first}; "
+                             "select one method/variant before pairing")
+    joined = a.merge(b, on=keys, how="outer", indicator=True)
+    unmatched = joined["_merge"] != "both"
+    if strict and unmatched.any():
+        n_a = int((joined["_merge"] == "left_only").sum())
+        n_b = int((joined["_merge"] == "right_only").sum())
+        raise ValueError(f"paired comparison needs identical episodes: {n_a} baseline-only and "
+                         f"{n_b} treatment-only episodes on keys {keys}")
+    joined = joined.loc[~unmatched].drop(columns="_merge")
+    joined = joined.dropna(subset=["baseline", "treatment"])
+    joined["diff"] = joined["treatment"].astype(float) - joined["baseline"].astype(float)
+    return joined.reset_index(drop=True)
+
+
+def paired_bootstrap(baseline: pd.DataFrame, treatment: pd.DataFrame, value: str = "realized", *,
+                     keys: Sequence[str] = EPISODE_KEYS, cluster: str = "instance_id",
+                     resamples: int = DEFAULT_RESAMPLES, seed: int | np.random.Generator | None = DEFAULT_SEED,
+                     level: float = DEFAULT_LEVEL, strict: bool = True) -> PairedDifference:
+    """Paired difference of ``value`` (treatment minus baseline) with a paired cluster bootstrap.
+
+    Both arms are resampled with the *same* instance draws (the pair is the
+    unit), so the interval reflects only the within-episode change.
+
+    Args:
+        baseline: Baseline episode table.
+        treatment: Treatment episode table (same episodes).
+        value: Column compared, ``realized`` failure by default.
+        keys: Episode identity columns.
+        cluster: Cluster column (instance).
+        resamples: Bootstrap resamples.
+        seed: Seed or Generator.
+        level: Interval level.
+        strict: Require identical episode sets.
+
+    Returns:
+        The paired difference, its interval and an exact sign-flip p-value.
+    """
+    pairs = pair_episodes(baseline, treatment, value, keys, strict)
+    if pairs.empty:
+        raise ValueError("no paired episodes to compare")
+    labels, dsum, n = cluster_sums(pairs["diff"].to_numpy(), pairs[cluster].to_numpy())
+    diff = bootstrap_ratio(dsum, n, resamples=resamples, seed=seed, level=level)
+    p = sign_flip_test(dsum / n, seed=seed)
+    return PairedDifference(float(pairs["baseline"].mean()), float(pairs["treatment"].mean()), diff, p,
+                            len(pairs), labels.size)
+
+
+def sign_flip_test(cluster_differences: np.ndarray, *, max_exact: int = 20, resamples: int = 100_000,
+                   seed: int | np.random.Generator | None = DEFAULT_SEED) -> float:
+    """Two-sided sign-flip (randomization) test of zero mean over clusters.
+
+    Under the null each cluster's mean difference is symmetric about zero, so
+    flipping its sign leaves the law unchanged. The statistic is
+    ``|sum_i d_i|``; the p-value is the fraction of the ``2^M`` sign patterns
+    whose statistic is at least the observed one (ties count, within a relative
+    1e-12). Clusters with ``d_i = 0`` are dropped: they contribute nothing
+    under any sign, so dropping them leaves the exact p-value unchanged.
+
+    Args:
+        cluster_differences: ``[M]`` per-cluster mean differences.
+        max_exact: Enumerate all patterns when at most this many nonzero
+            clusters remain; otherwise a Monte Carlo estimate with the
+            ``(1 + hits) / (1 + draws)`` correction.
+        resamples: Monte Carlo draws for large ``M``.
+        seed: Seed for the Monte Carlo path.
+
+    Returns:
+        The p-value in ``(0, 1]``.
+    """
+    d = np.asarray(cluster_differences, dtype=float)
+    d = d[np.isfinite(d) & (d != 0.0)]
+    if d.size == 0:
+        return 1.0
+    observed = abs(d.sum())
+    tol = 1e-12 * max(1.0, np.abs(d).sum())
+    if d.size <= max_exact:
+        hits = 0
+        total = 0
+        # Enumerate in chunks of at most 2^12 patterns of the leading clusters
+        # against all patterns of the rest, to bound memory.
+        head = min(d.size, 12)
+        head_signs = np.array(list(itertools.product((1.0, -1.0), repeat=head)))  # [2^h, h]
+        head_sums = head_signs @ d[:head]
+        tail = d[head:]
+        for tail_signs in itertools.product((1.0, -1.0), repeat=tail.size):
+            s = head_sums + (np.dot(tail_signs, tail) if tail.size else 0.0)
+            hits += int(np.count_nonzero(np.abs(s) >= observed - tol))
+            total += s.size
+        return hits / total
+    rng = _rng(seed)
+    signs = rng.choice((-1.0, 1.0), size=(resamples, d.size))
+    hits = int(np.count_nonzero(np.abs(signs @ d) >= observed - tol))
+    return (1 + hits) / (1 + resamples)
+
+
+# ----------------------------------------------------------------------------- AUC
+
+
+def rank_auc(scores: np.ndarray, labels: np.ndarray) -> float:
+    """Mann–Whitney rank AUC: ``P(score_pos > score_neg) + P(tie) / 2``.
+
+    Args:
+        scores: ``[E]`` scores, higher meaning "more likely positive".
+        labels: ``[E]`` booleans (positive class, e.g. escaped).
+
+    Returns:
+        The AUC, or NaN when one class is empty.
+    """
+    return float(_weighted_auc(np.asarray(scores, dtype=float), np.asarray(labels, dtype=bool),
+                               np.ones((1, len(scores))))[0])
+
+
+def _weighted_auc(scores: np.ndarray, labels: np.ndarray, weights: np.ndarray) -> np.ndarray:
+    """AUC per row of episode ``weights[B, E]``; ties between scores count one half."""
+    order = np.argsort(scores, kind="stable")
+    s = scores[order]
+    pos = labels[order]
+    w = weights[:, order]
+    starts = np.flatnonzero(np.r_[True, s[1:] != s[:-1]])  # tie groups of equal scores
+    wp = np.add.reduceat(np.where(pos, w, 0.0), starts, axis=1)  # [B, G]
+    wn = np.add.reduceat(np.where(pos, 0.0, w), starts, axis=1)
+    neg_below = np.cumsum(wn, axis=1) - wn
+    num = np.sum(wp * (neg_below + 0.5 * wn), axis=1)
+    den = wp.sum(axis=1) * wn.sum(axis=1)
+    return _ratio(num, den)
+
+
+def cluster_bootstrap_auc(scores: np.ndarray, labels: np.ndarray, clusters: Sequence, *,
+                          resamples: int = DEFAULT_RESAMPLES, seed: int | np.random.Generator | None = DEFAULT_SEED,
+                          level: float = DEFAULT_LEVEL) -> Interval:
+    """Rank AUC with a cluster-bootstrap percentile interval.
+
+    A resampled instance brings all its episodes, positive and negative alike,
+    as integer weights; resamples with an empty class are dropped (NaN).
+
+    Args:
+        scores: ``[E]`` scores.
+        labels: ``[E]`` booleans.
+        clusters: ``[E]`` cluster labels.
+        resamples: Bootstrap resamples.
+        seed: Seed or Generator.
+        level: Interval level.
+
+    Returns:
+        The AUC and its interval.
+    """
+    scores = np.asarray(scores, dtype=float)
+    labels = np.asarray(labels, dtype=bool)
+    ok = np.isfinite(scores)
+    scores, labels = scores[ok], labels[ok]
+    names, inverse = np.unique(np.asarray(clusters)[ok], return_inverse=True)
+    estimate = rank_auc(scores, labels)
+    if scores.size == 0:
+        return Interval(math.nan, math.nan, math.nan, 0, resamples, level)
+    counts = resample_counts(names.size, resamples, seed)
+    draws = _weighted_auc(scores, labels, counts[:, inverse].astype(float))
+    lo, hi = percentile_interval(draws, level)
+    return Interval(estimate, lo, hi, names.size, resamples, level)

@@ -1,0 +1,159 @@
+"""The ``probecommit`` command line (typer + rich)."""
+
+from __future__ import annotations
+
+import functools
+import sys
+from importlib import resources
+from pathlib import Path
+from typing import Callable, Optional
+
+import typer
+from rich.console import Console
+from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
+from rich.table import Table
+
+app = typer.Typer(
+    add_completion=False,
+    no_args_is_help=True,
+    help="Probe a few times, commit once, audit offline. Run 'probecommit COMMAND --help' for each command.",
+)
+console = Console()
+err_console = Console(stderr=True)
+
+# Errors a user can cause (bad config, bad log, wrong directory): one line, exit 2.
+USER_ERRORS: tuple[type[BaseException], ...] = (ValueError, FileNotFoundError, RuntimeError, ImportError)
+
+
+def user_errors(fn: Callable) -> Callable:
+    """Turn user-caused errors into one red line and exit code 2, never a traceback."""
+
+    @functools.wraps(fn)
+    def wrapper(*args, **kwargs):
+        try:
+            return fn(*args, **kwargs)
+        except typer.Exit:
+            raise
+        except USER_ERRORS as exc:
+            err_console.print(f"[red]error:[/red] {exc}", highlight=False, markup=True)
+            raise typer.Exit(2) from None
+
+    return wrapper
+
+
+def progress_bar(description: str):
+    """A rich progress bar and a ``(done, total)`` callback that drives it."""
+    bar = Progress(
+        TextColumn("[bold]{task.description}"), BarColumn(), MofNCompleteColumn(),
+        TimeElapsedColumn(), TimeRemainingColumn(), console=err_console, transient=False,
+    )
+    task = bar.add_task(description, total=None)
+
+    def update(done: int, total: int) -> None:
+        bar.update(task, completed=done, total=total)
+
+    return bar, update
+
+
+def print_budget_table(episodes, title: str) -> None:
+    from probecommit.report.tables import budget_summary
+
+    summary = budget_summary(episodes)
+    table = Table(title=title, title_style="bold")
+    for col in summary.columns:
+        table.add_column(col, justify="right")
+    for _, row in summary.iterrows():
+        table.add_row(
+            str(row["method"]), str(row["k"]), str(row["episodes"]),
+            f"{row['failure']:.3f}", f"{row['predicted']:.3f}", f"{row['optimism']:+.3f}",
+            f"{row['coverage']:.3f}", f"{row['escape']:.3f}", str(row["failed"]),
+        )
+    console.print(table)
+
+
+def _run(config, out: Path, workers: int, ray: Optional[str]):
+    from probecommit.runner.study import run_study
+
+    bar, update = progress_bar(f"{config.name}: units")
+    with bar:
+        return run_study(config, out, workers=workers, ray_address=ray, progress=update)
+
+
+@app.command()
+@user_errors
+def run(
+    config: Path = typer.Argument(..., help="Study config (YAML)."),
+    out: Optional[Path] = typer.Option(None, "--out", "-o", help="Run directory (default runs/<name>)."),
+    workers: int = typer.Option(1, "--workers", "-w", min=1, help="Local worker processes."),
+    ray: Optional[str] = typer.Option(None, "--ray", help="Run on Ray: 'auto', 'local' or host:port."),
+) -> None:
+    """Run (or resume) a study into a run directory."""
+    from probecommit.runner.config import load_config
+
+    cfg = load_config(config)
+    result = _run(cfg, out or Path("runs") / cfg.name, workers, ray)
+    print_budget_table(result.episodes, f"{cfg.name}: per-budget summary")
+    console.print(f"run directory: [bold]{result.run_dir}[/bold]")
+
+
+@app.command()
+@user_errors
+def demo(
+    out: Path = typer.Option(Path("runs/demo"), "--out", "-o", help="Run directory."),
+    workers: int = typer.Option(1, "--workers", "-w", min=1, help="Local worker processes."),
+    engine: str = typer.Option("mujoco", help="Ground-truth engine: mujoco or analytic."),
+) -> None:
+    """Run the embedded default insertion study and write its report."""
+    import yaml
+
+    from probecommit.report.demo import write_demo_report
+    from probecommit.runner.config import parse_config
+
+    data = yaml.safe_load(resources.files("probecommit").joinpath("configs/demo.yaml").read_text())
+    data["simulator"]["engine"] = engine
+    cfg = parse_config(data)
+    result = _run(cfg, out, workers, None)
+    print_budget_table(result.episodes, "demo: insertion, random taps, deployed tap model")
+    report = write_demo_report(result.run_dir)
+    console.print(f"run directory: [bold]{result.run_dir}[/bold]")
+    console.print(f"report: [bold]{report}[/bold]")
+
+
+@app.command()
+@user_errors
+def replay(
+    run_dir: Path = typer.Argument(..., help="A complete run directory."),
+    model: str = typer.Option("corrected", "--model", help="Model variant: deployed or corrected."),
+    delta: Optional[float] = typer.Option(None, help="Boundary offset delta (mm) of the corrected model."),
+    out: Optional[Path] = typer.Option(None, "--out", "-o", help="New run directory (default RUN-<model>)."),
+) -> None:
+    """Recompute beliefs and episodes from a run's stored probes under another model."""
+    from probecommit.runner.replay import load_run, replay_run
+
+    overrides: dict = {"model": {"boundary": model}}
+    if delta is not None:
+        overrides["model"]["delta"] = delta
+    target = out or run_dir.with_name(f"{run_dir.name}-{model}")
+    path = replay_run(run_dir, target, overrides)
+    print_budget_table(load_run(path).episodes, f"replay of {run_dir.name} under the {model} model")
+    console.print(f"run directory: [bold]{path}[/bold]")
+
+
+def register_optional_commands() -> None:
+    """Register command groups that live in their own modules, if present."""
+    try:
+        from probecommit.cli import audit_commands
+    except ImportError:
+        return
+    audit_commands.register(app)
+
+
+register_optional_commands()
+
+
+def main() -> None:  # pragma: no cover - entry point
+    app()
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

@@ -1,0 +1,1 @@
+"""NumPy-only core: particle belief, likelihoods, retained sets, executors."""

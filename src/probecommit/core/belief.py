@@ -1,0 +1,188 @@
+"""Batched particle belief: log-space reweighting, ESS, systematic resampling, jitter.
+
+Everything is batched over episodes: particles are ``[E, N, d]`` and log-weights
+``[E, N]``. Randomness is per episode (one ``numpy.random.Generator`` each), so an
+episode's result never depends on which other episodes share its batch.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Protocol, Sequence
+
+import numpy as np
+
+from probecommit.core.likelihood import GaussianLikelihood, Likelihood
+
+
+class ForwardModel(Protocol):
+    """What the filter needs from a task model."""
+
+    prior_low: np.ndarray
+    prior_high: np.ndarray
+    jitter_scale: np.ndarray
+
+    def predict(self, u: np.ndarray, theta: np.ndarray) -> np.ndarray:
+        """Predicted observation ``[E, N, m]`` for probes ``u[E]`` and particles ``[E, N, d]``."""
+
+
+def normalize_log_weights(log_weights: np.ndarray) -> np.ndarray:
+    """Return log-weights shifted so each row's weights sum to one.
+
+    Rows whose weights are all ``-inf`` (every particle impossible) are reset to
+    uniform, which is the only belief consistent with "no information left".
+    """
+    log_weights = np.asarray(log_weights, dtype=float)
+    row_max = np.max(log_weights, axis=-1, keepdims=True)
+    dead = ~np.isfinite(row_max)
+    safe_max = np.where(dead, 0.0, row_max)
+    log_norm = safe_max + np.log(np.sum(np.exp(log_weights - safe_max), axis=-1, keepdims=True))
+    out = log_weights - log_norm
+    if np.any(dead):
+        n = log_weights.shape[-1]
+        out = np.where(dead, -np.log(n), out)
+    return out
+
+
+def effective_sample_size(weights: np.ndarray) -> np.ndarray:
+    """Kish effective sample size ``1 / sum w^2`` of normalized weights ``[E, N] -> [E]``."""
+    return 1.0 / np.sum(np.square(weights), axis=-1)
+
+
+def systematic_resample(weights: np.ndarray, offsets: np.ndarray) -> np.ndarray:
+    """Systematic resampling, batched over rows.
+
+    Args:
+        weights: Normalized weights ``[E, N]``.
+        offsets: One uniform in ``[0, 1)`` per row ``[E]``.
+
+    Returns:
+        Parent indices ``[E, N]``, non-decreasing within each row (copies stay in
+        parent order, which the retained-set tie rule relies on).
+    """
+    weights = np.asarray(weights, dtype=float)
+    n_rows, n = weights.shape
+    cumulative = np.cumsum(weights, axis=1)
+    cumulative[:, -1] = 1.0  # guard against round-off leaving the last point unreachable
+    positions = (np.asarray(offsets, dtype=float)[:, None] + np.arange(n)[None, :]) / n
+    # One searchsorted over all rows: shift row r into [r, r+1).
+    row_shift = np.arange(n_rows, dtype=float)[:, None]
+    flat = np.searchsorted((cumulative + row_shift).ravel(), (positions + row_shift).ravel(), side="right")
+    idx = flat.reshape(n_rows, n) - (np.arange(n_rows) * n)[:, None]
+    return np.clip(idx, 0, n - 1)
+
+
+@dataclass
+class BeliefState:
+    """A batch of particle beliefs.
+
+    Attributes:
+        particles: ``[E, N, d]`` latent hypotheses.
+        log_weights: ``[E, N]`` normalized log-weights.
+        resampled: ``[E]`` whether each episode resampled at the last update.
+    """
+
+    particles: np.ndarray
+    log_weights: np.ndarray
+    resampled: np.ndarray = field(default=None)  # type: ignore[assignment]
+
+    def __post_init__(self) -> None:
+        if self.resampled is None:
+            self.resampled = np.zeros(self.particles.shape[0], dtype=bool)
+
+    @property
+    def weights(self) -> np.ndarray:
+        return np.exp(self.log_weights)
+
+    @property
+    def n_episodes(self) -> int:
+        return self.particles.shape[0]
+
+    @property
+    def n_particles(self) -> int:
+        return self.particles.shape[1]
+
+    def copy(self) -> "BeliefState":
+        return BeliefState(self.particles.copy(), self.log_weights.copy(), self.resampled.copy())
+
+
+@dataclass
+class ParticleFilter:
+    """Bootstrap particle filter over a box prior, batched over episodes.
+
+    Args:
+        model: Forward model with ``predict``, prior box and jitter scales.
+        likelihood: Observation likelihood (Gaussian, tempered, mixture, ...).
+        n_particles: Particles per episode.
+        resample_fraction: Resample when ESS falls below this fraction of N.
+        jitter: Whether to jitter copies after resampling.
+        rejuvenation: Fraction of particles redrawn from the prior at each resampling.
+    """
+
+    model: ForwardModel
+    likelihood: Likelihood
+    n_particles: int = 1024
+    resample_fraction: float = 0.5
+    jitter: bool = True
+    rejuvenation: float = 0.0
+
+    @classmethod
+    def gaussian(cls, model: ForwardModel, sigma: float, **kwargs) -> "ParticleFilter":
+        return cls(model=model, likelihood=GaussianLikelihood(sigma), **kwargs)
+
+    def initial(self, rngs: Sequence[np.random.Generator]) -> BeliefState:
+        """Draw ``N`` prior particles per episode from the box prior."""
+        low = np.asarray(self.model.prior_low, dtype=float)
+        high = np.asarray(self.model.prior_high, dtype=float)
+        d = low.shape[0]
+        particles = np.stack([low + (high - low) * rng.random((self.n_particles, d)) for rng in rngs])
+        log_w = np.full((len(rngs), self.n_particles), -np.log(self.n_particles))
+        return BeliefState(particles, log_w)
+
+    def log_predictive(self, state: BeliefState, u: np.ndarray, y: np.ndarray) -> np.ndarray:
+        """Log predictive density of ``y`` before it is assimilated, per episode ``[E]``."""
+        pred = self.model.predict(np.asarray(u), state.particles)
+        loglik = self.likelihood.log_likelihood(np.asarray(y, dtype=float), pred)
+        a = state.log_weights + loglik
+        m = np.max(a, axis=1)
+        safe = np.where(np.isfinite(m), m, 0.0)
+        return safe + np.log(np.sum(np.exp(a - safe[:, None]), axis=1))
+
+    def update(
+        self, state: BeliefState, u: np.ndarray, y: np.ndarray, rngs: Sequence[np.random.Generator]
+    ) -> BeliefState:
+        """Assimilate one probe per episode, resampling where ESS < fraction * N.
+
+        Args:
+            state: Current beliefs (not modified).
+            u: Probe per episode ``[E]`` (or ``[E, p]``).
+            y: Observation per episode ``[E, m]``.
+            rngs: One generator per episode; only resampling episodes draw from it.
+        """
+        pred = self.model.predict(np.asarray(u), state.particles)
+        loglik = self.likelihood.log_likelihood(np.asarray(y, dtype=float), pred)
+        log_w = normalize_log_weights(state.log_weights + loglik)
+        particles = state.particles.copy()
+        weights = np.exp(log_w)
+        ess = effective_sample_size(weights)
+        resample = ess < self.resample_fraction * self.n_particles
+        if np.any(resample):
+            rows = np.flatnonzero(resample)
+            offsets = np.array([rngs[r].random() for r in rows])
+            parents = systematic_resample(weights[rows], offsets)
+            new = np.take_along_axis(particles[rows], parents[:, :, None], axis=1)
+            low = np.asarray(self.model.prior_low, dtype=float)
+            high = np.asarray(self.model.prior_high, dtype=float)
+            scale = np.asarray(self.model.jitter_scale, dtype=float)
+            for i, r in enumerate(rows):
+                rng = rngs[r]
+                if self.jitter:
+                    new[i] = new[i] + scale * rng.standard_normal(new[i].shape)
+                if self.rejuvenation > 0:
+                    n_fresh = int(round(self.rejuvenation * self.n_particles))
+                    if n_fresh:
+                        which = rng.choice(self.n_particles, size=n_fresh, replace=False)
+                        new[i, which] = low + (high - low) * rng.random((n_fresh, low.shape[0]))
+            particles[rows] = np.clip(new, low, high)
+            log_w[rows] = -np.log(self.n_particles)
+        return BeliefState(particles, log_w, resample)

@@ -1,0 +1,70 @@
+"""Top-weight retained sets and decision-coordinate intervals.
+
+The retained set at mass ``nu`` is the shortest prefix of the particles sorted by
+descending weight (stable: ties in particle-index order) whose cumulative mass
+reaches ``nu``. Sets are nested in ``nu``. Right after a resampling all weights tie,
+so the prefix is the first ``ceil(nu * N)`` copies in parent order.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+# Cumulative sums of float weights may fall a hair short of an exactly reachable
+# mass (e.g. 820 copies of 1/1024 against nu = 0.8); this tolerance absorbs that.
+MASS_TOLERANCE = 1e-12
+
+
+def weight_order(weights: np.ndarray) -> np.ndarray:
+    """Particle indices sorted by descending weight, ties in index order ``[E, N]``."""
+    return np.argsort(-np.asarray(weights), axis=-1, kind="stable")
+
+
+def prefix_mass(weights: np.ndarray, order: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Sorted order and cumulative mass ``W_m`` of the first ``m+1`` particles."""
+    if order is None:
+        order = weight_order(weights)
+    return order, np.cumsum(np.take_along_axis(weights, order, axis=-1), axis=-1)
+
+
+def retained_count(weights: np.ndarray, nu: float | np.ndarray) -> np.ndarray:
+    """Size ``m(nu)`` of the shortest prefix reaching mass ``nu`` per episode ``[E]``."""
+    _, cum = prefix_mass(weights)
+    nu = np.broadcast_to(np.asarray(nu, dtype=float), cum.shape[:-1])
+    reached = cum >= (nu[..., None] - MASS_TOLERANCE)
+    count = np.argmax(reached, axis=-1) + 1
+    # Mass never reached (nu > 1): keep everything.
+    return np.where(reached.any(axis=-1), count, cum.shape[-1])
+
+
+def retained_mask(weights: np.ndarray, nu: float | np.ndarray) -> np.ndarray:
+    """Boolean mask ``[E, N]`` of the retained top-weight ``nu``-mass subset."""
+    weights = np.asarray(weights, dtype=float)
+    order = weight_order(weights)
+    count = retained_count(weights, nu)
+    rank_kept = np.arange(weights.shape[-1])[None, :] < count[:, None]
+    mask = np.zeros_like(rank_kept)
+    np.put_along_axis(mask, order, rank_kept, axis=-1)
+    return mask
+
+
+def masked_interval(z: np.ndarray, mask: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Range ``[lo, hi]`` of ``z[E, N]`` over ``mask[E, N]`` per episode."""
+    lo = np.min(np.where(mask, z, np.inf), axis=-1)
+    hi = np.max(np.where(mask, z, -np.inf), axis=-1)
+    return lo, hi
+
+
+def weighted_mean(z: np.ndarray, weights: np.ndarray, mask: np.ndarray | None = None) -> np.ndarray:
+    """Weighted mean of ``z`` over ``mask`` (all particles if None) ``[E]``."""
+    w = weights if mask is None else np.where(mask, weights, 0.0)
+    total = np.sum(w, axis=-1)
+    # A retained set of zero-weight particles only: fall back to the unweighted mean.
+    plain = np.sum(np.where(mask, z, 0.0), axis=-1) / np.maximum(np.sum(mask, axis=-1), 1) if mask is not None else np.mean(z, axis=-1)
+    return np.where(total > 0, np.sum(w * z, axis=-1) / np.where(total > 0, total, 1.0), plain)
+
+
+def weighted_variance(z: np.ndarray, weights: np.ndarray) -> np.ndarray:
+    """Posterior variance of ``z[E, N]`` under normalized ``weights`` ``[E]``."""
+    mean = np.sum(weights * z, axis=-1)
+    return np.sum(weights * (z - mean[:, None]) ** 2, axis=-1)

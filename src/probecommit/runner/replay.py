@@ -1,0 +1,145 @@
+"""Replays: recompute beliefs and episodes from stored probes under another model.
+
+Both arms of a comparison then see identical probes, and the engine is consulted
+only through the run's engine cache (a query the run never made is computed, and
+needs the engine installed).
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from probecommit.runner.build import build_filter, build_model, build_simulator
+from probecommit.runner.config import StudyConfig, dump_config, parse_config
+from probecommit.runner.inference import BeliefTrace, ProbeBatch, blind_bayes_action, build_trace, commit
+from probecommit.store.rundir import RunDir
+
+import yaml
+
+
+@dataclass
+class LoadedRun:
+    """A complete run directory read into memory."""
+
+    path: Path
+    config: StudyConfig
+    instances: pd.DataFrame
+    probes: pd.DataFrame
+    episodes: pd.DataFrame
+    engine_cache: pd.DataFrame
+    manifest: dict[str, Any]
+
+
+def load_run(run_dir: str | Path) -> LoadedRun:
+    """Read a complete run directory (refuses an incomplete one)."""
+    run = RunDir(run_dir)
+    manifest = run.manifest()
+    config = parse_config(yaml.safe_load(run.config_text()))
+    return LoadedRun(
+        run.path, config, run.read("instances"), run.read("probes"), run.read("episodes"),
+        run.read("engine_cache"), manifest,
+    )
+
+
+def probe_batch(loaded: LoadedRun, latent_names: tuple[str, ...]) -> ProbeBatch:
+    """Rebuild the stored probe trajectories (successful episodes) as a batch."""
+    # The run's own episode order: instance order of the instances table, then repeat, then j.
+    order = {iid: n for n, iid in enumerate(loaded.instances["instance_id"])}
+    probes = loaded.probes.assign(_o=loaded.probes["instance_id"].map(order))
+    probes = probes.sort_values(["_o", "repeat", "j"], kind="stable")
+    keys = probes.drop_duplicates(["_o", "repeat"])[["instance_id", "repeat"]]
+    n_e = len(keys)
+    k = int(probes["j"].max()) if n_e else 0
+    inst = loaded.instances.set_index("instance_id")
+    iids = keys["instance_id"].to_numpy(object)
+    return ProbeBatch(
+        split=str(loaded.instances["split"].iloc[0]),
+        instance_id=iids,
+        instance_index=inst.loc[iids, "instance_index"].to_numpy(np.int64),
+        repeat=keys["repeat"].to_numpy(np.int64),
+        truths=np.stack([inst.loc[iids, f"true_{n}"].to_numpy(float) for n in latent_names], axis=1),
+        u=probes["u"].to_numpy(float).reshape(n_e, k),
+        y=probes["y"].to_numpy(float).reshape(n_e, k, 1),
+    )
+
+
+def simulator_for_run(loaded: LoadedRun, config: StudyConfig | None = None):
+    """The run's simulator with every engine answer the run already has."""
+    sim = build_simulator((config or loaded.config).simulator)
+    sim.load_cache(loaded.engine_cache.to_dict("records"))
+    return sim
+
+
+def trace_for_run(run_dir: str | Path | LoadedRun, config: StudyConfig | None = None) -> tuple[BeliefTrace, Any, Any]:
+    """Beliefs of every stored episode at every budget, under ``config`` (default: the run's).
+
+    Returns:
+        ``(trace, model, simulator)``.
+    """
+    loaded = run_dir if isinstance(run_dir, LoadedRun) else load_run(run_dir)
+    config = config or loaded.config
+    model = build_model(config.model)
+    batch = probe_batch(loaded, model.latent_names)
+    trace = build_trace(build_filter(model, config.belief), batch, config.seed, config.probes.commit_budgets)
+    return trace, model, simulator_for_run(loaded, config)
+
+
+def replay_config(config: StudyConfig, overrides: dict[str, dict[str, Any]]) -> StudyConfig:
+    data = config.model_dump(mode="json")
+    for section, values in overrides.items():
+        data[section] = {**data[section], **values}
+    return parse_config(data)
+
+
+def replay_run(src: str | Path, out: str | Path, overrides: dict[str, dict[str, Any]]) -> Path:
+    """Write a new run directory: the source's probes, re-inferred under ``overrides``.
+
+    Args:
+        src: A complete run directory.
+        out: The new run directory (must not hold another run).
+        overrides: Config sections to change, e.g. ``{"model": {"boundary": "corrected"}}``.
+            Only ``model`` and ``belief`` may change: probes and truths are the source's.
+    """
+    bad = set(overrides) - {"model", "belief"}
+    if bad:
+        raise ValueError(f"replay can change only the model and belief sections, not {sorted(bad)}")
+    start = time.perf_counter()
+    loaded = load_run(src)
+    config = replay_config(loaded.config, overrides)
+    trace, model, sim = trace_for_run(loaded, config)
+    blind = blind_bayes_action(model, config.seed, config.blind_prior_samples) if "blind_bayes" in config.methods else None
+    episodes = commit(trace, model, sim, thresholds=config.belief.nu, methods=config.methods, blind=blind)
+    failed = loaded.episodes[loaded.episodes["method"] == "rollout"]
+    if len(failed):
+        episodes = pd.concat([episodes, failed.assign(variant=model.variant)], ignore_index=True)
+    run = RunDir(out)
+    run.prepare(dump_config(config))
+    unit = "replay"
+    run.write_unit(
+        unit,
+        {
+            "instances": loaded.instances,
+            "probes": loaded.probes,
+            "engine_cache": pd.DataFrame(sim.cache_records(), columns=["engine", "query", "x_hole", "c", "arg", "value"]),
+            "episodes": episodes,
+        },
+        {"engine_calls": sim.engine_calls, "engine_s": sim.engine_seconds},
+    )
+    run.finalize(
+        [unit],
+        {
+            "study": config.name,
+            "replay_of": str(Path(src).resolve()),
+            "engine": config.simulator.engine,
+            "engine_calls": sim.engine_calls,
+            "timing": {"engine_s": sim.engine_seconds, "this_invocation_wall_s": time.perf_counter() - start},
+            "episodes": int(trace.batch.n_episodes),
+        },
+    )
+    return run.path

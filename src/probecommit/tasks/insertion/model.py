@@ -1,0 +1,103 @@
+"""Analytic insertion model (paper Sec. III, Eq. 2). NumPy only; all lengths in mm.
+
+theta = (x_hole, c): hole centre and clearance scale. The slot half-gap is
+``hg(c) = 4 + 0.6 c``; a tap at ``u`` reads the pocket floor (-15 mm) when
+``|u - x_hole| < hg(c) + boundary_offset`` and the plate top (0 mm) otherwise.
+The deployed model uses ``boundary_offset = -r = -1.2`` mm, the corrected one
+``+delta``. The modeled loss is failure when ``|a - x_hole| >= gamma * w(c)`` with
+capture half-width ``w(c) = 0.6 c + 1.1`` mm and margin ``gamma`` (1 = no margin).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+TIP_RADIUS_MM = 1.2
+POCKET_DEPTH_MM = 15.0
+PLATE_TOP_MM = 0.0
+#: The paper's MuJoCo-fitted boundary offset; replaced by our own scan's value in configs.
+PAPER_DELTA_MM = 0.905
+
+
+def half_gap(c: np.ndarray) -> np.ndarray:
+    """Slot half-gap ``hg(c) = 4 + 0.6 c`` in mm."""
+    return 4.0 + 0.6 * np.asarray(c)
+
+
+def capture_half_width(c: np.ndarray) -> np.ndarray:
+    """Modeled capture half-width ``w(c) = 0.6 c + 1.1`` in mm."""
+    return 0.6 * np.asarray(c) + 1.1
+
+
+@dataclass(frozen=True)
+class InsertionModel:
+    """The insertion task model; variants are parameters, not copies.
+
+    Args:
+        boundary_offset: Offset added to ``hg(c)`` for the pocket-reading boundary (mm).
+        variant: Label stored with every episode this model scores.
+        sigma: Observation noise the likelihood assumes (mm).
+        margin: ``gamma``, the capture window shrink used when scoring aims.
+        prior_low, prior_high: Box prior on ``(x_hole, c)``.
+    """
+
+    boundary_offset: float = -TIP_RADIUS_MM
+    variant: str = "deployed"
+    sigma: float = 0.5
+    margin: float = 1.0
+    prior_low: np.ndarray = field(default_factory=lambda: np.array([-10.0, 0.7]))
+    prior_high: np.ndarray = field(default_factory=lambda: np.array([10.0, 1.3]))
+    jitter_scale: np.ndarray = field(default_factory=lambda: np.array([0.6, 0.006]))
+
+    name = "insertion"
+    latent_names = ("x_hole", "c")
+    probe_grid = np.arange(-12.0, 12.0 + 1e-9, 3.0)
+    action_grid = np.round(np.arange(-10.0, 10.0 + 1e-9, 0.5), 10)
+    binary_loss = True
+    decision_domain_width = 20.0
+    observation_dim = 1
+
+    def __post_init__(self) -> None:
+        if not (np.isfinite(self.sigma) and self.sigma > 0):
+            raise ValueError(f"sigma must be positive, got {self.sigma!r}")
+        if not (0 < self.margin <= 1.5):
+            raise ValueError(f"margin gamma must be in (0, 1.5], got {self.margin!r}")
+        if np.any(np.asarray(self.prior_high) <= np.asarray(self.prior_low)):
+            raise ValueError("prior box must have high > low in every coordinate")
+
+    @classmethod
+    def deployed(cls, **kwargs) -> "InsertionModel":
+        """The boundary as deployed: ``hg(c) - r``."""
+        return cls(boundary_offset=-TIP_RADIUS_MM, variant="deployed", **kwargs)
+
+    @classmethod
+    def corrected(cls, delta: float = PAPER_DELTA_MM, **kwargs) -> "InsertionModel":
+        """The corrected boundary ``hg(c) + delta``."""
+        return cls(boundary_offset=float(delta), variant="corrected", **kwargs)
+
+    def with_margin(self, gamma: float) -> "InsertionModel":
+        return replace(self, margin=float(gamma))
+
+    def decision(self, theta: np.ndarray) -> np.ndarray:
+        return np.asarray(theta)[..., 0]
+
+    def reads_pocket(self, u: np.ndarray, theta: np.ndarray) -> np.ndarray:
+        """Whether a tap at ``u[E]`` reads the pocket for each particle ``[E, N]``."""
+        theta = np.asarray(theta)
+        u = np.asarray(u, dtype=float).reshape(theta.shape[0], 1)
+        return np.abs(u - theta[..., 0]) < half_gap(theta[..., 1]) + self.boundary_offset
+
+    def predict(self, u: np.ndarray, theta: np.ndarray) -> np.ndarray:
+        pocket = self.reads_pocket(u, theta)
+        return np.where(pocket, PLATE_TOP_MM - POCKET_DEPTH_MM, PLATE_TOP_MM)[..., None]
+
+    def loss(self, actions: np.ndarray, theta: np.ndarray) -> np.ndarray:
+        theta = np.asarray(theta)
+        a = np.asarray(actions, dtype=float)
+        x = theta[..., 0]
+        window = self.margin * capture_half_width(theta[..., 1])
+        if theta.ndim == 2:  # [S, d] -> [A, S]
+            return np.abs(a[:, None] - x[None, :]) >= window[None, :]
+        return np.abs(a[None, :, None] - x[:, None, :]) >= window[:, None, :]
