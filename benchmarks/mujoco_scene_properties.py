@@ -76,8 +76,8 @@ def main() -> None:
             row_cap.append(bisect(lambda d: peg(x, c, x + sgn * d) >= entry, 0.0, hg, args.tol))
         offsets += row_off
         ratios += [v / w for v in row_cap]
-        print(f"{x:7.2f} {c:5.2f} {hg:6.3f} | {row_off[0]:+9.3f} {row_off[1]:+9.3f}"
-              f"                | {w:6.3f} {row_cap[0]:6.3f} {row_cap[1]:6.3f} {np.mean(row_cap) / w:6.3f}")
+        print(f"{x:7.2f} {c:5.2f} {hg:6.3f} | {row_off[0]:+9.4f} {row_off[1]:+9.4f}"
+              f"                | {w:6.3f} {row_cap[0]:6.4f} {row_cap[1]:6.4f} {np.mean(row_cap) / w:6.3f}")
     print(f"\ntap boundary offset from hg: mean {np.mean(offsets):+.4f} mm, "
           f"range [{min(offsets):+.4f}, {max(offsets):+.4f}] (paper: +0.905, identical on all scans)")
     print(f"capture half-width / w(c): mean {np.mean(ratios):.3f}, range [{min(ratios):.3f}, {max(ratios):.3f}]")

@@ -232,8 +232,28 @@ def validate_episodes(table: pd.DataFrame, source: str = "episode table", *, csv
 
 
 def _check_repeats(df: pd.DataFrame, groups: list[str], source: str) -> None:
-    """Every instance must carry the same number of repeats at a budget (per group)."""
-    counts = df.groupby(groups + ["k", "instance_id"], sort=True)["repeat"].nunique()
+    """Every instance must carry the same number of repeats at a budget (per group).
+
+    A trajectory marked failed anywhere (e.g. our runner's ``rollout`` row when
+    the engine failed mid-probe) counts as present at every budget, since its
+    absence is explained; groups made only of failed rows are not checked.
+    """
+    failed = df["status"] == "failed"
+    all_failed_groups = set()
+    if groups:
+        ok_any = (~failed).groupby([df[g] for g in groups]).any()
+        all_failed_groups = {k if isinstance(k, tuple) else (k,) for k, v in ok_any.items() if not v}
+    failed_traj = df.loc[failed, ["instance_id", "repeat"]].drop_duplicates()
+    keyed = df[groups + ["k", "instance_id", "repeat"]]
+    if groups and all_failed_groups:
+        gk = list(map(tuple, df[groups].to_numpy()))
+        keyed = keyed.loc[[g not in all_failed_groups for g in gk]]
+    if len(failed_traj):
+        # Add each failed trajectory to every (group, k) its instance appears in.
+        cells = keyed[groups + ["k", "instance_id"]].drop_duplicates()
+        extra = cells.merge(failed_traj, on="instance_id")
+        keyed = pd.concat([keyed, extra], ignore_index=True)
+    counts = keyed.groupby(groups + ["k", "instance_id"], sort=True)["repeat"].nunique()
     per_budget = counts.groupby(level=list(range(len(groups) + 1)))
     for budget_key, c in per_budget:
         if c.nunique() > 1:

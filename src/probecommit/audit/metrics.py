@@ -78,9 +78,16 @@ def audit_table(episodes: pd.DataFrame, *, budgets=None, resamples: int = DEFAUL
         df = df.loc[df["k"].isin(list(budgets))]
     failed = df["status"].astype(str).eq("failed") if "status" in df.columns else pd.Series(False, index=df.index)
     rows = []
-    grouped = df.groupby(groups, sort=True) if groups else [((), df)]
+    grouped = list(df.groupby(groups, sort=True)) if groups else [((), df)]
+    # Groups with no ok row at all (our runner's "rollout" rows for trajectories
+    # whose probing failed) are not audited; their trajectories are missing from
+    # every budget of every group, so they add to each row's failed count.
+    dead = [g for _, g in grouped if failed.loc[g.index].all()]
+    n_dead = sum(int(g[["instance_id", "repeat"]].drop_duplicates().shape[0]) for g in dead)
     for gkey, g in grouped:
         gkey = gkey if isinstance(gkey, tuple) else (gkey,)
+        if failed.loc[g.index].all():
+            continue
         names = np.unique(g["instance_id"].to_numpy().astype(str))
         counts = resample_counts(names.size, resamples, seed)
         for k, gk in g.groupby("k", sort=True):
@@ -89,7 +96,7 @@ def audit_table(episodes: pd.DataFrame, *, budgets=None, resamples: int = DEFAUL
             row = dict(zip(groups, gkey))
             row.update(k=int(k), n_episodes=int(len(ok)), n_instances=int(ok["instance_id"].nunique()),
                        n_repeats=int(ok.groupby("instance_id")["repeat"].nunique().max()) if len(ok) else 0,
-                       n_failed=int(fk.sum()))
+                       n_failed=int(fk.sum()) + n_dead)
             if len(ok) == 0:
                 rows.append(row)
                 continue

@@ -9,6 +9,7 @@ from pathlib import Path
 from typing import Callable, Optional
 
 import typer
+from rich import box
 from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
 from rich.table import Table
@@ -59,9 +60,9 @@ def print_budget_table(episodes, title: str) -> None:
     from probecommit.report.tables import budget_summary
 
     summary = budget_summary(episodes)
-    table = Table(title=title, title_style="bold")
+    table = Table(title=title, title_style="bold", box=box.SIMPLE_HEAD)
     for col in summary.columns:
-        table.add_column(col, justify="right")
+        table.add_column(col, justify="right", no_wrap=True)
     for _, row in summary.iterrows():
         table.add_row(
             str(row["method"]), str(row["k"]), str(row["episodes"]),

@@ -36,8 +36,9 @@ def normalize_log_weights(log_weights: np.ndarray) -> np.ndarray:
     row_max = np.max(log_weights, axis=-1, keepdims=True)
     dead = ~np.isfinite(row_max)
     safe_max = np.where(dead, 0.0, row_max)
-    log_norm = safe_max + np.log(np.sum(np.exp(log_weights - safe_max), axis=-1, keepdims=True))
-    out = log_weights - log_norm
+    with np.errstate(divide="ignore", invalid="ignore"):  # dead rows are replaced below
+        log_norm = safe_max + np.log(np.sum(np.exp(log_weights - safe_max), axis=-1, keepdims=True))
+        out = log_weights - log_norm
     if np.any(dead):
         n = log_weights.shape[-1]
         out = np.where(dead, -np.log(n), out)

@@ -48,6 +48,33 @@ def scenario_failure_fraction(failures: np.ndarray, mask: np.ndarray) -> np.ndar
     return np.einsum("ean,en->ea", failures.astype(np.float64), mask.astype(np.float64)) / kept[:, None]
 
 
+def interval_success_counts(lo: np.ndarray, hi: np.ndarray, mask: np.ndarray, actions: np.ndarray) -> np.ndarray:
+    """Retained scenarios whose open success interval ``(lo, hi)`` contains each action.
+
+    An ``O(E (N + A))`` alternative to materializing ``[E, A, N]`` failures, for
+    tasks whose success set is an interval of a sorted 1-D action grid: each
+    scenario adds one to a contiguous run of actions (a difference array).
+
+    Args:
+        lo, hi: ``[E, N]`` open interval ends per scenario.
+        mask: ``[E, N]`` retained scenarios.
+        actions: ``[A]`` strictly increasing action grid.
+
+    Returns:
+        ``[E, A]`` integer counts, identical to counting ``lo < a < hi`` directly.
+    """
+    actions = np.asarray(actions, dtype=float)
+    n_e, n_a = mask.shape[0], actions.shape[0]
+    first = np.searchsorted(actions, lo, side="right")  # first a > lo
+    last = np.searchsorted(actions, hi, side="left")  # one past the last a < hi
+    live = mask & (first < last)
+    rows = np.broadcast_to(np.arange(n_e)[:, None] * (n_a + 1), mask.shape)
+    flat = np.concatenate([(rows + first)[live], (rows + last)[live]])
+    step = np.concatenate([np.ones(int(live.sum()), np.int64), -np.ones(int(live.sum()), np.int64)])
+    diff = np.bincount(flat, weights=step, minlength=n_e * (n_a + 1)).reshape(n_e, n_a + 1)
+    return np.cumsum(diff, axis=1)[:, :n_a].astype(np.int64)
+
+
 def scenario_max_loss(losses: np.ndarray, mask: np.ndarray) -> np.ndarray:
     """Scenario minimax score: the maximum loss over retained scenarios ``[E, A]``."""
     return np.max(np.where(mask[:, None, :], losses, -np.inf), axis=-1)

@@ -27,9 +27,9 @@ def prefix_mass(weights: np.ndarray, order: np.ndarray | None = None) -> tuple[n
     return order, np.cumsum(np.take_along_axis(weights, order, axis=-1), axis=-1)
 
 
-def retained_count(weights: np.ndarray, nu: float | np.ndarray) -> np.ndarray:
+def retained_count(weights: np.ndarray, nu: float | np.ndarray, order: np.ndarray | None = None) -> np.ndarray:
     """Size ``m(nu)`` of the shortest prefix reaching mass ``nu`` per episode ``[E]``."""
-    _, cum = prefix_mass(weights)
+    _, cum = prefix_mass(weights, order)
     nu = np.broadcast_to(np.asarray(nu, dtype=float), cum.shape[:-1])
     reached = cum >= (nu[..., None] - MASS_TOLERANCE)
     count = np.argmax(reached, axis=-1) + 1
@@ -41,7 +41,7 @@ def retained_mask(weights: np.ndarray, nu: float | np.ndarray) -> np.ndarray:
     """Boolean mask ``[E, N]`` of the retained top-weight ``nu``-mass subset."""
     weights = np.asarray(weights, dtype=float)
     order = weight_order(weights)
-    count = retained_count(weights, nu)
+    count = retained_count(weights, nu, order)
     rank_kept = np.arange(weights.shape[-1])[None, :] < count[:, None]
     mask = np.zeros_like(rank_kept)
     np.put_along_axis(mask, order, rank_kept, axis=-1)

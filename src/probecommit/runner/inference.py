@@ -17,7 +17,7 @@ import pandas as pd
 
 from probecommit.audit.score import coverage_score
 from probecommit.core.belief import BeliefState, ParticleFilter
-from probecommit.core.executors import prior_expected_loss, scenario_max_loss, select_action
+from probecommit.core.executors import interval_success_counts, prior_expected_loss, scenario_max_loss, select_action
 from probecommit.core.retained import masked_interval, retained_mask, weighted_mean, weighted_variance
 from probecommit.runner.seeding import INFERENCE, ROLLOUT, blind_rng, episode_rng
 
@@ -176,13 +176,17 @@ def grown_scenarios(particles: np.ndarray, threshold: float, domain_width: float
 
 def _choose(model, scenarios: np.ndarray, mask: np.ndarray, reference: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Scenario executor: action index and its score per episode."""
-    losses = model.loss(model.action_grid, scenarios)
     if model.binary_loss:
         kept = np.maximum(mask.sum(axis=-1), 1)
         # Integer counting keeps scores exact and independent of batch shape.
-        scores = np.sum(losses & mask[:, None, :], axis=-1) / kept[:, None]
+        if hasattr(model, "success_interval"):
+            lo, hi = model.success_interval(scenarios)
+            failures = mask.sum(axis=-1)[:, None] - interval_success_counts(lo, hi, mask, model.action_grid)
+        else:
+            failures = np.sum(model.loss(model.action_grid, scenarios) & mask[:, None, :], axis=-1)
+        scores = failures / kept[:, None]
     else:
-        scores = scenario_max_loss(losses, mask)
+        scores = scenario_max_loss(model.loss(model.action_grid, scenarios), mask)
     idx = select_action(scores, model.action_grid, reference)
     return idx, np.take_along_axis(scores, idx[:, None], axis=1)[:, 0]
 
@@ -240,7 +244,7 @@ def commit(
     if "probe_robust" in methods:
         plan += [("probe_robust", k) for k in trace.budgets]
     z_true = model.decision(batch.truths)
-    for method, k in plan:
+    for plan_index, (method, k) in enumerate(plan):
         state = trace.states[k]
         weights, particles = state.weights, state.particles
         z = model.decision(particles)
@@ -299,10 +303,16 @@ def commit(
                     "n_retained": mask.sum(axis=1).astype(np.int64),
                     "status": status,
                     "error": error,
+                    "_row": np.arange(batch.n_episodes),
+                    "_plan": plan_index,
                 }
             )
         )
-    return pd.concat(frames, ignore_index=True) if frames else pd.DataFrame()
+    if not frames:
+        return pd.DataFrame()
+    # Canonical order: episode by episode, each in plan order (blind first, then budgets).
+    table = pd.concat(frames, ignore_index=True).sort_values(["_row", "_plan"], kind="stable")
+    return table.drop(columns=["_row", "_plan"]).reset_index(drop=True)
 
 
 def failed_episode_rows(batch: ProbeBatch, variant: str) -> pd.DataFrame:

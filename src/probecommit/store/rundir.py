@@ -164,6 +164,9 @@ class RunDir:
             parts = [pd.read_parquet(self.shard_path(u, name)) for u in units]
             parts = [p for p in parts if len(p)]
             frame = pd.concat(parts, ignore_index=True) if parts else pd.DataFrame()
+            if name == "episodes" and len(frame):
+                # Canonical row order, independent of how instances were grouped into units.
+                frame = frame.sort_values(["instance_id", "repeat"], kind="stable", ignore_index=True)
             atomic_write_parquet(self.table_path(name), frame)
             digests[f"{name}.parquet"] = sha256_file(self.table_path(name))
         manifest = {

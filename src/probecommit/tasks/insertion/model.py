@@ -5,7 +5,8 @@ theta = (x_hole, c): hole centre and clearance scale. The slot half-gap is
 ``|u - x_hole| < hg(c) + boundary_offset`` and the plate top (0 mm) otherwise.
 The deployed model uses ``boundary_offset = -r = -1.2`` mm, the corrected one
 ``+delta``. The modeled loss is failure when ``|a - x_hole| >= gamma * w(c)`` with
-capture half-width ``w(c) = 0.6 c + 1.1`` mm and margin ``gamma`` (1 = no margin).
+capture half-width ``w(c) = 0.6 c + 1.1`` mm and margin ``gamma`` (1 = no margin),
+evaluated as the open interval test ``x - gamma w < a < x + gamma w``.
 """
 
 from __future__ import annotations
@@ -93,11 +94,20 @@ class InsertionModel:
         pocket = self.reads_pocket(u, theta)
         return np.where(pocket, PLATE_TOP_MM - POCKET_DEPTH_MM, PLATE_TOP_MM)[..., None]
 
-    def loss(self, actions: np.ndarray, theta: np.ndarray) -> np.ndarray:
+    def success_interval(self, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Open interval of aims that succeed: ``x - gamma w(c) < a < x + gamma w(c)``.
+
+        This is the definition of the modeled loss; ``loss`` and the executor's
+        interval-counting fast path both use it, so they agree bit for bit.
+        """
         theta = np.asarray(theta)
-        a = np.asarray(actions, dtype=float)
         x = theta[..., 0]
         window = self.margin * capture_half_width(theta[..., 1])
-        if theta.ndim == 2:  # [S, d] -> [A, S]
-            return np.abs(a[:, None] - x[None, :]) >= window[None, :]
-        return np.abs(a[None, :, None] - x[:, None, :]) >= window[:, None, :]
+        return x - window, x + window
+
+    def loss(self, actions: np.ndarray, theta: np.ndarray) -> np.ndarray:
+        lo, hi = self.success_interval(theta)
+        a = np.asarray(actions, dtype=float)
+        if lo.ndim == 1:  # [S] -> [A, S]
+            return ~((lo[None, :] < a[:, None]) & (a[:, None] < hi[None, :]))
+        return ~((lo[:, None, :] < a[None, :, None]) & (a[None, :, None] < hi[:, None, :]))

@@ -11,8 +11,9 @@ analytic sphere-box and box-box colliders (no mesh, no GJK).
   (a position servo). The tip-plate contact is frictionless, so a tip that lands on the
   chamfer, or on its outer edge, slides into the slot and reads the floor. The flip
   from pocket to top therefore sits at the chamfer's outer edge, ``hg + CHAMFER_MM``.
-* The peg is a box of half-width ``PEG_HALF_WIDTH_MM`` on the same two joints, pushed
-  down by a constant force, with a stiffer lateral spring and friction. Its bottom
+* The peg is a box of half-width ``PEG_HALF_WIDTH_MM`` on the same two joints, driven
+  down by a force-limited velocity servo (a slow guarded approach near the plate top,
+  fast below the chamfer), with a stiffer lateral spring and friction. Its bottom
   corner slides down the chamfer when it lands there, so it enters while
   ``|a - x_hole| < hg + CHAMFER_MM - PEG_HALF_WIDTH_MM = 0.6 c + 1.1`` mm.
 
@@ -76,7 +77,7 @@ SETTLE_SPEED = 1e-4  # m/s: both joint speeds below this ...
 SETTLE_CHUNKS = 3  # ... for this many consecutive chunks, with contact, means stopped
 MAX_TIME_S = 0.5
 
-MODEL_CACHE_SIZE = 512
+MODEL_CACHE_SIZE = 256  # instances; a study touches at most a few hundred
 
 
 def _f(x: float) -> str:
@@ -137,6 +138,7 @@ def scene_xml(x_hole_mm: float, c: float) -> str:
     si = " ".join(_f(v) for v in SOLIMP)
     return f"""
 <mujoco model="insertion">
+  <size memory="1M"/>
   <option timestep="{_f(TIMESTEP_S)}" gravity="0 0 0" integrator="implicitfast"/>
   <default>
     <geom solref="{sr}" solimp="{si}"/>

@@ -1,0 +1,36 @@
+# Two commands do everything on a fresh machine: `make demo` and `make test`.
+PYTHON ?= python3
+VENV := .venv
+PY := $(VENV)/bin/python
+STAMP := $(VENV)/.installed
+
+.PHONY: demo test test-fast bench reproduce clean-venv
+
+$(STAMP): pyproject.toml constraints.txt
+	$(PYTHON) -m venv $(VENV)
+	$(PY) -m pip install --quiet --upgrade "pip>=24"
+	$(PY) -m pip install --quiet -c constraints.txt -e '.[all,test]'
+	touch $(STAMP)
+
+## Create the venv, install pinned dependencies, run the demo study and print its report path.
+demo: $(STAMP)
+	$(VENV)/bin/probecommit demo
+
+## Create the venv, install pinned dependencies, run the whole test suite (slow tests included).
+test: $(STAMP)
+	$(PY) -m pytest -q
+
+## The suite without tests marked slow.
+test-fast: $(STAMP)
+	$(PY) -m pytest -q -m "not slow"
+
+## Benchmarks: ratios measured side by side in one run.
+bench: $(STAMP)
+	$(PY) benchmarks/belief.py
+
+## Every MuJoCo insertion table and figure of the paper.
+reproduce: $(STAMP)
+	$(VENV)/bin/probecommit reproduce insertion
+
+clean-venv:
+	rm -rf $(VENV)

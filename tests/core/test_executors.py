@@ -1,0 +1,72 @@
+"""Executors on hand-built cases with known answers, and the tie-break rule."""
+
+import numpy as np
+
+from probecommit.core.executors import prior_expected_loss, scenario_failure_fraction, scenario_max_loss, select_action
+from probecommit.runner.inference import _choose, blind_bayes_action
+from probecommit.tasks.insertion.model import InsertionModel
+
+
+def test_select_action_minimum_then_nearest_reference_then_lowest_index():
+    actions = np.array([0.0, 1.0, 2.0, 3.0])
+    scores = np.array([[0.5, 0.1, 0.1, 0.1], [0.2, 0.2, 0.9, 0.9], [0.0, 0.3, 0.3, 0.0]])
+    ref = np.array([2.2, 5.0, 1.5])
+    assert select_action(scores, actions, ref).tolist() == [2, 1, 0]
+
+
+def test_scenario_failure_fraction_is_unweighted_over_retained():
+    failures = np.array([[[True, False, True, True], [False, False, True, False]]])
+    mask = np.array([[True, True, True, False]])
+    np.testing.assert_allclose(scenario_failure_fraction(failures, mask), [[2 / 3, 1 / 3]])
+
+
+def test_scenario_max_loss():
+    losses = np.array([[[0.1, 0.9, 0.3], [0.5, 0.2, 0.4]]])
+    mask = np.array([[True, False, True]])
+    np.testing.assert_allclose(scenario_max_loss(losses, mask), [[0.3, 0.5]])
+    np.testing.assert_allclose(prior_expected_loss(np.array([[0, 1], [1, 1]])), [0.5, 1.0])
+
+
+def test_insertion_probe_robust_aims_at_the_retained_cluster():
+    model = InsertionModel.deployed()
+    # Three scenarios at x = 2.0 (c = 1 -> w = 1.7 mm), one outlier at -8: aim 2.0 fails only the outlier.
+    theta = np.array([[[2.0, 1.0], [2.1, 1.0], [1.9, 1.0], [-8.0, 1.0]]])
+    mask = np.ones((1, 4), dtype=bool)
+    idx, score = _choose(model, theta, mask, np.array([2.0]))
+    assert model.action_grid[idx[0]] == 2.0
+    assert score[0] == 0.25
+    # With the outlier dropped from the retained set the score is zero.
+    idx, score = _choose(model, theta, np.array([[True, True, True, False]]), np.array([2.0]))
+    assert model.action_grid[idx[0]] == 2.0 and score[0] == 0.0
+
+
+def test_insertion_margin_shrinks_window():
+    model = InsertionModel.deployed()
+    theta = np.array([[[0.0, 1.0]]])  # w = 1.7
+    assert not model.loss(np.array([1.5]), theta)[0, 0, 0]
+    assert model.with_margin(0.8).loss(np.array([1.5]), theta)[0, 0, 0]  # 0.8 * 1.7 = 1.36
+
+
+def test_blind_bayes_is_the_prior_optimum_and_deterministic():
+    model = InsertionModel.deployed()
+    a1, r1 = blind_bayes_action(model, 0, 20000)
+    a2, r2 = blind_bayes_action(model, 0, 20000)
+    assert (a1, r1) == (a2, r2)
+    # Uniform prior on [-10, 10]: any aim at least w_max from the edges has P(fail) ~ 1 - 2*E[w]/20 = 0.83.
+    assert abs(r1 - (1 - 2 * 1.7 / 20)) < 0.02
+    assert abs(a1) <= 8.5
+
+
+def test_interval_counting_equals_direct_counting():
+    from probecommit.core.executors import interval_success_counts
+
+    rng = np.random.default_rng(5)
+    model = InsertionModel.deployed(margin=0.74)
+    theta = np.stack([rng.uniform(-11, 11, (30, 200)), rng.uniform(0.7, 1.3, (30, 200))], axis=-1)
+    # Put some interval ends exactly on grid points.
+    theta[:, :20, 0] = np.round(theta[:, :20, 0] * 2) / 2
+    mask = rng.random((30, 200)) < 0.7
+    lo, hi = model.success_interval(theta)
+    fast = interval_success_counts(lo, hi, mask, model.action_grid)
+    direct = np.sum(~model.loss(model.action_grid, theta) & mask[:, None, :], axis=-1)
+    np.testing.assert_array_equal(fast, direct)

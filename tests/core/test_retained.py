@@ -1,0 +1,51 @@
+"""Retained sets: nesting in nu, the post-resampling tie rule, intervals."""
+
+import math
+
+import numpy as np
+import pytest
+
+from probecommit.core.retained import masked_interval, retained_count, retained_mask, weighted_mean
+
+
+def test_retained_sets_are_nested_in_nu():
+    rng = np.random.default_rng(0)
+    w = rng.dirichlet(np.full(50, 0.3), size=20)
+    w[:, :5] = w[:, 5:10]  # plant exact ties
+    w /= w.sum(axis=1, keepdims=True)
+    prev = np.zeros_like(w, dtype=bool)
+    for nu in np.linspace(0.05, 1.0, 20):
+        mask = retained_mask(w, nu)
+        assert np.all(prev <= mask)
+        assert np.all(np.sum(np.where(mask, w, 0), axis=1) >= nu - 1e-9)
+        prev = mask
+
+
+def test_shortest_prefix_by_descending_weight():
+    w = np.array([[0.1, 0.4, 0.2, 0.3]])
+    assert retained_mask(w, 0.5).tolist() == [[False, True, False, True]]
+    assert retained_mask(w, 0.7).tolist() == [[False, True, False, True]]
+    assert retained_mask(w, 0.71).tolist() == [[False, True, True, True]]
+
+
+@pytest.mark.parametrize("n", [1024, 512, 100, 7])
+def test_tie_rule_after_resampling_keeps_first_ceil_nu_n_in_parent_order(n):
+    w = np.full((1, n), 1.0 / n)
+    mask = retained_mask(w, 0.8)
+    k = math.ceil(0.8 * n)
+    assert retained_count(w, 0.8)[0] == k
+    assert mask[0, :k].all() and not mask[0, k:].any()
+
+
+def test_zero_weight_particles_come_last():
+    w = np.array([[0.0, 0.5, 0.0, 0.5]])
+    assert retained_mask(w, 1.0).tolist() == [[False, True, False, True]]
+
+
+def test_interval_and_mean():
+    z = np.array([[3.0, -1.0, 2.0, 10.0]])
+    mask = np.array([[True, True, True, False]])
+    lo, hi = masked_interval(z, mask)
+    assert (lo[0], hi[0]) == (-1.0, 3.0)
+    w = np.array([[0.5, 0.5, 0.0, 0.0]])
+    assert weighted_mean(z, w, mask)[0] == 1.0
