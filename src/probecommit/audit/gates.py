@@ -146,11 +146,14 @@ def gate_curve(signal: np.ndarray, outcome: np.ndarray) -> pd.DataFrame:
     v, d_commit, d_fail = v[order], d_commit[order], d_fail[order]
     n_c = np.cumsum(d_commit)
     n_f = np.cumsum(d_fail)
-    ends = np.flatnonzero(np.r_[v[1:] != v[:-1], True]) if v.size else np.array([], dtype=int)
-    n_c, n_f, tau = n_c[ends], n_f[ends], v[ends]
+    # Evaluate at every distinct finite signal value (non-record values repeat the
+    # state of the last record below them): the state after all events <= tau.
+    tau = np.unique(s[np.isfinite(s)])
+    pos = np.searchsorted(v, tau, side="right") - 1  # >= 0: the smallest value is always a record
+    n_c, n_f = n_c[pos], n_f[pos]
     with np.errstate(invalid="ignore", divide="ignore"):
         failure = np.where(n_c > 0, n_f / np.maximum(n_c, 1), np.nan)
-    return pd.DataFrame({"tau": tau, "n_committed": n_c.astype(int), "commit_rate": n_c / max(n_traj, 1),
+    return pd.DataFrame({"tau": tau, "n_committed": np.rint(n_c).astype(int), "commit_rate": n_c / max(n_traj, 1),
                          "failure": failure, "n_failed_committed": n_f})
 
 

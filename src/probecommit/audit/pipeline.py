@@ -25,7 +25,7 @@ from probecommit.audit.conformal import (
     simultaneous_threshold,
 )
 from probecommit.audit.gates import DEFAULT_TARGET_RATE, GatesResult, gates_from_tables
-from probecommit.audit.io import ok_episodes, read_episodes, validate_episodes
+from probecommit.audit.io import group_columns, ok_episodes, read_episodes, validate_episodes
 from probecommit.audit.margin import GAMMA_GRID, MarginResult, distribution_free_margin, select_margin
 from probecommit.audit.metrics import audit_table, summary_row
 from probecommit.audit.stats import (
@@ -91,12 +91,17 @@ def audit(path_or_table: str | Path | pd.DataFrame, *, resamples: int = DEFAULT_
     probe = ok_episodes(df)
     probe = probe.loc[probe["k"] >= 1]
     if "method" in probe.columns:
-        probe = probe.loc[probe["method"] == PROBE_METHOD] if (probe["method"] == PROBE_METHOD).any() else probe
-    if "max_surprise" in probe.columns and probe["max_surprise"].notna().any() and len(probe):
-        if "variant" in probe.columns and probe["variant"].nunique() > 1:
-            probe = probe.loc[probe["variant"] == probe["variant"].iloc[0]]
-        if probe.get("method", pd.Series(["x"])).nunique() <= 1:
-            surprise = surprise_auc(probe, resamples=resamples, seed=seed, level=level)
+        probe = probe.loc[probe["method"] == PROBE_METHOD]
+    if "max_surprise" in probe.columns and probe["max_surprise"].notna().any():
+        groups = group_columns(probe)
+        parts = []
+        for key, g in (probe.groupby(groups) if groups else [((), probe)]):
+            key = key if isinstance(key, tuple) else (key,)
+            part = surprise_auc(g, resamples=resamples, seed=seed, level=level)
+            for name, value in zip(groups, key):
+                part.insert(0, name, value)
+            parts.append(part)
+        surprise = pd.concat(parts, ignore_index=True) if parts else None
     return AuditResult(table, surprise, df.attrs.get("source", "table"), df.attrs.get("n_total", len(df)),
                        df.attrs.get("n_failed", 0))
 

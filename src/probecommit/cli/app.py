@@ -11,6 +11,7 @@ from typing import Callable, Optional
 import typer
 from rich import box
 from rich.console import Console
+from rich.markup import escape
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
 from rich.table import Table
 
@@ -26,6 +27,20 @@ err_console = Console(stderr=True)
 USER_ERRORS: tuple[type[BaseException], ...] = (ValueError, FileNotFoundError, RuntimeError, ImportError)
 
 
+def one_line(text: object) -> str:
+    """``text`` on one line: newlines and runs of spaces become single spaces."""
+    return " ".join(str(text).split())
+
+
+def print_error(exc: BaseException) -> None:
+    """One line on stderr, never wrapped at the terminal width."""
+    err_console.print(f"[red]error:[/red] {escape(one_line(exc) or type(exc).__name__)}", soft_wrap=True, highlight=False)
+
+
+def print_warning(message: str) -> None:
+    err_console.print(f"[yellow]warning:[/yellow] {escape(one_line(message))}", soft_wrap=True, highlight=False)
+
+
 def user_errors(fn: Callable) -> Callable:
     """Turn user-caused errors into one red line and exit code 2, never a traceback."""
 
@@ -36,7 +51,7 @@ def user_errors(fn: Callable) -> Callable:
         except typer.Exit:
             raise
         except USER_ERRORS as exc:
-            err_console.print(f"[red]error:[/red] {exc}", highlight=False, markup=True)
+            print_error(exc)
             raise typer.Exit(2) from None
 
     return wrapper
@@ -73,11 +88,28 @@ def print_budget_table(episodes, title: str) -> None:
 
 
 def _run(config, out: Path, workers: int, ray: Optional[str]):
-    from probecommit.runner.study import run_study
+    from probecommit.runner.study import preflight, run_study
+    from probecommit.store.rundir import RunDir
+    from probecommit.runner.config import dump_config
 
+    # Fail on a bad config or an incompatible directory before drawing a progress bar.
+    preflight(config)
+    RunDir(out).check_writable(dump_config(config))
     bar, update = progress_bar(f"{config.name}: units")
     with bar:
         return run_study(config, out, workers=workers, ray_address=ray, progress=update)
+
+
+def warn_failed(result) -> None:
+    """One warning line when some episodes failed (engine NaN or error), else nothing."""
+    failed = result.failed_episodes
+    if failed:
+        trajectories = result.manifest.get("failed_trajectories", 0)
+        print_warning(
+            f"{failed} of {len(result.episodes)} episode rows failed ({trajectories} trajectories lost in rollout): "
+            "the engine returned NaN or raised; see the 'status' and 'error' columns of "
+            f"{result.run_dir / 'episodes.parquet'}"
+        )
 
 
 @app.command()
@@ -85,15 +117,23 @@ def _run(config, out: Path, workers: int, ray: Optional[str]):
 def run(
     config: Path = typer.Argument(..., help="Study config (YAML)."),
     out: Optional[Path] = typer.Option(None, "--out", "-o", help="Run directory (default runs/<name>)."),
-    workers: int = typer.Option(1, "--workers", "-w", min=1, help="Local worker processes."),
-    ray: Optional[str] = typer.Option(None, "--ray", help="Run on Ray: 'auto', 'local' or host:port."),
+    workers: int = typer.Option(1, "--workers", "-w", min=1, help="Local worker processes (with --ray local: Ray CPUs)."),
+    ray: Optional[str] = typer.Option(
+        None, "--ray", help="Run on Ray: 'auto' (an existing cluster), host:port, or 'local' (start one here)."
+    ),
 ) -> None:
-    """Run (or resume) a study into a run directory."""
+    """Run (or resume) a study into a run directory.
+
+    Rerunning the same command after an interruption (Ctrl-C, a crash, SIGKILL)
+    keeps the finished units and redoes the rest; results are identical to an
+    uninterrupted run, whatever --workers or --ray.
+    """
     from probecommit.runner.config import load_config
 
     cfg = load_config(config)
     result = _run(cfg, out or Path("runs") / cfg.name, workers, ray)
     print_budget_table(result.episodes, f"{cfg.name}: per-budget summary")
+    warn_failed(result)
     console.print(f"run directory: [bold]{result.run_dir}[/bold]")
 
 
@@ -115,6 +155,7 @@ def demo(
     cfg = parse_config(data)
     result = _run(cfg, out, workers, None)
     print_budget_table(result.episodes, "demo: insertion, random taps, deployed tap model")
+    warn_failed(result)
     report = write_demo_report(result.run_dir)
     console.print(f"run directory: [bold]{result.run_dir}[/bold]")
     console.print(f"report: [bold]{report}[/bold]")

@@ -242,7 +242,9 @@ def commit(
     if "blind_robust" in methods:
         plan.append(("blind_robust", 0))
     if "probe_robust" in methods:
-        plan += [("probe_robust", k) for k in trace.budgets]
+        # Per-budget thresholds commit only at the budgets they name.
+        budgets = [k for k in trace.budgets if not isinstance(thresholds, Mapping) or k in thresholds]
+        plan += [("probe_robust", k) for k in budgets]
     z_true = model.decision(batch.truths)
     for plan_index, (method, k) in enumerate(plan):
         state = trace.states[k]

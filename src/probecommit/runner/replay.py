@@ -97,27 +97,58 @@ def replay_config(config: StudyConfig, overrides: dict[str, dict[str, Any]]) -> 
     return parse_config(data)
 
 
+def replay_episodes(
+    loaded: LoadedRun,
+    overrides: dict[str, dict[str, Any]] | None = None,
+    thresholds: float | dict[int, float] | None = None,
+    margin: float | None = None,
+) -> tuple[pd.DataFrame, Any]:
+    """Episodes re-inferred from a run's stored probes, without writing anything.
+
+    Args:
+        loaded: A loaded run.
+        overrides: Config sections to change. ``model`` and ``belief`` change inference;
+            ``simulator`` may change execution-side settings only (``aim_offset``), since
+            the readings are the stored ones.
+        thresholds: Retained mass or conformal thresholds (default: the config's ``nu``).
+        margin: Capture-window margin ``gamma`` (default: the config's).
+
+    Returns:
+        ``(episodes, simulator)``; the simulator carries the engine-call counts.
+    """
+    overrides = overrides or {}
+    bad = set(overrides) - {"model", "belief", "simulator"}
+    if bad:
+        raise ValueError(f"a replay can change only the model, belief and simulator sections, not {sorted(bad)}")
+    sim_bad = set(overrides.get("simulator", {})) - {"aim_offset"}
+    if sim_bad:
+        raise ValueError(f"stored probes fix the readings; a replay cannot change simulator {sorted(sim_bad)}")
+    config = replay_config(loaded.config, overrides)
+    trace, model, sim = trace_for_run(loaded, config)
+    blind = blind_bayes_action(model, config.seed, config.blind_prior_samples) if "blind_bayes" in config.methods else None
+    episodes = commit(
+        trace, model, sim, thresholds=config.belief.nu if thresholds is None else thresholds,
+        margin=margin, methods=config.methods, blind=blind,
+    )
+    failed = loaded.episodes[loaded.episodes["method"] == "rollout"]
+    if len(failed):
+        episodes = pd.concat([episodes, failed.assign(variant=model.variant)], ignore_index=True)
+    return episodes, sim
+
+
 def replay_run(src: str | Path, out: str | Path, overrides: dict[str, dict[str, Any]]) -> Path:
     """Write a new run directory: the source's probes, re-inferred under ``overrides``.
 
     Args:
         src: A complete run directory.
         out: The new run directory (must not hold another run).
-        overrides: Config sections to change, e.g. ``{"model": {"boundary": "corrected"}}``.
-            Only ``model`` and ``belief`` may change: probes and truths are the source's.
+        overrides: Config sections to change, e.g. ``{"model": {"boundary": "corrected"}}``
+            (see ``replay_episodes``).
     """
-    bad = set(overrides) - {"model", "belief"}
-    if bad:
-        raise ValueError(f"replay can change only the model and belief sections, not {sorted(bad)}")
     start = time.perf_counter()
     loaded = load_run(src)
     config = replay_config(loaded.config, overrides)
-    trace, model, sim = trace_for_run(loaded, config)
-    blind = blind_bayes_action(model, config.seed, config.blind_prior_samples) if "blind_bayes" in config.methods else None
-    episodes = commit(trace, model, sim, thresholds=config.belief.nu, methods=config.methods, blind=blind)
-    failed = loaded.episodes[loaded.episodes["method"] == "rollout"]
-    if len(failed):
-        episodes = pd.concat([episodes, failed.assign(variant=model.variant)], ignore_index=True)
+    episodes, sim = replay_episodes(loaded, overrides)
     run = RunDir(out)
     run.prepare(dump_config(config))
     unit = "replay"
@@ -139,7 +170,7 @@ def replay_run(src: str | Path, out: str | Path, overrides: dict[str, dict[str, 
             "engine": config.simulator.engine,
             "engine_calls": sim.engine_calls,
             "timing": {"engine_s": sim.engine_seconds, "this_invocation_wall_s": time.perf_counter() - start},
-            "episodes": int(trace.batch.n_episodes),
+            "episodes": int(len(loaded.probes[["instance_id", "repeat"]].drop_duplicates())),
         },
     )
     return run.path

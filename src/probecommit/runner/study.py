@@ -9,19 +9,22 @@ whatever the backend or the number of workers.
 
 from __future__ import annotations
 
+import os
 import time
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Callable
+from typing import Any, Callable, Iterable, Iterator
 
 import numpy as np
 import pandas as pd
 
-from probecommit.runner.build import build_filter, build_model, build_simulator
+from probecommit.runner import build
 from probecommit.runner.config import StudyConfig, dump_config, parse_config
 from probecommit.runner.inference import blind_bayes_action, build_trace, commit, failed_episode_rows, rollout
 from probecommit.runner.instances import draw_instances
 from probecommit.store.rundir import RunDir
+
+CACHE_COLUMNS = ["engine", "query", "x_hole", "c", "arg", "value"]
 
 
 @dataclass
@@ -29,6 +32,11 @@ class StudyResult:
     run_dir: Path
     manifest: dict[str, Any]
     episodes: pd.DataFrame
+
+    @property
+    def failed_episodes(self) -> int:
+        """Episode rows marked failed (engine NaN or error), rollout rows included."""
+        return int((self.episodes["status"] != "ok").sum()) if "status" in self.episodes else 0
 
 
 def unit_names(n_instances: int, unit_instances: int) -> list[tuple[str, slice]]:
@@ -38,16 +46,18 @@ def unit_names(n_instances: int, unit_instances: int) -> list[tuple[str, slice]]
     ]
 
 
-def run_unit(config_data: dict, instances: pd.DataFrame, unit: str, out: str) -> dict[str, Any]:
-    """Run one unit end to end and write its shards; returns its stats.
+def compute_unit(config_data: dict, instances: pd.DataFrame, unit: str) -> tuple[str, dict[str, pd.DataFrame], dict[str, Any]]:
+    """Run one unit end to end in memory; returns ``(unit, tables, stats)``.
 
-    Top-level and argument-only so process pools and Ray can ship it.
+    Top-level, argument-only and free of disk writes, so process pools and Ray
+    workers (on any node, with no shared filesystem) can run it; only the driver
+    writes the run directory.
     """
     start = time.perf_counter()
     config = parse_config(config_data)
-    model = build_model(config.model)
-    pfilter = build_filter(model, config.belief)
-    simulator = build_simulator(config.simulator)
+    model = build.build_model(config.model)
+    pfilter = build.build_filter(model, config.belief)
+    simulator = build.build_simulator(config.simulator)
     schedule = config.probes.schedule
     batch = rollout(
         instances, config.repeats, schedule, config.probes.budget, model.probe_grid, simulator,
@@ -65,66 +75,102 @@ def run_unit(config_data: dict, instances: pd.DataFrame, unit: str, out: str) ->
     episodes = commit(trace, model, simulator, thresholds=config.belief.nu, methods=config.methods, blind=blind)
     failed = failed_episode_rows(batch, model.variant)
     if len(failed):
-        episodes = pd.concat([episodes, failed], ignore_index=True)
+        episodes = pd.concat([episodes, failed], ignore_index=True) if len(episodes) else failed
     stats = {
         "unit": unit,
         "engine_calls": dict(simulator.engine_calls),
         "engine_s": simulator.engine_seconds,
         "wall_s": time.perf_counter() - start,
+        "pid": os.getpid(),
         "episodes": int(batch.n_episodes),
         "failed_trajectories": int(np.sum(batch.status != "ok")),
-        "failed_rows": int(np.sum(episodes["status"] != "ok")),
+        "failed_rows": int(np.sum(episodes["status"] != "ok")) if len(episodes) else 0,
     }
-    RunDir(out).write_unit(
-        unit,
-        {
-            "instances": instances.reset_index(drop=True),
-            "probes": batch.probes_frame(),
-            "engine_cache": pd.DataFrame(simulator.cache_records(), columns=["engine", "query", "x_hole", "c", "arg", "value"]),
-            "episodes": episodes,
-        },
-        stats,
-    )
+    tables = {
+        "instances": instances.reset_index(drop=True),
+        "probes": batch.probes_frame(),
+        "engine_cache": pd.DataFrame(simulator.cache_records(), columns=CACHE_COLUMNS),
+        "episodes": episodes,
+    }
+    return unit, tables, stats
+
+
+def run_unit(config_data: dict, instances: pd.DataFrame, unit: str, out: str) -> dict[str, Any]:
+    """Run one unit and write its shards into the run directory ``out``; returns its stats."""
+    unit, tables, stats = compute_unit(config_data, instances, unit)
+    RunDir(out).write_unit(unit, tables, stats)
     return stats
 
 
-def _run_serial(jobs, progress):
+Job = tuple[dict, pd.DataFrame, str]
+Result = tuple[str, dict[str, pd.DataFrame], dict[str, Any]]
+
+
+def _run_serial(jobs: list[Job]) -> Iterator[Result]:
     for job in jobs:
-        run_unit(*job)
-        progress()
+        yield compute_unit(*job)
 
 
-def _run_processes(jobs, workers: int, progress):
+def _run_processes(jobs: list[Job], workers: int) -> Iterator[Result]:
     import multiprocessing as mp
-    from concurrent.futures import ProcessPoolExecutor, as_completed
+    from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 
-    # "spawn": engines hold native state that must not be forked.
-    with ProcessPoolExecutor(max_workers=workers, mp_context=mp.get_context("spawn")) as pool:
-        for fut in as_completed([pool.submit(run_unit, *job) for job in jobs]):
-            fut.result()
-            progress()
+    # "spawn": engines (MuJoCo, PyBullet, SAPIEN) hold native state that must not be
+    # forked, and a spawned worker starts from the same imports on every platform.
+    with ProcessPoolExecutor(max_workers=min(workers, len(jobs)), mp_context=mp.get_context("spawn")) as pool:
+        pending = {pool.submit(compute_unit, *job) for job in jobs}
+        try:
+            while pending:
+                done, pending = wait(pending, return_when=FIRST_COMPLETED)
+                for fut in done:
+                    yield fut.result()
+        finally:
+            for fut in pending:
+                fut.cancel()
 
 
-def _run_ray(jobs, address: str, progress):
+def ray_init_kwargs(address: str, workers: int) -> dict[str, Any]:
+    """``ray.init`` arguments for ``--ray``: ``local`` starts an instance, else connect."""
+    common = dict(include_dashboard=False, log_to_driver=False, configure_logging=False)
+    if address == "local":
+        return dict(num_cpus=workers if workers > 1 else None, **common)
+    return dict(address=address, **common)
+
+
+def _run_ray(jobs: list[Job], address: str, workers: int, timing: dict[str, float]) -> Iterator[Result]:
     from probecommit.engines import require
 
     ray = require("ray")
     started_here = not ray.is_initialized()
+    t0 = time.perf_counter()
     if started_here:
-        if address == "local":
-            ray.init(num_cpus=None, include_dashboard=False, log_to_driver=False)
-        else:
-            ray.init(address=address, include_dashboard=False, log_to_driver=False)
+        try:
+            ray.init(**ray_init_kwargs(address, workers))
+        except (ConnectionError, TimeoutError) as exc:
+            raise RuntimeError(f"cannot reach the Ray cluster at {address!r}: {str(exc).splitlines()[0]}") from None
+    timing["backend_start_s"] = time.perf_counter() - t0
     try:
-        remote = ray.remote(run_unit)
+        # Tasks return their tables to the driver: no shared filesystem is needed.
+        remote = ray.remote(max_retries=2)(compute_unit)
         pending = [remote.remote(*job) for job in jobs]
         while pending:
             done, pending = ray.wait(pending, num_returns=1)
-            ray.get(done[0])
-            progress()
+            yield ray.get(done[0])
     finally:
         if started_here:
             ray.shutdown()
+
+
+def preflight(config: StudyConfig) -> pd.DataFrame:
+    """Everything that can fail on a bad config, before anything is written.
+
+    Builds the model, filter and simulator (which imports the engine) and draws the
+    instances; returns the instances.
+    """
+    model = build.build_model(config.model)
+    build.build_filter(model, config.belief)
+    build.build_simulator(config.simulator)
+    return draw_instances(config, model.latent_names)
 
 
 def run_study(
@@ -136,37 +182,57 @@ def run_study(
 ) -> StudyResult:
     """Run (or resume) a study into ``out``.
 
+    Results are bit-identical whatever ``workers`` or the backend: every random draw
+    is keyed by (seed, instance, repeat), a unit's result does not depend on which
+    other units exist, and the final tables are merged in a canonical order.
+
     Args:
         config: The validated study config.
-        out: Run directory; an existing one is resumed only if its config matches.
-        workers: Local worker processes (1 = in this process).
+        out: Run directory; an existing one is resumed only if its config and
+            probecommit version match. A complete one whose tables still match its
+            manifest is returned as is.
+        workers: Local worker processes (1 = in this process); with
+            ``ray_address="local"``, the CPUs of the local Ray instance.
         ray_address: Run units on Ray instead: ``"auto"``, ``"local"`` or ``host:port``.
         progress: Called as ``progress(done, total)`` after each unit.
     """
     start = time.perf_counter()
+    instances = preflight(config)  # a bad config fails here: no directory is created
     run = RunDir(out)
-    run.prepare(dump_config(config))
-    model = build_model(config.model)
-    instances = draw_instances(config, model.latent_names)
+    config_yaml = dump_config(config)
+    with run.writing(config_yaml):
+        if run.is_complete() and not run.verify_digests():
+            if progress:
+                n = len(unit_names(len(instances), config.unit_instances))
+                progress(n, n)
+            return StudyResult(run.path, run.manifest(), pd.read_parquet(run.table_path("episodes")))
+        return _run_units(config, run, instances, workers, ray_address, progress, start)
+
+
+def _run_units(config, run: RunDir, instances, workers, ray_address, progress, start) -> StudyResult:
     units = unit_names(len(instances), config.unit_instances)
     config_data = config.model_dump(mode="json")
-    jobs = [(config_data, instances.iloc[sl], name, str(run.path)) for name, sl in units if not run.unit_done(name)]
+    jobs = [(config_data, instances.iloc[sl], name) for name, sl in units if not run.unit_done(name)]
     done = len(units) - len(jobs)
-    counter = {"done": done}
-
-    def tick() -> None:
-        counter["done"] += 1
-        if progress:
-            progress(counter["done"], len(units))
-
+    timing: dict[str, float] = {"backend_start_s": 0.0}
     if progress:
         progress(done, len(units))
     if ray_address:
-        _run_ray(jobs, ray_address, tick)
+        results: Iterable[Result] = _run_ray(jobs, ray_address, workers, timing)
+        backend = f"ray:{ray_address}"
     elif workers > 1 and len(jobs) > 1:
-        _run_processes(jobs, workers, tick)
+        results = _run_processes(jobs, workers)
+        backend = f"processes:{min(workers, len(jobs))}"
     else:
-        _run_serial(jobs, tick)
+        results = _run_serial(jobs)
+        backend = "serial"
+    t_units = time.perf_counter()
+    for unit, tables, stats in results:
+        run.write_unit(unit, tables, stats)  # only the driver writes: one writer per file
+        done += 1
+        if progress:
+            progress(done, len(units))
+    units_wall = time.perf_counter() - t_units
     stats = [run.unit_stats(name) for name, _ in units]
     calls: dict[str, int] = {}
     for s in stats:
@@ -178,15 +244,19 @@ def run_study(
             "study": config.name,
             "engine": config.simulator.engine,
             "engine_calls": calls,
+            "backend": backend,
             "timing": {
                 "engine_s": float(sum(s["engine_s"] for s in stats)),
                 "units_wall_s": float(sum(s["wall_s"] for s in stats)),
+                "backend_start_s": float(timing["backend_start_s"]),
+                "this_invocation_units_wall_s": units_wall,
                 "this_invocation_wall_s": time.perf_counter() - start,
             },
+            "units": len(units),
             "episodes": int(sum(s["episodes"] for s in stats)),
             "failed_trajectories": int(sum(s["failed_trajectories"] for s in stats)),
             "failed_rows": int(sum(s["failed_rows"] for s in stats)),
-            "resumed_units": done,
+            "resumed_units": len(units) - len(jobs),
         },
     )
     return StudyResult(run.path, manifest, pd.read_parquet(run.table_path("episodes")))

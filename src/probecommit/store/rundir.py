@@ -9,32 +9,47 @@ Layout (the data contract users see)::
       probes.parquet       instance, repeat, j, probe u, observation y
       episodes.parquet     one row per (instance, repeat, budget, method)
       engine_cache.parquet every deterministic engine answer, so replays never re-run one
-      shards/              per-unit partial results while a run is in progress
+      shards/              per-unit results (kept after completion; safe to delete then)
 
 Every file is written to a temporary name and renamed into place, so a killed run
 never leaves a half-written table; a directory without ``manifest.json`` is
-incomplete by definition.
+incomplete by definition. Within a unit the episodes shard is renamed into place
+last, so its presence marks the unit whole; the manifest is written after every
+final table. The final tables are in a canonical row order that does not depend
+on how instances were grouped into units, on the backend or on the worker count.
 """
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import json
 import os
 import subprocess
 import tempfile
 from pathlib import Path
-from typing import Any
+from typing import Any, Iterator
 
 import pandas as pd
 import pyarrow as pa
 import pyarrow.parquet as pq
+import yaml
 
 from probecommit import __version__
+from probecommit.store.schema import EPISODE_COLUMNS, INSTANCE_COLUMNS, PROBE_COLUMNS, Column
 
 MANIFEST = "manifest.json"
 CONFIG = "config.yaml"
+VERSION = "VERSION"
+LOCK = "LOCK"
 TABLES = ("instances", "probes", "episodes", "engine_cache")
+#: Shard files of one unit, in the order they are written (episodes last marks it done).
+UNIT_FILES = ("instances.parquet", "probes.parquet", "engine_cache.parquet", "stats.json", "episodes.parquet")
+_SCHEMAS: dict[str, tuple[Column, ...]] = {
+    "instances": INSTANCE_COLUMNS,
+    "probes": PROBE_COLUMNS,
+    "episodes": EPISODE_COLUMNS,
+}
 
 
 class RunDirError(RuntimeError):
@@ -56,10 +71,42 @@ def atomic_write_bytes(path: Path, data: bytes) -> None:
         raise
 
 
-def atomic_write_parquet(path: Path, frame: pd.DataFrame) -> None:
+def _is_tmp(path: Path) -> bool:
+    return path.name.startswith(".") and path.name.endswith(".tmp")
+
+
+def atomic_write_parquet(path: Path, frame: pd.DataFrame, columns: tuple[Column, ...] = ()) -> None:
+    """Write a table atomically; columns named in ``columns`` get their schema type."""
+    table = pa.Table.from_pandas(frame, preserve_index=False)
+    types = {c.name: c.type for c in columns}
+    if types:
+        target = pa.schema([pa.field(f.name, types.get(f.name, f.type)) for f in table.schema])
+        if target != table.schema:
+            table = table.cast(target)
     sink = pa.BufferOutputStream()
-    pq.write_table(pa.Table.from_pandas(frame, preserve_index=False), sink)
+    pq.write_table(table, sink)
     atomic_write_bytes(path, sink.getvalue().to_pybytes())
+
+
+def _flatten(data: Any, prefix: str = "") -> dict[str, Any]:
+    if isinstance(data, dict):
+        out: dict[str, Any] = {}
+        for key, value in data.items():
+            out.update(_flatten(value, f"{prefix}{key}."))
+        return out
+    return {prefix.rstrip("."): data}
+
+
+def config_difference(old_yaml: str, new_yaml: str) -> str:
+    """The first differing config field, as ``field: old in the directory, new here``."""
+    try:
+        old, new = _flatten(yaml.safe_load(old_yaml) or {}), _flatten(yaml.safe_load(new_yaml) or {})
+    except yaml.YAMLError:
+        return "its config.yaml is not valid YAML"
+    for key in list(new) + [k for k in old if k not in new]:
+        if old.get(key, "<unset>") != new.get(key, "<unset>"):
+            return f"{key} is {old.get(key, '<unset>')!r} there, {new.get(key, '<unset>')!r} here"
+    return "the config text differs"
 
 
 def sha256_file(path: Path) -> str:
@@ -104,39 +151,124 @@ class RunDir:
     def is_complete(self) -> bool:
         return (self.path / MANIFEST).is_file()
 
-    def prepare(self, config_yaml: str) -> None:
-        """Create the directory, or accept it for resuming only if its config matches.
+    def check_compatible(self, config_yaml: str) -> None:
+        """Refuse a directory written by another probecommit version or of another config.
+
+        Versions are checked first (a new version may also change the config's
+        defaults, and the version is then the real reason).
 
         Raises:
-            RunDirError: the directory holds a run of another config or version.
+            RunDirError: naming the version or the first differing config field.
         """
-        cfg_path = self.path / CONFIG
-        if cfg_path.is_file():
-            existing = cfg_path.read_text()
-            if existing != config_yaml:
+        hint = "choose another --out directory, or delete this one to start over"
+        meta = self.shards / VERSION
+        if meta.is_file() and meta.read_text().strip() != __version__:
+            raise RunDirError(
+                f"{self.path} was started by probecommit {meta.read_text().strip()}, this is {__version__}; "
+                f"refusing to mix results from two versions ({hint})"
+            )
+        if self.is_complete():
+            try:
+                written_by = json.loads((self.path / MANIFEST).read_text()).get("probecommit_version")
+            except (ValueError, AttributeError):
+                raise RunDirError(f"{self.path}/{MANIFEST} is not valid JSON; the directory is corrupt ({hint})") from None
+            if written_by != __version__:
                 raise RunDirError(
-                    f"{self.path} holds a run of a different config; refusing to mix results. "
-                    "Choose another --out directory or delete it."
+                    f"{self.path} was written by probecommit {written_by}, this is {__version__}; "
+                    f"refusing to mix results from two versions ({hint})"
                 )
-            meta = self.path / "shards" / "VERSION"
-            if meta.is_file() and meta.read_text().strip() != __version__:
-                raise RunDirError(
-                    f"{self.path} was started by probecommit {meta.read_text().strip()}, this is {__version__}; "
-                    "refusing to mix results from two versions."
-                )
-            if self.is_complete():
-                manifest = self.manifest()
-                if manifest.get("probecommit_version") != __version__:
-                    raise RunDirError(
-                        f"{self.path} was written by probecommit {manifest.get('probecommit_version')}, "
-                        f"this is {__version__}; refusing to mix results."
-                    )
+        existing = (self.path / CONFIG).read_text()
+        if existing != config_yaml:
+            raise RunDirError(
+                f"{self.path} holds a run of a different config ({config_difference(existing, config_yaml)}); "
+                f"refusing to mix results ({hint})"
+            )
+
+    def _ours_but_unstarted(self) -> bool:
+        """A directory a killed run left before it wrote its config: nothing but shards/VERSION."""
+        entries = [e for e in self.path.iterdir() if not _is_tmp(e)]
+        if [e.name for e in entries] != ["shards"] or not self.shards.is_dir():
+            return False
+        return all(e.name in (VERSION, LOCK) or _is_tmp(e) for e in self.shards.iterdir())
+
+    def check_writable(self, config_yaml: str) -> None:
+        """Read-only checks that this run may be started or resumed here; creates nothing.
+
+        Raises:
+            RunDirError: the directory holds a run of another config or version, or
+                something that is not a run directory.
+        """
+        if (self.path / CONFIG).is_file():
+            self.check_compatible(config_yaml)
             return
-        if self.path.exists() and any(self.path.iterdir()):
+        if self.path.exists() and not self.path.is_dir():
+            raise RunDirError(f"{self.path} exists and is not a directory; refusing to write into it")
+        if self.path.exists() and any(self.path.iterdir()) and not self._ours_but_unstarted():
             raise RunDirError(f"{self.path} exists and is not a probecommit run directory; refusing to write into it")
+
+    def prepare(self, config_yaml: str) -> None:
+        """Create the directory, or accept it for resuming only if it is compatible.
+
+        Call with :meth:`lock` held when another process could write the directory
+        (see :meth:`writing`): it deletes temporaries a killed writer left.
+
+        Raises:
+            RunDirError: as :meth:`check_writable`.
+        """
+        self.check_writable(config_yaml)
+        cfg_path = self.path / CONFIG
         self.shards.mkdir(parents=True, exist_ok=True)
-        atomic_write_bytes(self.shards / "VERSION", __version__.encode())
-        atomic_write_bytes(cfg_path, config_yaml.encode())
+        self.remove_stale_temporaries()
+        if not cfg_path.is_file() or not (self.shards / VERSION).is_file():
+            # VERSION first: a directory with a config but without VERSION was killed in
+            # between and has no unit yet, so writing VERSION now mixes nothing.
+            atomic_write_bytes(self.shards / VERSION, __version__.encode())
+        if not cfg_path.is_file():
+            atomic_write_bytes(cfg_path, config_yaml.encode())
+
+    @contextlib.contextmanager
+    def writing(self, config_yaml: str) -> Iterator[None]:
+        """Check, lock and prepare the directory for a run, and hold the lock throughout."""
+        self.check_writable(config_yaml)
+        with self.lock():
+            self.prepare(config_yaml)
+            yield
+
+    def remove_stale_temporaries(self) -> None:
+        """Delete temporary files a killed writer left behind (call with the lock held)."""
+        for folder in (self.path, self.shards):
+            if folder.is_dir():
+                for entry in folder.iterdir():
+                    if _is_tmp(entry) and entry.is_file():
+                        entry.unlink(missing_ok=True)
+
+    @contextlib.contextmanager
+    def lock(self) -> Iterator[None]:
+        """Hold an exclusive lock on the directory while writing it.
+
+        The operating system releases it when the process dies, SIGKILL included,
+        so a killed run never blocks its own resumption.
+
+        Raises:
+            RunDirError: another live process is writing this directory.
+        """
+        try:
+            import fcntl
+        except ImportError:  # pragma: no cover - not POSIX: no lock
+            yield
+            return
+        self.shards.mkdir(parents=True, exist_ok=True)
+        fd = os.open(self.shards / LOCK, os.O_RDWR | os.O_CREAT, 0o644)
+        try:
+            try:
+                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            except OSError:
+                raise RunDirError(
+                    f"{self.path} is being written by another probecommit process; wait for it or stop it first"
+                ) from None
+            yield
+        finally:
+            os.close(fd)
 
     def config_text(self) -> str:
         return (self.path / CONFIG).read_text()
@@ -145,29 +277,33 @@ class RunDir:
         return self.shards / f"{unit}.{table}.parquet"
 
     def unit_done(self, unit: str) -> bool:
-        # The episodes shard is written last in a unit, so its presence means the unit is whole.
-        return self.shard_path(unit, "episodes").is_file()
+        """Whether every shard of ``unit`` is on disk.
+
+        The episodes shard is written last in a unit, so with atomic writes its
+        presence means the unit is whole; the other files are checked too, so a
+        shard deleted by hand makes the unit run again instead of failing the merge.
+        """
+        return all((self.shards / f"{unit}.{name}").is_file() for name in UNIT_FILES)
 
     def write_unit(self, unit: str, tables: dict[str, pd.DataFrame], stats: dict[str, Any]) -> None:
         for name in ("instances", "probes", "engine_cache"):
-            atomic_write_parquet(self.shard_path(unit, name), tables[name])
+            atomic_write_parquet(self.shard_path(unit, name), tables[name], _SCHEMAS.get(name, ()))
         atomic_write_bytes(self.shards / f"{unit}.stats.json", json.dumps(stats).encode())
-        atomic_write_parquet(self.shard_path(unit, "episodes"), tables["episodes"])
+        atomic_write_parquet(self.shard_path(unit, "episodes"), tables["episodes"], EPISODE_COLUMNS)
 
     def unit_stats(self, unit: str) -> dict[str, Any]:
         return json.loads((self.shards / f"{unit}.stats.json").read_text())
 
     def finalize(self, units: list[str], manifest_extra: dict[str, Any]) -> dict[str, Any]:
-        """Merge unit shards in unit order into the final tables, then write the manifest."""
-        digests = {}
+        """Merge unit shards into the final tables (canonical order), then write the manifest."""
+        frames = {}
         for name in TABLES:
             parts = [pd.read_parquet(self.shard_path(u, name)) for u in units]
-            parts = [p for p in parts if len(p)]
-            frame = pd.concat(parts, ignore_index=True) if parts else pd.DataFrame()
-            if name == "episodes" and len(frame):
-                # Canonical row order, independent of how instances were grouped into units.
-                frame = frame.sort_values(["instance_id", "repeat"], kind="stable", ignore_index=True)
-            atomic_write_parquet(self.table_path(name), frame)
+            nonempty = [p for p in parts if len(p)]
+            frames[name] = pd.concat(nonempty or parts[:1], ignore_index=True) if parts else pd.DataFrame()
+        digests = {}
+        for name, frame in canonical_tables(frames).items():
+            atomic_write_parquet(self.table_path(name), frame, _SCHEMAS.get(name, ()))
             digests[f"{name}.parquet"] = sha256_file(self.table_path(name))
         manifest = {
             "probecommit_version": __version__,
@@ -191,4 +327,37 @@ class RunDir:
     def verify_digests(self) -> list[str]:
         """Tables whose sha256 no longer matches the manifest."""
         manifest = self.manifest()
-        return [f for f, h in manifest["sha256"].items() if sha256_file(self.path / f) != h]
+        return [f for f, h in manifest["sha256"].items() if not (self.path / f).is_file() or sha256_file(self.path / f) != h]
+
+
+def canonical_tables(frames: dict[str, pd.DataFrame]) -> dict[str, pd.DataFrame]:
+    """The final tables in a row order that depends on their content only.
+
+    Instances by index; probes by (instance, repeat, j); episodes by (instance,
+    repeat), keeping the runner's plan order (blind first, then budgets) within a
+    trajectory; the engine cache by (engine, instance truth, query, argument).
+    Instances order the others, so ``test-10000`` follows ``test-9999``.
+    """
+    out = dict(frames)
+    instances = frames.get("instances")
+    order: dict[str, int] = {}
+    if instances is not None and "instance_index" in instances.columns:
+        instances = instances.sort_values(["instance_index"], kind="stable", ignore_index=True)
+        out["instances"] = instances
+        order = {iid: n for n, iid in enumerate(instances["instance_id"].astype(str))}
+
+    def by_instance(frame: pd.DataFrame, keys: list[str]) -> pd.DataFrame:
+        if frame is None or not len(frame) or not set(keys) <= set(frame.columns):
+            return frame
+        pos = frame["instance_id"].astype(str).map(order).fillna(len(order)) if order else 0
+        ranked = frame.assign(_pos=pos)
+        sort_keys = ["_pos", "instance_id"] + keys[1:]
+        return ranked.sort_values(sort_keys, kind="stable", ignore_index=True).drop(columns="_pos")
+
+    out["probes"] = by_instance(frames.get("probes"), ["instance_id", "repeat", "j"])
+    out["episodes"] = by_instance(frames.get("episodes"), ["instance_id", "repeat"])
+    cache = frames.get("engine_cache")
+    keys = ["engine", "x_hole", "c", "query", "arg"]
+    if cache is not None and len(cache) and set(keys) <= set(cache.columns):
+        out["engine_cache"] = cache.sort_values(keys, kind="stable", ignore_index=True)
+    return {name: out[name] for name in frames}

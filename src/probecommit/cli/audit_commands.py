@@ -1,0 +1,227 @@
+"""``probecommit audit``, ``calibrate`` and ``gates``: typer commands over :mod:`probecommit.audit`.
+
+Registered on the main app by :func:`register`. Each prints rich tables and writes
+a self-contained HTML report, its PNG figures and machine-readable tables.
+"""
+
+from __future__ import annotations
+
+import functools
+import json
+import math
+from pathlib import Path
+from typing import Callable, Optional
+
+import typer
+from rich.console import Console
+from rich.table import Table
+
+console = Console()
+err_console = Console(stderr=True)
+
+_USER_ERRORS: tuple[type[BaseException], ...] = (ValueError, FileNotFoundError, RuntimeError, ImportError)
+
+
+def _user_errors(fn: Callable) -> Callable:
+    """One red line and exit code 2 for errors a user can cause (bad log, wrong run)."""
+
+    @functools.wraps(fn)
+    def wrapper(*args, **kwargs):
+        try:
+            return fn(*args, **kwargs)
+        except typer.Exit:
+            raise
+        except _USER_ERRORS as exc:
+            err_console.print(f"[red]error:[/red] {exc}", highlight=False, markup=True)
+            raise typer.Exit(2) from None
+
+    return wrapper
+
+
+def _f(v, signed: bool = False) -> str:
+    try:
+        v = float(v)
+    except (TypeError, ValueError):
+        return str(v)
+    if math.isnan(v):
+        return "–"
+    if math.isinf(v):
+        return "inf"
+    return f"{v:+.3f}" if signed else f"{v:.3f}"
+
+
+def _ci(row, name: str, signed: bool = False) -> str:
+    return f"{_f(row[name], signed)} [{_f(row[name + '_lo'], signed)}, {_f(row[name + '_hi'], signed)}]"
+
+
+def _ci3(row, metric: str, arm: str, signed: bool = False) -> str:
+    return (f"{_f(row[f'{metric}_{arm}'], signed)} [{_f(row[f'{metric}_lo_{arm}'], signed)}, "
+            f"{_f(row[f'{metric}_hi_{arm}'], signed)}]")
+
+
+def _parse_budgets(text: Optional[str]) -> Optional[list[int]]:
+    if not text:
+        return None
+    try:
+        return sorted({int(x) for x in text.replace(" ", "").split(",") if x})
+    except ValueError:
+        raise ValueError(f"--budgets must be comma-separated integers, got {text!r}") from None
+
+
+def _save_png(fig, path: Path) -> None:
+    import matplotlib.pyplot as plt
+
+    fig.savefig(path)
+    plt.close(fig)
+
+
+def print_audit_table(table, title: str) -> None:
+    """Rich tables of the per-budget audit metrics with intervals, one per method/variant."""
+    groups = [c for c in ("method", "variant") if c in table.columns]
+    parts = list(table.groupby(groups, sort=False)) if groups else [((), table)]
+    for key, part in parts:
+        key = key if isinstance(key, tuple) else (key,)
+        name = " / ".join(map(str, key))
+        out = Table(title=f"{title}: {name}" if name else title, title_style="bold")
+        for col in ("k", "n", "failed", "coverage", "cluster cov.", "escape", "R_k", "R̂_k", "e_k"):
+            out.add_column(col, justify="right")
+        for _, row in part.iterrows():
+            out.add_row(str(int(row["k"])), str(int(row["n_episodes"])), str(int(row["n_failed"])),
+                        _ci(row, "coverage"), _ci(row, "cluster_coverage"), _ci(row, "escape"),
+                        _f(row["realized"]), _f(row["predicted"]), _ci(row, "optimism", True))
+        console.print(out)
+
+
+@_user_errors
+def audit_command(
+    path: Path = typer.Argument(..., help="Run directory, or a Parquet/CSV episode log (a real robot's)."),
+    out: Optional[Path] = typer.Option(None, "--out", "-o", help="Output folder (default: the run directory, "
+                                       "or <log>-audit next to a log file)."),
+    resamples: int = typer.Option(2000, min=100, help="Cluster-bootstrap resamples."),
+    seed: int = typer.Option(0, help="Bootstrap seed."),
+    nominal: float = typer.Option(0.8, min=0.0, max=1.0, help="Nominal coverage drawn in the figure."),
+) -> None:
+    """Audit coverage, support escape and optimism per budget, with cluster-bootstrap intervals."""
+    from probecommit.audit.pipeline import audit
+    from probecommit.audit.report import audit_figure, write_html_report
+
+    result = audit(path, resamples=resamples, seed=seed)
+    out = out or (path if path.is_dir() else path.with_name(f"{path.stem}-audit"))
+    out.mkdir(parents=True, exist_ok=True)
+    print_audit_table(result.table, f"audit of {path}")
+    if result.n_failed:
+        console.print(f"{result.n_failed} failed row(s) of {result.n_total} excluded from every metric")
+    if result.surprise is not None:
+        s = Table(title="prequential surprise: AUC for final-budget escape", title_style="bold")
+        for col in ("k", "escaped", "not escaped", "AUC"):
+            s.add_column(col, justify="right")
+        for _, row in result.surprise.iterrows():
+            s.add_row(str(row["k"]), str(row["n_escaped"]), str(row["n_covered"]), _ci(row, "auc"))
+        console.print(s)
+    result.table.to_csv(out / "audit.csv", index=False)
+    if result.surprise is not None:
+        result.surprise.to_csv(out / "surprise_auc.csv", index=False)
+    _save_png(audit_figure(result.table, nominal), out / "audit.png")
+    report = write_html_report(out / "audit.html", result, title=f"Audit of {path.name}", nominal=nominal)
+    console.print(f"report: [bold]{report}[/bold]")
+
+
+@_user_errors
+def calibrate_command(
+    cal: Path = typer.Option(..., "--cal", help="Calibration run directory."),
+    test: Path = typer.Option(..., "--test", help="Test run directory (same model and schedule, other instances)."),
+    alpha: float = typer.Option(0.2, min=0.001, max=0.999, help="Miscoverage level (1 - alpha is the target)."),
+    budgets: Optional[str] = typer.Option(None, help="Comma-separated budgets (default: all)."),
+    cost_budget: Optional[int] = typer.Option(None, help="Budget of the failure comparison (default: the last)."),
+    out: Optional[Path] = typer.Option(None, "--out", "-o", help="Output folder (default: <test>/calibration)."),
+    resamples: int = typer.Option(2000, min=100, help="Cluster-bootstrap resamples."),
+    seed: int = typer.Option(0, help="Bootstrap seed."),
+) -> None:
+    """Conformal thresholds and margin on --cal; their effect on --test (Tables III and IV)."""
+    from probecommit.audit.pipeline import calibrate
+    from probecommit.audit.report import calibration_figure, write_html_report
+
+    res = calibrate(cal, test, alpha, _parse_budgets(budgets), cost_budget=cost_budget, resamples=resamples, seed=seed)
+    out = out or test / "calibration"
+    out.mkdir(parents=True, exist_ok=True)
+    console.print(f"M = {res.n_calibration} calibration instances, 1 - alpha = {1 - alpha:.2f}; "
+                  f"simultaneous t = {_f(res.simultaneous_threshold)}; margin gamma = {res.margin.gamma:.2f}"
+                  f"{'' if res.margin.satisfied else ' (rule not met on the grid)'}; "
+                  f"distribution-free margin = {_f(res.distribution_free_margin)}")
+    t3 = Table(title="coverage and optimism on test (original -> calibrated)", title_style="bold")
+    for col in ("k", "t_k", "cluster cov. original", "cluster cov. calibrated", "e_k original", "e_k calibrated"):
+        t3.add_column(col, justify="right")
+    for _, r in res.table3.iterrows():
+        t3.add_row(str(int(r["k"])), _f(r["threshold"]),
+                   _ci3(r, "cluster_coverage", "original"), _ci3(r, "cluster_coverage", "calibrated"),
+                   _ci3(r, "optimism", "original", True), _ci3(r, "optimism", "calibrated", True))
+    t3.add_row("mean |.|", "", f"{_f(res.summary['mean_abs_cluster_coverage_gap_original'])}",
+               f"{_f(res.summary['mean_abs_cluster_coverage_gap_calibrated'])}",
+               f"{_f(res.summary['mean_abs_optimism_original'])}", f"{_f(res.summary['mean_abs_optimism_calibrated'])}")
+    console.print(t3)
+    t4 = Table(title=f"cost of calibration: failure at k = {res.cost_budget}", title_style="bold")
+    for col in ("setting", "k", "n", "failure"):
+        t4.add_column(col, justify="right")
+    for _, r in res.cost.iterrows():
+        t4.add_row(str(r["setting"]), str(int(r["k"])), str(int(r["n_episodes"])), _ci(r, "failure"))
+    for _, r in res.cost_differences.iterrows():
+        t4.add_row(f"{r['treatment']} - {r['baseline']}", "", str(int(r["n_pairs"])),
+                   f"{_f(r['difference'], True)} [{_f(r['lo'], True)}, {_f(r['hi'], True)}] p={r['p_sign_flip']:.3g}")
+    console.print(t4)
+    (out / "calibration.json").write_text(json.dumps(res.to_dict(), indent=2, default=float))
+    res.table3.to_csv(out / "table3.csv", index=False)
+    res.cost.to_csv(out / "cost.csv", index=False)
+    res.cost_differences.to_csv(out / "cost_differences.csv", index=False)
+    res.margin.search.to_csv(out / "margin_search.csv", index=False)
+    _save_png(calibration_figure(res.table3, 1 - alpha), out / "calibration.png")
+    report = write_html_report(out / "calibration.html", res.audit_calibrated, title="Calibration",
+                               calibration=res, nominal=1 - alpha,
+                               notes=f"calibration run {cal}, test run {test}; the audit table is the calibrated executor's.")
+    console.print(f"report: [bold]{report}[/bold]")
+
+
+@_user_errors
+def gates_command(
+    cal: Path = typer.Option(..., "--cal", help="Calibration run directory."),
+    test: Path = typer.Option(..., "--test", help="Test run directory."),
+    alpha: float = typer.Option(0.2, min=0.001, max=0.999, help="Miscoverage level of the simultaneous threshold."),
+    budgets: Optional[str] = typer.Option(None, help="Comma-separated nested budgets (default: all)."),
+    target: float = typer.Option(0.6, min=0.0, max=1.0, help="Commit rate of the operating point."),
+    out: Optional[Path] = typer.Option(None, "--out", "-o", help="Output folder (default: <test>/gates)."),
+    resamples: int = typer.Option(2000, min=100, help="Bootstrap resamples (surprise AUC)."),
+    seed: int = typer.Option(0, help="Bootstrap seed."),
+) -> None:
+    """Commit gates: failure among committed vs commit rate under first-passage commitment."""
+    from probecommit.audit.pipeline import gates
+    from probecommit.audit.report import gates_figure, write_html_report
+
+    res = gates(cal, test, alpha, _parse_budgets(budgets), target_rate=target, resamples=resamples, seed=seed)
+    out = out or test / "gates"
+    out.mkdir(parents=True, exist_ok=True)
+    console.print(f"simultaneous t = {_f(res.info['threshold'])}, margin gamma = {res.info['gamma']:.2f}; "
+                  f"{res.n_trajectories} trajectories ({res.n_dropped} dropped), budgets {res.budgets}")
+    tab = Table(title=f"gates at the commit rate nearest {target:.0%}", title_style="bold")
+    for col in ("signal", "area", "range", "tau", "committed", "escaped in pool", "escaped rejected",
+                "claimed", "realized"):
+        tab.add_column(col, justify="right")
+    for _, r in res.summary.iterrows():
+        tab.add_row(str(r["signal"]) + ("" if r["deployable"] else " (hindsight)"), _f(r["area"]),
+                    f"[{_f(r['c_min'])}, {_f(r['c_max'])}]", _f(r.get("tau")),
+                    f"{int(r['n_committed'])} ({_f(r['commit_rate'])})",
+                    f"{int(r['escaped_committed'])}/{int(r['n_committed'])}",
+                    f"{int(r['escaped_rejected'])}/{int(r['n_rejected'])}", _f(r["claimed"]), _f(r["realized"]))
+    console.print(tab)
+    res.curves.to_csv(out / "gate_curves.csv", index=False)
+    res.summary.to_csv(out / "gates.csv", index=False)
+    res.info["surprise"].to_csv(out / "surprise_auc.csv", index=False)
+    _save_png(gates_figure(res), out / "gates.png")
+    report = write_html_report(out / "gates.html", title="Commit gates", gates=res, nominal=1 - alpha,
+                               notes=f"calibration run {cal}, test run {test}")
+    console.print(f"report: [bold]{report}[/bold]")
+
+
+def register(app: typer.Typer) -> None:
+    """Register ``audit``, ``calibrate`` and ``gates`` on the main app."""
+    app.command("audit")(audit_command)
+    app.command("calibrate")(calibrate_command)
+    app.command("gates")(gates_command)

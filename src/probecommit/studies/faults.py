@@ -1,0 +1,76 @@
+"""Controlled mismatch classes (paper Table "Controlled mismatch tests", Fig. "signatures").
+
+Five faults are injected one at a time on top of the corrected model, each with
+its known fix and with tempering ``T``:
+
+========== ============================================ ==================================
+fault      injection                                    known fix
+========== ============================================ ==================================
+noise      simulator tap noise x4 (model sigma kept)    model sigma x4
+boundary   the deployed tap boundary hg - r             the corrected boundary
+prior      truths from +-12 mm under a +-10 mm prior    prior widened to +-12 mm
+particles  128 particles, no jitter                     1024 with jitter
+frame      +1 mm on the committed aim, simulator side   offset removed
+========== ============================================ ==================================
+
+Every arm of a fault reuses one set of stored probes, so arms are paired.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import pandas as pd
+
+from probecommit.runner.replay import LoadedRun, replay_episodes
+
+FAULTS = ("none", "noise", "boundary", "prior", "particles", "frame")
+ROLLOUTS = ("base", "noise", "prior")  # runs the harness needs: the rest are replays of "base"
+
+
+@dataclass(frozen=True)
+class Arm:
+    fault: str
+    arm: str  # "fault", "fix" or "tempered"
+    rollout: str  # which stored run's probes
+    overrides: dict[str, dict[str, Any]]
+
+
+def fault_arms(noise_factor: float, prior_half_width: float, particles: int, frame_offset: float,
+               temperature: float, sigma: float) -> list[Arm]:
+    """Every (fault, arm) of the harness as a replay of one of the ``ROLLOUTS``."""
+    temper = {"likelihood": "tempered", "temperature": temperature}
+    deployed = {"boundary": "deployed"}
+    few = {"particles": particles, "jitter": False}
+    frame = {"aim_offset": frame_offset}
+    wide = {"prior_low": (-prior_half_width, 0.7), "prior_high": (prior_half_width, 1.3)}
+    return [
+        Arm("none", "fault", "base", {}),
+        Arm("noise", "fault", "noise", {}),
+        Arm("noise", "fix", "noise", {"model": {"sigma": sigma * noise_factor}}),
+        Arm("noise", "tempered", "noise", {"belief": temper}),
+        Arm("boundary", "fault", "base", {"model": deployed}),
+        Arm("boundary", "fix", "base", {}),
+        Arm("boundary", "tempered", "base", {"model": deployed, "belief": temper}),
+        Arm("prior", "fault", "prior", {}),
+        Arm("prior", "fix", "prior", {"model": wide}),
+        Arm("prior", "tempered", "prior", {"belief": temper}),
+        Arm("particles", "fault", "base", {"belief": few}),
+        Arm("particles", "fix", "base", {}),
+        Arm("particles", "tempered", "base", {"belief": {**few, **temper}}),
+        Arm("frame", "fault", "base", {"simulator": frame}),
+        Arm("frame", "fix", "base", {}),
+        Arm("frame", "tempered", "base", {"simulator": frame, "belief": temper}),
+    ]
+
+
+def run_fault_harness(rollouts: dict[str, LoadedRun], arms: list[Arm], progress=None) -> pd.DataFrame:
+    """Episodes of every arm, tagged with ``fault`` and ``arm`` columns."""
+    frames = []
+    for n, arm in enumerate(arms):
+        episodes, _ = replay_episodes(rollouts[arm.rollout], arm.overrides)
+        frames.append(episodes.assign(fault=arm.fault, arm=arm.arm))
+        if progress:
+            progress(n + 1, len(arms))
+    return pd.concat(frames, ignore_index=True)

@@ -1,0 +1,485 @@
+"""``probecommit reproduce insertion``: every MuJoCo insertion table and figure.
+
+The steps, in the paper's order of dependence: the boundary scan and the cover
+schedule search on the development instances (both frozen into the protocol), the
+rollouts of every instance set, the replays under the corrected model, calibration,
+the Test C confirmation, the fault harness, the robust filters and the re-split
+study. Each step writes its tables to ``results/`` as Markdown and every number
+into ``results.json``; ``REPRODUCTION.md`` is generated from those.
+"""
+
+from __future__ import annotations
+
+import json
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Callable
+
+import numpy as np
+import pandas as pd
+
+from probecommit.audit.pipeline import calibrate
+from probecommit.audit.stats import cluster_bootstrap_mean, paired_bootstrap
+from probecommit.audit.surprise import surprise_auc
+from probecommit.report.study_figures import decisive_tap_figure, fault_signatures, scan_figure
+from probecommit.runner.build import build_model, build_simulator
+from probecommit.runner.config import SimulatorConfig
+from probecommit.runner.instances import draw_instances
+from probecommit.runner.replay import LoadedRun, load_run, replay_episodes, replay_run, trace_for_run
+from probecommit.runner.study import run_study
+from probecommit.studies.cover_search import search_cover_schedule
+from probecommit.studies.faults import fault_arms, run_fault_harness
+from probecommit.studies.protocol import DEFAULT_PROTOCOL, Protocol, load_protocol
+from probecommit.studies.robust import final_failure, robust_candidates, tune_robust_filters
+from probecommit.studies.scan import boundary_scan
+
+Progress = Callable[[str, int, int], None]
+
+
+def _noop(step: str, done: int, total: int) -> None:
+    return None
+
+
+@dataclass
+class Reproduction:
+    """Where everything went, and the numbers."""
+
+    root: Path
+    results: dict[str, Any] = field(default_factory=dict)
+    tables: dict[str, str] = field(default_factory=dict)
+    figures: dict[str, str] = field(default_factory=dict)
+    engine_calls: dict[str, int] = field(default_factory=dict)
+    wall_s: float = 0.0
+
+    def add_calls(self, calls: dict[str, int]) -> None:
+        for key, value in calls.items():
+            self.engine_calls[key] = self.engine_calls.get(key, 0) + int(value)
+
+
+def probe_rows(episodes: pd.DataFrame, k: int | None = None) -> pd.DataFrame:
+    out = episodes[(episodes.method == "probe_robust") & (episodes.status == "ok")]
+    return out if k is None else out[out.k == k]
+
+
+def subset_run(loaded: LoadedRun, instance_ids) -> LoadedRun:
+    """The same run restricted to some instances (for re-splits of one pool)."""
+    keep = set(instance_ids)
+    return LoadedRun(
+        loaded.path, loaded.config,
+        loaded.instances[loaded.instances.instance_id.isin(keep)].reset_index(drop=True),
+        loaded.probes[loaded.probes.instance_id.isin(keep)].reset_index(drop=True),
+        loaded.episodes[loaded.episodes.instance_id.isin(keep)].reset_index(drop=True),
+        loaded.engine_cache, loaded.manifest,
+    )
+
+
+def episode_metrics(episodes: pd.DataFrame, k: int, resamples: int, seed: int) -> dict[str, Any]:
+    """Failure, predicted, optimism, coverage and escape at one budget, with cluster intervals."""
+    rows = probe_rows(episodes, k)
+    out: dict[str, Any] = {"n": int(len(rows))}
+    for name, values in (
+        ("failure", rows["realized"].to_numpy(float)),
+        ("predicted", rows["predicted"].to_numpy(float)),
+        ("optimism", (rows["realized"] - rows["predicted"]).to_numpy(float)),
+        ("episode_coverage", rows["covered"].to_numpy(float)),
+        ("escape", rows["escaped"].to_numpy(float)),
+    ):
+        iv = cluster_bootstrap_mean(values, rows["instance_id"].to_numpy(), resamples=resamples, seed=seed)
+        out[name] = [iv.estimate, iv.lo, iv.hi]
+    return out
+
+
+def paired(base: pd.DataFrame, treat: pd.DataFrame, k: int, value: str, resamples: int, seed: int) -> list[float]:
+    """``[estimate, lo, hi]`` of ``treat - base`` at budget k on identical episodes."""
+    b, t = probe_rows(base, k).copy(), probe_rows(treat, k).copy()
+    if value == "optimism":
+        b["optimism"] = b["realized"] - b["predicted"]
+        t["optimism"] = t["realized"] - t["predicted"]
+    b[value] = b[value].astype(float)
+    t[value] = t[value].astype(float)
+    diff = paired_bootstrap(b, t, value, resamples=resamples, seed=seed)
+    return [diff.difference.estimate, diff.difference.lo, diff.difference.hi]
+
+
+def fmt(v: Any, signed: bool = False) -> str:
+    if isinstance(v, (list, tuple)) and len(v) == 3:
+        return f"{v[0]:+.3f} [{v[1]:+.3f}, {v[2]:+.3f}]" if signed else f"{v[0]:.3f} [{v[1]:.3f}, {v[2]:.3f}]"
+    if isinstance(v, float):
+        return f"{v:+.3f}" if signed else f"{v:.3f}"
+    return str(v)
+
+
+def md_table(header: list[str], rows: list[list[Any]]) -> str:
+    lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
+    lines += ["| " + " | ".join(str(c) for c in row) + " |" for row in rows]
+    return "\n".join(lines)
+
+
+class InsertionReproduction:
+    """Runs the insertion reproduction step by step into ``root``."""
+
+    def __init__(self, protocol: Protocol, root: Path, progress: Progress = _noop, workers: int = 1) -> None:
+        self.p = protocol
+        self.root = Path(root)
+        self.runs = self.root / "runs"
+        self.out = self.root / "results"
+        self.out.mkdir(parents=True, exist_ok=True)
+        self.progress = progress
+        self.workers = workers
+        self.rep = Reproduction(self.root)
+        self.boot = dict(resamples=protocol.bootstrap.resamples, seed=protocol.bootstrap.seed)
+        self.loaded: dict[str, LoadedRun] = {}
+
+    # ---------------------------------------------------------------- helpers
+    def run(self, name: str, config) -> LoadedRun:
+        self.progress(f"run {name}", 0, 1)
+        result = run_study(config, self.runs / name, workers=self.workers,
+                           progress=lambda d, t: self.progress(f"run {name}", d, t))
+        if result.manifest.get("resumed_units", 0) == 0:
+            self.rep.add_calls(result.manifest["engine_calls"])
+        self.loaded[name] = load_run(result.run_dir)
+        return self.loaded[name]
+
+    def replay(self, source: str, name: str, overrides: dict) -> LoadedRun:
+        path = self.runs / name
+        if not (path / "manifest.json").is_file():
+            replay_run(self.runs / source, path, overrides)
+        self.loaded[name] = load_run(path)
+        self.rep.add_calls(self.loaded[name].manifest["engine_calls"])
+        return self.loaded[name]
+
+    def write_table(self, key: str, title: str, table: str, note: str = "") -> None:
+        text = f"### {title}\n\n{table}\n" + (f"\n{note}\n" if note else "")
+        (self.out / f"{key}.md").write_text(text)
+        self.rep.tables[key] = text
+
+    # ---------------------------------------------------------------- steps
+    def scan(self) -> None:
+        p = self.p
+        cfg = p.run_config("development", "development", "development", "random")
+        instances = draw_instances(cfg, ("x_hole", "c"))
+        sim = build_simulator(SimulatorConfig(engine=p.engine, noise_sigma=p.noise_sigma))
+        self.progress("boundary scan", 0, 1)
+        result = boundary_scan(sim, instances, p.scan["step"], p.scan["half_range"], p.scan["tolerance"])
+        self.rep.add_calls(sim.engine_calls)
+        result.scans.to_parquet(self.out / "scan.parquet")
+        summary = result.summary()
+        summary["frozen_delta"] = p.delta
+        self.rep.results["scan"] = summary
+        first = str(result.scans["instance_id"].iloc[0])
+        self.rep.figures["scan"] = str(scan_figure(result.grid, result.scans, first, summary["delta"], self.out / "fig_scan_section.png"))
+        self.write_table(
+            "scan", "Boundary scan on the development truths",
+            md_table(["scans", "delta mean (mm)", "SD", "min", "max", "shift vs deployed hg - r (mm)", "frozen delta"],
+                     [[summary["scans"], f"{summary['delta']:+.4f}", f"{summary['sd']:.4f}", f"{summary['min']:+.4f}",
+                       f"{summary['max']:+.4f}", f"{summary['shift_vs_deployed_mm']:.3f}", f"{p.delta:+.3f}"]]),
+        )
+
+    def cover_search(self, limit: int | None) -> None:
+        p = self.p
+        cfg = p.run_config("cover-search", "development", "development", "cover")
+        sim = build_simulator(cfg.simulator)
+        table = search_cover_schedule(cfg, sim, limit=limit, progress=lambda d, t: self.progress("cover search", d, t))
+        self.rep.add_calls(sim.engine_calls)
+        table.assign(schedule=table["schedule"].map(str)).to_parquet(self.out / "cover_search.parquet")
+        best = table.iloc[0]
+        self.rep.results["cover"] = {
+            "winner": [float(u) for u in best["schedule"]], "winner_failure": float(best["failure"]),
+            "frozen": list(p.cover_schedule), "candidates": int(len(table)),
+            "frozen_rank": int(table.index[table["schedule"].map(lambda s: list(map(float, s)) == list(p.cover_schedule))][0]) + 1
+            if any(table["schedule"].map(lambda s: list(map(float, s)) == list(p.cover_schedule))) else None,
+        }
+        top = table.head(5)
+        self.write_table(
+            "cover_search", f"Cover-schedule search ({len(table)} subsets, development instances, k = 5)",
+            md_table(["rank", "schedule (mm)", "failure", "mean aim error (mm)"],
+                     [[i + 1, str([float(u) for u in r["schedule"]]), f"{r['failure']:.3f}", f"{r['aim_error']:.2f}"] for i, r in top.iterrows()]),
+        )
+
+    def rollouts(self) -> None:
+        p = self.p
+        both = ("blind_robust", "probe_robust")
+        self.run("dev_random", p.run_config("dev_random", "development", "development", "random"))
+        self.run("A_cover", p.run_config("A_cover", "A", "A", "cover", methods=("blind_bayes", "probe_robust")))
+        for part in ("cal", "test"):
+            self.run(f"B_{part}_cover", p.run_config(f"B_{part}_cover", "B", f"B_{part}_cover", "cover", methods=both))
+            self.run(f"B_{part}_random", p.run_config(f"B_{part}_random", "B", f"B_{part}_random", "random"))
+        f = p.faults
+        common = dict(boundary="corrected", seed_offset=f.seed_offset)
+        self.run("faults_base", p.run_config("faults_base", "B", "B_test_random", "random", **common))
+        self.run("faults_noise", p.run_config("faults_noise", "B", "B_test_random", "random", noise_factor=f.noise_factor, **common))
+        self.run("faults_prior", p.run_config("faults_prior", "B", "B_test_random", "random", truth_half_width=f.prior_half_width, **common))
+        # Test C: drawn from its own seed stream after the correction froze.
+        self.run("C_cover", p.run_config("C_cover", "C", "C_cover", "cover"))
+        self.run("C_random", p.run_config("C_random", "C", "C_random", "random"))
+        # The 192-instance pool of the re-split study (cover schedule).
+        pool = p.instances["B"].count * 2
+        cfg = p.run_config("B_pool_cover", "B", "B_pool_cover", "cover")
+        cfg = cfg.model_copy(update={"instances": cfg.instances.model_copy(update={"count": pool})})
+        self.run("B_pool_cover", cfg)
+        corrected = {"model": {"boundary": "corrected", "delta": p.delta}}
+        for name in ("C_cover", "C_random", "B_cal_cover"):
+            self.replay(name, f"{name}_corrected", corrected)
+
+    def table_insertion(self) -> None:
+        L, b = self.loaded, self.boot
+        a = L["A_cover"].episodes
+        blind_a = a[(a.method == "blind_bayes") & (a.status == "ok")]
+        a_no = cluster_bootstrap_mean(blind_a["realized"].to_numpy(float), blind_a["instance_id"].to_numpy(), **b)
+        a_k5 = episode_metrics(a, 5, **b)["failure"]
+        self.cal_cover = calibrate(L["B_cal_cover"], L["B_test_cover"], alpha=self.p.alpha, budgets=[1, 2, 3, 4, 5], **b)
+        self.cal_random = calibrate(L["B_cal_random"], L["B_test_random"], alpha=self.p.alpha, budgets=[1, 2, 3, 5, 8], **b)
+        res = {
+            "A.no_probe": [a_no.estimate, a_no.lo, a_no.hi],
+            "A.cover_k5": a_k5,
+            "B.cost_table": self.cal_cover.cost.to_dict("records"),
+            "B.cost_differences": self.cal_cover.cost_differences.to_dict("records"),
+            "margin_cover": self.cal_cover.margin.gamma,
+            "margin_random": self.cal_random.margin.gamma,
+            "distribution_free_margin_cover": self.cal_cover.distribution_free_margin,
+            "thresholds_cover": {int(k): float(v) for k, v in self.cal_cover.thresholds.items()},
+            "thresholds_random": {int(k): float(v) for k, v in self.cal_random.thresholds.items()},
+            "simultaneous_cover": float(self.cal_cover.simultaneous_threshold),
+            "simultaneous_random": float(self.cal_random.simultaneous_threshold),
+        }
+        self.rep.results["table_insertion"] = res
+        rows = [["A", "no probe (Blind-Bayes)", "--", "--", fmt(res["A.no_probe"])],
+                ["A", "cover, k=5", "no", "no", fmt(a_k5)]]
+        for _, r in self.cal_cover.cost.iterrows():
+            rows.append(["B", *self._cost_row(r)])
+        self.write_table("table_insertion", "Insertion failure by split and calibration setting (MuJoCo)",
+                         md_table(["split", "method", "set cal.", "margin", "failure [95% CI]"], rows),
+                         note=f"Margin gamma (cover) = {res['margin_cover']}; conformal t_k (cover) = "
+                              f"{ {k: round(v, 3) for k, v in res['thresholds_cover'].items()} }; distribution-free margin = "
+                              f"{res['distribution_free_margin_cover']:.3f}.")
+
+    @staticmethod
+    def _cost_row(r: pd.Series) -> list[str]:
+        k = int(r["k"])
+        label = {"blind_robust": ("Blind-Robust", "--", "--"), "no calibration": (f"cover, k={k}", "no", "no"),
+                 "set calibration": (f"cover, k={k}", "yes", "no"),
+                 "set calibration + margin": (f"cover, k={k}", "yes", "yes")}[str(r["setting"])]
+        return [*label, fmt([float(r["failure"]), float(r["failure_lo"]), float(r["failure_hi"])])]
+
+    def table_audit(self) -> None:
+        t3 = self.cal_random.table3
+        self.rep.results["table_audit"] = {"table": t3.to_dict("records"), "summary": self.cal_random.summary}
+        test = self.loaded["B_test_random"].episodes
+        esc = {k: episode_metrics(test, k, **self.boot) for k in (1, 8)}
+        self.rep.results["text"] = {"escape_k1": esc[1]["escape"], "escape_k8": esc[8]["escape"],
+                                     "episode_coverage_k1": esc[1]["episode_coverage"], "episode_coverage_k8": esc[8]["episode_coverage"]}
+        cols = [c for c in t3.columns if not c.endswith(("_lo", "_hi"))]
+        rows = [[fmt(v) if isinstance(v, float) else v for v in r] for r in t3[cols].itertuples(index=False)]
+        s = self.cal_random.summary
+        self.write_table("table_audit", "Insertion audit, Split B, random probes (MuJoCo)", md_table(cols, rows),
+                         note=f"Summary: {json.dumps({k: round(float(v), 3) for k, v in s.items()})}. "
+                              f"Escape k=1: {fmt(esc[1]['escape'])}, k=8: {fmt(esc[8]['escape'])}; "
+                              f"episode coverage k=1: {fmt(esc[1]['episode_coverage'])}, k=8: {fmt(esc[8]['episode_coverage'])}.")
+
+    def table_testc(self) -> None:
+        L, b = self.loaded, self.boot
+        old_r, new_r = L["C_random"].episodes, L["C_random_corrected"].episodes
+        old_c, new_c = L["C_cover"].episodes, L["C_cover_corrected"].episodes
+        rows, res = [], {}
+        spec = [("escape_random_k8", old_r, new_r, 8, "escaped"), ("episode_coverage_random_k8", old_r, new_r, 8, "covered"),
+                ("optimism_random_k8", old_r, new_r, 8, "optimism"), ("failure_random_k8", old_r, new_r, 8, "realized"),
+                ("failure_cover_k5", old_c, new_c, 5, "realized"), ("failure_cover_k1", old_c, new_c, 1, "realized")]
+        for key, old, new, k, col in spec:
+            mo, mn = episode_metrics(old, k, **b), episode_metrics(new, k, **b)
+            name = {"escaped": "escape", "covered": "episode_coverage", "realized": "failure", "optimism": "optimism"}[col]
+            d = paired(new, old, k, col, **b)  # old - corrected
+            res[key] = {"old": mo[name], "corrected": mn[name], "old_minus_corrected": d}
+            rows.append([key, fmt(mo[name][0]), fmt(mn[name][0]), fmt(d, signed=True)])
+        cal_old = calibrate(L["B_cal_cover"], L["C_cover"], alpha=self.p.alpha, budgets=[1, 2, 3, 4, 5], **b)
+        cal_new = calibrate(L["B_cal_cover_corrected"], L["C_cover_corrected"], alpha=self.p.alpha, budgets=[1, 2, 3, 4, 5], **b)
+        fo, fn = self._setmargin_failure(cal_old), self._setmargin_failure(cal_new)
+        res["failure_cover_k5_setcal_margin"] = {"old": fo, "corrected": fn,
+                                                 "simultaneous_threshold": {"old": cal_old.simultaneous_threshold, "corrected": cal_new.simultaneous_threshold}}
+        rows.append(["failure_cover_k5_setcal_margin", fmt(fo), fmt(fn), f"{fo - fn:+.3f}" if isinstance(fo, float) else "--"])
+        self.rep.results["table_testc"] = res
+        self.write_table("table_testc", "Confirmation on untouched instances (Test C), MuJoCo",
+                         md_table(["row", "old", "corrected", "old - corrected [95% CI]"], rows),
+                         note="Both models see identical taps; paired cluster bootstrap over instances.")
+
+    @staticmethod
+    def _setmargin_failure(cal) -> float:
+        row = cal.cost[cal.cost["setting"] == "set calibration + margin"]
+        return float(row["failure"].iloc[0])
+
+    def faults(self) -> None:
+        p, L, b = self.p, self.loaded, self.boot
+        f = p.faults
+        arms = fault_arms(f.noise_factor, f.prior_half_width, f.particles, f.frame_offset, f.temperature, p.sigma)
+        rollouts = {"base": L["faults_base"], "noise": L["faults_noise"], "prior": L["faults_prior"]}
+        episodes = run_fault_harness(rollouts, arms, progress=lambda d, t: self.progress("fault harness", d, t))
+        episodes.to_parquet(self.out / "faults_episodes.parquet")
+        kmax = p.budgets["random"]
+        table, res, sig_rows = [], {}, []
+        for fault in ("none", "noise", "boundary", "prior", "particles", "frame"):
+            fa = episodes[(episodes.fault == fault) & (episodes.arm == "fault")]
+            row = {"fail": episode_metrics(fa, kmax, **b)["failure"]}
+            probe = probe_rows(fa)
+            if probe[probe.k == kmax]["escaped"].any():
+                auc = surprise_auc(probe, final_k=kmax, **b)
+                row["surprise_auc"] = float(auc[auc.k == kmax]["auc"].iloc[0]) if "auc" in auc.columns else None
+            for arm in ("tempered", "fix"):
+                other = episodes[(episodes.fault == fault) & (episodes.arm == arm)]
+                if len(other):
+                    row[arm] = episode_metrics(other, kmax, **b)["failure"]
+            fix = episodes[(episodes.fault == fault) & (episodes.arm == "fix")]
+            if len(fix):
+                row["paired_fix"] = paired(fa, fix, kmax, "realized", **b)
+            res[fault] = row
+            for k in sorted(probe.k.unique()):
+                m = probe[probe.k == k]
+                sig_rows.append({"fault": fault, "k": int(k), "escape": m.escaped.mean(), "coverage": m.covered.mean(),
+                                 "optimism": (m.realized - m.predicted).mean(), "failure": m.realized.mean()})
+            table.append([fault, fmt(row["fail"]), f"{row['surprise_auc']:.2f}" if row.get("surprise_auc") is not None else "--",
+                          fmt(row["tempered"][0]) if "tempered" in row else "--", fmt(row["fix"][0]) if "fix" in row else "--",
+                          fmt(row["paired_fix"], signed=True) if "paired_fix" in row else "--"])
+        signatures = pd.DataFrame(sig_rows)
+        signatures.to_parquet(self.out / "fault_signatures.parquet")
+        self.rep.figures["signatures"] = str(fault_signatures(signatures, self.out / "fig_fault_signatures.png"))
+        self.rep.results["table_faults"] = res
+        self.write_table("table_faults", f"Controlled mismatch tests, random probes, k = {kmax} (MuJoCo)",
+                         md_table(["fault", "fail [95% CI]", "surprise AUC", f"tempered T={f.temperature:g}", "known fix", "fix - fault (paired)"], table))
+
+    def robust(self) -> None:
+        p, L, b = self.p, self.loaded, self.boot
+        r = p.robust
+        cands = robust_candidates(r.temperatures, r.epsilons, r.rejuvenation, r.mixture_range)
+        tuning = tune_robust_filters(L["dev_random"], cands, progress=lambda d, t: self.progress("robust tuning", d, t))
+        chosen = {row.family: (row.value, row.belief) for row in tuning[tuning.chosen].itertuples()}
+        base = L["faults_base"]
+        kmax = p.budgets["random"]
+        deployed, _ = replay_episodes(base, {"model": {"boundary": "deployed"}})
+        res = {"tuning": tuning.drop(columns="belief").to_dict("records"), "chosen": {k: v[0] for k, v in chosen.items()},
+               "deployed": episode_metrics(deployed, kmax, **b)}
+        rows = [["deployed (no robust filter)", "--", fmt(res["deployed"]["escape"][0]), fmt(res["deployed"]["failure"][0]),
+                 fmt(res["deployed"]["optimism"][0], signed=True), "--"]]
+        for family, (value, belief) in chosen.items():
+            ep, _ = replay_episodes(base, {"model": {"boundary": "deployed"}, "belief": belief})
+            m = episode_metrics(ep, kmax, **b)
+            d = paired(deployed, ep, kmax, "realized", **b)
+            res[family] = {"value": value, **m, "failure_diff": d}
+            rows.append([family, f"{value:g}", fmt(m["escape"][0]), fmt(m["failure"][0]), fmt(m["optimism"][0], signed=True), fmt(d, signed=True)])
+        if "mixture" in chosen:
+            right = probe_rows(base.episodes, kmax)["realized"].mean()
+            mix, _ = replay_episodes(base, {"belief": chosen["mixture"][1]})
+            res["mixture_cost_when_right"] = [float(right), float(probe_rows(mix, kmax)["realized"].mean())]
+        self.rep.results["robust"] = res
+        self.write_table("robust", f"Robust filters under the boundary error, random k = {kmax} (MuJoCo)",
+                         md_table(["filter", "chosen", "escape", "failure", "optimism", "failure vs deployed (paired)"], rows),
+                         note=f"Chosen on the development instances by lowest k = {kmax} failure under the deployed model. "
+                              + (f"When the model is right the mixture moves failure {res['mixture_cost_when_right'][0]:.3f} -> "
+                                 f"{res['mixture_cost_when_right'][1]:.3f}." if "mixture_cost_when_right" in res else ""))
+
+    def resplits(self) -> None:
+        p = self.p
+        pool = self.loaded["B_pool_cover"]
+        ids = pool.instances["instance_id"].to_numpy()
+        rng = np.random.default_rng(p.resplits["seed"])
+        rows = []
+        count = p.resplits["count"]
+        for n in range(count):
+            perm = rng.permutation(len(ids))
+            half = len(ids) // 2
+            cal = subset_run(pool, ids[perm[:half]])
+            test = subset_run(pool, ids[perm[half:]])
+            res = calibrate(cal, test, alpha=p.alpha, budgets=[5], resamples=50, seed=p.bootstrap.seed + n)
+            t3 = res.table3
+            rows.append({
+                "split": n, "level": float(res.thresholds[5]), "failure": self._setmargin_failure(res),
+                "heldout_cluster_coverage": float(t3["cluster_coverage_calibrated"].iloc[0]),
+                "margin_optimistic": bool(t3["optimism_calibrated"].iloc[0] > 0),
+                "gamma": res.margin.gamma,
+            })
+            self.progress("re-splits", n + 1, count)
+        table = pd.DataFrame(rows)
+        table.to_parquet(self.out / "resplits.parquet")
+        summary = {"level_mean_sd": [float(table.level.mean()), float(table.level.std(ddof=1))],
+                   "failure_mean_sd": [float(table.failure.mean()), float(table.failure.std(ddof=1))],
+                   "heldout_cluster_coverage": float(table.heldout_cluster_coverage.mean()),
+                   "margin_optimistic_fraction": float(table.margin_optimistic.mean()),
+                   "splits": count}
+        self.rep.results["resplits"] = summary
+        self.write_table("resplits", f"{count} random re-splits of one {len(ids)}-instance pool (cover, k = 5)",
+                         md_table(["calibrated level t_5 (mean +- SD)", "failure set+margin (mean +- SD)", "held-out cluster coverage", "margin optimistic"],
+                                  [[f"{summary['level_mean_sd'][0]:.3f} +- {summary['level_mean_sd'][1]:.3f}",
+                                    f"{summary['failure_mean_sd'][0]:.3f} +- {summary['failure_mean_sd'][1]:.3f}",
+                                    f"{summary['heldout_cluster_coverage']:.3f}", summary["margin_optimistic_fraction"]]]))
+
+    def decisive_tap(self) -> None:
+        """Fig. (teaser b): a development episode where a chamfer-band tap removes the truth."""
+        dev = self.loaded["dev_random"]
+        p = self.p
+        trace_old, model_old, _ = trace_for_run(dev)
+        cfg_new = dev.config.model_copy(update={"model": dev.config.model.model_copy(update={"boundary": "corrected", "delta": p.delta})})
+        trace_new, model_new, _ = trace_for_run(dev, cfg_new)
+        batch = trace_old.batch
+        for k in trace_old.budgets:
+            prev = trace_old.states[k - 1] if k - 1 in trace_old.states else None
+            now = trace_old.states[k]
+            z_true = batch.truths[:, 0]
+            z = now.particles[..., 0]
+            escaped = (z_true < z.min(axis=1)) | (z_true > z.max(axis=1))
+            kept_new = trace_new.states[k].particles[..., 0]
+            ok_new = (z_true >= kept_new.min(axis=1)) & (z_true <= kept_new.max(axis=1))
+            if prev is not None:
+                zp = prev.particles[..., 0]
+                was_in = (z_true >= zp.min(axis=1)) & (z_true <= zp.max(axis=1))
+            else:
+                was_in = np.ones_like(escaped)
+            hits = np.flatnonzero(escaped & was_in & ok_new)
+            if len(hits):
+                e = int(hits[0])
+                path = decisive_tap_figure(
+                    z[e], now.weights[e], kept_new[e], trace_new.states[k].weights[e], float(z_true[e]),
+                    float(batch.u[e, k - 1]), float(batch.y[e, k - 1, 0]),
+                    f"{batch.instance_id[e]} repeat {batch.repeat[e]}, after tap {k}", self.out / "fig_decisive_tap.png")
+                self.rep.figures["decisive_tap"] = str(path)
+                return
+
+    # ---------------------------------------------------------------- all
+    def run_all(self, cover_limit: int | None = None) -> Reproduction:
+        start = time.perf_counter()
+        self.scan()
+        self.cover_search(cover_limit)
+        self.rollouts()
+        self.table_insertion()
+        self.table_audit()
+        self.table_testc()
+        self.faults()
+        self.robust()
+        self.resplits()
+        self.decisive_tap()
+        self.rep.wall_s = time.perf_counter() - start
+        payload = {"results": self.rep.results, "engine_calls": self.rep.engine_calls, "wall_s": self.rep.wall_s,
+                   "figures": self.rep.figures}
+        (self.out / "results.json").write_text(json.dumps(payload, indent=2, default=_json_default))
+        return self.rep
+
+
+def _json_default(o: Any) -> Any:
+    if isinstance(o, (np.integer,)):
+        return int(o)
+    if isinstance(o, (np.floating,)):
+        return float(o)
+    if isinstance(o, (np.bool_,)):
+        return bool(o)
+    if isinstance(o, (np.ndarray,)):
+        return o.tolist()
+    if hasattr(o, "__dict__"):
+        return {k: v for k, v in o.__dict__.items() if not k.startswith("_")}
+    return str(o)
+
+
+def reproduce_insertion(root: str | Path, quick: bool = False, protocol_path: str | Path = DEFAULT_PROTOCOL,
+                        progress: Progress = _noop, workers: int = 1) -> Reproduction:
+    """Run the whole MuJoCo insertion reproduction into ``root``."""
+    protocol = load_protocol(protocol_path)
+    if quick:
+        protocol = protocol.quick_version()
+    repro = InsertionReproduction(protocol, Path(root), progress, workers)
+    return repro.run_all(cover_limit=protocol.quick.cover_subsets if quick else None)
