@@ -183,6 +183,9 @@ def replay(
 
 def register_optional_commands() -> None:
     """Register command groups that live in their own modules, if present."""
+    from probecommit.cli import study_commands
+
+    study_commands.register(app)
     try:
         from probecommit.cli import audit_commands
     except ImportError:

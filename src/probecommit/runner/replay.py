@@ -18,6 +18,7 @@ import pandas as pd
 from probecommit.runner.build import build_filter, build_model, build_simulator
 from probecommit.runner.config import StudyConfig, dump_config, parse_config
 from probecommit.runner.inference import BeliefTrace, ProbeBatch, blind_bayes_action, build_trace, commit
+from probecommit.store.probes import validate_probes
 from probecommit.store.rundir import RunDir
 
 import yaml
@@ -49,14 +50,17 @@ def load_run(run_dir: str | Path) -> LoadedRun:
 
 def probe_batch(loaded: LoadedRun, latent_names: tuple[str, ...]) -> ProbeBatch:
     """Rebuild the stored probe trajectories (successful episodes) as a batch."""
+    # Validate first: a malformed table is refused naming column and row, never reshaped.
+    probes = validate_probes(loaded.probes, str(loaded.path / "probes.parquet"),
+                             instance_ids=loaded.instances["instance_id"])
     # The run's own episode order: instance order of the instances table, then repeat, then j.
     order = {iid: n for n, iid in enumerate(loaded.instances["instance_id"])}
-    probes = loaded.probes.assign(_o=loaded.probes["instance_id"].map(order))
+    probes = probes.assign(_o=loaded.probes["instance_id"].map(order))
     probes = probes.sort_values(["_o", "repeat", "j"], kind="stable")
     keys = probes.drop_duplicates(["_o", "repeat"])[["instance_id", "repeat"]]
     n_e = len(keys)
     k = int(probes["j"].max()) if n_e else 0
-    inst = loaded.instances.set_index("instance_id")
+    inst = loaded.instances.assign(instance_id=loaded.instances["instance_id"].astype(str)).set_index("instance_id")
     iids = keys["instance_id"].to_numpy(object)
     return ProbeBatch(
         split=str(loaded.instances["split"].iloc[0]),

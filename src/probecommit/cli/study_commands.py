@@ -1,0 +1,142 @@
+"""Study commands: reproduce, scan, faults."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Optional
+
+import typer
+
+from probecommit.cli.app import console, err_console, progress_bar, user_errors
+
+REPO_ROOT = Path(__file__).resolve().parents[3]
+
+
+def _stepper():
+    """A progress callback that shows one bar per named step."""
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+
+    bar = Progress(TextColumn("[bold]{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
+                   console=err_console)
+    tasks: dict[str, int] = {}
+
+    def update(step: str, done: int, total: int) -> None:
+        if step not in tasks:
+            tasks[step] = bar.add_task(step, total=total)
+        bar.update(tasks[step], completed=done, total=total)
+
+    return bar, update
+
+
+def reproduce(
+    target: str = typer.Argument("insertion", help="What to reproduce: 'insertion' (the MuJoCo insertion tables and figures)."),
+    quick: bool = typer.Option(False, "--quick", help="The same pipeline on a few instances (a minute; for CI)."),
+    out: Optional[Path] = typer.Option(None, "--out", "-o", help="Root for run directories and results (default runs/paper/<target>[-quick])."),
+    protocol: Path = typer.Option(REPO_ROOT / "configs" / "paper" / "insertion.yaml", help="Frozen protocol config."),
+    workers: int = typer.Option(1, "--workers", "-w", min=1, help="Local worker processes for the rollouts."),
+    write_reproduction: Optional[bool] = typer.Option(None, help="Write REPRODUCTION.md (default: yes for full runs, no with --quick)."),
+) -> None:
+    """Regenerate every MuJoCo insertion table and figure from the frozen configs."""
+    from probecommit.studies.reproduce import reproduce_insertion
+    from probecommit.studies.reproduction_md import render
+
+    if target not in ("insertion", "all"):
+        raise ValueError(f"unknown reproduce target {target!r}; available: insertion, all")
+    root = out or Path("runs") / "paper" / ("insertion-quick" if quick else "insertion")
+    bar, update = _stepper()
+    with bar:
+        rep = reproduce_insertion(root, quick=quick, protocol_path=protocol, progress=update, workers=workers)
+    for text in rep.tables.values():
+        console.print(text)
+    results = root / "results" / "results.json"
+    console.print(f"results: [bold]{root / 'results'}[/bold]  (wall {rep.wall_s / 60:.1f} min, engine calls {rep.engine_calls})")
+    if write_reproduction if write_reproduction is not None else not quick:
+        from probecommit.studies.explanations import EXPLANATIONS
+
+        body = render(results, EXPLANATIONS)
+        (root / "results" / "REPRODUCTION-insertion.md").write_text(body)
+        console.print(f"reproduction section: [bold]{root / 'results' / 'REPRODUCTION-insertion.md'}[/bold]")
+
+
+def scan(
+    engine: str = typer.Option("mujoco", help="Engine to scan: mujoco or analytic."),
+    protocol: Path = typer.Option(REPO_ROOT / "configs" / "paper" / "insertion.yaml", help="Frozen protocol config."),
+    step: Optional[float] = typer.Option(None, min=0.001, help="Grid step (mm); default from the protocol (0.25)."),
+    boundary_offset: float = typer.Option(0.905, help="Analytic engine only: its planted boundary offset (mm)."),
+    out: Path = typer.Option(Path("runs/scan"), "--out", "-o", help="Output folder for scan.parquet and the figure."),
+) -> None:
+    """Scan the tap reading against lateral offset on the development truths and fit delta."""
+    from probecommit.report.study_figures import scan_figure
+    from probecommit.runner.build import build_simulator
+    from probecommit.runner.config import SimulatorConfig
+    from probecommit.runner.instances import draw_instances
+    from probecommit.studies.protocol import load_protocol
+    from probecommit.studies.scan import boundary_scan
+
+    p = load_protocol(protocol)
+    cfg = p.run_config("development", "development", "development", "random")
+    instances = draw_instances(cfg, ("x_hole", "c"))
+    sim = build_simulator(SimulatorConfig(engine=engine, boundary_offset=boundary_offset))
+    bar, update = progress_bar("scanning development truths")
+    with bar:
+        update(0, 1)
+        result = boundary_scan(sim, instances, step or p.scan["step"], p.scan["half_range"], p.scan["tolerance"])
+        update(1, 1)
+    out.mkdir(parents=True, exist_ok=True)
+    result.scans.to_parquet(out / "scan.parquet")
+    summary = result.summary()
+    fig = scan_figure(result.grid, result.scans, str(result.scans.instance_id.iloc[0]), summary["delta"], out / "scan_section.png")
+    (out / "scan_summary.json").write_text(json.dumps(summary, indent=2))
+    console.print(f"{engine}: delta = {summary['delta']:+.4f} mm (SD {summary['sd']:.4f}, min {summary['min']:+.4f}, "
+                  f"max {summary['max']:+.4f}) over {summary['scans']} scans; boundary moves "
+                  f"{summary['shift_vs_deployed_mm']:.3f} mm from the deployed hg - r; engine calls {sim.engine_calls}")
+    console.print(f"scans: [bold]{out / 'scan.parquet'}[/bold]; figure: [bold]{fig}[/bold]")
+
+
+def faults(
+    base: Path = typer.Argument(..., help="Run directory of the base rollout (corrected model, random probes)."),
+    noise_run: Optional[Path] = typer.Option(None, help="Run with simulator noise x4 (same instances and seed)."),
+    prior_run: Optional[Path] = typer.Option(None, help="Run with truths from +-12 mm (same seed)."),
+    protocol: Path = typer.Option(REPO_ROOT / "configs" / "paper" / "insertion.yaml", help="Frozen protocol config."),
+    out: Path = typer.Option(Path("runs/faults"), "--out", "-o", help="Output folder."),
+) -> None:
+    """Inject the five mismatch classes on stored probes, with known fixes and tempering."""
+    from probecommit.report.study_figures import fault_signatures
+    from probecommit.runner.replay import load_run
+    from probecommit.studies.faults import fault_arms, run_fault_harness
+    from probecommit.studies.protocol import load_protocol
+
+    p = load_protocol(protocol)
+    f = p.faults
+    rollouts = {"base": load_run(base)}
+    if noise_run:
+        rollouts["noise"] = load_run(noise_run)
+    if prior_run:
+        rollouts["prior"] = load_run(prior_run)
+    arms = [a for a in fault_arms(f.noise_factor, f.prior_half_width, f.particles, f.frame_offset, f.temperature, p.sigma)
+            if a.rollout in rollouts]
+    skipped = sorted({a.fault for a in fault_arms(f.noise_factor, f.prior_half_width, f.particles, f.frame_offset, f.temperature, p.sigma)} - {a.fault for a in arms})
+    bar, update = progress_bar("fault arms")
+    with bar:
+        episodes = run_fault_harness(rollouts, arms, progress=update)
+    out.mkdir(parents=True, exist_ok=True)
+    episodes.to_parquet(out / "faults_episodes.parquet")
+    probe = episodes[(episodes.method == "probe_robust") & (episodes.status == "ok")]
+    kmax = int(probe.k.max())
+    summary = (probe[probe.k == kmax].assign(optimism=lambda d: d.realized - d.predicted)
+               .groupby(["fault", "arm"], sort=False)[["realized", "optimism", "covered", "escaped"]].mean())
+    console.print(summary.rename(columns={"realized": "failure", "covered": "coverage", "escaped": "escape"}).round(3).to_string())
+    sig = (probe[probe.arm == "fault"].assign(optimism=lambda d: d.realized - d.predicted)
+           .groupby(["fault", "k"], sort=False).agg(escape=("escaped", "mean"), coverage=("covered", "mean"),
+                                                    optimism=("optimism", "mean"), failure=("realized", "mean")).reset_index())
+    fig = fault_signatures(sig, out / "fault_signatures.png")
+    if skipped:
+        err_console.print(f"[yellow]skipped faults needing other rollouts:[/yellow] {', '.join(skipped)} (pass --noise-run / --prior-run)")
+    console.print(f"episodes: [bold]{out / 'faults_episodes.parquet'}[/bold]; figure: [bold]{fig}[/bold]")
+
+
+def register(app: typer.Typer) -> None:
+    app.command("reproduce")(user_errors(reproduce))
+    app.command("scan")(user_errors(scan))
+    app.command("faults")(user_errors(faults))

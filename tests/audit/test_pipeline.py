@@ -1,0 +1,116 @@
+"""calibrate / gates / audit on real (analytic-engine) run directories, and the CLI commands."""
+
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+from typer.testing import CliRunner
+
+from probecommit.audit.conformal import conformal_quantile
+from probecommit.audit.margin import GAMMA_GRID
+from probecommit.audit.metrics import audit_table
+from probecommit.audit.pipeline import audit, calibrate, gates
+
+ROBOT = Path(__file__).parent / "data" / "robot_log.csv"
+
+
+@pytest.fixture(scope="module")
+def runs(tmp_path_factory):
+    from probecommit.runner.study import run_study
+    from tests.conftest import small_config
+
+    root = tmp_path_factory.mktemp("runs")
+    out = {}
+    for split, seed in (("cal", 3), ("test", 4)):
+        cfg = small_config(name=split, instances={"split": split, "count": 8, "seed": seed}, repeats=3)
+        out[split] = run_study(cfg, root / split).run_dir
+    return out
+
+
+def _stored_probe(run_dir):
+    from probecommit.runner.replay import load_run
+
+    e = load_run(run_dir).episodes
+    return e[(e.method == "probe_robust") & (e.status == "ok")]
+
+
+def test_calibrate_on_runs(runs):
+    res = calibrate(runs["cal"], runs["test"], alpha=0.2, resamples=200)
+    cal = _stored_probe(runs["cal"])
+    # Thresholds from the stored scores (beliefs are recomputed bit-identically).
+    for k, t in res.thresholds.items():
+        worst = cal[cal.k == k].groupby("instance_id")["score_s"].max()
+        assert t == conformal_quantile(worst.to_numpy(), 0.2)
+    worst_all = cal.groupby("instance_id")["score_s"].max()
+    assert res.simultaneous_threshold == conformal_quantile(worst_all.to_numpy(), 0.2)
+    assert res.n_calibration == 8 and res.budgets == [1, 2, 3, 4, 5]
+    # The margin: the largest grid value satisfying the rule (scan stops there).
+    assert res.margin.gamma in GAMMA_GRID
+    s = res.margin.search
+    assert s["satisfied"].iloc[-1] == res.margin.satisfied and not s["satisfied"].iloc[:-1].any()
+    assert (s["mean_predicted"].iloc[-1] >= s["mean_realized"].iloc[-1]) == res.margin.satisfied
+    # "original" columns are the stored test run's own audit.
+    stored = audit_table(_stored_probe(runs["test"]), resamples=200)
+    np.testing.assert_allclose(res.table3["cluster_coverage_original"], stored["cluster_coverage"])
+    np.testing.assert_allclose(res.table3["optimism_original"], stored["optimism"])
+    # Cost rows and their paired differences agree.
+    cost = res.cost.set_index("setting")["failure"]
+    d = res.cost_differences.set_index(["baseline", "treatment"])["difference"]
+    assert d[("no calibration", "set calibration + margin")] == pytest.approx(
+        cost["set calibration + margin"] - cost["no calibration"])
+    assert "blind_robust" in cost.index
+    assert 0 <= res.simultaneous_coverage["cluster_coverage"] <= 1
+    assert res.to_dict()["gamma"] == res.margin.gamma
+
+
+def test_gates_on_runs(runs):
+    res = gates(runs["cal"], runs["test"], resamples=100)
+    s = res.summary.set_index("signal")
+    assert list(s.index) == ["raw", "adjusted", "posterior_variance", "oracle"]
+    assert res.n_trajectories == 8 * 3 and res.budgets == [1, 2, 3, 4, 5]
+    assert s.loc["oracle", "realized"] == 0.0
+    assert (s["escaped_committed"] + s["escaped_rejected"]).nunique() == 1
+    assert res.info["gamma"] in GAMMA_GRID and "surprise" in res.info
+
+
+def test_calibrate_refuses_runs_of_different_models(tmp_path, runs):
+    from probecommit.runner.study import run_study
+    from tests.conftest import small_config
+
+    other = run_study(small_config(name="o", instances={"split": "o", "count": 4, "seed": 9},
+                                   model={"boundary": "corrected"}), tmp_path / "o").run_dir
+    with pytest.raises(ValueError, match="differ in their 'model' settings"):
+        calibrate(runs["cal"], other)
+
+
+def test_audit_of_a_run_directory(runs):
+    res = audit(runs["test"], resamples=100)
+    assert set(res.table["method"]) == {"blind_bayes", "blind_robust", "probe_robust"}
+    assert list(res.surprise["k"]) == [1, 2, 3, 4, 5]
+
+
+def test_cli_commands(tmp_path, runs):
+    from probecommit.cli.app import app
+
+    cli = CliRunner()
+    r = cli.invoke(app, ["audit", str(ROBOT), "-o", str(tmp_path / "a"), "--resamples", "200"])
+    assert r.exit_code == 0, r.output
+    assert {"audit.html", "audit.png", "audit.csv"} <= {p.name for p in (tmp_path / "a").iterdir()}
+    html = (tmp_path / "a" / "audit.html").read_text()
+    assert "data:image/png;base64," in html and "<table>" in html and "http" not in html.split("<body>")[1][:200]
+
+    bad = tmp_path / "bad.csv"
+    bad.write_text(ROBOT.read_text().replace("0.30,0,0.0", "0.30,oops,0.0"))
+    r = cli.invoke(app, ["audit", str(bad)])
+    assert r.exit_code == 2 and "realized" in r.output and "oops" in r.output
+
+    r = cli.invoke(app, ["calibrate", "--cal", str(runs["cal"]), "--test", str(runs["test"]),
+                         "-o", str(tmp_path / "c"), "--resamples", "100"])
+    assert r.exit_code == 0, r.output
+    assert (tmp_path / "c" / "calibration.html").exists() and (tmp_path / "c" / "calibration.json").exists()
+    r = cli.invoke(app, ["gates", "--cal", str(runs["cal"]), "--test", str(runs["test"]),
+                         "-o", str(tmp_path / "g"), "--resamples", "100"])
+    assert r.exit_code == 0, r.output
+    curves = pd.read_csv(tmp_path / "g" / "gate_curves.csv")
+    assert set(curves["signal"]) == {"raw", "adjusted", "posterior_variance", "oracle"}
