@@ -30,3 +30,12 @@ def test_engine_free_layers_import_without_engines():
     out = subprocess.run([sys.executable, "-c", BLOCKER], capture_output=True, text=True, timeout=120)
     assert out.returncode == 0, out.stderr
     assert out.stdout.strip() == "ok"
+
+
+def test_record_schema_doc_is_generated_from_the_schema():
+    from pathlib import Path
+
+    from probecommit.store.docs import record_schema_markdown
+
+    doc = Path(__file__).resolve().parents[1] / "docs" / "record-schema.md"
+    assert doc.read_text() == record_schema_markdown(), "regenerate docs/record-schema.md from store/docs.py"
