@@ -266,6 +266,10 @@ def gates_from_tables(raw: pd.DataFrame, adjusted: pd.DataFrame | None = None, *
         mats += [adj_pred, adj_real]
     keep = np.all([np.isfinite(m).all(axis=1) for m in mats], axis=0)
     n_dropped = int((~keep).sum())
+    # Trajectories with only failed rows (e.g. probing failed) never reach the matrices.
+    if "status" in raw.columns:
+        bad = raw.loc[raw["status"] == "failed", ["instance_id", "repeat"]].drop_duplicates()
+        n_dropped += int((~pd.MultiIndex.from_frame(bad).isin(index)).sum()) if len(bad) else 0
     sel = lambda m: None if m is None else m[keep]  # noqa: E731
     escaped_final = sel(escaped)[:, -1].astype(bool)
     signals = [GateSignal("raw", sel(raw_pred), sel(raw_real), sel(raw_pred))]

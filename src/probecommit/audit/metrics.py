@@ -74,16 +74,17 @@ def audit_table(episodes: pd.DataFrame, *, budgets=None, resamples: int = DEFAUL
     """
     groups = group_columns(episodes)
     df = episodes
-    if budgets is not None:
-        df = df.loc[df["k"].isin(list(budgets))]
     failed = df["status"].astype(str).eq("failed") if "status" in df.columns else pd.Series(False, index=df.index)
-    rows = []
-    grouped = list(df.groupby(groups, sort=True)) if groups else [((), df)]
     # Groups with no ok row at all (our runner's "rollout" rows for trajectories
     # whose probing failed) are not audited; their trajectories are missing from
     # every budget of every group, so they add to each row's failed count.
-    dead = [g for _, g in grouped if failed.loc[g.index].all()]
-    n_dead = sum(int(g[["instance_id", "repeat"]].drop_duplicates().shape[0]) for g in dead)
+    all_groups = list(df.groupby(groups, sort=True)) if groups else [((), df)]
+    dead = [g for _, g in all_groups if failed.loc[g.index].all()]
+    n_dead = len(pd.concat([g[["instance_id", "repeat"]] for g in dead]).drop_duplicates()) if dead else 0
+    if budgets is not None:
+        df = df.loc[df["k"].isin(list(budgets))]
+    rows = []
+    grouped = list(df.groupby(groups, sort=True)) if groups else [((), df)]
     for gkey, g in grouped:
         gkey = gkey if isinstance(gkey, tuple) else (gkey,)
         if failed.loc[g.index].all():

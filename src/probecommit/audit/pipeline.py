@@ -127,6 +127,12 @@ class _Run:
 
         table = commit(self.trace, self.model, self.simulator, thresholds=_executable(thresholds), margin=margin,
                        methods=(PROBE_METHOD,))
+        # Trajectories whose probing failed have no belief; carry the run's failure
+        # rows along so they stay counted (and the repeat-count check sees them).
+        stored = self.loaded.episodes
+        failed = stored.loc[(stored["status"] == "failed") & (stored["method"] == "rollout")]
+        if len(failed):
+            table = pd.concat([table, failed.assign(variant=self.model.variant)], ignore_index=True)
         return validate_episodes(table, f"{self.loaded.path} (re-executed)")
 
 

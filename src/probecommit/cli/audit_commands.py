@@ -6,37 +6,15 @@ a self-contained HTML report, its PNG figures and machine-readable tables.
 
 from __future__ import annotations
 
-import functools
 import json
 import math
 from pathlib import Path
-from typing import Callable, Optional
+from typing import Optional
 
 import typer
-from rich.console import Console
 from rich.table import Table
 
-console = Console()
-err_console = Console(stderr=True)
-
-_USER_ERRORS: tuple[type[BaseException], ...] = (ValueError, FileNotFoundError, RuntimeError, ImportError)
-
-
-def _user_errors(fn: Callable) -> Callable:
-    """One red line and exit code 2 for errors a user can cause (bad log, wrong run)."""
-
-    @functools.wraps(fn)
-    def wrapper(*args, **kwargs):
-        try:
-            return fn(*args, **kwargs)
-        except typer.Exit:
-            raise
-        except _USER_ERRORS as exc:
-            err_console.print(f"[red]error:[/red] {exc}", highlight=False, markup=True)
-            raise typer.Exit(2) from None
-
-    return wrapper
-
+from probecommit.cli.common import console, err_console, user_errors
 
 def _f(v, signed: bool = False) -> str:
     try:
@@ -92,7 +70,7 @@ def print_audit_table(table, title: str) -> None:
         console.print(out)
 
 
-@_user_errors
+@user_errors
 def audit_command(
     path: Path = typer.Argument(..., help="Run directory, or a Parquet/CSV episode log (a real robot's)."),
     out: Optional[Path] = typer.Option(None, "--out", "-o", help="Output folder (default: the run directory, "
@@ -126,7 +104,7 @@ def audit_command(
     console.print(f"report: [bold]{report}[/bold]")
 
 
-@_user_errors
+@user_errors
 def calibrate_command(
     cal: Path = typer.Option(..., "--cal", help="Calibration run directory."),
     test: Path = typer.Option(..., "--test", help="Test run directory (same model and schedule, other instances)."),
@@ -180,7 +158,7 @@ def calibrate_command(
     console.print(f"report: [bold]{report}[/bold]")
 
 
-@_user_errors
+@user_errors
 def gates_command(
     cal: Path = typer.Option(..., "--cal", help="Calibration run directory."),
     test: Path = typer.Option(..., "--test", help="Test run directory."),

@@ -8,7 +8,7 @@ from typing import Optional
 
 import typer
 
-from probecommit.cli.app import console, err_console, progress_bar, user_errors
+from probecommit.cli.common import console, err_console, progress_bar, user_errors
 
 REPO_ROOT = Path(__file__).resolve().parents[3]
 
@@ -52,11 +52,10 @@ def reproduce(
     results = root / "results" / "results.json"
     console.print(f"results: [bold]{root / 'results'}[/bold]  (wall {rep.wall_s / 60:.1f} min, engine calls {rep.engine_calls})")
     if write_reproduction if write_reproduction is not None else not quick:
-        from probecommit.studies.explanations import EXPLANATIONS
+        from probecommit.studies.publish import publish_insertion
 
-        body = render(results, EXPLANATIONS)
-        (root / "results" / "REPRODUCTION-insertion.md").write_text(body)
-        console.print(f"reproduction section: [bold]{root / 'results' / 'REPRODUCTION-insertion.md'}[/bold]")
+        published = publish_insertion(root / "results", REPO_ROOT)
+        console.print(f"frozen results: [bold]{published}[/bold]; REPRODUCTION.md rewritten")
 
 
 def scan(

@@ -8,7 +8,7 @@ from pathlib import Path
 from typing import Any, Literal, Union
 
 import yaml
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
+from pydantic import BaseModel, ConfigDict, Field, StrictBool, ValidationError, field_validator, model_validator
 
 ENGINES = ("analytic", "mujoco", "pybullet", "sapien")
 METHODS = ("blind_bayes", "blind_robust", "probe_robust")
@@ -18,8 +18,15 @@ class ConfigError(ValueError):
     """A study config is invalid; the message names the field."""
 
 
+#: Largest |coordinate| of a prior or truth box, and of an offset (mm): the plate is 120 mm wide.
+BOX_LIMIT_MM = 50.0
 #: Lowest clearance scale c with a positive capture window w(c) = 0.6 c + 1.1 (and half-gap).
 MIN_CLEARANCE = -1.1 / 0.6
+
+
+def _check_box(name: str, box: tuple[float, ...] | None) -> None:
+    if box is not None and any(abs(v) > BOX_LIMIT_MM for v in box):
+        raise _FieldError(name, f"coordinates must be within +-{BOX_LIMIT_MM:g} mm, got {list(box)}")
 
 
 def _has_bool(value: Any) -> bool:
@@ -47,7 +54,7 @@ class _Strict(BaseModel):
     def _no_bool_numbers(cls, value: Any, info) -> Any:
         # Pydantic's lax mode reads ``true`` as 1; in a config that is a typo, not a number.
         annotation = cls.model_fields[info.field_name].annotation
-        if annotation is not bool and _has_bool(value):
+        if annotation not in (bool, StrictBool) and _has_bool(value):
             raise ValueError("expected a number, got a boolean (true/false)")
         return value
 
@@ -67,6 +74,7 @@ class InstancesConfig(_Strict):
     def _check(self) -> "InstancesConfig":
         for name in ("truth_low", "truth_high"):
             box = getattr(self, name)
+            _check_box(name, box)
             if box is not None and box[1] <= MIN_CLEARANCE:
                 raise _FieldError(name, f"clearance scale c must be > {MIN_CLEARANCE:.4f} (w(c) = 0.6 c + 1.1 > 0), got {box[1]!r}")
         if self.truth_low is not None and self.truth_high is not None:
@@ -115,13 +123,15 @@ class ModelConfig(_Strict):
 
     boundary: Literal["deployed", "corrected"] = "deployed"
     delta: float = Field(0.905, ge=-5, le=5)
-    sigma: float = Field(0.5, gt=0)
+    sigma: float = Field(0.5, gt=0, le=1000)
     margin: float = Field(1.0, gt=0, le=1.5)
     prior_low: tuple[float, float] = (-10.0, 0.7)
     prior_high: tuple[float, float] = (10.0, 1.3)
 
     @model_validator(mode="after")
     def _check(self) -> "ModelConfig":
+        _check_box("prior_low", self.prior_low)
+        _check_box("prior_high", self.prior_high)
         if self.prior_low[1] <= MIN_CLEARANCE:
             raise _FieldError("prior_low", f"clearance scale c must be > {MIN_CLEARANCE:.4f} (w(c) = 0.6 c + 1.1 > 0), got {self.prior_low[1]!r}")
         if any(h <= lo for lo, h in zip(self.prior_low, self.prior_high)):
@@ -135,12 +145,12 @@ class BeliefConfig(_Strict):
     particles: int = Field(1024, ge=1, le=1_000_000)
     nu: float = Field(0.8, gt=0, le=1)
     resample_fraction: float = Field(0.5, gt=0, le=1)
-    jitter: bool = True
+    jitter: StrictBool = True
     likelihood: Literal["gaussian", "tempered", "mixture"] = "gaussian"
-    temperature: float = Field(1.0, ge=1)
+    temperature: float = Field(1.0, ge=1, le=1e6)
     epsilon: float = Field(0.0, ge=0, lt=1)
-    mixture_low: float = -17.0
-    mixture_high: float = 2.0
+    mixture_low: float = Field(-17.0, ge=-1000, le=1000)
+    mixture_high: float = Field(2.0, ge=-1000, le=1000)
     rejuvenation: float = Field(0.0, ge=0, lt=1)
 
     @model_validator(mode="after")
@@ -154,14 +164,14 @@ class SimulatorConfig(_Strict):
     """Ground truth: the engine and simulator-side settings (separate from the model's)."""
 
     engine: str = "mujoco"
-    noise_sigma: float = Field(0.5, ge=0)
-    aim_offset: float = 0.0
+    noise_sigma: float = Field(0.5, ge=0, le=1000)
+    aim_offset: float = Field(0.0, ge=-BOX_LIMIT_MM, le=BOX_LIMIT_MM)
     #: Analytic engine only: its tap boundary offset and capture scale.
-    boundary_offset: float = 0.905
-    capture_scale: float = Field(1.0, gt=0)
+    boundary_offset: float = Field(0.905, ge=-BOX_LIMIT_MM, le=BOX_LIMIT_MM)
+    capture_scale: float = Field(1.0, gt=0, le=100)
     #: Execute every aim of the grid once per instance, so replays and calibration
     #: under any model never need the engine again.
-    execute_all_aims: bool = True
+    execute_all_aims: StrictBool = True
 
     @field_validator("engine")
     @classmethod
@@ -184,7 +194,7 @@ class StudyConfig(_Strict):
     belief: BeliefConfig = BeliefConfig()
     simulator: SimulatorConfig = SimulatorConfig()
     methods: list[Literal["blind_bayes", "blind_robust", "probe_robust"]] = Field(list(METHODS), min_length=1)
-    blind_prior_samples: int = Field(20_000, ge=100)
+    blind_prior_samples: int = Field(20_000, ge=100, le=10_000_000)
     #: Instances per work unit; a unit is the resumable, parallel grain.
     unit_instances: int = Field(4, ge=1, le=1000)
 

@@ -51,8 +51,10 @@ def load_run(run_dir: str | Path) -> LoadedRun:
 def probe_batch(loaded: LoadedRun, latent_names: tuple[str, ...]) -> ProbeBatch:
     """Rebuild the stored probe trajectories (successful episodes) as a batch."""
     # Validate first: a malformed table is refused naming column and row, never reshaped.
-    probes = validate_probes(loaded.probes, str(loaded.path / "probes.parquet"),
-                             instance_ids=loaded.instances["instance_id"])
+    probes = loaded.probes
+    if len(probes):  # empty when every trajectory failed in rollout
+        probes = validate_probes(probes, str(loaded.path / "probes.parquet"),
+                                 instance_ids=loaded.instances["instance_id"])
     # The run's own episode order: instance order of the instances table, then repeat, then j.
     order = {iid: n for n, iid in enumerate(loaded.instances["instance_id"])}
     probes = probes.assign(_o=loaded.probes["instance_id"].map(order))

@@ -9,6 +9,7 @@ whatever the backend or the number of workers.
 
 from __future__ import annotations
 
+import contextlib
 import os
 import time
 from dataclasses import dataclass
@@ -70,9 +71,11 @@ def compute_unit(config_data: dict, instances: pd.DataFrame, unit: str) -> tuple
                     simulator.execute(theta, float(aim))
                 except Exception:  # noqa: BLE001 - recorded when an episode commits there
                     pass
-    trace = build_trace(pfilter, batch, config.seed, config.probes.commit_budgets)
-    blind = blind_bayes_action(model, config.seed, config.blind_prior_samples) if "blind_bayes" in config.methods else None
-    episodes = commit(trace, model, simulator, thresholds=config.belief.nu, methods=config.methods, blind=blind)
+    episodes = pd.DataFrame()
+    if np.any(batch.status == "ok"):  # a unit whose every trajectory failed has nothing to infer
+        trace = build_trace(pfilter, batch, config.seed, config.probes.commit_budgets)
+        blind = blind_bayes_action(model, config.seed, config.blind_prior_samples) if "blind_bayes" in config.methods else None
+        episodes = commit(trace, model, simulator, thresholds=config.belief.nu, methods=config.methods, blind=blind)
     failed = failed_episode_rows(batch, model.variant)
     if len(failed):
         episodes = pd.concat([episodes, failed], ignore_index=True) if len(episodes) else failed
@@ -137,7 +140,13 @@ def ray_init_kwargs(address: str, workers: int) -> dict[str, Any]:
     return dict(address=address, **common)
 
 
-def _run_ray(jobs: list[Job], address: str, workers: int, timing: dict[str, float]) -> Iterator[Result]:
+@contextlib.contextmanager
+def ray_session(address: str, workers: int, timing: dict[str, float]) -> Iterator[Any]:
+    """Connect to (or, for ``"local"``, start) Ray; shut down on exit what was started here.
+
+    Raises:
+        RuntimeError: the cluster cannot be reached (one line).
+    """
     from probecommit.engines import require
 
     ray = require("ray")
@@ -150,15 +159,19 @@ def _run_ray(jobs: list[Job], address: str, workers: int, timing: dict[str, floa
             raise RuntimeError(f"cannot reach the Ray cluster at {address!r}: {str(exc).splitlines()[0]}") from None
     timing["backend_start_s"] = time.perf_counter() - t0
     try:
-        # Tasks return their tables to the driver: no shared filesystem is needed.
-        remote = ray.remote(max_retries=2)(compute_unit)
-        pending = [remote.remote(*job) for job in jobs]
-        while pending:
-            done, pending = ray.wait(pending, num_returns=1)
-            yield ray.get(done[0])
+        yield ray
     finally:
         if started_here:
             ray.shutdown()
+
+
+def _run_ray(jobs: list[Job], ray: Any) -> Iterator[Result]:
+    # Tasks return their tables to the driver: no shared filesystem is needed.
+    remote = ray.remote(max_retries=2)(compute_unit)
+    pending = [remote.remote(*job) for job in jobs]
+    while pending:
+        done, pending = ray.wait(pending, num_returns=1)
+        yield ray.get(done[0])
 
 
 def preflight(config: StudyConfig) -> pd.DataFrame:
@@ -200,25 +213,37 @@ def run_study(
     instances = preflight(config)  # a bad config fails here: no directory is created
     run = RunDir(out)
     config_yaml = dump_config(config)
-    with run.writing(config_yaml):
+    run.check_writable(config_yaml)  # an incompatible directory too
+    n_units = len(unit_names(len(instances), config.unit_instances))
+
+    def complete() -> StudyResult | None:
         if run.is_complete() and not run.verify_digests():
             if progress:
-                n = len(unit_names(len(instances), config.unit_instances))
-                progress(n, n)
+                progress(n_units, n_units)
             return StudyResult(run.path, run.manifest(), pd.read_parquet(run.table_path("episodes")))
-        return _run_units(config, run, instances, workers, ray_address, progress, start)
+        return None
+
+    if (done := complete()) is not None:
+        return done
+    timing: dict[str, float] = {"backend_start_s": 0.0}
+    with contextlib.ExitStack() as stack:
+        # Reach the cluster before writing anything: an unreachable one leaves no directory.
+        ray = stack.enter_context(ray_session(ray_address, workers, timing)) if ray_address else None
+        stack.enter_context(run.writing(config_yaml))
+        if (done := complete()) is not None:  # finished by another process meanwhile
+            return done
+        return _run_units(config, run, instances, workers, ray, ray_address, timing, progress, start)
 
 
-def _run_units(config, run: RunDir, instances, workers, ray_address, progress, start) -> StudyResult:
+def _run_units(config, run: RunDir, instances, workers, ray, ray_address, timing, progress, start) -> StudyResult:
     units = unit_names(len(instances), config.unit_instances)
     config_data = config.model_dump(mode="json")
     jobs = [(config_data, instances.iloc[sl], name) for name, sl in units if not run.unit_done(name)]
     done = len(units) - len(jobs)
-    timing: dict[str, float] = {"backend_start_s": 0.0}
     if progress:
         progress(done, len(units))
-    if ray_address:
-        results: Iterable[Result] = _run_ray(jobs, ray_address, workers, timing)
+    if ray is not None:
+        results: Iterable[Result] = _run_ray(jobs, ray)
         backend = f"ray:{ray_address}"
     elif workers > 1 and len(jobs) > 1:
         results = _run_processes(jobs, workers)

@@ -360,4 +360,13 @@ def canonical_tables(frames: dict[str, pd.DataFrame]) -> dict[str, pd.DataFrame]
     keys = ["engine", "x_hole", "c", "query", "arg"]
     if cache is not None and len(cache) and set(keys) <= set(cache.columns):
         out["engine_cache"] = cache.sort_values(keys, kind="stable", ignore_index=True)
+    for name, columns in _SCHEMAS.items():
+        frame = out.get(name)
+        if frame is not None and len(frame.columns):
+            # Every schema column, in schema order (a table of failed rows only lacks some).
+            names = [c.name for c in columns]
+            missing = {n: pd.Series([None] * len(frame), index=frame.index, dtype=object) for n in names if n not in frame}
+            if missing:
+                frame = frame.assign(**missing)
+            out[name] = frame[names + [c for c in frame.columns if c not in names]]
     return {name: out[name] for name in frames}

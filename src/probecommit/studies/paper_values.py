@@ -53,4 +53,11 @@ PAPER = {
     "robust.escape": {"deployed": 0.174, "mixture": 0.042, "rejuvenation": 0.062},
     "robust.failure_diff": {"mixture": 0.016, "rejuvenation": 0.029},
     "robust.mixture_cost_when_right": (0.102, 0.167),
+    # The commit decision (Split B, cover schedule, budget-simultaneous threshold).
+    "gates.simultaneous_threshold": {"cover": 1.004, "random": 1.018},
+    "gates.area": {"raw": 0.293, "posterior_variance": 0.306, "adjusted": 0.407},
+    "gates.escaped_committed": {"raw": (43, 230, 7, 154), "adjusted": (41, 231, 9, 153), "posterior_variance": (43, 230, 7, 154)},
+    "gates.claimed_realized": {"raw": (0.017, 0.313), "adjusted": (0.075, 0.359)},
+    "gates.oracle_commit_rate": 0.89,
+    "testc.simultaneous_threshold_corrected": {"cover": 0.046, "random": 0.085},
 }

@@ -410,6 +410,34 @@ class InsertionReproduction:
                                     f"{summary['failure_mean_sd'][0]:.3f} +- {summary['failure_mean_sd'][1]:.3f}",
                                     f"{summary['heldout_cluster_coverage']:.3f}", summary["margin_optimistic_fraction"]]]))
 
+    def commit_gates(self) -> None:
+        """Commit gates on Split B, cover schedule (paper Fig. "commit decision" b, c)."""
+        from probecommit.audit.pipeline import gates
+        from probecommit.audit.report import gates_figure
+
+        L = self.loaded
+        result = gates(L["B_cal_cover"], L["B_test_cover"], alpha=self.p.alpha, **self.boot)
+        fig = gates_figure(result)
+        path = self.out / "fig_commit_gates.png"
+        fig.savefig(path, dpi=150)
+        self.rep.figures["commit_gates"] = str(path)
+        summary = result.summary
+        self.rep.results["gates"] = {"summary": summary.to_dict("records"), "info": result.info}
+        result.curves.to_parquet(self.out / "gates_curves.parquet")
+        cols = [c for c in summary.columns if summary[c].dtype != object or c == "signal"]
+        rows = [[fmt(v) if isinstance(v, float) else v for v in r] for r in summary[cols].itertuples(index=False)]
+        self.write_table("gates", "Commit gates, Split B, cover schedule (failure among committed vs commit rate)",
+                         md_table(cols, rows))
+
+    def setup_table(self) -> None:
+        """Table I, the insertion row, from the protocol."""
+        p = self.p
+        n = f"{p.instances['B'].count}x{p.repeats}"
+        self.write_table("table_setup", "Experimental setup, insertion (MuJoCo)", md_table(
+            ["family", "engine", "latents", "probe / action", "sigma", "budgets k", "n; metric"],
+            [["insertion", p.engine, "x_hole, c", "tap / aim", f"{p.sigma} mm", f"1-{p.budgets['random']}, cover {p.cover_schedule}",
+              f"{n}; failure"]]))
+
     def decisive_tap(self) -> None:
         """Fig. (teaser b): a development episode where a chamfer-band tap removes the truth."""
         dev = self.loaded["dev_random"]
@@ -453,6 +481,8 @@ class InsertionReproduction:
         self.faults()
         self.robust()
         self.resplits()
+        self.commit_gates()
+        self.setup_table()
         self.decisive_tap()
         self.rep.wall_s = time.perf_counter() - start
         payload = {"results": self.rep.results, "engine_calls": self.rep.engine_calls, "wall_s": self.rep.wall_s,

@@ -151,6 +151,33 @@ def render(results_json: str | Path, explanations: dict[str, str] | None = None)
     out.append("")
     out.append(ex.get("resplits", ""))
     out.append("")
+    g = r.get("gates")
+    if g:
+        rows = [_row("simultaneous threshold t, cover (original)", PAPER["gates.simultaneous_threshold"]["cover"], r["table_insertion"]["simultaneous_cover"]),
+                _row("simultaneous threshold t, random (original)", PAPER["gates.simultaneous_threshold"]["random"], r["table_insertion"]["simultaneous_random"])]
+        tcs = r["table_testc"]["failure_cover_k5_setcal_margin"].get("simultaneous_threshold", {})
+        if tcs:
+            rows.append(_row("simultaneous threshold t, cover (corrected, Test C)", PAPER["testc.simultaneous_threshold_corrected"]["cover"], tcs.get("corrected")))
+        for row in g["summary"]:
+            sig = row["signal"]
+            if sig in PAPER["gates.area"]:
+                rows.append(_row(f"gate area, {sig}", PAPER["gates.area"][sig], row["area"]))
+            if sig in PAPER["gates.escaped_committed"]:
+                pe = PAPER["gates.escaped_committed"][sig]
+                rows.append(["escaped in committed / rejected pool, " + sig, f"{pe[0]}/{pe[1]} vs {pe[2]}/{pe[3]}",
+                             f"{row['escaped_committed']}/{row['n_committed']} vs {row['escaped_rejected']}/{row['n_rejected']}",
+                             "--", f"at commit rate {row['commit_rate']:.2f}"])
+            if sig in PAPER["gates.claimed_realized"]:
+                pc = PAPER["gates.claimed_realized"][sig]
+                rows.append(_row(f"claimed score at commit, {sig}", pc[0], row["claimed"]))
+                rows.append(_row(f"realized failure at commit, {sig}", pc[1], row["realized"]))
+            if sig == "oracle":
+                rows.append(_row("oracle: smallest commit rate at zero failure", PAPER["gates.oracle_commit_rate"], row["c_min"]))
+        out.append("### The commit decision (Split B, cover schedule)")
+        out.append(_table(rows))
+        out.append("")
+        out.append(ex.get("gates", ""))
+        out.append("")
     figs = payload.get("figures", {})
     if figs:
         out.append("### Figures")
