@@ -114,3 +114,38 @@ def test_cli_commands(tmp_path, runs):
     assert r.exit_code == 0, r.output
     curves = pd.read_csv(tmp_path / "g" / "gate_curves.csv")
     assert set(curves["signal"]) == {"raw", "adjusted", "posterior_variance", "oracle"}
+
+
+def test_runs_with_a_failed_trajectory(tmp_path, runs, monkeypatch):
+    """A trajectory whose probing failed stays counted through calibration and gates."""
+    import probecommit.runner.build as build
+    from probecommit.runner.study import run_study
+    from tests.conftest import small_config
+
+    real_build = build.build_simulator
+    calls = [0]  # shared by every unit's simulator: exactly one probe fails
+
+    class Flaky:
+        def __init__(self, sim):
+            self._sim = sim
+
+        def probe(self, theta, u, rng):
+            calls[0] += 1
+            if calls[0] == 7:  # second trajectory, second probe
+                return float("nan") * self._sim.probe(theta, u, rng)
+            return self._sim.probe(theta, u, rng)
+
+        def __getattr__(self, name):
+            return getattr(self._sim, name)
+
+    monkeypatch.setattr(build, "build_simulator", lambda cfg: Flaky(real_build(cfg)))
+    cfg = small_config(name="test", instances={"split": "test", "count": 8, "seed": 4}, repeats=3)
+    run = run_study(cfg, tmp_path / "flaky").run_dir
+    monkeypatch.undo()
+    res = audit(run, resamples=100)
+    probe = res.table[res.table.method == "probe_robust"]
+    assert (probe["n_failed"] == 1).all() and (probe["n_episodes"] == 8 * 3 - 1).all()
+    cal = calibrate(runs["cal"], run, resamples=100)
+    assert (cal.audit_original["n_failed"] == 1).all()
+    g = gates(runs["cal"], run, resamples=100)
+    assert g.n_trajectories == 8 * 3 - 1 and g.n_dropped == 1
