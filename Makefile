@@ -27,6 +27,7 @@ test-fast: $(STAMP)
 ## Benchmarks: ratios measured side by side in one run.
 bench: $(STAMP)
 	$(PY) benchmarks/belief.py
+	$(PY) benchmarks/scale.py
 
 ## Every MuJoCo insertion table and figure of the paper.
 reproduce: $(STAMP)

@@ -85,6 +85,12 @@ def _integer(df: pd.DataFrame, name: str, csv: bool, source: str) -> pd.Series:
     if nan.any():
         row = int(np.flatnonzero(nan)[0])
         raise EpisodeTableError(f"{source}: column '{name}' is empty at {_where(row, csv)}")
+    # Exact integers only: beyond 2**53 a float no longer holds one, and inf has none.
+    huge = (~np.isfinite(values.to_numpy(float))) | (np.abs(values.to_numpy(float)) > 2**53)
+    if huge.any():
+        row = int(np.flatnonzero(huge)[0])
+        raise EpisodeTableError(f"{source}: column '{name}' must be a finite integer below 2**53, "
+                                f"found {df[name].iloc[row]!r} at {_where(row, csv)}")
     frac = (values != np.round(values)).to_numpy()
     if frac.any():
         row = int(np.flatnonzero(frac)[0])

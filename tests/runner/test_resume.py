@@ -1,0 +1,172 @@
+"""Killed runs resume: finished units are kept, partial ones redone, tables identical."""
+
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pandas as pd
+import pytest
+import yaml
+
+import probecommit.store.rundir as rundir
+from probecommit.runner.config import load_config
+from probecommit.runner.study import run_study
+from probecommit.store.rundir import RunDir, RunDirError
+
+TABLES = ("instances", "probes", "episodes", "engine_cache")
+
+
+def assert_same_tables(a: Path, b: Path) -> None:
+    """Byte-identical final tables (and so identical manifest digests)."""
+    for name in TABLES:
+        fa, fb = a / f"{name}.parquet", b / f"{name}.parquet"
+        if fa.read_bytes() != fb.read_bytes():
+            pd.testing.assert_frame_equal(pd.read_parquet(fa), pd.read_parquet(fb), check_exact=True)
+            raise AssertionError(f"{name}.parquet: equal frames but different bytes")
+
+
+def tiny(make_config):
+    return make_config(
+        instances={"count": 4}, probes={"budget": 3}, belief={"particles": 32},
+        unit_instances=2, blind_prior_samples=200,
+    )
+
+
+class Killed(BaseException):
+    """Stands in for SIGKILL: not an Exception, so nothing in the runner catches it."""
+
+
+def test_killed_at_every_write_resumes_to_identical_tables(tmp_path, make_config, monkeypatch):
+    cfg = tiny(make_config)
+    real_write = rundir.atomic_write_bytes
+    writes = []
+
+    def counting(path, data):
+        writes.append(path.name)
+        real_write(path, data)
+
+    monkeypatch.setattr(rundir, "atomic_write_bytes", counting)
+    reference = run_study(cfg, tmp_path / "ref").run_dir
+    monkeypatch.setattr(rundir, "atomic_write_bytes", real_write)
+    # VERSION, config, 2 units x 5 shard files, 4 tables, manifest.
+    assert len(writes) == 2 + 2 * 5 + 4 + 1 and writes[-1] == "manifest.json"
+
+    for n in range(len(writes)):
+        calls = {"n": 0}
+
+        def dying(path, data, n=n):
+            if calls["n"] == n:
+                # Die mid-write: half the bytes in a temporary that is never renamed.
+                tmp = path.parent / f".{path.name}.killed.tmp"
+                tmp.write_bytes(data[: len(data) // 2])
+                raise Killed(path.name)
+            calls["n"] += 1
+            real_write(path, data)
+
+        out = tmp_path / f"killed-{n}"
+        monkeypatch.setattr(rundir, "atomic_write_bytes", dying)
+        with pytest.raises(Killed):
+            run_study(cfg, out)
+        assert not (out / "manifest.json").is_file()
+        monkeypatch.setattr(rundir, "atomic_write_bytes", real_write)
+        result = run_study(cfg, out)
+        assert_same_tables(reference, out)
+        assert not list(out.glob("**/*.tmp")), f"temporaries left after resuming a kill at write {n}"
+        assert result.manifest["resumed_units"] == sum(1 for w in writes[:n] if w.startswith("unit-") and w.endswith(".episodes.parquet"))
+
+
+def test_partial_unit_is_redone_and_finished_units_are_kept(tmp_path, make_config):
+    cfg = make_config()  # 6 instances, 2 per unit: 3 units
+    reference = run_study(cfg, tmp_path / "ref").run_dir
+    out = run_study(cfg, tmp_path / "run").run_dir
+    shards = out / "shards"
+    (out / "manifest.json").unlink()
+    (out / "episodes.parquet").unlink()
+    # unit-00001 is partial: its episodes shard is missing and its probes shard is garbage.
+    (shards / "unit-00001.episodes.parquet").unlink()
+    (shards / "unit-00001.probes.parquet").write_bytes(b"not parquet")
+    kept = {p.name: p.stat().st_mtime_ns for p in shards.glob("unit-0000[02].*")}
+    time.sleep(0.01)
+    result = run_study(cfg, out)
+    assert result.manifest["resumed_units"] == 2
+    assert {p.name: p.stat().st_mtime_ns for p in shards.glob("unit-0000[02].*")} == kept
+    assert_same_tables(reference, out)
+
+
+def test_a_unit_missing_any_shard_counts_as_not_done(tmp_path, make_config):
+    out = run_study(make_config(), tmp_path / "run").run_dir
+    run = RunDir(out)
+    assert run.unit_done("unit-00000")
+    (out / "shards" / "unit-00000.engine_cache.parquet").unlink()
+    assert not run.unit_done("unit-00000")
+
+
+def test_rerunning_a_complete_run_changes_nothing(tmp_path, make_config):
+    first = run_study(make_config(), tmp_path / "run")
+    manifest = (first.run_dir / "manifest.json").read_bytes()
+    again = run_study(make_config(), tmp_path / "run")
+    assert (first.run_dir / "manifest.json").read_bytes() == manifest
+    pd.testing.assert_frame_equal(again.episodes, first.episodes, check_exact=True)
+
+
+def test_a_directory_being_written_is_refused(tmp_path, make_config):
+    cfg = make_config()
+    run_study(cfg, tmp_path / "run")
+    (tmp_path / "run" / "manifest.json").unlink()  # unfinished: a second writer would race
+    with RunDir(tmp_path / "run").lock():
+        with pytest.raises(RunDirError, match="being written by another probecommit process"):
+            run_study(cfg, tmp_path / "run")
+
+
+KILL_CONFIG = {
+    "name": "killme",
+    "seed": 5,
+    "repeats": 4,
+    "instances": {"split": "kill", "count": 24, "seed": 1},
+    "probes": {"budget": 8},
+    "belief": {"particles": 4096},
+    "simulator": {"engine": "analytic"},
+    "unit_instances": 1,
+    "blind_prior_samples": 2000,
+}
+
+
+@pytest.mark.slow
+def test_sigkilled_cli_run_resumes_to_identical_tables(tmp_path):
+    path = tmp_path / "kill.yaml"
+    path.write_text(yaml.safe_dump(KILL_CONFIG))
+    out = tmp_path / "run"
+    script = Path(sys.executable).with_name("probecommit")
+    entry = [str(script)] if script.is_file() else [sys.executable, "-m", "probecommit.cli.app"]
+    cmd = entry + ["run", str(path), "--out", str(out)]
+    env = {**os.environ, "COLUMNS": "120"}
+    proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, env=env)
+    deadline = time.monotonic() + 30
+    done = []
+    while time.monotonic() < deadline and proc.poll() is None:
+        done = list((out / "shards").glob("unit-*.episodes.parquet"))
+        if len(done) >= 3:
+            break
+        time.sleep(0.005)
+    assert proc.poll() is None, f"run finished before it could be killed: {proc.stderr.read().decode()[-500:]}"
+    proc.send_signal(signal.SIGKILL)
+    proc.wait(timeout=10)
+    proc.stderr.close()
+    assert proc.returncode == -signal.SIGKILL
+    assert not (out / "manifest.json").exists()
+    units_done = len(list((out / "shards").glob("unit-*.episodes.parquet")))
+    assert 3 <= units_done < 24
+
+    again = subprocess.run(cmd, capture_output=True, text=True, env=env, timeout=60)
+    assert again.returncode == 0, again.stderr
+    manifest = RunDir(out).manifest()
+    assert manifest["resumed_units"] == units_done
+
+    # Reference: uninterrupted, in one unit (grouping must not matter either).
+    ref_cfg = load_config(path).model_copy(update={"unit_instances": 24})
+    reference = run_study(ref_cfg, tmp_path / "ref").run_dir
+    assert_same_tables(reference, out)
+    assert manifest["sha256"] == RunDir(reference).manifest()["sha256"]

@@ -1,0 +1,92 @@
+"""A run directory of another version or config is refused, with a message saying why."""
+
+import json
+
+import pytest
+
+from probecommit import __version__
+from probecommit.runner.config import dump_config
+from probecommit.runner.study import run_study
+from probecommit.store.rundir import RunDir, RunDirError
+
+
+def test_other_config_is_refused_naming_the_field(tmp_path, make_config):
+    run_study(make_config(), tmp_path / "run")
+    with pytest.raises(RunDirError, match=r"different config \(seed is 11 there, 12 here\)") as err:
+        run_study(make_config(seed=12), tmp_path / "run")
+    assert "\n" not in str(err.value)
+
+
+def test_other_config_is_refused_while_in_progress(tmp_path, make_config):
+    run = RunDir(tmp_path / "run")
+    run.prepare(dump_config(make_config()))
+    with pytest.raises(RunDirError, match=r"belief\.particles is 256 there, 128 here"):
+        run_study(make_config(belief={"particles": 128}), tmp_path / "run")
+
+
+def test_manifest_of_another_version_is_refused(tmp_path, make_config):
+    out = run_study(make_config(), tmp_path / "run").run_dir
+    manifest = json.loads((out / "manifest.json").read_text())
+    manifest["probecommit_version"] = "0.0.1"
+    (out / "manifest.json").write_text(json.dumps(manifest))
+    (out / "shards" / "VERSION").unlink()  # e.g. shards cleaned up after completion
+    with pytest.raises(RunDirError, match=rf"written by probecommit 0\.0\.1, this is {__version__}"):
+        run_study(make_config(), out)
+
+
+def test_unfinished_run_of_another_version_is_refused(tmp_path, make_config):
+    out = run_study(make_config(), tmp_path / "run").run_dir
+    (out / "manifest.json").unlink()
+    (out / "shards" / "VERSION").write_text("0.0.1")
+    with pytest.raises(RunDirError, match=rf"started by probecommit 0\.0\.1, this is {__version__}"):
+        run_study(make_config(), out)
+
+
+def test_version_is_reported_before_a_config_difference(tmp_path, make_config):
+    # A new version may change config defaults too; the version is the real reason.
+    out = run_study(make_config(), tmp_path / "run").run_dir
+    (out / "shards" / "VERSION").write_text("0.0.1")
+    with pytest.raises(RunDirError, match="started by probecommit 0.0.1"):
+        run_study(make_config(seed=99), out)
+
+
+def test_corrupt_manifest_is_refused(tmp_path, make_config):
+    out = run_study(make_config(), tmp_path / "run").run_dir
+    (out / "manifest.json").write_text("{not json")
+    with pytest.raises(RunDirError, match="not valid JSON"):
+        run_study(make_config(), out)
+
+
+def test_foreign_directory_is_refused_and_left_untouched(tmp_path, make_config):
+    foreign = tmp_path / "photos"
+    foreign.mkdir()
+    (foreign / "cat.jpg").write_bytes(b"x")
+    with pytest.raises(RunDirError, match="not a probecommit run directory"):
+        run_study(make_config(), foreign)
+    assert [p.name for p in foreign.iterdir()] == ["cat.jpg"]
+    afile = tmp_path / "afile"
+    afile.write_text("x")
+    with pytest.raises(RunDirError, match="not a directory"):
+        run_study(make_config(), afile)
+
+
+def test_canonical_order_follows_the_instances_not_the_id_text():
+    import pandas as pd
+
+    from probecommit.store.rundir import canonical_tables
+
+    ids = ["s-9999", "s-10000"]
+    frames = {
+        "instances": pd.DataFrame({"instance_id": ids[::-1], "split": "s", "instance_index": [10000, 9999]}),
+        "probes": pd.DataFrame({"instance_id": ["s-10000", "s-9999", "s-9999"], "repeat": [0, 0, 0],
+                                "j": [1, 2, 1], "u": [0.0, 1.0, 2.0], "y": [0.0, 0.0, 0.0]}),
+        "episodes": pd.DataFrame({"instance_id": ["s-10000", "s-9999", "s-9999"], "repeat": [0, 1, 0],
+                                  "k": [0, 0, 0], "method": ["a", "b", "c"]}),
+        "engine_cache": pd.DataFrame({"engine": "e", "query": ["t", "p", "t"], "x_hole": [2.0, 1.0, 1.0],
+                                      "c": 1.0, "arg": [0.0, 3.0, 1.0], "value": [0.0, 0.0, 0.0]}),
+    }
+    out = canonical_tables(frames)
+    assert out["instances"]["instance_id"].tolist() == ids
+    assert out["probes"][["instance_id", "j"]].values.tolist() == [["s-9999", 1], ["s-9999", 2], ["s-10000", 1]]
+    assert out["episodes"]["method"].tolist() == ["c", "b", "a"]
+    assert out["engine_cache"][["x_hole", "query"]].values.tolist() == [[1.0, "p"], [1.0, "t"], [2.0, "t"]]
