@@ -33,6 +33,7 @@ from probecommit.studies.faults import fault_arms, run_fault_harness
 from probecommit.studies.protocol import DEFAULT_PROTOCOL, Protocol, load_protocol
 from probecommit.studies.robust import final_failure, robust_candidates, tune_robust_filters
 from probecommit.studies.scan import boundary_scan
+from probecommit.store.rundir import RunDir
 
 Progress = Callable[[str, int, int], None]
 
@@ -134,19 +135,23 @@ class InsertionReproduction:
     # ---------------------------------------------------------------- helpers
     def run(self, name: str, config) -> LoadedRun:
         self.progress(f"run {name}", 0, 1)
+        already_done = RunDir(self.runs / name).is_complete()
         result = run_study(config, self.runs / name, workers=self.workers,
                            progress=lambda d, t: self.progress(f"run {name}", d, t))
-        if result.manifest.get("resumed_units", 0) == 0:
+        # Count only engine work done now: a complete run from an earlier invocation made no calls.
+        if not already_done and result.manifest.get("resumed_units", 0) == 0:
             self.rep.add_calls(result.manifest["engine_calls"])
         self.loaded[name] = load_run(result.run_dir)
         return self.loaded[name]
 
     def replay(self, source: str, name: str, overrides: dict) -> LoadedRun:
         path = self.runs / name
-        if not (path / "manifest.json").is_file():
+        fresh = not RunDir(path).is_complete()
+        if fresh:
             replay_run(self.runs / source, path, overrides)
         self.loaded[name] = load_run(path)
-        self.rep.add_calls(self.loaded[name].manifest["engine_calls"])
+        if fresh:
+            self.rep.add_calls(self.loaded[name].manifest["engine_calls"])
         return self.loaded[name]
 
     def write_table(self, key: str, title: str, table: str, note: str = "") -> None:
