@@ -16,7 +16,7 @@ import numpy as np
 import pandas as pd
 import pyarrow as pa
 
-from probecommit.store.schema import AUDIT_REQUIRED, EPISODE_COLUMNS
+from probecommit.store.schema import AUDIT_REQUIRED, EPISODE_COLUMNS, checked_frame
 
 #: Columns that identify one episode within a (method, variant) group.
 KEY_COLUMNS = ("instance_id", "repeat", "k")
@@ -153,18 +153,7 @@ def validate_episodes(table: pd.DataFrame, source: str = "episode table", *, csv
     Raises:
         EpisodeTableError: With one message naming the problem.
     """
-    df = table.copy()
-    df.columns = [str(c).strip() for c in df.columns]
-    missing = [c for c in AUDIT_REQUIRED if c not in df.columns]
-    if missing:
-        raise EpisodeTableError(f"{source}: missing required column(s) {', '.join(missing)}; "
-                                f"the audit needs {', '.join(AUDIT_REQUIRED)}")
-    dupcols = df.columns[df.columns.duplicated()]
-    if len(dupcols):
-        raise EpisodeTableError(f"{source}: column '{dupcols[0]}' appears more than once")
-    if len(df) == 0:
-        raise EpisodeTableError(f"{source}: the table has no rows")
-    df = df.reset_index(drop=True)
+    df = checked_frame(table, AUDIT_REQUIRED, source, EpisodeTableError, "the audit")
 
     ids = df["instance_id"]
     id_na = ids.isna() | ids.astype(str).str.strip().isin(["", "nan", "None"])

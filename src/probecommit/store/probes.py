@@ -15,7 +15,7 @@ import numpy as np
 import pandas as pd
 import pyarrow as pa
 
-from probecommit.store.schema import PROBE_COLUMNS
+from probecommit.store.schema import PROBE_COLUMNS, checked_frame
 
 REQUIRED = tuple(c.name for c in PROBE_COLUMNS)
 _NA_TEXT = {"", "nan", "NaN", "NA", "N/A", "null", "None", "none"}
@@ -98,18 +98,7 @@ def validate_probes(table: pd.DataFrame, source: str = "probe table", *, csv: bo
     Raises:
         ProbeTableError: with one line naming the problem, the column and the first row.
     """
-    df = table.copy()
-    df.columns = [str(c).strip() for c in df.columns]
-    missing = [c for c in REQUIRED if c not in df.columns]
-    if missing:
-        raise ProbeTableError(f"{source}: missing required column(s) {', '.join(missing)}; "
-                              f"a probe table needs {', '.join(REQUIRED)}")
-    dupcols = df.columns[df.columns.duplicated()]
-    if len(dupcols):
-        raise ProbeTableError(f"{source}: column '{dupcols[0]}' appears more than once")
-    if len(df) == 0:
-        raise ProbeTableError(f"{source}: the table has no rows")
-    df = df.reset_index(drop=True)
+    df = checked_frame(table, REQUIRED, source, ProbeTableError, "a probe table")
     ids = df["instance_id"].astype(object)
     empty = ids.map(lambda v: v is None or (isinstance(v, float) and np.isnan(v))
                     or str(v).strip() in ("", "nan", "None")).to_numpy(bool)

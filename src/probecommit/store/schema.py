@@ -62,6 +62,25 @@ EPISODE_COLUMNS: tuple[Column, ...] = (
 AUDIT_REQUIRED = tuple(c.name for c in EPISODE_COLUMNS if c.required_for_audit)
 
 
+def checked_frame(table, required: tuple[str, ...], source: str, error: type[Exception], needs: str):
+    """A copy of ``table`` with stripped column names, after the checks every reader makes.
+
+    Raises ``error`` with one line for missing required columns (``needs`` names the
+    kind of table), a column given twice, or no rows.
+    """
+    df = table.copy()
+    df.columns = [str(c).strip() for c in df.columns]
+    missing = [c for c in required if c not in df.columns]
+    if missing:
+        raise error(f"{source}: missing required column(s) {', '.join(missing)}; {needs} needs {', '.join(required)}")
+    duplicated = df.columns[df.columns.duplicated()]
+    if len(duplicated):
+        raise error(f"{source}: column '{duplicated[0]}' appears more than once")
+    if len(df) == 0:
+        raise error(f"{source}: the table has no rows")
+    return df.reset_index(drop=True)
+
+
 def arrow_schema(columns: tuple[Column, ...]) -> pa.Schema:
     return pa.schema([pa.field(c.name, c.type) for c in columns])
 
