@@ -24,12 +24,15 @@ def print_budget_table(episodes, title: str) -> None:
     from probecommit.report.tables import budget_summary
 
     summary = budget_summary(episodes)
-    table = Table(title=title, title_style="bold", box=box.SIMPLE_HEAD)
-    for col in summary.columns:
-        table.add_column(col, justify="right", no_wrap=True)
+    # Short headers and labels: the table must fit 80 columns (pipes and CI logs).
+    headers = ("method", "k", "n", "failure", "pred", "e_k", "cover", "escape", "failed")
+    labels = {"blind_bayes": "Blind-Bayes", "blind_robust": "Blind-Robust", "probe_robust": "Probe-Robust"}
+    table = Table(title=title, title_style="bold", box=box.SIMPLE_HEAD, padding=(0, 1), pad_edge=False)
+    for col in headers:
+        table.add_column(col, justify="right", no_wrap=True, min_width={"method": 12, "n": 3}.get(col, len(col)))
     for _, row in summary.iterrows():
         table.add_row(
-            str(row["method"]), str(row["k"]), str(row["episodes"]),
+            labels.get(str(row["method"]), str(row["method"])), str(row["k"]), str(row["episodes"]),
             f"{row['failure']:.3f}", f"{row['predicted']:.3f}", f"{row['optimism']:+.3f}",
             f"{row['coverage']:.3f}", f"{row['escape']:.3f}", str(row["failed"]),
         )
