@@ -46,13 +46,6 @@ def _parse_budgets(text: Optional[str]) -> Optional[list[int]]:
         raise ValueError(f"--budgets must be comma-separated integers, got {text!r}") from None
 
 
-def _save_png(fig, path: Path) -> None:
-    import matplotlib.pyplot as plt
-
-    fig.savefig(path)
-    plt.close(fig)
-
-
 def print_audit_table(table, title: str) -> None:
     """Rich tables of the per-budget audit metrics with intervals, one per method/variant."""
     groups = [c for c in ("method", "variant") if c in table.columns]
@@ -82,6 +75,7 @@ def audit_command(
     """Audit coverage, support escape and optimism per budget, with cluster-bootstrap intervals."""
     from probecommit.audit.pipeline import audit
     from probecommit.audit.report import audit_figure, write_html_report
+    from probecommit.report.figures import save_figure
 
     result = audit(path, resamples=resamples, seed=seed)
     out = out or (path if path.is_dir() else path.with_name(f"{path.stem}-audit"))
@@ -99,7 +93,7 @@ def audit_command(
     result.table.to_csv(out / "audit.csv", index=False)
     if result.surprise is not None:
         result.surprise.to_csv(out / "surprise_auc.csv", index=False)
-    _save_png(audit_figure(result.table, nominal), out / "audit.png")
+    save_figure(audit_figure(result.table, nominal), out / "audit.png")
     report = write_html_report(out / "audit.html", result, title=f"Audit of {path.name}", nominal=nominal)
     console.print(f"report: [bold]{report}[/bold]")
 
@@ -118,6 +112,7 @@ def calibrate_command(
     """Conformal thresholds and margin on --cal; their effect on --test (Tables III and IV)."""
     from probecommit.audit.pipeline import calibrate
     from probecommit.audit.report import calibration_figure, write_html_report
+    from probecommit.report.figures import save_figure
 
     res = calibrate(cal, test, alpha, _parse_budgets(budgets), cost_budget=cost_budget, resamples=resamples, seed=seed)
     out = out or test / "calibration"
@@ -151,7 +146,7 @@ def calibrate_command(
     res.cost.to_csv(out / "cost.csv", index=False)
     res.cost_differences.to_csv(out / "cost_differences.csv", index=False)
     res.margin.search.to_csv(out / "margin_search.csv", index=False)
-    _save_png(calibration_figure(res.table3, 1 - alpha), out / "calibration.png")
+    save_figure(calibration_figure(res.table3, 1 - alpha), out / "calibration.png")
     report = write_html_report(out / "calibration.html", res.audit_calibrated, title="Calibration",
                                calibration=res, nominal=1 - alpha,
                                notes=f"calibration run {cal}, test run {test}; the audit table is the calibrated executor's.")
@@ -172,6 +167,7 @@ def gates_command(
     """Commit gates: failure among committed vs commit rate under first-passage commitment."""
     from probecommit.audit.pipeline import gates
     from probecommit.audit.report import gates_figure, write_html_report
+    from probecommit.report.figures import save_figure
 
     res = gates(cal, test, alpha, _parse_budgets(budgets), target_rate=target, resamples=resamples, seed=seed)
     out = out or test / "gates"
@@ -192,7 +188,7 @@ def gates_command(
     res.curves.to_csv(out / "gate_curves.csv", index=False)
     res.summary.to_csv(out / "gates.csv", index=False)
     res.info["surprise"].to_csv(out / "surprise_auc.csv", index=False)
-    _save_png(gates_figure(res), out / "gates.png")
+    save_figure(gates_figure(res), out / "gates.png")
     report = write_html_report(out / "gates.html", title="Commit gates", gates=res, nominal=1 - alpha,
                                notes=f"calibration run {cal}, test run {test}")
     console.print(f"report: [bold]{report}[/bold]")

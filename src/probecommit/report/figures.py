@@ -13,6 +13,14 @@ import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 
 
+def save_figure(fig, path: str | Path, dpi: int | None = None) -> Path:
+    """Write ``fig`` to ``path`` and close it (figures are built in loops; open ones leak)."""
+    path = Path(path)
+    fig.savefig(path, dpi=dpi)
+    plt.close(fig)
+    return path
+
+
 def belief_density(z: np.ndarray, weights: np.ndarray, grid: np.ndarray, bandwidth: float) -> np.ndarray:
     """Weighted Gaussian-kernel density of particles on ``grid``, peak-normalized."""
     diff = (grid[:, None] - z[None, :]) / bandwidth
@@ -66,7 +74,4 @@ def belief_snapshots(
     ax.set_title(title or f"{iid}, repeat {rep}: beliefs and aims (filled: entered, open: failed)", fontsize=8)
     ax.legend(fontsize=7, loc="upper left", frameon=False)
     fig.tight_layout()
-    path = Path(path)
-    fig.savefig(path)
-    plt.close(fig)
-    return path
+    return save_figure(fig, path)

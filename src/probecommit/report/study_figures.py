@@ -11,7 +11,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 
-from probecommit.report.figures import belief_density  # noqa: E402
+from probecommit.report.figures import belief_density, save_figure  # noqa: E402
 from probecommit.tasks.insertion.model import TIP_RADIUS_MM, half_gap  # noqa: E402
 
 
@@ -28,10 +28,7 @@ def fault_signatures(per_budget: pd.DataFrame, path: str | Path) -> Path:
         ax.grid(alpha=0.3)
     axes[0].legend(fontsize=7, frameon=False)
     fig.tight_layout()
-    path = Path(path)
-    fig.savefig(path)
-    plt.close(fig)
-    return path
+    return save_figure(fig, path)
 
 
 def scan_figure(grid: pd.DataFrame, scans: pd.DataFrame, instance_id: str, delta: float, path: str | Path) -> Path:
@@ -61,10 +58,7 @@ def scan_figure(grid: pd.DataFrame, scans: pd.DataFrame, instance_id: str, delta
     ax.set_title(f"{instance_id}: c = {c:.2f}, hg = {hg:.2f} mm; boundary moves {delta + TIP_RADIUS_MM:.2f} mm", fontsize=8)
     ax.legend(fontsize=7, loc="lower left", frameon=False)
     fig.tight_layout()
-    path = Path(path)
-    fig.savefig(path)
-    plt.close(fig)
-    return path
+    return save_figure(fig, path)
 
 
 def decisive_tap_figure(z_deployed, w_deployed, z_corrected, w_corrected, z_true: float, tap: float, reading: float,
@@ -81,7 +75,4 @@ def decisive_tap_figure(z_deployed, w_deployed, z_corrected, w_corrected, z_true
     ax.set_title(title, fontsize=8)
     ax.legend(fontsize=7, frameon=False)
     fig.tight_layout()
-    path = Path(path)
-    fig.savefig(path)
-    plt.close(fig)
-    return path
+    return save_figure(fig, path)

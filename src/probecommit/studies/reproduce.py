@@ -22,6 +22,7 @@ import pandas as pd
 from probecommit.audit.pipeline import calibrate
 from probecommit.audit.stats import cluster_bootstrap_mean, paired_bootstrap
 from probecommit.audit.surprise import surprise_auc
+from probecommit.report.figures import save_figure
 from probecommit.report.study_figures import decisive_tap_figure, fault_signatures, scan_figure
 from probecommit.runner.build import build_model, build_simulator
 from probecommit.runner.config import SimulatorConfig
@@ -422,9 +423,7 @@ class InsertionReproduction:
 
         L = self.loaded
         result = gates(L["B_cal_cover"], L["B_test_cover"], alpha=self.p.alpha, **self.boot)
-        fig = gates_figure(result)
-        path = self.out / "fig_commit_gates.png"
-        fig.savefig(path, dpi=150)
+        path = save_figure(gates_figure(result), self.out / "fig_commit_gates.png", dpi=150)
         self.rep.figures["commit_gates"] = str(path)
         summary = result.summary
         self.rep.results["gates"] = {"summary": summary.to_dict("records"), "info": result.info}
