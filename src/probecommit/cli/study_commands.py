@@ -103,7 +103,7 @@ def faults(
     """Inject the five mismatch classes on stored probes, with known fixes and tempering."""
     from probecommit.report.study_figures import fault_signatures
     from probecommit.runner.replay import load_run
-    from probecommit.studies.faults import fault_arms, run_fault_harness
+    from probecommit.studies.faults import fault_arms, run_fault_harness, signature_table
     from probecommit.studies.protocol import load_protocol
 
     p = load_protocol(protocol)
@@ -113,9 +113,9 @@ def faults(
         rollouts["noise"] = load_run(noise_run)
     if prior_run:
         rollouts["prior"] = load_run(prior_run)
-    arms = [a for a in fault_arms(f.noise_factor, f.prior_half_width, f.particles, f.frame_offset, f.temperature, p.sigma)
-            if a.rollout in rollouts]
-    skipped = sorted({a.fault for a in fault_arms(f.noise_factor, f.prior_half_width, f.particles, f.frame_offset, f.temperature, p.sigma)} - {a.fault for a in arms})
+    every_arm = fault_arms(f.noise_factor, f.prior_half_width, f.particles, f.frame_offset, f.temperature, p.sigma)
+    arms = [a for a in every_arm if a.rollout in rollouts]
+    skipped = sorted({a.fault for a in every_arm} - {a.fault for a in arms})
     bar, update = progress_bar("fault arms")
     with bar:
         episodes = run_fault_harness(rollouts, arms, progress=update)
@@ -126,10 +126,7 @@ def faults(
     summary = (probe[probe.k == kmax].assign(optimism=lambda d: d.realized - d.predicted)
                .groupby(["fault", "arm"], sort=False)[["realized", "optimism", "covered", "escaped"]].mean())
     console.print(summary.rename(columns={"realized": "failure", "covered": "coverage", "escaped": "escape"}).round(3).to_string())
-    sig = (probe[probe.arm == "fault"].assign(optimism=lambda d: d.realized - d.predicted)
-           .groupby(["fault", "k"], sort=False).agg(escape=("escaped", "mean"), coverage=("covered", "mean"),
-                                                    optimism=("optimism", "mean"), failure=("realized", "mean")).reset_index())
-    fig = fault_signatures(sig, out / "fault_signatures.png")
+    fig = fault_signatures(signature_table(episodes), out / "fault_signatures.png")
     if skipped:
         err_console.print(f"[yellow]skipped faults needing other rollouts:[/yellow] {', '.join(skipped)} (pass --noise-run / --prior-run)")
     console.print(f"episodes: [bold]{out / 'faults_episodes.parquet'}[/bold]; figure: [bold]{fig}[/bold]")

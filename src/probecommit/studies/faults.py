@@ -74,3 +74,20 @@ def run_fault_harness(rollouts: dict[str, LoadedRun], arms: list[Arm], progress=
         if progress:
             progress(n + 1, len(arms))
     return pd.concat(frames, ignore_index=True)
+
+
+def signature_table(episodes: pd.DataFrame) -> pd.DataFrame:
+    """Per (fault, budget) of the fault arms: escape, coverage, optimism and failure.
+
+    The data of the signatures figure; faults in ``FAULTS`` order, budgets ascending.
+    """
+    probe = episodes[(episodes.arm == "fault") & (episodes.method == "probe_robust") & (episodes.status == "ok")]
+    table = (
+        probe.assign(optimism=probe.realized - probe.predicted)
+        .groupby(["fault", "k"], sort=False)
+        .agg(escape=("escaped", "mean"), coverage=("covered", "mean"), optimism=("optimism", "mean"),
+             failure=("realized", "mean"))
+        .reset_index()
+    )
+    rank = table["fault"].map({f: i for i, f in enumerate(FAULTS)})
+    return table.assign(_r=rank).sort_values(["_r", "k"], kind="stable").drop(columns="_r").reset_index(drop=True)

@@ -30,7 +30,7 @@ from probecommit.runner.instances import draw_instances
 from probecommit.runner.replay import LoadedRun, load_run, replay_episodes, replay_run, trace_for_run
 from probecommit.runner.study import run_study
 from probecommit.studies.cover_search import search_cover_schedule
-from probecommit.studies.faults import fault_arms, run_fault_harness
+from probecommit.studies.faults import FAULTS, fault_arms, run_fault_harness, signature_table
 from probecommit.studies.protocol import DEFAULT_PROTOCOL, Protocol, load_protocol
 from probecommit.studies.robust import final_failure, robust_candidates, tune_robust_filters
 from probecommit.studies.scan import boundary_scan
@@ -321,8 +321,8 @@ class InsertionReproduction:
         episodes = run_fault_harness(rollouts, arms, progress=lambda d, t: self.progress("fault harness", d, t))
         episodes.to_parquet(self.out / "faults_episodes.parquet")
         kmax = p.budgets["random"]
-        table, res, sig_rows = [], {}, []
-        for fault in ("none", "noise", "boundary", "prior", "particles", "frame"):
+        table, res = [], {}
+        for fault in FAULTS:
             fa = episodes[(episodes.fault == fault) & (episodes.arm == "fault")]
             row = {"fail": episode_metrics(fa, kmax, **b)["failure"]}
             probe = probe_rows(fa)
@@ -337,14 +337,10 @@ class InsertionReproduction:
             if len(fix):
                 row["paired_fix"] = paired(fa, fix, kmax, "realized", **b)
             res[fault] = row
-            for k in sorted(probe.k.unique()):
-                m = probe[probe.k == k]
-                sig_rows.append({"fault": fault, "k": int(k), "escape": m.escaped.mean(), "coverage": m.covered.mean(),
-                                 "optimism": (m.realized - m.predicted).mean(), "failure": m.realized.mean()})
             table.append([fault, fmt(row["fail"]), f"{row['surprise_auc']:.2f}" if row.get("surprise_auc") is not None else "--",
                           fmt(row["tempered"][0]) if "tempered" in row else "--", fmt(row["fix"][0]) if "fix" in row else "--",
                           fmt(row["paired_fix"], signed=True) if "paired_fix" in row else "--"])
-        signatures = pd.DataFrame(sig_rows)
+        signatures = signature_table(episodes)
         signatures.to_parquet(self.out / "fault_signatures.parquet")
         self.rep.figures["signatures"] = str(fault_signatures(signatures, self.out / "fig_fault_signatures.png"))
         self.rep.results["table_faults"] = res
