@@ -69,18 +69,17 @@ def scan(
     from probecommit.report.study_figures import scan_figure
     from probecommit.runner.build import build_simulator
     from probecommit.runner.config import SimulatorConfig
-    from probecommit.runner.instances import draw_instances
     from probecommit.studies.protocol import load_protocol
-    from probecommit.studies.scan import boundary_scan
+    from probecommit.studies.scan import scan_development
 
+    if engine not in ("mujoco", "analytic"):
+        raise ValueError(f"scan --engine must be mujoco or analytic, got {engine!r}")
     p = load_protocol(protocol)
-    cfg = p.run_config("development", "development", "development", "random")
-    instances = draw_instances(cfg, ("x_hole", "c"))
     sim = build_simulator(SimulatorConfig(engine=engine, boundary_offset=boundary_offset))
     bar, update = progress_bar("scanning development truths")
     with bar:
         update(0, 1)
-        result = boundary_scan(sim, instances, step or p.scan["step"], p.scan["half_range"], p.scan["tolerance"])
+        result = scan_development(p, sim, step)
         update(1, 1)
     out.mkdir(parents=True, exist_ok=True)
     result.scans.to_parquet(out / "scan.parquet")

@@ -26,14 +26,13 @@ from probecommit.report.figures import save_figure
 from probecommit.report.study_figures import decisive_tap_figure, fault_signatures, scan_figure
 from probecommit.runner.build import build_model, build_simulator
 from probecommit.runner.config import SimulatorConfig
-from probecommit.runner.instances import draw_instances
 from probecommit.runner.replay import LoadedRun, load_run, replay_episodes, replay_run, trace_for_run
 from probecommit.runner.study import run_study
 from probecommit.studies.cover_search import search_cover_schedule
 from probecommit.studies.faults import FAULTS, fault_arms, run_fault_harness, signature_table
 from probecommit.studies.protocol import DEFAULT_PROTOCOL, Protocol, load_protocol
 from probecommit.studies.robust import final_failure, robust_candidates, tune_robust_filters
-from probecommit.studies.scan import boundary_scan
+from probecommit.studies.scan import scan_development
 from probecommit.store.rundir import RunDir
 
 Progress = Callable[[str, int, int], None]
@@ -163,11 +162,9 @@ class InsertionReproduction:
     # ---------------------------------------------------------------- steps
     def scan(self) -> None:
         p = self.p
-        cfg = p.run_config("development", "development", "development", "random")
-        instances = draw_instances(cfg, ("x_hole", "c"))
         sim = build_simulator(SimulatorConfig(engine=p.engine, noise_sigma=p.noise_sigma))
         self.progress("boundary scan", 0, 1)
-        result = boundary_scan(sim, instances, p.scan["step"], p.scan["half_range"], p.scan["tolerance"])
+        result = scan_development(p, sim)
         self.rep.add_calls(sim.engine_calls)
         result.scans.to_parquet(self.out / "scan.parquet")
         summary = result.summary()

@@ -83,3 +83,13 @@ def boundary_scan(simulator, instances: pd.DataFrame, step: float = 0.25, half_r
             rows.append({"instance_id": inst["instance_id"], "x_hole": x, "c": c, "side": side,
                          "boundary": dist, "offset": dist - float(half_gap(c))})
     return ScanResult(pd.DataFrame(rows), pd.concat(grids, ignore_index=True))
+
+
+def scan_development(protocol, simulator, step: float | None = None) -> ScanResult:
+    """The protocol's scan: every development truth, at the protocol's step, range and tolerance."""
+    from probecommit.runner.instances import draw_instances
+
+    cfg = protocol.run_config("development", "development", "development", "random")
+    instances = draw_instances(cfg, ("x_hole", "c"))
+    return boundary_scan(simulator, instances, step or protocol.scan["step"], protocol.scan["half_range"],
+                         protocol.scan["tolerance"])
