@@ -120,7 +120,8 @@ def engine_seconds(run: Path) -> float | None:
 
 
 def run_benchmark(paths: list[Path], synthetic_total: float) -> None:
-    from probecommit.audit.pipeline import audit, calibrate, gates
+    from probecommit.audit.pipeline import audit
+    from probecommit.runner.calibration import calibrate, gates
 
     test = paths[-1]
     print(f"== run: {test} ==")

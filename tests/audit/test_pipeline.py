@@ -10,7 +10,8 @@ from typer.testing import CliRunner
 from probecommit.audit.conformal import conformal_quantile
 from probecommit.audit.margin import GAMMA_GRID
 from probecommit.audit.metrics import audit_table
-from probecommit.audit.pipeline import audit, calibrate, gates
+from probecommit.audit.pipeline import audit
+from probecommit.runner.calibration import calibrate, gates
 
 ROBOT = Path(__file__).parent / "data" / "robot_log.csv"
 

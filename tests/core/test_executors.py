@@ -2,16 +2,50 @@
 
 import numpy as np
 
-from probecommit.core.executors import prior_expected_loss, scenario_failure_fraction, scenario_max_loss, select_action
-from probecommit.runner.inference import _choose, blind_bayes_action
+from probecommit.core.executors import (
+    BlindBayes,
+    ProbeRobust,
+    prior_expected_loss,
+    scenario_failure_fraction,
+    scenario_max_loss,
+    scenario_scores,
+    select_action,
+)
+from probecommit.runner.inference import blind_bayes_executor
 from probecommit.tasks.insertion.model import InsertionModel
 
 
-def test_select_action_minimum_then_nearest_reference_then_lowest_index():
+def _choose(model, theta, mask, reference_x):
+    """Scenario executor on given scenarios: (index, score), tie-break against a reference x."""
+    scores = scenario_scores(model, theta, mask)
+    ref = np.stack([reference_x, np.ones_like(reference_x)], axis=-1)
+    idx = select_action(scores, model.tie_break_cost(model.action_grid, ref))
+    return idx, np.take_along_axis(scores, idx[:, None], axis=1)[:, 0]
+
+
+def blind_bayes_action(model, seed, n):
+    index, expected = blind_bayes_executor(model, seed, n).act_one()
+    return float(model.action_grid[index, 0]), expected
+
+
+def test_select_action_minimum_then_lowest_tie_cost_then_lowest_index():
     actions = np.array([0.0, 1.0, 2.0, 3.0])
     scores = np.array([[0.5, 0.1, 0.1, 0.1], [0.2, 0.2, 0.9, 0.9], [0.0, 0.3, 0.3, 0.0]])
     ref = np.array([2.2, 5.0, 1.5])
-    assert select_action(scores, actions, ref).tolist() == [2, 1, 0]
+    cost = np.abs(actions[None, :] - ref[:, None])
+    assert select_action(scores, cost).tolist() == [2, 1, 0]
+
+
+def test_probe_robust_object_equals_scenario_scoring_on_its_retained_set():
+    model = InsertionModel.deployed()
+    rng = np.random.default_rng(3)
+    particles = np.stack([rng.uniform(-10, 10, (5, 64)), rng.uniform(0.7, 1.3, (5, 64))], axis=-1)
+    weights = rng.random((5, 64))
+    weights /= weights.sum(axis=1, keepdims=True)
+    chosen = ProbeRobust(model).act(particles, weights, 0.8)
+    scores = scenario_scores(model, particles, chosen.mask)
+    np.testing.assert_array_equal(chosen.score, scores.min(axis=1))
+    assert np.all(chosen.mask.sum(axis=1) >= 1)
 
 
 def test_scenario_failure_fraction_is_unweighted_over_retained():
@@ -33,11 +67,11 @@ def test_insertion_probe_robust_aims_at_the_retained_cluster():
     theta = np.array([[[2.0, 1.0], [2.1, 1.0], [1.9, 1.0], [-8.0, 1.0]]])
     mask = np.ones((1, 4), dtype=bool)
     idx, score = _choose(model, theta, mask, np.array([2.0]))
-    assert model.action_grid[idx[0]] == 2.0
+    assert model.action_grid[idx[0], 0] == 2.0
     assert score[0] == 0.25
     # With the outlier dropped from the retained set the score is zero.
     idx, score = _choose(model, theta, np.array([[True, True, True, False]]), np.array([2.0]))
-    assert model.action_grid[idx[0]] == 2.0 and score[0] == 0.0
+    assert model.action_grid[idx[0], 0] == 2.0 and score[0] == 0.0
 
 
 def test_insertion_margin_shrinks_window():
@@ -67,6 +101,6 @@ def test_interval_counting_equals_direct_counting():
     theta[:, :20, 0] = np.round(theta[:, :20, 0] * 2) / 2
     mask = rng.random((30, 200)) < 0.7
     lo, hi = model.success_interval(theta)
-    fast = interval_success_counts(lo, hi, mask, model.action_grid)
+    fast = interval_success_counts(lo, hi, mask, model.action_grid[:, 0])
     direct = np.sum(~model.loss(model.action_grid, theta) & mask[:, None, :], axis=-1)
     np.testing.assert_array_equal(fast, direct)

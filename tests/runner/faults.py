@@ -37,7 +37,7 @@ def inject(monkeypatch, **faults) -> None:
 
     def faulty(cfg):
         sim = real(cfg)
-        if cfg.engine != "analytic":
+        if cfg.simulator.engine != "analytic":
             return sim
         return FaultyAnalyticSimulator(
             boundary_offset=sim.boundary_offset, capture_scale=sim.capture_scale,

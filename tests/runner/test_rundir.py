@@ -83,7 +83,7 @@ def test_canonical_order_follows_the_instances_not_the_id_text():
         "episodes": pd.DataFrame({"instance_id": ["s-10000", "s-9999", "s-9999"], "repeat": [0, 1, 0],
                                   "k": [0, 0, 0], "method": ["a", "b", "c"]}),
         "engine_cache": pd.DataFrame({"engine": "e", "query": ["t", "p", "t"], "x_hole": [2.0, 1.0, 1.0],
-                                      "c": 1.0, "arg": [0.0, 3.0, 1.0], "value": [0.0, 0.0, 0.0]}),
+                                      "c": 1.0, "arg": [[0.0], [3.0], [1.0]], "value": [[0.0], [0.0], [0.0]]}),
     }
     out = canonical_tables(frames)
     assert out["instances"]["instance_id"].tolist() == ids

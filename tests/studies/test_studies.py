@@ -7,6 +7,7 @@ import pandas as pd
 import pytest
 
 from probecommit.runner.instances import draw_instances
+from probecommit.tasks.insertion.model import InsertionModel
 from probecommit.runner.replay import load_run, replay_episodes
 from probecommit.runner.study import run_study
 from probecommit.studies.cover_search import candidate_schedules
@@ -21,7 +22,7 @@ SETS = [("development", "development"), ("A", "A"), ("B", "B_cal_cover"), ("B", 
 
 
 def all_sets(protocol):
-    return {split: draw_instances(protocol.run_config(split, name, split, "random"), ("x_hole", "c")) for name, split in SETS}
+    return {split: draw_instances(protocol.run_config(split, name, split, "random"), InsertionModel()) for name, split in SETS}
 
 
 def test_instance_sets_are_disjoint_reproducible_and_in_the_prior_box():
@@ -54,7 +55,7 @@ def test_test_c_uses_its_own_seed_stream():
 @pytest.mark.parametrize("planted", [0.6, -0.3, 0.905])
 def test_scan_recovers_a_planted_boundary(planted):
     p = load_protocol()
-    inst = draw_instances(p.run_config("d", "development", "development", "random"), ("x_hole", "c")).head(5)
+    inst = draw_instances(p.run_config("d", "development", "development", "random"), InsertionModel()).head(5)
     sim = AnalyticInsertionSimulator(boundary_offset=planted)
     result = boundary_scan(sim, inst, step=0.25, half_range=7.0, tolerance=1e-3)
     assert len(result.scans) == 10

@@ -3,8 +3,9 @@
 Modules: ``io`` (read/validate episode tables), ``metrics`` (per-budget audit),
 ``stats`` (cluster bootstrap, paired differences, sign-flip test, rank AUC),
 ``conformal`` (thresholds), ``margin``, ``gates``, ``surprise``, ``score`` (the
-episode coverage score), ``report`` (HTML) and ``pipeline`` (calibrate/gates on
-run directories; imports the runner lazily).
+episode coverage score), ``report`` (HTML) and ``pipeline`` (the audit of a table or
+run directory). Tables only: calibration and gates that re-commit episodes are in
+``probecommit.runner.calibration``.
 """
 
 from probecommit.audit.conformal import (
@@ -30,19 +31,10 @@ from probecommit.audit.stats import (
 from probecommit.audit.surprise import max_surprise, surprise_auc
 
 
-def __getattr__(name):
-    # calibrate needs the runner; import it only when asked for. (The run-level
-    # ``gates`` and ``audit`` functions live in ``probecommit.audit.pipeline``:
-    # ``probecommit.audit.gates`` is the gates module.)
-    if name in ("calibrate", "CalibrationResult", "AuditResult"):
-        from probecommit.audit import pipeline
-
-        return getattr(pipeline, name)
-    raise AttributeError(name)
-
+from probecommit.audit.pipeline import AuditResult, audit
 
 __all__ = [
-    "EpisodeTableError", "GAMMA_GRID", "Interval", "audit_table", "cluster_bootstrap_auc",
+    "AuditResult", "audit", "EpisodeTableError", "GAMMA_GRID", "Interval", "audit_table", "cluster_bootstrap_auc",
     "cluster_bootstrap_mean", "conformal_quantile", "coverage_score", "distribution_free_margin",
     "evaluate_gates", "first_passage", "fixed_budget_thresholds", "gate_curve", "gates_from_tables",
     "instance_scores", "max_surprise", "paired_bootstrap", "rank_auc", "read_episodes", "select_margin",

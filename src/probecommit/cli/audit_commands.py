@@ -110,7 +110,7 @@ def calibrate_command(
     seed: int = typer.Option(0, help="Bootstrap seed."),
 ) -> None:
     """Conformal thresholds and margin on --cal; their effect on --test (Tables III and IV)."""
-    from probecommit.audit.pipeline import calibrate
+    from probecommit.runner.calibration import calibrate
     from probecommit.audit.report import calibration_figure, write_html_report
     from probecommit.report.figures import save_figure
 
@@ -165,7 +165,7 @@ def gates_command(
     seed: int = typer.Option(0, help="Bootstrap seed."),
 ) -> None:
     """Commit gates: failure among committed vs commit rate under first-passage commitment."""
-    from probecommit.audit.pipeline import gates
+    from probecommit.runner.calibration import gates
     from probecommit.audit.report import gates_figure, write_html_report
     from probecommit.report.figures import save_figure
 

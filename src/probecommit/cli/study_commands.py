@@ -9,6 +9,7 @@ from typing import Optional
 import typer
 
 from probecommit.cli.common import console, err_console, progress_bar, user_errors
+from probecommit.tasks.insertion.model import PAPER_DELTA_MM
 
 REPO_ROOT = Path(__file__).resolve().parents[3]
 
@@ -62,20 +63,20 @@ def scan(
     engine: str = typer.Option("mujoco", help="Engine to scan: mujoco or analytic."),
     protocol: Path = typer.Option(REPO_ROOT / "configs" / "paper" / "insertion.yaml", help="Frozen protocol config."),
     step: Optional[float] = typer.Option(None, min=0.001, help="Grid step (mm); default from the protocol (0.25)."),
-    boundary_offset: float = typer.Option(0.905, help="Analytic engine only: its planted boundary offset (mm)."),
+    boundary_offset: float = typer.Option(PAPER_DELTA_MM, help="Analytic engine only: its planted boundary offset (mm)."),
     out: Path = typer.Option(Path("runs/scan"), "--out", "-o", help="Output folder for scan.parquet and the figure."),
 ) -> None:
     """Scan the tap reading against lateral offset on the development truths and fit delta."""
     from probecommit.report.study_figures import scan_figure
-    from probecommit.runner.build import build_simulator
-    from probecommit.runner.config import SimulatorConfig
     from probecommit.studies.protocol import load_protocol
     from probecommit.studies.scan import scan_development
 
     if engine not in ("mujoco", "analytic"):
         raise ValueError(f"scan --engine must be mujoco or analytic, got {engine!r}")
     p = load_protocol(protocol)
-    sim = build_simulator(SimulatorConfig(engine=engine, boundary_offset=boundary_offset))
+    from probecommit.tasks.insertion import make_simulator
+
+    sim = make_simulator(engine, boundary_offset=boundary_offset)  # the offset applies to 'analytic' only
     bar, update = progress_bar("scanning development truths")
     with bar:
         update(0, 1)

@@ -1,37 +1,48 @@
-"""Executors: Blind-Bayes, Blind-Robust and Probe-Robust(k).
+"""Executors: Blind-Bayes, Blind-Robust and Probe-Robust(k), as objects over a model.
+
+An executor takes a task model (``tasks.base.TaskModel``) and a belief and returns,
+per episode, the committed action's grid index, its modeled score and the retained
+set it scored. Binary loss: the unweighted scenario failure fraction over the
+retained set; continuous loss: scenario minimax (the largest miss over it).
 
 Tie-break rule (every executor, documented in docs/decisions.md): among actions
-whose score equals the minimum (within ``SCORE_TIE_TOLERANCE``), choose the one
-closest to a *reference* point computed from the belief alone (the weighted mean of
-the decision coordinate over the scenarios scored); if still tied, the lowest
-action index. The truth is never used.
+whose score equals the minimum (within ``SCORE_TIE_TOLERANCE``), choose the one with
+the lowest ``model.tie_break_cost`` against a *reference* computed from the belief
+alone (the weighted mean of the scenarios scored); if still tied, the lowest action
+index. The truth is never used.
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+from typing import Any
+
 import numpy as np
 
+from probecommit.core.retained import masked_interval, retained_mask, weighted_mean
+
 SCORE_TIE_TOLERANCE = 1e-12
+#: Number of evenly spaced scenarios added across the grown interval when t > 1.
+GROWN_SET_POINTS = 9
 
 
-def select_action(scores: np.ndarray, actions: np.ndarray, reference: np.ndarray) -> np.ndarray:
+def select_action(scores: np.ndarray, tie_cost: np.ndarray) -> np.ndarray:
     """Index of the best action per episode under the documented tie-break.
 
     Args:
         scores: ``[E, A]`` lower is better.
-        actions: ``[A]`` the action grid (scalar actions in the decision coordinate).
-        reference: ``[E]`` tie-break reference point from the belief.
+        tie_cost: ``[E, A]`` secondary cost among tied actions (the model's
+            ``tie_break_cost`` against the belief's reference).
 
     Returns:
-        ``[E]`` integer indices into ``actions``.
+        ``[E]`` integer indices into the action grid.
     """
     scores = np.asarray(scores, dtype=float)
     best = np.min(scores, axis=1, keepdims=True)
     tied = scores <= best + SCORE_TIE_TOLERANCE
-    distance = np.abs(np.asarray(actions, dtype=float)[None, :] - np.asarray(reference, dtype=float)[:, None])
-    distance = np.where(tied, distance, np.inf)
+    cost = np.where(tied, np.asarray(tie_cost, dtype=float), np.inf)
     # argmin returns the first (lowest-index) minimum, which is the final tie-break.
-    return np.argmin(distance, axis=1)
+    return np.argmin(cost, axis=1)
 
 
 def scenario_failure_fraction(failures: np.ndarray, mask: np.ndarray) -> np.ndarray:
@@ -83,3 +94,141 @@ def scenario_max_loss(losses: np.ndarray, mask: np.ndarray) -> np.ndarray:
 def prior_expected_loss(losses: np.ndarray) -> np.ndarray:
     """Mean loss over a prior sample: ``losses[A, S] -> [A]`` (Blind-Bayes objective)."""
     return np.mean(np.asarray(losses, dtype=float), axis=-1)
+
+
+def scenario_scores(model: Any, scenarios: np.ndarray, mask: np.ndarray, context: np.ndarray | None = None) -> np.ndarray:
+    """Scenario score of every grid action ``[E, A]`` over the retained scenarios.
+
+    Binary loss: failure fraction (exact integer counts over a retained count); the
+    interval-counting fast path is used when the model declares ``success_interval``.
+    Continuous loss: the maximum loss over the retained scenarios.
+    """
+    if model.binary_loss:
+        kept = np.maximum(mask.sum(axis=-1), 1)
+        interval = model.success_interval(scenarios)
+        if interval is not None:
+            lo, hi = interval
+            grid = np.asarray(model.action_grid, dtype=float).reshape(-1)
+            failures = mask.sum(axis=-1)[:, None] - interval_success_counts(lo, hi, mask, grid)
+        else:
+            failures = np.sum(model.loss(model.action_grid, scenarios, context) & mask[:, None, :], axis=-1)
+        return failures / kept[:, None]
+    return scenario_max_loss(model.loss(model.action_grid, scenarios, context), mask)
+
+
+def belief_reference(particles: np.ndarray, weights: np.ndarray, mask: np.ndarray | None = None) -> np.ndarray:
+    """Weighted mean of every latent over ``mask`` ``[E, d]``: the tie-break reference."""
+    return np.stack([weighted_mean(particles[..., j], weights, mask) for j in range(particles.shape[-1])], axis=-1)
+
+
+@dataclass
+class Commitment:
+    """What an executor decided for a batch of episodes.
+
+    Attributes:
+        index: ``[E]`` action grid indices.
+        score: ``[E]`` modeled score of the chosen action (failure fraction or max miss).
+        mask: ``[E, N]`` particles in the retained set (all of them for a grown set).
+        lo, hi: ``[E]`` the retained set's interval in the decision coordinate.
+    """
+
+    index: np.ndarray
+    score: np.ndarray
+    mask: np.ndarray
+    lo: np.ndarray
+    hi: np.ndarray
+
+
+def grown_set(model: Any, particles: np.ndarray, threshold: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The set for a threshold ``t > 1``: the hull grown by ``(t - 1) D`` on each side.
+
+    It is represented by all ``N`` particles plus ``GROWN_SET_POINTS`` scenarios evenly
+    spaced across the grown decision-coordinate interval; the model fills their other
+    latents (``model.grown_scenarios``; insertion: the particles' median clearance).
+
+    Returns:
+        Scenarios ``[E, N + 9, d]`` and the grown interval ``(lo, hi)`` per episode.
+    """
+    z = model.decision(particles)
+    grow = (threshold - 1.0) * model.decision_domain_width
+    lo, hi = z.min(axis=1) - grow, z.max(axis=1) + grow
+    z_points = lo[:, None] + (hi - lo)[:, None] * np.linspace(0.0, 1.0, GROWN_SET_POINTS)[None, :]
+    return np.concatenate([particles, model.grown_scenarios(particles, z_points)], axis=1), lo, hi
+
+
+@dataclass
+class ProbeRobust:
+    """Probe-Robust(k): the set objective over the retained top-weight set of a belief.
+
+    Args:
+        model: The task model scoring actions.
+    """
+
+    model: Any
+
+    def act(self, particles: np.ndarray, weights: np.ndarray, threshold: float,
+            context: np.ndarray | None = None) -> Commitment:
+        """Commit for every episode of a belief batch.
+
+        Args:
+            particles: ``[E, N, d]``.
+            weights: ``[E, N]`` normalized.
+            threshold: Retained mass ``nu`` (``<= 1``) or a conformal threshold ``t > 1``
+                (the grown set).
+            context: ``[E, c]`` observed context, if the family has one.
+        """
+        model = self.model
+        if threshold <= 1:
+            mask = retained_mask(weights, threshold)
+            lo, hi = masked_interval(model.decision(particles), mask)
+            scenarios, scenario_mask = particles, mask
+            reference = belief_reference(particles, weights, mask)
+        else:
+            scenarios, lo, hi = grown_set(model, particles, threshold)
+            scenario_mask = np.ones(scenarios.shape[:2], dtype=bool)
+            mask = np.ones_like(weights, dtype=bool)
+            reference = belief_reference(particles, weights)
+        scores = scenario_scores(model, scenarios, scenario_mask, context)
+        index = select_action(scores, model.tie_break_cost(model.action_grid, reference, context))
+        return Commitment(index, np.take_along_axis(scores, index[:, None], axis=1)[:, 0], mask, lo, hi)
+
+
+class BlindRobust(ProbeRobust):
+    """Blind-Robust: the same set objective applied to the unprobed prior cloud (k = 0)."""
+
+
+@dataclass
+class BlindBayes:
+    """Blind-Bayes: the prior-expected-loss optimum over a fixed large prior sample.
+
+    A converged prior-averaged policy: the expectation is computed directly over
+    ``prior_sample`` (one action per distinct context), not learned.
+
+    Args:
+        model: The task model.
+        prior_sample: ``[S, d]`` draws from the prior.
+    """
+
+    model: Any
+    prior_sample: np.ndarray
+
+    def act_one(self, context: np.ndarray | None = None) -> tuple[int, float]:
+        """Action index and its prior expected loss for one context (or none)."""
+        model, sample = self.model, self.prior_sample
+        expected = prior_expected_loss(model.loss(model.action_grid, sample, context))
+        reference = sample.mean(axis=0)[None, :]
+        cost = model.tie_break_cost(model.action_grid, reference, None if context is None else np.asarray(context)[None])
+        index = int(select_action(expected[None, :], cost)[0])
+        return index, float(expected[index])
+
+    def act(self, n_episodes: int, context: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """``(index[E], expected[E])`` for a batch; computed once per distinct context."""
+        if context is None or np.asarray(context).shape[-1] == 0:
+            index, expected = self.act_one(None)
+            return np.full(n_episodes, index), np.full(n_episodes, expected)
+        context = np.asarray(context, dtype=float)
+        unique, inverse = np.unique(context, axis=0, return_inverse=True)
+        answers = [self.act_one(row) for row in unique]
+        inverse = np.asarray(inverse).reshape(-1)
+        return (np.array([answers[i][0] for i in inverse], dtype=np.int64),
+                np.array([answers[i][1] for i in inverse], dtype=float))

@@ -5,58 +5,21 @@ from __future__ import annotations
 import math
 from numbers import Real
 from pathlib import Path
-from typing import Any, Literal, Union
+from typing import Annotated, Any, Literal, Union
 
 import yaml
-from pydantic import BaseModel, ConfigDict, Field, StrictBool, ValidationError, field_validator, model_validator
+from pydantic import Field, StrictBool, ValidationError, field_validator, model_validator
 
-ENGINES = ("analytic", "mujoco", "pybullet", "sapien")
+from probecommit.tasks.config import ConfigError, FieldError as _FieldError, StrictModel as _Strict
+from probecommit.tasks.registry import UnknownTaskError, families
+
 METHODS = ("blind_bayes", "blind_robust", "probe_robust")
+#: Family used when a config names none (the paper's primary testbed).
+DEFAULT_FAMILY = "insertion"
+#: Sections of the flat YAML form that belong to the family's config.
+TASK_SECTIONS = ("model", "simulator")
 
-
-class ConfigError(ValueError):
-    """A study config is invalid; the message names the field."""
-
-
-#: Largest |coordinate| of a prior or truth box, and of an offset (mm): the plate is 120 mm wide.
-BOX_LIMIT_MM = 50.0
-#: Lowest clearance scale c with a positive capture window w(c) = 0.6 c + 1.1 (and half-gap).
-MIN_CLEARANCE = -1.1 / 0.6
-
-
-def _check_box(name: str, box: tuple[float, ...] | None) -> None:
-    if box is not None and any(abs(v) > BOX_LIMIT_MM for v in box):
-        raise _FieldError(name, f"coordinates must be within +-{BOX_LIMIT_MM:g} mm, got {list(box)}")
-
-
-def _has_bool(value: Any) -> bool:
-    if isinstance(value, bool):
-        return True
-    return isinstance(value, (list, tuple)) and any(_has_bool(v) for v in value)
-
-
-class _FieldError(ValueError):
-    """A cross-field check's error, attributed to one field of its section."""
-
-    def __init__(self, field: str, message: str) -> None:
-        super().__init__(f"[{field}] {message}")
-        self.field = field
-        self.message = message
-
-
-class _Strict(BaseModel):
-    """Unknown keys, NaN and infinity are errors; so is a boolean where a number is due."""
-
-    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
-
-    @field_validator("*", mode="before")
-    @classmethod
-    def _no_bool_numbers(cls, value: Any, info) -> Any:
-        # Pydantic's lax mode reads ``true`` as 1; in a config that is a typo, not a number.
-        annotation = cls.model_fields[info.field_name].annotation
-        if annotation not in (bool, StrictBool) and _has_bool(value):
-            raise ValueError("expected a number, got a boolean (true/false)")
-        return value
+__all__ = ["ConfigError", "StudyConfig", "load_config", "parse_config", "dump_config"]
 
 
 class InstancesConfig(_Strict):
@@ -67,16 +30,21 @@ class InstancesConfig(_Strict):
     sampling: Literal["uniform", "lhs"] = "uniform"
     seed: int = Field(0, ge=0)
     #: Truth box, if different from the model's prior box (the prior fault draws from +-12 mm).
-    truth_low: tuple[float, float] | None = None
-    truth_high: tuple[float, float] | None = None
+    truth_low: tuple[float, ...] | None = None
+    truth_high: tuple[float, ...] | None = None
+    #: A fixed truth set (rows of latent values) instead of ``count`` draws from a box.
+    truths: list[tuple[float, ...]] | None = Field(None, min_length=1, max_length=100_000)
+    #: Observed contexts (targets) crossed with the truths: instance = (truth, context).
+    contexts: list[tuple[float, ...]] | None = Field(None, min_length=1, max_length=10_000)
 
     @model_validator(mode="after")
     def _check(self) -> "InstancesConfig":
-        for name in ("truth_low", "truth_high"):
-            box = getattr(self, name)
-            _check_box(name, box)
-            if box is not None and box[1] <= MIN_CLEARANCE:
-                raise _FieldError(name, f"clearance scale c must be > {MIN_CLEARANCE:.4f} (w(c) = 0.6 c + 1.1 > 0), got {box[1]!r}")
+        if self.truths is not None and (self.truth_low is not None or self.truth_high is not None):
+            raise _FieldError("truths", "give either a fixed truth set or a truth box, not both")
+        for name in ("truths", "contexts"):
+            rows = getattr(self, name)
+            if rows is not None and len({len(r) for r in rows}) > 1:
+                raise _FieldError(name, "every row must have the same number of coordinates")
         if self.truth_low is not None and self.truth_high is not None:
             if any(h <= lo for lo, h in zip(self.truth_low, self.truth_high)):
                 raise _FieldError("truth_high", f"must be > truth_low in every coordinate, got {list(self.truth_high)} vs {list(self.truth_low)}")
@@ -86,7 +54,7 @@ class InstancesConfig(_Strict):
 class ProbesConfig(_Strict):
     """Probe schedule: ``random`` (i.i.d. uniform with replacement) or a fixed list."""
 
-    schedule: Union[Literal["random"], list[float]] = "random"
+    schedule: Union[Literal["random"], list[tuple[float, ...]]] = "random"
     budget: int = Field(8, ge=1, le=64)
     budgets: list[int] | None = Field(None, min_length=1)
 
@@ -97,11 +65,14 @@ class ProbesConfig(_Strict):
         if value == "random" and isinstance(value, str):
             return value
         if isinstance(value, (list, tuple)):
+            out = []
             for i, v in enumerate(value):
-                if isinstance(v, bool) or not isinstance(v, Real) or not math.isfinite(v):
-                    raise ValueError(f"probe {i} of the schedule must be a finite number (mm), got {v!r}")
-            return [float(v) for v in value]
-        raise ValueError(f"must be 'random' or a list of probe positions (mm), got {value!r}")
+                comps = list(v) if isinstance(v, (list, tuple)) else [v]
+                if not comps or any(isinstance(c, bool) or not isinstance(c, Real) or not math.isfinite(c) for c in comps):
+                    raise ValueError(f"probe {i} of the schedule must be a finite number or a list of them, got {v!r}")
+                out.append(tuple(float(c) for c in comps))
+            return out
+        raise ValueError(f"must be 'random' or a list of probes (numbers, or lists for vector probes), got {value!r}")
 
     @model_validator(mode="after")
     def _check(self) -> "ProbesConfig":
@@ -116,27 +87,6 @@ class ProbesConfig(_Strict):
     @property
     def commit_budgets(self) -> list[int]:
         return sorted(set(self.budgets)) if self.budgets else list(range(1, self.budget + 1))
-
-
-class ModelConfig(_Strict):
-    """The analytic model the robot deploys."""
-
-    boundary: Literal["deployed", "corrected"] = "deployed"
-    delta: float = Field(0.905, ge=-5, le=5)
-    sigma: float = Field(0.5, gt=0, le=1000)
-    margin: float = Field(1.0, gt=0, le=1.5)
-    prior_low: tuple[float, float] = (-10.0, 0.7)
-    prior_high: tuple[float, float] = (10.0, 1.3)
-
-    @model_validator(mode="after")
-    def _check(self) -> "ModelConfig":
-        _check_box("prior_low", self.prior_low)
-        _check_box("prior_high", self.prior_high)
-        if self.prior_low[1] <= MIN_CLEARANCE:
-            raise _FieldError("prior_low", f"clearance scale c must be > {MIN_CLEARANCE:.4f} (w(c) = 0.6 c + 1.1 > 0), got {self.prior_low[1]!r}")
-        if any(h <= lo for lo, h in zip(self.prior_low, self.prior_high)):
-            raise _FieldError("prior_high", f"must be > prior_low in every coordinate, got {list(self.prior_high)} vs {list(self.prior_low)}")
-        return self
 
 
 class BeliefConfig(_Strict):
@@ -160,43 +110,79 @@ class BeliefConfig(_Strict):
         return self
 
 
-class SimulatorConfig(_Strict):
-    """Ground truth: the engine and simulator-side settings (separate from the model's)."""
+def _task_union() -> Any:
+    members = tuple(spec.config for spec in families().values())
+    if len(members) == 1:
+        return members[0]
+    return Annotated[Union[members], Field(discriminator="family")]
 
-    engine: str = "mujoco"
-    noise_sigma: float = Field(0.5, ge=0, le=1000)
-    aim_offset: float = Field(0.0, ge=-BOX_LIMIT_MM, le=BOX_LIMIT_MM)
-    #: Analytic engine only: its tap boundary offset and capture scale.
-    boundary_offset: float = Field(0.905, ge=-BOX_LIMIT_MM, le=BOX_LIMIT_MM)
-    capture_scale: float = Field(1.0, gt=0, le=100)
-    #: Execute every aim of the grid once per instance, so replays and calibration
-    #: under any model never need the engine again.
-    execute_all_aims: StrictBool = True
 
-    @field_validator("engine")
-    @classmethod
-    def _engine(cls, v: str) -> str:
-        if v not in ENGINES:
-            raise ValueError(f"unknown engine {v!r}; choose one of {', '.join(ENGINES)}")
-        return v
+#: Every registered family's config, a discriminated union on ``family``. Built when this
+#: module is imported, after the built-in families and the ``probecommit.tasks`` entry
+#: points have registered.
+TaskConfig = _task_union()
 
 
 class StudyConfig(_Strict):
-    """One study: instances x repeats x probe schedule x budgets, one model, one engine."""
+    """One study: instances x repeats x probe schedule x budgets, one family's model, one engine.
+
+    ``task`` is a discriminated union keyed on the family name over every registered
+    family's config (:data:`TaskConfig`). In YAML the family's
+    ``model`` and ``simulator`` sections may sit at the top level beside
+    ``task: <family>`` (the flat form, also what :func:`dump_config` writes), or
+    inside ``task: {family: ..., model: ..., simulator: ...}``.
+    """
 
     name: str = Field("study", min_length=1, pattern=r"^[A-Za-z0-9_.-]+$")
-    task: Literal["insertion"] = "insertion"
+    task: TaskConfig = None  # type: ignore[assignment]  # filled by _nest_task
     seed: int = Field(0, ge=0)
     repeats: int = Field(4, ge=1, le=1000)
     instances: InstancesConfig = InstancesConfig()
     probes: ProbesConfig = ProbesConfig()
-    model: ModelConfig = ModelConfig()
     belief: BeliefConfig = BeliefConfig()
-    simulator: SimulatorConfig = SimulatorConfig()
     methods: list[Literal["blind_bayes", "blind_robust", "probe_robust"]] = Field(list(METHODS), min_length=1)
     blind_prior_samples: int = Field(20_000, ge=100, le=10_000_000)
     #: Instances per work unit; a unit is the resumable, parallel grain.
     unit_instances: int = Field(4, ge=1, le=1000)
+
+    @property
+    def family(self) -> str:
+        return self.task.family
+
+    @property
+    def model(self) -> Any:
+        """The family's model section."""
+        return self.task.model
+
+    @property
+    def simulator(self) -> Any:
+        """The family's simulator section."""
+        return self.task.simulator
+
+    @model_validator(mode="before")
+    @classmethod
+    def _nest_task(cls, data: Any) -> Any:
+        # The flat YAML form: ``task: <family>`` with ``model``/``simulator`` at the top.
+        if not isinstance(data, dict):
+            return data
+        data = dict(data)
+        task = data.get("task", DEFAULT_FAMILY)
+        if isinstance(task, str):
+            task = {"family": task}
+            for section in TASK_SECTIONS:
+                if section in data:
+                    task[section] = data.pop(section)
+        elif isinstance(task, dict):
+            clash = [s for s in TASK_SECTIONS if s in data]
+            if clash:
+                raise ValueError(f"'{clash[0]}' given both at the top level and inside 'task'; give it once")
+        if isinstance(task, dict):
+            name = task.get("family")
+            known = families()
+            if name not in known:
+                raise _FieldError("task", f"unknown task family {name!r}; registered: {', '.join(sorted(known))}")
+        data["task"] = task
+        return data
 
     @field_validator("name")
     @classmethod
@@ -216,16 +202,31 @@ class StudyConfig(_Strict):
 
     @model_validator(mode="after")
     def _check(self) -> "StudyConfig":
-        inst, model = self.instances, self.model
-        low = inst.truth_low if inst.truth_low is not None else model.prior_low
-        high = inst.truth_high if inst.truth_high is not None else model.prior_high
-        if any(h <= lo for lo, h in zip(low, high)):
-            which = "truth_high" if inst.truth_high is not None else "truth_low"
-            raise _FieldError(
-                f"instances.{which}",
-                f"truth box must have high > low in every coordinate, got low {list(low)}, high {list(high)} "
-                "(an unset end defaults to the model's prior box)",
-            )
+        inst, task = self.instances, self.task
+        if inst.truths is not None:
+            n = len(task.latent_names)
+            if n and len(inst.truths[0]) != n:
+                raise _FieldError("instances.truths", f"rows need {n} coordinates ({', '.join(task.latent_names)}), got {len(inst.truths[0])}")
+        else:
+            low = inst.truth_low if inst.truth_low is not None else self.model.prior_low
+            high = inst.truth_high if inst.truth_high is not None else self.model.prior_high
+            task.check_truth_box(low, high, "instances")
+            if any(h <= lo for lo, h in zip(low, high)):
+                which = "truth_high" if inst.truth_high is not None else "truth_low"
+                raise _FieldError(
+                    f"instances.{which}",
+                    f"truth box must have high > low in every coordinate, got low {list(low)}, high {list(high)} "
+                    "(an unset end defaults to the model's prior box)",
+                )
+        n_ctx = len(task.context_names)
+        if inst.contexts is not None and len(inst.contexts[0]) != n_ctx:
+            raise _FieldError("instances.contexts", f"rows need {n_ctx} coordinates ({', '.join(task.context_names) or 'the family has no context'}), got {len(inst.contexts[0])}")
+        if n_ctx and inst.contexts is None:
+            raise _FieldError("instances.contexts", f"the {task.family} family needs a context per instance ({', '.join(task.context_names)})")
+        if isinstance(self.probes.schedule, list):
+            bad = [p for p in self.probes.schedule if len(p) != task.probe_dim]
+            if bad:
+                raise _FieldError("probes.schedule", f"probes of the {task.family} family have {task.probe_dim} component(s), got {list(bad[0])}")
         return self
 
 
@@ -247,6 +248,9 @@ def _format_error(exc: ValidationError) -> str:
     if isinstance(cause, _FieldError):
         loc, msg = loc + [cause.field], cause.message
         loc = [p for part in loc for p in part.split(".")]
+    # ``task.<family>.model.sigma`` -> ``model.sigma``: the flat form users write.
+    if len(loc) >= 2 and loc[0] == "task" and loc[1] in families():
+        loc = loc[2:] if len(loc) > 2 and loc[2] in TASK_SECTIONS else ["task"] + loc[2:]
     field = ".".join(loc) or "config"
     extra = f" (and {exc.error_count() - 1} more)" if exc.error_count() > 1 else ""
     return _one_line(f"invalid config field '{field}': {msg}{extra}")
@@ -334,5 +338,15 @@ def load_config(path: str | Path) -> StudyConfig:
         raise ConfigError(f"{path}: {exc}") from None
 
 
+def config_data(config: StudyConfig) -> dict[str, Any]:
+    """The config as plain data in the flat form (``task: <family>``, then its sections)."""
+    data = config.model_dump(mode="json")
+    task = data.pop("task")
+    data.update(task=task.pop("family"), **task)  # model, simulator
+    order = ["name", "task", "seed", "repeats", "instances", "probes", "model", "belief", "simulator"]
+    return {**{k: data[k] for k in order if k in data}, **{k: v for k, v in data.items() if k not in order}}
+
+
 def dump_config(config: StudyConfig) -> str:
-    return yaml.safe_dump(config.model_dump(mode="json"), sort_keys=False)
+    """The config as YAML in the flat form; :func:`parse_config` reads it back identically."""
+    return yaml.safe_dump(config_data(config), sort_keys=False)

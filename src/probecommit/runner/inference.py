@@ -10,34 +10,37 @@ faults and calibration all reuse stored probes, so compared arms see identical t
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Iterable, Mapping
+from typing import Any, Iterable, Mapping
 
 import numpy as np
 import pandas as pd
 
-from probecommit.audit.score import coverage_score
 from probecommit.core.belief import BeliefState, ParticleFilter
-from probecommit.core.executors import interval_success_counts, prior_expected_loss, scenario_max_loss, select_action
-from probecommit.core.retained import masked_interval, retained_mask, weighted_mean, weighted_variance
+from probecommit.core.executors import BlindBayes, BlindRobust, ProbeRobust
+from probecommit.core.retained import coverage_score, masked_interval, weighted_variance
 from probecommit.runner.seeding import INFERENCE, ROLLOUT, blind_rng, episode_rng
-
-#: Number of evenly spaced scenarios added across the grown interval when t > 1.
-GROWN_SET_POINTS = 9
+from probecommit.store.schema import component_names
 
 
 @dataclass
 class ProbeBatch:
-    """Stored probes of ``E`` episodes (one trajectory each, ``K`` probes)."""
+    """Stored probes of ``E`` episodes (one trajectory each, ``K`` probes).
+
+    Attributes:
+        u: ``[E, K, p]`` probes; ``y``: ``[E, K, m]`` observations.
+        context: ``[E, c]`` observed context per episode (``c`` may be 0).
+    """
 
     split: str
     instance_id: np.ndarray  # [E] str
     instance_index: np.ndarray  # [E] int
     repeat: np.ndarray  # [E] int
     truths: np.ndarray  # [E, d]
-    u: np.ndarray  # [E, K]
+    u: np.ndarray  # [E, K, p]
     y: np.ndarray  # [E, K, m]
     status: np.ndarray = field(default=None)  # type: ignore[assignment]  # [E] "ok" / "failed"
     error: np.ndarray = field(default=None)  # type: ignore[assignment]
+    context: np.ndarray = field(default=None)  # type: ignore[assignment]
 
     def __post_init__(self) -> None:
         n = len(self.instance_id)
@@ -45,79 +48,95 @@ class ProbeBatch:
             self.status = np.full(n, "ok", dtype=object)
         if self.error is None:
             self.error = np.full(n, "", dtype=object)
+        if self.context is None:
+            self.context = np.zeros((n, 0))
 
     @property
     def n_episodes(self) -> int:
         return len(self.instance_id)
 
+    @property
+    def episode_context(self) -> np.ndarray | None:
+        """``[E, c]``, or None for a family without context."""
+        return self.context if self.context.shape[1] else None
+
     def subset(self, rows: np.ndarray) -> "ProbeBatch":
         return ProbeBatch(
             self.split, self.instance_id[rows], self.instance_index[rows], self.repeat[rows],
-            self.truths[rows], self.u[rows], self.y[rows], self.status[rows], self.error[rows],
+            self.truths[rows], self.u[rows], self.y[rows], self.status[rows], self.error[rows], self.context[rows],
         )
 
     def probes_frame(self) -> pd.DataFrame:
-        """Long table ``instance_id, repeat, j, u, y`` of the successful episodes."""
+        """Long table ``instance_id, repeat, j, u.., y..`` of the successful episodes."""
         ok = self.status == "ok"
-        e, k = self.u[ok].shape
-        return pd.DataFrame(
-            {
-                "instance_id": np.repeat(self.instance_id[ok], k).astype(str),
-                "repeat": np.repeat(self.repeat[ok], k).astype(np.int64),
-                "j": np.tile(np.arange(1, k + 1), e).astype(np.int64),
-                "u": self.u[ok].ravel().astype(float),
-                "y": self.y[ok][..., 0].ravel().astype(float),
-            }
-        )
+        e, k = self.u[ok].shape[:2]
+        frame = {
+            "instance_id": np.repeat(self.instance_id[ok], k).astype(str),
+            "repeat": np.repeat(self.repeat[ok], k).astype(np.int64),
+            "j": np.tile(np.arange(1, k + 1), e).astype(np.int64),
+        }
+        for base, values in (("u", self.u[ok]), ("y", self.y[ok])):
+            for i, name in enumerate(component_names(base, values.shape[2])):
+                frame[name] = values[..., i].ravel().astype(float)
+        return pd.DataFrame(frame)
+
+
+def instance_arrays(instances: pd.DataFrame, model: Any) -> tuple[np.ndarray, np.ndarray]:
+    """Truths ``[I, d]`` and contexts ``[I, c]`` of an instance table."""
+    truths = instances[[f"true_{n}" for n in model.latent_names]].to_numpy(float).reshape(len(instances), -1)
+    context = instances[[f"ctx_{n}" for n in model.context_names]].to_numpy(float).reshape(len(instances), -1)
+    return truths, context
 
 
 def rollout(
     instances: pd.DataFrame,
     repeats: int,
-    schedule: str | list[float],
+    schedule: str | list,
     budget: int,
-    probe_grid: np.ndarray,
+    model: Any,
     simulator,
     seed: int,
-    latent_names: tuple[str, ...],
 ) -> ProbeBatch:
     """Draw every episode's probe trajectory from the simulator.
 
-    Random schedules draw the probe position and then the reading noise at each
+    Random schedules draw the probe's grid index and then the reading noise at each
     step, from the episode's own rollout stream, so a budget-``k`` trajectory is
     the prefix of any longer one with the same seed.
     """
+    grid = np.asarray(model.probe_grid, dtype=float)
+    p, m = model.probe_dim, model.observation_dim
+    truths, contexts = instance_arrays(instances, model)
     rows = []
-    for _, inst in instances.iterrows():
-        theta = np.array([inst[f"true_{n}"] for n in latent_names], dtype=float)
+    for i, (_, inst) in enumerate(instances.iterrows()):
+        theta = truths[i]
         for r in range(repeats):
             rng = episode_rng(seed, str(inst["split"]), int(inst["instance_index"]), r, ROLLOUT)
-            u = np.empty(budget)
-            y = np.full((budget, 1), np.nan)
+            u = np.empty((budget, p))
+            y = np.full((budget, m), np.nan)
             status, error = "ok", ""
             try:
                 for j in range(budget):
-                    if schedule == "random":
-                        u[j] = probe_grid[rng.integers(len(probe_grid))]
-                    else:
-                        u[j] = schedule[j]
+                    u[j] = grid[rng.integers(len(grid))] if schedule == "random" else schedule[j]
                     y[j] = simulator.probe(theta, u[j], rng)
                     if not np.all(np.isfinite(y[j])):
-                        raise FloatingPointError(f"{simulator.engine} returned {y[j].tolist()} for probe u={u[j]}")
+                        shown = u[j][0] if p == 1 else u[j].tolist()
+                        raise FloatingPointError(f"{simulator.engine} returned {y[j].tolist()} for probe u={shown}")
             except Exception as exc:  # noqa: BLE001 - one bad engine query must not end the study
                 status, error = "failed", f"probe {j + 1}: {type(exc).__name__}: {exc}"
-            rows.append((inst["instance_id"], int(inst["instance_index"]), r, theta, u, y, status, error))
+            rows.append((inst["instance_id"], int(inst["instance_index"]), r, theta, u, y, status, error, contexts[i]))
     split = str(instances["split"].iloc[0]) if len(instances) else ""
+    n = len(rows)
     return ProbeBatch(
         split=split,
         instance_id=np.array([r[0] for r in rows], dtype=object),
         instance_index=np.array([r[1] for r in rows], dtype=np.int64),
         repeat=np.array([r[2] for r in rows], dtype=np.int64),
-        truths=np.array([r[3] for r in rows], dtype=float).reshape(len(rows), len(latent_names)),
-        u=np.array([r[4] for r in rows], dtype=float).reshape(len(rows), budget),
-        y=np.array([r[5] for r in rows], dtype=float).reshape(len(rows), budget, 1),
+        truths=np.array([r[3] for r in rows], dtype=float).reshape(n, len(model.latent_names)),
+        u=np.array([r[4] for r in rows], dtype=float).reshape(n, budget, p),
+        y=np.array([r[5] for r in rows], dtype=float).reshape(n, budget, m),
         status=np.array([r[6] for r in rows], dtype=object),
         error=np.array([r[7] for r in rows], dtype=object),
+        context=np.array([r[8] for r in rows], dtype=float).reshape(n, len(model.context_names)),
     )
 
 
@@ -156,54 +175,9 @@ def build_trace(pfilter: ParticleFilter, batch: ProbeBatch, seed: int, budgets: 
     return BeliefTrace(batch, states, surprise)
 
 
-def grown_scenarios(particles: np.ndarray, threshold: float, domain_width: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The set for a threshold ``t > 1``: the hull grown by ``(t - 1) D`` on each side.
-
-    It is represented by all ``N`` particles plus nine points evenly spaced across the
-    grown interval, each at the particles' median of the other latents (the clearance
-    scale for insertion). The decision coordinate is latent 0.
-
-    Returns:
-        Scenarios ``[E, N + 9, d]`` and the grown interval ``(lo, hi)`` per episode.
-    """
-    z = particles[..., 0]
-    grow = (threshold - 1.0) * domain_width
-    lo, hi = z.min(axis=1) - grow, z.max(axis=1) + grow
-    extra = np.repeat(np.median(particles, axis=1)[:, None, :], GROWN_SET_POINTS, axis=1)
-    extra[..., 0] = lo[:, None] + (hi - lo)[:, None] * np.linspace(0.0, 1.0, GROWN_SET_POINTS)[None, :]
-    return np.concatenate([particles, extra], axis=1), lo, hi
-
-
-def _choose(model, scenarios: np.ndarray, mask: np.ndarray, reference: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Scenario executor: action index and its score per episode."""
-    if model.binary_loss:
-        kept = np.maximum(mask.sum(axis=-1), 1)
-        # Integer counting keeps scores exact and independent of batch shape.
-        if hasattr(model, "success_interval"):
-            lo, hi = model.success_interval(scenarios)
-            failures = mask.sum(axis=-1)[:, None] - interval_success_counts(lo, hi, mask, model.action_grid)
-        else:
-            failures = np.sum(model.loss(model.action_grid, scenarios) & mask[:, None, :], axis=-1)
-        scores = failures / kept[:, None]
-    else:
-        scores = scenario_max_loss(model.loss(model.action_grid, scenarios), mask)
-    idx = select_action(scores, model.action_grid, reference)
-    return idx, np.take_along_axis(scores, idx[:, None], axis=1)[:, 0]
-
-
-def blind_bayes_action(model, seed: int, n_samples: int) -> tuple[float, float]:
-    """Blind-Bayes: the prior-expected-loss optimum over a large fixed prior sample.
-
-    Returns:
-        The action and its prior expected loss.
-    """
-    rng = blind_rng(seed)
-    low, high = np.asarray(model.prior_low, float), np.asarray(model.prior_high, float)
-    sample = low + (high - low) * rng.random((n_samples, low.shape[0]))
-    expected = prior_expected_loss(model.loss(model.action_grid, sample))
-    ref = np.array([float(np.mean(model.decision(sample)))])
-    idx = int(select_action(expected[None, :], model.action_grid, ref)[0])
-    return float(model.action_grid[idx]), float(expected[idx])
+def blind_bayes_executor(model, seed: int, n_samples: int) -> BlindBayes:
+    """Blind-Bayes over a large fixed prior sample drawn from the study's blind stream."""
+    return BlindBayes(model, model.sample_prior(blind_rng(seed), n_samples))
 
 
 def commit(
@@ -213,20 +187,20 @@ def commit(
     thresholds: float | Mapping[int, float] = 0.8,
     margin: float | None = None,
     methods: Iterable[str] = ("probe_robust",),
-    blind: tuple[float, float] | None = None,
+    blind: BlindBayes | None = None,
 ) -> pd.DataFrame:
     """Commit once per episode and budget, and score the commit against ground truth.
 
     Args:
         trace: Beliefs per budget.
         model: The model scoring actions (its variant labels the rows).
-        simulator: Ground truth; ``execute`` is cached per distinct aim.
+        simulator: Ground truth; ``execute`` is cached per distinct action.
         thresholds: Retained mass ``nu`` (or conformal threshold ``t``), a float for
             every budget or ``{k: t}``; ``t > 1`` uses the grown set.
-        margin: Capture-window shrink ``gamma`` (None keeps the model's).
+        margin: The model's margin ``gamma`` (None keeps the model's).
         methods: Any of ``probe_robust`` (k >= 1), ``blind_robust`` and
             ``blind_bayes`` (k = 0).
-        blind: ``(action, expected loss)`` of Blind-Bayes, required for that method.
+        blind: The Blind-Bayes executor, required for that method.
 
     Returns:
         The episode table (columns of ``store.schema.EPISODE_COLUMNS``).
@@ -235,6 +209,7 @@ def commit(
         model = model.with_margin(margin)
     methods = list(methods)
     batch = trace.batch
+    context = batch.episode_context
     frames = []
     plan: list[tuple[str, int]] = []
     if "blind_bayes" in methods:
@@ -245,7 +220,10 @@ def commit(
         # Per-budget thresholds commit only at the budgets they name.
         budgets = [k for k in trace.budgets if not isinstance(thresholds, Mapping) or k in thresholds]
         plan += [("probe_robust", k) for k in budgets]
+    executors = {"probe_robust": ProbeRobust(model), "blind_robust": BlindRobust(model)}
     z_true = model.decision(batch.truths)
+    action_names = component_names("action", model.action_dim)
+    grid = np.asarray(model.action_grid, dtype=float).reshape(len(model.action_grid), -1)
     for plan_index, (method, k) in enumerate(plan):
         state = trace.states[k]
         weights, particles = state.weights, state.particles
@@ -253,63 +231,53 @@ def commit(
         t = float(thresholds[k] if isinstance(thresholds, Mapping) else thresholds)
         if method == "blind_bayes":
             if blind is None:
-                raise ValueError("blind_bayes needs the blind action")
+                raise ValueError("blind_bayes needs the Blind-Bayes executor")
             mask = np.ones_like(weights, dtype=bool)
             lo, hi = masked_interval(z, mask)
-            action = np.full(batch.n_episodes, blind[0])
-            predicted = np.full(batch.n_episodes, blind[1])
+            index, predicted = blind.act(batch.n_episodes, context)
         else:
-            if t <= 1:
-                mask = retained_mask(weights, t)
-                lo, hi = masked_interval(z, mask)
-                scen, smask = particles, mask
-                ref = weighted_mean(z, weights, mask)
-            else:
-                scen, lo, hi = grown_scenarios(particles, t, model.decision_domain_width)
-                smask = np.ones(scen.shape[:2], dtype=bool)
-                mask = np.ones_like(weights, dtype=bool)
-                ref = weighted_mean(z, weights)
-            idx, predicted = _choose(model, scen, smask, ref)
-            action = model.action_grid[idx]
-        hull_lo, hull_hi = z.min(axis=1), z.max(axis=1)
+            chosen = executors[method].act(particles, weights, t, context)
+            index, predicted, mask, lo, hi = chosen.index, chosen.score, chosen.mask, chosen.lo, chosen.hi
+        action = grid[index]
         realized = np.full(batch.n_episodes, np.nan)
         status = np.full(batch.n_episodes, "ok", dtype=object)
         error = np.full(batch.n_episodes, "", dtype=object)
         for e in range(batch.n_episodes):
             try:
-                realized[e] = simulator.execute(batch.truths[e], float(action[e]))["realized"]
+                ctx = None if context is None else context[e]
+                realized[e] = simulator.execute(batch.truths[e], action[e], ctx)["realized"]
             except Exception as exc:  # noqa: BLE001 - mark the episode, keep the study going
                 status[e], error[e] = "failed", f"execute: {type(exc).__name__}: {exc}"
         surprise = trace.surprise[:, :k]
-        frames.append(
-            pd.DataFrame(
-                {
-                    "instance_id": batch.instance_id.astype(str),
-                    "repeat": batch.repeat.astype(np.int64),
-                    "k": np.int64(k),
-                    "method": method,
-                    "variant": model.variant,
-                    "action": action.astype(float),
-                    "predicted": predicted.astype(float),
-                    "realized": realized,
-                    "z_true": z_true,
-                    "retained_lo": lo,
-                    "retained_hi": hi,
-                    "hull_lo": hull_lo,
-                    "hull_hi": hull_hi,
-                    "covered": (lo <= z_true) & (z_true <= hi),
-                    "escaped": (z_true < hull_lo) | (z_true > hull_hi),
-                    "score_s": coverage_score(z, weights, z_true, model.decision_domain_width),
-                    "post_var": weighted_variance(z, weights),
-                    "max_surprise": surprise.max(axis=1) if k > 0 else np.full(batch.n_episodes, np.nan),
-                    "n_retained": mask.sum(axis=1).astype(np.int64),
-                    "status": status,
-                    "error": error,
-                    "_row": np.arange(batch.n_episodes),
-                    "_plan": plan_index,
-                }
-            )
-        )
+        hull_lo, hull_hi = z.min(axis=1), z.max(axis=1)
+        columns = {
+            "instance_id": batch.instance_id.astype(str),
+            "repeat": batch.repeat.astype(np.int64),
+            "k": np.int64(k),
+            "method": method,
+            "variant": model.variant,
+        }
+        columns.update({name: action[:, i] for i, name in enumerate(action_names)})
+        columns.update({
+            "predicted": np.asarray(predicted, dtype=float),
+            "realized": realized,
+            "z_true": z_true,
+            "retained_lo": lo,
+            "retained_hi": hi,
+            "hull_lo": hull_lo,
+            "hull_hi": hull_hi,
+            "covered": (lo <= z_true) & (z_true <= hi),
+            "escaped": (z_true < hull_lo) | (z_true > hull_hi),
+            "score_s": coverage_score(z, weights, z_true, model.decision_domain_width),
+            "post_var": weighted_variance(z, weights),
+            "max_surprise": surprise.max(axis=1) if k > 0 else np.full(batch.n_episodes, np.nan),
+            "n_retained": mask.sum(axis=1).astype(np.int64),
+            "status": status,
+            "error": error,
+            "_row": np.arange(batch.n_episodes),
+            "_plan": plan_index,
+        })
+        frames.append(pd.DataFrame(columns))
     if not frames:
         return pd.DataFrame()
     # Canonical order: episode by episode, each in plan order (blind first, then budgets).

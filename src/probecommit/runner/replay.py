@@ -16,10 +16,11 @@ import numpy as np
 import pandas as pd
 
 from probecommit.runner.build import build_filter, build_model, build_simulator
-from probecommit.runner.config import StudyConfig, dump_config, parse_config
-from probecommit.runner.inference import BeliefTrace, ProbeBatch, blind_bayes_action, build_trace, commit
+from probecommit.runner.config import StudyConfig, config_data, dump_config, parse_config
+from probecommit.runner.inference import BeliefTrace, ProbeBatch, blind_bayes_executor, build_trace, commit, instance_arrays
 from probecommit.store.probes import validate_probes
 from probecommit.store.rundir import RunDir
+from probecommit.store.schema import cache_frame, cache_records, component_names
 
 import yaml
 
@@ -48,13 +49,15 @@ def load_run(run_dir: str | Path) -> LoadedRun:
     )
 
 
-def probe_batch(loaded: LoadedRun, latent_names: tuple[str, ...]) -> ProbeBatch:
+def probe_batch(loaded: LoadedRun, model: Any) -> ProbeBatch:
     """Rebuild the stored probe trajectories (successful episodes) as a batch."""
     # Validate first: a malformed table is refused naming column and row, never reshaped.
     probes = loaded.probes
+    u_cols, y_cols = component_names("u", model.probe_dim), component_names("y", model.observation_dim)
     if len(probes):  # empty when every trajectory failed in rollout
         probes = validate_probes(probes, str(loaded.path / "probes.parquet"),
-                                 instance_ids=loaded.instances["instance_id"])
+                                 instance_ids=loaded.instances["instance_id"],
+                                 probe_dim=model.probe_dim, observation_dim=model.observation_dim)
     # The run's own episode order: instance order of the instances table, then repeat, then j.
     order = {iid: n for n, iid in enumerate(loaded.instances["instance_id"])}
     probes = probes.assign(_o=loaded.probes["instance_id"].map(order))
@@ -64,21 +67,25 @@ def probe_batch(loaded: LoadedRun, latent_names: tuple[str, ...]) -> ProbeBatch:
     k = int(probes["j"].max()) if n_e else 0
     inst = loaded.instances.assign(instance_id=loaded.instances["instance_id"].astype(str)).set_index("instance_id")
     iids = keys["instance_id"].to_numpy(object)
+    rows = inst.loc[iids]
+    truths, context = instance_arrays(rows, model)
     return ProbeBatch(
         split=str(loaded.instances["split"].iloc[0]),
         instance_id=iids,
-        instance_index=inst.loc[iids, "instance_index"].to_numpy(np.int64),
+        instance_index=rows["instance_index"].to_numpy(np.int64),
         repeat=keys["repeat"].to_numpy(np.int64),
-        truths=np.stack([inst.loc[iids, f"true_{n}"].to_numpy(float) for n in latent_names], axis=1),
-        u=probes["u"].to_numpy(float).reshape(n_e, k),
-        y=probes["y"].to_numpy(float).reshape(n_e, k, 1),
+        truths=truths,
+        u=probes[u_cols].to_numpy(float).reshape(n_e, k, len(u_cols)),
+        y=probes[y_cols].to_numpy(float).reshape(n_e, k, len(y_cols)),
+        context=context,
     )
 
 
 def simulator_for_run(loaded: LoadedRun, config: StudyConfig | None = None):
     """The run's simulator with every engine answer the run already has."""
-    sim = build_simulator((config or loaded.config).simulator)
-    sim.load_cache(loaded.engine_cache.to_dict("records"))
+    config = config or loaded.config
+    sim = build_simulator(config)
+    sim.load_cache(cache_records(loaded.engine_cache, build_model(config).latent_names))
     return sim
 
 
@@ -90,14 +97,14 @@ def trace_for_run(run_dir: str | Path | LoadedRun, config: StudyConfig | None = 
     """
     loaded = run_dir if isinstance(run_dir, LoadedRun) else load_run(run_dir)
     config = config or loaded.config
-    model = build_model(config.model)
-    batch = probe_batch(loaded, model.latent_names)
+    model = build_model(config)
+    batch = probe_batch(loaded, model)
     trace = build_trace(build_filter(model, config.belief), batch, config.seed, config.probes.commit_budgets)
     return trace, model, simulator_for_run(loaded, config)
 
 
 def replay_config(config: StudyConfig, overrides: dict[str, dict[str, Any]]) -> StudyConfig:
-    data = config.model_dump(mode="json")
+    data = config_data(config)
     for section, values in overrides.items():
         data[section] = {**data[section], **values}
     return parse_config(data)
@@ -131,7 +138,7 @@ def replay_episodes(
         raise ValueError(f"stored probes fix the readings; a replay cannot change simulator {sorted(sim_bad)}")
     config = replay_config(loaded.config, overrides)
     trace, model, sim = trace_for_run(loaded, config)
-    blind = blind_bayes_action(model, config.seed, config.blind_prior_samples) if "blind_bayes" in config.methods else None
+    blind = blind_bayes_executor(model, config.seed, config.blind_prior_samples) if "blind_bayes" in config.methods else None
     episodes = commit(
         trace, model, sim, thresholds=config.belief.nu if thresholds is None else thresholds,
         margin=margin, methods=config.methods, blind=blind,
@@ -163,7 +170,7 @@ def replay_run(src: str | Path, out: str | Path, overrides: dict[str, dict[str, 
         {
             "instances": loaded.instances,
             "probes": loaded.probes,
-            "engine_cache": pd.DataFrame(sim.cache_records(), columns=["engine", "query", "x_hole", "c", "arg", "value"]),
+            "engine_cache": cache_frame(sim.cache_records(), build_model(config).latent_names),
             "episodes": episodes,
         },
         {"engine_calls": sim.engine_calls, "engine_s": sim.engine_seconds},

@@ -21,11 +21,10 @@ import pandas as pd
 
 from probecommit.runner import build
 from probecommit.runner.config import StudyConfig, dump_config, parse_config
-from probecommit.runner.inference import blind_bayes_action, build_trace, commit, failed_episode_rows, rollout
+from probecommit.runner.inference import blind_bayes_executor, build_trace, commit, failed_episode_rows, instance_arrays, rollout
 from probecommit.runner.instances import draw_instances
 from probecommit.store.rundir import RunDir
-
-CACHE_COLUMNS = ["engine", "query", "x_hole", "c", "arg", "value"]
+from probecommit.store.schema import cache_frame
 
 
 @dataclass
@@ -56,25 +55,23 @@ def compute_unit(config_data: dict, instances: pd.DataFrame, unit: str) -> tuple
     """
     start = time.perf_counter()
     config = parse_config(config_data)
-    model = build.build_model(config.model)
+    model = build.build_model(config)
     pfilter = build.build_filter(model, config.belief)
-    simulator = build.build_simulator(config.simulator)
+    simulator = build.build_simulator(config)
     schedule = config.probes.schedule
-    batch = rollout(
-        instances, config.repeats, schedule, config.probes.budget, model.probe_grid, simulator,
-        config.seed, model.latent_names,
-    )
+    batch = rollout(instances, config.repeats, schedule, config.probes.budget, model, simulator, config.seed)
     if config.simulator.execute_all_aims:
-        for theta in batch.truths[:: config.repeats]:
+        truths, contexts = instance_arrays(instances, model)
+        for theta, ctx in zip(truths, contexts):
             for aim in model.action_grid:
                 try:
-                    simulator.execute(theta, float(aim))
+                    simulator.execute(theta, aim, ctx if len(ctx) else None)
                 except Exception:  # noqa: BLE001 - recorded when an episode commits there
                     pass
     episodes = pd.DataFrame()
     if np.any(batch.status == "ok"):  # a unit whose every trajectory failed has nothing to infer
         trace = build_trace(pfilter, batch, config.seed, config.probes.commit_budgets)
-        blind = blind_bayes_action(model, config.seed, config.blind_prior_samples) if "blind_bayes" in config.methods else None
+        blind = blind_bayes_executor(model, config.seed, config.blind_prior_samples) if "blind_bayes" in config.methods else None
         episodes = commit(trace, model, simulator, thresholds=config.belief.nu, methods=config.methods, blind=blind)
     failed = failed_episode_rows(batch, model.variant)
     if len(failed):
@@ -92,7 +89,7 @@ def compute_unit(config_data: dict, instances: pd.DataFrame, unit: str) -> tuple
     tables = {
         "instances": instances.reset_index(drop=True),
         "probes": batch.probes_frame(),
-        "engine_cache": pd.DataFrame(simulator.cache_records(), columns=CACHE_COLUMNS),
+        "engine_cache": cache_frame(simulator.cache_records(), model.latent_names),
         "episodes": episodes,
     }
     return unit, tables, stats
@@ -180,10 +177,10 @@ def preflight(config: StudyConfig) -> pd.DataFrame:
     Builds the model, filter and simulator (which imports the engine) and draws the
     instances; returns the instances.
     """
-    model = build.build_model(config.model)
+    model = build.build_model(config)
     build.build_filter(model, config.belief)
-    build.build_simulator(config.simulator)
-    return draw_instances(config, model.latent_names)
+    build.build_simulator(config)
+    return draw_instances(config, model)
 
 
 def run_study(

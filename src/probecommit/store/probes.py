@@ -15,9 +15,11 @@ import numpy as np
 import pandas as pd
 import pyarrow as pa
 
-from probecommit.store.schema import PROBE_COLUMNS, checked_frame
+from probecommit.store.schema import PROBE_COLUMNS, checked_frame, component_names
 
+#: Required columns of a scalar-probe, scalar-observation table (insertion).
 REQUIRED = tuple(c.name for c in PROBE_COLUMNS)
+KEY_COLUMNS = ("instance_id", "repeat", "j")
 _NA_TEXT = {"", "nan", "NaN", "NA", "N/A", "null", "None", "none"}
 
 
@@ -83,10 +85,13 @@ def _integers(df: pd.DataFrame, name: str, lowest: int, source: str, csv: bool) 
 
 
 def validate_probes(table: pd.DataFrame, source: str = "probe table", *, csv: bool = False,
-                    instance_ids: pd.Series | None = None) -> pd.DataFrame:
+                    instance_ids: pd.Series | None = None, probe_dim: int = 1,
+                    observation_dim: int = 1) -> pd.DataFrame:
     """Validate a probe table and return its normalized copy.
 
-    Checks: the five columns exist once each; ``instance_id`` is non-empty; ``repeat``
+    Checks: the key columns and every probe and observation component column
+    (``u``/``y``, or ``u_0..``/``y_0..`` for vectors; ``store.schema.component_names``)
+    exist once each; ``instance_id`` is non-empty; ``repeat``
     is an integer >= 0 and ``j`` an integer >= 1; ``u`` and ``y`` are finite numbers;
     no probe is given twice; every trajectory holds probes ``1..K`` with no gap and
     the same ``K``; and, if ``instance_ids`` is given, every instance is known.
@@ -98,7 +103,8 @@ def validate_probes(table: pd.DataFrame, source: str = "probe table", *, csv: bo
     Raises:
         ProbeTableError: with one line naming the problem, the column and the first row.
     """
-    df = checked_frame(table, REQUIRED, source, ProbeTableError, "a probe table")
+    values = component_names("u", probe_dim) + component_names("y", observation_dim)
+    df = checked_frame(table, KEY_COLUMNS + tuple(values), source, ProbeTableError, "a probe table")
     ids = df["instance_id"].astype(object)
     empty = ids.map(lambda v: v is None or (isinstance(v, float) and np.isnan(v))
                     or str(v).strip() in ("", "nan", "None")).to_numpy(bool)
@@ -109,8 +115,7 @@ def validate_probes(table: pd.DataFrame, source: str = "probe table", *, csv: bo
         "instance_id": ids.map(lambda v: str(int(v)) if isinstance(v, float) and v == int(v) else str(v).strip()),
         "repeat": _integers(df, "repeat", 0, source, csv),
         "j": _integers(df, "j", 1, source, csv),
-        "u": _numbers(df, "u", source, csv),
-        "y": _numbers(df, "y", source, csv),
+        **{name: _numbers(df, name, source, csv) for name in values},
     })
     dup = out.duplicated(["instance_id", "repeat", "j"]).to_numpy()
     if dup.any():
@@ -141,7 +146,8 @@ def validate_probes(table: pd.DataFrame, source: str = "probe table", *, csv: bo
     return out
 
 
-def read_probes(path: str | Path, instance_ids: pd.Series | None = None) -> pd.DataFrame:
+def read_probes(path: str | Path, instance_ids: pd.Series | None = None, probe_dim: int = 1,
+                observation_dim: int = 1) -> pd.DataFrame:
     """Read and validate a probe table: a run directory, a Parquet file or a CSV log.
 
     Raises:
@@ -165,4 +171,5 @@ def read_probes(path: str | Path, instance_ids: pd.Series | None = None) -> pd.D
     except (OSError, ValueError, UnicodeDecodeError, pa.ArrowException) as exc:
         first = " ".join(str(exc).split())[:200]
         raise ProbeTableError(f"cannot read probe table {path}: {first}") from None
-    return validate_probes(frame, str(path), csv=csv, instance_ids=instance_ids)
+    return validate_probes(frame, str(path), csv=csv, instance_ids=instance_ids, probe_dim=probe_dim,
+                           observation_dim=observation_dim)

@@ -36,7 +36,7 @@ import pyarrow.parquet as pq
 import yaml
 
 from probecommit import __version__
-from probecommit.store.schema import EPISODE_COLUMNS, INSTANCE_COLUMNS, PROBE_COLUMNS, Column
+from probecommit.store.schema import EPISODE_COLUMNS, INSTANCE_COLUMNS, PROBE_COLUMNS, Column, vector_columns
 
 MANIFEST = "manifest.json"
 CONFIG = "config.yaml"
@@ -79,6 +79,9 @@ def atomic_write_parquet(path: Path, frame: pd.DataFrame, columns: tuple[Column,
     """Write a table atomically; columns named in ``columns`` get their schema type."""
     table = pa.Table.from_pandas(frame, preserve_index=False)
     types = {c.name: c.type for c in columns}
+    for c in columns:
+        if c.vector:  # u_0, u_1, ... take the type of u
+            types.update({name: c.type for name in vector_columns(table.schema.names, c.name)})
     if types:
         target = pa.schema([pa.field(f.name, types.get(f.name, f.type)) for f in table.schema])
         if target != table.schema:
@@ -357,14 +360,17 @@ def canonical_tables(frames: dict[str, pd.DataFrame]) -> dict[str, pd.DataFrame]
     out["probes"] = by_instance(frames.get("probes"), ["instance_id", "repeat", "j"])
     out["episodes"] = by_instance(frames.get("episodes"), ["instance_id", "repeat"])
     cache = frames.get("engine_cache")
-    keys = ["engine", "x_hole", "c", "query", "arg"]
-    if cache is not None and len(cache) and set(keys) <= set(cache.columns):
-        out["engine_cache"] = cache.sort_values(keys, kind="stable", ignore_index=True)
+    if cache is not None and len(cache) and {"engine", "query", "arg"} <= set(cache.columns):
+        cols = list(cache.columns)
+        latents = cols[cols.index("query") + 1: cols.index("arg")]  # the family's latent names
+        ranked = cache.assign(_arg=cache["arg"].map(lambda a: tuple(float(v) for v in a)))
+        out["engine_cache"] = ranked.sort_values(["engine", *latents, "query", "_arg"], kind="stable",
+                                                 ignore_index=True).drop(columns="_arg")
     for name, columns in _SCHEMAS.items():
         frame = out.get(name)
         if frame is not None and len(frame.columns):
             # Every schema column, in schema order (a table of failed rows only lacks some).
-            names = [c.name for c in columns]
+            names = [n for c in columns for n in (vector_columns(frame.columns, c.name) if c.vector else [c.name]) or [c.name]]
             missing = {n: pd.Series([None] * len(frame), index=frame.index, dtype=object) for n in names if n not in frame}
             if missing:
                 frame = frame.assign(**missing)

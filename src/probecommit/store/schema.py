@@ -13,25 +13,53 @@ import pyarrow as pa
 
 @dataclass(frozen=True)
 class Column:
+    """One column of a run-directory table.
+
+    ``vector`` columns hold one component of a family's probe, observation or action:
+    named ``u`` when the family's dimension is 1, else ``u_0 .. u_{p-1}``
+    (:func:`component_names`).
+    """
+
     name: str
     type: pa.DataType
     doc: str
     required_for_audit: bool = False
+    vector: bool = False
+
+
+def component_names(base: str, dim: int) -> list[str]:
+    """Column names of a ``dim``-component quantity: ``[base]`` or ``[base_0, ..]``."""
+    if dim < 1:
+        raise ValueError(f"{base} needs at least one component, got {dim}")
+    return [base] if dim == 1 else [f"{base}_{i}" for i in range(dim)]
+
+
+def vector_columns(frame_columns, base: str) -> list[str]:
+    """The component columns of ``base`` present in a table (``[base]`` or ``base_0..``)."""
+    cols = list(frame_columns)
+    if base in cols:
+        return [base]
+    found, i = [], 0
+    while f"{base}_{i}" in cols:
+        found.append(f"{base}_{i}")
+        i += 1
+    return found
 
 
 INSTANCE_COLUMNS: tuple[Column, ...] = (
     Column("instance_id", pa.string(), "Stable instance identifier."),
     Column("split", pa.string(), "Instance set: development, A, B_cal, B_test, C, ..."),
     Column("instance_index", pa.int64(), "Index within the split (seeds derive from it)."),
-    # Latent truth columns follow, one per latent name, prefixed 'true_'.
+    # Latent truth columns follow, one per latent name, prefixed 'true_'; then the
+    # observed context, one column per context name, prefixed 'ctx_'.
 )
 
 PROBE_COLUMNS: tuple[Column, ...] = (
     Column("instance_id", pa.string(), "Instance identifier."),
     Column("repeat", pa.int64(), "Repeat index of this instance (0..R-1)."),
     Column("j", pa.int64(), "Probe index within the trajectory (1..K)."),
-    Column("u", pa.float64(), "Probe (tap position, mm for insertion)."),
-    Column("y", pa.float64(), "Observation (surface height, mm for insertion)."),
+    Column("u", pa.float64(), "Probe (tap position, mm for insertion); u_0, u_1, ... for vector probes.", vector=True),
+    Column("y", pa.float64(), "Observation (surface height, mm for insertion); y_0, y_1, ... for vector observations.", vector=True),
 )
 
 EPISODE_COLUMNS: tuple[Column, ...] = (
@@ -40,7 +68,7 @@ EPISODE_COLUMNS: tuple[Column, ...] = (
     Column("k", pa.int64(), "Probe budget: number of probes before the commit (0 = blind).", True),
     Column("method", pa.string(), "blind_bayes, blind_robust or probe_robust."),
     Column("variant", pa.string(), "Model variant that produced belief and action."),
-    Column("action", pa.float64(), "Committed action (aim, mm)."),
+    Column("action", pa.float64(), "Committed action (aim, mm); action_0, action_1, ... for vector actions.", vector=True),
     Column("predicted", pa.float64(), "Modeled score of the chosen action (scenario failure fraction or max miss).", True),
     Column("realized", pa.float64(), "Realized outcome: failure 0/1 (binary tasks) or miss.", True),
     Column("z_true", pa.float64(), "True decision coordinate (ground truth, audit only).", True),
@@ -57,6 +85,44 @@ EPISODE_COLUMNS: tuple[Column, ...] = (
     Column("status", pa.string(), "ok, or failed (the engine returned NaN or raised)."),
     Column("error", pa.string(), "Why the episode failed; empty when ok."),
 )
+
+#: The engine cache: every deterministic engine answer of a run, so replays never re-run one.
+#: The instance's latent values follow ``query``, one column per latent name.
+ENGINE_CACHE_COLUMNS: tuple[Column, ...] = (
+    Column("engine", pa.string(), "Engine that answered (mujoco, pybullet, sapien, analytic)."),
+    Column("query", pa.string(), "Named query (tap_reading, peg_depth, ...)."),
+    # <latent> columns here, one per latent name of the family.
+    Column("arg", pa.list_(pa.float64()), "The query's argument (tap position, aim, impulse, ...)."),
+    Column("value", pa.list_(pa.float64()), "The engine's answer."),
+)
+
+
+def cache_frame(records: list[dict], latent_names: tuple[str, ...]):
+    """Engine-cache rows (``Simulator.cache_records``) as a table keyed by the latent names."""
+    import pandas as pd
+
+    columns = ["engine", "query", *latent_names, "arg", "value"]
+    rows = [
+        {"engine": r["engine"], "query": r["query"], **dict(zip(latent_names, r["theta"])),
+         "arg": list(r["arg"]), "value": list(r["value"])}
+        for r in records
+    ]
+    return pd.DataFrame(rows, columns=columns)
+
+
+def cache_records(frame, latent_names: tuple[str, ...]) -> list[dict]:
+    """Inverse of :func:`cache_frame`: records a simulator's ``load_cache`` accepts."""
+    if frame is None or not len(frame):
+        return []
+    missing = [c for c in ("engine", "query", *latent_names, "arg", "value") if c not in frame.columns]
+    if missing:
+        raise ValueError(f"engine cache lacks column(s) {', '.join(missing)}; it was written for another task family")
+    thetas = frame[list(latent_names)].to_numpy(float)
+    return [
+        {"engine": e, "query": q, "theta": list(t), "arg": list(a), "value": list(v)}
+        for e, q, t, a, v in zip(frame["engine"], frame["query"], thetas, frame["arg"], frame["value"])
+    ]
+
 
 #: Columns a user's own log must provide for ``probecommit audit``.
 AUDIT_REQUIRED = tuple(c.name for c in EPISODE_COLUMNS if c.required_for_audit)

@@ -20,7 +20,8 @@ from probecommit.runner.instances import draw_instances
 
 
 def candidate_schedules(probe_grid: np.ndarray, size: int = 5) -> list[tuple[float, ...]]:
-    return [tuple(float(u) for u in combo) for combo in combinations(sorted(probe_grid), size)]
+    positions = sorted(float(u) for u in np.asarray(probe_grid).reshape(-1))  # scalar taps
+    return [tuple(combo) for combo in combinations(positions, size)]
 
 
 def search_cover_schedule(config: StudyConfig, simulator, limit: int | None = None, progress=None) -> pd.DataFrame:
@@ -31,14 +32,13 @@ def search_cover_schedule(config: StudyConfig, simulator, limit: int | None = No
         simulator: Ground truth; its cache makes every candidate reuse the same taps.
         limit: Score only the first ``limit`` candidates (quick mode).
     """
-    model = build_model(config.model)
+    model = build_model(config)
     pfilter = build_filter(model, config.belief)
-    instances = draw_instances(config, model.latent_names)
+    instances = draw_instances(config, model)
     candidates = candidate_schedules(model.probe_grid)[:limit]
     rows = []
     for n, schedule in enumerate(candidates):
-        batch = rollout(instances, config.repeats, list(schedule), len(schedule), model.probe_grid, simulator,
-                        config.seed, model.latent_names)
+        batch = rollout(instances, config.repeats, [(u,) for u in schedule], len(schedule), model, simulator, config.seed)
         trace = build_trace(pfilter, batch, config.seed, [len(schedule)])
         ep = commit(trace, model, simulator, thresholds=config.belief.nu)
         rows.append({

@@ -19,15 +19,15 @@ from typing import Any, Callable
 import numpy as np
 import pandas as pd
 
-from probecommit.audit.pipeline import calibrate
+from probecommit.runner.calibration import calibrate
 from probecommit.audit.stats import cluster_bootstrap_mean, paired_bootstrap
 from probecommit.audit.surprise import surprise_auc
 from probecommit.report.figures import save_figure
 from probecommit.report.study_figures import decisive_tap_figure, fault_signatures, scan_figure
 from probecommit.runner.build import build_model, build_simulator
-from probecommit.runner.config import SimulatorConfig
 from probecommit.runner.replay import LoadedRun, load_run, replay_episodes, replay_run, trace_for_run
 from probecommit.runner.study import run_study
+from probecommit.tasks.insertion import make_simulator
 from probecommit.studies.cover_search import search_cover_schedule
 from probecommit.studies.faults import FAULTS, fault_arms, run_fault_harness, signature_table
 from probecommit.studies.protocol import DEFAULT_PROTOCOL, Protocol, load_protocol
@@ -162,7 +162,7 @@ class InsertionReproduction:
     # ---------------------------------------------------------------- steps
     def scan(self) -> None:
         p = self.p
-        sim = build_simulator(SimulatorConfig(engine=p.engine, noise_sigma=p.noise_sigma))
+        sim = make_simulator(p.engine, noise_sigma=p.noise_sigma)
         self.progress("boundary scan", 0, 1)
         result = scan_development(p, sim)
         self.rep.add_calls(sim.engine_calls)
@@ -182,7 +182,7 @@ class InsertionReproduction:
     def cover_search(self, limit: int | None) -> None:
         p = self.p
         cfg = p.run_config("cover-search", "development", "development", "cover")
-        sim = build_simulator(cfg.simulator)
+        sim = build_simulator(cfg)
         table = search_cover_schedule(cfg, sim, limit=limit, progress=lambda d, t: self.progress("cover search", d, t))
         self.rep.add_calls(sim.engine_calls)
         table.assign(schedule=table["schedule"].map(str)).to_parquet(self.out / "cover_search.parquet")
@@ -411,7 +411,7 @@ class InsertionReproduction:
 
     def commit_gates(self) -> None:
         """Commit gates on Split B, cover schedule (paper Fig. "commit decision" b, c)."""
-        from probecommit.audit.pipeline import gates
+        from probecommit.runner.calibration import gates
         from probecommit.audit.report import gates_figure
 
         L = self.loaded

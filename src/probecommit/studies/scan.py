@@ -87,9 +87,10 @@ def boundary_scan(simulator, instances: pd.DataFrame, step: float = 0.25, half_r
 
 def scan_development(protocol, simulator, step: float | None = None) -> ScanResult:
     """The protocol's scan: every development truth, at the protocol's step, range and tolerance."""
+    from probecommit.runner.build import build_model
     from probecommit.runner.instances import draw_instances
 
     cfg = protocol.run_config("development", "development", "development", "random")
-    instances = draw_instances(cfg, ("x_hole", "c"))
+    instances = draw_instances(cfg, build_model(cfg))
     return boundary_scan(simulator, instances, step or protocol.scan["step"], protocol.scan["half_range"],
                          protocol.scan["tolerance"])

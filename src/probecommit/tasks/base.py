@@ -1,31 +1,45 @@
-"""The task contracts: an analytic TaskModel and an engine Simulator.
+"""The task contracts: an analytic TaskModel, an engine Simulator and a TaskSpec.
 
-A task never owns an engine. The model is NumPy only and vectorized over
-particles; the simulator answers named queries against ground truth. Rollout
-(simulator) and inference (model) are separate: runs store every probe, and
-beliefs are recomputed from stored probes.
+A task never owns an engine. The model is NumPy only and vectorized over episodes
+and particles; the simulator answers named queries against ground truth. Rollout
+(simulator) and inference (model) are separate: runs store every probe, and beliefs
+are recomputed from stored probes.
+
+Shapes (``E`` episodes, ``N`` particles, ``d`` latents, ``p`` probe components,
+``m`` observation components, ``a`` action components, ``A`` grid actions):
+
+* probes ``u[E, p]``, observations ``y[E, m]``, actions ``[A, a]``;
+* particles ``theta[E, N, d]``; an optional observed *context* per episode
+  ``context[E, c]`` (a target position, say) that the loss may depend on.
+
+Family-specific behaviour the generic executors need (the tie-break reference, how a
+grown set fills the non-decision latents, the margin) is a named method of the
+model; :class:`TaskModelBase` gives the defaults a family overrides.
 """
 
 from __future__ import annotations
 
-from typing import Any, Protocol, runtime_checkable
+import time
+from dataclasses import dataclass, field
+from typing import Any, Callable, Iterable, Protocol, runtime_checkable
 
 import numpy as np
 
 
 @runtime_checkable
 class TaskModel(Protocol):
-    """Analytic model of one task family.
+    """Analytic model of one task family (see the module docstring for shapes).
 
     Attributes:
         name: Family name (``"insertion"``).
         variant: Model variant label stored in episode tables (``"deployed"``).
-        latent_names: Names of the latent coordinates, in column order.
+        latent_names: Names of the latent coordinates, in column order (``d``).
+        context_names: Names of the observed per-episode context (``c``; may be empty).
         prior_low, prior_high: Box prior ``[d]``.
         jitter_scale: Post-resampling jitter standard deviations ``[d]``.
         sigma: Observation noise the likelihood assumes.
-        probe_grid: Admissible probes ``[P]``.
-        action_grid: Admissible commit actions ``[A]``.
+        probe_grid: Admissible probes ``[P, p]``.
+        action_grid: Admissible commit actions ``[A, a]``.
         binary_loss: True when the loss is failure (0/1), False for a continuous miss.
         decision_domain_width: ``D``, width of the decision coordinate's domain.
     """
@@ -33,6 +47,7 @@ class TaskModel(Protocol):
     name: str
     variant: str
     latent_names: tuple[str, ...]
+    context_names: tuple[str, ...]
     prior_low: np.ndarray
     prior_high: np.ndarray
     jitter_scale: np.ndarray
@@ -42,27 +57,191 @@ class TaskModel(Protocol):
     binary_loss: bool
     decision_domain_width: float
 
-    def predict(self, u: np.ndarray, theta: np.ndarray) -> np.ndarray:
-        """Noise-free observation ``[E, N, m]`` for probes ``u[E]`` and ``theta[E, N, d]``."""
+    @property
+    def probe_dim(self) -> int: ...
 
-    def loss(self, actions: np.ndarray, theta: np.ndarray) -> np.ndarray:
+    @property
+    def observation_dim(self) -> int: ...
+
+    @property
+    def action_dim(self) -> int: ...
+
+    def predict(self, u: np.ndarray, theta: np.ndarray) -> np.ndarray:
+        """Noise-free observation ``[E, N, m]`` for probes ``u[E, p]`` and ``theta[E, N, d]``."""
+
+    def loss(self, actions: np.ndarray, theta: np.ndarray, context: np.ndarray | None = None) -> np.ndarray:
         """Modeled loss ``[E, A, N]`` (bool failures when ``binary_loss``)."""
 
     def decision(self, theta: np.ndarray) -> np.ndarray:
         """Decision coordinate ``z(theta)``: ``[..., d] -> [...]``."""
+
+    def tie_break_cost(self, actions: np.ndarray, reference: np.ndarray, context: np.ndarray | None = None) -> np.ndarray:
+        """``[E, A]`` secondary cost among equally scored actions, from a belief reference ``[E, d]``."""
+
+    def grown_scenarios(self, particles: np.ndarray, z_points: np.ndarray) -> np.ndarray:
+        """Scenarios ``[E, n, d]`` at decision coordinates ``z_points[E, n]``, other latents from the belief."""
+
+    def with_margin(self, gamma: float) -> "TaskModel":
+        """The same model scoring actions with margin ``gamma`` (1 = none)."""
+
+    def success_interval(self, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
+        """Open interval of 1-D actions that succeed per scenario, or None (no fast path)."""
+
+    def sample_prior(self, rng: np.random.Generator, n: int) -> np.ndarray:
+        """``n`` draws ``[n, d]`` from the prior."""
+
+
+def as_rows(values: Any, dim: int, what: str) -> np.ndarray:
+    """Coerce a list of scalars or vectors to a float array ``[n, dim]``.
+
+    Raises:
+        ValueError: the components do not match ``dim``.
+    """
+    arr = np.asarray(values, dtype=float)
+    if arr.ndim == 1 and dim == 1:
+        arr = arr[:, None]
+    if arr.ndim != 2 or arr.shape[1] != dim:
+        raise ValueError(f"{what} must have {dim} component(s) per entry, got shape {arr.shape}")
+    return arr
+
+
+class TaskModelBase:
+    """Defaults for the named hooks of :class:`TaskModel`; a family overrides what differs.
+
+    Subclasses set the class or instance attributes of the Protocol. Grids are stored
+    as ``[P, p]`` and ``[A, a]``.
+    """
+
+    context_names: tuple[str, ...] = ()
+    variant: str = "deployed"
+
+    @property
+    def probe_dim(self) -> int:
+        return int(np.asarray(self.probe_grid).shape[1])
+
+    @property
+    def observation_dim(self) -> int:
+        return int(self.predict(np.asarray(self.probe_grid)[:1], self.sample_prior(np.random.default_rng(0), 1)[None]).shape[-1])
+
+    @property
+    def action_dim(self) -> int:
+        return int(np.asarray(self.action_grid).shape[1])
+
+    def decision(self, theta: np.ndarray) -> np.ndarray:
+        """Default decision coordinate: latent 0."""
+        return np.asarray(theta)[..., 0]
+
+    def tie_break_cost(self, actions: np.ndarray, reference: np.ndarray, context: np.ndarray | None = None) -> np.ndarray:
+        """Default: the modeled loss of each action for the reference scenario (then lowest index)."""
+        return self.loss(actions, np.asarray(reference)[:, None, :], context)[:, :, 0].astype(float)
+
+    def grown_scenarios(self, particles: np.ndarray, z_points: np.ndarray) -> np.ndarray:
+        """Default: each point at the particles' per-coordinate median, its decision coordinate set.
+
+        Valid for families whose decision coordinate is latent 0 (the default ``decision``);
+        a family with another decision coordinate overrides this.
+        """
+        extra = np.repeat(np.median(particles, axis=1)[:, None, :], z_points.shape[1], axis=1)
+        extra[..., 0] = z_points
+        return extra
+
+    def with_margin(self, gamma: float) -> "TaskModelBase":
+        raise NotImplementedError(f"the {self.name} model has no execution margin")
+
+    def success_interval(self, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
+        return None
+
+    def sample_prior(self, rng: np.random.Generator, n: int) -> np.ndarray:
+        low, high = np.asarray(self.prior_low, float), np.asarray(self.prior_high, float)
+        return low + (high - low) * rng.random((n, low.shape[0]))
 
 
 @runtime_checkable
 class Simulator(Protocol):
     """Ground-truth side of one task family in one engine.
 
-    ``probe`` returns a noisy reading drawn with the episode's generator;
-    ``execute`` commits an action once and returns the realized outcome, with at
-    least the key ``"realized"`` (failure 0/1 or miss).
+    ``probe`` returns a noisy reading ``[m]`` drawn with the episode's generator;
+    ``execute`` commits an action ``[a]`` once and returns the realized outcome, with
+    at least the key ``"realized"`` (failure 0/1 or miss).
     """
 
     engine: str
+    engine_calls: dict[str, int]
+    engine_seconds: float
 
-    def probe(self, theta: np.ndarray, u: float, rng: np.random.Generator) -> np.ndarray: ...
+    def probe(self, theta: np.ndarray, u: np.ndarray, rng: np.random.Generator) -> np.ndarray: ...
 
-    def execute(self, theta: np.ndarray, action: float) -> dict[str, Any]: ...
+    def execute(self, theta: np.ndarray, action: np.ndarray, context: np.ndarray | None = None) -> dict[str, Any]: ...
+
+    def cache_records(self) -> list[dict[str, Any]]: ...
+
+    def load_cache(self, records: Iterable[dict[str, Any]]) -> None: ...
+
+
+class CachedSimulator:
+    """Base for simulators: every deterministic engine query is run once and cached.
+
+    A family's simulator answers named queries ``kind(theta, arg) -> value`` that are
+    pure functions of their arguments; :meth:`cached` caches them per
+    ``(kind, theta, arg)``, counts engine calls and time, and the cache persists in the
+    run directory (``store.schema.ENGINE_CACHE_COLUMNS``) so replays never re-run one.
+    """
+
+    engine = "abstract"
+
+    def __init__(self) -> None:
+        self._cache: dict[tuple[str, tuple[float, ...], tuple[float, ...]], np.ndarray] = {}
+        self.engine_calls: dict[str, int] = {}
+        self.engine_seconds = 0.0
+
+    def cached(self, kind: str, theta: Iterable[float], arg: Iterable[float]) -> np.ndarray:
+        """Cached named query ``self.<kind>(*theta, *arg)``; the engine runs once per key."""
+        key = (kind, tuple(float(v) for v in np.ravel(theta)), tuple(float(v) for v in np.ravel(arg)))
+        hit = self._cache.get(key)
+        if hit is None:
+            start = time.perf_counter()
+            value = np.atleast_1d(np.asarray(getattr(self, kind)(*key[1], *key[2]), dtype=float))
+            self.engine_seconds += time.perf_counter() - start
+            self.engine_calls[kind] = self.engine_calls.get(kind, 0) + 1
+            self._cache[key] = hit = value
+        return hit
+
+    def cache_records(self) -> list[dict[str, Any]]:
+        """Cache rows: engine, query, theta and arg tuples, value vector."""
+        return [
+            {"engine": self.engine, "query": k[0], "theta": list(k[1]), "arg": list(k[2]), "value": v.tolist()}
+            for k, v in self._cache.items()
+        ]
+
+    def load_cache(self, records: Iterable[dict[str, Any]]) -> None:
+        for r in records:
+            if r["engine"] == self.engine:
+                key = (str(r["query"]), tuple(float(v) for v in r["theta"]), tuple(float(v) for v in r["arg"]))
+                self._cache[key] = np.asarray(r["value"], dtype=float)
+
+
+@dataclass(frozen=True)
+class TaskSpec:
+    """What a family registers (dm_control suite / Gymnasium ``register`` style).
+
+    Attributes:
+        name: Family name; the config's ``task`` key.
+        config: Pydantic model of the family's config (a ``family`` literal, ``model`` and
+            ``simulator`` sections); one branch of the study config's discriminated union.
+        build_model: ``build_model(task_config) -> TaskModel``.
+        simulators: Engine name -> lazy ``"module:Class"`` entry point; the class is
+            constructed as ``Class(**task_config.simulator_kwargs())``.
+        summary: One row of the paper's Table II as the code has it: ``latents``,
+            ``probe``, ``action``, ``sigma``, ``budgets``, ``metric``.
+        extras: Engine name -> pip extra that installs it.
+    """
+
+    name: str
+    config: type
+    build_model: Callable[[Any], Any]
+    simulators: dict[str, str]
+    summary: dict[str, str] = field(default_factory=dict)
+
+    @property
+    def engines(self) -> tuple[str, ...]:
+        return tuple(self.simulators)

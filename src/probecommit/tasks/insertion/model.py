@@ -15,6 +15,8 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from probecommit.tasks.base import TaskModelBase
+
 TIP_RADIUS_MM = 1.2
 POCKET_DEPTH_MM = 15.0
 PLATE_TOP_MM = 0.0
@@ -33,7 +35,7 @@ def capture_half_width(c: np.ndarray) -> np.ndarray:
 
 
 @dataclass(frozen=True)
-class InsertionModel:
+class InsertionModel(TaskModelBase):
     """The insertion task model; variants are parameters, not copies.
 
     Args:
@@ -54,11 +56,16 @@ class InsertionModel:
 
     name = "insertion"
     latent_names = ("x_hole", "c")
-    probe_grid = np.arange(-12.0, 12.0 + 1e-9, 3.0)
-    action_grid = np.round(np.arange(-10.0, 10.0 + 1e-9, 0.5), 10)
+    context_names = ()
+    #: Nine tap positions, -12..12 mm in 3 mm steps ``[9, 1]``.
+    probe_grid = np.arange(-12.0, 12.0 + 1e-9, 3.0)[:, None]
+    #: Aims on a 0.5 mm grid over [-10, 10] mm ``[41, 1]``.
+    action_grid = np.round(np.arange(-10.0, 10.0 + 1e-9, 0.5), 10)[:, None]
     binary_loss = True
     decision_domain_width = 20.0
+    probe_dim = 1
     observation_dim = 1
+    action_dim = 1
 
     def __post_init__(self) -> None:
         if not (np.isfinite(self.sigma) and self.sigma > 0):
@@ -82,10 +89,16 @@ class InsertionModel:
         return replace(self, margin=float(gamma))
 
     def decision(self, theta: np.ndarray) -> np.ndarray:
+        """The hole position ``x_hole``."""
         return np.asarray(theta)[..., 0]
 
+    def tie_break_cost(self, actions: np.ndarray, reference: np.ndarray, context: np.ndarray | None = None) -> np.ndarray:
+        """Distance of each aim from the reference's hole position ``[E, A]``."""
+        a = np.asarray(actions, dtype=float).reshape(-1)
+        return np.abs(a[None, :] - np.asarray(reference, dtype=float)[:, 0][:, None])
+
     def reads_pocket(self, u: np.ndarray, theta: np.ndarray) -> np.ndarray:
-        """Whether a tap at ``u[E]`` reads the pocket for each particle ``[E, N]``."""
+        """Whether a tap at ``u[E]`` (or ``[E, 1]``) reads the pocket for each particle ``[E, N]``."""
         theta = np.asarray(theta)
         u = np.asarray(u, dtype=float).reshape(theta.shape[0], 1)
         return np.abs(u - theta[..., 0]) < half_gap(theta[..., 1]) + self.boundary_offset
@@ -105,9 +118,10 @@ class InsertionModel:
         window = self.margin * capture_half_width(theta[..., 1])
         return x - window, x + window
 
-    def loss(self, actions: np.ndarray, theta: np.ndarray) -> np.ndarray:
+    def loss(self, actions: np.ndarray, theta: np.ndarray, context: np.ndarray | None = None) -> np.ndarray:
+        """Modeled failure ``[E, A, N]`` (or ``[A, S]`` for ``theta[S, d]``); actions ``[A]`` or ``[A, 1]``."""
         lo, hi = self.success_interval(theta)
-        a = np.asarray(actions, dtype=float)
+        a = np.asarray(actions, dtype=float).reshape(-1)
         if lo.ndim == 1:  # [S] -> [A, S]
             return ~((lo[None, :] < a[:, None]) & (a[:, None] < hi[None, :]))
         return ~((lo[:, None, :] < a[None, :, None]) & (a[None, :, None] < hi[:, None, :]))

@@ -11,18 +11,18 @@ the simulator-side frame offset of the frame fault.
 
 from __future__ import annotations
 
-import time
-from typing import Any, Iterable
+from typing import Any
 
 import numpy as np
 
-from probecommit.tasks.insertion.model import POCKET_DEPTH_MM
+from probecommit.tasks.base import CachedSimulator
+from probecommit.tasks.insertion.model import PAPER_DELTA_MM, POCKET_DEPTH_MM
 
 #: The peg fails if it reaches less than this fraction of the pocket depth.
 ENTRY_DEPTH_FRACTION = 0.6
 
 
-class InsertionSimulator:
+class InsertionSimulator(CachedSimulator):
     """Base class: cached deterministic queries + simulator-side noise and frame offset.
 
     Args:
@@ -33,13 +33,12 @@ class InsertionSimulator:
     engine = "abstract"
 
     def __init__(self, noise_sigma: float = 0.5, aim_offset: float = 0.0) -> None:
+        super().__init__()
         if not (np.isfinite(noise_sigma) and noise_sigma >= 0):
             raise ValueError(f"noise_sigma must be >= 0, got {noise_sigma!r}")
         self.noise_sigma = float(noise_sigma)
         self.aim_offset = float(aim_offset)
-        self._cache: dict[tuple[str, float, float, float], float] = {}
         self.engine_calls = {"tap_reading": 0, "peg_depth": 0}
-        self.engine_seconds = 0.0
 
     # Named engine queries, deterministic given their arguments.
     def tap_reading(self, x_hole: float, c: float, u: float) -> float:  # pragma: no cover
@@ -49,38 +48,19 @@ class InsertionSimulator:
         raise NotImplementedError
 
     def query(self, kind: str, x_hole: float, c: float, q: float) -> float:
-        """Cached ``tap_reading`` or ``peg_depth``; the engine runs once per key."""
-        key = (kind, float(x_hole), float(c), float(q))
-        if key not in self._cache:
-            start = time.perf_counter()
-            value = float(getattr(self, kind)(float(x_hole), float(c), float(q)))
-            self.engine_seconds += time.perf_counter() - start
-            self.engine_calls[kind] += 1
-            self._cache[key] = value
-        return self._cache[key]
+        """Cached ``tap_reading`` or ``peg_depth`` in mm; the engine runs once per key."""
+        return float(self.cached(kind, (x_hole, c), (q,))[0])
 
-    def probe(self, theta: np.ndarray, u: float, rng: np.random.Generator) -> np.ndarray:
-        reading = self.query("tap_reading", theta[0], theta[1], u)
+    def probe(self, theta: np.ndarray, u: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+        reading = self.query("tap_reading", theta[0], theta[1], float(np.ravel(u)[0]))
         return np.array([reading + self.noise_sigma * rng.standard_normal()])
 
-    def execute(self, theta: np.ndarray, action: float) -> dict[str, Any]:
-        aim = float(action) + self.aim_offset
+    def execute(self, theta: np.ndarray, action: np.ndarray, context: np.ndarray | None = None) -> dict[str, Any]:
+        aim = float(np.ravel(action)[0]) + self.aim_offset
         depth = self.query("peg_depth", theta[0], theta[1], aim)
         if not np.isfinite(depth):
             raise FloatingPointError(f"{self.engine} peg_depth returned {depth} at aim {aim}")
         return {"realized": float(depth < ENTRY_DEPTH_FRACTION * POCKET_DEPTH_MM), "depth": depth}
-
-    # Cache persistence, so replays and calibration never re-run a known query.
-    def cache_records(self) -> list[dict[str, Any]]:
-        return [
-            {"engine": self.engine, "query": k[0], "x_hole": k[1], "c": k[2], "arg": k[3], "value": v}
-            for k, v in self._cache.items()
-        ]
-
-    def load_cache(self, records: Iterable[dict[str, Any]]) -> None:
-        for r in records:
-            if r["engine"] == self.engine:
-                self._cache[(r["query"], float(r["x_hole"]), float(r["c"]), float(r["arg"]))] = float(r["value"])
 
 
 class AnalyticInsertionSimulator(InsertionSimulator):
@@ -93,7 +73,7 @@ class AnalyticInsertionSimulator(InsertionSimulator):
 
     engine = "analytic"
 
-    def __init__(self, boundary_offset: float = 0.905, capture_scale: float = 1.0, **kwargs) -> None:
+    def __init__(self, boundary_offset: float = PAPER_DELTA_MM, capture_scale: float = 1.0, **kwargs) -> None:
         super().__init__(**kwargs)
         self.boundary_offset = float(boundary_offset)
         self.capture_scale = float(capture_scale)

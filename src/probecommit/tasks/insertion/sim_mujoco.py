@@ -31,14 +31,14 @@ from typing import Any
 import numpy as np
 
 from probecommit.engines import require
-from probecommit.tasks.insertion.model import POCKET_DEPTH_MM, TIP_RADIUS_MM, half_gap
+from probecommit.tasks.insertion.model import PAPER_DELTA_MM, POCKET_DEPTH_MM, TIP_RADIUS_MM, half_gap
 from probecommit.tasks.insertion.sim_base import InsertionSimulator
 
 MM = 1e-3  # metres per mm
 
 # --- Scene parameters (mm unless stated); see docs/decisions.md -------------------------
 #: 45-degree chamfer width at each slot edge; the tap flip sits at its outer edge.
-CHAMFER_MM = 0.905
+CHAMFER_MM = PAPER_DELTA_MM  # the paper reports its MuJoCo scan at hg + 0.905 mm
 #: Peg half-width; capture half-width is hg + chamfer - this = 0.6 c + 1.1 mm.
 PEG_HALF_WIDTH_MM = 4.0 + CHAMFER_MM - 1.1
 PEG_HALF_LENGTH_MM = 5.0  # along the slot (y)

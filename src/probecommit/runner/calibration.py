@@ -1,0 +1,338 @@
+"""Calibration and commit gates on run directories (paper Secs. IV and VI).
+
+These functions tie the pure audit modules to the runner: beliefs are recomputed
+from each run's stored probes (``runner.replay.trace_for_run``) and the commit is
+re-executed (``runner.inference.commit``) under each threshold and margin, so every
+arm of a comparison sees identical probes and every coverage is measured on the
+set as constructed. Ground truth comes from the runs' engine caches; a run made
+with ``execute_all_aims`` never needs the engine again.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any, Iterable, Sequence
+
+import numpy as np
+import pandas as pd
+
+from probecommit.audit.conformal import (
+    DEFAULT_ALPHA,
+    fixed_budget_thresholds,
+    simultaneous_scores,
+    simultaneous_threshold,
+)
+from probecommit.audit.gates import DEFAULT_TARGET_RATE, GatesResult, gates_from_tables
+from probecommit.audit.io import ok_episodes, validate_episodes
+from probecommit.audit.margin import GAMMA_GRID, MarginResult, distribution_free_margin, select_margin
+from probecommit.audit.metrics import audit_table, summary_row
+from probecommit.audit.stats import (
+    DEFAULT_LEVEL,
+    DEFAULT_RESAMPLES,
+    DEFAULT_SEED,
+    bootstrap_ratio,
+    cluster_bootstrap_mean,
+    paired_bootstrap,
+    resample_counts,
+)
+from probecommit.audit.surprise import surprise_auc
+from probecommit.runner.inference import commit as commit_episodes
+from probecommit.runner.replay import LoadedRun, load_run, trace_for_run
+
+#: The executor's method whose commits are calibrated.
+PROBE_METHOD = "probe_robust"
+
+
+# ----------------------------------------------------------------------------- runs
+
+
+@dataclass
+class _Run:
+    """A loaded run with its recomputed beliefs (internal)."""
+
+    loaded: Any
+    trace: Any
+    model: Any
+    simulator: Any
+
+    @property
+    def nu(self) -> float:
+        return float(self.loaded.config.belief.nu)
+
+    def commit(self, thresholds: float | dict[int, float], margin: float | None = None) -> pd.DataFrame:
+        table = commit_episodes(self.trace, self.model, self.simulator, thresholds=_executable(thresholds), margin=margin,
+                       methods=(PROBE_METHOD,))
+        # Trajectories whose probing failed have no belief; carry the run's failure
+        # rows along so they stay counted (and the repeat-count check sees them).
+        stored = self.loaded.episodes
+        failed = stored.loc[(stored["status"] == "failed") & (stored["method"] == "rollout")]
+        if len(failed):
+            table = pd.concat([table, failed.assign(variant=self.model.variant)], ignore_index=True)
+        return validate_episodes(table, f"{self.loaded.path} (re-executed)")
+
+
+def _executable(thresholds: float | dict[int, float]) -> float | dict[int, float]:
+    """Map an infinite conformal threshold (too few calibration clusters) to t = 2.
+
+    ``t = 2`` grows the hull by ``D`` on each side, so the set contains the whole
+    decision domain of width ``D``: the executable meaning of "cover everything".
+    """
+    if isinstance(thresholds, dict):
+        return {k: (2.0 if math.isinf(t) else float(t)) for k, t in thresholds.items()}
+    return 2.0 if math.isinf(thresholds) else float(thresholds)
+
+
+def _load(run) -> _Run:
+    loaded = run if isinstance(run, LoadedRun) else load_run(run)
+    trace, model, simulator = trace_for_run(loaded)
+    return _Run(loaded, trace, model, simulator)
+
+
+def _check_pair(cal: _Run, test: _Run) -> None:
+    """Calibration transfers only between runs of one model, belief and probe schedule."""
+    a, b = cal.loaded.config, test.loaded.config
+    for section in ("family", "model", "belief", "probes"):
+        if getattr(a, section) != getattr(b, section):
+            raise ValueError(f"calibration and test runs differ in their '{section}' settings; "
+                             "calibrate on a run of the same model, belief and probe schedule")
+    ids_a = set(cal.loaded.instances["instance_id"])
+    ids_b = set(test.loaded.instances["instance_id"])
+    if ids_a & ids_b and cal.loaded.path.resolve() != test.loaded.path.resolve():
+        shared = sorted(ids_a & ids_b)
+        # Same ids in different splits would be a leak only if they were the same truths.
+        ia = cal.loaded.instances.set_index("instance_id").loc[shared]
+        ib = test.loaded.instances.set_index("instance_id").loc[shared]
+        truth_cols = [c for c in ia.columns if c.startswith("true_")]
+        if np.allclose(ia[truth_cols].to_numpy(float), ib[truth_cols].to_numpy(float)):
+            raise ValueError(f"calibration and test runs share {len(shared)} instance(s) (e.g. {shared[0]!r}); "
+                             "conformal calibration needs disjoint instances")
+
+
+def _budgets(run: _Run, budgets: Iterable[int] | None) -> list[int]:
+    have = list(run.trace.budgets)
+    if budgets is None:
+        return have
+    budgets = sorted(int(b) for b in budgets)
+    missing = [b for b in budgets if b not in have]
+    if missing:
+        raise ValueError(f"budget(s) {missing} not in the run (it commits at {have})")
+    return budgets
+
+
+# ----------------------------------------------------------------------------- calibrate
+
+
+@dataclass
+class CalibrationResult:
+    """Calibration on one run, evaluated on another (paper Tables III and IV).
+
+    Attributes:
+        alpha: Miscoverage level (``1 - alpha`` = 0.80 in the paper).
+        budgets: Budgets calibrated.
+        n_calibration: Calibration instances ``M``.
+        thresholds: Fixed-budget conformal thresholds ``{k: t_k}``.
+        simultaneous_threshold: Budget-simultaneous ``t`` over ``budgets``.
+        margin: The validation-tuned margin search (under ``thresholds``).
+        distribution_free_margin: Conformal ``1 - alpha`` quantile of the
+            calibration instances' worst-budget optimism (set-calibrated executor).
+        table3: Per budget: cluster coverage and optimism, original vs
+            calibrated (set calibration + margin), with intervals.
+        summary: Bottom row of Table III (mean ``|coverage - (1 - alpha)|`` and
+            mean ``|e_k|``, original and calibrated).
+        cost: Test failure at ``cost_budget``: no calibration, set calibration,
+            set calibration + margin (and Blind-Robust when the run has it).
+        cost_differences: Paired differences between those arms.
+        cost_budget: The budget of the cost comparison (the final budget by default).
+        simultaneous_coverage: Test fraction of instances covered in all repeats
+            and all budgets at the simultaneous threshold, with its interval.
+        audit_original, audit_calibrated: Full test audit tables.
+    """
+
+    alpha: float
+    budgets: list[int]
+    n_calibration: int
+    thresholds: dict[int, float]
+    simultaneous_threshold: float
+    margin: MarginResult
+    distribution_free_margin: float
+    table3: pd.DataFrame
+    summary: dict[str, float]
+    cost: pd.DataFrame
+    cost_differences: pd.DataFrame
+    cost_budget: int
+    simultaneous_coverage: dict[str, float]
+    audit_original: pd.DataFrame = field(repr=False)
+    audit_calibrated: pd.DataFrame = field(repr=False)
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-friendly summary (infinite thresholds as the string ``"inf"``)."""
+        def num(v: float) -> float | str:
+            return "inf" if isinstance(v, float) and math.isinf(v) else v
+
+        return {
+            "alpha": self.alpha,
+            "budgets": self.budgets,
+            "n_calibration": self.n_calibration,
+            "thresholds": {str(k): num(v) for k, v in self.thresholds.items()},
+            "simultaneous_threshold": num(self.simultaneous_threshold),
+            "gamma": self.margin.gamma,
+            "gamma_satisfied": self.margin.satisfied,
+            "distribution_free_margin": num(self.distribution_free_margin),
+            "summary": self.summary,
+            "cost_budget": self.cost_budget,
+            "cost": self.cost.to_dict("records"),
+            "cost_differences": self.cost_differences.to_dict("records"),
+            "simultaneous_coverage": self.simultaneous_coverage,
+            "table3": self.table3.to_dict("records"),
+        }
+
+
+def _failure_at(table: pd.DataFrame, k: int, counts: np.ndarray, names: np.ndarray, level: float):
+    rows = ok_episodes(table)
+    rows = rows.loc[rows["k"] == k]
+    idx = np.searchsorted(names, rows["instance_id"].to_numpy().astype(str))
+    num = np.bincount(idx, weights=rows["realized"].to_numpy(float), minlength=names.size)
+    den = np.bincount(idx, minlength=names.size).astype(float)
+    return bootstrap_ratio(num, den, counts=counts, level=level), len(rows)
+
+
+def calibrate(cal_run, test_run, alpha: float = DEFAULT_ALPHA, budgets: Sequence[int] | None = None, *,
+              cost_budget: int | None = None, margin_grid: Iterable[float] = GAMMA_GRID,
+              resamples: int = DEFAULT_RESAMPLES, seed: int = DEFAULT_SEED, level: float = DEFAULT_LEVEL) -> CalibrationResult:
+    """Calibrate the executor on one run and report its effect on another.
+
+    Steps: beliefs of both runs are recomputed from stored probes; worst-repeat
+    coverage scores of the calibration run give ``t_k`` per budget and the
+    simultaneous ``t``; the margin ``gamma`` is searched with the calibration
+    commits re-executed at ``t_k``; the test commits are re-executed with no
+    calibration (``nu``), set calibration (``t_k``) and set calibration + margin,
+    and audited.
+
+    Args:
+        cal_run: Calibration run directory (or ``LoadedRun``).
+        test_run: Test run directory (same model, belief and schedule; disjoint instances).
+        alpha: Miscoverage level.
+        budgets: Budgets to calibrate (default: every budget the runs commit at).
+        cost_budget: Budget of the failure comparison (default: the largest).
+        margin_grid: Margin candidates.
+        resamples: Cluster-bootstrap resamples.
+        seed: Bootstrap seed.
+        level: Interval level.
+
+    Returns:
+        The calibration result.
+    """
+    cal, test = _load(cal_run), _load(test_run)
+    _check_pair(cal, test)
+    budgets = _budgets(cal, budgets)
+    _budgets(test, budgets)
+    cost_budget = max(budgets) if cost_budget is None else int(cost_budget)
+    if cost_budget not in budgets:
+        raise ValueError(f"cost budget {cost_budget} is not among the calibrated budgets {budgets}")
+
+    cal_orig = cal.commit(cal.nu)
+    t_k = fixed_budget_thresholds(cal_orig, alpha, budgets)
+    t_sim = simultaneous_threshold(cal_orig, budgets, alpha)
+    margin = select_margin(lambda g: cal.commit(t_k, g), margin_grid, budgets=budgets)
+    cal_set = cal.commit(t_k)
+    df_margin = distribution_free_margin(cal_set, alpha, budgets)
+
+    test_orig = test.commit(test.nu)
+    test_set = test.commit(t_k)
+    test_full = test.commit(t_k, margin.gamma)
+    a_orig = audit_table(test_orig, budgets=budgets, resamples=resamples, seed=seed, level=level)
+    a_cal = audit_table(test_full, budgets=budgets, resamples=resamples, seed=seed, level=level)
+    table3 = pd.DataFrame({"k": a_orig["k"]})
+    for name, src in (("original", a_orig), ("calibrated", a_cal)):
+        for metric in ("cluster_coverage", "coverage", "optimism"):
+            for sfx in ("", "_lo", "_hi"):
+                table3[f"{metric}{sfx}_{name}"] = src[f"{metric}{sfx}"].to_numpy()
+    table3.insert(1, "threshold", table3["k"].map(t_k))
+    nominal = 1.0 - alpha
+    s_orig, s_cal = summary_row(a_orig, nominal), summary_row(a_cal, nominal)
+    summary = {f"{k}_original": v for k, v in s_orig.items()} | {f"{k}_calibrated": v for k, v in s_cal.items()}
+
+    # Cost of calibration (Table IV): failure at the cost budget, paired over identical episodes.
+    names = np.unique(test_orig["instance_id"].to_numpy().astype(str))
+    counts = resample_counts(names.size, resamples, seed)
+    arms = {"no calibration": test_orig, "set calibration": test_set, "set calibration + margin": test_full}
+    cost_rows = []
+    blind = ok_episodes(test.loaded.episodes)
+    blind = blind.loc[blind["method"] == "blind_robust"] if "method" in blind.columns else blind.iloc[:0]
+    if len(blind):
+        iv, n = _failure_at(blind, int(blind["k"].iloc[0]), counts, names, level)
+        cost_rows.append({"setting": "blind_robust", "k": int(blind["k"].iloc[0]), "n_episodes": n,
+                          "failure": iv.estimate, "failure_lo": iv.lo, "failure_hi": iv.hi})
+    for label, table in arms.items():
+        iv, n = _failure_at(table, cost_budget, counts, names, level)
+        cost_rows.append({"setting": label, "k": cost_budget, "n_episodes": n,
+                          "failure": iv.estimate, "failure_lo": iv.lo, "failure_hi": iv.hi})
+    diffs = []
+    at = lambda t: t.loc[t["k"] == cost_budget]  # noqa: E731
+    for base, treat in (("no calibration", "set calibration + margin"), ("no calibration", "set calibration"),
+                        ("set calibration", "set calibration + margin")):
+        pdiff = paired_bootstrap(at(arms[base]), at(arms[treat]), "realized", resamples=resamples, seed=seed, level=level)
+        diffs.append({"baseline": base, "treatment": treat, "difference": pdiff.difference.estimate,
+                      "lo": pdiff.difference.lo, "hi": pdiff.difference.hi, "p_sign_flip": pdiff.p_sign_flip,
+                      "n_pairs": pdiff.n_pairs, "n_clusters": pdiff.n_clusters})
+
+    # Simultaneous coverage on test, measured on the sets as constructed at t.
+    test_sim = test.commit(t_sim)
+    test_sim = ok_episodes(test_sim).loc[lambda d: d["k"].isin(budgets)]
+    per_inst = test_sim.groupby("instance_id")["covered"].all().astype(float)
+    sim_iv = cluster_bootstrap_mean(per_inst.to_numpy(), per_inst.index.to_numpy(), resamples=resamples,
+                                    seed=seed, level=level)
+    return CalibrationResult(
+        alpha=alpha, budgets=budgets, n_calibration=int(simultaneous_scores(cal_orig, budgets).size),
+        thresholds=t_k, simultaneous_threshold=t_sim, margin=margin, distribution_free_margin=df_margin,
+        table3=table3, summary=summary, cost=pd.DataFrame(cost_rows), cost_differences=pd.DataFrame(diffs),
+        cost_budget=cost_budget,
+        simultaneous_coverage={"cluster_coverage": sim_iv.estimate, "lo": sim_iv.lo, "hi": sim_iv.hi},
+        audit_original=a_orig, audit_calibrated=a_cal,
+    )
+
+
+# ----------------------------------------------------------------------------- gates
+
+
+def gates(cal_run, test_run, alpha: float = DEFAULT_ALPHA, budgets: Sequence[int] | None = None, *,
+          target_rate: float = DEFAULT_TARGET_RATE, margin_grid: Iterable[float] = GAMMA_GRID,
+          post_var_executor: str = "raw", resamples: int = DEFAULT_RESAMPLES, seed: int = DEFAULT_SEED) -> GatesResult:
+    """Commit gates on the test run with the decision layer calibrated on the calibration run.
+
+    The decision layer uses the budget-simultaneous threshold ``t`` over the
+    nested budgets and a margin searched under ``t`` (Sec. VI). Gates: the raw
+    scenario fraction of the uncalibrated ``nu`` executor, the adjusted score of
+    the calibrated + margin executor, posterior variance, and the hindsight oracle.
+
+    Args:
+        cal_run: Calibration run directory (or ``LoadedRun``).
+        test_run: Test run directory.
+        alpha: Miscoverage level of the simultaneous threshold.
+        budgets: Nested budgets (default: every budget the runs commit at).
+        target_rate: Operating-point commit rate (0.6 in the paper).
+        margin_grid: Margin candidates.
+        post_var_executor: Whose aims the posterior-variance gate executes.
+        resamples: Bootstrap resamples of the surprise AUC.
+        seed: Bootstrap seed.
+
+    Returns:
+        Curves, areas and the committed pools; ``info`` holds ``t``, ``gamma``
+        and the surprise AUC table of the raw test episodes.
+    """
+    cal, test = _load(cal_run), _load(test_run)
+    _check_pair(cal, test)
+    budgets = _budgets(cal, budgets)
+    _budgets(test, budgets)
+    cal_orig = cal.commit(cal.nu)
+    t_sim = simultaneous_threshold(cal_orig, budgets, alpha)
+    margin = select_margin(lambda g: cal.commit(t_sim, g), margin_grid, budgets=budgets)
+    raw = test.commit(test.nu)
+    adjusted = test.commit(t_sim, margin.gamma)
+    result = gates_from_tables(raw, adjusted, budgets=budgets, target_rate=target_rate,
+                               post_var_executor=post_var_executor)
+    raw_b = raw.loc[raw["k"].isin(budgets)]
+    result.info.update(threshold=t_sim, gamma=margin.gamma, gamma_satisfied=margin.satisfied, alpha=alpha,
+                       surprise=surprise_auc(raw_b, resamples=resamples, seed=seed))
+    return result

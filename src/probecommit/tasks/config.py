@@ -1,0 +1,119 @@
+"""Config building blocks every family's config uses (pydantic, strict).
+
+A family's config is one branch of the study config's discriminated union: a
+:class:`TaskConfigBase` subclass with ``family: Literal["<name>"]`` and its own
+``model`` and ``simulator`` sections, so each family owns and validates its fields.
+"""
+
+from __future__ import annotations
+
+from typing import Any, ClassVar
+
+from pydantic import BaseModel, ConfigDict, Field, StrictBool, field_validator, model_validator
+
+
+class ConfigError(ValueError):
+    """A study config is invalid; the message names the field."""
+
+
+class FieldError(ValueError):
+    """A cross-field check's error, attributed to one field of its section."""
+
+    def __init__(self, field: str, message: str) -> None:
+        super().__init__(f"[{field}] {message}")
+        self.field = field
+        self.message = message
+
+
+def has_bool(value: Any, _depth: int = 0) -> bool:
+    """Whether a (nested list of) value(s) holds a boolean; depth-bounded."""
+    if isinstance(value, bool):
+        return True
+    if _depth > 4 or not isinstance(value, (list, tuple)):
+        return False
+    return any(has_bool(v, _depth + 1) for v in value[:10_000])
+
+
+class StrictModel(BaseModel):
+    """Unknown keys, NaN and infinity are errors; so is a boolean where a number is due."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
+
+    @field_validator("*", mode="before")
+    @classmethod
+    def _no_bool_numbers(cls, value: Any, info) -> Any:
+        # Pydantic's lax mode reads ``true`` as 1; in a config that is a typo, not a number.
+        annotation = cls.model_fields[info.field_name].annotation
+        if annotation not in (bool, StrictBool) and has_bool(value):
+            raise ValueError("expected a number, got a boolean (true/false)")
+        return value
+
+
+class ModelConfigBase(StrictModel):
+    """Fields every family's model section has: the likelihood's sigma and the prior box."""
+
+    sigma: float = Field(gt=0, le=1e6)
+    prior_low: tuple[float, ...]
+    prior_high: tuple[float, ...]
+
+    @model_validator(mode="after")
+    def _check_prior(self) -> "ModelConfigBase":
+        if len(self.prior_low) != len(self.prior_high):
+            raise FieldError("prior_high", f"has {len(self.prior_high)} coordinates but prior_low has {len(self.prior_low)}")
+        if any(h <= lo for lo, h in zip(self.prior_low, self.prior_high)):
+            raise FieldError("prior_high", f"must be > prior_low in every coordinate, got {list(self.prior_high)} vs {list(self.prior_low)}")
+        return self
+
+
+class SimulatorConfigBase(StrictModel):
+    """Fields every family's simulator section has."""
+
+    engine: str = "analytic"
+    noise_sigma: float = Field(ge=0, le=1e6)
+    #: Execute every action of the grid once per instance up front (insertion's cache fill).
+    execute_all_aims: StrictBool = False
+
+
+class TaskConfigBase(BaseModel):
+    """One family's config: ``family`` (the union's tag), ``model`` and ``simulator``.
+
+    Subclasses set ``latent_names`` and ``probe_dim`` (class constants used to check
+    truth boxes and probe schedules before anything runs) and may override the hooks.
+    """
+
+    # Not StrictModel: its wildcard before-validator may not touch the union's tag;
+    # the sections below are strict.
+    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
+
+    family: str
+    latent_names: ClassVar[tuple[str, ...]] = ()
+    context_names: ClassVar[tuple[str, ...]] = ()
+    probe_dim: ClassVar[int] = 1
+
+    @model_validator(mode="after")
+    def _check_engine(self) -> "TaskConfigBase":
+        from probecommit.tasks.registry import get
+
+        engines = get(self.family).engines
+        engine = self.simulator.engine  # type: ignore[attr-defined]
+        if engine not in engines:
+            raise FieldError("simulator.engine", f"task family {self.family!r} has no {engine!r} simulator; it has: {', '.join(engines)}")
+        n = len(self.latent_names)
+        if n and len(self.model.prior_low) != n:  # type: ignore[attr-defined]
+            raise FieldError("model.prior_low", f"needs {n} coordinates ({', '.join(self.latent_names)}), got {len(self.model.prior_low)}")  # type: ignore[attr-defined]
+        return self
+
+    def simulator_kwargs(self) -> dict[str, Any]:
+        """Keyword arguments of the family's simulator classes (default: the simulator section less ``engine``)."""
+        return self.simulator.model_dump(exclude={"engine", "execute_all_aims"})  # type: ignore[attr-defined]
+
+    def check_truth_box(self, low: tuple[float, ...], high: tuple[float, ...], field: str) -> None:
+        """Family checks on a truth box beyond its shape (override to add physical limits).
+
+        Raises:
+            FieldError: naming ``field``.
+        """
+        n = len(self.latent_names)
+        for name, box in (("truth_low", low), ("truth_high", high)):
+            if n and len(box) != n:
+                raise FieldError(f"{field}.{name}", f"needs {n} coordinates ({', '.join(self.latent_names)}), got {len(box)}")

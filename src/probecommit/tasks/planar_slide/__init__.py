@@ -1,0 +1,34 @@
+"""Planar slide: the example family of ``docs/adding-a-task.md`` (analytic only).
+
+Registers ``planar_slide``: latents ``(mu, phi, m)``, a strike probe observing a 2-D
+rest position, a 2-D impulse action aimed at a per-instance target, continuous miss.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from probecommit.tasks.base import TaskSpec
+from probecommit.tasks.planar_slide.config import PlanarSlideConfig
+from probecommit.tasks.planar_slide.model import PlanarSlideModel
+from probecommit.tasks.registry import register
+
+
+def build_model(config: PlanarSlideConfig) -> PlanarSlideModel:
+    cfg = config.model
+    return PlanarSlideModel(
+        sigma=cfg.sigma, margin=cfg.margin,
+        prior_low=np.array(cfg.prior_low, dtype=float), prior_high=np.array(cfg.prior_high, dtype=float),
+    )
+
+
+SPEC = register(
+    TaskSpec(
+        name="planar_slide",
+        config=PlanarSlideConfig,
+        build_model=build_model,
+        simulators={"analytic": "probecommit.tasks.planar_slide.sim_analytic:AnalyticPlanarSlideSimulator"},
+        summary={"latents": "mu, phi, m", "probe": "strike / 2-D rest", "action": "2-D impulse",
+                 "sigma": "2 cm", "budgets": "0, 2, 5", "metric": "miss (m)", "n": "example"},
+    )
+)

@@ -1,0 +1,100 @@
+"""The task registry: families register a :class:`~probecommit.tasks.base.TaskSpec` by name.
+
+Built-in families live in ``probecommit.tasks.<family>`` and register on import;
+third-party families register through the ``probecommit.tasks`` entry-point group,
+whose entry points name a module (imported, so it registers itself) or a callable
+returning a ``TaskSpec``. Simulators are lazy ``"module:Class"`` entry points: an
+engine is imported only when a study asks for it.
+"""
+
+from __future__ import annotations
+
+import importlib
+from importlib.metadata import entry_points
+from typing import Any
+
+from probecommit.tasks.base import TaskSpec
+
+#: Built-in family packages, imported on first use of the registry.
+BUILTIN_FAMILIES = ("insertion", "planar_slide")
+ENTRY_POINT_GROUP = "probecommit.tasks"
+
+_REGISTRY: dict[str, TaskSpec] = {}
+_loaded = False
+
+
+class UnknownTaskError(KeyError):
+    """An unknown family, or an engine a family lacks; the message lists what exists."""
+
+    def __str__(self) -> str:  # KeyError would quote the message
+        return str(self.args[0])
+
+
+def register(spec: TaskSpec) -> TaskSpec:
+    """Register a family (idempotent for the same spec object; a different one is refused)."""
+    existing = _REGISTRY.get(spec.name)
+    if existing is not None and existing is not spec and existing != spec:
+        raise ValueError(f"task family {spec.name!r} is already registered")
+    _REGISTRY[spec.name] = spec
+    return spec
+
+
+def _load() -> None:
+    global _loaded
+    if _loaded:
+        return
+    _loaded = True
+    for family in BUILTIN_FAMILIES:
+        importlib.import_module(f"probecommit.tasks.{family}")
+    for ep in entry_points(group=ENTRY_POINT_GROUP):
+        loaded = ep.load()
+        if callable(loaded) and not isinstance(loaded, type):
+            spec = loaded()
+            if isinstance(spec, TaskSpec):
+                register(spec)
+
+
+def families() -> dict[str, TaskSpec]:
+    """Every registered family by name (built-ins and entry points)."""
+    _load()
+    return dict(_REGISTRY)
+
+
+def get(name: str) -> TaskSpec:
+    """The spec of family ``name``.
+
+    Raises:
+        UnknownTaskError: one line listing the registered families.
+    """
+    specs = families()
+    if name not in specs:
+        raise UnknownTaskError(f"unknown task family {name!r}; registered: {', '.join(sorted(specs))}")
+    return specs[name]
+
+
+def simulator_class(family: str, engine: str) -> type:
+    """Import and return the simulator class of ``family`` in ``engine``.
+
+    Raises:
+        UnknownTaskError: the family lacks that engine (lists the engines it has).
+        EngineUnavailableError: the engine is not installed (names the extra).
+    """
+    spec = get(family)
+    if engine not in spec.simulators:
+        raise UnknownTaskError(
+            f"task family {family!r} has no {engine!r} simulator; it has: {', '.join(spec.engines)}"
+        )
+    module_name, _, attr = spec.simulators[engine].partition(":")
+    module = importlib.import_module(module_name)
+    return getattr(module, attr)
+
+
+def build_simulator(family: str, task_config: Any) -> Any:
+    """The ground-truth simulator of a family config (engine imported only here)."""
+    cls = simulator_class(family, task_config.simulator.engine)
+    return cls(**task_config.simulator_kwargs())
+
+
+def build_model(task_config: Any) -> Any:
+    """The analytic model of a family config."""
+    return get(task_config.family).build_model(task_config)
