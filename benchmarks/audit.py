@@ -31,7 +31,7 @@ from probecommit.audit.gates import first_passage, gate_curve, gates_from_tables
 from probecommit.audit.io import read_episodes
 from probecommit.audit.margin import distribution_free_margin, select_margin
 from probecommit.audit.metrics import audit_table
-from probecommit.audit.report import write_html_report
+from probecommit.report.audit_report import write_html_report
 from probecommit.audit.stats import cluster_sums, resample_counts
 from probecommit.audit.surprise import surprise_auc
 from probecommit.audit.synthetic import synthetic_episodes

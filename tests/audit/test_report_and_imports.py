@@ -9,7 +9,7 @@ import numpy as np
 from probecommit.audit.gates import gates_from_tables
 from probecommit.audit.io import validate_episodes
 from probecommit.audit.metrics import audit_table
-from probecommit.audit.report import write_html_report
+from probecommit.report.audit_report import write_html_report
 from probecommit.audit.synthetic import synthetic_episodes
 
 
@@ -35,7 +35,7 @@ class Block:
 sys.meta_path.insert(0, Block())
 import probecommit.audit
 import probecommit.audit.io, probecommit.audit.metrics, probecommit.audit.stats, probecommit.audit.conformal
-import probecommit.audit.margin, probecommit.audit.gates, probecommit.audit.surprise, probecommit.audit.report
+import probecommit.audit.margin, probecommit.audit.gates, probecommit.audit.surprise, probecommit.report.audit_report
 import probecommit.audit.synthetic, probecommit.audit.pipeline
 print('ok')
 """

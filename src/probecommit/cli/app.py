@@ -9,6 +9,7 @@ from typing import Optional
 
 import typer
 from rich import box
+from rich.markup import escape
 from rich.table import Table
 
 from probecommit.cli.common import console, err_console, print_warning, progress_bar, user_errors
@@ -25,7 +26,8 @@ def print_budget_table(episodes, title: str) -> None:
 
     summary = budget_summary(episodes)
     # Short headers and labels: the table must fit 80 columns (pipes and CI logs).
-    headers = ("method", "k", "n", "failure", "pred", "e_k", "cover", "escape", "failed")
+    binary = set(episodes["realized"].dropna().unique()) <= {0.0, 1.0}
+    headers = ("method", "k", "n", "failure" if binary else "miss", "pred", "e_k", "cover", "escape", "failed")
     labels = {"blind_bayes": "Blind-Bayes", "blind_robust": "Blind-Robust", "probe_robust": "Probe-Robust"}
     table = Table(title=title, title_style="bold", box=box.SIMPLE_HEAD, padding=(0, 1), pad_edge=False)
     for col in headers:
@@ -117,20 +119,64 @@ def demo(
 @user_errors
 def replay(
     run_dir: Path = typer.Argument(..., help="A complete run directory."),
-    model: str = typer.Option("corrected", "--model", help="Model variant: deployed or corrected."),
-    delta: Optional[float] = typer.Option(None, help="Boundary offset delta (mm) of the corrected model."),
-    out: Optional[Path] = typer.Option(None, "--out", "-o", help="New run directory (default RUN-<model>)."),
+    model: Optional[str] = typer.Option(None, "--model", help="Insertion shorthand for --set model.boundary=...: deployed or corrected."),
+    delta: Optional[float] = typer.Option(None, help="Insertion shorthand for --set model.delta=... (mm)."),
+    set_: list[str] = typer.Option([], "--set", help="Override a model, belief or simulator.aim_offset field: SECTION.FIELD=VALUE (YAML value; repeatable)."),
+    out: Optional[Path] = typer.Option(None, "--out", "-o", help="New run directory (default RUN-replay or RUN-<model>)."),
 ) -> None:
-    """Recompute beliefs and episodes from a run's stored probes under another model."""
+    """Recompute beliefs and episodes from a run's stored probes under another model.
+
+    Both runs then hold identical probes, so their episodes are paired. With no
+    option, an insertion run is replayed under the corrected tap model.
+    """
+    import yaml
+
     from probecommit.runner.replay import load_run, replay_run
 
-    overrides: dict = {"model": {"boundary": model}}
-    if delta is not None:
-        overrides["model"]["delta"] = delta
-    target = out or run_dir.with_name(f"{run_dir.name}-{model}")
+    overrides: dict = {}
+    for item in set_:
+        key, eq, value = item.partition("=")
+        section, dot, field = key.strip().partition(".")
+        if not (eq and dot and section and field):
+            raise ValueError(f"--set expects SECTION.FIELD=VALUE (e.g. model.sigma=0.4), got {item!r}")
+        overrides.setdefault(section, {})[field] = yaml.safe_load(value)
+    if model is not None or delta is not None or not overrides:
+        overrides.setdefault("model", {})["boundary"] = model or "corrected"
+        if delta is not None:
+            overrides["model"]["delta"] = delta
+    label = overrides.get("model", {}).get("boundary", "replay")
+    target = out or run_dir.with_name(f"{run_dir.name}-{label}")
     path = replay_run(run_dir, target, overrides)
-    print_budget_table(load_run(path).episodes, f"replay of {run_dir.name} under the {model} model")
+    print_budget_table(load_run(path).episodes, f"replay of {run_dir.name} ({', '.join(f'{s}.{k}' for s, v in overrides.items() for k in v)})")
     console.print(f"run directory: [bold]{path}[/bold]")
+
+
+@app.command()
+@user_errors
+def tasks() -> None:
+    """List every registered task family: engines, latents, probe, action, sigma, budgets (Table II)."""
+    import importlib.util
+
+    from probecommit.tasks.registry import families
+
+    table = Table(title="registered task families", title_style="bold", box=box.SIMPLE_HEAD, padding=(0, 1))
+    for col in ("family", "engines", "latents", "probe / action", "dims p/m/a", "sigma", "budgets", "metric"):
+        table.add_column(col)
+    for name, spec in sorted(families().items()):
+        model = spec.build_model(spec.config())
+        engines = []
+        for engine in spec.engines:
+            # An engine whose package is missing is shown with the extra that installs it.
+            missing = engine != "analytic" and importlib.util.find_spec(engine) is None
+            engines.append(f"{engine} (pip install 'probecommit[{engine}]')" if missing else engine)
+        s = spec.summary
+        table.add_row(
+            escape(name), escape(", ".join(engines)), escape(", ".join(model.latent_names)),
+            escape(f"{s.get('probe', '?')} / {s.get('action', '?')}"),
+            f"{model.probe_dim}/{model.observation_dim}/{model.action_dim}",
+            escape(s.get("sigma", f"{model.sigma:g}")), escape(s.get("budgets", "")), escape(s.get("metric", "")),
+        )
+    console.print(table)
 
 
 def register_optional_commands() -> None:

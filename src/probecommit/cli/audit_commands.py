@@ -74,7 +74,7 @@ def audit_command(
 ) -> None:
     """Audit coverage, support escape and optimism per budget, with cluster-bootstrap intervals."""
     from probecommit.audit.pipeline import audit
-    from probecommit.audit.report import audit_figure, write_html_report
+    from probecommit.report.audit_report import audit_figure, write_html_report
     from probecommit.report.figures import save_figure
 
     result = audit(path, resamples=resamples, seed=seed)
@@ -111,7 +111,7 @@ def calibrate_command(
 ) -> None:
     """Conformal thresholds and margin on --cal; their effect on --test (Tables III and IV)."""
     from probecommit.runner.calibration import calibrate
-    from probecommit.audit.report import calibration_figure, write_html_report
+    from probecommit.report.audit_report import calibration_figure, write_html_report
     from probecommit.report.figures import save_figure
 
     res = calibrate(cal, test, alpha, _parse_budgets(budgets), cost_budget=cost_budget, resamples=resamples, seed=seed)
@@ -166,7 +166,7 @@ def gates_command(
 ) -> None:
     """Commit gates: failure among committed vs commit rate under first-passage commitment."""
     from probecommit.runner.calibration import gates
-    from probecommit.audit.report import gates_figure, write_html_report
+    from probecommit.report.audit_report import gates_figure, write_html_report
     from probecommit.report.figures import save_figure
 
     res = gates(cal, test, alpha, _parse_budgets(budgets), target_rate=target, resamples=resamples, seed=seed)

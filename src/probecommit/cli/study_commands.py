@@ -39,7 +39,7 @@ def reproduce(
     write_reproduction: Optional[bool] = typer.Option(None, help="Write REPRODUCTION.md (default: yes for full runs, no with --quick)."),
 ) -> None:
     """Regenerate every MuJoCo insertion table and figure from the frozen configs."""
-    from probecommit.studies.reproduce import reproduce_insertion
+    from probecommit.report.reproduce import reproduce_insertion
     from probecommit.studies.reproduction_md import render
 
     if target not in ("insertion", "all"):

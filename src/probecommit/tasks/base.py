@@ -233,7 +233,9 @@ class TaskSpec:
             constructed as ``Class(**task_config.simulator_kwargs())``.
         summary: One row of the paper's Table II as the code has it: ``latents``,
             ``probe``, ``action``, ``sigma``, ``budgets``, ``metric``.
-        extras: Engine name -> pip extra that installs it.
+        example: Study-config fields for a small example study of this family (what a
+            family needs beyond defaults, e.g. ``instances.contexts``); the conformance
+            suite runs it in every engine.
     """
 
     name: str
@@ -241,6 +243,7 @@ class TaskSpec:
     build_model: Callable[[Any], Any]
     simulators: dict[str, str]
     summary: dict[str, str] = field(default_factory=dict)
+    example: dict[str, Any] = field(default_factory=dict)
 
     @property
     def engines(self) -> tuple[str, ...]:

@@ -30,5 +30,6 @@ SPEC = register(
         simulators={"analytic": "probecommit.tasks.planar_slide.sim_analytic:AnalyticPlanarSlideSimulator"},
         summary={"latents": "mu, phi, m", "probe": "strike / 2-D rest", "action": "2-D impulse",
                  "sigma": "2 cm", "budgets": "0, 2, 5", "metric": "miss (m)", "n": "example"},
+        example={"instances": {"contexts": [[1.0, 0.2], [0.6, -0.3]]}, "probes": {"budget": 5, "budgets": [2, 5]}},
     )
 )

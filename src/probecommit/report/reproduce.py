@@ -412,7 +412,7 @@ class InsertionReproduction:
     def commit_gates(self) -> None:
         """Commit gates on Split B, cover schedule (paper Fig. "commit decision" b, c)."""
         from probecommit.runner.calibration import gates
-        from probecommit.audit.report import gates_figure
+        from probecommit.report.audit_report import gates_figure
 
         L = self.loaded
         result = gates(L["B_cal_cover"], L["B_test_cover"], alpha=self.p.alpha, **self.boot)
