@@ -47,11 +47,13 @@ def _load() -> None:
     for family in BUILTIN_FAMILIES:
         importlib.import_module(f"probecommit.tasks.{family}")
     for ep in entry_points(group=ENTRY_POINT_GROUP):
+        # An entry point names a module (importing it registers), a TaskSpec, or a
+        # callable returning one.
         loaded = ep.load()
-        if callable(loaded) and not isinstance(loaded, type):
-            spec = loaded()
-            if isinstance(spec, TaskSpec):
-                register(spec)
+        if callable(loaded) and not isinstance(loaded, (type, TaskSpec)):
+            loaded = loaded()
+        if isinstance(loaded, TaskSpec):
+            register(loaded)
 
 
 def families() -> dict[str, TaskSpec]:
