@@ -2,21 +2,29 @@
 PYTHON ?= python3
 VENV := .venv
 PY := $(VENV)/bin/python
+# The demo installs only what it runs (the package and MuJoCo); the tests install every extra.
+DEMO_STAMP := $(VENV)/.installed-demo
 STAMP := $(VENV)/.installed
 
 .PHONY: demo test test-fast bench reproduce clean-venv
 
-$(STAMP): pyproject.toml constraints.txt
+$(VENV)/bin/python:
 	$(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install --quiet --upgrade "pip>=24"
-	$(PY) -m pip install --quiet -c constraints.txt -e '.[all,test]'
-	touch $(STAMP)
 
-## Create the venv, install pinned dependencies, run the demo study and print its report path.
-demo: $(STAMP)
+$(DEMO_STAMP): pyproject.toml constraints.txt | $(VENV)/bin/python
+	$(PY) -m pip install --quiet -c constraints.txt -e '.[mujoco]'
+	touch $(DEMO_STAMP)
+
+$(STAMP): pyproject.toml constraints.txt | $(VENV)/bin/python
+	$(PY) -m pip install --quiet -c constraints.txt -e '.[all,test]'
+	touch $(STAMP) $(DEMO_STAMP)
+
+## Create the venv, install pinned dependencies (MuJoCo only), run the demo study and print its report path.
+demo: $(DEMO_STAMP)
 	$(VENV)/bin/probecommit demo
 
-## Create the venv, install pinned dependencies, run the whole test suite (slow tests included).
+## Create the venv, install every pinned extra, run the whole test suite (slow tests included).
 test: $(STAMP)
 	$(PY) -m pytest -q
 
