@@ -1,4 +1,4 @@
-"""calibrate / gates / audit on real (analytic-engine) run directories, and the CLI commands."""
+"""Calibration and commit gates on run directories (runner.calibration), and the audit of a run directory."""
 
 from pathlib import Path
 
