@@ -126,7 +126,7 @@ def test_replay_refuses_to_change_readings(base_run):
 def test_reproduce_insertion_quick_end_to_end(tmp_path):
     pytest.importorskip("mujoco")
     from probecommit.report.reproduce import reproduce_insertion
-    from probecommit.studies.reproduction_md import render
+    from probecommit.report.reproduction_md import render
 
     rep = reproduce_insertion(tmp_path / "q", quick=True)
     payload = json.loads((tmp_path / "q" / "results" / "results.json").read_text())

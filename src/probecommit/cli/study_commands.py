@@ -40,7 +40,7 @@ def reproduce(
 ) -> None:
     """Regenerate every MuJoCo insertion table and figure from the frozen configs."""
     from probecommit.report.reproduce import reproduce_insertion
-    from probecommit.studies.reproduction_md import render
+    from probecommit.report.reproduction_md import render
 
     if target not in ("insertion", "all"):
         raise ValueError(f"unknown reproduce target {target!r}; available: insertion, all")
@@ -53,7 +53,7 @@ def reproduce(
     results = root / "results" / "results.json"
     console.print(f"results: [bold]{root / 'results'}[/bold]  (wall {rep.wall_s / 60:.1f} min, engine calls {rep.engine_calls})")
     if write_reproduction if write_reproduction is not None else not quick:
-        from probecommit.studies.publish import publish_insertion
+        from probecommit.report.publish import publish_insertion
 
         published = publish_insertion(root / "results", REPO_ROOT)
         console.print(f"frozen results: [bold]{published}[/bold]; REPRODUCTION.md rewritten")
@@ -132,7 +132,29 @@ def faults(
     console.print(f"episodes: [bold]{out / 'faults_episodes.parquet'}[/bold]; figure: [bold]{fig}[/bold]")
 
 
+def verify(
+    results: Path = typer.Argument(REPO_ROOT / "results", help="A results folder (one folder per study) or one study folder."),
+    reproduction: Optional[Path] = typer.Option(None, "--reproduction", help="REPRODUCTION.md to trace (default: beside the results folder)."),
+    trace: bool = typer.Option(False, "--trace", help="Print where each REPRODUCTION.md number comes from."),
+) -> None:
+    """Check the numerical invariants of frozen results: hashes, intervals, ranges, identities, traceability."""
+    from rich.markup import escape
+
+    from probecommit.report.verify import verify as run_verify
+
+    report = run_verify(results, reproduction)
+    if trace:
+        for line in report.traces:
+            console.print(escape(line))
+    for line in report.failures:
+        err_console.print(f"FAILED {escape(line)}")
+    console.print(f"{report.checked} invariants checked, {len(report.failures)} failed")
+    if not report.ok:
+        raise typer.Exit(1)
+
+
 def register(app: typer.Typer) -> None:
     app.command("reproduce")(user_errors(reproduce))
     app.command("scan")(user_errors(scan))
     app.command("faults")(user_errors(faults))
+    app.command("verify")(user_errors(verify))

@@ -5,8 +5,9 @@ from __future__ import annotations
 import shutil
 from pathlib import Path
 
+from probecommit.report.verify import write_manifest
 from probecommit.studies.explanations import EXPLANATIONS
-from probecommit.studies.reproduction_md import render
+from probecommit.report.reproduction_md import render
 
 #: Result files small enough to version (the per-episode fault table stays in the run root).
 PUBLISHED_SUFFIXES = (".md", ".json", ".png")
@@ -39,4 +40,5 @@ def publish_insertion(results_dir: str | Path, repo_root: str | Path) -> Path:
             shutil.copy2(path, target / path.name)
     body = render(results_dir / "results.json", EXPLANATIONS)
     (repo_root / "REPRODUCTION.md").write_text(HEADER + body)
+    write_manifest(target)
     return target
