@@ -13,7 +13,7 @@ from probecommit.audit.metrics import audit_table
 from probecommit.audit.pipeline import audit
 from probecommit.runner.calibration import calibrate, gates
 
-ROBOT = Path(__file__).parent / "data" / "robot_log.csv"
+ROBOT = Path(__file__).parents[1] / "audit" / "data" / "robot_log.csv"
 
 
 @pytest.fixture(scope="module")
