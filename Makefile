@@ -2,7 +2,7 @@
 PYTHON ?= python3
 VENV := .venv
 PY := $(VENV)/bin/python
-# The demo installs only what it runs (the package and MuJoCo); the tests install every extra.
+# The demo installs only what it runs (the package, MuJoCo and the numba kernels); the tests install every extra.
 DEMO_STAMP := $(VENV)/.installed-demo
 STAMP := $(VENV)/.installed
 
@@ -13,14 +13,14 @@ $(VENV)/bin/python:
 	$(PY) -m pip install --quiet --upgrade "pip>=24"
 
 $(DEMO_STAMP): pyproject.toml constraints.txt | $(VENV)/bin/python
-	$(PY) -m pip install --quiet -c constraints.txt -e '.[mujoco]'
+	$(PY) -m pip install --quiet -c constraints.txt -e '.[mujoco,fast]'
 	touch $(DEMO_STAMP)
 
 $(STAMP): pyproject.toml constraints.txt | $(VENV)/bin/python
 	$(PY) -m pip install --quiet -c constraints.txt -e '.[all,test]'
 	touch $(STAMP) $(DEMO_STAMP)
 
-## Create the venv, install pinned dependencies (MuJoCo only), run the demo study and print its report path.
+## Create the venv, install pinned dependencies (MuJoCo and numba only), run the demo study and print its report path.
 demo: $(DEMO_STAMP)
 	$(VENV)/bin/probecommit demo
 

@@ -19,6 +19,7 @@ from typing import Any
 
 import numpy as np
 
+from probecommit.core.kernels import interval_success_counts_compiled
 from probecommit.core.retained import masked_interval, retained_mask, weighted_mean
 
 SCORE_TIE_TOLERANCE = 1e-12
@@ -74,16 +75,25 @@ def interval_success_counts(lo: np.ndarray, hi: np.ndarray, mask: np.ndarray, ac
     Returns:
         ``[E, A]`` integer counts, identical to counting ``lo < a < hi`` directly.
     """
+    compiled = interval_success_counts_compiled(lo, hi, mask, actions)
+    if compiled is not None:
+        return compiled
+    return interval_success_counts_numpy(lo, hi, mask, actions)
+
+
+def interval_success_counts_numpy(lo: np.ndarray, hi: np.ndarray, mask: np.ndarray, actions: np.ndarray) -> np.ndarray:
+    """NumPy path of :func:`interval_success_counts` (the compiled kernel's reference)."""
     actions = np.asarray(actions, dtype=float)
     n_e, n_a = mask.shape[0], actions.shape[0]
     first = np.searchsorted(actions, lo, side="right")  # first a > lo
     last = np.searchsorted(actions, hi, side="left")  # one past the last a < hi
     live = mask & (first < last)
-    rows = np.broadcast_to(np.arange(n_e)[:, None] * (n_a + 1), mask.shape)
-    flat = np.concatenate([(rows + first)[live], (rows + last)[live]])
-    step = np.concatenate([np.ones(int(live.sum()), np.int64), -np.ones(int(live.sum()), np.int64)])
-    diff = np.bincount(flat, weights=step, minlength=n_e * (n_a + 1)).reshape(n_e, n_a + 1)
-    return np.cumsum(diff, axis=1)[:, :n_a].astype(np.int64)
+    offset = (np.arange(n_e, dtype=np.int64) * (n_a + 1))[:, None]
+    size = n_e * (n_a + 1)
+    starts = np.bincount((first + offset)[live], minlength=size)
+    stops = np.bincount((last + offset)[live], minlength=size)
+    diff = (starts - stops).reshape(n_e, n_a + 1)
+    return np.cumsum(diff, axis=1)[:, :n_a]
 
 
 def scenario_max_loss(losses: np.ndarray, mask: np.ndarray) -> np.ndarray:
@@ -157,6 +167,29 @@ def grown_set(model: Any, particles: np.ndarray, threshold: float) -> tuple[np.n
 
 
 @dataclass
+class RetainedSet:
+    """The scenario set an executor scores, built from a belief and a threshold.
+
+    It does not depend on the model's margin, so a margin search builds it once per
+    threshold and rescores it per margin (:meth:`ProbeRobust.choose`).
+
+    Attributes:
+        scenarios: ``[E, S, d]`` scenarios scored (the particles, plus the grown points for t > 1).
+        scenario_mask: ``[E, S]`` which scenarios are retained.
+        mask: ``[E, N]`` retained particles (all of them for a grown set).
+        lo, hi: ``[E]`` the set's decision-coordinate interval.
+        reference: ``[E, d]`` the tie-break reference.
+    """
+
+    scenarios: np.ndarray
+    scenario_mask: np.ndarray
+    mask: np.ndarray
+    lo: np.ndarray
+    hi: np.ndarray
+    reference: np.ndarray
+
+
+@dataclass
 class ProbeRobust:
     """Probe-Robust(k): the set objective over the retained top-weight set of a belief.
 
@@ -165,6 +198,25 @@ class ProbeRobust:
     """
 
     model: Any
+
+    def retain(self, particles: np.ndarray, weights: np.ndarray, threshold: float) -> RetainedSet:
+        """The retained set at mass ``nu`` (``<= 1``) or the grown set of a threshold ``t > 1``."""
+        model = self.model
+        if threshold <= 1:
+            mask = retained_mask(weights, threshold)
+            lo, hi = masked_interval(model.decision(particles), mask)
+            return RetainedSet(particles, mask, mask, lo, hi, belief_reference(particles, weights, mask))
+        scenarios, lo, hi = grown_set(model, particles, threshold)
+        return RetainedSet(scenarios, np.ones(scenarios.shape[:2], dtype=bool), np.ones_like(weights, dtype=bool),
+                           lo, hi, belief_reference(particles, weights))
+
+    def choose(self, retained: RetainedSet, context: np.ndarray | None = None) -> Commitment:
+        """Score every grid action over a retained set and pick one per episode."""
+        model = self.model
+        scores = scenario_scores(model, retained.scenarios, retained.scenario_mask, context)
+        index = select_action(scores, model.tie_break_cost(model.action_grid, retained.reference, context))
+        return Commitment(index, np.take_along_axis(scores, index[:, None], axis=1)[:, 0], retained.mask,
+                          retained.lo, retained.hi)
 
     def act(self, particles: np.ndarray, weights: np.ndarray, threshold: float,
             context: np.ndarray | None = None) -> Commitment:
@@ -177,20 +229,7 @@ class ProbeRobust:
                 (the grown set).
             context: ``[E, c]`` observed context, if the family has one.
         """
-        model = self.model
-        if threshold <= 1:
-            mask = retained_mask(weights, threshold)
-            lo, hi = masked_interval(model.decision(particles), mask)
-            scenarios, scenario_mask = particles, mask
-            reference = belief_reference(particles, weights, mask)
-        else:
-            scenarios, lo, hi = grown_set(model, particles, threshold)
-            scenario_mask = np.ones(scenarios.shape[:2], dtype=bool)
-            mask = np.ones_like(weights, dtype=bool)
-            reference = belief_reference(particles, weights)
-        scores = scenario_scores(model, scenarios, scenario_mask, context)
-        index = select_action(scores, model.tie_break_cost(model.action_grid, reference, context))
-        return Commitment(index, np.take_along_axis(scores, index[:, None], axis=1)[:, 0], mask, lo, hi)
+        return self.choose(self.retain(particles, weights, threshold), context)
 
 
 class BlindRobust(ProbeRobust):

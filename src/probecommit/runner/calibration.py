@@ -55,6 +55,9 @@ class _Run:
     trace: Any
     model: Any
     simulator: Any
+    #: Margin-independent work (retained sets, coverage scores) shared by every commit;
+    #: None recomputes it each time (the reference path the benchmark compares against).
+    cache: dict | None = field(default_factory=dict)
 
     @property
     def nu(self) -> float:
@@ -62,7 +65,7 @@ class _Run:
 
     def commit(self, thresholds: float | dict[int, float], margin: float | None = None) -> pd.DataFrame:
         table = commit_episodes(self.trace, self.model, self.simulator, thresholds=_executable(thresholds), margin=margin,
-                       methods=(PROBE_METHOD,))
+                                methods=(PROBE_METHOD,), cache=self.cache)
         # Trajectories whose probing failed have no belief; carry the run's failure
         # rows along so they stay counted (and the repeat-count check sees them).
         stored = self.loaded.episodes
@@ -83,10 +86,10 @@ def _executable(thresholds: float | dict[int, float]) -> float | dict[int, float
     return 2.0 if math.isinf(thresholds) else float(thresholds)
 
 
-def _load(run) -> _Run:
+def _load(run, reuse: bool = True) -> _Run:
     loaded = run if isinstance(run, LoadedRun) else load_run(run)
     trace, model, simulator = trace_for_run(loaded)
-    return _Run(loaded, trace, model, simulator)
+    return _Run(loaded, trace, model, simulator, {} if reuse else None)
 
 
 def _check_pair(cal: _Run, test: _Run) -> None:
@@ -199,7 +202,8 @@ def _failure_at(table: pd.DataFrame, k: int, counts: np.ndarray, names: np.ndarr
 
 def calibrate(cal_run, test_run, alpha: float = DEFAULT_ALPHA, budgets: Sequence[int] | None = None, *,
               cost_budget: int | None = None, margin_grid: Iterable[float] = GAMMA_GRID,
-              resamples: int = DEFAULT_RESAMPLES, seed: int = DEFAULT_SEED, level: float = DEFAULT_LEVEL) -> CalibrationResult:
+              resamples: int = DEFAULT_RESAMPLES, seed: int = DEFAULT_SEED, level: float = DEFAULT_LEVEL,
+              reuse: bool = True) -> CalibrationResult:
     """Calibrate the executor on one run and report its effect on another.
 
     Steps: beliefs of both runs are recomputed from stored probes; worst-repeat
@@ -219,11 +223,14 @@ def calibrate(cal_run, test_run, alpha: float = DEFAULT_ALPHA, budgets: Sequence
         resamples: Cluster-bootstrap resamples.
         seed: Bootstrap seed.
         level: Interval level.
+        reuse: Build each retained set and coverage score once per threshold and
+            rescore it per margin (True); False recomputes everything per commit, the
+            reference path of ``benchmarks/calibrate.py``. Identical results.
 
     Returns:
         The calibration result.
     """
-    cal, test = _load(cal_run), _load(test_run)
+    cal, test = _load(cal_run, reuse), _load(test_run, reuse)
     _check_pair(cal, test)
     budgets = _budgets(cal, budgets)
     _budgets(test, budgets)
@@ -298,7 +305,8 @@ def calibrate(cal_run, test_run, alpha: float = DEFAULT_ALPHA, budgets: Sequence
 
 def gates(cal_run, test_run, alpha: float = DEFAULT_ALPHA, budgets: Sequence[int] | None = None, *,
           target_rate: float = DEFAULT_TARGET_RATE, margin_grid: Iterable[float] = GAMMA_GRID,
-          post_var_executor: str = "raw", resamples: int = DEFAULT_RESAMPLES, seed: int = DEFAULT_SEED) -> GatesResult:
+          post_var_executor: str = "raw", resamples: int = DEFAULT_RESAMPLES, seed: int = DEFAULT_SEED,
+          reuse: bool = True) -> GatesResult:
     """Commit gates on the test run with the decision layer calibrated on the calibration run.
 
     The decision layer uses the budget-simultaneous threshold ``t`` over the
@@ -316,12 +324,15 @@ def gates(cal_run, test_run, alpha: float = DEFAULT_ALPHA, budgets: Sequence[int
         post_var_executor: Whose aims the posterior-variance gate executes.
         resamples: Bootstrap resamples of the surprise AUC.
         seed: Bootstrap seed.
+        reuse: Build each retained set and coverage score once per threshold and
+            rescore it per margin (True); False recomputes everything per commit, the
+            reference path of ``benchmarks/calibrate.py``. Identical results.
 
     Returns:
         Curves, areas and the committed pools; ``info`` holds ``t``, ``gamma``
         and the surprise AUC table of the raw test episodes.
     """
-    cal, test = _load(cal_run), _load(test_run)
+    cal, test = _load(cal_run, reuse), _load(test_run, reuse)
     _check_pair(cal, test)
     budgets = _budgets(cal, budgets)
     _budgets(test, budgets)

@@ -188,6 +188,7 @@ def commit(
     margin: float | None = None,
     methods: Iterable[str] = ("probe_robust",),
     blind: BlindBayes | None = None,
+    cache: dict | None = None,
 ) -> pd.DataFrame:
     """Commit once per episode and budget, and score the commit against ground truth.
 
@@ -201,10 +202,15 @@ def commit(
         methods: Any of ``probe_robust`` (k >= 1), ``blind_robust`` and
             ``blind_bayes`` (k = 0).
         blind: The Blind-Bayes executor, required for that method.
+        cache: Optional dict reused across calls on the same ``trace`` (a margin search):
+            what does not depend on the margin (the retained sets, the coverage score,
+            the posterior variance, the hull) is computed once per budget and threshold.
+            Results are identical with or without it.
 
     Returns:
         The episode table (columns of ``store.schema.EPISODE_COLUMNS``).
     """
+    cache = {} if cache is None else cache
     if margin is not None:
         model = model.with_margin(margin)
     methods = list(methods)
@@ -226,9 +232,18 @@ def commit(
     grid = np.asarray(model.action_grid, dtype=float).reshape(len(model.action_grid), -1)
     for plan_index, (method, k) in enumerate(plan):
         state = trace.states[k]
-        weights, particles = state.weights, state.particles
-        z = model.decision(particles)
+        particles = state.particles
         t = float(thresholds[k] if isinstance(thresholds, Mapping) else thresholds)
+        belief = cache.get(("belief", k))
+        if belief is None:
+            z = model.decision(particles)
+            weights = state.weights
+            belief = cache[("belief", k)] = {
+                "z": z, "weights": weights, "hull_lo": z.min(axis=1), "hull_hi": z.max(axis=1),
+                "score_s": coverage_score(z, weights, z_true, model.decision_domain_width),
+                "post_var": weighted_variance(z, weights),
+            }
+        z, weights = belief["z"], belief["weights"]
         if method == "blind_bayes":
             if blind is None:
                 raise ValueError("blind_bayes needs the Blind-Bayes executor")
@@ -236,20 +251,15 @@ def commit(
             lo, hi = masked_interval(z, mask)
             index, predicted = blind.act(batch.n_episodes, context)
         else:
-            chosen = executors[method].act(particles, weights, t, context)
+            retained = cache.get(("set", method, k, t))
+            if retained is None:
+                retained = cache[("set", method, k, t)] = executors[method].retain(particles, weights, t)
+            chosen = executors[method].choose(retained, context)
             index, predicted, mask, lo, hi = chosen.index, chosen.score, chosen.mask, chosen.lo, chosen.hi
         action = grid[index]
-        realized = np.full(batch.n_episodes, np.nan)
-        status = np.full(batch.n_episodes, "ok", dtype=object)
-        error = np.full(batch.n_episodes, "", dtype=object)
-        for e in range(batch.n_episodes):
-            try:
-                ctx = None if context is None else context[e]
-                realized[e] = simulator.execute(batch.truths[e], action[e], ctx)["realized"]
-            except Exception as exc:  # noqa: BLE001 - mark the episode, keep the study going
-                status[e], error[e] = "failed", f"execute: {type(exc).__name__}: {exc}"
+        realized, status, error = _execute(simulator, batch, action, index, len(grid), cache.setdefault("outcomes", {}))
         surprise = trace.surprise[:, :k]
-        hull_lo, hull_hi = z.min(axis=1), z.max(axis=1)
+        hull_lo, hull_hi = belief["hull_lo"], belief["hull_hi"]
         columns = {
             "instance_id": batch.instance_id.astype(str),
             "repeat": batch.repeat.astype(np.int64),
@@ -268,8 +278,8 @@ def commit(
             "hull_hi": hull_hi,
             "covered": (lo <= z_true) & (z_true <= hi),
             "escaped": (z_true < hull_lo) | (z_true > hull_hi),
-            "score_s": coverage_score(z, weights, z_true, model.decision_domain_width),
-            "post_var": weighted_variance(z, weights),
+            "score_s": belief["score_s"],
+            "post_var": belief["post_var"],
             "max_surprise": surprise.max(axis=1) if k > 0 else np.full(batch.n_episodes, np.nan),
             "n_retained": mask.sum(axis=1).astype(np.int64),
             "status": status,
@@ -283,6 +293,43 @@ def commit(
     # Canonical order: episode by episode, each in plan order (blind first, then budgets).
     table = pd.concat(frames, ignore_index=True).sort_values(["_row", "_plan"], kind="stable")
     return table.drop(columns=["_row", "_plan"]).reset_index(drop=True)
+
+
+def _execute(simulator, batch: ProbeBatch, action: np.ndarray, index: np.ndarray, n_actions: int,
+             outcomes: dict):
+    """Realized outcome of each episode's action: one ``execute`` per distinct (instance, action).
+
+    Repeats of an instance that commit to the same action share one call, and
+    ``outcomes`` remembers each answer across commits on the same batch (the engine
+    answer is cached anyway; this saves the per-call overhead). An error marks every
+    episode of that (instance, action) failed, with the reason.
+    """
+    n = batch.n_episodes
+    status = np.full(n, "ok", dtype=object)
+    error = np.full(n, "", dtype=object)
+    keys = batch.instance_index.astype(np.int64) * n_actions + index
+    unique, first, inverse = np.unique(keys, return_index=True, return_inverse=True)
+    context = batch.episode_context
+    inverse = np.asarray(inverse).reshape(-1)
+    values = np.empty(len(unique))
+    errors: dict[int, str] = {}
+    for u, (key, e) in enumerate(zip(unique.tolist(), first)):
+        if key not in outcomes:
+            try:
+                ctx = None if context is None else context[e]
+                outcomes[key] = float(simulator.execute(batch.truths[e], action[e], ctx)["realized"])
+            except Exception as exc:  # noqa: BLE001 - mark the episodes, keep the study going
+                outcomes[key] = f"execute: {type(exc).__name__}: {exc}"
+        value = outcomes[key]
+        if isinstance(value, str):
+            values[u], errors[u] = np.nan, value
+        else:
+            values[u] = value
+    realized = values[inverse]
+    for u, message in errors.items():
+        rows = inverse == u
+        status[rows], error[rows] = "failed", message
+    return realized, status, error
 
 
 def failed_episode_rows(batch: ProbeBatch, variant: str) -> pd.DataFrame:
