@@ -32,3 +32,21 @@ def test_interval_counts_match_numpy_including_ties_and_non_finite(grid):
 def test_uniform_step_detects_even_grids_only():
     assert kernels.uniform_step(np.round(np.arange(-10.0, 10.5, 0.5), 10)) == 0.5
     assert kernels.uniform_step(np.array([0.0, 1.0, 3.0])) == 0.0
+
+
+def test_systematic_resample_matches_numpy_and_is_row_independent():
+    from probecommit.core.belief import systematic_resample, systematic_resample_numpy
+
+    rng = np.random.default_rng(0)
+    weights = rng.random((64, 256)) ** 8
+    weights[3] = 0.0
+    weights[3, 17] = 1.0  # all mass on one particle
+    weights[5] = 1.0  # all tied
+    weights /= weights.sum(axis=1, keepdims=True)
+    offsets = rng.random(64)
+    offsets[0] = 0.0
+    fast, slow = systematic_resample(weights, offsets), systematic_resample_numpy(weights, offsets)
+    np.testing.assert_array_equal(fast, slow)
+    assert np.all(fast[3] == 17) and np.all(np.diff(fast, axis=1) >= 0)
+    for r in (0, 31, 63):
+        np.testing.assert_array_equal(systematic_resample(weights[r:r + 1], offsets[r:r + 1])[0], fast[r])

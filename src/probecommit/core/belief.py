@@ -12,6 +12,7 @@ from typing import Protocol, Sequence
 
 import numpy as np
 
+from probecommit.core.kernels import systematic_resample_compiled
 from probecommit.core.likelihood import GaussianLikelihood, Likelihood
 
 
@@ -63,13 +64,26 @@ def systematic_resample(weights: np.ndarray, offsets: np.ndarray) -> np.ndarray:
     """
     weights = np.asarray(weights, dtype=float)
     n_rows, n = weights.shape
+    offsets = np.asarray(offsets, dtype=float)
+    compiled = systematic_resample_compiled(weights, offsets)
+    if compiled is not None:
+        return compiled
+    return systematic_resample_numpy(weights, offsets)
+
+
+def systematic_resample_numpy(weights: np.ndarray, offsets: np.ndarray) -> np.ndarray:
+    """NumPy path of :func:`systematic_resample`: one search per row.
+
+    Each row is searched on its own (no row-shifted flattened search), so a row's
+    parents never depend on which other rows share its batch.
+    """
+    n_rows, n = weights.shape
     cumulative = np.cumsum(weights, axis=1)
     cumulative[:, -1] = 1.0  # guard against round-off leaving the last point unreachable
-    positions = (np.asarray(offsets, dtype=float)[:, None] + np.arange(n)[None, :]) / n
-    # One searchsorted over all rows: shift row r into [r, r+1).
-    row_shift = np.arange(n_rows, dtype=float)[:, None]
-    flat = np.searchsorted((cumulative + row_shift).ravel(), (positions + row_shift).ravel(), side="right")
-    idx = flat.reshape(n_rows, n) - (np.arange(n_rows) * n)[:, None]
+    positions = (offsets[:, None] + np.arange(n)[None, :]) / n
+    idx = np.empty((n_rows, n), dtype=np.int64)
+    for r in range(n_rows):
+        idx[r] = np.searchsorted(cumulative[r], positions[r], side="right")
     return np.clip(idx, 0, n - 1)
 
 

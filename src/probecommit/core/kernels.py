@@ -80,6 +80,36 @@ if HAVE_NUMBA:
         return out
 
 
+if HAVE_NUMBA:
+
+    @numba.njit(cache=True, nogil=True)
+    def _systematic_resample(weights, offsets):  # pragma: no cover - compiled
+        n_rows, n = weights.shape
+        out = np.empty((n_rows, n), dtype=np.int64)
+        cumulative = np.empty(n)
+        for r in range(n_rows):
+            total = 0.0
+            for i in range(n):
+                total += weights[r, i]
+                cumulative[i] = total
+            cumulative[n - 1] = 1.0
+            j = 0
+            for i in range(n):
+                # searchsorted(cumulative, position, side="right"), walking forward: positions increase
+                position = (offsets[r] + i) / n
+                while j < n and cumulative[j] <= position:
+                    j += 1
+                out[r, i] = j if j < n else n - 1
+        return out
+
+
+def systematic_resample_compiled(weights: np.ndarray, offsets: np.ndarray) -> np.ndarray | None:
+    """The compiled systematic resampler (see ``core.belief.systematic_resample``), or None without numba."""
+    if not HAVE_NUMBA:
+        return None
+    return _systematic_resample(np.ascontiguousarray(weights, dtype=np.float64), np.ascontiguousarray(offsets, dtype=np.float64))
+
+
 def uniform_step(actions: np.ndarray) -> float:
     """The spacing of an evenly spaced grid (within 1e-9 relative), else 0."""
     n = actions.shape[0]
