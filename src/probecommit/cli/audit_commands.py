@@ -108,13 +108,19 @@ def calibrate_command(
     out: Optional[Path] = typer.Option(None, "--out", "-o", help="Output folder (default: <test>/calibration)."),
     resamples: int = typer.Option(2000, min=100, help="Cluster-bootstrap resamples."),
     seed: int = typer.Option(0, help="Bootstrap seed."),
+    plateau: Optional[str] = typer.Option(
+        None, help="Set at t = 1: 'prefix' (the paper, with its zero-weight plateau exception) or 'hull' "
+                   "(every particle: the conformal guarantee without exception). Default: the runs' config."),
 ) -> None:
     """Conformal thresholds and margin on --cal; their effect on --test (Tables III and IV)."""
     from probecommit.runner.calibration import calibrate
     from probecommit.report.audit_report import calibration_figure, write_html_report
     from probecommit.report.figures import save_figure
 
-    res = calibrate(cal, test, alpha, _parse_budgets(budgets), cost_budget=cost_budget, resamples=resamples, seed=seed)
+    if plateau is not None and plateau not in ("prefix", "hull"):
+        raise ValueError(f"--plateau must be 'prefix' or 'hull', got {plateau!r}")
+    res = calibrate(cal, test, alpha, _parse_budgets(budgets), cost_budget=cost_budget, resamples=resamples, seed=seed,
+                    plateau=plateau)
     out = out or test / "calibration"
     out.mkdir(parents=True, exist_ok=True)
     console.print(f"M = {res.n_calibration} calibration instances, 1 - alpha = {1 - alpha:.2f}; "

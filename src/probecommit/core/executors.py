@@ -189,19 +189,41 @@ class RetainedSet:
     reference: np.ndarray
 
 
+#: Set constructions at t = 1: the paper's top-weight prefix, or every particle.
+PLATEAU_MODES = ("prefix", "hull")
+#: In ``hull`` mode a threshold this close to one is the plateau: the cumulative mass of
+#: normalized float weights ends a few ulps short of one, and only particles of weight
+#: below ``MASS_TOLERANCE`` (~1e-12 each, so at most N * 1e-12 in all) can lie past it.
+PLATEAU_EPSILON = 1e-9
+
+
 @dataclass
 class ProbeRobust:
     """Probe-Robust(k): the set objective over the retained top-weight set of a belief.
 
     Args:
         model: The task model scoring actions.
+        plateau: The set at ``t = 1``. ``"prefix"`` (the paper): the shortest prefix
+            reaching mass one, which stops before the zero-weight particles, so a truth
+            spanned only by them has score ``s = 1`` and is still not covered (the
+            paper's named exception). ``"hull"``: every particle, so ``s <= t`` implies
+            coverage for every ``t`` and the split-conformal guarantee has no exception.
     """
 
     model: Any
+    plateau: str = "prefix"
+
+    def __post_init__(self) -> None:
+        if self.plateau not in PLATEAU_MODES:
+            raise ValueError(f"plateau must be one of {', '.join(PLATEAU_MODES)}, got {self.plateau!r}")
 
     def retain(self, particles: np.ndarray, weights: np.ndarray, threshold: float) -> RetainedSet:
         """The retained set at mass ``nu`` (``<= 1``) or the grown set of a threshold ``t > 1``."""
         model = self.model
+        if self.plateau == "hull" and 1 - PLATEAU_EPSILON <= threshold <= 1:
+            mask = np.ones_like(weights, dtype=bool)
+            lo, hi = masked_interval(model.decision(particles), mask)
+            return RetainedSet(particles, mask, mask, lo, hi, belief_reference(particles, weights))
         if threshold <= 1:
             mask = retained_mask(weights, threshold)
             lo, hi = masked_interval(model.decision(particles), mask)

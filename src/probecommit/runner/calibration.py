@@ -58,14 +58,20 @@ class _Run:
     #: Margin-independent work (retained sets, coverage scores) shared by every commit;
     #: None recomputes it each time (the reference path the benchmark compares against).
     cache: dict | None = field(default_factory=dict)
+    #: The set construction at t = 1, if not the run config's (``calibrate(..., plateau=)``).
+    override_plateau: str | None = None
 
     @property
     def nu(self) -> float:
         return float(self.loaded.config.belief.nu)
 
+    @property
+    def plateau(self) -> str:
+        return self.override_plateau or self.loaded.config.calibration.plateau
+
     def commit(self, thresholds: float | dict[int, float], margin: float | None = None) -> pd.DataFrame:
         table = commit_episodes(self.trace, self.model, self.simulator, thresholds=_executable(thresholds), margin=margin,
-                                methods=(PROBE_METHOD,), cache=self.cache)
+                                methods=(PROBE_METHOD,), cache=self.cache, plateau=self.plateau)
         # Trajectories whose probing failed have no belief; carry the run's failure
         # rows along so they stay counted (and the repeat-count check sees them).
         stored = self.loaded.episodes
@@ -86,10 +92,10 @@ def _executable(thresholds: float | dict[int, float]) -> float | dict[int, float
     return 2.0 if math.isinf(thresholds) else float(thresholds)
 
 
-def _load(run, reuse: bool = True) -> _Run:
+def _load(run, reuse: bool = True, plateau: str | None = None) -> _Run:
     loaded = run if isinstance(run, LoadedRun) else load_run(run)
     trace, model, simulator = trace_for_run(loaded)
-    return _Run(loaded, trace, model, simulator, {} if reuse else None)
+    return _Run(loaded, trace, model, simulator, {} if reuse else None, plateau)
 
 
 def _check_pair(cal: _Run, test: _Run) -> None:
@@ -203,7 +209,7 @@ def _failure_at(table: pd.DataFrame, k: int, counts: np.ndarray, names: np.ndarr
 def calibrate(cal_run, test_run, alpha: float = DEFAULT_ALPHA, budgets: Sequence[int] | None = None, *,
               cost_budget: int | None = None, margin_grid: Iterable[float] = GAMMA_GRID,
               resamples: int = DEFAULT_RESAMPLES, seed: int = DEFAULT_SEED, level: float = DEFAULT_LEVEL,
-              reuse: bool = True) -> CalibrationResult:
+              reuse: bool = True, plateau: str | None = None) -> CalibrationResult:
     """Calibrate the executor on one run and report its effect on another.
 
     Steps: beliefs of both runs are recomputed from stored probes; worst-repeat
@@ -226,11 +232,13 @@ def calibrate(cal_run, test_run, alpha: float = DEFAULT_ALPHA, budgets: Sequence
         reuse: Build each retained set and coverage score once per threshold and
             rescore it per margin (True); False recomputes everything per commit, the
             reference path of ``benchmarks/calibrate.py``. Identical results.
+        plateau: The set at ``t = 1``: ``prefix`` (the paper) or ``hull`` (no exception
+            to the guarantee); default the runs' ``calibration.plateau``.
 
     Returns:
         The calibration result.
     """
-    cal, test = _load(cal_run, reuse), _load(test_run, reuse)
+    cal, test = _load(cal_run, reuse, plateau), _load(test_run, reuse, plateau)
     _check_pair(cal, test)
     budgets = _budgets(cal, budgets)
     _budgets(test, budgets)
@@ -306,7 +314,7 @@ def calibrate(cal_run, test_run, alpha: float = DEFAULT_ALPHA, budgets: Sequence
 def gates(cal_run, test_run, alpha: float = DEFAULT_ALPHA, budgets: Sequence[int] | None = None, *,
           target_rate: float = DEFAULT_TARGET_RATE, margin_grid: Iterable[float] = GAMMA_GRID,
           post_var_executor: str = "raw", resamples: int = DEFAULT_RESAMPLES, seed: int = DEFAULT_SEED,
-          reuse: bool = True) -> GatesResult:
+          reuse: bool = True, plateau: str | None = None) -> GatesResult:
     """Commit gates on the test run with the decision layer calibrated on the calibration run.
 
     The decision layer uses the budget-simultaneous threshold ``t`` over the
@@ -327,12 +335,14 @@ def gates(cal_run, test_run, alpha: float = DEFAULT_ALPHA, budgets: Sequence[int
         reuse: Build each retained set and coverage score once per threshold and
             rescore it per margin (True); False recomputes everything per commit, the
             reference path of ``benchmarks/calibrate.py``. Identical results.
+        plateau: The set at ``t = 1``: ``prefix`` (the paper) or ``hull`` (no exception
+            to the guarantee); default the runs' ``calibration.plateau``.
 
     Returns:
         Curves, areas and the committed pools; ``info`` holds ``t``, ``gamma``
         and the surprise AUC table of the raw test episodes.
     """
-    cal, test = _load(cal_run, reuse), _load(test_run, reuse)
+    cal, test = _load(cal_run, reuse, plateau), _load(test_run, reuse, plateau)
     _check_pair(cal, test)
     budgets = _budgets(cal, budgets)
     _budgets(test, budgets)

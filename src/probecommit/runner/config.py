@@ -123,6 +123,14 @@ def _task_union() -> Any:
 TaskConfig = _task_union()
 
 
+class CalibrationConfig(_Strict):
+    """How calibration constructs the set at a conformal threshold."""
+
+    #: ``prefix``: the paper's top-weight prefix at t = 1 (its zero-weight plateau exception);
+    #: ``hull``: every particle at t >= 1, so the conformal guarantee has no exception.
+    plateau: Literal["prefix", "hull"] = "prefix"
+
+
 class StudyConfig(_Strict):
     """One study: instances x repeats x probe schedule x budgets, one family's model, one engine.
 
@@ -140,6 +148,7 @@ class StudyConfig(_Strict):
     instances: InstancesConfig = InstancesConfig()
     probes: ProbesConfig = ProbesConfig()
     belief: BeliefConfig = BeliefConfig()
+    calibration: CalibrationConfig = CalibrationConfig()
     methods: list[Literal["blind_bayes", "blind_robust", "probe_robust"]] = Field(list(METHODS), min_length=1)
     blind_prior_samples: int = Field(20_000, ge=100, le=10_000_000)
     #: Instances per work unit; a unit is the resumable, parallel grain.

@@ -189,6 +189,7 @@ def commit(
     methods: Iterable[str] = ("probe_robust",),
     blind: BlindBayes | None = None,
     cache: dict | None = None,
+    plateau: str = "prefix",
 ) -> pd.DataFrame:
     """Commit once per episode and budget, and score the commit against ground truth.
 
@@ -206,6 +207,8 @@ def commit(
             what does not depend on the margin (the retained sets, the coverage score,
             the posterior variance, the hull) is computed once per budget and threshold.
             Results are identical with or without it.
+        plateau: The set at ``t = 1`` (``core.executors.ProbeRobust``): ``prefix`` (the
+            paper) or ``hull``.
 
     Returns:
         The episode table (columns of ``store.schema.EPISODE_COLUMNS``).
@@ -226,7 +229,7 @@ def commit(
         # Per-budget thresholds commit only at the budgets they name.
         budgets = [k for k in trace.budgets if not isinstance(thresholds, Mapping) or k in thresholds]
         plan += [("probe_robust", k) for k in budgets]
-    executors = {"probe_robust": ProbeRobust(model), "blind_robust": BlindRobust(model)}
+    executors = {"probe_robust": ProbeRobust(model, plateau), "blind_robust": BlindRobust(model, plateau)}
     z_true = model.decision(batch.truths)
     action_names = component_names("action", model.action_dim)
     grid = np.asarray(model.action_grid, dtype=float).reshape(len(model.action_grid), -1)
@@ -251,9 +254,9 @@ def commit(
             lo, hi = masked_interval(z, mask)
             index, predicted = blind.act(batch.n_episodes, context)
         else:
-            retained = cache.get(("set", method, k, t))
+            retained = cache.get(("set", method, k, t, plateau))
             if retained is None:
-                retained = cache[("set", method, k, t)] = executors[method].retain(particles, weights, t)
+                retained = cache[("set", method, k, t, plateau)] = executors[method].retain(particles, weights, t)
             chosen = executors[method].choose(retained, context)
             index, predicted, mask, lo, hi = chosen.index, chosen.score, chosen.mask, chosen.lo, chosen.hi
         action = grid[index]
