@@ -95,11 +95,18 @@ class BeliefState:
         particles: ``[E, N, d]`` latent hypotheses.
         log_weights: ``[E, N]`` normalized log-weights.
         resampled: ``[E]`` whether each episode resampled at the last update.
+        u_hist, y_hist: ``[E, j, p]`` and ``[E, j, m]``, the probes assimilated so far
+            (what a resample-move step needs to keep the posterior invariant).
+        accepted: ``[E]`` fraction of move proposals accepted at the last update (NaN
+            when no move ran).
     """
 
     particles: np.ndarray
     log_weights: np.ndarray
     resampled: np.ndarray = field(default=None)  # type: ignore[assignment]
+    u_hist: np.ndarray | None = None
+    y_hist: np.ndarray | None = None
+    accepted: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         if self.resampled is None:
@@ -118,7 +125,10 @@ class BeliefState:
         return self.particles.shape[1]
 
     def copy(self) -> "BeliefState":
-        return BeliefState(self.particles.copy(), self.log_weights.copy(), self.resampled.copy())
+        return BeliefState(self.particles.copy(), self.log_weights.copy(), self.resampled.copy(),
+                           None if self.u_hist is None else self.u_hist.copy(),
+                           None if self.y_hist is None else self.y_hist.copy(),
+                           None if self.accepted is None else self.accepted.copy())
 
 
 @dataclass
@@ -132,6 +142,13 @@ class ParticleFilter:
         resample_fraction: Resample when ESS falls below this fraction of N.
         jitter: Whether to jitter copies after resampling.
         rejuvenation: Fraction of particles redrawn from the prior at each resampling.
+        move: What the jitter is. ``"jitter"`` (the paper): every copy moves by the
+            jitter and is clipped to the prior box, which biases the belief (it does not
+            converge to the posterior as N grows). ``"mh"``: resample-move; the jittered
+            copy is a random-walk proposal accepted with the Metropolis-Hastings
+            probability against the prior and the likelihood of every probe seen so
+            far, so the posterior is invariant and the belief converges.
+        move_steps: MH steps per resampling (``move="mh"`` only).
     """
 
     model: ForwardModel
@@ -140,6 +157,14 @@ class ParticleFilter:
     resample_fraction: float = 0.5
     jitter: bool = True
     rejuvenation: float = 0.0
+    move: str = "jitter"
+    move_steps: int = 1
+
+    def __post_init__(self) -> None:
+        if self.move not in ("jitter", "mh"):
+            raise ValueError(f"move must be 'jitter' or 'mh', got {self.move!r}")
+        if self.move_steps < 1:
+            raise ValueError(f"move_steps must be >= 1, got {self.move_steps!r}")
 
     @classmethod
     def gaussian(cls, model: ForwardModel, sigma: float, **kwargs) -> "ParticleFilter":
@@ -174,13 +199,20 @@ class ParticleFilter:
             y: Observation per episode ``[E, m]``.
             rngs: One generator per episode; only resampling episodes draw from it.
         """
-        pred = self.model.predict(np.asarray(u), state.particles)
-        loglik = self.likelihood.log_likelihood(np.asarray(y, dtype=float), pred)
+        n_e = state.n_episodes
+        u = np.asarray(u, dtype=float)
+        y = np.asarray(y, dtype=float)
+        pred = self.model.predict(u, state.particles)
+        loglik = self.likelihood.log_likelihood(y, pred)
         log_w = normalize_log_weights(state.log_weights + loglik)
+        u_now, y_now = u.reshape(n_e, 1, -1), y.reshape(n_e, 1, -1)
+        u_hist = u_now if state.u_hist is None else np.concatenate([state.u_hist, u_now], axis=1)
+        y_hist = y_now if state.y_hist is None else np.concatenate([state.y_hist, y_now], axis=1)
         particles = state.particles.copy()
         weights = np.exp(log_w)
         ess = effective_sample_size(weights)
         resample = ess < self.resample_fraction * self.n_particles
+        accepted = np.full(n_e, np.nan)
         if np.any(resample):
             rows = np.flatnonzero(resample)
             offsets = np.array([rngs[r].random() for r in rows])
@@ -189,9 +221,12 @@ class ParticleFilter:
             low = np.asarray(self.model.prior_low, dtype=float)
             high = np.asarray(self.model.prior_high, dtype=float)
             scale = np.asarray(self.model.jitter_scale, dtype=float)
+            if self.jitter and self.move == "mh":
+                new, accepted[rows] = self._mh_move(new, u_hist[rows], y_hist[rows], [rngs[r] for r in rows],
+                                                    low, high, scale)
             for i, r in enumerate(rows):
                 rng = rngs[r]
-                if self.jitter:
+                if self.jitter and self.move == "jitter":
                     new[i] = new[i] + scale * rng.standard_normal(new[i].shape)
                 if self.rejuvenation > 0:
                     n_fresh = int(round(self.rejuvenation * self.n_particles))
@@ -200,4 +235,40 @@ class ParticleFilter:
                         new[i, which] = low + (high - low) * rng.random((n_fresh, low.shape[0]))
             particles[rows] = np.clip(new, low, high)
             log_w[rows] = -np.log(self.n_particles)
-        return BeliefState(particles, log_w, resample)
+        return BeliefState(particles, log_w, resample, u_hist, y_hist, accepted)
+
+    def history_log_likelihood(self, particles: np.ndarray, u_hist: np.ndarray, y_hist: np.ndarray) -> np.ndarray:
+        """Log-likelihood ``[E, N]`` of every probe seen so far, ``sum_j log p(y_j | u_j, theta)``."""
+        total = np.zeros(particles.shape[:2])
+        for j in range(u_hist.shape[1]):
+            total += self.likelihood.log_likelihood(y_hist[:, j], self.model.predict(u_hist[:, j], particles))
+        return total
+
+    def _mh_move(self, particles, u_hist, y_hist, rngs, low, high, scale):
+        """Random-walk Metropolis-Hastings on the resampled copies; leaves the posterior invariant.
+
+        The proposal is the paper's jitter (Gaussian, ``jitter_scale``); the target is the
+        prior box times the likelihood of all probes so far. Each episode draws its
+        proposals and acceptance uniforms from its own generator.
+
+        Returns:
+            The moved particles and the acceptance rate per episode.
+        """
+        n_rows, n, d = particles.shape
+        current = particles
+        current_ll = self.history_log_likelihood(current, u_hist, y_hist)
+        taken = np.zeros(n_rows)
+        for _ in range(self.move_steps):
+            noise = np.stack([rng.standard_normal((n, d)) for rng in rngs])
+            log_uniform = np.log(np.stack([rng.random(n) for rng in rngs]))
+            proposal = current + scale * noise
+            inside = np.all((proposal >= low) & (proposal <= high), axis=-1)
+            proposal_ll = np.where(inside, self.history_log_likelihood(np.clip(proposal, low, high), u_hist, y_hist), -np.inf)
+            with np.errstate(invalid="ignore"):
+                ratio = proposal_ll - current_ll
+            # From an impossible state any possible proposal is taken.
+            accept = inside & np.where(np.isneginf(current_ll), np.isfinite(proposal_ll), log_uniform < ratio)
+            current = np.where(accept[..., None], proposal, current)
+            current_ll = np.where(accept, proposal_ll, current_ll)
+            taken += accept.mean(axis=1)
+        return current, taken / self.move_steps

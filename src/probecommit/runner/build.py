@@ -32,6 +32,8 @@ def build_filter(model: Any, cfg: BeliefConfig) -> ParticleFilter:
         resample_fraction=cfg.resample_fraction,
         jitter=cfg.jitter,
         rejuvenation=cfg.rejuvenation,
+        move=cfg.move,
+        move_steps=cfg.move_steps,
     )
 
 

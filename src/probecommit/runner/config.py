@@ -102,6 +102,10 @@ class BeliefConfig(_Strict):
     mixture_low: float = Field(-17.0, ge=-1000, le=1000)
     mixture_high: float = Field(2.0, ge=-1000, le=1000)
     rejuvenation: float = Field(0.0, ge=0, lt=1)
+    #: ``jitter`` (the paper: clip-to-box jitter, biased) or ``mh`` (resample-move with a
+    #: Metropolis-Hastings accept/reject, posterior-invariant).
+    move: Literal["jitter", "mh"] = "jitter"
+    move_steps: int = Field(1, ge=1, le=100)
 
     @model_validator(mode="after")
     def _check(self) -> "BeliefConfig":
