@@ -175,7 +175,7 @@ def plot_budget_curves(curves: pd.DataFrame, path: str | Path) -> list[Path]:
     n = max(len(families), 1)
     with plt.rc_context({"font.size": 7, "axes.titlesize": 7, "axes.labelsize": 7, "xtick.labelsize": 7,
                          "ytick.labelsize": 7, "legend.fontsize": 7}):
-        fig, axes = plt.subplots(1, n, figsize=(3.5, 1.6), squeeze=False)
+        fig, axes = plt.subplots(1, n, figsize=(3.5, 1.9), squeeze=False)
         for ax, fam in zip(axes[0], families):
             c = curves[curves["family"] == fam]
             br = c[c["method"] == "blind_robust"]
@@ -192,8 +192,9 @@ def plot_budget_curves(curves: pd.DataFrame, path: str | Path) -> list[Path]:
             ax.set_xticks(sorted(set(c["k"])))
             ax.set_ylim(bottom=0)
         axes[0][0].set_ylabel("mean miss (m)")
-        axes[0][0].legend(frameon=False, loc="upper right", handlelength=1.2)
-        fig.tight_layout(pad=0.3)
+        handles, labels = axes[0][0].get_legend_handles_labels()
+        fig.legend(handles, labels, frameon=False, loc="upper center", ncol=2, handlelength=1.2)
+        fig.tight_layout(pad=0.3, rect=(0, 0, 1, 0.86))
         stem = Path(path).with_suffix("")
         out = [stem.with_suffix(".png"), stem.with_suffix(".pdf")]
         for p in out:
