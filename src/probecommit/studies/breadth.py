@@ -1,0 +1,258 @@
+"""Table V (every family, blind against probed) for the continuous-loss families.
+
+For each family's run directory (or frozen config, run here) this computes
+
+* the mean miss of Blind-Bayes (k = 0), Blind-Robust (k = 0) and Probe-Robust(k), each
+  with a cluster-bootstrap interval over instances (repeats kept together);
+* the paired reduction ``Blind-Robust - Probe-Robust(k)`` on identical episodes
+  (same instance and seed: the only change is the information; the risk functional is
+  the same), with a paired cluster bootstrap over instances and a sign-flip p-value.
+  Positive = probing reduced the miss;
+* the miss-versus-budget curve as a table, and a figure (3.5 in wide, PNG + PDF).
+
+Frozen configs live in ``configs/paper/<family>.yaml``; :func:`run_breadth` runs them
+through :func:`probecommit.runner.study.run_study`. The paper's own values are kept in
+:data:`PAPER_TABLE_V` for side-by-side reporting only; nothing reads them to set a value.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any, Iterable, Mapping
+
+import numpy as np
+import pandas as pd
+
+from probecommit.audit.stats import DEFAULT_RESAMPLES, cluster_bootstrap_mean, paired_bootstrap
+
+#: Families this study covers, in table order.
+BREADTH_FAMILIES = ("push1d", "push2d", "darts")
+#: Frozen paper configs.
+#: The frozen paper configs shipped with the package (``configs/paper`` in the repository).
+PAPER_CONFIG_DIR = Path(__file__).resolve().parents[1] / "configs" / "paper"
+#: The paper's Table V rows (mean miss, m): Blind-Bayes, Blind-Robust, Probe-Robust(5), paired
+#: reduction [95% CI]; None where the paper reports none. Quoted for comparison only.
+PAPER_TABLE_V: dict[str, dict[str, Any]] = {
+    "push1d": {"blind_bayes": 0.491, "blind_robust": None, "probe_robust": 0.062, "paired": None},
+    "push2d": {"blind_bayes": 0.252, "blind_robust": 0.307, "probe_robust": 0.221, "paired": (0.031, 0.007, 0.054)},
+    "darts": {"blind_bayes": 0.026, "blind_robust": 0.035, "probe_robust": 0.010, "paired": (0.016, 0.009, 0.024)},
+}
+#: Quick mode (CI): instances kept per family and particles.
+QUICK = {"instances": 2, "repeats": 2, "particles": 128, "blind_prior_samples": 500}
+
+PAIR_KEYS = ("instance_id", "repeat")
+
+
+def _ok(episodes: pd.DataFrame) -> pd.DataFrame:
+    if "status" in episodes:
+        episodes = episodes[episodes["status"] == "ok"]
+    return episodes
+
+
+def arm(episodes: pd.DataFrame, method: str, k: int) -> pd.DataFrame:
+    """Rows of one method at one budget (successful episodes only)."""
+    ep = _ok(episodes)
+    return ep[(ep["method"] == method) & (ep["k"] == k)]
+
+
+def _mean(rows: pd.DataFrame, resamples: int, seed: int) -> dict[str, float]:
+    if rows.empty:
+        return {"mean": float("nan"), "lo": float("nan"), "hi": float("nan"), "n": 0}
+    ci = cluster_bootstrap_mean(rows["realized"].to_numpy(float), rows["instance_id"].to_numpy(), resamples=resamples, seed=seed)
+    return {"mean": ci.estimate, "lo": ci.lo, "hi": ci.hi, "n": int(len(rows))}
+
+
+def breadth_row(episodes: pd.DataFrame, family: str = "", k: int = 5, *, resamples: int = DEFAULT_RESAMPLES,
+                seed: int = 0) -> dict[str, Any]:
+    """One Table V row from an episode table.
+
+    Args:
+        episodes: Episode table with ``instance_id, repeat, k, method, realized`` (and
+            optionally ``status``).
+        family: Label of the row.
+        k: Probe budget of the Probe-Robust column.
+        resamples, seed: Cluster bootstrap settings.
+
+    Returns:
+        ``family, k, n_instances``; ``blind_bayes``, ``blind_robust``, ``probe_robust``
+        mean miss (with ``_lo``/``_hi``); ``paired`` = mean of Blind-Robust minus
+        Probe-Robust(k) over paired (instance, repeat) episodes with ``paired_lo``,
+        ``paired_hi``, ``paired_p`` (sign-flip) and ``n_pairs`` (NaN when an arm is missing).
+    """
+    row: dict[str, Any] = {"family": family, "k": int(k)}
+    arms = {"blind_bayes": arm(episodes, "blind_bayes", 0), "blind_robust": arm(episodes, "blind_robust", 0),
+            "probe_robust": arm(episodes, "probe_robust", k)}
+    row["n_instances"] = int(_ok(episodes)["instance_id"].nunique())
+    for name, rows in arms.items():
+        stat = _mean(rows, resamples, seed)
+        row[name], row[f"{name}_lo"], row[f"{name}_hi"] = stat["mean"], stat["lo"], stat["hi"]
+        row[f"n_{name}"] = stat["n"]
+    base, treat = arms["blind_robust"], arms["probe_robust"]
+    row.update(paired=float("nan"), paired_lo=float("nan"), paired_hi=float("nan"), paired_p=float("nan"), n_pairs=0)
+    if len(base) and len(treat):
+        # treatment = Blind-Robust, baseline = Probe-Robust(k): the difference is the reduction.
+        res = paired_bootstrap(treat, base, "realized", keys=PAIR_KEYS, resamples=resamples, seed=seed)
+        row.update(paired=res.difference.estimate, paired_lo=res.difference.lo, paired_hi=res.difference.hi,
+                   paired_p=res.p_sign_flip, n_pairs=res.n_pairs)
+    return row
+
+
+def budget_curve(episodes: pd.DataFrame, family: str = "", *, resamples: int = DEFAULT_RESAMPLES,
+                 seed: int = 0) -> pd.DataFrame:
+    """Mean miss versus budget: ``family, method, k, mean, lo, hi, n`` (blind methods at k = 0)."""
+    ep = _ok(episodes)
+    rows = []
+    for (method, k), group in ep.groupby(["method", "k"], sort=True):
+        if method not in ("blind_bayes", "blind_robust", "probe_robust"):
+            continue
+        rows.append({"family": family, "method": method, "k": int(k), **_mean(group, resamples, seed)})
+    order = {"blind_bayes": 0, "blind_robust": 1, "probe_robust": 2}
+    out = pd.DataFrame(rows, columns=["family", "method", "k", "mean", "lo", "hi", "n"])
+    return out.sort_values(["method", "k"], key=lambda s: s.map(order) if s.name == "method" else s).reset_index(drop=True)
+
+
+def read_episodes(run_dir: str | Path) -> pd.DataFrame:
+    """The episode table of a run directory."""
+    from probecommit.store.rundir import RunDir
+
+    return pd.read_parquet(RunDir(run_dir).table_path("episodes"))
+
+
+def breadth_table(runs: Mapping[str, str | Path | pd.DataFrame], k: int = 5, *, resamples: int = DEFAULT_RESAMPLES,
+                  seed: int = 0) -> pd.DataFrame:
+    """Table V rows for ``{family: run directory or episode table}``, in the given order."""
+    rows = []
+    for family, src in runs.items():
+        episodes = src if isinstance(src, pd.DataFrame) else read_episodes(src)
+        rows.append(breadth_row(episodes, family, k, resamples=resamples, seed=seed))
+    return pd.DataFrame(rows)
+
+
+def budget_curves(runs: Mapping[str, str | Path | pd.DataFrame], *, resamples: int = DEFAULT_RESAMPLES,
+                  seed: int = 0) -> pd.DataFrame:
+    """Miss-versus-budget table of every family."""
+    frames = []
+    for family, src in runs.items():
+        episodes = src if isinstance(src, pd.DataFrame) else read_episodes(src)
+        frames.append(budget_curve(episodes, family, resamples=resamples, seed=seed))
+    return pd.concat(frames, ignore_index=True) if frames else pd.DataFrame()
+
+
+def _fmt(v: Any, digits: int = 3) -> str:
+    return "--" if v is None or (isinstance(v, float) and not np.isfinite(v)) else f"{v:.{digits}f}"
+
+
+def breadth_markdown(table: pd.DataFrame, paper: Mapping[str, Mapping[str, Any]] | None = PAPER_TABLE_V) -> str:
+    """Markdown Table V, ours next to the paper's where ``paper`` is given."""
+    head = "| family | Blind-Bayes | Blind-Robust | Probe-Robust(k) | paired reduction [95%] |"
+    lines = [head, "|---|---|---|---|---|"]
+    for _, r in table.iterrows():
+        paired = "--" if not np.isfinite(r["paired"]) else f"{r['paired']:.3f} [{r['paired_lo']:.3f}, {r['paired_hi']:.3f}]"
+        lines.append(f"| {r['family']} (ours, k={r['k']}) | {_fmt(r['blind_bayes'])} | {_fmt(r['blind_robust'])} "
+                     f"| {_fmt(r['probe_robust'])} | {paired} |")
+        p = (paper or {}).get(r["family"])
+        if p:
+            pp = "--" if p["paired"] is None else f"{p['paired'][0]:.3f} [{p['paired'][1]:.3f}, {p['paired'][2]:.3f}]"
+            lines.append(f"| {r['family']} (paper, k=5) | {_fmt(p['blind_bayes'])} | {_fmt(p['blind_robust'])} "
+                         f"| {_fmt(p['probe_robust'])} | {pp} |")
+    return "\n".join(lines) + "\n"
+
+
+LABELS = {"blind_bayes": "Blind-Bayes", "blind_robust": "Blind-Robust", "probe_robust": "Probe-Robust(k)"}
+
+
+def plot_budget_curves(curves: pd.DataFrame, path: str | Path) -> list[Path]:
+    """Miss versus budget, one panel per family; saves ``<path>.png`` and ``<path>.pdf``.
+
+    3.5 in wide, every font at least 7 pt; blind methods are drawn as markers at k = 0,
+    Probe-Robust as a line through Blind-Robust's k = 0 point (the same risk functional).
+    """
+    import matplotlib
+
+    matplotlib.use("Agg", force=False)
+    import matplotlib.pyplot as plt
+
+    families = list(dict.fromkeys(curves["family"]))
+    n = max(len(families), 1)
+    with plt.rc_context({"font.size": 7, "axes.titlesize": 7, "axes.labelsize": 7, "xtick.labelsize": 7,
+                         "ytick.labelsize": 7, "legend.fontsize": 7}):
+        fig, axes = plt.subplots(1, n, figsize=(3.5, 1.9), squeeze=False)
+        for ax, fam in zip(axes[0], families):
+            c = curves[curves["family"] == fam]
+            br = c[c["method"] == "blind_robust"]
+            pr = c[c["method"] == "probe_robust"]
+            line = pd.concat([br, pr]).sort_values("k")
+            ax.errorbar(line["k"], line["mean"], yerr=[line["mean"] - line["lo"], line["hi"] - line["mean"]],
+                        marker="o", ms=3, lw=1, capsize=2, color="C0", label="Blind-/Probe-Robust")
+            bb = c[c["method"] == "blind_bayes"]
+            if len(bb):
+                ax.errorbar(bb["k"] - 0.15, bb["mean"], yerr=[bb["mean"] - bb["lo"], bb["hi"] - bb["mean"]],
+                            marker="s", ms=3, lw=0, elinewidth=1, capsize=2, color="C1", label="Blind-Bayes")
+            ax.set_title(fam)
+            ax.set_xlabel("probes k")
+            ax.set_xticks(sorted(set(c["k"])))
+            ax.set_ylim(bottom=0)
+        axes[0][0].set_ylabel("mean miss (m)")
+        handles, labels = axes[0][0].get_legend_handles_labels()
+        fig.legend(handles, labels, frameon=False, loc="upper center", ncol=2, handlelength=1.2)
+        fig.tight_layout(pad=0.3, rect=(0, 0, 1, 0.86))
+        stem = Path(path).with_suffix("")
+        out = [stem.with_suffix(".png"), stem.with_suffix(".pdf")]
+        for p in out:
+            fig.savefig(p, dpi=300)
+        plt.close(fig)
+    return out
+
+
+def quick_config(config: Any) -> Any:
+    """A small version of a frozen config for CI: first instances, few repeats and particles."""
+    from probecommit.runner.config import config_data, parse_config
+
+    data = config_data(config)
+    inst = data["instances"]
+    truths = inst["truths"][: QUICK["instances"]] if inst.get("truths") else None
+    contexts = inst["contexts"][:1] if inst.get("contexts") else None
+    if truths is not None:
+        inst["truths"] = truths
+    if contexts is not None:
+        inst["contexts"] = contexts
+    if truths is None:
+        inst["count"] = QUICK["instances"]
+    data["repeats"] = QUICK["repeats"]
+    data["belief"]["particles"] = QUICK["particles"]
+    data["blind_prior_samples"] = QUICK["blind_prior_samples"]
+    data["name"] = f"{data['name']}-quick"
+    return parse_config(data)
+
+
+def paper_config(family: str, config_dir: str | Path = PAPER_CONFIG_DIR) -> Any:
+    """The frozen study config of ``family``."""
+    from probecommit.runner.config import load_config
+
+    return load_config(Path(config_dir) / f"{family}.yaml")
+
+
+def run_breadth(families: Iterable[str] = BREADTH_FAMILIES, out_dir: str | Path = "runs/breadth", quick: bool = False,
+                *, k: int = 5, workers: int = 1, resamples: int = DEFAULT_RESAMPLES, seed: int = 0,
+                config_dir: str | Path = PAPER_CONFIG_DIR) -> pd.DataFrame:
+    """Run each family's frozen config (resuming finished runs) and return its Table V rows.
+
+    Args:
+        families: Family names with a ``configs/paper/<family>.yaml``.
+        out_dir: Parent of the run directories (``<out_dir>/<family>[-quick]``).
+        quick: Two truths x one target, two seeds, 128 particles (CI).
+        k: Probe-Robust budget of the table.
+        workers: Local worker processes per run.
+        resamples, seed: Cluster bootstrap settings.
+    """
+    from probecommit.runner.study import run_study
+
+    out_dir = Path(out_dir)
+    runs: dict[str, pd.DataFrame] = {}
+    for family in families:
+        config = paper_config(family, config_dir)
+        if quick:
+            config = quick_config(config)
+        result = run_study(config, out_dir / config.name, workers=workers)
+        runs[family] = result.episodes
+    return breadth_table(runs, k, resamples=resamples, seed=seed)

@@ -1,0 +1,53 @@
+"""1-D push (paper Table II, analytic): a box pushed to stop at a target distance.
+
+Registers ``push1d``. Every choice (the paper gives the latents, probe/action kind,
+sigma, budgets and instance count, nothing else):
+
+* **Latents and prior** ``(mu, m, k_d)``: Coulomb friction ``U[0.2, 0.6]``, mass
+  ``U[0.5, 1.5]`` kg, linear damping ``U[0.5, 3.0]`` N s/m (damping time constants
+  0.17-3 s, so damping and friction both matter at these speeds). Jitter
+  ``(0.01, 0.025, 0.06)``, about 2.5% of each width.
+* **Dynamics**: ``m dv/dt = -mu m g - k_d v`` from ``v0 = J / m``; closed-form stop
+  distance in :mod:`probecommit.tasks.push1d.model`.
+* **Probe**: a known pulse from ``{1, 2, 3}`` N s (uniform random with replacement),
+  reading the slide distance with ``sigma = 5`` cm (model and simulator). The box is
+  returned to its start pose after each probe.
+* **Action**: an impulse on a geometric grid, ``0.25 * 1.01^i`` N s up to 10 N s (371).
+* **Context**: the target distance; **loss**: miss ``|d(J) - target|`` in metres,
+  divided by the margin ``gamma`` (``with_margin``).
+* **Instances** (``configs/paper/push1d.yaml``): the 3x3x3 grid of truths at 1/8, 1/2
+  and 7/8 of each prior width (``mu in {0.25, 0.4, 0.55}``, ``m in {0.625, 1.0,
+  1.375}``, ``k_d in {0.8125, 1.75, 2.6875}``) crossed with targets ``{0.5, 1.0,
+  1.5}`` m: 81 instances x 6 seeds; budgets 0, 2, 5.
+* **Decision coordinate**: ``mu`` (latent 0), domain width 0.4.
+* **Simulator**: the closed form at the truth plus noise (the paper: no scene).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from probecommit.tasks.base import TaskSpec
+from probecommit.tasks.push1d.config import Push1DConfig
+from probecommit.tasks.push1d.model import Push1DModel
+from probecommit.tasks.registry import register
+
+
+def build_model(config: Push1DConfig) -> Push1DModel:
+    cfg = config.model
+    return Push1DModel(
+        sigma=cfg.sigma, margin=cfg.margin,
+        prior_low=np.array(cfg.prior_low, dtype=float), prior_high=np.array(cfg.prior_high, dtype=float),
+    )
+
+
+SPEC = register(
+    TaskSpec(
+        name="push1d",
+        config=Push1DConfig,
+        build_model=build_model,
+        simulators={"analytic": "probecommit.tasks.push1d.sim_analytic:AnalyticPush1DSimulator"},
+        summary={"latents": "mu, m, k_d", "probe": "pulse / slide distance", "action": "impulse",
+                 "sigma": "5 cm", "budgets": "0, 2, 5", "metric": "miss (m)", "n": "81 x 6"},
+    )
+)

@@ -1,0 +1,88 @@
+"""Breadth study (Table V rows): hand-made tables with known answers, the figure, quick runs."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from probecommit.studies.breadth import (
+    PAPER_TABLE_V,
+    breadth_markdown,
+    breadth_row,
+    breadth_table,
+    budget_curve,
+    plot_budget_curves,
+    run_breadth,
+)
+
+
+def table(values: dict[tuple[str, int], list[list[float]]]) -> pd.DataFrame:
+    """Episodes from ``{(method, k): miss[instance][repeat]}``."""
+    rows = []
+    for (method, k), grid in values.items():
+        for i, reps in enumerate(grid):
+            for r, v in enumerate(reps):
+                rows.append({"instance_id": f"i{i}", "repeat": r, "k": k, "method": method, "realized": v, "status": "ok"})
+    return pd.DataFrame(rows)
+
+
+def test_row_means_and_paired_reduction_known_answer():
+    ep = table({
+        ("blind_bayes", 0): [[0.7, 0.7], [0.7, 0.7], [0.7, 0.7]],
+        ("blind_robust", 0): [[1.0, 0.8], [0.6, 0.6], [0.9, 0.3]],
+        ("probe_robust", 2): [[0.5, 0.5], [0.5, 0.5], [0.5, 0.5]],
+        ("probe_robust", 5): [[0.2, 0.4], [0.5, 0.3], [0.1, 0.1]],
+    })
+    row = breadth_row(ep, "toy", k=5, resamples=500)
+    assert row["blind_bayes"] == pytest.approx(0.7)
+    assert row["blind_robust"] == pytest.approx(0.7)
+    assert row["probe_robust"] == pytest.approx(1.6 / 6)
+    # Per-instance mean reductions: 0.6, 0.2, 0.5 -> overall 1.3 / 3.
+    assert row["paired"] == pytest.approx(1.3 / 3)
+    assert row["n_pairs"] == 6 and row["n_instances"] == 3
+    assert 0.2 - 1e-12 <= row["paired_lo"] <= row["paired"] <= row["paired_hi"] <= 0.6 + 1e-12
+    assert row["blind_bayes_lo"] == pytest.approx(0.7) and row["blind_bayes_hi"] == pytest.approx(0.7)
+    assert breadth_row(ep, "toy", k=2, resamples=200)["paired"] == pytest.approx(0.2)
+
+
+def test_constant_reduction_has_a_degenerate_interval_and_failed_rows_are_ignored():
+    ep = table({("blind_robust", 0): [[1.0, 1.0]] * 4, ("probe_robust", 5): [[0.4, 0.4]] * 4})
+    ep = pd.concat([ep, pd.DataFrame([{"instance_id": "i0", "repeat": 9, "k": 0, "method": "rollout",
+                                       "realized": np.nan, "status": "failed"}])], ignore_index=True)
+    row = breadth_row(ep, "flat", resamples=200)
+    assert (row["paired"], row["paired_lo"], row["paired_hi"]) == pytest.approx((0.6, 0.6, 0.6))
+    assert np.isnan(row["blind_bayes"])  # no Blind-Bayes rows: reported as missing, not zero
+
+
+def test_budget_curve_table_markdown_and_figure(tmp_path):
+    ep = table({("blind_bayes", 0): [[0.5, 0.5]], ("blind_robust", 0): [[0.6, 0.6]],
+                ("probe_robust", 2): [[0.3, 0.3]], ("probe_robust", 5): [[0.1, 0.1]]})
+    curve = budget_curve(ep, "toy", resamples=100)
+    assert list(zip(curve["method"], curve["k"])) == [("blind_bayes", 0), ("blind_robust", 0), ("probe_robust", 2), ("probe_robust", 5)]
+    assert curve["mean"].tolist() == pytest.approx([0.5, 0.6, 0.3, 0.1])
+    tab = breadth_table({"push2d": ep}, resamples=100)
+    md = breadth_markdown(tab)
+    assert "push2d (ours, k=5) | 0.500 | 0.600 | 0.100 | 0.500 [0.500, 0.500]" in md
+    assert "push2d (paper, k=5) | 0.252 | 0.307 | 0.221 | 0.031 [0.007, 0.054]" in md
+    assert set(PAPER_TABLE_V) == {"push1d", "push2d", "darts"}
+    paths = plot_budget_curves(pd.concat([curve, budget_curve(ep, "other", resamples=100)]), tmp_path / "curves")
+    assert [p.suffix for p in paths] == [".png", ".pdf"] and all(p.stat().st_size > 0 for p in paths)
+
+
+def test_run_breadth_quick_push1d(tmp_path):
+    out = run_breadth(["push1d"], tmp_path, quick=True, resamples=100)
+    row = out.iloc[0]
+    assert row["family"] == "push1d" and row["n_instances"] == 2 and row["n_pairs"] == 4
+    assert np.isfinite([row["blind_bayes"], row["blind_robust"], row["probe_robust"], row["paired"]]).all()
+    # Resumes the finished run: same table.
+    again = run_breadth(["push1d"], tmp_path, quick=True, resamples=100)
+    pd.testing.assert_frame_equal(out, again)
+
+
+@pytest.mark.mujoco
+def test_run_breadth_quick_mujoco_families(tmp_path):
+    pytest.importorskip("mujoco")
+    out = run_breadth(["push2d", "darts"], tmp_path, quick=True, resamples=100)
+    assert out["family"].tolist() == ["push2d", "darts"]
+    assert np.isfinite(out[["blind_bayes", "blind_robust", "probe_robust", "paired"]].to_numpy(float)).all()
