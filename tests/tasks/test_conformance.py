@@ -73,9 +73,12 @@ def test_model_satisfies_the_protocol_and_shapes_agree(family):
     assert model.decision(theta).shape == (3, 7)
     ref = theta.mean(axis=1)
     assert model.tie_break_cost(model.action_grid, ref, context).shape == (3, A[0])
-    grown = model.grown_scenarios(theta, np.linspace(0, 1, 9)[None, :].repeat(3, 0))
+    # Grown-set points across the belief's own decision range map back to those coordinates.
+    z = model.decision(theta)
+    points = z.min(axis=1, keepdims=True) + (z.max(axis=1, keepdims=True) - z.min(axis=1, keepdims=True)) * np.linspace(0, 1, 9)
+    grown = model.grown_scenarios(theta, points)
     assert grown.shape == (3, 9, d)
-    np.testing.assert_allclose(model.decision(grown), np.linspace(0, 1, 9)[None, :].repeat(3, 0))
+    np.testing.assert_allclose(model.decision(grown), points, rtol=1e-9, atol=1e-12)
 
 
 @pytest.mark.parametrize("family", FAMILIES)

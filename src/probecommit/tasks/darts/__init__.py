@@ -52,5 +52,6 @@ SPEC = register(
         simulators={"mujoco": "probecommit.tasks.darts.sim_mujoco:MujocoDartsSimulator"},
         summary={"latents": "k_d, m, g", "probe": "throw / landing point", "action": "launch (v, alpha)",
                  "sigma": "2 cm", "budgets": "0, 2, 5", "metric": "miss (m)", "n": "18 x 8"},
+        example={"instances": {"contexts": [[2.0], [3.0]]}},
     )
 )

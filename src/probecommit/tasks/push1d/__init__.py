@@ -49,5 +49,6 @@ SPEC = register(
         simulators={"analytic": "probecommit.tasks.push1d.sim_analytic:AnalyticPush1DSimulator"},
         summary={"latents": "mu, m, k_d", "probe": "pulse / slide distance", "action": "impulse",
                  "sigma": "5 cm", "budgets": "0, 2, 5", "metric": "miss (m)", "n": "81 x 6"},
+        example={"instances": {"contexts": [[0.5], [1.0]]}},
     )
 )

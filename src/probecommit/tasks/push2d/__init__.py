@@ -52,5 +52,6 @@ SPEC = register(
         simulators={"mujoco": "probecommit.tasks.push2d.sim_mujoco:MujocoPush2DSimulator"},
         summary={"latents": "mu, m, k_d", "probe": "pulse / 2-D rest", "action": "2-D impulse",
                  "sigma": "5 cm", "budgets": "0, 2, 5", "metric": "miss (m)", "n": "18 x 6"},
+        example={"instances": {"contexts": [[0.469846, -0.171010], [0.866025, 0.5]]}},
     )
 )
