@@ -123,6 +123,7 @@ def replay(
     delta: Optional[float] = typer.Option(None, help="Insertion shorthand for --set model.delta=... (mm)."),
     set_: list[str] = typer.Option([], "--set", help="Override a model, belief or simulator.aim_offset field: SECTION.FIELD=VALUE (YAML value; repeatable)."),
     out: Optional[Path] = typer.Option(None, "--out", "-o", help="New run directory (default RUN-replay or RUN-<model>)."),
+    fixed_probes: bool = typer.Option(False, "--fixed-probes", help="Replay an adaptive run's probes under another model anyway (not a paired comparison)."),
 ) -> None:
     """Recompute beliefs and episodes from a run's stored probes under another model.
 
@@ -146,7 +147,7 @@ def replay(
             overrides["model"]["delta"] = delta
     label = overrides.get("model", {}).get("boundary", "replay")
     target = out or run_dir.with_name(f"{run_dir.name}-{label}")
-    path = replay_run(run_dir, target, overrides)
+    path = replay_run(run_dir, target, overrides, fixed_probes=fixed_probes)
     print_budget_table(load_run(path).episodes, f"replay of {run_dir.name} ({', '.join(f'{s}.{k}' for s, v in overrides.items() for k in v)})")
     console.print(f"run directory: [bold]{path}[/bold]")
 

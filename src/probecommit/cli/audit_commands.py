@@ -78,6 +78,16 @@ def audit_command(
     from probecommit.report.figures import save_figure
 
     result = audit(path, resamples=resamples, seed=seed)
+    config_file = path / "config.yaml" if path.is_dir() else None
+    if config_file is not None and config_file.is_file():
+        import yaml
+
+        schedule = ((yaml.safe_load(config_file.read_text()) or {}).get("probes") or {}).get("schedule")
+        if schedule == "adaptive":
+            from probecommit.cli.common import print_warning
+
+            print_warning("this run's probes were chosen adaptively by its own belief: its episodes are not paired "
+                          "with a run of another model on the same instances (other probes would have been chosen)")
     out = out or (path if path.is_dir() else path.with_name(f"{path.stem}-audit"))
     out.mkdir(parents=True, exist_ok=True)
     print_audit_table(result.table, f"audit of {path}")

@@ -52,9 +52,10 @@ class InstancesConfig(_Strict):
 
 
 class ProbesConfig(_Strict):
-    """Probe schedule: ``random`` (i.i.d. uniform with replacement) or a fixed list."""
+    """Probe schedule: ``random`` (i.i.d. uniform with replacement), a fixed list, or
+    ``adaptive`` (each probe chosen by the current belief; beyond the paper)."""
 
-    schedule: Union[Literal["random"], list[tuple[float, ...]]] = "random"
+    schedule: Union[Literal["random", "adaptive"], list[tuple[float, ...]]] = "random"
     budget: int = Field(8, ge=1, le=64)
     budgets: list[int] | None = Field(None, min_length=1)
 
@@ -62,7 +63,7 @@ class ProbesConfig(_Strict):
     @classmethod
     def _schedule(cls, value: Any) -> Any:
         # One clear message instead of pydantic's two union-branch errors.
-        if value == "random" and isinstance(value, str):
+        if value in ("random", "adaptive") and isinstance(value, str):
             return value
         if isinstance(value, (list, tuple)):
             out = []
@@ -72,7 +73,7 @@ class ProbesConfig(_Strict):
                     raise ValueError(f"probe {i} of the schedule must be a finite number or a list of them, got {v!r}")
                 out.append(tuple(float(c) for c in comps))
             return out
-        raise ValueError(f"must be 'random' or a list of probes (numbers, or lists for vector probes), got {value!r}")
+        raise ValueError(f"must be 'random', 'adaptive' or a list of probes (numbers, or lists for vector probes), got {value!r}")
 
     @model_validator(mode="after")
     def _check(self) -> "ProbesConfig":

@@ -140,6 +140,61 @@ def rollout(
     )
 
 
+def rollout_adaptive(
+    instances: pd.DataFrame,
+    repeats: int,
+    budget: int,
+    model: Any,
+    pfilter: ParticleFilter,
+    simulator,
+    seed: int,
+) -> ProbeBatch:
+    """Probe trajectories whose every probe is chosen by the current belief (``schedule: adaptive``).
+
+    The belief runs online with the same inference streams ``build_trace`` uses, so
+    recomputing beliefs from the stored probes under the same model reproduces this
+    run exactly. The reading noise comes from each episode's rollout stream.
+    """
+    from probecommit.core.selectors import choose_probes, expected_posterior_variance
+
+    grid = np.asarray(model.probe_grid, dtype=float)
+    truths, contexts = instance_arrays(instances, model)
+    meta = [(inst["instance_id"], int(inst["instance_index"]), r, i) for i, (_, inst) in enumerate(instances.iterrows())
+            for r in range(repeats)]
+    n = len(meta)
+    split = str(instances["split"].iloc[0]) if len(instances) else ""
+    index = np.array([m[1] for m in meta], dtype=np.int64)
+    rep = np.array([m[2] for m in meta], dtype=np.int64)
+    rows = np.array([m[3] for m in meta], dtype=np.int64)
+    roll = [episode_rng(seed, split, int(i), int(r), ROLLOUT) for i, r in zip(index, rep)]
+    infer = [episode_rng(seed, split, int(i), int(r), INFERENCE) for i, r in zip(index, rep)]
+    u = np.empty((n, budget, model.probe_dim))
+    y = np.full((n, budget, model.observation_dim), np.nan)
+    status = np.full(n, "ok", dtype=object)
+    error = np.full(n, "", dtype=object)
+    state = pfilter.initial(infer)
+    for j in range(budget):
+        scores = expected_posterior_variance(model, pfilter.likelihood, state.particles, state.weights, grid)
+        u[:, j] = grid[choose_probes(scores)]
+        for e in range(n):
+            if status[e] != "ok":
+                y[e, j] = model.predict(u[e:e + 1, j], state.particles[e:e + 1, :1])[0, 0]  # keep the filter running
+                continue
+            try:
+                y[e, j] = simulator.probe(truths[rows[e]], u[e, j], roll[e])
+                if not np.all(np.isfinite(y[e, j])):
+                    raise FloatingPointError(f"{simulator.engine} returned {y[e, j].tolist()} for probe u={u[e, j].tolist()}")
+            except Exception as exc:  # noqa: BLE001 - one bad engine query must not end the study
+                status[e], error[e] = "failed", f"probe {j + 1}: {type(exc).__name__}: {exc}"
+                y[e, j] = model.predict(u[e:e + 1, j], state.particles[e:e + 1, :1])[0, 0]
+        state = pfilter.update(state, u[:, j], y[:, j], infer)
+    return ProbeBatch(
+        split=split, instance_id=np.array([m[0] for m in meta], dtype=object), instance_index=index, repeat=rep,
+        truths=truths[rows].reshape(n, -1), u=u, y=y, status=status, error=error,
+        context=contexts[rows].reshape(n, len(model.context_names)),
+    )
+
+
 @dataclass
 class BeliefTrace:
     """Beliefs of a batch of episodes after each committed budget (k = 0 is the prior)."""

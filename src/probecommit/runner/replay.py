@@ -115,6 +115,7 @@ def replay_episodes(
     overrides: dict[str, dict[str, Any]] | None = None,
     thresholds: float | dict[int, float] | None = None,
     margin: float | None = None,
+    fixed_probes: bool = False,
 ) -> tuple[pd.DataFrame, Any]:
     """Episodes re-inferred from a run's stored probes, without writing anything.
 
@@ -125,6 +126,10 @@ def replay_episodes(
             the readings are the stored ones.
         thresholds: Retained mass or conformal thresholds (default: the config's ``nu``).
         margin: Capture-window margin ``gamma`` (default: the config's).
+        fixed_probes: Allow a replay of an *adaptive* run under another model or belief.
+            Its probes were chosen by the run's own belief, so the other model would
+            have probed elsewhere: the replay answers "this model on those probes",
+            and a difference between the two is not a paired comparison.
 
     Returns:
         ``(episodes, simulator)``; the simulator carries the engine-call counts.
@@ -136,6 +141,13 @@ def replay_episodes(
     sim_bad = set(overrides.get("simulator", {})) - {"aim_offset"}
     if sim_bad:
         raise ValueError(f"stored probes fix the readings; a replay cannot change simulator {sorted(sim_bad)}")
+    changes_inference = any(overrides.get(section) for section in ("model", "belief"))
+    if loaded.config.probes.schedule == "adaptive" and changes_inference and not fixed_probes:
+        raise ValueError(
+            f"{loaded.path}: its probes were chosen adaptively by the run's own belief, so another model or belief "
+            "would have probed elsewhere; replaying them is not a paired (identical-probes) comparison. "
+            "Pass fixed_probes=True (CLI: --fixed-probes) to replay the recorded probes anyway."
+        )
     config = replay_config(loaded.config, overrides)
     trace, model, sim = trace_for_run(loaded, config)
     blind = blind_bayes_executor(model, config.seed, config.blind_prior_samples) if "blind_bayes" in config.methods else None
@@ -149,7 +161,7 @@ def replay_episodes(
     return episodes, sim
 
 
-def replay_run(src: str | Path, out: str | Path, overrides: dict[str, dict[str, Any]]) -> Path:
+def replay_run(src: str | Path, out: str | Path, overrides: dict[str, dict[str, Any]], fixed_probes: bool = False) -> Path:
     """Write a new run directory: the source's probes, re-inferred under ``overrides``.
 
     Args:
@@ -161,7 +173,7 @@ def replay_run(src: str | Path, out: str | Path, overrides: dict[str, dict[str, 
     start = time.perf_counter()
     loaded = load_run(src)
     config = replay_config(loaded.config, overrides)
-    episodes, sim = replay_episodes(loaded, overrides)
+    episodes, sim = replay_episodes(loaded, overrides, fixed_probes=fixed_probes)
     run = RunDir(out)
     run.prepare(dump_config(config))
     unit = "replay"

@@ -21,7 +21,15 @@ import pandas as pd
 
 from probecommit.runner import build
 from probecommit.runner.config import StudyConfig, dump_config, parse_config
-from probecommit.runner.inference import blind_bayes_executor, build_trace, commit, failed_episode_rows, instance_arrays, rollout
+from probecommit.runner.inference import (
+    blind_bayes_executor,
+    build_trace,
+    commit,
+    failed_episode_rows,
+    instance_arrays,
+    rollout,
+    rollout_adaptive,
+)
 from probecommit.runner.instances import draw_instances
 from probecommit.store.rundir import RunDir
 from probecommit.store.schema import cache_frame
@@ -59,7 +67,10 @@ def compute_unit(config_data: dict, instances: pd.DataFrame, unit: str) -> tuple
     pfilter = build.build_filter(model, config.belief)
     simulator = build.build_simulator(config)
     schedule = config.probes.schedule
-    batch = rollout(instances, config.repeats, schedule, config.probes.budget, model, simulator, config.seed)
+    if schedule == "adaptive":
+        batch = rollout_adaptive(instances, config.repeats, config.probes.budget, model, pfilter, simulator, config.seed)
+    else:
+        batch = rollout(instances, config.repeats, schedule, config.probes.budget, model, simulator, config.seed)
     if config.simulator.execute_all_aims:
         truths, contexts = instance_arrays(instances, model)
         for theta, ctx in zip(truths, contexts):
