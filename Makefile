@@ -37,9 +37,9 @@ bench: $(STAMP)
 	$(PY) benchmarks/belief.py
 	$(PY) benchmarks/scale.py
 
-## Every MuJoCo insertion table and figure of the paper.
+## Every table and figure of the paper (resumable; see probecommit reproduce --list).
 reproduce: $(STAMP)
-	$(VENV)/bin/probecommit reproduce insertion
+	$(VENV)/bin/probecommit reproduce all
 
 clean-venv:
 	rm -rf $(VENV)

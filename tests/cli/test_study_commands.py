@@ -32,9 +32,9 @@ def test_scan_rejects_an_unknown_engine(tmp_path):
 
 
 def test_reproduce_rejects_an_unknown_target():
-    result = runner.invoke(app, ["reproduce", "darts"])
+    result = runner.invoke(app, ["reproduce", "juggling"])
     assert result.exit_code == 2
-    assert "unknown reproduce target 'darts'" in " ".join(result.output.split())
+    assert "unknown reproduce target 'juggling'" in " ".join(result.output.split())
 
 
 def test_faults_on_a_base_run_skips_the_faults_needing_other_rollouts(tmp_path, make_config):

@@ -31,32 +31,43 @@ def _stepper():
 
 
 def reproduce(
-    target: str = typer.Argument("insertion", help="What to reproduce: 'insertion' (the MuJoCo insertion tables and figures)."),
-    quick: bool = typer.Option(False, "--quick", help="The same pipeline on a few instances (a minute; for CI)."),
-    out: Optional[Path] = typer.Option(None, "--out", "-o", help="Root for run directories and results (default runs/paper/<target>[-quick])."),
-    protocol: Path = typer.Option(REPO_ROOT / "configs" / "paper" / "insertion.yaml", help="Frozen protocol config."),
+    targets: Optional[list[str]] = typer.Argument(None, help="Targets: insertion, breadth, beyond, all, or a paper item such as table-7 (see --list)."),
+    list_targets: bool = typer.Option(False, "--list", help="List every target and the tables and figures it makes."),
+    quick: bool = typer.Option(False, "--quick", help="The same pipelines on a few instances (minutes; for CI)."),
+    out: Optional[Path] = typer.Option(None, "--out", "-o", help="Root for run directories and results (default runs/paper[-quick])."),
     workers: int = typer.Option(1, "--workers", "-w", min=1, help="Local worker processes for the rollouts."),
-    write_reproduction: Optional[bool] = typer.Option(None, help="Write REPRODUCTION.md (default: yes for full runs, no with --quick)."),
+    publish: Optional[bool] = typer.Option(None, help="Copy results into results/paper/ and rewrite REPRODUCTION.md (default: yes for full runs, no with --quick)."),
 ) -> None:
-    """Regenerate every MuJoCo insertion table and figure from the frozen configs."""
-    from probecommit.report.reproduce import reproduce_insertion
-    from probecommit.report.reproduction_md import render
+    """Regenerate the paper's tables and figures from the frozen configs in configs/paper/.
 
-    if target not in ("insertion", "all"):
-        raise ValueError(f"unknown reproduce target {target!r}; available: insertion, all")
-    root = out or Path("runs") / "paper" / ("insertion-quick" if quick else "insertion")
+    A killed reproduction resumes: rerun the same command and finished runs are kept.
+    """
+    from rich.markup import escape
+    from rich.table import Table
+
+    from probecommit.report import paper
+
+    if list_targets:
+        table = Table(title="reproduce targets", title_style="bold")
+        for col in ("target", "makes", "runs first"):
+            table.add_column(col)
+        for row in paper.listing():
+            table.add_row(*map(escape, row))
+        console.print(table)
+        return
+    names = targets or ["insertion"]
+    paper.resolve(names)  # an unknown target fails before anything runs
+    root = out or Path("runs") / ("paper-quick" if quick else "paper")
     bar, update = _stepper()
     with bar:
-        rep = reproduce_insertion(root, quick=quick, protocol_path=protocol, progress=update, workers=workers)
-    for text in rep.tables.values():
-        console.print(text)
-    results = root / "results" / "results.json"
-    console.print(f"results: [bold]{root / 'results'}[/bold]  (wall {rep.wall_s / 60:.1f} min, engine calls {rep.engine_calls})")
-    if write_reproduction if write_reproduction is not None else not quick:
-        from probecommit.report.publish import publish_insertion
+        done = paper.reproduce(names, root, quick=quick, progress=update, workers=workers)
+    for name, folder in done["targets"].items():
+        console.print(f"{escape(name)}: [bold]{escape(str(folder))}[/bold]  (wall {done['wall_s'][name] / 60:.1f} min)")
+    if publish if publish is not None else not quick:
+        from probecommit.report.publish import publish as publish_results
 
-        published = publish_insertion(root / "results", REPO_ROOT)
-        console.print(f"frozen results: [bold]{published}[/bold]; REPRODUCTION.md rewritten")
+        published = publish_results(done["targets"], REPO_ROOT, timing=done)
+        console.print(f"frozen results: [bold]{escape(str(published))}[/bold]; REPRODUCTION.md rewritten")
 
 
 def scan(

@@ -1,6 +1,6 @@
 """Check the numerical invariants of frozen result files (``probecommit verify``).
 
-A results tree holds one folder per study (``results/insertion/``, ...), each with a
+A results tree holds one folder per study (``results/paper/insertion/``, ...), each with a
 ``results.json`` (the numbers the tables print), Parquet tables and figures, and a
 ``MANIFEST.json`` with the sha256 of every file. The verifier reads files only and
 checks, without rerunning anything:
@@ -277,29 +277,47 @@ def check_reproduction(md: Path, numbers: dict[str, Any], report: Report) -> Non
         digits = len(text.split(".")[1])
         return abs(v - float(text)) <= 0.5 * 10**-digits + 1e-12
 
+    header: list[str] | None = None
     for line_no, line in enumerate(md.read_text().splitlines(), start=1):
+        if not line.strip().startswith("|"):
+            header = None
+            continue
         cells = [c.strip() for c in line.strip().strip("|").split("|")]
-        if len(cells) != 5 or cells[0] in ("quantity", "---") or set(cells[0]) <= {"-"}:
+        if header is None:
+            header = [c.lower() for c in cells]
             continue
-        texts = _NUMBER.findall(cells[2])
-        if len(texts) == 3:  # "point [lo, hi]": the three must come from one interval
-            hits = [k for k, v in triples.items() if all(close(float(x), t) for x, t in zip(v, texts))]
-            report.check(bool(hits), f"{md}:{line_no}: {cells[0]!r} prints {cells[2]}, no results.json interval matches")
-            if hits:
-                report.traces.append(f"{md.name}:{line_no} {cells[0]} {cells[2]} <- {hits[0]}")
+        if all(set(c) <= set("-: ") for c in cells):
             continue
-        for text in texts:
-            hits = [k for k, v in candidates if close(v, text)]
-            report.check(bool(hits), f"{md}:{line_no}: {cells[0]!r} prints {text}, found in no results.json")
-            if hits:
-                report.traces.append(f"{md.name}:{line_no} {cells[0]} {text} <- {hits[0]}")
+        # Which cells are ours: the "ours" column of a paper-vs-ours table; otherwise
+        # every cell of a row that is not the paper's own (its label says "paper").
+        ours_cols = [i for i, h in enumerate(header) if h.startswith("ours") and "paper" not in h]
+        if ours_cols:
+            checked_cells = [cells[i] for i in ours_cols if i < len(cells)]
+        elif "paper" in cells[0].lower():
+            continue
+        else:
+            checked_cells = cells[1:]
+        for cell in checked_cells:
+            texts = _NUMBER.findall(cell)
+            if len(texts) == 3 and "[" in cell:  # "point [lo, hi]": the three must come from one interval
+                hits = [k for k, v in triples.items() if all(close(float(x), t) for x, t in zip(v, texts))]
+                report.check(bool(hits), f"{md}:{line_no}: {cells[0]!r} prints {cell}, no results.json interval matches")
+                if hits:
+                    report.traces.append(f"{md.name}:{line_no} {cells[0]} {cell} <- {hits[0]}")
+                continue
+            for text in texts:
+                hits = [k for k, v in candidates if close(v, text)]
+                report.check(bool(hits), f"{md}:{line_no}: {cells[0]!r} prints {text}, found in no results.json")
+                if hits:
+                    report.traces.append(f"{md.name}:{line_no} {cells[0]} {text} <- {hits[0]}")
 
 
 def verify(results_root: str | Path, reproduction_md: str | Path | None = None) -> Report:
     """Verify every study folder under ``results_root`` (or one study folder).
 
     Args:
-        results_root: ``results/`` (one folder per study) or a single study folder.
+        results_root: ``results/`` (every folder below it holding a ``results.json`` or a
+            manifest is a study) or a single study folder.
         reproduction_md: REPRODUCTION.md to trace (default: beside ``results_root``'s parent
             when it exists).
 
@@ -310,8 +328,7 @@ def verify(results_root: str | Path, reproduction_md: str | Path | None = None) 
     if not root.is_dir():
         raise FileNotFoundError(f"no results folder at {root}")
     report = Report()
-    studies = [root] if (root / "results.json").is_file() or (root / MANIFEST).is_file() else sorted(
-        p for p in root.iterdir() if p.is_dir())
+    studies = sorted({p.parent for name in ("results.json", MANIFEST) for p in root.rglob(name)})
     if not studies:
         raise FileNotFoundError(f"{root} holds no study folder (results.json / {MANIFEST})")
     numbers: dict[str, Any] = {}
@@ -319,9 +336,9 @@ def verify(results_root: str | Path, reproduction_md: str | Path | None = None) 
         check_hashes(study, report)
         numbers.update({f"{study.name}:{k}": v for k, v in check_json(study, report).items()})
         numbers.update(check_parquet(study, report))
-    if reproduction_md is None:
-        guess = root.parent / "REPRODUCTION.md" if (root / "results.json").is_file() is False else root.parent.parent / "REPRODUCTION.md"
-        reproduction_md = guess if guess.is_file() else None
+    if reproduction_md is None:  # the nearest REPRODUCTION.md above the results folder
+        reproduction_md = next((p / "REPRODUCTION.md" for p in [root, *root.resolve().parents]
+                                if (p / "REPRODUCTION.md").is_file()), None)
     if reproduction_md is not None:
         check_reproduction(Path(reproduction_md), numbers, report)
     return report

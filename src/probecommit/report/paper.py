@@ -1,0 +1,215 @@
+"""One command for the paper: ``probecommit reproduce all`` and its targets.
+
+Each target runs its studies from the frozen configs in ``configs/paper/`` into
+``<root>/<target>/`` (run directories resume, so a killed reproduction picks up where
+it stopped) and writes its results folder: ``results.json`` (every number the tables
+print), each table as Markdown and LaTeX, each figure as PNG and PDF. ``publish``
+copies the results into the repository's ``results/paper/<target>/`` with a
+``MANIFEST.json`` of hashes (what ``probecommit verify`` checks) and rewrites
+``REPRODUCTION.md`` and ``results/paper/report.html``.
+"""
+
+from __future__ import annotations
+
+import json
+import shutil
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Callable
+
+Progress = Callable[[str, int, int], None]
+
+
+def _noop(step: str, done: int, total: int) -> None:
+    return None
+
+
+@dataclass(frozen=True)
+class Target:
+    """A reproduction target: what it makes and how.
+
+    Attributes:
+        name: CLI name (``probecommit reproduce NAME``).
+        makes: The paper's tables and figures it regenerates.
+        needs: Targets whose run directories it reads (run first).
+        run: ``run(root, quick, progress, workers) -> results folder``.
+    """
+
+    name: str
+    makes: tuple[str, ...]
+    needs: tuple[str, ...]
+    run: Callable[[Path, bool, Progress, int], Path]
+
+
+# ----------------------------------------------------------------------------- tables
+
+
+def markdown_to_latex(markdown: str) -> str:
+    """A Markdown pipe table as a LaTeX ``tabular`` (booktabs), for pasting into a paper."""
+    rows = [line.strip().strip("|").split("|") for line in markdown.strip().splitlines() if line.strip().startswith("|")]
+    rows = [[cell.strip() for cell in row] for row in rows if not all(set(c.strip()) <= set("-: ") for c in row)]
+    if not rows:
+        return ""
+
+    def esc(cell: str) -> str:
+        for a, b in (("\\", r"\textbackslash{}"), ("&", r"\&"), ("%", r"\%"), ("_", r"\_"), ("#", r"\#"),
+                     ("$", r"\$"), ("~", r"\textasciitilde{}"), ("^", r"\textasciicircum{}")):
+            cell = cell.replace(a, b)
+        return cell.replace("`", "")
+
+    head, body = rows[0], rows[1:]
+    lines = [r"\begin{tabular}{@{}l" + "c" * (len(head) - 1) + "@{}}", r"\toprule", " & ".join(map(esc, head)) + r" \\",
+             r"\midrule"]
+    lines += [" & ".join(map(esc, row)) + r" \\" for row in body]
+    lines += [r"\bottomrule", r"\end{tabular}"]
+    return "\n".join(lines) + "\n"
+
+
+def write_table(folder: Path, key: str, markdown: str) -> None:
+    """``<key>.md`` and ``<key>.tex`` from a Markdown table."""
+    (folder / f"{key}.md").write_text(markdown if markdown.endswith("\n") else markdown + "\n")
+    (folder / f"{key}.tex").write_text(markdown_to_latex(markdown))
+
+
+# ----------------------------------------------------------------------------- targets
+
+
+def _insertion(root: Path, quick: bool, progress: Progress, workers: int) -> Path:
+    from probecommit.report.reproduce import reproduce_insertion
+
+    folder = root / "insertion"
+    rep = reproduce_insertion(folder, quick=quick, progress=progress, workers=workers)
+    results = folder / "results"
+    for name in list(rep.tables):
+        md = results / f"{name}.md"
+        if md.is_file():
+            (results / f"{name}.tex").write_text(markdown_to_latex(md.read_text()))
+    return results
+
+
+def _breadth(root: Path, quick: bool, progress: Progress, workers: int) -> Path:
+    from probecommit.studies.breadth import BREADTH_FAMILIES, breadth_markdown, budget_curves, plot_budget_curves, run_breadth
+
+    folder = root / "breadth"
+    results = folder / "results"
+    results.mkdir(parents=True, exist_ok=True)
+    progress("breadth: families", 0, len(BREADTH_FAMILIES))
+    table = run_breadth(BREADTH_FAMILIES, folder / "runs", quick=quick, workers=workers)
+    runs = {f: next((folder / "runs").glob(f"{f}*")) for f in BREADTH_FAMILIES}
+    curves = budget_curves(runs)
+    progress("breadth: families", len(BREADTH_FAMILIES), len(BREADTH_FAMILIES))
+    table.to_parquet(results / "table_5.parquet")
+    curves.to_parquet(results / "budget_curves.parquet")
+    write_table(results, "table_5", breadth_markdown(table))
+    plot_budget_curves(curves, results / "fig_breadth_budget.png")
+    payload = {"results": {"table_5": json.loads(table.to_json(orient="records")),
+                           "curves": json.loads(curves.to_json(orient="records"))}}
+    (results / "results.json").write_text(json.dumps(payload, indent=1))
+    return results
+
+
+def _beyond(root: Path, quick: bool, progress: Progress, workers: int) -> Path:
+    from probecommit.studies.beyond import reproduce_beyond
+
+    results = root / "beyond" / "results"
+    push1d = next((root / "breadth" / "runs").glob("push1d*"), None)
+    reproduce_beyond(root / "insertion" / "runs", results, push1d_run=push1d, workers=workers,
+                     progress=lambda step, d, t: progress(f"beyond: {step}", d, t))
+    return results
+
+
+TARGETS: dict[str, Target] = {
+    "insertion": Target("insertion", ("Table III (audit)", "Table IV (failure by split)", "Table VI (faults)",
+                                      "Table VII (Test C)", "Fig. 4", "Fig. 5", "Fig. 6", "scan and cover search",
+                                      "re-splits, robust filters"), (), _insertion),
+    "breadth": Target("breadth", ("Table V (1-D push, 2-D push MuJoCo, darts)", "miss-vs-budget figure"), (), _breadth),
+    "beyond": Target("beyond", ("hull set at t = 1", "resample-move belief", "adaptive probes"),
+                     ("insertion", "breadth"), _beyond),
+}
+
+#: Paper item -> target that makes it (table numbers as the project's issues number them:
+#: II setup, III audit, IV failure by split, V every family, VI faults, VII Test C,
+#: VIII engines, IX physical arm).
+ALIASES = {
+    "table-3": "insertion", "table-4": "insertion", "table-6": "insertion", "table-7": "insertion",
+    "fig-4": "insertion", "fig-5": "insertion", "fig-6": "insertion", "table-5": "breadth",
+}
+
+
+def resolve(names: list[str]) -> list[str]:
+    """Targets to run, dependencies first; ``all`` is every target.
+
+    Raises:
+        ValueError: an unknown name (lists the targets and aliases).
+    """
+    wanted: list[str] = []
+    for name in names:
+        if name == "all":
+            wanted += list(TARGETS)
+        elif name in TARGETS:
+            wanted.append(name)
+        elif name in ALIASES:
+            wanted.append(ALIASES[name])
+        else:
+            raise ValueError(f"unknown reproduce target {name!r}; targets: {', '.join(TARGETS)}, all; "
+                             f"paper items: {', '.join(sorted(ALIASES))}")
+    order: list[str] = []
+
+    def add(name: str) -> None:
+        for need in TARGETS[name].needs:
+            add(need)
+        if name not in order:
+            order.append(name)
+
+    for name in wanted:
+        add(name)
+    return order
+
+
+def listing() -> list[tuple[str, str, str]]:
+    """``(target, what it makes, needs)`` rows for ``reproduce --list``."""
+    rows = [(t.name, ", ".join(t.makes), ", ".join(t.needs) or "-") for t in TARGETS.values()]
+    rows += [(alias, f"= {target}", "-") for alias, target in sorted(ALIASES.items())]
+    return rows
+
+
+def reproduce(names: list[str], root: str | Path, quick: bool = False, progress: Progress = _noop,
+              workers: int = 1) -> dict[str, Any]:
+    """Run the named targets (dependencies first) into ``root``.
+
+    Returns:
+        ``{"targets": {name: results folder}, "wall_s": {name: seconds}}``.
+    """
+    root = Path(root)
+    out: dict[str, Any] = {"targets": {}, "wall_s": {}}
+    for name in resolve(names):
+        start = time.perf_counter()
+        out["targets"][name] = str(TARGETS[name].run(root, quick, progress, workers))
+        out["wall_s"][name] = time.perf_counter() - start
+    root.mkdir(parents=True, exist_ok=True)
+    (root / "reproduction.json").write_text(json.dumps(out, indent=1))
+    return out
+
+
+# ----------------------------------------------------------------------------- publish
+
+#: Files small enough to version.
+PUBLISHED_SUFFIXES = (".md", ".tex", ".json", ".png", ".pdf", ".parquet")
+#: Per-episode tables that stay in the run root.
+UNPUBLISHED = ("faults_episodes.parquet",)
+
+
+def publish(results: dict[str, str | Path], repo_root: str | Path) -> Path:
+    """Copy each target's results into ``results/paper/<target>/`` with a hash manifest."""
+    from probecommit.report.verify import write_manifest
+
+    target_root = Path(repo_root) / "results" / "paper"
+    for name, folder in results.items():
+        dest = target_root / name
+        dest.mkdir(parents=True, exist_ok=True)
+        for path in sorted(Path(folder).iterdir()):
+            if path.is_file() and path.suffix in PUBLISHED_SUFFIXES and path.name not in UNPUBLISHED:
+                shutil.copy2(path, dest / path.name)
+        write_manifest(dest)
+    return target_root
