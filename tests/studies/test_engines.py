@@ -109,6 +109,18 @@ def test_capture_scan_asymmetric_and_failed_centre():
     assert abs(first["left"] - 1.0) < 1e-3 and abs(first["right"] - 2.0) < 1e-3
     assert abs(result.truths["window"].iloc[0] - 1.5) < 1e-3
     assert result.truths["window"].iloc[1] == 0.0
+    assert not result.sides["enters_beyond"].any()
+
+
+def test_capture_scan_flags_a_non_contiguous_window():
+    class Snag(Bare):
+        def peg_depth(self, x_hole, c, a):
+            d = abs(a - x_hole)
+            return 15.0 if d < 0.6 or 1.0 < d < 1.5 else 0.0
+
+    result = scan_capture_window(Snag(0.0, 1.0), [(0.0, 1.0)], tolerance=1e-4)
+    assert np.allclose(result.sides["half_width"], 0.6, atol=1e-3)
+    assert result.sides["enters_beyond"].all() and result.summary()["sides_entering_beyond"] == 2
 
 
 def test_table_variants_and_layout():

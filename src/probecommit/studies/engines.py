@@ -201,31 +201,36 @@ class _Queryable:
 class CaptureResult:
     """Capture-window scans: per side and per truth, and the ratio to ``w(c)``."""
 
-    sides: pd.DataFrame  # instance_id, x_hole, c, side, half_width
+    sides: pd.DataFrame  # instance_id, x_hole, c, side, half_width, enters_beyond
     truths: pd.DataFrame  # instance_id, x_hole, c, w, window (mean of the sides), ratio
 
     def summary(self) -> dict[str, float]:
         """Mean, SD (ddof 1), min and max of the per-truth ratio window / w(c)."""
         r = self.truths["ratio"]
         return {"ratio_mean": float(r.mean()), "ratio_sd": float(r.std(ddof=1)) if len(r) > 1 else 0.0,
-                "ratio_min": float(r.min()), "ratio_max": float(r.max()), "truths": int(len(r))}
+                "ratio_min": float(r.min()), "ratio_max": float(r.max()), "truths": int(len(r)),
+                "sides_entering_beyond": int(self.sides["enters_beyond"].sum())}
 
 
 def scan_capture_window(simulator: Any, truths: pd.DataFrame | Iterable[tuple[float, float]], step: float = 0.25,
-                        half_range: float = 7.0, tolerance: float = 1e-3) -> CaptureResult:
+                        half_range: float = 7.0, tolerance: float = 1e-3, check_beyond: bool = True) -> CaptureResult:
     """The engine's capture half-width: the largest ``|a - x_hole|`` at which the peg enters.
 
     Entry is the paper's outcome rule: the peg reaches at least 60% of the pocket depth.
     Per truth and side, aims step outward from the hole centre by ``step`` until the
     first that fails, then the last entering / first failing pair is bisected to
-    ``tolerance``. A peg that fails even centred has window 0 on both sides. The
-    per-truth window is the mean of its two sides, and its ratio is to ``w(c) = 0.6 c + 1.1``.
+    ``tolerance``: the window is the contiguous entering interval around the hole. A peg
+    that fails even centred has window 0 on both sides. With ``check_beyond`` the rest of
+    the grid out to ``half_range`` is tried too and ``enters_beyond`` flags a side where
+    some farther aim enters again (a snag, not a wider window). The per-truth window is
+    the mean of its two sides, and its ratio is to ``w(c) = 0.6 c + 1.1``.
 
     Args:
         simulator: Any insertion simulator (``query`` or ``peg_depth``).
         truths: Columns ``true_x_hole, true_c`` (and ``instance_id``), or (x_hole, c) pairs.
         step, half_range, tolerance: Outward step, largest offset tried and bisection
             tolerance (mm).
+        check_beyond: Also try every grid aim past the first failure.
 
     Returns:
         A :class:`CaptureResult`.
@@ -240,20 +245,27 @@ def scan_capture_window(simulator: Any, truths: pd.DataFrame | Iterable[tuple[fl
 
         widths = []
         for side, sgn in (("left", -1.0), ("right", 1.0)):
+            beyond = False
             if not enters(x):
-                width = 0.0
+                width, outer = 0.0, 0.0
             else:
                 inner, outer = 0.0, step
                 while enters(x + sgn * outer):
                     inner, outer = outer, outer + step
                     if outer > half_range + 1e-9:
                         raise RuntimeError(f"capture of x_hole={x:.3f}, c={c:.3f}: peg enters out to +-{half_range} mm")
+                first_fail = outer
                 while outer - inner > tolerance:
                     mid = 0.5 * (inner + outer)
                     inner, outer = (mid, outer) if enters(x + sgn * mid) else (inner, mid)
-                width = 0.5 * (inner + outer)
+                width, outer = 0.5 * (inner + outer), first_fail
+            if check_beyond:
+                # Does any grid aim past the first failure enter again (a non-contiguous window)?
+                grid = np.arange(outer + step, half_range + 1e-9, step)
+                beyond = any(enters(x + sgn * o) for o in grid)
             widths.append(width)
-            side_rows.append({"instance_id": inst.instance_id, "x_hole": x, "c": c, "side": side, "half_width": width})
+            side_rows.append({"instance_id": inst.instance_id, "x_hole": x, "c": c, "side": side, "half_width": width,
+                              "enters_beyond": beyond})
         w = float(capture_half_width(c))
         window = float(np.mean(widths))
         truth_rows.append({"instance_id": inst.instance_id, "x_hole": x, "c": c, "w": w, "window": window,

@@ -31,6 +31,7 @@ from typing import Any
 
 import numpy as np
 
+from probecommit.engines.pybullet import COLLISION_MARGIN_M  # plain constants: no pybullet import
 from probecommit.tasks.insertion.model import TIP_RADIUS_MM
 from probecommit.tasks.insertion.sim_base import InsertionSimulator
 from probecommit.tasks.insertion.sim_mujoco import (
@@ -100,18 +101,22 @@ class PybulletInsertionSimulator(InsertionSimulator):
     """Insertion ground truth in PyBullet (see the module docstring for the scene).
 
     Args:
-        physics: Overrides of the engine parameters (``engines.pybullet.MM_PHYSICS``);
-            only for measuring what the settings do, never in a study.
+        physics: Replaces the engine parameters (``engines.pybullet.MM_PHYSICS``; ``{}``
+            is PyBullet's defaults); only for measuring what the settings do.
+        collision_margin: Collision margin (m) on every body; None keeps PyBullet's
+            default (only for measurements).
         **kwargs: ``noise_sigma``, ``aim_offset``, passed to the base class.
     """
 
     engine = "pybullet"
 
-    def __init__(self, physics: dict[str, Any] | None = None, **kwargs: Any) -> None:
+    def __init__(self, physics: dict[str, Any] | None = None, collision_margin: float | None = COLLISION_MARGIN_M,
+                 **kwargs: Any) -> None:
         super().__init__(**kwargs)
         from probecommit.engines import pybullet as pbe  # lazy: importing this module needs no pybullet
 
         self._pbe = pbe
+        self._margin = collision_margin
         self._p = pbe.import_pybullet()
         self._cid: int | None = None
         self._cid = pbe.new_client(TIMESTEP_S, physics)
@@ -145,7 +150,7 @@ class PybulletInsertionSimulator(InsertionSimulator):
             extra = {"lateralFriction": friction}
             if m is not None:
                 extra["localInertiaDiagonal"] = [CARRIAGE_INERTIA] * 3 if link == 0 else self._inertia(shape, m)
-            self._pbe.mm_dynamics(body, link, cid, **extra)
+            self._pbe.mm_dynamics(body, link, cid, margin=self._margin, **extra)
         # Free the joints of PyBullet's default velocity motors; drives are set per query.
         p.setJointMotorControlArray(body, [0, 1], p.VELOCITY_CONTROL, forces=[0.0, 0.0], physicsClientId=cid)
         return {"body": body, "base_z": base_z}
@@ -173,7 +178,7 @@ class PybulletInsertionSimulator(InsertionSimulator):
             body = p.createMultiBody(baseMass=0.0, baseCollisionShapeIndex=col, baseVisualShapeIndex=-1,
                                      basePosition=[0, 0, 0], physicsClientId=cid)
             # Friction is a product in Bullet: plate 1.0 x peg 0.3 = 0.3, plate x tip 0 = 0.
-            self._pbe.mm_dynamics(body, -1, cid, lateralFriction=1.0)
+            self._pbe.mm_dynamics(body, -1, cid, margin=self._margin, lateralFriction=1.0)
             self._plates[key] = body
             if len(self._plates) > MODEL_CACHE_SIZE:
                 _, old = self._plates.popitem(last=False)
