@@ -25,3 +25,29 @@ def require(module: str) -> ModuleType:
         raise EngineUnavailableError(
             f"{module} is not installed; install it with: pip install 'probecommit[{extra}]'"
         ) from exc
+
+
+def silenced_fds():
+    """Context manager: fds 1 and 2 (C-level prints too) and Python warnings go to /dev/null.
+
+    Engine imports print banners (PyBullet's build time, SAPIEN's libvulkan warning) from
+    C code, which ``contextlib.redirect_stdout`` cannot catch.
+    """
+    import contextlib, os, sys, warnings  # noqa: E401  (kept local: one self-contained hunk)
+
+    @contextlib.contextmanager
+    def _silenced():
+        sys.stdout.flush(), sys.stderr.flush()
+        saved, null = [os.dup(1), os.dup(2)], os.open(os.devnull, os.O_WRONLY)
+        try:
+            os.dup2(null, 1), os.dup2(null, 2)
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                yield
+        finally:
+            sys.stdout.flush(), sys.stderr.flush()
+            os.dup2(saved[0], 1), os.dup2(saved[1], 2)
+            for fd in (*saved, null):
+                os.close(fd)
+
+    return _silenced()
