@@ -14,7 +14,7 @@ from probecommit.tasks.registry import UnknownTaskError, families, get, simulato
 def test_unknown_family_and_missing_engine_list_what_exists():
     with pytest.raises(UnknownTaskError, match=r"unknown task family 'juggling'; registered: .*insertion"):
         get("juggling")
-    with pytest.raises(UnknownTaskError, match=r"has no 'gazebo' simulator; it has: analytic, mujoco"):
+    with pytest.raises(UnknownTaskError, match=r"has no 'gazebo' simulator; it has: analytic, mujoco, pybullet, sapien"):
         simulator_class("insertion", "gazebo")
 
 

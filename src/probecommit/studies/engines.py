@@ -321,3 +321,81 @@ def engines_table(audits: Mapping[tuple[str, str], pd.DataFrame], k: int = 8,
         data.append([float(rows[col].iloc[0]) for _, col in TABLE_ROWS])
     return pd.DataFrame(np.array(data).T, index=[label for label, _ in TABLE_ROWS],
                         columns=pd.MultiIndex.from_tuples(cols, names=["engine", "variant"]))
+
+
+# ----------------------------------------------------------------------------- the study
+
+
+def run_engine_study(protocol: Any, root: str | Path, engines: Iterable[str] = ("pybullet", "sapien"), *,
+                     workers: int = 1, progress: Any = None) -> dict[str, Any]:
+    """Table VIII and the scene properties of the insertion scene in each engine.
+
+    Per engine: the tap-boundary scan and the capture-window scan on the development
+    truths; one random-probe run of the Split B test instances (k = 1..8) with the
+    deployed model; replays of the same taps with the MuJoCo-fitted offset (not
+    refitted) and with the engine's own scanned offset; the audit of each (k = 8),
+    the paired failure differences against the deployed model, and escape against k.
+
+    Args:
+        protocol: The insertion protocol (``studies.protocol.Protocol``).
+        root: Folder for run directories (``<root>/<engine>_B_test_random``, ...).
+        engines: Engines to study.
+        workers: Local worker processes for the runs.
+        progress: ``progress(step, done, total)``.
+
+    Returns:
+        ``{"table": DataFrame, "paired": [...], "escape": DataFrame, "scans": {engine: {...}}}``.
+    """
+    from pathlib import Path as _Path
+
+    from probecommit.audit.metrics import audit_table
+    from probecommit.audit.stats import paired_bootstrap
+    from probecommit.runner.build import build_model
+    from probecommit.runner.config import config_data, parse_config
+    from probecommit.runner.instances import draw_instances
+    from probecommit.runner.replay import load_run, replay_run
+    from probecommit.runner.study import run_study
+    from probecommit.store.rundir import RunDir
+
+    root = _Path(root)
+    step = progress or (lambda *a: None)
+    boot = dict(resamples=protocol.bootstrap.resamples, seed=protocol.bootstrap.seed)
+    dev_config = protocol.run_config("development", "development", "development", "random")
+    dev = draw_instances(dev_config, build_model(dev_config))
+    audits: dict[tuple[str, str], pd.DataFrame] = {}
+    paired_rows, escape_rows, scans = [], [], {}
+    for engine in engines:
+        sim = make_simulator(engine, noise_sigma=protocol.noise_sigma)
+        step(f"{engine}: boundary scan", 0, 1)
+        boundary = scan_boundary(sim, dev, protocol.scan["step"], protocol.scan["half_range"], protocol.scan["tolerance"])
+        step(f"{engine}: capture-window scan", 0, 1)
+        capture = scan_capture_window(sim, dev)
+        own = boundary.summary()["delta"]
+        scans[engine] = {"boundary": boundary.summary(), "capture": capture.summary(),
+                         "engine_calls": dict(sim.engine_calls)}
+        base_cfg = protocol.run_config(f"{engine}_B_test_random", "B", "B_test", "random")
+        data = config_data(base_cfg)
+        data["simulator"] = {**data["simulator"], "engine": engine}
+        base = run_study(parse_config(data), root / f"{engine}_B_test_random", workers=workers,
+                         progress=lambda d, t: step(f"{engine}: run", d, t))
+        runs = {"deployed": load_run(base.run_dir)}
+        for variant, delta in (("mj_offset", PAPER_DELTA_MM), ("own_scan", own)):
+            path = root / f"{engine}_B_test_random_{variant}"
+            if not RunDir(path).is_complete():
+                replay_run(base.run_dir, path, {"model": {"boundary": "corrected", "delta": float(delta)}})
+            runs[variant] = load_run(path)
+        for variant, loaded in runs.items():
+            episodes = loaded.episodes
+            audits[(engine, variant)] = audit_table(episodes[episodes["method"] == "probe_robust"], **boot)
+            per_k = episodes[(episodes["method"] == "probe_robust") & (episodes["status"] == "ok")].groupby("k")["escaped"].mean()
+            escape_rows += [{"engine": engine, "variant": variant, "k": int(k), "escape": float(v)} for k, v in per_k.items()]
+        deployed = runs["deployed"].episodes
+        for variant in ("mj_offset", "own_scan"):
+            treat = runs[variant].episodes
+            b = deployed[(deployed["method"] == "probe_robust") & (deployed["k"] == 8)]
+            t = treat[(treat["method"] == "probe_robust") & (treat["k"] == 8)]
+            diff = paired_bootstrap(b, t, "realized", **boot).difference
+            paired_rows.append({"engine": engine, "variant": variant,
+                                "failure_difference": [diff.estimate, diff.lo, diff.hi]})
+    table = engines_table(audits, k=8)
+    return {"table": table, "paired": paired_rows, "escape": pd.DataFrame(escape_rows), "scans": scans}

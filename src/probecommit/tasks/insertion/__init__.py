@@ -37,6 +37,8 @@ SPEC = register(
         simulators={
             "analytic": "probecommit.tasks.insertion.sim_base:AnalyticInsertionSimulator",
             "mujoco": "probecommit.tasks.insertion.sim_mujoco:MujocoInsertionSimulator",
+            "pybullet": "probecommit.tasks.insertion.sim_pybullet:PybulletInsertionSimulator",
+            "sapien": "probecommit.tasks.insertion.sim_sapien:SapienInsertionSimulator",
         },
         summary={
             "latents": "x_hole, c",
