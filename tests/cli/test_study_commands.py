@@ -28,7 +28,7 @@ def test_scan_fits_a_planted_analytic_boundary(tmp_path):
 def test_scan_rejects_an_unknown_engine(tmp_path):
     result = runner.invoke(app, ["scan", "--engine", "gazebo", "--out", str(tmp_path)])
     assert result.exit_code == 2
-    assert "--engine must be mujoco or analytic" in result.output and "Traceback" not in result.output
+    assert "--engine must be one of analytic, mujoco, pybullet, sapien" in " ".join(result.output.split()) and "Traceback" not in result.output
 
 
 def test_reproduce_rejects_an_unknown_target():
@@ -50,3 +50,19 @@ def test_faults_on_a_base_run_skips_the_faults_needing_other_rollouts(tmp_path, 
 def test_faults_on_a_missing_run_is_one_line(tmp_path):
     result = runner.invoke(app, ["faults", str(tmp_path / "nope")])
     assert result.exit_code == 2 and "Traceback" not in result.output
+
+
+def test_engines_check_agrees_on_every_installed_engine():
+    result = runner.invoke(app, ["engines", "check", "--engines", "mujoco,analytic"])
+    assert result.exit_code == 0, result.output
+    assert "tap over the plate" in result.output and "NO (" not in result.output
+
+
+def test_scan_any_engine_with_capture(tmp_path):
+    result = runner.invoke(app, ["scan", "--engine", "analytic", "--boundary-offset", "0.5", "--capture",
+                                 "--step", "0.5", "-o", str(tmp_path)])
+    assert result.exit_code == 0, result.output
+    assert "delta = +0.50" in result.output and "capture window / w(c) = 1.0" in result.output
+    assert (tmp_path / "capture.parquet").is_file()
+    bad = runner.invoke(app, ["scan", "--engine", "gazebo"])
+    assert bad.exit_code == 2 and "mujoco, pybullet, sapien" in bad.output

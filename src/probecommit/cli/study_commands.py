@@ -71,19 +71,23 @@ def reproduce(
 
 
 def scan(
-    engine: str = typer.Option("mujoco", help="Engine to scan: mujoco or analytic."),
+    engine: str = typer.Option("mujoco", help="Engine to scan: mujoco, pybullet, sapien or analytic."),
     protocol: Path = typer.Option(REPO_ROOT / "configs" / "paper" / "insertion.yaml", help="Frozen protocol config."),
     step: Optional[float] = typer.Option(None, min=0.001, help="Grid step (mm); default from the protocol (0.25)."),
     boundary_offset: float = typer.Option(PAPER_DELTA_MM, help="Analytic engine only: its planted boundary offset (mm)."),
+    capture: bool = typer.Option(False, "--capture", help="Also scan the capture window (peg entry against lateral offset)."),
     out: Path = typer.Option(Path("runs/scan"), "--out", "-o", help="Output folder for scan.parquet and the figure."),
 ) -> None:
-    """Scan the tap reading against lateral offset on the development truths and fit delta."""
+    """Scan the tap reading against lateral offset on the development truths and fit delta (any engine)."""
     from probecommit.report.study_figures import scan_figure
     from probecommit.studies.protocol import load_protocol
     from probecommit.studies.scan import scan_development
 
-    if engine not in ("mujoco", "analytic"):
-        raise ValueError(f"scan --engine must be mujoco or analytic, got {engine!r}")
+    from probecommit.tasks.registry import get
+
+    engines = get("insertion").engines
+    if engine not in engines:
+        raise ValueError(f"scan --engine must be one of {', '.join(engines)}, got {engine!r}")
     p = load_protocol(protocol)
     from probecommit.tasks.insertion import make_simulator
 
@@ -102,6 +106,41 @@ def scan(
                   f"max {summary['max']:+.4f}) over {summary['scans']} scans; boundary moves "
                   f"{summary['shift_vs_deployed_mm']:.3f} mm from the deployed hg - r; engine calls {sim.engine_calls}")
     console.print(f"scans: [bold]{out / 'scan.parquet'}[/bold]; figure: [bold]{fig}[/bold]")
+    if capture:
+        from probecommit.runner.build import build_model
+        from probecommit.runner.instances import draw_instances
+        from probecommit.studies.engines import scan_capture_window
+
+        cfg = p.run_config("development", "development", "development", "random")
+        window = scan_capture_window(sim, draw_instances(cfg, build_model(cfg)))
+        window.truths.to_parquet(out / "capture.parquet")
+        c = window.summary()
+        console.print(f"{engine}: capture window / w(c) = {c['ratio_mean']:.3f} (SD {c['ratio_sd']:.3f} over the "
+                      f"development truths); per truth: [bold]{out / 'capture.parquet'}[/bold]")
+
+
+def engines_check(
+    engines: str = typer.Option("mujoco,pybullet,sapien", help="Comma-separated engines to compare."),
+    tolerance: float = typer.Option(0.5, min=0.0, help="Largest |value - expected| that agrees (mm)."),
+) -> None:
+    """The same hand queries on every engine (taps over the plate, the slot centre, the chamfer;
+    pegs centred, 1 mm and 3 mm off), and where they agree with the scene's design."""
+    from rich.markup import escape
+    from rich.table import Table
+
+    from probecommit.studies.engines import check_engines
+
+    names = [e.strip() for e in engines.split(",") if e.strip()]
+    table = check_engines(names, tolerance=tolerance)
+    out = Table(title=f"engine check (agree = every engine within {tolerance:g} mm of the design)", title_style="bold")
+    for col in ["query", "expected", *names, "agree"]:
+        out.add_column(col, justify="right" if col not in ("query",) else "left")
+    for _, row in table.iterrows():
+        out.add_row(escape(str(row["query"])), f"{row['expected']:+.3f}", *[f"{row[n]:+.3f}" for n in names],
+                    "yes" if row["agree"] else f"NO ({escape(row['disagreeing'])})")
+    console.print(out)
+    if not table["agree"].all():
+        raise typer.Exit(1)
 
 
 def faults(
@@ -169,3 +208,6 @@ def register(app: typer.Typer) -> None:
     app.command("scan")(user_errors(scan))
     app.command("faults")(user_errors(faults))
     app.command("verify")(user_errors(verify))
+    engines_app = typer.Typer(help="Cross-engine checks of the insertion scene (MuJoCo, PyBullet, SAPIEN).", no_args_is_help=True)
+    engines_app.command("check")(user_errors(engines_check))
+    app.add_typer(engines_app, name="engines")
