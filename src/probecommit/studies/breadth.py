@@ -26,7 +26,7 @@ import pandas as pd
 from probecommit.audit.stats import DEFAULT_RESAMPLES, cluster_bootstrap_mean, paired_bootstrap
 
 #: Families this study covers, in table order.
-BREADTH_FAMILIES = ("push1d", "push2d", "darts")
+BREADTH_FAMILIES = ("push1d", "push2d", "push2d_pybullet", "darts")
 #: Frozen paper configs.
 #: The frozen paper configs shipped with the package (``configs/paper`` in the repository).
 PAPER_CONFIG_DIR = Path(__file__).resolve().parents[1] / "configs" / "paper"
@@ -35,6 +35,7 @@ PAPER_CONFIG_DIR = Path(__file__).resolve().parents[1] / "configs" / "paper"
 PAPER_TABLE_V: dict[str, dict[str, Any]] = {
     "push1d": {"blind_bayes": 0.491, "blind_robust": None, "probe_robust": 0.062, "paired": None},
     "push2d": {"blind_bayes": 0.252, "blind_robust": 0.307, "probe_robust": 0.221, "paired": (0.031, 0.007, 0.054)},
+    "push2d_pybullet": {"blind_bayes": 0.243, "blind_robust": None, "probe_robust": 0.141, "paired": None},
     "darts": {"blind_bayes": 0.026, "blind_robust": 0.035, "probe_robust": 0.010, "paired": (0.016, 0.009, 0.024)},
 }
 #: Quick mode (CI): instances kept per family and particles.

@@ -21,7 +21,7 @@ class Push2DModelConfig(ModelConfigBase):
 
 
 class Push2DSimulatorConfig(SimulatorConfigBase):
-    engine: Literal["mujoco"] = "mujoco"
+    engine: Literal["mujoco", "pybullet"] = "mujoco"
     noise_sigma: float = Field(0.05, ge=0, le=10)
 
 
