@@ -51,8 +51,8 @@ def test_killed_at_every_write_resumes_to_identical_tables(tmp_path, make_config
     monkeypatch.setattr(rundir, "atomic_write_bytes", counting)
     reference = run_study(cfg, tmp_path / "ref").run_dir
     monkeypatch.setattr(rundir, "atomic_write_bytes", real_write)
-    # VERSION, config, 2 units x 5 shard files, 4 tables, manifest.
-    assert len(writes) == 2 + 2 * 5 + 4 + 1 and writes[-1] == "manifest.json"
+    # VERSION, CODE, config, 2 units x 5 shard files, 4 tables, manifest.
+    assert len(writes) == 3 + 2 * 5 + 4 + 1 and writes[-1] == "manifest.json"
 
     for n in range(len(writes)):
         calls = {"n": 0}

@@ -41,6 +41,8 @@ from probecommit.store.schema import EPISODE_COLUMNS, INSTANCE_COLUMNS, PROBE_CO
 MANIFEST = "manifest.json"
 CONFIG = "config.yaml"
 VERSION = "VERSION"
+#: Hash of the package source that started an unfinished run (a resume must match it).
+CODE = "CODE"
 LOCK = "LOCK"
 TABLES = ("instances", "probes", "episodes", "engine_cache")
 #: Shard files of one unit, in the order they are written (episodes last marks it done).
@@ -126,6 +128,37 @@ def git_commit() -> str | None:
         return None
 
 
+_CODE_IDENTITY: str | None = None
+
+
+def code_identity() -> str:
+    """sha256 of the package's Python source (every ``.py`` under ``probecommit/``, path and bytes).
+
+    Two builds with the same ``__version__`` but different code differ here, so an
+    unfinished run is never resumed by other code than the one that started it.
+    """
+    global _CODE_IDENTITY
+    if _CODE_IDENTITY is None:
+        root = Path(__file__).resolve().parents[1]
+        digest = hashlib.sha256()
+        for path in sorted(root.rglob("*.py")):
+            digest.update(str(path.relative_to(root)).encode())
+            digest.update(path.read_bytes())
+        _CODE_IDENTITY = digest.hexdigest()
+    return _CODE_IDENTITY
+
+
+def git_dirty() -> bool | None:
+    """Whether the package checkout has uncommitted changes (None outside a git checkout)."""
+    here = Path(__file__).resolve().parent
+    try:
+        out = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"], cwd=here, capture_output=True,
+                             text=True, timeout=5)
+        return bool(out.stdout.strip()) if out.returncode == 0 else None
+    except Exception:  # noqa: BLE001 - no git is fine
+        return None
+
+
 def engine_versions() -> dict[str, str | None]:
     from importlib import metadata
 
@@ -170,6 +203,15 @@ class RunDir:
                 f"{self.path} was started by probecommit {meta.read_text().strip()}, this is {__version__}; "
                 f"refusing to mix results from two versions ({hint})"
             )
+        code = self.shards / CODE
+        if not self.is_complete() and (self.path / CONFIG).is_file() and self.shards.is_dir():
+            started = code.read_text().strip() if code.is_file() else "unrecorded"
+            if started != code_identity():
+                raise RunDirError(
+                    f"{self.path} is an unfinished run started by other code (package source {started[:12]}, this is "
+                    f"{code_identity()[:12]}, same version {__version__}); resuming would mix results from two builds. "
+                    f"Start fresh: delete {self.path} (or choose another --out) and rerun the same command"
+                )
         if self.is_complete():
             try:
                 written_by = json.loads((self.path / MANIFEST).read_text()).get("probecommit_version")
@@ -192,7 +234,7 @@ class RunDir:
         entries = [e for e in self.path.iterdir() if not _is_tmp(e)]
         if [e.name for e in entries] != ["shards"] or not self.shards.is_dir():
             return False
-        return all(e.name in (VERSION, LOCK) or _is_tmp(e) for e in self.shards.iterdir())
+        return all(e.name in (VERSION, CODE, LOCK) or _is_tmp(e) for e in self.shards.iterdir())
 
     def check_writable(self, config_yaml: str) -> None:
         """Read-only checks that this run may be started or resumed here; creates nothing.
@@ -226,6 +268,7 @@ class RunDir:
             # VERSION first: a directory with a config but without VERSION was killed in
             # between and has no unit yet, so writing VERSION now mixes nothing.
             atomic_write_bytes(self.shards / VERSION, __version__.encode())
+            atomic_write_bytes(self.shards / CODE, code_identity().encode())
         if not cfg_path.is_file():
             atomic_write_bytes(cfg_path, config_yaml.encode())
 
@@ -311,6 +354,8 @@ class RunDir:
         manifest = {
             "probecommit_version": __version__,
             "git_commit": git_commit(),
+            "git_dirty": git_dirty(),
+            "code_sha256": code_identity(),
             "engine_versions": engine_versions(),
             "sha256": digests,
             **manifest_extra,
