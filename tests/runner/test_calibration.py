@@ -150,3 +150,8 @@ def test_runs_with_a_failed_trajectory(tmp_path, runs, monkeypatch):
     assert (cal.audit_original["n_failed"] == 1).all()
     g = gates(runs["cal"], run, resamples=100)
     assert g.n_trajectories == 8 * 3 - 1 and g.n_dropped == 1
+
+
+def test_in_sample_calibration_is_refused(runs):
+    with pytest.raises(ValueError, match="same run"):
+        calibrate(runs["test"], runs["test"])

@@ -62,5 +62,5 @@ def test_run_directory_of_another_config_is_refused(tmp_path, make_config):
 def test_manifest_is_last_and_lists_table_digests(tmp_path, make_config):
     run = run_study(make_config(), tmp_path / "run")
     manifest = run.manifest
-    assert set(manifest["sha256"]) == {"instances.parquet", "probes.parquet", "episodes.parquet", "engine_cache.parquet"}
+    assert set(manifest["sha256"]) == {"instances.parquet", "probes.parquet", "episodes.parquet", "engine_cache.parquet", "config.yaml"}
     assert manifest["engine_calls"]["tap_reading"] <= 6 * 9

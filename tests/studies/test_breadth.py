@@ -65,7 +65,7 @@ def test_budget_curve_table_markdown_and_figure(tmp_path):
     md = breadth_markdown(tab)
     assert "push2d (ours, k=5) | 0.500 | 0.600 | 0.100 | 0.500 [0.500, 0.500]" in md
     assert "push2d (paper, k=5) | 0.252 | 0.307 | 0.221 | 0.031 [0.007, 0.054]" in md
-    assert set(PAPER_TABLE_V) == {"push1d", "push2d", "darts"}
+    assert set(PAPER_TABLE_V) == {"push1d", "push2d", "push2d_pybullet", "darts"}
     paths = plot_budget_curves(pd.concat([curve, budget_curve(ep, "other", resamples=100)]), tmp_path / "curves")
     assert [p.suffix for p in paths] == [".png", ".pdf"] and all(p.stat().st_size > 0 for p in paths)
 

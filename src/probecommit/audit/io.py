@@ -37,11 +37,27 @@ def _where(row: int, csv: bool) -> str:
     return f"row {row} (CSV line {row + 2})" if csv else f"row {row}"
 
 
+def _check_intact(run_dir: Path) -> None:
+    """A run directory is audited only if complete and unchanged since its manifest."""
+    from probecommit.store.rundir import CONFIG, MANIFEST, RunDir
+
+    if not ((run_dir / CONFIG).is_file() or (run_dir / "shards").is_dir()):
+        return  # a folder holding a user's episodes.parquet, not a probecommit run directory
+    if not (run_dir / MANIFEST).is_file():
+        raise EpisodeTableError(f"run directory {run_dir} has no {MANIFEST}: the run is incomplete "
+                                "(rerun the command that made it to finish it)")
+    changed = RunDir(run_dir).verify_digests()
+    if changed:
+        raise EpisodeTableError(f"run directory {run_dir}: {', '.join(changed)} changed since the run wrote its "
+                                f"manifest (sha256 differs); refusing to audit an altered run")
+
+
 def _load(path: Path) -> tuple[pd.DataFrame, str, bool]:
     if path.is_dir():
         candidate = path / "episodes.parquet"
         if not candidate.exists():
             raise EpisodeTableError(f"run directory {path} has no episodes.parquet")
+        _check_intact(path)
         path = candidate
     if not path.exists():
         raise EpisodeTableError(f"no episode table at {path}")

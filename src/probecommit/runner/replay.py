@@ -19,7 +19,7 @@ from probecommit.runner.build import build_filter, build_model, build_simulator
 from probecommit.runner.config import StudyConfig, config_data, dump_config, parse_config
 from probecommit.runner.inference import BeliefTrace, ProbeBatch, blind_bayes_executor, build_trace, commit, instance_arrays
 from probecommit.store.probes import validate_probes
-from probecommit.store.rundir import RunDir
+from probecommit.store.rundir import RunDir, RunDirError
 from probecommit.store.schema import cache_frame, cache_records, component_names
 
 import yaml
@@ -42,6 +42,10 @@ def load_run(run_dir: str | Path) -> LoadedRun:
     """Read a complete run directory (refuses an incomplete one)."""
     run = RunDir(run_dir)
     manifest = run.manifest()
+    changed = run.verify_digests()
+    if changed:
+        raise RunDirError(f"{run.path}: {', '.join(changed)} changed since the run wrote its manifest (sha256 "
+                          "differs); refusing to read an altered run")
     config = parse_config(yaml.safe_load(run.config_text()))
     return LoadedRun(
         run.path, config, run.read("instances"), run.read("probes"), run.read("episodes"),

@@ -351,6 +351,7 @@ class RunDir:
         for name, frame in canonical_tables(frames).items():
             atomic_write_parquet(self.table_path(name), frame, _SCHEMAS.get(name, ()))
             digests[f"{name}.parquet"] = sha256_file(self.table_path(name))
+        digests[CONFIG] = sha256_file(self.path / CONFIG)  # a hand-edited config is caught on read
         manifest = {
             "probecommit_version": __version__,
             "git_commit": git_commit(),
