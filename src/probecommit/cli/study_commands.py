@@ -36,6 +36,7 @@ def reproduce(
     quick: bool = typer.Option(False, "--quick", help="The same pipelines on a few instances (minutes; for CI)."),
     out: Optional[Path] = typer.Option(None, "--out", "-o", help="Root for run directories and results (default runs/paper[-quick])."),
     workers: int = typer.Option(1, "--workers", "-w", min=1, help="Local worker processes for the rollouts."),
+    families: Optional[str] = typer.Option(None, "--families", help="breadth only: comma-separated families (default: all of them)."),
     publish: Optional[bool] = typer.Option(None, help="Copy results into results/paper/ and rewrite REPRODUCTION.md (default: yes for full runs, no with --quick)."),
 ) -> None:
     """Regenerate the paper's tables and figures from the frozen configs in configs/paper/.
@@ -60,7 +61,8 @@ def reproduce(
     root = out or Path("runs") / ("paper-quick" if quick else "paper")
     bar, update = _stepper()
     with bar:
-        done = paper.reproduce(names, root, quick=quick, progress=update, workers=workers)
+        options = {"families": [f.strip() for f in families.split(",") if f.strip()]} if families else {}
+        done = paper.reproduce(names, root, quick=quick, progress=update, workers=workers, options=options)
     for name, folder in done["targets"].items():
         console.print(f"{escape(name)}: [bold]{escape(str(folder))}[/bold]  (wall {done['wall_s'][name] / 60:.1f} min)")
     if publish if publish is not None else not quick:

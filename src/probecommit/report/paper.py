@@ -88,17 +88,27 @@ def _insertion(root: Path, quick: bool, progress: Progress, workers: int) -> Pat
     return results
 
 
+#: Options a target may read (``reproduce(..., options={...})``): breadth's family subset.
+OPTIONS: dict[str, Any] = {}
+
+
 def _breadth(root: Path, quick: bool, progress: Progress, workers: int) -> Path:
     from probecommit.studies.breadth import BREADTH_FAMILIES, breadth_markdown, budget_curves, plot_budget_curves, run_breadth
 
+    families = tuple(OPTIONS.get("families") or BREADTH_FAMILIES)
+    unknown = [f for f in families if f not in BREADTH_FAMILIES]
+    if unknown:
+        raise ValueError(f"unknown breadth famil{'y' if len(unknown) == 1 else 'ies'} {', '.join(unknown)}; "
+                         f"available: {', '.join(BREADTH_FAMILIES)}")
     folder = root / "breadth"
     results = folder / "results"
     results.mkdir(parents=True, exist_ok=True)
-    progress("breadth: families", 0, len(BREADTH_FAMILIES))
-    table = run_breadth(BREADTH_FAMILIES, folder / "runs", quick=quick, workers=workers)
-    runs = {f: next((folder / "runs").glob(f"{f}*")) for f in BREADTH_FAMILIES}
+    progress("breadth: families", 0, len(families))
+    table = run_breadth(families, folder / "runs", quick=quick, workers=workers)
+    runs = {f: folder / "runs" / next(p.name for p in (folder / "runs").iterdir()
+                                      if p.name == f or p.name == f"{f}-quick") for f in families}
     curves = budget_curves(runs)
-    progress("breadth: families", len(BREADTH_FAMILIES), len(BREADTH_FAMILIES))
+    progress("breadth: families", len(families), len(families))
     table.to_parquet(results / "table_5.parquet")
     curves.to_parquet(results / "budget_curves.parquet")
     write_table(results, "table_5", breadth_markdown(table))
@@ -175,13 +185,17 @@ def listing() -> list[tuple[str, str, str]]:
 
 
 def reproduce(names: list[str], root: str | Path, quick: bool = False, progress: Progress = _noop,
-              workers: int = 1) -> dict[str, Any]:
+              workers: int = 1, options: dict[str, Any] | None = None) -> dict[str, Any]:
     """Run the named targets (dependencies first) into ``root``.
+
+    ``options``: target options, e.g. ``{"families": ["push1d", "darts"]}`` for breadth.
 
     Returns:
         ``{"targets": {name: results folder}, "wall_s": {name: seconds}}``.
     """
     root = Path(root)
+    OPTIONS.clear()
+    OPTIONS.update(options or {})
     out: dict[str, Any] = {"targets": {}, "wall_s": {}}
     for name in resolve(names):
         start = time.perf_counter()
@@ -253,6 +267,7 @@ def _engines(root: Path, quick: bool, progress: Progress, workers: int) -> Path:
         "table": {f"{e}/{v}": dict(zip([r.replace(" ", "_") for r in table.index], map(float, table[(e, v)])))
                   for e, v in table.columns},
         "paired_failure": study["paired"], "scans": study["scans"],
+        "escape_by_budget": json.loads(escape.to_json(orient="records")),
     }}
     (results / "results.json").write_text(json.dumps(payload, indent=1, default=float))
     return results

@@ -66,6 +66,16 @@ def engines_section(folder: Path) -> str:
              "only 0.55 of the window. So in our PhysX the MuJoCo offset transfers as it does in PyBullet, and the "
              "paper's PhysX verdict (an execution-model mismatch) does not reproduce.", "",
              (folder / "engine_scans.md").read_text().strip(), "", (folder / "table_engines.md").read_text().strip(), ""]
+    escape_path = folder / "escape_by_budget.parquet"
+    if escape_path.is_file():
+        import pandas as pd
+
+        esc = pd.read_parquet(escape_path)
+        esc = esc[esc["variant"] == "deployed"].pivot(index="k", columns="engine", values="escape")
+        lines += ["Support escape against the budget, deployed model (paper, PyBullet: 0.055 at k = 1 to 0.167 at k = 8):",
+                  "", "| k | " + " | ".join(esc.columns) + " |", "|---" * (len(esc.columns) + 1) + "|"]
+        lines += [f"| {k} | " + " | ".join(f"{v:.3f}" for v in row) + " |" for k, row in esc.iterrows()]
+        lines.append("")
     if paired:
         lines += ["Paired failure difference at k = 8 against the deployed model (cluster bootstrap):", "",
                   "| engine | variant | ours [95% CI] |", "|---|---|---|"]
