@@ -12,7 +12,7 @@ from rich import box
 from rich.markup import escape
 from rich.table import Table
 
-from probecommit.cli.common import console, err_console, print_warning, progress_bar, user_errors
+from probecommit.cli.common import console, err_console, print_warning, progress_bar, safe, user_errors
 
 app = typer.Typer(
     add_completion=False,
@@ -34,7 +34,7 @@ def print_budget_table(episodes, title: str) -> None:
         table.add_column(col, justify="right", no_wrap=True, min_width={"method": 12, "n": 3}.get(col, len(col)))
     for _, row in summary.iterrows():
         table.add_row(
-            labels.get(str(row["method"]), str(row["method"])), str(row["k"]), str(row["episodes"]),
+            labels.get(str(row["method"]), safe(row["method"])), str(row["k"]), str(row["episodes"]),
             f"{row['failure']:.3f}", f"{row['predicted']:.3f}", f"{row['optimism']:+.3f}",
             f"{row['coverage']:.3f}", f"{row['escape']:.3f}", str(row["failed"]),
         )
@@ -88,7 +88,7 @@ def run(
     result = _run(cfg, out or Path("runs") / cfg.name, workers, ray)
     print_budget_table(result.episodes, f"{cfg.name}: per-budget summary")
     warn_failed(result)
-    console.print(f"run directory: [bold]{result.run_dir}[/bold]")
+    console.print(f"run directory: [bold]{safe(result.run_dir)}[/bold]")
 
 
 @app.command()
@@ -111,8 +111,8 @@ def demo(
     print_budget_table(result.episodes, "demo: insertion, random taps, deployed tap model")
     warn_failed(result)
     report = write_demo_report(result.run_dir)
-    console.print(f"run directory: [bold]{result.run_dir}[/bold]")
-    console.print(f"report: [bold]{report}[/bold]")
+    console.print(f"run directory: [bold]{safe(result.run_dir)}[/bold]")
+    console.print(f"report: [bold]{safe(report)}[/bold]")
 
 
 @app.command()
@@ -149,7 +149,7 @@ def replay(
     target = out or run_dir.with_name(f"{run_dir.name}-{label}")
     path = replay_run(run_dir, target, overrides, fixed_probes=fixed_probes)
     print_budget_table(load_run(path).episodes, f"replay of {run_dir.name} ({', '.join(f'{s}.{k}' for s, v in overrides.items() for k in v)})")
-    console.print(f"run directory: [bold]{path}[/bold]")
+    console.print(f"run directory: [bold]{safe(path)}[/bold]")
 
 
 @app.command()

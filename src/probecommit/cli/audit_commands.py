@@ -14,7 +14,7 @@ from typing import Optional
 import typer
 from rich.table import Table
 
-from probecommit.cli.common import console, err_console, user_errors
+from probecommit.cli.common import console, err_console, safe, user_errors
 
 def _f(v, signed: bool = False) -> str:
     try:
@@ -52,8 +52,8 @@ def print_audit_table(table, title: str) -> None:
     parts = list(table.groupby(groups, sort=False)) if groups else [((), table)]
     for key, part in parts:
         key = key if isinstance(key, tuple) else (key,)
-        name = " / ".join(map(str, key))
-        out = Table(title=f"{title}: {name}" if name else title, title_style="bold")
+        name = " / ".join(map(safe, key))
+        out = Table(title=f"{safe(title)}: {name}" if name else safe(title), title_style="bold")
         for col in ("k", "n", "failed", "coverage", "cluster cov.", "escape", "R_k", "R̂_k", "e_k"):
             out.add_column(col, justify="right")
         for _, row in part.iterrows():
@@ -61,6 +61,18 @@ def print_audit_table(table, title: str) -> None:
                         _ci(row, "coverage"), _ci(row, "cluster_coverage"), _ci(row, "escape"),
                         _f(row["realized"]), _f(row["predicted"]), _ci(row, "optimism", True))
         console.print(out)
+
+
+def write_csv(frame, path: Path) -> None:
+    """CSV for spreadsheets: text cells that a spreadsheet would run as a formula
+    (``=``, ``+``, ``-``, ``@``, tab, CR first) are prefixed with a quote (OWASP CSV injection)."""
+    import pandas as pd
+
+    out = frame.copy()
+    for col in out.columns:
+        if pd.api.types.is_object_dtype(out[col]) or pd.api.types.is_string_dtype(out[col]):
+            out[col] = out[col].map(lambda v: "'" + v if isinstance(v, str) and v[:1] in ("=", "+", "-", "@", "\t", "\r") else v)
+    out.to_csv(path, index=False)
 
 
 @user_errors
@@ -100,12 +112,12 @@ def audit_command(
         for _, row in result.surprise.iterrows():
             s.add_row(str(row["k"]), str(row["n_escaped"]), str(row["n_covered"]), _ci(row, "auc"))
         console.print(s)
-    result.table.to_csv(out / "audit.csv", index=False)
+    write_csv(result.table, out / "audit.csv")
     if result.surprise is not None:
-        result.surprise.to_csv(out / "surprise_auc.csv", index=False)
+        write_csv(result.surprise, out / "surprise_auc.csv")
     save_figure(audit_figure(result.table, nominal), out / "audit.png")
     report = write_html_report(out / "audit.html", result, title=f"Audit of {path.name}", nominal=nominal)
-    console.print(f"report: [bold]{report}[/bold]")
+    console.print(f"report: [bold]{safe(report)}[/bold]")
 
 
 @user_errors
@@ -152,21 +164,21 @@ def calibrate_command(
     for col in ("setting", "k", "n", "failure"):
         t4.add_column(col, justify="right")
     for _, r in res.cost.iterrows():
-        t4.add_row(str(r["setting"]), str(int(r["k"])), str(int(r["n_episodes"])), _ci(r, "failure"))
+        t4.add_row(safe(r["setting"]), str(int(r["k"])), str(int(r["n_episodes"])), _ci(r, "failure"))
     for _, r in res.cost_differences.iterrows():
         t4.add_row(f"{r['treatment']} - {r['baseline']}", "", str(int(r["n_pairs"])),
                    f"{_f(r['difference'], True)} [{_f(r['lo'], True)}, {_f(r['hi'], True)}] p={r['p_sign_flip']:.3g}")
     console.print(t4)
     (out / "calibration.json").write_text(json.dumps(res.to_dict(), indent=2, default=float))
-    res.table3.to_csv(out / "table3.csv", index=False)
-    res.cost.to_csv(out / "cost.csv", index=False)
-    res.cost_differences.to_csv(out / "cost_differences.csv", index=False)
-    res.margin.search.to_csv(out / "margin_search.csv", index=False)
+    write_csv(res.table3, out / "table3.csv")
+    write_csv(res.cost, out / "cost.csv")
+    write_csv(res.cost_differences, out / "cost_differences.csv")
+    write_csv(res.margin.search, out / "margin_search.csv")
     save_figure(calibration_figure(res.table3, 1 - alpha), out / "calibration.png")
     report = write_html_report(out / "calibration.html", res.audit_calibrated, title="Calibration",
                                calibration=res, nominal=1 - alpha,
                                notes=f"calibration run {cal}, test run {test}; the audit table is the calibrated executor's.")
-    console.print(f"report: [bold]{report}[/bold]")
+    console.print(f"report: [bold]{safe(report)}[/bold]")
 
 
 @user_errors
@@ -195,19 +207,19 @@ def gates_command(
                 "claimed", "realized"):
         tab.add_column(col, justify="right")
     for _, r in res.summary.iterrows():
-        tab.add_row(str(r["signal"]) + ("" if r["deployable"] else " (hindsight)"), _f(r["area"]),
+        tab.add_row(safe(r["signal"]) + ("" if r["deployable"] else " (hindsight)"), _f(r["area"]),
                     f"[{_f(r['c_min'])}, {_f(r['c_max'])}]", _f(r.get("tau")),
                     f"{int(r['n_committed'])} ({_f(r['commit_rate'])})",
                     f"{int(r['escaped_committed'])}/{int(r['n_committed'])}",
                     f"{int(r['escaped_rejected'])}/{int(r['n_rejected'])}", _f(r["claimed"]), _f(r["realized"]))
     console.print(tab)
-    res.curves.to_csv(out / "gate_curves.csv", index=False)
-    res.summary.to_csv(out / "gates.csv", index=False)
-    res.info["surprise"].to_csv(out / "surprise_auc.csv", index=False)
+    write_csv(res.curves, out / "gate_curves.csv")
+    write_csv(res.summary, out / "gates.csv")
+    write_csv(res.info["surprise"], out / "surprise_auc.csv")
     save_figure(gates_figure(res), out / "gates.png")
     report = write_html_report(out / "gates.html", title="Commit gates", gates=res, nominal=1 - alpha,
                                notes=f"calibration run {cal}, test run {test}")
-    console.print(f"report: [bold]{report}[/bold]")
+    console.print(f"report: [bold]{safe(report)}[/bold]")
 
 
 def register(app: typer.Typer) -> None:

@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import errno
 import functools
+import re
 from typing import Callable
 
 import typer
@@ -14,7 +16,10 @@ console = Console()
 err_console = Console(stderr=True)
 
 # Errors a user can cause (bad config, bad log, wrong directory): one line, exit 2.
-USER_ERRORS: tuple[type[BaseException], ...] = (ValueError, FileNotFoundError, RuntimeError, ImportError)
+USER_ERRORS: tuple[type[BaseException], ...] = (ValueError, OSError, RuntimeError, ImportError, MemoryError)
+
+
+_CONTROL = re.compile(r"[\x00-\x08\x0b-\x1f\x7f-\x9f]")
 
 
 def one_line(text: object) -> str:
@@ -22,13 +27,30 @@ def one_line(text: object) -> str:
     return " ".join(str(text).split())
 
 
+def safe(text: object) -> str:
+    """A string from data or a path, safe to print with rich: markup escaped, control
+    characters (ANSI escape sequences included) shown as ``?``."""
+    return escape(_CONTROL.sub("?", str(text)))
+
+
+def os_error_line(exc: OSError) -> str:
+    """One line for an OS error, naming the path and what went wrong."""
+    what = {errno.ENOSPC: "the disk is full", errno.EROFS: "the file system is read-only",
+            errno.EACCES: "permission denied", errno.ENAMETOOLONG: "the name is too long",
+            errno.EEXIST: "it already exists", errno.ENOTDIR: "a path component is a file, not a directory",
+            errno.EISDIR: "it is a directory"}.get(exc.errno, exc.strerror or type(exc).__name__)
+    where = exc.filename or "a file"
+    return f"cannot write or read {where}: {what}"
+
+
 def print_error(exc: BaseException) -> None:
     """One line on stderr, never wrapped at the terminal width."""
-    err_console.print(f"[red]error:[/red] {escape(one_line(exc) or type(exc).__name__)}", soft_wrap=True, highlight=False)
+    text = os_error_line(exc) if isinstance(exc, OSError) and not isinstance(exc, FileNotFoundError) else (one_line(exc) or type(exc).__name__)
+    err_console.print(f"[red]error:[/red] {safe(one_line(text))}", soft_wrap=True, highlight=False)
 
 
 def print_warning(message: str) -> None:
-    err_console.print(f"[yellow]warning:[/yellow] {escape(one_line(message))}", soft_wrap=True, highlight=False)
+    err_console.print(f"[yellow]warning:[/yellow] {safe(one_line(message))}", soft_wrap=True, highlight=False)
 
 
 def user_errors(fn: Callable) -> Callable:
@@ -40,6 +62,9 @@ def user_errors(fn: Callable) -> Callable:
             return fn(*args, **kwargs)
         except typer.Exit:
             raise
+        except KeyboardInterrupt:
+            print_warning("interrupted; finished work is kept: rerun the same command to resume")
+            raise typer.Exit(130) from None
         except USER_ERRORS as exc:
             print_error(exc)
             raise typer.Exit(2) from None

@@ -8,7 +8,7 @@ from typing import Optional
 
 import typer
 
-from probecommit.cli.common import console, err_console, progress_bar, user_errors
+from probecommit.cli.common import console, err_console, progress_bar, safe, user_errors
 from probecommit.tasks.insertion.model import PAPER_DELTA_MM
 
 REPO_ROOT = Path(__file__).resolve().parents[3]
@@ -107,7 +107,7 @@ def scan(
     console.print(f"{engine}: delta = {summary['delta']:+.4f} mm (SD {summary['sd']:.4f}, min {summary['min']:+.4f}, "
                   f"max {summary['max']:+.4f}) over {summary['scans']} scans; boundary moves "
                   f"{summary['shift_vs_deployed_mm']:.3f} mm from the deployed hg - r; engine calls {sim.engine_calls}")
-    console.print(f"scans: [bold]{out / 'scan.parquet'}[/bold]; figure: [bold]{fig}[/bold]")
+    console.print(f"scans: [bold]{safe(out / 'scan.parquet')}[/bold]; figure: [bold]{safe(fig)}[/bold]")
     if capture:
         from probecommit.runner.build import build_model
         from probecommit.runner.instances import draw_instances
@@ -118,7 +118,7 @@ def scan(
         window.truths.to_parquet(out / "capture.parquet")
         c = window.summary()
         console.print(f"{engine}: capture window / w(c) = {c['ratio_mean']:.3f} (SD {c['ratio_sd']:.3f} over the "
-                      f"development truths); per truth: [bold]{out / 'capture.parquet'}[/bold]")
+                      f"development truths); per truth: [bold]{safe(out / 'capture.parquet')}[/bold]")
 
 
 def engines_check(
@@ -181,7 +181,7 @@ def faults(
     fig = fault_signatures(signature_table(episodes), out / "fault_signatures.png")
     if skipped:
         err_console.print(f"[yellow]skipped faults needing other rollouts:[/yellow] {', '.join(skipped)} (pass --noise-run / --prior-run)")
-    console.print(f"episodes: [bold]{out / 'faults_episodes.parquet'}[/bold]; figure: [bold]{fig}[/bold]")
+    console.print(f"episodes: [bold]{safe(out / 'faults_episodes.parquet')}[/bold]; figure: [bold]{safe(fig)}[/bold]")
 
 
 def verify(

@@ -287,6 +287,10 @@ def parse_config(data: dict) -> StudyConfig:
         raise ConfigError(_one_line(f"invalid config: {type(exc).__name__}: {exc}")) from None
 
 
+#: Most YAML aliases a config may hold (a config needs none; anchors for repeated lists are fine).
+MAX_YAML_ALIASES = 64
+
+
 class _UniqueKeyLoader(yaml.SafeLoader):
     """Safe YAML loader that refuses a key given twice (YAML would keep the last silently)."""
 
@@ -328,6 +332,8 @@ def load_config(path: str | Path) -> StudyConfig:
             or, from :func:`parse_config`, the bad field.
     """
     path = Path(path)
+    if path.is_dir():
+        raise ConfigError(f"{path} is a directory, not a config file (give the YAML file inside it)")
     if not path.is_file():
         raise ConfigError(f"config file not found: {path}")
     try:
@@ -337,7 +343,15 @@ def load_config(path: str | Path) -> StudyConfig:
     except OSError as exc:
         raise ConfigError(_one_line(f"{path}: cannot read: {exc.strerror or exc}")) from None
     try:
+        # Bound the work on untrusted YAML before constructing anything: a few hundred bytes of
+        # nested aliases (a "billion laughs") expand to billions of nodes for any traversal.
+        aliases = sum(isinstance(event, yaml.AliasEvent) for event in yaml.parse(text, Loader=yaml.SafeLoader))
+        if aliases > MAX_YAML_ALIASES:
+            raise ConfigError(f"{path}: {aliases} YAML aliases (*name); a study config needs none, at most "
+                              f"{MAX_YAML_ALIASES} are accepted")
         data = yaml.load(text, Loader=_UniqueKeyLoader)  # noqa: S506 - a SafeLoader subclass
+    except ConfigError:
+        raise
     except yaml.YAMLError as exc:
         raise ConfigError(_yaml_error(path, exc)) from None
     except (ValueError, TypeError, RecursionError) as exc:  # e.g. unhashable keys, absurd nesting

@@ -148,6 +148,24 @@ def ray_init_kwargs(address: str, workers: int) -> dict[str, Any]:
     return dict(address=address, **common)
 
 
+def check_reachable(address: str, timeout_s: float = 3.0) -> None:
+    """Fail within seconds when nothing listens at a Ray ``host:port`` (Ray itself retries for minutes).
+
+    Raises:
+        RuntimeError: one line naming the address.
+    """
+    import socket
+
+    host, _, port = address.rpartition(":")
+    if not host or not port.isdigit():
+        raise RuntimeError(f"--ray expects 'local', 'auto' or host:port, got {address!r}")
+    try:
+        with socket.create_connection((host, int(port)), timeout=timeout_s):
+            return
+    except OSError as exc:
+        raise RuntimeError(f"cannot reach the Ray cluster at {address}: {exc.strerror or exc}") from None
+
+
 @contextlib.contextmanager
 def ray_session(address: str, workers: int, timing: dict[str, float]) -> Iterator[Any]:
     """Connect to (or, for ``"local"``, start) Ray; shut down on exit what was started here.
@@ -157,6 +175,8 @@ def ray_session(address: str, workers: int, timing: dict[str, float]) -> Iterato
     """
     from probecommit.engines import require
 
+    if address not in ("local", "auto"):
+        check_reachable(address)
     ray = require("ray")
     started_here = not ray.is_initialized()
     t0 = time.perf_counter()

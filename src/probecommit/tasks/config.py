@@ -46,6 +46,15 @@ class StrictModel(BaseModel):
         annotation = cls.model_fields[info.field_name].annotation
         if annotation not in (bool, StrictBool) and has_bool(value):
             raise ValueError("expected a number, got a boolean (true/false)")
+        if annotation is int and isinstance(value, (str, float)) and not isinstance(value, bool):
+            # YAML reads "1e3" as a string (YAML 1.1 wants "1.0e3"); an integral number is an integer.
+            try:
+                number = float(value)
+            except ValueError:
+                return value
+            if number.is_integer() and abs(number) < 2**53:
+                return int(number)
+            raise ValueError(f"must be an integer, got {value!r}")
         return value
 
 

@@ -1,0 +1,88 @@
+"""Bad input from data, paths and the environment: one line, no traceback, nothing silent."""
+
+from __future__ import annotations
+
+import time
+
+import pandas as pd
+import pytest
+import yaml
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from typer.testing import CliRunner
+
+from probecommit.cli.app import app
+from probecommit.cli.common import safe
+from probecommit.runner.config import ConfigError, load_config
+
+runner = CliRunner()
+GOOD = {"name": "h", "repeats": 1, "instances": {"split": "h", "count": 2}, "probes": {"budget": 2},
+        "belief": {"particles": 32}, "simulator": {"engine": "analytic"}, "blind_prior_samples": 200}
+
+
+def test_an_unreachable_ray_address_fails_within_seconds(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "s.yaml").write_text(yaml.safe_dump(GOOD))
+    start = time.perf_counter()
+    result = runner.invoke(app, ["run", "s.yaml", "--ray", "127.0.0.1:1"])
+    assert result.exit_code == 2 and "cannot reach the Ray cluster at 127.0.0.1:1" in " ".join(result.output.split())
+    assert time.perf_counter() - start < 10 and not (tmp_path / "runs").exists()
+
+
+@given(st.lists(st.sampled_from(list("[]/=bold link\x1b\x07ab:;") + ["[/bold]", "[link=x]", "\x1b[31m", "[red]"]),
+                max_size=12).map("".join))
+@settings(max_examples=60, deadline=None)
+def test_markup_and_control_characters_from_data_are_inert(text):
+    from rich.console import Console
+
+    console = Console(record=True, width=200)
+    console.print(f"value: {safe(text)}")  # must never raise or render markup
+    out = console.export_text()
+    assert "\x1b" not in out and "\x07" not in out
+
+
+def test_a_method_named_like_markup_and_a_formula_cell(tmp_path, monkeypatch):
+    from tests.audit.test_io import ROBOT
+
+    log = pd.read_csv(ROBOT)
+    log["method"] = "[/bold]=cmd|' /C calc'!A0"
+    log.loc[log.index[: len(log) // 2], "method"] = "=cmd|' /C calc'!A0"
+    path = tmp_path / "q[b][bold].csv"
+    log.to_csv(path, index=False)
+    result = runner.invoke(app, ["audit", str(path), "--resamples", "100"])
+    assert result.exit_code == 0, result.output
+    assert "q[b][bold]" in " ".join(result.output.split())  # the path printed literally, not as markup
+    cells = (tmp_path / "q[b][bold]-audit" / "audit.csv").read_text()
+    assert "'=cmd" in cells and ",=cmd" not in cells and "\n=cmd" not in cells
+
+
+def test_os_errors_are_one_line_naming_the_path(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "s.yaml").write_text(yaml.safe_dump(GOOD))
+    (tmp_path / "taken").write_text("a file")
+    result = runner.invoke(app, ["run", "s.yaml", "-o", "taken"])
+    assert result.exit_code == 2 and "taken" in result.output and "Traceback" not in result.output
+    long = "x" * 300
+    result = runner.invoke(app, ["run", "s.yaml", "-o", long])
+    assert result.exit_code == 2 and "name is too long" in result.output
+
+
+def test_a_yaml_alias_bomb_is_refused_quickly(tmp_path):
+    lines = ['a0: &a0 ["x", "x", "x", "x", "x", "x", "x", "x", "x"]']
+    for i in range(1, 9):
+        lines.append(f"a{i}: &a{i} [" + ", ".join([f"*a{i - 1}"] * 9) + "]")
+    bomb = "\n".join(lines) + "\nname: *a8\n"
+    path = tmp_path / "bomb.yaml"
+    path.write_text(bomb)
+    start = time.perf_counter()
+    with pytest.raises(ConfigError):
+        load_config(path)
+    assert time.perf_counter() - start < 2.0
+
+
+def test_particles_as_an_integral_float_and_a_directory_path(tmp_path):
+    path = tmp_path / "p.yaml"
+    path.write_text(yaml.safe_dump({**GOOD, "belief": {"particles": 1e3}}))
+    assert load_config(path).belief.particles == 1000
+    with pytest.raises(ConfigError, match="is a directory"):
+        load_config(tmp_path)
