@@ -86,3 +86,21 @@ def test_particles_as_an_integral_float_and_a_directory_path(tmp_path):
     assert load_config(path).belief.particles == 1000
     with pytest.raises(ConfigError, match="is a directory"):
         load_config(tmp_path)
+
+
+def test_a_probe_off_the_family_range_is_a_config_error(tmp_path):
+    path = tmp_path / "p.yaml"
+    path.write_text(yaml.safe_dump({**GOOD, "probes": {"schedule": [-9.0, 1000.0], "budget": 2}}))
+    with pytest.raises(ConfigError, match=r"probe 1 = \[1000.0\] is outside the insertion family's probe range"):
+        load_config(path)
+
+
+def test_a_belief_that_loses_every_particle_is_reported(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    cfg = {**GOOD, "model": {"sigma": 1e-300}, "probes": {"budget": 3}}
+    (tmp_path / "s.yaml").write_text(yaml.safe_dump(cfg))
+    result = runner.invoke(app, ["run", "s.yaml"])
+    assert result.exit_code == 0, result.output
+    assert "lost every particle" in " ".join(result.output.split())
+    episodes = pd.read_parquet(tmp_path / "runs" / "h" / "episodes.parquet")
+    assert episodes["belief_resets"].max() > 0

@@ -55,7 +55,13 @@ def _run(config, out: Path, workers: int, ray: Optional[str]):
 
 
 def warn_failed(result) -> None:
-    """One warning line when some episodes failed (engine NaN or error), else nothing."""
+    """One warning line when some episodes failed (engine NaN or error), else nothing; and one
+    when some beliefs lost every particle (the likelihood ruled all of them out)."""
+    episodes = result.episodes
+    if "belief_resets" in episodes and (episodes["belief_resets"].fillna(0) > 0).any():
+        hit = episodes[episodes["belief_resets"].fillna(0) > 0]
+        print_warning(f"{len(hit)} episode row(s) had a belief that lost every particle (every particle impossible "
+                      "under the likelihood; weights reset to uniform): see the 'belief_resets' column; is sigma too small?")
     failed = result.failed_episodes
     if failed:
         trajectories = result.manifest.get("failed_trajectories", 0)

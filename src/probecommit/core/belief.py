@@ -99,6 +99,8 @@ class BeliefState:
             (what a resample-move step needs to keep the posterior invariant).
         accepted: ``[E]`` fraction of move proposals accepted at the last update (NaN
             when no move ran).
+        lost: ``[E]`` whether the last probe gave every particle zero likelihood, so the
+            belief was reset to uniform weights over its particles (reported, never silent).
     """
 
     particles: np.ndarray
@@ -107,10 +109,13 @@ class BeliefState:
     u_hist: np.ndarray | None = None
     y_hist: np.ndarray | None = None
     accepted: np.ndarray | None = None
+    lost: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         if self.resampled is None:
             self.resampled = np.zeros(self.particles.shape[0], dtype=bool)
+        if self.lost is None:
+            self.lost = np.zeros(self.particles.shape[0], dtype=bool)
 
     @property
     def weights(self) -> np.ndarray:
@@ -204,7 +209,9 @@ class ParticleFilter:
         y = np.asarray(y, dtype=float)
         pred = self.model.predict(u, state.particles)
         loglik = self.likelihood.log_likelihood(y, pred)
-        log_w = normalize_log_weights(state.log_weights + loglik)
+        unnormalized = state.log_weights + loglik
+        lost = ~np.isfinite(np.max(unnormalized, axis=1))
+        log_w = normalize_log_weights(unnormalized)
         u_now, y_now = u.reshape(n_e, 1, -1), y.reshape(n_e, 1, -1)
         u_hist = u_now if state.u_hist is None else np.concatenate([state.u_hist, u_now], axis=1)
         y_hist = y_now if state.y_hist is None else np.concatenate([state.y_hist, y_now], axis=1)
@@ -235,7 +242,7 @@ class ParticleFilter:
                         new[i, which] = low + (high - low) * rng.random((n_fresh, low.shape[0]))
             particles[rows] = np.clip(new, low, high)
             log_w[rows] = -np.log(self.n_particles)
-        return BeliefState(particles, log_w, resample, u_hist, y_hist, accepted)
+        return BeliefState(particles, log_w, resample, u_hist, y_hist, accepted, lost)
 
     def history_log_likelihood(self, particles: np.ndarray, u_hist: np.ndarray, y_hist: np.ndarray) -> np.ndarray:
         """Log-likelihood ``[E, N]`` of every probe seen so far, ``sum_j log p(y_j | u_j, theta)``."""

@@ -241,6 +241,16 @@ class StudyConfig(_Strict):
             bad = [p for p in self.probes.schedule if len(p) != task.probe_dim]
             if bad:
                 raise _FieldError("probes.schedule", f"probes of the {task.family} family have {task.probe_dim} component(s), got {list(bad[0])}")
+            import numpy as np
+
+            from probecommit.tasks.registry import build_model
+
+            grid = np.asarray(build_model(task).probe_grid, dtype=float)
+            low, high = grid.min(axis=0), grid.max(axis=0)
+            for i, probe in enumerate(self.probes.schedule):
+                if np.any(np.asarray(probe) < low - 1e-9) or np.any(np.asarray(probe) > high + 1e-9):
+                    raise _FieldError("probes.schedule", f"probe {i} = {list(probe)} is outside the {task.family} family's "
+                                      f"probe range {low.tolist()} .. {high.tolist()}")
         return self
 
 

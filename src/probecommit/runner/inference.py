@@ -202,6 +202,7 @@ class BeliefTrace:
     batch: ProbeBatch
     states: dict[int, BeliefState]
     surprise: np.ndarray  # [E, K] -log predictive density of probe j before assimilation
+    lost: np.ndarray | None = None  # [E, K] the belief lost every particle at probe j (reset)
 
     @property
     def budgets(self) -> list[int]:
@@ -221,13 +222,15 @@ def build_trace(pfilter: ParticleFilter, batch: ProbeBatch, seed: int, budgets: 
     states = {0: state}
     k_max = max(budgets) if budgets else 0
     surprise = np.full((batch.n_episodes, batch.u.shape[1]), np.nan)
+    lost = np.zeros((batch.n_episodes, batch.u.shape[1]), dtype=bool)
     for j in range(1, k_max + 1):
         u_j, y_j = batch.u[:, j - 1], batch.y[:, j - 1]
         surprise[:, j - 1] = -pfilter.log_predictive(state, u_j, y_j)
         state = pfilter.update(state, u_j, y_j, rngs)
+        lost[:, j - 1] = state.lost
         if j in budgets:
             states[j] = state
-    return BeliefTrace(batch, states, surprise)
+    return BeliefTrace(batch, states, surprise, lost)
 
 
 def blind_bayes_executor(model, seed: int, n_samples: int) -> BlindBayes:
@@ -340,6 +343,7 @@ def commit(
             "post_var": belief["post_var"],
             "max_surprise": surprise.max(axis=1) if k > 0 else np.full(batch.n_episodes, np.nan),
             "n_retained": mask.sum(axis=1).astype(np.int64),
+            "belief_resets": (trace.lost[:, :k].sum(axis=1) if trace.lost is not None else np.zeros(batch.n_episodes)).astype(np.int64),
             "status": status,
             "error": error,
             "_row": np.arange(batch.n_episodes),

@@ -175,6 +175,8 @@ def replay_run(src: str | Path, out: str | Path, overrides: dict[str, dict[str, 
             (see ``replay_episodes``).
     """
     start = time.perf_counter()
+    if Path(out).resolve() == Path(src).resolve():
+        raise ValueError(f"replay would overwrite its source run {src}; give another --out")
     loaded = load_run(src)
     config = replay_config(loaded.config, overrides)
     episodes, sim = replay_episodes(loaded, overrides, fixed_probes=fixed_probes)

@@ -58,11 +58,23 @@ class RunDirError(RuntimeError):
     """A run directory is incomplete, incompatible or corrupt."""
 
 
+def _read_umask() -> int:
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
+
+
+#: Read once at import: ``os.umask`` can only be read by setting it, which is process-global.
+_UMASK = _read_umask()
+
+
 def atomic_write_bytes(path: Path, data: bytes) -> None:
     """Write ``data`` to ``path`` via a temporary file and an atomic rename."""
     path.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
     try:
+        # mkstemp creates 0600; a run file gets the mode any new file would (the umask's).
+        os.fchmod(fd, 0o666 & ~_UMASK)
         with os.fdopen(fd, "wb") as fh:
             fh.write(data)
             fh.flush()
@@ -160,10 +172,12 @@ def git_dirty() -> bool | None:
 
 
 def engine_versions() -> dict[str, str | None]:
+    """Python's version and those of the engines and the data stack, as the manifest records them."""
+    import platform
     from importlib import metadata
 
-    out: dict[str, str | None] = {}
-    for dist in ("mujoco", "pybullet", "sapien", "ray", "numpy"):
+    out: dict[str, str | None] = {"python": platform.python_version()}
+    for dist in ("mujoco", "pybullet", "sapien", "ray", "numpy", "pandas", "pyarrow", "numba"):
         try:
             out[dist] = metadata.version(dist)
         except metadata.PackageNotFoundError:

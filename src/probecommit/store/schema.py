@@ -82,6 +82,7 @@ EPISODE_COLUMNS: tuple[Column, ...] = (
     Column("post_var", pa.float64(), "Posterior variance of the decision coordinate."),
     Column("max_surprise", pa.float64(), "Max over probes seen of -log predictive density before assimilation."),
     Column("n_retained", pa.int64(), "Number of retained particles (scenarios)."),
+    Column("belief_resets", pa.int64(), "Probes up to k after which every particle had zero likelihood and the weights were reset to uniform."),
     Column("status", pa.string(), "ok, or failed (the engine returned NaN or raised)."),
     Column("error", pa.string(), "Why the episode failed; empty when ok."),
 )
