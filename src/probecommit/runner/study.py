@@ -122,13 +122,31 @@ def _run_serial(jobs: list[Job]) -> Iterator[Result]:
         yield compute_unit(*job)
 
 
+def _die_with_parent(parent_pid: int, poll_s: float = 0.5) -> None:
+    """Pool-worker initializer: exit as soon as the parent is gone (even after SIGKILL).
+
+    A killed parent cannot clean up its pool; each worker watches its parent pid from a
+    daemon thread and leaves when it changes (the worker was re-parented).
+    """
+    import threading
+
+    def watch() -> None:
+        while True:
+            time.sleep(poll_s)
+            if os.getppid() != parent_pid:
+                os._exit(1)
+
+    threading.Thread(target=watch, name="die-with-parent", daemon=True).start()
+
+
 def _run_processes(jobs: list[Job], workers: int) -> Iterator[Result]:
     import multiprocessing as mp
     from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 
     # "spawn": engines (MuJoCo, PyBullet, SAPIEN) hold native state that must not be
     # forked, and a spawned worker starts from the same imports on every platform.
-    with ProcessPoolExecutor(max_workers=min(workers, len(jobs)), mp_context=mp.get_context("spawn")) as pool:
+    with ProcessPoolExecutor(max_workers=min(workers, len(jobs)), mp_context=mp.get_context("spawn"),
+                             initializer=_die_with_parent, initargs=(os.getpid(),)) as pool:
         pending = {pool.submit(compute_unit, *job) for job in jobs}
         try:
             while pending:
