@@ -159,3 +159,21 @@ def test_rollout_failures_count_as_present_repeats():
     a = audit_table(df, resamples=100)
     assert set(a["method"]) == {"probe_robust"}
     assert (a["n_failed"] == 1).all() and (a["n_episodes"] == 7).all()
+
+
+def test_interval_wider_than_hull_is_counted_duplicate_header_and_missing_budget_are_refused(tmp_path):
+    table = synthetic_episodes(6, 2, (1, 2), n_particles=64, seed=3)
+    wide = table.copy()
+    wide.loc[0, "retained_lo"] = wide.loc[0, "hull_lo"] - 1.0
+    notes = validate_episodes(wide).attrs["notes"]
+    assert notes and "1 row(s) have a retained interval wider than the particle hull" in notes[0]
+    path = tmp_path / "dup.csv"
+    text = table.to_csv(index=False)
+    header, rest = text.split("\n", 1)
+    path.write_text(header + ",predicted\n" + "\n".join(line + ",0.5" for line in rest.strip().split("\n")) + "\n")
+    with pytest.raises(EpisodeTableError, match="'predicted' appears more than once"):
+        read_episodes(path)
+    first = table["instance_id"].iloc[0]
+    missing = table[~((table["instance_id"] == first) & (table["k"] == 2))]
+    with pytest.raises(EpisodeTableError, match=rf"instance '{first}' has no rows at budget\(s\) \[2\]"):
+        validate_episodes(missing)

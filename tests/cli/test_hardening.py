@@ -45,8 +45,7 @@ def test_a_method_named_like_markup_and_a_formula_cell(tmp_path, monkeypatch):
     from tests.audit.test_io import ROBOT
 
     log = pd.read_csv(ROBOT)
-    log["method"] = "[/bold]=cmd|' /C calc'!A0"
-    log.loc[log.index[: len(log) // 2], "method"] = "=cmd|' /C calc'!A0"
+    log["method"] = "=cmd|' /C calc'!A0"
     path = tmp_path / "q[b][bold].csv"
     log.to_csv(path, index=False)
     result = runner.invoke(app, ["audit", str(path), "--resamples", "100"])
@@ -104,3 +103,16 @@ def test_a_belief_that_loses_every_particle_is_reported(tmp_path, monkeypatch):
     assert "lost every particle" in " ".join(result.output.split())
     episodes = pd.read_parquet(tmp_path / "runs" / "h" / "episodes.parquet")
     assert episodes["belief_resets"].max() > 0
+
+
+def test_huge_configs_and_resamples_are_refused_with_an_estimate(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    cfg = {**GOOD, "belief": {"particles": 1_000_000}, "repeats": 1000}
+    (tmp_path / "s.yaml").write_text(yaml.safe_dump(cfg))
+    result = runner.invoke(app, ["run", "s.yaml"])
+    assert result.exit_code == 2 and "GiB" in result.output and "belief.particles" in " ".join(result.output.split())
+    assert not (tmp_path / "runs").exists()
+    from probecommit.audit.stats import resample_counts
+
+    with pytest.raises(MemoryError, match="--resamples"):
+        resample_counts(1_000_000, 100_000_000)

@@ -170,6 +170,10 @@ def validate_episodes(table: pd.DataFrame, source: str = "episode table", *, csv
         EpisodeTableError: With one message naming the problem.
     """
     df = checked_frame(table, AUDIT_REQUIRED, source, EpisodeTableError, "the audit")
+    # pandas renames a repeated CSV header "x" to "x.1": a column given twice is an error, not a rename.
+    renamed = [c for c in df.columns if "." in c and c.rsplit(".", 1)[1].isdigit() and c.rsplit(".", 1)[0] in df.columns]
+    if renamed:
+        raise EpisodeTableError(f"{source}: column '{renamed[0].rsplit('.', 1)[0]}' appears more than once in the header")
 
     ids = df["instance_id"]
     id_na = ids.isna() | ids.astype(str).str.strip().isin(["", "nan", "None"])
@@ -218,6 +222,16 @@ def validate_episodes(table: pd.DataFrame, source: str = "episode table", *, csv
             row = int(np.flatnonzero(bad)[0])
             raise EpisodeTableError(f"{source}: {lo} > {hi} at {_where(row, csv)} "
                                     f"({df[lo].iloc[row]!r} > {df[hi].iloc[row]!r})")
+    # A retained interval wider than the particle hull is legitimate only for a grown set (a
+    # conformal threshold t > 1); such rows can be covered and escaped at once. Counted, and
+    # said in the report, never silent.
+    wider = ((df["retained_lo"] < df["hull_lo"] - 1e-9) | (df["retained_hi"] > df["hull_hi"] + 1e-9)).to_numpy() & ok
+    notes: list[str] = []
+    if wider.any():
+        both = wider & ((df["z_true"] < df["hull_lo"]) | (df["z_true"] > df["hull_hi"])).to_numpy() & \
+            ((df["retained_lo"] <= df["z_true"]) & (df["z_true"] <= df["retained_hi"])).to_numpy()
+        notes.append(f"{int(wider.sum())} row(s) have a retained interval wider than the particle hull (a grown set, "
+                     f"conformal threshold t > 1); {int(both.sum())} of them are both covered and escaped")
 
     for name in GROUP_COLUMNS:
         if name in df.columns:
@@ -230,6 +244,7 @@ def validate_episodes(table: pd.DataFrame, source: str = "episode table", *, csv
         key = ", ".join(f"{c}={df[c].iloc[row]!r}" for c in groups + list(KEY_COLUMNS))
         raise EpisodeTableError(f"{source}: duplicate episode ({key}) at {_where(row, csv)}")
     _check_repeats(df, groups, source)
+    _check_budgets(df, groups, source)
 
     # Derived indicators, measured on the set as recorded (closed intervals).
     z = df["z_true"]
@@ -238,7 +253,12 @@ def validate_episodes(table: pd.DataFrame, source: str = "episode table", *, csv
     for name, derived in (("covered", derived_cov), ("escaped", derived_esc)):
         given = _boolean(df, name, csv, source) if name in df.columns else None
         df[name] = derived.astype(bool) if given is None else given
-    df.attrs = {"source": source, "n_total": int(len(df)), "n_failed": int((~ok).sum())}
+    if (~ok).any():
+        partial = set(df.loc[~ok, "instance_id"]) & set(df.loc[ok, "instance_id"])
+        if partial:
+            notes.append(f"{len(partial)} instance(s) have failed rows beside successful ones; their cluster coverage "
+                         "is over the remaining repeats only, which can only raise it")
+    df.attrs = {"source": source, "n_total": int(len(df)), "n_failed": int((~ok).sum()), "notes": notes}
     return df
 
 
@@ -277,6 +297,22 @@ def _check_repeats(df: pd.DataFrame, groups: list[str], source: str) -> None:
                 f"{source}: repeats of unequal count at {where}: instance {inst!r} has "
                 f"{int(odd.iloc[0])} repeat(s) but most instances have {modal} "
                 f"({len(odd)} instance(s) differ); cluster coverage needs every repeat")
+
+
+def _check_budgets(df: pd.DataFrame, groups: list[str], source: str) -> None:
+    """Every instance of a group must appear at every budget the group reports (none silently dropped)."""
+    keyed = df[df["status"] != "failed"]
+    for key, part in (keyed.groupby(groups, sort=False) if groups else [((), keyed)]):
+        budgets = set(part["k"].unique())
+        have = part.groupby("instance_id")["k"].agg(lambda ks: set(ks))
+        missing = have[have.map(lambda ks: ks != budgets)]
+        if len(missing):
+            inst = missing.index[0]
+            lacking = sorted(int(k) for k in budgets - missing.iloc[0])
+            where = ", ".join(f"{g}={v!r}" for g, v in zip(groups, key if isinstance(key, tuple) else (key,)))
+            raise EpisodeTableError(f"{source}: instance {inst!r} has no rows at budget(s) {lacking}"
+                                    f"{' (' + where + ')' if where else ''} while other instances do "
+                                    f"({len(missing)} instance(s) affected); per-budget metrics need every instance")
 
 
 def read_episodes(path: str | Path) -> pd.DataFrame:

@@ -7,7 +7,7 @@ which re-commit episodes under new thresholds and margins, live on the runner si
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import pandas as pd
@@ -42,6 +42,7 @@ class AuditResult:
     source: str
     n_total: int
     n_failed: int
+    notes: list[str] = field(default_factory=list)
 
 
 def audit(path_or_table: str | Path | pd.DataFrame, *, resamples: int = DEFAULT_RESAMPLES, seed: int = DEFAULT_SEED,
@@ -81,4 +82,4 @@ def audit(path_or_table: str | Path | pd.DataFrame, *, resamples: int = DEFAULT_
             parts.append(part)
         surprise = pd.concat(parts, ignore_index=True) if parts else None
     return AuditResult(table, surprise, df.attrs.get("source", "table"), df.attrs.get("n_total", len(df)),
-                       df.attrs.get("n_failed", 0))
+                       df.attrs.get("n_failed", 0), list(df.attrs.get("notes", [])))

@@ -77,6 +77,10 @@ def resample_counts(n_clusters: int, resamples: int = DEFAULT_RESAMPLES,
         raise ValueError("cluster bootstrap needs at least one cluster")
     if resamples < 1:
         raise ValueError("resamples must be positive")
+    from probecommit.core.memory import check_fits
+
+    check_fits(8.0 * resamples * n_clusters * 3, f"a cluster bootstrap of {n_clusters} clusters x {resamples} resamples",
+               "the number of resamples (--resamples)")
     rng = _rng(seed)
     draws = rng.integers(0, n_clusters, size=(resamples, n_clusters))
     # One bincount over all rows: shift row b's indices into [b*M, (b+1)*M).

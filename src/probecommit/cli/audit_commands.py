@@ -105,6 +105,10 @@ def audit_command(
     print_audit_table(result.table, f"audit of {path}")
     if result.n_failed:
         console.print(f"{result.n_failed} failed row(s) of {result.n_total} excluded from every metric")
+    from probecommit.cli.common import print_warning as _warn
+
+    for note in result.notes:
+        _warn(note)
     if result.surprise is not None:
         s = Table(title="prequential surprise: AUC for final-budget escape", title_style="bold")
         for col in ("k", "escaped", "not escaped", "AUC"):

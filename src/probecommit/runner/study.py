@@ -228,6 +228,16 @@ def preflight(config: StudyConfig) -> pd.DataFrame:
     """
     model = build.build_model(config)
     build.build_filter(model, config.belief)
+    from probecommit.core.memory import check_fits
+
+    # A unit keeps every budget's belief ([E, N, d] particles + [E, N] weights) and scores
+    # [E, A, N] losses for continuous families: estimate before anything is drawn.
+    episodes = config.unit_instances * config.repeats
+    d, budgets = len(model.latent_names), len(config.probes.commit_budgets) + 2
+    per_particle = 8.0 * ((d + 2) * budgets + (0 if model.binary_loss else len(model.action_grid)))
+    check_fits(episodes * config.belief.particles * per_particle,
+               f"one work unit ({episodes} episodes x {config.belief.particles} particles)",
+               "belief.particles, repeats or unit_instances")
     build.build_simulator(config)
     return draw_instances(config, model)
 
