@@ -116,3 +116,14 @@ def test_huge_configs_and_resamples_are_refused_with_an_estimate(tmp_path, monke
 
     with pytest.raises(MemoryError, match="--resamples"):
         resample_counts(1_000_000, 100_000_000)
+
+
+def test_a_semicolon_csv_and_a_nan_boundary_offset_get_plain_errors(tmp_path):
+    from tests.audit.test_io import ROBOT
+
+    path = tmp_path / "semi.csv"
+    pd.read_csv(ROBOT).to_csv(path, sep=";", decimal=",", index=False)
+    result = runner.invoke(app, ["audit", str(path)])
+    assert result.exit_code == 2 and "semicolon-separated" in " ".join(result.output.split())
+    result = runner.invoke(app, ["scan", "--engine", "analytic", "--boundary-offset", "nan", "-o", str(tmp_path / "s")])
+    assert result.exit_code == 2 and "boundary_offset" in result.output and "http" not in result.output

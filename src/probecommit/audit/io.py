@@ -68,7 +68,14 @@ def _load(path: Path) -> tuple[pd.DataFrame, str, bool]:
         if suffix in (".csv", ".txt"):
             # Read everything as text first: type problems are then reported by
             # column and row instead of as a pandas parser error.
-            return pd.read_csv(path, dtype=str, keep_default_na=False, skipinitialspace=True), str(path), True
+            frame = pd.read_csv(path, dtype=str, keep_default_na=False, skipinitialspace=True)
+            if len(frame.columns) == 1 and ";" in str(frame.columns[0]):
+                raise EpisodeTableError(
+                    f"{path}: the header has no commas but has ';' ({str(frame.columns[0])[:60]!r}...): the file looks "
+                    "semicolon-separated (a decimal-comma locale); save it with ',' between columns and '.' decimals")
+            return frame, str(path), True
+    except EpisodeTableError:
+        raise
     except (OSError, ValueError, pa.ArrowException) as exc:
         raise EpisodeTableError(f"cannot read episode table {path}: {exc}") from exc
     raise EpisodeTableError(f"unsupported episode table format {path.suffix!r} for {path}; "

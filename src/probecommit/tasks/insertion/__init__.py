@@ -55,8 +55,15 @@ SPEC = register(
 
 def make_simulator(engine: str = "mujoco", **fields):
     """An insertion simulator of ``engine`` with simulator-section ``fields`` (validated)."""
+    from pydantic import ValidationError
+
     from probecommit.tasks.insertion.config import InsertionSimulatorConfig
     from probecommit.tasks.registry import build_simulator
 
-    config = InsertionConfig(simulator=InsertionSimulatorConfig(engine=engine, **fields))
+    try:
+        config = InsertionConfig(simulator=InsertionSimulatorConfig(engine=engine, **fields))
+    except ValidationError as exc:
+        first = exc.errors()[0]
+        field = ".".join(str(p) for p in first["loc"])
+        raise ValueError(f"invalid simulator setting '{field}': {first['msg'].removeprefix('Value error, ')}") from None
     return build_simulator("insertion", config)
