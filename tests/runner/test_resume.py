@@ -169,4 +169,5 @@ def test_sigkilled_cli_run_resumes_to_identical_tables(tmp_path):
     ref_cfg = load_config(path).model_copy(update={"unit_instances": 24})
     reference = run_study(ref_cfg, tmp_path / "ref").run_dir
     assert_same_tables(reference, out)
-    assert manifest["sha256"] == RunDir(reference).manifest()["sha256"]
+    tables = lambda m: {k: v for k, v in m["sha256"].items() if k.endswith(".parquet")}  # noqa: E731 - configs differ in unit_instances
+    assert tables(manifest) == tables(RunDir(reference).manifest())

@@ -105,11 +105,12 @@ def _check_pair(cal: _Run, test: _Run) -> None:
         if getattr(a, section) != getattr(b, section):
             raise ValueError(f"calibration and test runs differ in their '{section}' settings; "
                              "calibrate on a run of the same model, belief and probe schedule")
-    if cal.loaded.path.resolve() == test.loaded.path.resolve():
-        raise ValueError(f"calibration and test are the same run ({cal.loaded.path}); in-sample calibration has no "
-                         "coverage guarantee: calibrate on a run of other instances")
     ids_a = set(cal.loaded.instances["instance_id"])
     ids_b = set(test.loaded.instances["instance_id"])
+    if ids_a & ids_b and cal.loaded.path.resolve() == test.loaded.path.resolve():
+        # Disjoint instance subsets of one run (re-splits of a pool) are fine; the same instances are not.
+        raise ValueError(f"calibration and test are the same run ({cal.loaded.path}); in-sample calibration has no "
+                         "coverage guarantee: calibrate on a run of other instances")
     if ids_a & ids_b:
         shared = sorted(ids_a & ids_b)
         # Same ids in different splits would be a leak only if they were the same truths.
