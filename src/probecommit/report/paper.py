@@ -276,3 +276,17 @@ def _engines(root: Path, quick: bool, progress: Progress, workers: int) -> Path:
 TARGETS["engines"] = Target("engines", ("Table VIII (PyBullet and PhysX)", "scanned boundary offsets and capture windows per engine",
                                         "escape against k per engine"), (), _engines)
 ALIASES["table-8"] = "engines"
+
+
+def _gru(root: Path, quick: bool, progress: Progress, workers: int) -> Path:
+    from probecommit.studies.gru import reproduce_gru
+
+    runs = root / "breadth" / "runs"
+    pipeline = runs / ("push2d-quick" if quick and (runs / "push2d-quick").is_dir() else "push2d")
+    results = root / "gru" / "results"
+    reproduce_gru(results, pipeline, quick=quick, progress=progress)
+    return results
+
+
+TARGETS["gru"] = Target("gru", ("the GRU baseline on MuJoCo 2-D pushing, with the pre-registered equivalence test",),
+                        ("breadth",), _gru)
