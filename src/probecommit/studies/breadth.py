@@ -200,7 +200,8 @@ def plot_budget_curves(curves: pd.DataFrame, path: str | Path) -> list[Path]:
         stem = Path(path).with_suffix("")
         out = [stem.with_suffix(".png"), stem.with_suffix(".pdf")]
         for p in out:
-            fig.savefig(p, dpi=300)
+            # No creation date in the PDF: the same figure is the same bytes (frozen results are hashed).
+            fig.savefig(p, dpi=300, metadata={"CreationDate": None} if p.suffix == ".pdf" else None)
         plt.close(fig)
     return out
 
