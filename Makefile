@@ -6,7 +6,7 @@ PY := $(VENV)/bin/python
 DEMO_STAMP := $(VENV)/.installed-demo
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test test-fast bench reproduce clean-venv
+.PHONY: demo test test-fast bench reproduce clean-venv browser
 
 $(VENV)/bin/python:
 	$(PYTHON) -m venv $(VENV)
@@ -25,8 +25,14 @@ demo: $(DEMO_STAMP)
 	$(VENV)/bin/probecommit demo
 
 ## Create the venv, install every pinned extra, run the whole test suite (slow tests included).
-test: $(STAMP)
+## The HTML report is checked in a real browser: Chromium from Debian's packages, installed here when missing.
+test: $(STAMP) browser
 	$(PY) -m pytest -q
+
+browser:
+	@command -v chromium >/dev/null 2>&1 || command -v chromium-browser >/dev/null 2>&1 || \
+	  { [ "$$(id -u)" = 0 ] && (apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends chromium >/dev/null) ; } || \
+	  echo "chromium is not installed and could not be: the browser test of the HTML report will be skipped"
 
 ## The suite without tests marked slow.
 test-fast: $(STAMP)

@@ -120,7 +120,15 @@ def audit_command(
     if result.surprise is not None:
         write_csv(result.surprise, out / "surprise_auc.csv")
     save_figure(audit_figure(result.table, nominal), out / "audit.png")
-    report = write_html_report(out / "audit.html", result, title=f"Audit of {path.name}", nominal=nominal)
+    images = []
+    if path.is_dir() and (path / "probes.parquet").is_file():
+        try:  # a belief snapshot of one episode, when the run's model can be rebuilt here
+            from probecommit.report.demo import belief_figure
+
+            images.append(("Belief snapshot: one episode's belief after taps 1, 3 and 5", belief_figure(path, out)))
+        except Exception:  # noqa: BLE001 - the snapshot is an extra; the audit stands without it
+            pass
+    report = write_html_report(out / "audit.html", result, title=f"Audit of {path.name}", nominal=nominal, images=images)
     console.print(f"report: [bold]{safe(report)}[/bold]")
 
 

@@ -28,6 +28,15 @@ def illustrative_episode(trace, episodes) -> int:
     return 0
 
 
+def belief_figure(run_dir: str | Path, out: str | Path | None = None) -> Path:
+    """The belief snapshot (Fig. 1b style) of a run's illustrative episode; returns the PNG path."""
+    loaded = load_run(run_dir)
+    trace, model, _ = trace_for_run(loaded)
+    row = illustrative_episode(trace, loaded.episodes)
+    budgets = tuple(k for k in FIGURE_BUDGETS if k in trace.states) or tuple(trace.budgets[:3])
+    return belief_snapshots(trace, model, loaded.episodes, row, budgets, Path(out or run_dir) / "belief.png")
+
+
 def write_demo_report(run_dir: str | Path) -> Path:
     """Write ``report.md`` and ``belief.png`` into the run directory; returns the report path."""
     loaded = load_run(run_dir)

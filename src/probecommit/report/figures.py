@@ -12,13 +12,24 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 
+from probecommit.report.style import COLUMN  # noqa: E402  (applies the shared style)
+
 
 def save_figure(fig, path: str | Path, dpi: int | None = None) -> Path:
-    """Write ``fig`` to ``path`` and close it (figures are built in loops; open ones leak)."""
+    """Write ``fig`` as PNG (``path``, 300 dpi) and PDF beside it, then close it.
+
+    The PDF carries no creation date, so the same figure is the same bytes (frozen
+    results are hashed). Figures are built in loops; open ones leak, hence the close.
+
+    Returns:
+        The PNG path.
+    """
     path = Path(path)
-    fig.savefig(path, dpi=dpi)
+    png = path.with_suffix(".png")
+    fig.savefig(png, dpi=dpi or 300)
+    fig.savefig(png.with_suffix(".pdf"), metadata={"CreationDate": None})
     plt.close(fig)
-    return path
+    return png
 
 
 def belief_density(z: np.ndarray, weights: np.ndarray, grid: np.ndarray, bandwidth: float) -> np.ndarray:
@@ -54,24 +65,35 @@ def belief_snapshots(
     lo, hi = float(model.prior_low[0]), float(model.prior_high[0])
     grid = np.linspace(lo - 1, hi + 1, 600)
     colors = plt.cm.viridis(np.linspace(0.15, 0.85, len(budgets)))
-    fig, ax = plt.subplots(figsize=(6.4, 3.0), dpi=150)
+    fig, ax = plt.subplots(figsize=(COLUMN, 3.1))
     for color, k in zip(colors, budgets):
         state = trace.states[k]
         z = model.decision(state.particles[episode_row])
-        ax.plot(grid, belief_density(z, state.weights[episode_row], grid, 0.3), color=color, lw=1.6, label=f"after tap {k}")
+        ax.plot(grid, belief_density(z, state.weights[episode_row], grid, 0.3), color=color, label=f"after tap {k}")
         row = episodes[(episodes.instance_id == iid) & (episodes.repeat == rep) & (episodes.k == k) & (episodes.method == "probe_robust")]
         if len(row):
             aim = float(row["action"].iloc[0])
             ok = float(row["realized"].iloc[0]) == 0
-            ax.plot([aim], [1.08], marker="v", ms=8, color=color, markerfacecolor=color if ok else "white")
-    ax.axvline(z_true, color="crimson", ls="--", lw=1.2, label="true hole")
-    taps = batch.u[episode_row, : max(budgets)]
-    ax.plot(taps, np.full_like(taps, -0.06), "k|", ms=10, label="tap positions")
+            ax.plot([aim], [1.08], marker="v", ms=5, color=color, markerfacecolor=color if ok else "white")
+    ax.axvline(z_true, color="crimson", ls="--", lw=1.0, label="true hole")
+    # Each tap: its order and what it read (top of the plate or the pocket floor).
+    taps = batch.u[episode_row, : max(budgets)].reshape(-1)
+    readings = batch.y[episode_row, : max(budgets)].reshape(len(taps), -1)[:, 0]
+    seen: dict[float, int] = {}
+    for j, (u, y) in enumerate(zip(taps, readings), start=1):
+        level = seen.get(float(u), 0)
+        seen[float(u)] = level + 1
+        pocket = y < -7.5
+        ax.plot([u], [-0.07], marker="v" if pocket else "s", ms=3.5, color="k", markerfacecolor="k" if pocket else "white")
+        ax.annotate(str(j), (u, -0.07), xytext=(0, -7 - 6 * level), textcoords="offset points", ha="center", fontsize=7)
+    ax.plot([], [], "ks", ms=3.5, markerfacecolor="white", label="tap read top")
+    ax.plot([], [], "kv", ms=3.5, label="tap read pocket")
     ax.set_xlim(grid[0], grid[-1])
-    ax.set_ylim(-0.12, 1.18)
-    ax.set_xlabel("hole position x_hole (mm)")
+    ax.set_ylim(-0.32, 1.18)
+    ax.set_xlabel("hole position (mm)")
     ax.set_ylabel("belief (peak-normalized)")
-    ax.set_title(title or f"{iid}, repeat {rep}: beliefs and aims (filled: entered, open: failed)", fontsize=8)
-    ax.legend(fontsize=7, loc="upper left", frameon=False)
+    ax.set_title(title or "beliefs after each budget; aims on top (filled: entered)")
+    ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.2), frameon=False, ncol=3, handlelength=1.2,
+              columnspacing=0.8)
     fig.tight_layout()
     return save_figure(fig, path)

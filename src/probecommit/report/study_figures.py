@@ -12,21 +12,30 @@ import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 
 from probecommit.report.figures import belief_density, save_figure  # noqa: E402
+from probecommit.report.style import COLUMN, DOUBLE  # noqa: E402
 from probecommit.tasks.insertion.model import TIP_RADIUS_MM, half_gap  # noqa: E402
 
 
 def fault_signatures(per_budget: pd.DataFrame, path: str | Path) -> Path:
     """Escape, coverage, optimism and failure over the budget for each fault (fault arms)."""
     metrics = [("escape", "support escape"), ("coverage", "episode coverage"), ("optimism", "optimism e_k"), ("failure", "failure")]
-    fig, axes = plt.subplots(1, 4, figsize=(11, 2.8), dpi=150)
-    styles = {"none": "k-", "noise": "C0--", "boundary": "C3-", "prior": "C1-", "particles": "C2-", "frame": "C4-"}
+    fig, axes = plt.subplots(1, 4, figsize=(DOUBLE, 2.0))
+    # Overlapping series stay visible: each fault its own colour, line style and marker, and
+    # a small horizontal offset per fault (noise and frame coincide with "none" at times).
+    styles = {"none": ("k", "-", "o"), "noise": ("C0", (0, (4, 2)), "x"), "boundary": ("C3", "-", "s"),
+              "prior": ("C1", "-.", "^"), "particles": ("C2", ":", "D"), "frame": ("C4", (0, (1, 1)), "v")}
+    faults = list(dict.fromkeys(per_budget["fault"]))
     for ax, (col, label) in zip(axes, metrics):
-        for fault, group in per_budget.groupby("fault", sort=False):
-            ax.plot(group["k"], group[col], styles.get(fault, "-"), marker="o", ms=3, lw=1.3, label=fault)
+        for i, (fault, group) in enumerate(per_budget.groupby("fault", sort=False)):
+            color, ls, marker = styles.get(fault, ("0.4", "-", "o"))
+            offset = (i - (len(faults) - 1) / 2) * 0.06
+            ax.plot(group["k"] + offset, group[col], color=color, ls=ls, marker=marker, ms=3, lw=1.0,
+                    markerfacecolor="none" if fault in ("noise", "frame") else color, label=fault)
         ax.set_xlabel("taps k")
-        ax.set_title(label, fontsize=9)
+        ax.set_title(label)
         ax.grid(alpha=0.3)
-    axes[0].legend(fontsize=7, frameon=False)
+    fig.legend(*axes[0].get_legend_handles_labels(), loc="upper center", ncol=len(faults), frameon=False,
+               bbox_to_anchor=(0.5, 1.08))
     fig.tight_layout()
     return save_figure(fig, path)
 
@@ -37,7 +46,8 @@ def scan_figure(grid: pd.DataFrame, scans: pd.DataFrame, instance_id: str, delta
     s = scans[scans.instance_id == instance_id]
     c = float(s["c"].iloc[0])
     hg = float(half_gap(c))
-    fig, ax = plt.subplots(figsize=(6.4, 3.0), dpi=150)
+    fig, ax = plt.subplots(figsize=(COLUMN, 3.0))
+    ax.set_aspect("equal")  # to scale: one mm is one mm in both directions
     # Plate section: top at 0, slot of half-gap hg, floor at -15, chamfer of width delta at each edge.
     for sign in (-1, 1):
         edge = sign * hg
@@ -46,17 +56,30 @@ def scan_figure(grid: pd.DataFrame, scans: pd.DataFrame, instance_id: str, delta
         ax.plot([outer, edge, edge], [0, -delta, -15], color="0.3", lw=1)
         ax.plot([sign * 9, outer], [0, 0], color="0.3", lw=1)
     ax.plot([-hg, hg], [-15, -15], color="0.3", lw=1)
-    ax.scatter(g["offset_from_hole"], g["reading"], s=8, color="C0", zorder=3, label="MuJoCo tap reading")
+    ax.annotate("pocket floor", (0, -15), xytext=(0, 3), textcoords="offset points", ha="center", fontsize=7)
+    ax.scatter(g["offset_from_hole"], g["reading"], s=4, color="C0", zorder=3, label="tap reading (engine)")
+    # The simulated probe path of two taps beside the edge: down to the plate top outside the
+    # scanned boundary; down the chamfer and into the slot inside it (tip centre, radius r).
+    right = float(s[s.side == "right"]["boundary"].iloc[0])
+    theta_circle = np.linspace(0, 2 * np.pi, 40)
+    for u, inside in ((right + 0.4, False), (right - 0.3, True)):
+        end_x = u if not inside else min(u, hg - TIP_RADIUS_MM)
+        end_z = TIP_RADIUS_MM if not inside else -15 + TIP_RADIUS_MM
+        path_x = [u, u] if not inside else [u, u, hg - TIP_RADIUS_MM * 0.3, end_x, end_x]
+        path_z = [8, end_z] if not inside else [8, TIP_RADIUS_MM * 0.7 - (u - hg) * 0 , -delta, -delta - 1, end_z]
+        ax.plot(path_x, path_z, color="C3" if inside else "0.5", lw=0.8, ls=":")
+        ax.plot(end_x + TIP_RADIUS_MM * np.cos(theta_circle), end_z + TIP_RADIUS_MM * np.sin(theta_circle),
+                color="C3" if inside else "0.5", lw=0.8)
     for sign in (-1, 1):
         ax.axvline(sign * (hg - TIP_RADIUS_MM), color="C3", ls="--", lw=1, label="deployed boundary hg - r" if sign < 0 else None)
         ax.axvline(sign * float(s[s.side == ("left" if sign < 0 else "right")]["boundary"].iloc[0]), color="C2", lw=1.2,
                    label="scanned boundary" if sign < 0 else None)
-    ax.set_xlim(-8, 8)
-    ax.set_ylim(-17, 2)
+    ax.set_xlim(-9, 9)
+    ax.set_ylim(-17, 10)
     ax.set_xlabel("tap offset from hole centre (mm)")
-    ax.set_ylabel("reading (mm)")
-    ax.set_title(f"{instance_id}: c = {c:.2f}, hg = {hg:.2f} mm; boundary moves {delta + TIP_RADIUS_MM:.2f} mm", fontsize=8)
-    ax.legend(fontsize=7, loc="lower left", frameon=False)
+    ax.set_ylabel("height (mm)")
+    ax.set_title(f"c = {c:.2f}, hg = {hg:.2f} mm: the boundary moves {delta + TIP_RADIUS_MM:.2f} mm")
+    ax.legend(loc="upper left", frameon=False, fontsize=7)
     fig.tight_layout()
     return save_figure(fig, path)
 
@@ -65,14 +88,14 @@ def decisive_tap_figure(z_deployed, w_deployed, z_corrected, w_corrected, z_true
                         title: str, path: str | Path) -> Path:
     """(b) Beliefs under the deployed and the corrected model right after the decisive tap."""
     grid = np.linspace(-11, 11, 700)
-    fig, ax = plt.subplots(figsize=(6.4, 2.6), dpi=150)
+    fig, ax = plt.subplots(figsize=(COLUMN, 2.3))
     ax.plot(grid, belief_density(z_deployed, w_deployed, grid, 0.3), color="C3", label="deployed model")
     ax.plot(grid, belief_density(z_corrected, w_corrected, grid, 0.3), color="C2", label="corrected model")
     ax.axvline(z_true, color="k", ls="--", lw=1, label="true hole")
     ax.axvline(tap, color="C0", ls=":", lw=1.2, label=f"tap at {tap:+.1f} mm read {reading:.1f} mm")
     ax.set_xlabel("hole position (mm)")
     ax.set_ylabel("belief (peak-normalized)")
-    ax.set_title(title, fontsize=8)
-    ax.legend(fontsize=7, frameon=False)
+    ax.set_title(title)
+    ax.legend(frameon=False)
     fig.tight_layout()
     return save_figure(fig, path)
