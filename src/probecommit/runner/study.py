@@ -158,12 +158,23 @@ def _run_processes(jobs: list[Job], workers: int) -> Iterator[Result]:
                 fut.cancel()
 
 
+def package_runtime_env() -> dict[str, Any]:
+    """Ray runtime environment that ships this probecommit to every worker.
+
+    Workers of a real cluster need not have probecommit installed: Ray uploads the package
+    folder once (``py_modules``) and puts it first on the workers' import path, so they
+    run exactly the driver's code.
+    """
+    package = Path(__file__).resolve().parents[1]
+    return {"py_modules": [str(package)], "excludes": ["__pycache__", "*.pyc"]}
+
+
 def ray_init_kwargs(address: str, workers: int) -> dict[str, Any]:
-    """``ray.init`` arguments for ``--ray``: ``local`` starts an instance, else connect."""
+    """``ray.init`` arguments for ``--ray``: ``local`` starts an instance, else connect and ship the package."""
     common = dict(include_dashboard=False, log_to_driver=False, configure_logging=False)
     if address == "local":
         return dict(num_cpus=workers if workers > 1 else None, **common)
-    return dict(address=address, **common)
+    return dict(address=address, runtime_env=package_runtime_env(), **common)
 
 
 def check_reachable(address: str, timeout_s: float = 3.0) -> None:
