@@ -18,6 +18,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Callable
 
+import numpy as np
+
 Progress = Callable[[str, int, int], None]
 
 
@@ -290,3 +292,47 @@ def _gru(root: Path, quick: bool, progress: Progress, workers: int) -> Path:
 
 TARGETS["gru"] = Target("gru", ("the GRU baseline on MuJoCo 2-D pushing, with the pre-registered equivalence test",),
                         ("breadth",), _gru)
+
+
+def plot_pricing(table: Any, path: str | Path) -> Path:
+    """``J_lambda(k)`` against the price for each family (one small panel each)."""
+    import matplotlib.pyplot as plt
+
+    from probecommit.report.figures import save_figure
+
+    n = len(table)
+    fig, axes = plt.subplots(1, max(n, 1), figsize=(7.16, 2.0), squeeze=False)
+    for ax, (_, r) in zip(axes[0], table.iterrows()):
+        top = max(r["blind_above"] * 1.6, 1e-4)
+        lam = np.linspace(0, top, 200)
+        for k, m, style in ((0, r["miss_0"], "k-"), (2, r["miss_2"], "C0--"), (5, r["miss_5"], "C3-.")):
+            ax.plot(lam, m + k * lam, style, lw=1.0, label=f"k = {k}")
+        for price in {r["blind_above"], r["five_below"]}:
+            ax.axvline(price, color="0.6", lw=0.6, ls=":")
+        ax.set_title(str(r["family"]))
+        ax.set_xlabel("price per probe")
+    axes[0][0].set_ylabel("miss + price x k")
+    axes[0][0].legend(frameon=False)
+    fig.tight_layout()
+    return save_figure(fig, path)
+
+
+def _cost(root: Path, quick: bool, progress: Progress, workers: int) -> Path:
+    import pandas as pd
+
+    from probecommit.studies.pricing import pricing_markdown, pricing_table
+
+    curves = pd.read_parquet(root / "breadth" / "results" / "budget_curves.parquet")
+    results = root / "cost" / "results"
+    results.mkdir(parents=True, exist_ok=True)
+    table = pricing_table(curves)
+    table.to_parquet(results / "pricing.parquet")
+    write_table(results, "table_pricing", pricing_markdown(table))
+    plot_pricing(table, results / "fig_pricing.png")
+    (results / "results.json").write_text(json.dumps({"results": {"pricing": json.loads(table.to_json(orient="records"))}},
+                                                     indent=1))
+    return results
+
+
+TARGETS["cost"] = Target("cost", ("probe pricing J(k) = miss(k) + lambda k: break-even prices per family, figure",),
+                         ("breadth",), _cost)
