@@ -41,6 +41,7 @@ test-fast: $(STAMP)
 ## Benchmarks: ratios measured side by side in one run.
 bench: $(STAMP)
 	$(PY) benchmarks/belief.py
+	$(PY) benchmarks/calibrate.py
 	$(PY) benchmarks/scale.py
 
 ## Every table and figure of the paper (resumable; see probecommit reproduce --list).
