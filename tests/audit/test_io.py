@@ -5,6 +5,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from probecommit.audit.io import EpisodeTableError, read_episodes, validate_episodes
 from probecommit.audit.metrics import audit_table
@@ -177,3 +179,42 @@ def test_interval_wider_than_hull_is_counted_duplicate_header_and_missing_budget
     missing = table[~((table["instance_id"] == first) & (table["k"] == 2))]
     with pytest.raises(EpisodeTableError, match=rf"instance '{first}' has no rows at budget\(s\) \[2\]"):
         validate_episodes(missing)
+
+
+def test_nullable_boolean_na_is_derived_like_an_empty_csv_cell_and_optional_text_is_ignored():
+    table = synthetic_episodes(6, 2, (1, 2), n_particles=64, seed=3)
+    na = table.copy()
+    na["covered"] = pd.array([True] * (len(na) - 1) + [None], dtype="boolean")
+    derived = validate_episodes(na)
+    z, lo, hi = derived["z_true"], derived["retained_lo"], derived["retained_hi"]
+    assert (derived["covered"] == ((lo <= z) & (z <= hi))).all()
+    text = table.copy()
+    text["post_var"] = "not a number"
+    out = validate_episodes(text)
+    assert "post_var" not in out.columns and any("optional column 'post_var' ignored" in n for n in out.attrs["notes"])
+
+
+@given(st.lists(st.sampled_from(["instance_id", "repeat", "k", "predicted", "realized", "z_true", "retained_lo",
+                                  "retained_hi", "hull_lo", "hull_hi"]), min_size=1, max_size=3))
+@settings(max_examples=25, deadline=None)
+def test_generated_duplicate_headers_are_refused(duplicates):
+    import io
+
+    table = synthetic_episodes(4, 2, (1,), n_particles=32, seed=1)
+    text = table.to_csv(index=False)
+    header, rest = text.split("\n", 1)
+    extra = "".join("," + d for d in duplicates)
+    body = "\n".join(line + ",1" * len(duplicates) for line in rest.strip().split("\n"))
+    frame = pd.read_csv(io.StringIO(header + extra + "\n" + body), dtype=str, keep_default_na=False)
+    with pytest.raises(EpisodeTableError, match="appears more than once"):
+        validate_episodes(frame)
+
+
+@given(st.floats(0.01, 5.0), st.integers(0, 7))
+@settings(max_examples=25, deadline=None)
+def test_generated_inverted_intervals_are_refused(gap, row):
+    table = synthetic_episodes(4, 2, (1,), n_particles=32, seed=2)
+    bad = table.copy()
+    bad.loc[row, "retained_hi"] = bad.loc[row, "retained_lo"] - gap
+    with pytest.raises(EpisodeTableError, match="retained_lo > retained_hi"):
+        validate_episodes(bad)

@@ -127,3 +127,31 @@ def test_a_semicolon_csv_and_a_nan_boundary_offset_get_plain_errors(tmp_path):
     assert result.exit_code == 2 and "semicolon-separated" in " ".join(result.output.split())
     result = runner.invoke(app, ["scan", "--engine", "analytic", "--boundary-offset", "nan", "-o", str(tmp_path / "s")])
     assert result.exit_code == 2 and "boundary_offset" in result.output and "http" not in result.output
+
+
+@given(st.integers(2, 7), st.integers(2, 12))
+@settings(max_examples=15, deadline=None)
+def test_generated_alias_bombs_never_take_long(depth, width):
+    import tempfile
+    from pathlib import Path
+
+    lines = ['a0: &a0 ["x", "x"]']
+    for i in range(1, depth):
+        lines.append(f"a{i}: &a{i} [" + ", ".join([f"*a{i - 1}"] * width) + "]")
+    text = "\n".join(lines) + f"\nname: *a{depth - 1}\n"
+    with tempfile.TemporaryDirectory() as tmp:
+        path = Path(tmp) / "bomb.yaml"
+        path.write_text(text)
+        start = time.perf_counter()
+        with pytest.raises(ConfigError):
+            load_config(path)
+        assert time.perf_counter() - start < 2.0
+
+
+def test_audit_intervals_are_whole_in_a_pipe(tmp_path):
+    from tests.audit.test_io import ROBOT
+
+    result = runner.invoke(app, ["audit", str(ROBOT), "--resamples", "100", "-o", str(tmp_path / "a")])
+    assert result.exit_code == 0, result.output
+    # every interval of the audit table on one line: "[lo, hi]" never split across lines
+    assert all(line.count("[") == line.count("]") for line in result.output.splitlines())

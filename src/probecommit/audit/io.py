@@ -140,8 +140,9 @@ def _boolean(df: pd.DataFrame, name: str, csv: bool, source: str) -> pd.Series |
         if isinstance(v, (bool, np.bool_)):
             out.append(bool(v))
             continue
-        if v is None or (isinstance(v, float) and np.isnan(v)):
-            return None  # incomplete: derive from the intervals instead
+        if v is None or v is pd.NA or (isinstance(v, float) and np.isnan(v)):
+            # Incomplete (an empty CSV cell, a NaN, a nullable boolean's NA alike): derive from the intervals.
+            return None
         t = str(v).strip().lower()
         if t in _NA_TEXT or t == "":
             return None
@@ -209,12 +210,21 @@ def validate_episodes(table: pd.DataFrame, source: str = "episode table", *, csv
         df["status"] = "ok"
     ok = (df["status"] == "ok").to_numpy()
 
+    notes: list[str] = []
     for c in EPISODE_COLUMNS:
-        if c.name in df.columns and pa.types.is_floating(c.type):
+        numeric = c.name in df.columns and (pa.types.is_floating(c.type) or
+                                            (pa.types.is_integer(c.type) and c.name not in ("repeat", "k")))
+        if not numeric:
+            continue
+        if c.name in AUDIT_REQUIRED:
             df[c.name] = _numeric(df, c.name, csv, source)
-        elif c.name in df.columns and pa.types.is_integer(c.type) and c.name not in ("repeat", "k"):
-            vals = _numeric(df, c.name, csv, source)
-            df[c.name] = vals  # optional integer column (n_retained): keep as float if it has gaps
+            continue
+        # An optional column the audit does not need must not block it: unreadable ones are dropped, and said.
+        try:
+            df[c.name] = _numeric(df, c.name, csv, source)  # optional integer columns stay float if they have gaps
+        except EpisodeTableError as exc:
+            df = df.drop(columns=[c.name])
+            notes.append(f"optional column '{c.name}' ignored: {str(exc).split(': ', 1)[-1]}")
     for name in FINITE_REQUIRED:
         bad = ~np.isfinite(df[name].to_numpy()) & ok
         if bad.any():
@@ -233,7 +243,6 @@ def validate_episodes(table: pd.DataFrame, source: str = "episode table", *, csv
     # conformal threshold t > 1); such rows can be covered and escaped at once. Counted, and
     # said in the report, never silent.
     wider = ((df["retained_lo"] < df["hull_lo"] - 1e-9) | (df["retained_hi"] > df["hull_hi"] + 1e-9)).to_numpy() & ok
-    notes: list[str] = []
     if wider.any():
         both = wider & ((df["z_true"] < df["hull_lo"]) | (df["z_true"] > df["hull_hi"])).to_numpy() & \
             ((df["retained_lo"] <= df["z_true"]) & (df["z_true"] <= df["retained_hi"])).to_numpy()

@@ -60,7 +60,21 @@ def print_audit_table(table, title: str) -> None:
             out.add_row(str(int(row["k"])), str(int(row["n_episodes"])), str(int(row["n_failed"])),
                         _ci(row, "coverage"), _ci(row, "cluster_coverage"), _ci(row, "escape"),
                         _f(row["realized"]), _f(row["predicted"]), _ci(row, "optimism", True))
-        console.print(out)
+        print_table(out)
+
+
+def print_table(table) -> None:
+    """Print a table of intervals whole: in a pipe or a CI log (no terminal) the width is not
+    capped at 80 columns, so an interval is never cut or wrapped mid-number."""
+    if console.is_terminal:
+        console.print(table)
+        return
+    saved = console.width
+    console.width = 400  # the table takes only the width it needs
+    try:
+        console.print(table)
+    finally:
+        console.width = saved
 
 
 def write_csv(frame, path: Path) -> None:
@@ -115,7 +129,7 @@ def audit_command(
             s.add_column(col, justify="right")
         for _, row in result.surprise.iterrows():
             s.add_row(str(row["k"]), str(row["n_escaped"]), str(row["n_covered"]), _ci(row, "auc"))
-        console.print(s)
+        print_table(s)
     write_csv(result.table, out / "audit.csv")
     if result.surprise is not None:
         write_csv(result.surprise, out / "surprise_auc.csv")
@@ -171,7 +185,7 @@ def calibrate_command(
     t3.add_row("mean |.|", "", f"{_f(res.summary['mean_abs_cluster_coverage_gap_original'])}",
                f"{_f(res.summary['mean_abs_cluster_coverage_gap_calibrated'])}",
                f"{_f(res.summary['mean_abs_optimism_original'])}", f"{_f(res.summary['mean_abs_optimism_calibrated'])}")
-    console.print(t3)
+    print_table(t3)
     t4 = Table(title=f"cost of calibration: failure at k = {res.cost_budget}", title_style="bold")
     for col in ("setting", "k", "n", "failure"):
         t4.add_column(col, justify="right")
@@ -180,7 +194,7 @@ def calibrate_command(
     for _, r in res.cost_differences.iterrows():
         t4.add_row(f"{r['treatment']} - {r['baseline']}", "", str(int(r["n_pairs"])),
                    f"{_f(r['difference'], True)} [{_f(r['lo'], True)}, {_f(r['hi'], True)}] p={r['p_sign_flip']:.3g}")
-    console.print(t4)
+    print_table(t4)
     (out / "calibration.json").write_text(json.dumps(res.to_dict(), indent=2, default=float))
     write_csv(res.table3, out / "table3.csv")
     write_csv(res.cost, out / "cost.csv")
@@ -224,7 +238,7 @@ def gates_command(
                     f"{int(r['n_committed'])} ({_f(r['commit_rate'])})",
                     f"{int(r['escaped_committed'])}/{int(r['n_committed'])}",
                     f"{int(r['escaped_rejected'])}/{int(r['n_rejected'])}", _f(r["claimed"]), _f(r["realized"]))
-    console.print(tab)
+    print_table(tab)
     write_csv(res.curves, out / "gate_curves.csv")
     write_csv(res.summary, out / "gates.csv")
     write_csv(res.info["surprise"], out / "surprise_auc.csv")
