@@ -37,6 +37,8 @@ def test_reproduce_all_quick_then_publish_and_verify(tmp_path):
     publish({k: str(v) for k, v in folders.items()}, repo, timing={"wall_s": {"insertion": 1.0}})
     text = (repo / "REPRODUCTION.md").read_text()
     assert "Table V" in text and "Beyond the paper" in text
+    page = (repo / "results" / "paper" / "report.html").read_text()
+    assert "data:image/png;base64," in page and "<table>" in page and "http" not in page.split("<body>")[1][:500]
     report = verify(repo / "results")
     assert report.ok, report.failures[:5]
     assert report.checked > 788

@@ -154,6 +154,9 @@ def write_reproduction_md(repo_root: str | Path) -> Path:
         parts.append("\n" + beyond_section(frozen / "beyond"))
     path = repo_root / "REPRODUCTION.md"
     path.write_text("".join(parts))
+    from probecommit.report.paper_html import write_paper_report
+
+    write_paper_report(frozen, path, frozen / "report.html")
     return path
 
 
