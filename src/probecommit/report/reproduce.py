@@ -412,11 +412,15 @@ class InsertionReproduction:
     def commit_gates(self) -> None:
         """Commit gates on Split B, cover schedule (paper Fig. "commit decision" b, c)."""
         from probecommit.runner.calibration import gates
-        from probecommit.report.audit_report import gates_figure
+
+        from probecommit.report.study_figures import coverage_vs_nominal, decision_figure
 
         L = self.loaded
         result = gates(L["B_cal_cover"], L["B_test_cover"], alpha=self.p.alpha, **self.boot)
-        path = save_figure(gates_figure(result), self.out / "fig_commit_gates.png", dpi=150)
+        k = self.p.budgets["random"]
+        coverage = coverage_vs_nominal(L["B_cal_random"].episodes, L["B_test_random"].episodes, k)
+        coverage.to_parquet(self.out / "coverage_vs_nominal.parquet")
+        path = decision_figure(coverage, result, self.out / "fig_commit_gates.png")
         self.rep.figures["commit_gates"] = str(path)
         summary = result.summary
         self.rep.results["gates"] = {"summary": summary.to_dict("records"), "info": result.info}

@@ -31,6 +31,8 @@ def fault_signatures(per_budget: pd.DataFrame, path: str | Path) -> Path:
             offset = (i - (len(faults) - 1) / 2) * 0.06
             ax.plot(group["k"] + offset, group[col], color=color, ls=ls, marker=marker, ms=3, lw=1.0,
                     markerfacecolor="none" if fault in ("noise", "frame") else color, label=fault)
+            if f"{col}_lo" in group.columns:  # the cluster-bootstrap band
+                ax.fill_between(group["k"] + offset, group[f"{col}_lo"], group[f"{col}_hi"], color=color, alpha=0.10, lw=0)
         ax.set_xlabel("taps k")
         ax.set_title(label)
         ax.grid(alpha=0.3)
@@ -97,5 +99,65 @@ def decisive_tap_figure(z_deployed, w_deployed, z_corrected, w_corrected, z_true
     ax.set_ylabel("belief (peak-normalized)")
     ax.set_title(title)
     ax.legend(frameon=False)
+    fig.tight_layout()
+    return save_figure(fig, path)
+
+
+def coverage_vs_nominal(cal_episodes: pd.DataFrame, test_episodes: pd.DataFrame, k: int,
+                        levels: np.ndarray | None = None) -> pd.DataFrame:
+    """Fig. 4a's data: held-out cluster coverage against the nominal level 1 - alpha at budget ``k``.
+
+    The threshold is the conformal quantile of the calibration instances' worst-repeat
+    scores; coverage is the score identity ``s <= t`` on the test instances (all repeats).
+    """
+    from probecommit.audit.conformal import conformal_quantile, instance_scores, score_coverage
+
+    levels = np.round(np.arange(0.5, 0.951, 0.05), 2) if levels is None else levels
+    cal = instance_scores(cal_episodes[cal_episodes["method"] == "probe_robust"], k).dropna().to_numpy()
+    test = test_episodes[(test_episodes["method"] == "probe_robust") & (test_episodes["k"] == k)]
+    rows = []
+    for level in levels:
+        t = conformal_quantile(cal, 1 - level)
+        cov = score_coverage(test, min(t, 1e9))
+        # An infinite threshold (q = M + 1: too few calibration instances) is stored as NaN with a flag.
+        rows.append({"nominal": float(level), "threshold": float(t) if np.isfinite(t) else float("nan"),
+                     "threshold_infinite": bool(not np.isfinite(t)),
+                     "cluster_coverage": float(cov["cluster_coverage"].iloc[0])})
+    return pd.DataFrame(rows)
+
+
+def decision_figure(coverage: pd.DataFrame, gates_result, path: str | Path) -> Path:
+    """Fig. 4: (a) cluster coverage vs nominal, (b) failure among committed vs commit rate, (c) claimed vs realized."""
+    from probecommit.report.audit_report import gates_figure
+
+    gate_fig = gates_figure(gates_result)
+    fig = plt.figure(figsize=(DOUBLE, 2.5))
+    grid = fig.add_gridspec(1, 3, width_ratios=[2, 3, 2])
+    ax_a = fig.add_subplot(grid[0])
+    ax_a.plot([0.5, 1.0], [0.5, 1.0], color="grey", ls=":", lw=1, label="nominal")
+    ax_a.plot(coverage["nominal"], coverage["cluster_coverage"], "o-", color="C0", ms=3, label="held-out")
+    ax_a.set_xlabel("nominal level 1 - alpha")
+    ax_a.set_ylabel("cluster coverage")
+    ax_a.set_title("(a) coverage vs nominal")
+    ax_a.legend(frameon=False)
+    for i, src in enumerate(gate_fig.axes[:2]):
+        ax = fig.add_subplot(grid[i + 1])
+        for line in src.get_lines():
+            ax.plot(line.get_xdata(), line.get_ydata(), color=line.get_color(), ls=line.get_linestyle(),
+                    drawstyle=line.get_drawstyle(), lw=line.get_linewidth(), label=line.get_label())
+        for patch in src.patches:
+            ax.bar(patch.get_x() + patch.get_width() / 2, patch.get_height(), patch.get_width(),
+                   color=patch.get_facecolor())
+        if i == 1:
+            short = {"posterior_variance": "post. var.", "oracle": "oracle"}
+            ax.set_xticks(src.get_xticks(), [short.get(t.get_text(), t.get_text()) for t in src.get_xticklabels()],
+                          rotation=20, ha="right")
+        ax.set_xlabel(src.get_xlabel())
+        ax.set_ylabel(src.get_ylabel())
+        ax.set_title(("(b) " if i == 0 else "(c) ") + (src.get_title() or "failure among committed"))
+        if i == 0:
+            ax.set_xlim(0, 1)
+            ax.legend(frameon=False)
+    plt.close(gate_fig)
     fig.tight_layout()
     return save_figure(fig, path)

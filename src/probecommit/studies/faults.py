@@ -76,18 +76,27 @@ def run_fault_harness(rollouts: dict[str, LoadedRun], arms: list[Arm], progress=
     return pd.concat(frames, ignore_index=True)
 
 
-def signature_table(episodes: pd.DataFrame) -> pd.DataFrame:
+def signature_table(episodes: pd.DataFrame, resamples: int = 2000, seed: int = 7) -> pd.DataFrame:
     """Per (fault, budget) of the fault arms: escape, coverage, optimism and failure.
 
-    The data of the signatures figure; faults in ``FAULTS`` order, budgets ascending.
+    The data of the signatures figure; faults in ``FAULTS`` order, budgets ascending;
+    each metric with a cluster-bootstrap interval over instances (``<metric>_lo/_hi``),
+    the figure's bands.
     """
+    from probecommit.audit.stats import cluster_bootstrap_mean
+
     probe = episodes[(episodes.arm == "fault") & (episodes.method == "probe_robust") & (episodes.status == "ok")]
-    table = (
-        probe.assign(optimism=probe.realized - probe.predicted)
-        .groupby(["fault", "k"], sort=False)
-        .agg(escape=("escaped", "mean"), coverage=("covered", "mean"), optimism=("optimism", "mean"),
-             failure=("realized", "mean"))
-        .reset_index()
-    )
+    probe = probe.assign(optimism=probe.realized - probe.predicted)
+    columns = {"escape": "escaped", "coverage": "covered", "optimism": "optimism", "failure": "realized"}
+    rows = []
+    for (fault, k), group in probe.groupby(["fault", "k"], sort=False):
+        row = {"fault": fault, "k": k}
+        for name, col in columns.items():
+            ci = cluster_bootstrap_mean(group[col].to_numpy(float), group["instance_id"].to_numpy(), resamples=resamples,
+                                        seed=seed)
+            row.update({name: ci.estimate, f"{name}_lo": ci.lo, f"{name}_hi": ci.hi})
+        rows.append(row)
+    table = pd.DataFrame(rows)
+    table = table[["fault", "k", *columns, *[f"{n}_{e}" for n in columns for e in ("lo", "hi")]]]
     rank = table["fault"].map({f: i for i, f in enumerate(FAULTS)})
     return table.assign(_r=rank).sort_values(["_r", "k"], kind="stable").drop(columns="_r").reset_index(drop=True)
