@@ -24,3 +24,12 @@ def paper_config(name: str) -> _Path:
         have = ", ".join(sorted(p.stem for p in folder.glob("*.yaml")))
         raise FileNotFoundError(f"no paper config {name!r}; shipped: {have}")
     return path
+
+
+def __getattr__(name: str):
+    # Lazy: ``import probecommit`` stays light; ``probecommit.Session`` imports the robot API on first use.
+    if name == "Session":
+        from probecommit.robot.session import Session
+
+        return Session
+    raise AttributeError(f"module 'probecommit' has no attribute {name!r}")

@@ -32,10 +32,11 @@ from probecommit.audit.surprise import max_surprise, surprise_auc
 
 
 from probecommit.audit.pipeline import AuditResult, audit
+from probecommit.audit.rows import episode_row
 
 __all__ = [
     "AuditResult", "audit", "EpisodeTableError", "GAMMA_GRID", "Interval", "audit_table", "cluster_bootstrap_auc",
-    "cluster_bootstrap_mean", "conformal_quantile", "coverage_score", "distribution_free_margin",
+    "cluster_bootstrap_mean", "conformal_quantile", "coverage_score", "distribution_free_margin", "episode_row",
     "evaluate_gates", "first_passage", "fixed_budget_thresholds", "gate_curve", "gates_from_tables",
     "instance_scores", "max_surprise", "paired_bootstrap", "rank_auc", "read_episodes", "select_margin",
     "sign_flip_test", "simultaneous_scores", "simultaneous_threshold", "surprise_auc", "validate_episodes",

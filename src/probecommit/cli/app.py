@@ -124,19 +124,37 @@ def demo(
 @app.command()
 @user_errors
 def replay(
-    run_dir: Path = typer.Argument(..., help="A complete run directory."),
+    run_dir: Path = typer.Argument(..., help="A complete run directory, or a robot session log (.jsonl or its directory)."),
     model: Optional[str] = typer.Option(None, "--model", help="Insertion shorthand for --set model.boundary=...: deployed or corrected."),
     delta: Optional[float] = typer.Option(None, help="Insertion shorthand for --set model.delta=... (mm)."),
     set_: list[str] = typer.Option([], "--set", help="Override a model, belief or simulator.aim_offset field: SECTION.FIELD=VALUE (YAML value; repeatable)."),
     out: Optional[Path] = typer.Option(None, "--out", "-o", help="New run directory (default RUN-replay or RUN-<model>)."),
     fixed_probes: bool = typer.Option(False, "--fixed-probes", help="Replay an adaptive run's probes under another model anyway (not a paired comparison)."),
+    fault: Optional[str] = typer.Option(None, "--fault", help="Session logs: inject a fault, 'boundary' (tap boundary pulled inward) or 'prior' (prior narrowed)."),
+    sweep: Optional[str] = typer.Option(None, "--sweep", help="Session logs: fault sizes START:STOP:STEP in mm (inclusive) or a comma list; boundary default 0:14:1."),
+    half_width: Optional[float] = typer.Option(None, "--half-width", help="Session logs, --fault prior: the narrowed prior's half-width (mm)."),
+    resamples: int = typer.Option(2000, min=100, help="Session logs: cluster-bootstrap resamples."),
 ) -> None:
-    """Recompute beliefs and episodes from a run's stored probes under another model.
+    """Recompute beliefs and episodes from stored probes under another model.
 
     Both runs then hold identical probes, so their episodes are paired. With no
-    option, an insertion run is replayed under the corrected tap model.
+    option, an insertion run is replayed under the corrected tap model. A robot
+    session log is replayed as deployed (it must reproduce its own decisions), or
+    under an injected fault with --fault (paper Fig. 7c, 7d).
     """
     import yaml
+
+    from probecommit.cli.robot_commands import is_session_log, replay_session_log
+
+    if is_session_log(run_dir):
+        if model is not None or delta is not None or set_ or fixed_probes:
+            raise ValueError("a session log takes --fault/--sweep/--half-width; --model, --delta, --set and "
+                             "--fixed-probes are for run directories")
+        replay_session_log(run_dir, fault, sweep, half_width, out, resamples, 0)
+        return
+    if fault is not None or sweep is not None or half_width is not None:
+        raise ValueError(f"--fault, --sweep and --half-width replay robot session logs; {run_dir} is not one "
+                         "(for a run directory use --set model.FIELD=VALUE)")
 
     from probecommit.runner.replay import load_run, replay_run
 
@@ -191,6 +209,9 @@ def register_optional_commands() -> None:
     from probecommit.cli import study_commands
 
     study_commands.register(app)
+    from probecommit.cli import robot_commands
+
+    robot_commands.register(app)
     try:
         from probecommit.cli import audit_commands
     except ImportError:

@@ -91,7 +91,7 @@ def write_csv(frame, path: Path) -> None:
 
 @user_errors
 def audit_command(
-    path: Path = typer.Argument(..., help="Run directory, or a Parquet/CSV episode log (a real robot's)."),
+    path: Path = typer.Argument(..., help="Run directory, a Parquet/CSV episode log, or a robot session log (.jsonl or its directory: Table IX)."),
     out: Optional[Path] = typer.Option(None, "--out", "-o", help="Output folder (default: the run directory, "
                                        "or <log>-audit next to a log file)."),
     resamples: int = typer.Option(2000, min=100, help="Cluster-bootstrap resamples."),
@@ -100,9 +100,13 @@ def audit_command(
 ) -> None:
     """Audit coverage, support escape and optimism per budget, with cluster-bootstrap intervals."""
     from probecommit.audit.pipeline import audit
+    from probecommit.cli.robot_commands import audit_session_log, is_session_log
     from probecommit.report.audit_report import audit_figure, write_html_report
     from probecommit.report.figures import save_figure
 
+    if is_session_log(path):
+        audit_session_log(path, out, resamples, seed)
+        return
     result = audit(path, resamples=resamples, seed=seed)
     config_file = path / "config.yaml" if path.is_dir() else None
     if config_file is not None and config_file.is_file():

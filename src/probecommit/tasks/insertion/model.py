@@ -63,6 +63,8 @@ class InsertionModel(TaskModelBase):
     action_grid = np.round(np.arange(-10.0, 10.0 + 1e-9, 0.5), 10)[:, None]
     binary_loss = True
     decision_domain_width = 20.0
+    #: Readings a tap can physically give (mm): above the pocket floor's noise band to the start height.
+    observation_range = (-17.0, 2.0)
     probe_dim = 1
     observation_dim = 1
     action_dim = 1

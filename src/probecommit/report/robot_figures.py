@@ -1,0 +1,61 @@
+"""Fig. 7 (b-d): the robot run and its replays under injected faults.
+
+(b) aim error against taps, one point per episode (filled: the tool entered; open: it
+did not), medians joined, the model's window as a band and the opening's half-width
+dashed; (c) optimism and coverage of a boundary-faulted replay minus the deployed one,
+paired over positions, 95 % band, filled where resolved; (d) the same under a narrowed
+prior.
+"""
+
+from __future__ import annotations
+
+import matplotlib.pyplot as plt
+import numpy as np
+import pandas as pd
+
+from probecommit.report.style import COLUMN
+
+
+def aim_error_figure(rows: pd.DataFrame, window: float | None = None, half_opening: float | None = None):
+    """Fig. 7b: aim error (mm) against taps."""
+    fig, ax = plt.subplots(figsize=(COLUMN, 2.6))
+    rng = np.random.default_rng(0)  # horizontal jitter only, for legibility
+    entered = rows["entered"].fillna(0).astype(bool).to_numpy() if "entered" in rows else np.zeros(len(rows), bool)
+    x = rows["k"].to_numpy() + rng.uniform(-0.15, 0.15, len(rows))
+    y = rows["aim_error"].to_numpy()
+    ax.scatter(x[entered], y[entered], s=9, color="C0", label="entered", zorder=3)
+    ax.scatter(x[~entered], y[~entered], s=9, facecolors="none", edgecolors="C3", label="did not enter", zorder=3)
+    med = rows.groupby("k")["aim_error"].median()
+    ax.plot(med.index, med.to_numpy(), color="k", lw=1.0, label="median")
+    if window is not None:
+        ax.axhspan(0, window, color="C2", alpha=0.15, lw=0, label=f"model window ({window:.2f} mm)")
+    if half_opening is not None:
+        ax.axhline(half_opening, color="0.4", ls="--", lw=0.8, label=f"opening half-width ({half_opening:.1f} mm)")
+    ax.set_xlabel("taps before the commit")
+    ax.set_ylabel("aim error |a - x| (mm)")
+    ax.set_xticks(sorted(rows["k"].unique()))
+    ax.set_ylim(bottom=0)
+    ax.legend(frameon=False, ncol=3, fontsize=6.5, loc="lower center", bbox_to_anchor=(0.5, 1.0))
+    return fig
+
+
+def fault_sweep_figure(sweep: pd.DataFrame, xlabel: str, reference: float | None = None, reference_label: str = ""):
+    """Fig. 7c/7d: faulted minus deployed optimism and coverage against fault size, 95 % bands."""
+    fig, axes = plt.subplots(1, 2, figsize=(COLUMN * 2, 2.1))
+    for ax, metric, label in ((axes[0], "optimism", "optimism, faulted - deployed"),
+                              (axes[1], "coverage", "coverage, faulted - deployed")):
+        x = sweep["size"].to_numpy()
+        mid = sweep[f"d_{metric}"].to_numpy()
+        ax.fill_between(x, sweep[f"d_{metric}_lo"], sweep[f"d_{metric}_hi"], color="C0", alpha=0.2, lw=0, label="95% CI")
+        ax.plot(x, mid, color="C0", lw=1.0)
+        resolved = sweep[f"{metric}_resolved"].to_numpy(bool)
+        ax.scatter(x[resolved], mid[resolved], color="C0", s=12, zorder=3, label="resolved")
+        ax.scatter(x[~resolved], mid[~resolved], facecolors="white", edgecolors="C0", s=12, zorder=3, label="not resolved")
+        ax.axhline(0, color="0.5", lw=0.6)
+        if reference is not None:
+            ax.axvline(reference, color="0.3", ls=":", lw=0.9, label=reference_label)
+        ax.set_xlabel(xlabel)
+        ax.set_ylabel(label)
+    axes[0].legend(frameon=False, fontsize=6.5)
+    fig.tight_layout()
+    return fig
