@@ -27,7 +27,7 @@ def reading_rng(config: StudyConfig, episode: int) -> np.random.Generator:
 
 
 def simulate_session(path: str | Path, config: Any, *, progress: Callable[[int, int], None] | None = None,
-                     stop_after: int | None = None) -> Path:
+                     stop_after: int | None = None, repair: bool = False) -> Path:
     """Run (or resume) the simulated rig's whole session into the log at ``path``.
 
     Args:
@@ -36,6 +36,7 @@ def simulate_session(path: str | Path, config: Any, *, progress: Callable[[int, 
         progress: Called as ``progress(done, total)`` after each episode.
         stop_after: Stop after this many episodes in this call (a deliberate interruption,
             for tests and demos of resuming).
+        repair: Resume a log whose last line was cut off by a crash (kept in ``.partial``).
 
     Returns:
         The log's path.
@@ -48,7 +49,7 @@ def simulate_session(path: str | Path, config: Any, *, progress: Callable[[int, 
     budgets = config.probes.budgets or [config.probes.budget]
     plan = [(i, r, k) for i in range(len(instances)) for r in range(config.repeats) for k in budgets]
     done_now = 0
-    with Session.open(path, config) as session:
+    with Session.open(path, config, repair=repair) as session:
         started = len(session.episodes)
         # Resume: an open episode finishes first, then the plan continues where the log stopped.
         for number in range(max(started - 1, 0), len(plan)):
@@ -59,9 +60,12 @@ def simulate_session(path: str | Path, config: Any, *, progress: Callable[[int, 
             if number >= started:
                 session.start_episode(position, taps=k)
             ep = session.episodes[number]
-            if ep.done:
-                continue
             theta = truths[i]
+            last_of_position = number + 1 == len(plan) or plan[number + 1][0] != i
+            if ep.done:  # a crash may have come between the outcome and the touch sweep
+                if last_of_position and position not in session.truths:
+                    session.record_truth(position, theta)
+                continue
             rng = reading_rng(config, number)
             for _ in range(len(ep.probes)):  # readings already recorded were drawn already
                 simulator.probe(theta, np.asarray(ep.probes[0], dtype=float), rng)
@@ -71,7 +75,6 @@ def simulate_session(path: str | Path, config: Any, *, progress: Callable[[int, 
             action = decision.action if decision is not None else ep.decision["action"]
             outcome = simulator.execute(theta, np.atleast_1d(action))
             session.record_outcome(entered=outcome.get("entered"), depth=outcome.get("depth"))
-            last_of_position = number + 1 == len(plan) or plan[number + 1][0] != i
             if last_of_position:  # the touch sweep after the position's episodes gives its truth
                 session.record_truth(position, theta)
             done_now += 1
