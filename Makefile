@@ -43,6 +43,7 @@ bench: $(STAMP)
 	$(PY) benchmarks/belief.py
 	$(PY) benchmarks/calibrate.py
 	$(PY) benchmarks/scale.py
+	$(PY) benchmarks/session.py
 
 ## Every table and figure of the paper (resumable; see probecommit reproduce --list).
 reproduce: $(STAMP)

@@ -35,14 +35,14 @@ def test_replay_as_deployed_reproduces_every_decision(tmp_path):
 def test_a_fault_of_size_zero_changes_nothing(paper_size_log):
     sweep, _ = fault_sweep(paper_size_log, "boundary", [0.0], resamples=200)
     row = sweep.iloc[0]
-    assert row["d_optimism"] == 0.0 and row["d_coverage"] == 0.0
+    assert row["delta_optimism"] == 0.0 and row["delta_coverage"] == 0.0
     assert not row["optimism_resolved"] and not row["coverage_resolved"]
 
 
 def test_a_planted_boundary_fault_is_seen_by_optimism_as_it_grows(paper_size_log):
     sweep, reproduced = fault_sweep(paper_size_log, "boundary", [0.0, 4.0, 8.0, 12.0], resamples=1000)
     assert reproduced == 1.0
-    d = sweep["d_optimism"].to_numpy()
+    d = sweep["delta_optimism"].to_numpy()
     assert d[0] == 0.0 and d[-1] > 0.1
     assert sweep["optimism_resolved"].iloc[-1]
     assert d[-1] > d[1]

@@ -126,8 +126,8 @@ def replay_session_log(path: Path, fault: Optional[str], sweep: Optional[str], h
         t.add_column(col, justify="right", no_wrap=True)
     for r in table.itertuples(index=False):
         t.add_row(f"{r.size:g}", f"{r.coverage:.3f}", f"{r.escape:.3f}", f"{r.optimism:+.3f}",
-                  f"{r.d_optimism:+.3f}" + ("*" if r.optimism_resolved else " "), _ci(r.d_optimism_lo, r.d_optimism_hi),
-                  f"{r.d_coverage:+.3f}" + ("*" if r.coverage_resolved else " "), _ci(r.d_coverage_lo, r.d_coverage_hi))
+                  f"{r.delta_optimism:+.3f}" + ("*" if r.optimism_resolved else " "), _ci(r.delta_optimism_lo, r.delta_optimism_hi),
+                  f"{r.delta_coverage:+.3f}" + ("*" if r.coverage_resolved else " "), _ci(r.delta_coverage_lo, r.delta_coverage_hi))
     print_table(t)
     console.print("* resolved: the interval excludes zero. Deployed replay reproduced "
                   f"{reproduced:.3f} of the recorded decisions.")

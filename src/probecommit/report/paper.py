@@ -294,6 +294,21 @@ TARGETS["gru"] = Target("gru", ("the GRU baseline on MuJoCo 2-D pushing, with th
                         ("breadth",), _gru)
 
 
+def _robot(root: Path, quick: bool, progress: Progress, workers: int) -> Path:
+    from probecommit.studies.robot import reproduce_robot
+
+    results = root / "robot" / "results"
+    reproduce_robot(results, root / "robot" / "runs", quick=quick, progress=progress)
+    return results
+
+
+TARGETS["robot"] = Target("robot", ("Table IX (the simulated rig run as a robot session)",
+                                    "Fig. 7b-d: aim error against taps, replays under boundary and prior faults"),
+                          (), _robot)
+ALIASES["table-9"] = "robot"
+ALIASES["fig-7"] = "robot"
+
+
 def plot_pricing(table: Any, path: str | Path) -> Path:
     """``J_lambda(k)`` against the price for each family (one small panel each)."""
     import matplotlib.pyplot as plt

@@ -45,8 +45,8 @@ def fault_sweep_figure(sweep: pd.DataFrame, xlabel: str, reference: float | None
     for ax, metric, label in ((axes[0], "optimism", "optimism, faulted - deployed"),
                               (axes[1], "coverage", "coverage, faulted - deployed")):
         x = sweep["size"].to_numpy()
-        mid = sweep[f"d_{metric}"].to_numpy()
-        ax.fill_between(x, sweep[f"d_{metric}_lo"], sweep[f"d_{metric}_hi"], color="C0", alpha=0.2, lw=0, label="95% CI")
+        mid = sweep[f"delta_{metric}"].to_numpy()
+        ax.fill_between(x, sweep[f"delta_{metric}_lo"], sweep[f"delta_{metric}_hi"], color="C0", alpha=0.2, lw=0, label="95% CI")
         ax.plot(x, mid, color="C0", lw=1.0)
         resolved = sweep[f"{metric}_resolved"].to_numpy(bool)
         ax.scatter(x[resolved], mid[resolved], color="C0", s=12, zorder=3, label="resolved")

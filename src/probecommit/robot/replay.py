@@ -121,7 +121,7 @@ def fault_sweep(path: str | Path, fault: str, sizes: Iterable[float], *, resampl
 
     Returns:
         One row per size (``size``, the faulted ``coverage``, ``escape``, ``optimism``,
-        and ``d_optimism``/``d_coverage`` with their intervals and ``resolved`` flags),
+        and ``delta_optimism``/``delta_coverage`` with their intervals and ``resolved`` flags),
         and the deployed replay's reproduction fraction.
     """
     config, *_ = load_session(path)
@@ -141,9 +141,9 @@ def fault_sweep(path: str | Path, fault: str, sizes: Iterable[float], *, resampl
             "fault": fault, "size": float(size), "episodes": len(f),
             "coverage": float(f["covered"].mean()), "escape": float(f["escaped"].mean()),
             "optimism": float((f["realized"] - f["predicted"]).mean()), "failure": float(f["realized"].mean()),
-            "d_optimism": opt.estimate, "d_optimism_lo": opt.lo, "d_optimism_hi": opt.hi,
+            "delta_optimism": opt.estimate, "delta_optimism_lo": opt.lo, "delta_optimism_hi": opt.hi,
             "optimism_resolved": bool(opt.lo > 0 or opt.hi < 0),
-            "d_coverage": cov.estimate, "d_coverage_lo": cov.lo, "d_coverage_hi": cov.hi,
+            "delta_coverage": cov.estimate, "delta_coverage_lo": cov.lo, "delta_coverage_hi": cov.hi,
             "coverage_resolved": bool(cov.lo > 0 or cov.hi < 0),
         })
         if progress is not None:

@@ -172,6 +172,13 @@ class Session:
         current = self.current
         if current is not None and current.decision is None:
             self._rebuild(current)
+        self._warm_up()
+
+    def _warm_up(self) -> None:
+        # The first commit in a process loads the compiled kernels (a few hundred ms); pay it
+        # here, on a throwaway prior belief with its own generator, not at the robot's commit.
+        state = self.filter.initial([np.random.default_rng(0)])
+        decide_belief(self.model, self.config, state)
 
     # ------------------------------------------------------------------ opening
     @classmethod
