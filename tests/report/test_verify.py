@@ -65,3 +65,12 @@ def test_cli_exit_codes(results):
     (results / "paper" / "insertion" / "scan.parquet").write_bytes(b"not parquet")
     bad = CliRunner().invoke(app, ["verify", str(results)])
     assert bad.exit_code == 1
+
+
+def test_a_robot_table_that_miscounts_its_window_is_caught(results):
+    path = results / "paper" / "robot" / "results.json"
+    payload = json.loads(path.read_text())
+    payload["results"]["table"][0]["in_window"] += 1
+    path.write_text(json.dumps(payload))
+    write_manifest(results / "paper" / "robot")
+    assert any("1 - in_window / episodes" in f for f in verify(results).failures)

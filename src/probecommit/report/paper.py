@@ -295,10 +295,28 @@ TARGETS["gru"] = Target("gru", ("the GRU baseline on MuJoCo 2-D pushing, with th
 
 
 def _robot(root: Path, quick: bool, progress: Progress, workers: int) -> Path:
-    from probecommit.studies.robot import reproduce_robot
+    from probecommit.report.figures import save_figure
+    from probecommit.report.robot_figures import aim_error_figure, fault_sweep_figure
+    from probecommit.studies.robot import SIM_ERROR_AT_RIG_SCALE_MM, run_robot_study, sweep_markdown, table_markdown
+    from probecommit.tasks.rig.model import rig_half_gap, rig_window
 
     results = root / "robot" / "results"
-    reproduce_robot(results, root / "robot" / "runs", quick=quick, progress=progress)
+    results.mkdir(parents=True, exist_ok=True)
+    study = run_robot_study(root / "robot" / "runs", quick=quick, progress=progress)
+    study.episodes.rows.to_parquet(results / "robot_episodes.parquet")
+    study.table.to_parquet(results / "table_robot.parquet")
+    study.boundary.to_parquet(results / "fault_boundary.parquet")
+    study.prior.to_parquet(results / "fault_prior.parquet")
+    write_table(results, "table_9", table_markdown(study.table))
+    write_table(results, "fault_boundary", sweep_markdown(study.boundary, "boundary pulled in (mm)"))
+    write_table(results, "fault_prior", sweep_markdown(study.prior, "prior half-width (mm)"))
+    save_figure(aim_error_figure(study.episodes.rows, float(rig_window(1.0)), float(rig_half_gap(1.0))),
+                results / "fig_7b_aim_error.png")
+    save_figure(fault_sweep_figure(study.boundary, "boundary pulled inward (mm)", SIM_ERROR_AT_RIG_SCALE_MM,
+                                   "sim. 2.1 mm error at rig scale"), results / "fig_7c_boundary_fault.png")
+    save_figure(fault_sweep_figure(study.prior.sort_values("size"), "prior half-width (mm)"),
+                results / "fig_7d_prior_fault.png")
+    (results / "results.json").write_text(json.dumps(study.payload(), indent=1, default=float))
     return results
 
 

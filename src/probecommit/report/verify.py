@@ -13,7 +13,8 @@ checks, without rerunning anything:
 * **identities**: optimism = realized - predicted; a paired ``a_minus_b`` equals
   ``a - b``; a ``failure_diff``/``paired_fix`` equals the difference of its rows;
   ``shift_vs_deployed_mm`` = delta + tip radius; the per-budget fault-signature table
-  holds one row per (fault, k);
+  holds one row per (fault, k); a robot table's realized failure is ``1 - in_window /
+  episodes``, its optimism ``realized - predicted``, its counts within ``0..episodes``;
 * **counts**: ``n`` = 384 = 96 x 4 where the protocol says so;
 * **traceability**: every number in ``REPRODUCTION.md``'s "ours" column is found,
   to the printed precision, in a ``results.json`` (and the key it came from is
@@ -201,6 +202,18 @@ def _check_identities(payload: dict, where: str, report: Report) -> None:
             expected = pts["failure"] - pts["predicted"]
             report.check(abs(pts["optimism"] - expected) < 1e-9,
                          f"{where}: {key}.optimism = {pts['optimism']} but failure - predicted = {expected}")
+        # robot table (Table IX): realized failure is the share of aims outside the window
+        if all(pts.get(k) is not None for k in ("in_window", "episodes", "realized", "predicted", "optimism")):
+            expected = 1.0 - pts["in_window"] / pts["episodes"]
+            report.check(abs(pts["realized"] - expected) < 1e-9,
+                         f"{where}: {key}.realized = {pts['realized']} but 1 - in_window / episodes = {expected}")
+            report.check(abs(pts["optimism"] - (pts["realized"] - pts["predicted"])) < 1e-9,
+                         f"{where}: {key}.optimism = {pts['optimism']} but realized - predicted = "
+                         f"{pts['realized'] - pts['predicted']}")
+            for count in ("in_window", "entered", "covered"):
+                if pts.get(count) is not None:
+                    report.check(0 <= pts[count] <= pts["episodes"],
+                                 f"{where}: {key}.{count} = {pts[count]} is not within 0..episodes = {pts['episodes']}")
         if pts.get("n") is not None and key.startswith("robust"):
             report.check(pts["n"] == EPISODES_PER_ROW, f"{where}: {key}.n = {pts['n']}, expected {EPISODES_PER_ROW} (96 x 4)")
         # fault table: a paired fix is the difference of the fixed and faulty rows

@@ -14,6 +14,7 @@ The paper's Table IX is quoted beside ours for comparison only.
 from __future__ import annotations
 
 import json
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Callable
 
@@ -22,7 +23,7 @@ import pandas as pd
 from probecommit.audit.stats import DEFAULT_RESAMPLES
 from probecommit.robot.replay import fault_sweep, replay_session
 from probecommit.robot.simulated import simulate_session
-from probecommit.robot.table import robot_table, session_episodes
+from probecommit.robot.table import SessionEpisodes, robot_table, session_episodes
 from probecommit.runner.config import StudyConfig, config_data, load_config, parse_config
 
 #: The paper's Table IX (physical arm): taps -> (episodes, in window, entered, predicted, realized, optimism).
@@ -75,15 +76,40 @@ def sweep_markdown(sweep: pd.DataFrame, label: str) -> str:
     return "\n".join(lines) + "\n"
 
 
-def reproduce_robot(results: Path, runs: Path, *, quick: bool = False,
-                    progress: Callable[[str, int, int], None] | None = None,
-                    resamples: int = DEFAULT_RESAMPLES) -> dict[str, Any]:
-    """Run the simulated rig session, audit it, replay it under both faults; write ``results``."""
-    from probecommit.report.figures import save_figure
-    from probecommit.report.robot_figures import aim_error_figure, fault_sweep_figure
-    from probecommit.tasks.rig.model import rig_half_gap, rig_window
+@dataclass
+class RobotStudy:
+    """What the robot study measured (written out by ``report.paper``)."""
 
-    results.mkdir(parents=True, exist_ok=True)
+    config: StudyConfig
+    episodes: SessionEpisodes
+    table: pd.DataFrame
+    reproduced: float
+    boundary: pd.DataFrame
+    prior: pd.DataFrame
+
+    def payload(self) -> dict[str, Any]:
+        rows = self.episodes.rows
+        resolved = self.boundary[self.boundary["optimism_resolved"] & (self.boundary["size"] > 0)]
+        return {
+            "results": {
+                "config": config_data(self.config), "engine": self.config.simulator.engine,
+                "episodes": int(len(rows)), "positions": int(rows["instance_id"].nunique()),
+                "n_covered": int(rows["covered"].sum()), "n_escaped": int(rows["escaped"].sum()),
+                "replay_reproduced_fraction": self.reproduced,
+                "table": json.loads(self.table.to_json(orient="records")),
+                "boundary_fault": json.loads(self.boundary.to_json(orient="records")),
+                "prior_fault": json.loads(self.prior.to_json(orient="records")),
+                "boundary_first_resolved_mm": float(resolved["size"].min()) if len(resolved) else None,
+                "unscored": self.episodes.unscored,
+            },
+            "paper": {"table_9": {str(k): v for k, v in PAPER_TABLE_IX.items()}, "boundary_first_resolved_mm": 8.0,
+                      "prior_12mm": {"coverage": 0.61, "escape": 0.39, "optimism": 0.30}},
+        }
+
+
+def run_robot_study(runs: Path, *, quick: bool = False, progress: Callable[[str, int, int], None] | None = None,
+                    resamples: int = DEFAULT_RESAMPLES) -> RobotStudy:
+    """Run the simulated rig session into ``runs``, audit it and replay it under both faults."""
     config = rig_config(quick)
     log = simulate_session(runs / ("rig-quick" if quick else "rig"), config,
                            progress=(lambda d, t: progress("rig session", d, t)) if progress else None)
@@ -100,36 +126,4 @@ def reproduce_robot(results: Path, runs: Path, *, quick: bool = False,
 
     boundary, _ = fault_sweep(log, "boundary", boundary_sizes, resamples=resamples, progress=tick("boundary fault", boundary_sizes))
     prior, _ = fault_sweep(log, "prior", prior_sizes, resamples=resamples, progress=tick("prior fault", prior_sizes))
-
-    episodes.rows.to_parquet(results / "robot_episodes.parquet")
-    table.to_parquet(results / "table_robot.parquet")
-    boundary.to_parquet(results / "fault_boundary.parquet")
-    prior.to_parquet(results / "fault_prior.parquet")
-    from probecommit.report.paper import write_table
-
-    write_table(results, "table_9", table_markdown(table))
-    write_table(results, "fault_boundary", sweep_markdown(boundary, "boundary pulled in (mm)"))
-    write_table(results, "fault_prior", sweep_markdown(prior, "prior half-width (mm)"))
-    save_figure(aim_error_figure(episodes.rows, float(rig_window(1.0)), float(rig_half_gap(1.0))), results / "fig_7b_aim_error.png")
-    save_figure(fault_sweep_figure(boundary, "boundary pulled inward (mm)", SIM_ERROR_AT_RIG_SCALE_MM,
-                                   "sim. 2.1 mm error at rig scale"), results / "fig_7c_boundary_fault.png")
-    save_figure(fault_sweep_figure(prior.sort_values("size"), "prior half-width (mm)"), results / "fig_7d_prior_fault.png")
-    resolved = boundary[boundary["optimism_resolved"] & (boundary["size"] > 0)]
-    payload = {
-        "results": {
-            "config": config_data(config), "engine": config.simulator.engine,
-            "episodes": int(len(episodes.rows)), "positions": int(episodes.rows["instance_id"].nunique()),
-            "n_covered": int(episodes.rows["covered"].sum()),
-            "n_escaped": int(episodes.rows["escaped"].sum()),
-            "replay_reproduced_fraction": reproduced,
-            "table": json.loads(table.to_json(orient="records")),
-            "boundary_fault": json.loads(boundary.to_json(orient="records")),
-            "prior_fault": json.loads(prior.to_json(orient="records")),
-            "boundary_first_resolved_mm": float(resolved["size"].min()) if len(resolved) else None,
-            "unscored": episodes.unscored,
-        },
-        "paper": {"table_9": {str(k): v for k, v in PAPER_TABLE_IX.items()}, "boundary_first_resolved_mm": 8.0,
-                  "prior_12mm": {"coverage": 0.61, "escape": 0.39, "optimism": 0.30}},
-    }
-    (results / "results.json").write_text(json.dumps(payload, indent=1, default=float))
-    return payload
+    return RobotStudy(config, episodes, table, reproduced, boundary, prior)
