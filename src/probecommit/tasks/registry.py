@@ -16,7 +16,7 @@ from typing import Any
 from probecommit.tasks.base import TaskSpec
 
 #: Built-in family packages, imported on first use of the registry.
-BUILTIN_FAMILIES = ("insertion", "planar_slide", "push1d", "push2d", "darts", "hinge", "rig")
+BUILTIN_FAMILIES = ("insertion", "planar_slide", "push1d", "push2d", "darts", "hinge", "shuffleboard", "grasp", "rig")
 ENTRY_POINT_GROUP = "probecommit.tasks"
 
 _REGISTRY: dict[str, TaskSpec] = {}

@@ -1,0 +1,52 @@
+"""Grasp (paper Table II): squeeze to learn the hold force, then lift a delicate object.
+
+Registers ``grasp``. Every choice (the paper gives the latents, the probe/action kind,
+sigma, budgets, 16 x 80 and "a force-balance model with a MuJoCo lift check", nothing else):
+
+* **Latents and prior** ``(mu, m)``: pad-object friction ``U[0.2, 1.0]``, object mass
+  ``U[0.05, 0.5]`` kg.
+* **Model** (:mod:`probecommit.tasks.grasp.model`): the force balance
+  ``2 mu F >= m (g + a)`` with a 2 m/s^2 lift; success when the grip holds and stays
+  below 1.5x the force that holds (a delicate object; without an upper limit the
+  robust grip is always the strongest and probing cannot matter).
+* **Probe**: a squeeze, relaxing to a known force in ``{0.25, 0.5, 1, 2, 4}`` N for 50 ms
+  and reading the slip (mm, ``sigma = 2`` mm).
+* **Action**: the grip force per pad on ``0.2 * 1.02^i`` N up to 5 N (163), a small servo
+  gripper's range.
+* **Truth**: the MuJoCo lift check (:mod:`probecommit.tasks.grasp.sim_mujoco`) for holding;
+  the crush limit is a rule on the truth's force balance (no engine models fracture).
+* **Instances** (``configs/paper/grasp.yaml``): the 4 x 4 grid of stratum centres, 80
+  seeds, budgets 0, 2, 5, 8. A truth is *feasible* when some grid grip succeeds in the
+  simulator; success is reported on the feasible subset (paper Table V).
+* **Decision coordinate**: the hold force of the lift ``F_lift = m (g + a) / (2 mu)``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from probecommit.tasks.base import TaskSpec
+from probecommit.tasks.grasp.config import GraspConfig
+from probecommit.tasks.grasp.model import GraspModel
+from probecommit.tasks.registry import register
+
+
+def build_model(config: GraspConfig) -> GraspModel:
+    cfg = config.model
+    return GraspModel(
+        sigma=cfg.sigma, margin=cfg.margin,
+        prior_low=np.array(cfg.prior_low, dtype=float), prior_high=np.array(cfg.prior_high, dtype=float),
+    )
+
+
+SPEC = register(
+    TaskSpec(
+        name="grasp",
+        config=GraspConfig,
+        build_model=build_model,
+        simulators={"mujoco": "probecommit.tasks.grasp.sim_mujoco:MujocoGraspSimulator",
+                    "analytic": "probecommit.tasks.grasp.sim_base:AnalyticGraspSimulator"},
+        summary={"latents": "mu, m", "probe": "squeeze / slip", "action": "grip force",
+                 "sigma": "2 mm", "budgets": "0, 2, 5, 8", "metric": "success (feasible)", "n": "16 x 80"},
+    )
+)
