@@ -7,6 +7,8 @@ import pandas as pd
 import pytest
 
 from probecommit.studies.breadth import (
+    as_success,
+    truth_sign_flip,
     PAPER_TABLE_V,
     breadth_markdown,
     breadth_row,
@@ -63,9 +65,13 @@ def test_budget_curve_table_markdown_and_figure(tmp_path):
     assert curve["mean"].tolist() == pytest.approx([0.5, 0.6, 0.3, 0.1])
     tab = breadth_table({"push2d": ep}, resamples=100)
     md = breadth_markdown(tab)
-    assert "push2d (ours, k=5) | 0.500 | 0.600 | 0.100 | 0.500 [0.500, 0.500]" in md
-    assert "push2d (paper, k=5) | 0.252 | 0.307 | 0.221 | 0.031 [0.007, 0.054]" in md
-    assert set(PAPER_TABLE_V) == {"push1d", "push2d", "push2d_pybullet", "darts"}
+    assert "push2d (ours, k=5) | m | 0.500 | 0.600 | 0.100 | 0.500 [0.500, 0.500]" in md
+    assert "push2d (paper, k=5) | m | 0.252 | 0.307 | 0.221 | 0.031 [0.007, 0.054]" in md
+    assert set(PAPER_TABLE_V) == {"push1d", "push2d", "push2d_pybullet", "darts", "hinge", "shuffleboard", "grasp",
+                                  "insertion_A"}
+    # Shuffleboard's cells are mean / P90 and its column is Probe-Robust(2).
+    md = breadth_markdown(breadth_table({"shuffleboard": ep}, resamples=100))
+    assert "shuffleboard (ours, k=2) | m (mean / P90) | 0.500 / 0.500 | 0.600 / 0.600 | 0.300 / 0.300 |" in md
     paths = plot_budget_curves(pd.concat([curve, budget_curve(ep, "other", resamples=100)]), tmp_path / "curves")
     assert [p.suffix for p in paths] == [".png", ".pdf"] and all(p.stat().st_size > 0 for p in paths)
 
@@ -86,3 +92,29 @@ def test_run_breadth_quick_mujoco_families(tmp_path):
     out = run_breadth(["push2d", "darts"], tmp_path, quick=True, resamples=100)
     assert out["family"].tolist() == ["push2d", "darts"]
     assert np.isfinite(out[["blind_bayes", "blind_robust", "probe_robust", "paired"]].to_numpy(float)).all()
+
+
+def test_success_rows_swap_their_intervals():
+    row = {"family": "grasp", "blind_bayes": 0.7, "blind_bayes_lo": 0.6, "blind_bayes_hi": 0.8,
+           "blind_robust": 0.5, "blind_robust_lo": 0.4, "blind_robust_hi": 0.6,
+           "probe_robust": 0.2, "probe_robust_lo": 0.1, "probe_robust_hi": 0.3, "paired": 0.3}
+    out = as_success(row)
+    assert (out["blind_bayes"], out["blind_bayes_lo"], out["blind_bayes_hi"]) == pytest.approx((0.3, 0.2, 0.4))
+    assert out["paired"] == 0.3 and out["metric"] == "success"
+
+
+def test_truth_sign_flip_against_hand_enumeration():
+    # Three truths improve, three tie: the exact p over the three untied signs is 2 / 8 = 0.25.
+    rows = []
+    for t, (bb, pr) in enumerate([(0, 1), (0, 1), (1, 0.5), (1, 1), (0, 0), (0.5, 0.5)]):
+        for r in range(2):
+            rows.append({"instance_id": f"t{t}", "repeat": r, "k": 0, "method": "blind_bayes", "realized": 1 - bb})
+            rows.append({"instance_id": f"t{t}", "repeat": r, "k": 8, "method": "probe_robust", "realized": 1 - pr})
+    res = truth_sign_flip(pd.DataFrame(rows), {f"t{t}": f"t{t}" for t in range(6)}, 8)
+    assert (res["n_improve"], res["n_tie"], res["n_worse"]) == (2, 3, 1)
+    assert res["p_sign_flip"] == pytest.approx(0.5)  # |1 + 1 - 0.5| = 1.5: reached by 4 of the 8 sign patterns
+    rows = [r for r in rows if r["instance_id"] != "t2"] + [
+        {"instance_id": "t2", "repeat": r, "k": k, "method": m, "realized": v}
+        for r in range(2) for k, m, v in ((0, "blind_bayes", 1.0), (8, "probe_robust", 0.5))]
+    res = truth_sign_flip(pd.DataFrame(rows), {f"t{t}": f"t{t}" for t in range(6)}, 8)
+    assert (res["n_improve"], res["n_tie"]) == (3, 3) and res["p_sign_flip"] == pytest.approx(0.25)

@@ -94,8 +94,27 @@ def _insertion(root: Path, quick: bool, progress: Progress, workers: int) -> Pat
 OPTIONS: dict[str, Any] = {}
 
 
+def insertion_row(root: Path) -> dict[str, Any] | None:
+    """Table V's insertion row (failure on Split A, cover k = 5) from this reproduction's insertion
+    results, or None when ``reproduce insertion`` has not run under ``root``."""
+    path = root / "insertion" / "results" / "results.json"
+    if not path.is_file():
+        return None
+    t = json.loads(path.read_text())["results"]["table_insertion"]
+    nan = [float("nan")] * 3
+    bb, pr, paired = t["A.no_probe"], t["A.cover_k5"], t.get("A.paired_reduction_k5", nan)
+    return {"family": "insertion_A", "k": 5, "blind_bayes": bb[0], "blind_bayes_lo": bb[1], "blind_bayes_hi": bb[2],
+            "blind_robust": float("nan"), "blind_robust_lo": float("nan"), "blind_robust_hi": float("nan"),
+            "probe_robust": pr[0], "probe_robust_lo": pr[1], "probe_robust_hi": pr[2],
+            "paired": paired[0], "paired_lo": paired[1], "paired_hi": paired[2]}
+
+
 def _breadth(root: Path, quick: bool, progress: Progress, workers: int) -> Path:
-    from probecommit.studies.breadth import BREADTH_FAMILIES, breadth_markdown, budget_curves, plot_budget_curves, run_breadth
+    import pandas as pd
+
+    from probecommit.studies.breadth import (BREADTH_FAMILIES, FAMILY_K, SUCCESS_FAMILIES, breadth_markdown,
+                                             budget_curves, feasible_instances, paper_config, plot_budget_curves,
+                                             quick_config, run_breadth, truth_sign_flip)
 
     families = tuple(OPTIONS.get("families") or BREADTH_FAMILIES)
     unknown = [f for f in families if f not in BREADTH_FAMILIES]
@@ -111,12 +130,28 @@ def _breadth(root: Path, quick: bool, progress: Progress, workers: int) -> Path:
                                       if p.name == f or p.name == f"{f}-quick") for f in families}
     curves = budget_curves(runs)
     progress("breadth: families", len(families), len(families))
+    sign_flips = {}
+    for family in (f for f in families if f in SUCCESS_FAMILIES):
+        config = paper_config(family)
+        config = quick_config(config) if quick else config
+        feasible = feasible_instances(config, runs[family])
+        episodes = pd.read_parquet(runs[family] / "episodes.parquet")
+        episodes = episodes[episodes["instance_id"].map(feasible).fillna(False).astype(bool)]
+        instances = pd.read_parquet(runs[family] / "instances.parquet")
+        truth_cols = [c for c in instances.columns if c.startswith("true_")]
+        truth_of = dict(zip(instances["instance_id"], instances[truth_cols].astype(str).agg(",".join, axis=1)))
+        sign_flips[family] = {**truth_sign_flip(episodes, truth_of, FAMILY_K[family]),
+                              "n_feasible": int(sum(feasible.values())), "n_instances": len(feasible)}
+    row = insertion_row(root)
+    if row is not None:
+        table = pd.concat([pd.DataFrame([row]), table], ignore_index=True)
     table.to_parquet(results / "table_5.parquet")
     curves.to_parquet(results / "budget_curves.parquet")
     write_table(results, "table_5", breadth_markdown(table))
     plot_budget_curves(curves, results / "fig_breadth_budget.png")
     payload = {"results": {"table_5": json.loads(table.to_json(orient="records")),
-                           "curves": json.loads(curves.to_json(orient="records"))}}
+                           "curves": json.loads(curves.to_json(orient="records")),
+                           "sign_flip_over_truths": sign_flips}}
     (results / "results.json").write_text(json.dumps(payload, indent=1))
     return results
 
@@ -135,7 +170,9 @@ TARGETS: dict[str, Target] = {
     "insertion": Target("insertion", ("Table III (audit)", "Table IV (failure by split)", "Table VI (faults)",
                                       "Table VII (Test C)", "Fig. 4", "Fig. 5", "Fig. 6", "scan and cover search",
                                       "re-splits, robust filters"), (), _insertion),
-    "breadth": Target("breadth", ("Table V (1-D push, 2-D push MuJoCo, darts)", "miss-vs-budget figure"), (), _breadth),
+    "breadth": Target("breadth", ("Table V (every family: insertion A, 1-D push, 2-D push MuJoCo and PyBullet, darts, "
+                                  "hinge, shuffleboard, grasp)", "miss-vs-budget figure", "grasp's sign-flip over truths"),
+                      (), _breadth),
     "beyond": Target("beyond", ("hull set at t = 1", "resample-move belief", "adaptive probes"),
                      ("insertion", "breadth"), _beyond),
 }
@@ -353,9 +390,12 @@ def plot_pricing(table: Any, path: str | Path) -> Path:
 def _cost(root: Path, quick: bool, progress: Progress, workers: int) -> Path:
     import pandas as pd
 
+    from probecommit.studies.breadth import SUCCESS_FAMILIES
     from probecommit.studies.pricing import pricing_markdown, pricing_table
 
     curves = pd.read_parquet(root / "breadth" / "results" / "budget_curves.parquet")
+    # Prices are in the loss's units per probe: the miss families (grasp's loss is a success rate).
+    curves = curves[~curves["family"].isin(SUCCESS_FAMILIES)]
     results = root / "cost" / "results"
     results.mkdir(parents=True, exist_ok=True)
     table = pricing_table(curves)

@@ -26,7 +26,16 @@ import pandas as pd
 from probecommit.audit.stats import DEFAULT_RESAMPLES, cluster_bootstrap_mean, paired_bootstrap
 
 #: Families this study covers, in table order.
-BREADTH_FAMILIES = ("push1d", "push2d", "push2d_pybullet", "darts")
+BREADTH_FAMILIES = ("push1d", "push2d", "push2d_pybullet", "darts", "hinge", "shuffleboard", "grasp")
+#: Probe-Robust budget of each family's Table V column (paper: five probes, two for
+#: shuffleboard, eight for grasp).
+FAMILY_K = {"shuffleboard": 2, "grasp": 8}
+#: Unit of a family's miss (m unless listed); grasp reports success on its feasible subset.
+FAMILY_UNIT = {"hinge": "rad", "grasp": "success"}
+#: Families whose Table V cell is "mean / P90".
+P90_FAMILIES = ("shuffleboard",)
+#: Families reported as success on the feasible subset (binary loss; higher is better).
+SUCCESS_FAMILIES = ("grasp",)
 #: Frozen paper configs.
 #: The frozen paper configs shipped with the package (``configs/paper`` in the repository).
 PAPER_CONFIG_DIR = Path(__file__).resolve().parents[1] / "configs" / "paper"
@@ -37,6 +46,11 @@ PAPER_TABLE_V: dict[str, dict[str, Any]] = {
     "push2d": {"blind_bayes": 0.252, "blind_robust": 0.307, "probe_robust": 0.221, "paired": (0.031, 0.007, 0.054)},
     "push2d_pybullet": {"blind_bayes": 0.243, "blind_robust": None, "probe_robust": 0.141, "paired": None},
     "darts": {"blind_bayes": 0.026, "blind_robust": 0.035, "probe_robust": 0.010, "paired": (0.016, 0.009, 0.024)},
+    "hinge": {"blind_bayes": 0.334, "blind_robust": None, "probe_robust": 0.031, "paired": None, "note": "-91%"},
+    "shuffleboard": {"blind_bayes": 0.083, "blind_robust": None, "probe_robust": 0.050, "paired": None,
+                     "blind_bayes_p90": 0.199, "probe_robust_p90": 0.123},
+    "grasp": {"blind_bayes": 0.333, "blind_robust": None, "probe_robust": 0.692, "paired": None},
+    "insertion_A": {"blind_bayes": 0.820, "blind_robust": None, "probe_robust": 0.234, "paired": (0.586, 0.492, 0.674)},
 }
 #: Quick mode (CI): instances kept per family and particles.
 QUICK = {"instances": 2, "repeats": 2, "particles": 128, "blind_prior_samples": 500}
@@ -58,9 +72,10 @@ def arm(episodes: pd.DataFrame, method: str, k: int) -> pd.DataFrame:
 
 def _mean(rows: pd.DataFrame, resamples: int, seed: int) -> dict[str, float]:
     if rows.empty:
-        return {"mean": float("nan"), "lo": float("nan"), "hi": float("nan"), "n": 0}
+        return {"mean": float("nan"), "lo": float("nan"), "hi": float("nan"), "n": 0, "p90": float("nan")}
     ci = cluster_bootstrap_mean(rows["realized"].to_numpy(float), rows["instance_id"].to_numpy(), resamples=resamples, seed=seed)
-    return {"mean": ci.estimate, "lo": ci.lo, "hi": ci.hi, "n": int(len(rows))}
+    return {"mean": ci.estimate, "lo": ci.lo, "hi": ci.hi, "n": int(len(rows)),
+            "p90": float(np.percentile(rows["realized"].to_numpy(float), 90))}
 
 
 def breadth_row(episodes: pd.DataFrame, family: str = "", k: int = 5, *, resamples: int = DEFAULT_RESAMPLES,
@@ -87,6 +102,7 @@ def breadth_row(episodes: pd.DataFrame, family: str = "", k: int = 5, *, resampl
     for name, rows in arms.items():
         stat = _mean(rows, resamples, seed)
         row[name], row[f"{name}_lo"], row[f"{name}_hi"] = stat["mean"], stat["lo"], stat["hi"]
+        row[f"{name}_p90"] = stat["p90"]
         row[f"n_{name}"] = stat["n"]
     base, treat = arms["blind_robust"], arms["probe_robust"]
     row.update(paired=float("nan"), paired_lo=float("nan"), paired_hi=float("nan"), paired_p=float("nan"), n_pairs=0)
@@ -119,13 +135,49 @@ def read_episodes(run_dir: str | Path) -> pd.DataFrame:
     return pd.read_parquet(RunDir(run_dir).table_path("episodes"))
 
 
+def as_success(row: dict[str, Any]) -> dict[str, Any]:
+    """A failure row as success (``1 - failure``; intervals swap ends); the paired reduction in
+    failure is already the gain in success. P90 of a 0/1 outcome says nothing and is dropped."""
+    out = dict(row, metric="success")
+    for name in ("blind_bayes", "blind_robust", "probe_robust"):
+        out[name], out[f"{name}_lo"], out[f"{name}_hi"] = 1 - row[name], 1 - row[f"{name}_hi"], 1 - row[f"{name}_lo"]
+        out[f"{name}_p90"] = float("nan")
+    return out
+
+
+def truth_sign_flip(episodes: pd.DataFrame, truth_of: Mapping[str, str], k: int) -> dict[str, Any]:
+    """Per-truth success of Probe-Robust(k) minus Blind-Bayes, and the exact sign-flip test over truths.
+
+    Args:
+        episodes: Episodes of the feasible instances (binary ``realized`` failure).
+        truth_of: ``instance_id -> truth label`` (instances of one truth pooled).
+        k: Probe budget.
+
+    Returns:
+        Counts of truths that improve, tie (difference exactly zero) and worsen, the
+        improvements' range, and the two-sided exact sign-flip p-value (ties contribute
+        nothing under any sign; with ``n`` untied truths all of one sign, ``p = 2 / 2^n``).
+    """
+    from probecommit.audit.stats import sign_flip_test
+
+    ep = _ok(episodes).assign(truth=lambda d: d["instance_id"].map(truth_of))
+    success = lambda rows: 1.0 - rows.groupby("truth")["realized"].mean()  # noqa: E731
+    diff = (success(arm(ep, "probe_robust", k)) - success(arm(ep, "blind_bayes", 0))).dropna()
+    up, down = diff[diff > 0], diff[diff < 0]
+    return {"n_truths": int(len(diff)), "n_improve": int(len(up)), "n_tie": int((diff == 0).sum()),
+            "n_worse": int(len(down)), "improve_min": float(up.min()) if len(up) else float("nan"),
+            "improve_max": float(up.max()) if len(up) else float("nan"),
+            "p_sign_flip": float(sign_flip_test(diff.to_numpy())),
+            "differences": {str(t): float(v) for t, v in diff.items()}}
+
+
 def breadth_table(runs: Mapping[str, str | Path | pd.DataFrame], k: int = 5, *, resamples: int = DEFAULT_RESAMPLES,
                   seed: int = 0) -> pd.DataFrame:
     """Table V rows for ``{family: run directory or episode table}``, in the given order."""
     rows = []
     for family, src in runs.items():
         episodes = src if isinstance(src, pd.DataFrame) else read_episodes(src)
-        rows.append(breadth_row(episodes, family, k, resamples=resamples, seed=seed))
+        rows.append(breadth_row(episodes, family, FAMILY_K.get(family, k), resamples=resamples, seed=seed))
     return pd.DataFrame(rows)
 
 
@@ -143,19 +195,33 @@ def _fmt(v: Any, digits: int = 3) -> str:
     return "--" if v is None or (isinstance(v, float) and not np.isfinite(v)) else f"{v:.{digits}f}"
 
 
+def _cell(r: Mapping[str, Any], name: str, p90: bool) -> str:
+    value = _fmt(r.get(name))
+    if p90 and value != "--":
+        value += f" / {_fmt(r.get(f'{name}_p90'))}"
+    return value
+
+
 def breadth_markdown(table: pd.DataFrame, paper: Mapping[str, Mapping[str, Any]] | None = PAPER_TABLE_V) -> str:
     """Markdown Table V, ours next to the paper's where ``paper`` is given."""
-    head = "| family | Blind-Bayes | Blind-Robust | Probe-Robust(k) | paired reduction [95%] |"
-    lines = [head, "|---|---|---|---|---|"]
+    head = "| family | unit | Blind-Bayes | Blind-Robust | Probe-Robust(k) | paired reduction [95%] |"
+    lines = [head, "|---|---|---|---|---|---|"]
     for _, r in table.iterrows():
+        family = r["family"]
+        p90 = family in P90_FAMILIES
+        unit = FAMILY_UNIT.get(family, "m") + (" (mean / P90)" if p90 else "")
+        if family == "insertion_A":
+            unit = "failure"
         paired = "--" if not np.isfinite(r["paired"]) else f"{r['paired']:.3f} [{r['paired_lo']:.3f}, {r['paired_hi']:.3f}]"
-        lines.append(f"| {r['family']} (ours, k={r['k']}) | {_fmt(r['blind_bayes'])} | {_fmt(r['blind_robust'])} "
-                     f"| {_fmt(r['probe_robust'])} | {paired} |")
-        p = (paper or {}).get(r["family"])
+        lines.append(f"| {family} (ours, k={r['k']}) | {unit} | {_cell(r, 'blind_bayes', p90)} | "
+                     f"{_cell(r, 'blind_robust', p90)} | {_cell(r, 'probe_robust', p90)} | {paired} |")
+        p = (paper or {}).get(family)
         if p:
             pp = "--" if p["paired"] is None else f"{p['paired'][0]:.3f} [{p['paired'][1]:.3f}, {p['paired'][2]:.3f}]"
-            lines.append(f"| {r['family']} (paper, k=5) | {_fmt(p['blind_bayes'])} | {_fmt(p['blind_robust'])} "
-                         f"| {_fmt(p['probe_robust'])} | {pp} |")
+            pp = p.get("note", pp) if p["paired"] is None and p.get("note") else pp
+            k_paper = FAMILY_K.get(family, 5)
+            lines.append(f"| {family} (paper, k={k_paper}) | {unit} | {_cell(p, 'blind_bayes', p90)} | "
+                         f"{_cell(p, 'blind_robust', p90)} | {_cell(p, 'probe_robust', p90)} | {pp} |")
     return "\n".join(lines) + "\n"
 
 
@@ -175,10 +241,15 @@ def plot_budget_curves(curves: pd.DataFrame, path: str | Path) -> list[Path]:
 
     families = list(dict.fromkeys(curves["family"]))
     n = max(len(families), 1)
+    ncols = min(n, 4)
+    nrows = -(-n // ncols)
+    width = 3.5 if ncols <= 2 else 7.16
     with plt.rc_context({"font.size": 7, "axes.titlesize": 7, "axes.labelsize": 7, "xtick.labelsize": 7,
                          "ytick.labelsize": 7, "legend.fontsize": 7}):
-        fig, axes = plt.subplots(1, n, figsize=(3.5, 1.9), squeeze=False)
-        for ax, fam in zip(axes[0], families):
+        fig, axes = plt.subplots(nrows, ncols, figsize=(width, 1.75 * nrows + 0.3), squeeze=False)
+        for ax in axes.flat[n:]:
+            ax.set_visible(False)
+        for ax, fam in zip(axes.flat, families):
             c = curves[curves["family"] == fam]
             br = c[c["method"] == "blind_robust"]
             pr = c[c["method"] == "probe_robust"]
@@ -193,10 +264,11 @@ def plot_budget_curves(curves: pd.DataFrame, path: str | Path) -> list[Path]:
             ax.set_xlabel("probes k")
             ax.set_xticks(sorted(set(c["k"])))
             ax.set_ylim(bottom=0)
-        axes[0][0].set_ylabel("mean miss (m)")
+            unit = FAMILY_UNIT.get(fam, "m")
+            ax.set_ylabel("failure (all truths)" if unit == "success" else f"mean miss ({unit})")
         handles, labels = axes[0][0].get_legend_handles_labels()
         fig.legend(handles, labels, frameon=False, loc="upper center", ncol=2, handlelength=1.2)
-        fig.tight_layout(pad=0.3, rect=(0, 0, 1, 0.86))
+        fig.tight_layout(pad=0.3, rect=(0, 0, 1, 1 - 0.3 / (1.75 * nrows + 0.3)))
         stem = Path(path).with_suffix("")
         out = [stem.with_suffix(".png"), stem.with_suffix(".pdf")]
         for p in out:
@@ -257,4 +329,28 @@ def run_breadth(families: Iterable[str] = BREADTH_FAMILIES, out_dir: str | Path 
             config = quick_config(config)
         result = run_study(config, out_dir / config.name, workers=workers)
         runs[family] = result.episodes
-    return breadth_table(runs, k, resamples=resamples, seed=seed)
+        if family in SUCCESS_FAMILIES:
+            runs[family] = feasible_episodes(config, out_dir / config.name, result.episodes)
+    table = breadth_table(runs, k, resamples=resamples, seed=seed)
+    rows = [as_success(r) if r["family"] in SUCCESS_FAMILIES else r for r in table.to_dict("records")]
+    return pd.DataFrame(rows)
+
+
+def feasible_instances(config: Any, run_dir: str | Path) -> dict[str, bool]:
+    """``instance_id -> feasible``: whether some grid action succeeds for the instance's truth in
+    the run's engine (only actions near the truth's success window are tried)."""
+    from probecommit.runner.build import build_model, build_simulator
+    from probecommit.store.rundir import RunDir
+
+    model, sim = build_model(config), build_simulator(config)
+    instances = pd.read_parquet(RunDir(run_dir).table_path("instances"))
+    truths = instances[[f"true_{n}" for n in model.latent_names]].to_numpy(float)
+    return {iid: bool(sim.feasible(theta, model.action_grid)) for iid, theta in zip(instances["instance_id"], truths)}
+
+
+def feasible_episodes(config: Any, run_dir: str | Path, episodes: pd.DataFrame) -> pd.DataFrame:
+    """The episodes of feasible instances only (grasp's Table V reports success on them)."""
+    feasible = feasible_instances(config, run_dir)
+    out = episodes[episodes["instance_id"].map(feasible).fillna(False).astype(bool)]
+    out.attrs["feasible"] = feasible
+    return out
