@@ -190,8 +190,14 @@ def calibrate_command(
                f"{_f(res.summary['mean_abs_cluster_coverage_gap_calibrated'])}",
                f"{_f(res.summary['mean_abs_optimism_original'])}", f"{_f(res.summary['mean_abs_optimism_calibrated'])}")
     print_table(t3)
-    t4 = Table(title=f"cost of calibration: failure at k = {res.cost_budget}", title_style="bold")
-    for col in ("setting", "k", "n", "failure"):
+    # "failure" for a binary task, "miss" for a continuous one (the column is the realized loss either way).
+    import pandas as pd
+
+    realized = pd.read_parquet(test / "episodes.parquet", columns=["realized"])["realized"].dropna()
+    binary = bool(realized.isin([0.0, 1.0]).all())
+    loss_name = "failure" if binary else "miss"
+    t4 = Table(title=f"cost of calibration: {loss_name} at k = {res.cost_budget}", title_style="bold")
+    for col in ("setting", "k", "n", loss_name):
         t4.add_column(col, justify="right")
     for _, r in res.cost.iterrows():
         t4.add_row(safe(r["setting"]), str(int(r["k"])), str(int(r["n_episodes"])), _ci(r, "failure"))
