@@ -117,7 +117,10 @@ class InsertionModel(TaskModelBase):
         """
         theta = np.asarray(theta)
         x = theta[..., 0]
-        window = self.margin * capture_half_width(theta[..., 1])
+        # In place, same operations and order as margin * (0.6 c + 1.1): bit-identical, fewer temporaries.
+        window = np.multiply(theta[..., 1], 0.6)
+        window += 1.1
+        window *= self.margin
         return x - window, x + window
 
     def loss(self, actions: np.ndarray, theta: np.ndarray, context: np.ndarray | None = None) -> np.ndarray:
