@@ -223,6 +223,20 @@ def listing() -> list[tuple[str, str, str]]:
     return rows
 
 
+def engine_calls_under(folder: str | Path) -> dict[str, int]:
+    """Engine queries recorded in the manifests of every run directory under ``folder``, per engine."""
+    totals: dict[str, int] = {}
+    for manifest in sorted(Path(folder).rglob("manifest.json")):
+        try:
+            data = json.loads(manifest.read_text())
+        except (OSError, ValueError):
+            continue
+        calls = data.get("engine_calls") or {}
+        engine = str(data.get("engine", "?"))
+        totals[engine] = totals.get(engine, 0) + int(sum(int(v) for v in calls.values()))
+    return totals
+
+
 def reproduce(names: list[str], root: str | Path, quick: bool = False, progress: Progress = _noop,
               workers: int = 1, options: dict[str, Any] | None = None) -> dict[str, Any]:
     """Run the named targets (dependencies first) into ``root``.
@@ -230,16 +244,18 @@ def reproduce(names: list[str], root: str | Path, quick: bool = False, progress:
     ``options``: target options, e.g. ``{"families": ["push1d", "darts"]}`` for breadth.
 
     Returns:
-        ``{"targets": {name: results folder}, "wall_s": {name: seconds}}``.
+        ``{"targets": {name: results folder}, "wall_s": {name: seconds},
+        "engine_calls": {name: {engine: queries}}}`` (queries recorded in the run manifests).
     """
     root = Path(root)
     OPTIONS.clear()
     OPTIONS.update(options or {})
-    out: dict[str, Any] = {"targets": {}, "wall_s": {}}
+    out: dict[str, Any] = {"targets": {}, "wall_s": {}, "engine_calls": {}}
     for name in resolve(names):
         start = time.perf_counter()
         out["targets"][name] = str(TARGETS[name].run(root, quick, progress, workers))
         out["wall_s"][name] = time.perf_counter() - start
+        out["engine_calls"][name] = engine_calls_under(root / name)
     root.mkdir(parents=True, exist_ok=True)
     (root / "reproduction.json").write_text(json.dumps(out, indent=1))
     return out

@@ -172,7 +172,18 @@ def write_reproduction_md(repo_root: str | Path) -> Path:
         total = sum(timing.get("wall_s", {}).values())
         parts.append("Wall time of the last full reproduction on this 2-core machine, per target: "
                      + ", ".join(f"{k} {v / 60:.1f} min" for k, v in timing["wall_s"].items())
-                     + f" (total {total / 60:.1f} min).\n\n")
+                     + f" (total {total / 60:.1f} min).")
+        calls = timing.get("engine_calls") or {}
+        if calls:
+            per_engine: dict[str, int] = {}
+            for target_calls in calls.values():
+                for engine, n in target_calls.items():
+                    per_engine[engine] = per_engine.get(engine, 0) + int(n)
+            parts.append(" Engine queries recorded in the run manifests (each a distinct, cached query): "
+                         + ", ".join(f"{e} {n}" for e, n in sorted(per_engine.items()))
+                         + f" (total {sum(per_engine.values())}); the robot session's simulated-rig queries are in "
+                         "its log, not counted here.")
+        parts.append("\n\n")
     if (frozen / "insertion" / "results.json").is_file():
         parts.append(render(frozen / "insertion" / "results.json", EXPLANATIONS))
     if (frozen / "breadth" / "table_5.md").is_file():
@@ -214,7 +225,9 @@ def publish(results: dict[str, str | Path], repo_root: str | Path, timing: dict[
     if timing is not None:
         merged = _load(root / "reproduction.json") or {}
         merged.setdefault("wall_s", {}).update(timing.get("wall_s", {}))
-        (root / "reproduction.json").write_text(json.dumps({"wall_s": merged["wall_s"]}, indent=1) + "\n")
+        merged.setdefault("engine_calls", {}).update(timing.get("engine_calls", {}))
+        (root / "reproduction.json").write_text(
+            json.dumps({"wall_s": merged["wall_s"], "engine_calls": merged["engine_calls"]}, indent=1) + "\n")
     write_reproduction_md(repo_root)
     return root
 
