@@ -201,7 +201,9 @@ def tasks() -> None:
             f"{model.probe_dim}/{model.observation_dim}/{model.action_dim}",
             escape(s.get("sigma", f"{model.sigma:g}")), escape(s.get("budgets", "")), escape(s.get("metric", "")),
         )
-    console.print(table)
+    from probecommit.cli.audit_commands import print_table
+
+    print_table(table)  # whole rows in pipes and CI logs
 
 
 def register_optional_commands() -> None:
