@@ -41,7 +41,7 @@ def error_line(result) -> str:
         ({**GOOD, "methods": ["probe_robust", "probe_robust"]}, "invalid config field 'methods'"),
         ({**GOOD, "repeats": True}, "invalid config field 'repeats': expected a number"),
         ({**GOOD, "simulator": {"engine": "gazebo"}}, "task family 'insertion' has no 'gazebo' simulator; it has: analytic"),
-        ({**GOOD, "task": "juggling"}, "unknown task family 'juggling'; registered: darts, insertion"),
+        ({**GOOD, "task": "juggling"}, "unknown task family 'juggling'; registered: darts, grasp, hinge, insertion"),
         ("name: [x\n", "not valid YAML at line 2"),
         ("seed: 1\nseed: 2\n", "duplicate key 'seed'"),
     ],
