@@ -346,15 +346,28 @@ def commit(
             "belief_resets": (trace.lost[:, :k].sum(axis=1) if trace.lost is not None else np.zeros(batch.n_episodes)).astype(np.int64),
             "status": status,
             "error": error,
-            "_row": np.arange(batch.n_episodes),
-            "_plan": plan_index,
         })
-        frames.append(pd.DataFrame(columns))
+        frames.append(columns)
     if not frames:
         return pd.DataFrame()
-    # Canonical order: episode by episode, each in plan order (blind first, then budgets).
-    table = pd.concat(frames, ignore_index=True).sort_values(["_row", "_plan"], kind="stable")
-    return table.drop(columns=["_row", "_plan"]).reset_index(drop=True)
+    return _interleave(frames, batch.n_episodes)
+
+
+def _interleave(plans: list[dict[str, Any]], n_episodes: int) -> pd.DataFrame:
+    """One table from per-plan columns, in canonical order: episode by episode, each in plan
+    order (blind first, then budgets). Row ``e * P + p`` is episode ``e`` of plan ``p``;
+    built column by column (one DataFrame, no concat or sort)."""
+    n_plans = len(plans)
+    out: dict[str, Any] = {}
+    for name in plans[0]:
+        parts = [np.broadcast_to(np.asarray(plan[name]), (n_episodes,)) for plan in plans]
+        kinds = {part.dtype.kind for part in parts}
+        dtype = object if kinds & {"U", "S", "O"} else np.result_type(*parts)
+        column = np.empty(n_episodes * n_plans, dtype=dtype)
+        for p, part in enumerate(parts):
+            column[p::n_plans] = part
+        out[name] = column
+    return pd.DataFrame(out)
 
 
 def _execute(simulator, batch: ProbeBatch, action: np.ndarray, index: np.ndarray, n_actions: int,
