@@ -39,3 +39,22 @@ def test_session_errors_are_one_line(tmp_path):
     bad.write_text('{"type": "header", "format": "other"}\n')
     res = runner.invoke(app, ["audit", str(bad)])
     assert res.exit_code == 2 and "header format" in res.output
+
+
+def test_replay_of_another_family_with_no_option_is_as_deployed(tmp_path):
+    config = tmp_path / "hinge.yaml"
+    config.write_text(yaml.safe_dump({
+        "name": "h", "task": "hinge", "seed": 1, "repeats": 2,
+        "instances": {"split": "t", "count": 2, "seed": 1, "contexts": [[1.0]]},
+        "probes": {"schedule": "random", "budget": 2}, "belief": {"particles": 128},
+        "simulator": {"engine": "analytic"}, "methods": ["probe_robust"]}))
+    assert runner.invoke(app, ["run", str(config), "-o", str(tmp_path / "run")]).exit_code == 0
+    res = runner.invoke(app, ["replay", str(tmp_path / "run"), "-o", str(tmp_path / "again")])
+    assert res.exit_code == 0, res.output
+    import pandas as pd
+
+    a = pd.read_parquet(tmp_path / "run" / "episodes.parquet")
+    b = pd.read_parquet(tmp_path / "again" / "episodes.parquet")
+    pd.testing.assert_frame_equal(a.reset_index(drop=True), b.reset_index(drop=True))
+    res = runner.invoke(app, ["replay", str(tmp_path / "run"), "--model", "corrected"])
+    assert res.exit_code == 2 and "insertion shorthands" in res.output

@@ -138,7 +138,8 @@ def replay(
     """Recompute beliefs and episodes from stored probes under another model.
 
     Both runs then hold identical probes, so their episodes are paired. With no
-    option, an insertion run is replayed under the corrected tap model. A robot
+    option, an insertion run is replayed under the corrected tap model, and a run of
+    another family as deployed (it must reproduce its episodes). A robot
     session log is replayed as deployed (it must reproduce its own decisions), or
     under an injected fault with --fault (paper Fig. 7c, 7d).
     """
@@ -166,9 +167,17 @@ def replay(
             raise ValueError(f"--set expects SECTION.FIELD=VALUE (e.g. model.sigma=0.4), got {item!r}")
         overrides.setdefault(section, {})[field] = yaml.safe_load(value)
     if model is not None or delta is not None or not overrides:
-        overrides.setdefault("model", {})["boundary"] = model or "corrected"
-        if delta is not None:
-            overrides["model"]["delta"] = delta
+        from probecommit.runner.replay import load_run as _load
+
+        family = _load(run_dir).config.family
+        if family == "insertion":
+            overrides.setdefault("model", {})["boundary"] = model or "corrected"
+            if delta is not None:
+                overrides["model"]["delta"] = delta
+        elif model is not None or delta is not None:
+            raise ValueError(f"--model and --delta are insertion shorthands; {run_dir} is a {family!r} run: use "
+                             "--set model.FIELD=VALUE")
+        # Another family with no option: replayed as deployed (its episodes must come back identical).
     label = overrides.get("model", {}).get("boundary", "replay")
     target = out or run_dir.with_name(f"{run_dir.name}-{label}")
     path = replay_run(run_dir, target, overrides, fixed_probes=fixed_probes)

@@ -37,7 +37,7 @@ def reproduce(
     out: Optional[Path] = typer.Option(None, "--out", "-o", help="Root for run directories and results (default runs/paper[-quick])."),
     workers: int = typer.Option(1, "--workers", "-w", min=1, help="Local worker processes for the rollouts."),
     families: Optional[str] = typer.Option(None, "--families", help="breadth only: comma-separated families (default: all of them)."),
-    publish: Optional[bool] = typer.Option(None, help="Copy results into results/paper/ and rewrite REPRODUCTION.md (default: yes for full runs, no with --quick)."),
+    publish: Optional[bool] = typer.Option(None, help="Copy results into results/paper/ and rewrite REPRODUCTION.md (default: yes for full runs, no with --quick or a --families subset)."),
 ) -> None:
     """Regenerate the paper's tables and figures from the frozen configs in configs/paper/.
 
@@ -65,7 +65,8 @@ def reproduce(
         done = paper.reproduce(names, root, quick=quick, progress=update, workers=workers, options=options)
     for name, folder in done["targets"].items():
         console.print(f"{escape(name)}: [bold]{escape(str(folder))}[/bold]  (wall {done['wall_s'][name] / 60:.1f} min)")
-    if publish if publish is not None else not quick:
+    # A family subset would replace the frozen Table V with a partial one: published only on request.
+    if publish if publish is not None else not (quick or families):
         from probecommit.report.publish import publish as publish_results
 
         published = publish_results(done["targets"], REPO_ROOT, timing=done)

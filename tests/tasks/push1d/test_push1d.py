@@ -107,3 +107,16 @@ def test_small_study_has_blind_and_probe_rows(tmp_path):
     assert len(ep) == 2 * 2 * 4 and np.all(np.isfinite(ep["realized"])) and (ep["status"] == "ok").all()
     # Probing helps here: five probes beat the blind robust commit on average.
     assert ep[ep["k"] == 5]["realized"].mean() < ep[ep["method"] == "blind_robust"]["realized"].mean()
+
+
+def test_grown_scenarios_keep_friction_positive():
+    # A conformal threshold t > 1 grows the friction interval past zero; the slide stays defined.
+    from probecommit.core.executors import ProbeRobust
+    from probecommit.tasks.push1d.model import MIN_FRICTION, Push1DModel
+
+    model = Push1DModel()
+    particles = model.sample_prior(np.random.default_rng(0), 128)[None]
+    scenarios = model.grown_scenarios(particles, np.array([[-0.3, 0.0, 0.4]]))
+    assert scenarios[0, :, 0].tolist() == [MIN_FRICTION, MIN_FRICTION, 0.4]
+    commit = ProbeRobust(model).act(particles, np.full((1, 128), 1 / 128), 1.8, np.array([[1.0]]))
+    assert np.isfinite(commit.score).all()

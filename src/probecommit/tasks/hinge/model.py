@@ -31,7 +31,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from probecommit.tasks.base import TaskModelBase
-from probecommit.tasks.push1d.model import G, stop_distance
+from probecommit.tasks.push1d.model import G, MIN_FRICTION, stop_distance
 
 #: Door panel width (m): a 0.5 m cabinet-size door; I = m W^2 / 3.
 DOOR_WIDTH_M = 0.5
@@ -104,6 +104,17 @@ class HingeModel(TaskModelBase):
     def with_margin(self, gamma: float) -> "HingeModel":
         """Scale the modeled miss by ``1 / gamma``: actions keep their order, scores grow."""
         return replace(self, margin=float(gamma))
+
+    def grown_scenarios(self, particles: np.ndarray, z_points: np.ndarray) -> np.ndarray:
+        """The default grown scenarios with the friction torque kept positive.
+
+        A conformal threshold ``t > 1`` grows the decision interval by ``(t - 1) D`` on each
+        side, which can reach below zero, where the closed form is undefined (NaN); a
+        scenario there is the least friction torque that still slides, ``MIN_FRICTION``.
+        """
+        extra = super().grown_scenarios(particles, z_points)
+        extra[..., 0] = np.maximum(extra[..., 0], MIN_FRICTION)
+        return extra
 
     def predict(self, u: np.ndarray, theta: np.ndarray) -> np.ndarray:
         """Stop angle ``[E, N, 1]`` of coasts released at ``u[E]`` rad/s."""

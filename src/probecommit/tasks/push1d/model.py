@@ -34,6 +34,8 @@ import numpy as np
 from probecommit.tasks.base import TaskModelBase
 
 G = 9.81
+#: Smallest friction a grown scenario may have (grown sets can reach past zero).
+MIN_FRICTION = 1e-6
 
 #: Prior box on (mu, m, k_d): table-top friction, a 0.5-1.5 kg box, damping time
 #: constants m / k_d from 0.17 s to 3 s.
@@ -106,6 +108,17 @@ class Push1DModel(TaskModelBase):
     def with_margin(self, gamma: float) -> "Push1DModel":
         """Scale the modeled miss by ``1 / gamma``: actions keep their order, scores grow."""
         return replace(self, margin=float(gamma))
+
+    def grown_scenarios(self, particles: np.ndarray, z_points: np.ndarray) -> np.ndarray:
+        """The default grown scenarios with the friction kept positive.
+
+        A conformal threshold ``t > 1`` grows the decision interval by ``(t - 1) D`` on each
+        side, which can reach below zero, where the closed form is undefined (NaN); a
+        scenario there is the least friction that still slides, ``MIN_FRICTION``.
+        """
+        extra = super().grown_scenarios(particles, z_points)
+        extra[..., 0] = np.maximum(extra[..., 0], MIN_FRICTION)
+        return extra
 
     def predict(self, u: np.ndarray, theta: np.ndarray) -> np.ndarray:
         """Slide distance ``[E, N, 1]`` of pulses ``u[E]`` (or ``[E, 1]``)."""
