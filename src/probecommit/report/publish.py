@@ -54,6 +54,32 @@ def breadth_section(folder: Path) -> str:
         table,
         "",
     ]
+    rows = {r["family"]: r for r in payload["results"].get("table_5", [])}
+
+    def change(family: str) -> str:
+        r = rows[family]
+        return f"{100 * (r['probe_robust'] - r['blind_bayes']) / r['blind_bayes']:+.0f} %"
+
+    gaps = []
+    if "insertion_A" in rows:
+        gaps.append(f"insertion, Split A: cover k = 5 fails at {rows['insertion_A']['probe_robust']:.3f} against the "
+                    "paper's 0.234 on our own MuJoCo scene (Table IV's row, discussed there).")
+    gaps.append("1-D push, 2-D push, darts: blind misses differ in scale because our priors and targets are our own, "
+                "and the reductions are larger than the paper's for the same reason (docs/families.md).")
+    if "hinge" in rows:
+        gaps.append(f"hinge: {change('hinge')} from Blind-Bayes to Probe-Robust(5) against the paper's -91 %; the door "
+                    "and its prior are our own.")
+    if "shuffleboard" in rows:
+        gaps.append(f"shuffleboard: our blind miss is {rows['shuffleboard']['blind_bayes'] / 0.083:.0f}x the paper's "
+                    f"(our friction and mass priors are wide against 1.5-3.5 m targets); two strikes change it by "
+                    f"{change('shuffleboard')} (paper -40 %).")
+    for family, f in flips.items():
+        if family in rows:
+            r = rows[family]
+            gaps.append(f"{family}: {f['n_feasible']} of our {f['n_instances']} truths are feasible (paper: 6 of 16), so "
+                        f"our success is over more truths; it goes from {r['blind_bayes']:.2f} to {r['probe_robust']:.2f} "
+                        "(paper 0.33 to 0.69). The upper force limit is a task rule (docs/decisions.md).")
+    lines += ["Where we differ from the paper:", ""] + [f"- {text}" for text in gaps] + [""]
     for family, f in flips.items():
         lines.append(
             f"{family}: {f['n_feasible']} of {f['n_instances']} truths are feasible (some grid grip succeeds in the "
