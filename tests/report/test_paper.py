@@ -42,3 +42,15 @@ def test_reproduce_all_quick_then_publish_and_verify(tmp_path):
     report = verify(repo / "results")
     assert report.ok, report.failures[:5]
     assert report.checked > 788
+
+
+def test_setup_target_writes_table_2_and_fig_1b(tmp_path):
+    from probecommit.report import paper
+
+    done = paper.reproduce(["table-2"], tmp_path, quick=True)
+    results = tmp_path / "setup" / "results"
+    assert done["targets"] == {"setup": str(results)}
+    table = (results / "table_2.md").read_text()
+    for family in paper.SETUP_ORDER:
+        assert f"| {family} |" in table
+    assert (results / "fig_1b_belief.png").is_file() and (results / "fig_1b_belief.pdf").is_file()
