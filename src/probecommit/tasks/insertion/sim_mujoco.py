@@ -77,7 +77,7 @@ SETTLE_SPEED = 1e-4  # m/s: both joint speeds below this ...
 SETTLE_CHUNKS = 3  # ... for this many consecutive chunks, with contact, means stopped
 MAX_TIME_S = 0.5
 
-MODEL_CACHE_SIZE = 256  # instances; a study touches at most a few hundred
+MODEL_CACHE_SIZE = 32  # instances (0.6 MB each); queries are cached anyway, so a miss costs one compile (ms)
 
 
 def _f(x: float) -> str:

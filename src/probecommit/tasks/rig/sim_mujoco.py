@@ -32,7 +32,7 @@ FLOOR_THICKNESS_MM = 20.0
 TOOL_HALF_HEIGHT_MM = 40.0
 #: Contacts are reported within this distance; the switch closes at distance <= 0.
 CONTACT_MARGIN_MM = 0.01
-MODEL_CACHE_SIZE = 256
+MODEL_CACHE_SIZE = 32
 
 
 def _f(x: float) -> str:
