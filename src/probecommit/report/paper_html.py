@@ -16,7 +16,8 @@ from probecommit.report.audit_report import _CSS
 
 #: Target folders whose figures follow each REPRODUCTION.md section (by heading keyword).
 SECTION_TARGETS = (("MuJoCo insertion", "insertion"), ("Every family", "breadth"), ("Across engines", "engines"),
-                   ("Probe pricing", "cost"), ("learned baseline", "gru"), ("Beyond the paper", "beyond"))
+                   ("Probe pricing", "cost"), ("learned baseline", "gru"), ("Beyond the paper", "beyond"),
+                   ("The robot run", "robot"), ("The task families", "setup"))
 
 
 def _inline(text: str) -> str:
