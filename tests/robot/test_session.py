@@ -151,3 +151,11 @@ def test_missing_truths_are_named_not_scored(tmp_path, rig_config):
     result = session_episodes(tmp_path / "s")
     assert len(result.rows) == 1
     assert any("no truth recorded for position 'p1'" in note for note in result.notes)
+
+
+def test_the_audit_says_when_the_last_line_was_cut_off(tmp_path, rig_config):
+    log = simulate_session(tmp_path / "s", rig_config)
+    with open(log, "ab") as f:
+        f.write(b'{"type":"episode","epis')
+    result = session_episodes(log)
+    assert len(result.rows) == 12 and any("cut off mid-write" in note for note in result.notes)

@@ -36,10 +36,11 @@ class SessionEpisodes:
     rows: pd.DataFrame
     unscored: dict[str, list[int]] = field(default_factory=dict)
     path: Path | None = None
+    warnings: list[str] = field(default_factory=list)
 
     @property
     def notes(self) -> list[str]:
-        out = []
+        out = list(self.warnings)
         for reason, episodes in self.unscored.items():
             shown = ", ".join(map(str, episodes[:8])) + (" ..." if len(episodes) > 8 else "")
             out.append(f"{len(episodes)} episode(s) not scored ({reason}): {shown}")
@@ -92,9 +93,15 @@ def session_episodes(path: str | Path) -> SessionEpisodes:
     Raises:
         SessionLogError: the log is unreadable, or no episode can be scored (the message says why).
     """
+    from probecommit.robot.log import read_records
+
     config, episodes, truths, log = load_session(path)
     result = rows_from_decisions(build_model(config), episodes, truths)
     result.path = log
+    _, partial = read_records(log, allow_partial=True)
+    if partial:
+        result.warnings.append(f"the log's last line was cut off mid-write ({len(partial)} bytes; its call never "
+                               "returned) and is ignored here; Session.open(..., repair=True) moves it to .partial")
     if result.rows.empty:
         why = "; ".join(result.notes) or "it has no episodes"
         raise SessionLogError(f"{log}: no episode can be audited ({why})")
