@@ -44,6 +44,7 @@ bench: $(STAMP)
 	$(PY) benchmarks/calibrate.py
 	$(PY) benchmarks/scale.py
 	$(PY) benchmarks/session.py
+	$(PY) benchmarks/end_to_end.py
 
 ## Every table and figure of the paper (resumable; see probecommit reproduce --list).
 reproduce: $(STAMP)
