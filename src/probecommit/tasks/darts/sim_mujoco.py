@@ -18,12 +18,12 @@ landing point is the linear interpolation of ``x`` between the last two steps at
 
 from __future__ import annotations
 
-from collections import OrderedDict
 from typing import Any
 
 import numpy as np
 
 from probecommit.engines import require
+from probecommit.engines.cache import InstanceCache
 from probecommit.tasks.base import CachedSimulator
 from probecommit.tasks.darts.model import RELEASE_HEIGHT
 
@@ -70,20 +70,11 @@ class MujocoDartsSimulator(CachedSimulator):
             raise ValueError(f"noise_sigma must be >= 0, got {noise_sigma!r}")
         self.noise_sigma = float(noise_sigma)
         self._mj = require("mujoco")
-        self._models: OrderedDict[tuple[float, float, float], Any] = OrderedDict()
+        self._instance = InstanceCache(self._compile, MODEL_CACHE_SIZE).get
 
-    def _instance(self, k_d: float, m: float, g: float) -> tuple[Any, Any]:
-        key = (float(k_d), float(m), float(g))
-        entry = self._models.get(key)
-        if entry is None:
-            model = self._mj.MjModel.from_xml_string(scene_xml(*key))
-            entry = (model, self._mj.MjData(model))
-            self._models[key] = entry
-            if len(self._models) > MODEL_CACHE_SIZE:
-                self._models.popitem(last=False)
-        else:
-            self._models.move_to_end(key)
-        return entry
+    def _compile(self, k_d: float, m: float, g: float) -> tuple[Any, Any]:
+        model = self._mj.MjModel.from_xml_string(scene_xml(k_d, m, g))
+        return model, self._mj.MjData(model)
 
     def landing(self, k_d: float, m: float, g: float, speed: float, elevation_deg: float) -> float:
         """Named query: ground distance (m) where a launch ``(speed, elevation)`` lands."""

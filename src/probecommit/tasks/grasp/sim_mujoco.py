@@ -19,12 +19,12 @@ Soft contacts give a small systematic offset to a squeeze against the force bala
 
 from __future__ import annotations
 
-from collections import OrderedDict
 from typing import Any
 
 import numpy as np
 
 from probecommit.engines import require
+from probecommit.engines.cache import InstanceCache
 from probecommit.tasks.grasp.model import LIFT_ACCEL, SQUEEZE_S
 from probecommit.tasks.grasp.sim_base import GraspSimulator
 
@@ -82,20 +82,11 @@ class MujocoGraspSimulator(GraspSimulator):
     def __init__(self, **kwargs: Any) -> None:
         super().__init__(**kwargs)
         self._mj = require("mujoco")
-        self._models: OrderedDict[tuple[float, float], Any] = OrderedDict()
+        self._instance = InstanceCache(self._compile, MODEL_CACHE_SIZE).get
 
-    def _instance(self, mu: float, m: float) -> tuple[Any, Any, int]:
-        key = (float(mu), float(m))
-        entry = self._models.get(key)
-        if entry is None:
-            model = self._mj.MjModel.from_xml_string(scene_xml(*key))
-            entry = (model, self._mj.MjData(model), model.body("object").id)
-            self._models[key] = entry
-            if len(self._models) > MODEL_CACHE_SIZE:
-                self._models.popitem(last=False)
-        else:
-            self._models.move_to_end(key)
-        return entry
+    def _compile(self, mu: float, m: float) -> tuple[Any, Any, int]:
+        model = self._mj.MjModel.from_xml_string(scene_xml(mu, m))
+        return model, self._mj.MjData(model), model.body("object").id
 
     def squeeze(self, mu: float, m: float, u: float) -> float:
         """Named query: how far (mm) the box slides in 50 ms with the pads at ``u`` N."""

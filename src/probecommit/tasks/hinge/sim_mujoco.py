@@ -14,12 +14,12 @@ Coulomb closed form to well under the 0.02 rad reading noise (tested).
 
 from __future__ import annotations
 
-from collections import OrderedDict
 from typing import Any
 
 import numpy as np
 
 from probecommit.engines import require
+from probecommit.engines.cache import InstanceCache
 from probecommit.tasks.base import CachedSimulator
 from probecommit.tasks.hinge.model import DOOR_WIDTH_M
 
@@ -74,20 +74,11 @@ class MujocoHingeSimulator(CachedSimulator):
             raise ValueError(f"noise_sigma must be >= 0, got {noise_sigma!r}")
         self.noise_sigma = float(noise_sigma)
         self._mj = require("mujoco")
-        self._models: OrderedDict[tuple[float, float, float], Any] = OrderedDict()
+        self._instance = InstanceCache(self._compile, MODEL_CACHE_SIZE).get
 
-    def _instance(self, f: float, b: float, m: float) -> tuple[Any, Any]:
-        key = (float(f), float(b), float(m))
-        entry = self._models.get(key)
-        if entry is None:
-            model = self._mj.MjModel.from_xml_string(scene_xml(*key))
-            entry = (model, self._mj.MjData(model))
-            self._models[key] = entry
-            if len(self._models) > MODEL_CACHE_SIZE:
-                self._models.popitem(last=False)
-        else:
-            self._models.move_to_end(key)
-        return entry
+    def _compile(self, f: float, b: float, m: float) -> tuple[Any, Any]:
+        model = self._mj.MjModel.from_xml_string(scene_xml(f, b, m))
+        return model, self._mj.MjData(model)
 
     def coast(self, f: float, b: float, m: float, speed: float) -> float:
         """Named query: the angle (rad) where the door stops after release at ``speed`` rad/s."""

@@ -25,12 +25,12 @@ function of its arguments (bit-identical on repeat). See ``docs/decisions.md``,
 
 from __future__ import annotations
 
-from collections import OrderedDict
 from typing import Any
 
 import numpy as np
 
 from probecommit.engines import require
+from probecommit.engines.cache import InstanceCache
 from probecommit.tasks.insertion.model import PAPER_DELTA_MM, POCKET_DEPTH_MM, TIP_RADIUS_MM, half_gap
 from probecommit.tasks.insertion.sim_base import InsertionSimulator
 
@@ -187,36 +187,27 @@ class MujocoInsertionSimulator(InsertionSimulator):
     def __init__(self, **kwargs: Any) -> None:
         super().__init__(**kwargs)
         self._mj = require("mujoco")  # lazy: importing this module never needs mujoco
-        self._models: OrderedDict[tuple[float, float], Any] = OrderedDict()
+        self._instance = InstanceCache(self._compile, MODEL_CACHE_SIZE).get
 
     # ------------------------------------------------------------------ model cache
-    def _instance(self, x_hole: float, c: float) -> tuple[Any, Any, dict[str, int]]:
-        """Compiled (model, data, indices) for an instance, built once and LRU-cached."""
-        key = (float(x_hole), float(c))
-        entry = self._models.get(key)
-        if entry is None:
-            mj = self._mj
-            model = mj.MjModel.from_xml_string(scene_xml(*key))
-            data = mj.MjData(model)
-            idx = {
-                "tap_x": model.jnt_qposadr[mj.mj_name2id(model, mj.mjtObj.mjOBJ_JOINT, "tap_x")],
-                "tap_z": model.jnt_qposadr[mj.mj_name2id(model, mj.mjtObj.mjOBJ_JOINT, "tap_z")],
-                "peg_x": model.jnt_qposadr[mj.mj_name2id(model, mj.mjtObj.mjOBJ_JOINT, "peg_x")],
-                "peg_z": model.jnt_qposadr[mj.mj_name2id(model, mj.mjtObj.mjOBJ_JOINT, "peg_z")],
-                "tip": mj.mj_name2id(model, mj.mjtObj.mjOBJ_GEOM, "tip"),
-                "peg": mj.mj_name2id(model, mj.mjtObj.mjOBJ_GEOM, "peg"),
-                "tap_x_spring": mj.mj_name2id(model, mj.mjtObj.mjOBJ_ACTUATOR, "tap_x_spring"),
-                "tap_push": mj.mj_name2id(model, mj.mjtObj.mjOBJ_ACTUATOR, "tap_push"),
-                "peg_x_spring": mj.mj_name2id(model, mj.mjtObj.mjOBJ_ACTUATOR, "peg_x_spring"),
-                "peg_push": mj.mj_name2id(model, mj.mjtObj.mjOBJ_ACTUATOR, "peg_push"),
-            }
-            entry = (model, data, idx)
-            self._models[key] = entry
-            if len(self._models) > MODEL_CACHE_SIZE:
-                self._models.popitem(last=False)
-        else:
-            self._models.move_to_end(key)
-        return entry
+    def _compile(self, x_hole: float, c: float) -> tuple[Any, Any, dict[str, int]]:
+        """Compiled (model, data, indices) for an instance (kept by the LRU ``self._instance``)."""
+        mj = self._mj
+        model = mj.MjModel.from_xml_string(scene_xml(x_hole, c))
+        data = mj.MjData(model)
+        idx = {
+            "tap_x": model.jnt_qposadr[mj.mj_name2id(model, mj.mjtObj.mjOBJ_JOINT, "tap_x")],
+            "tap_z": model.jnt_qposadr[mj.mj_name2id(model, mj.mjtObj.mjOBJ_JOINT, "tap_z")],
+            "peg_x": model.jnt_qposadr[mj.mj_name2id(model, mj.mjtObj.mjOBJ_JOINT, "peg_x")],
+            "peg_z": model.jnt_qposadr[mj.mj_name2id(model, mj.mjtObj.mjOBJ_JOINT, "peg_z")],
+            "tip": mj.mj_name2id(model, mj.mjtObj.mjOBJ_GEOM, "tip"),
+            "peg": mj.mj_name2id(model, mj.mjtObj.mjOBJ_GEOM, "peg"),
+            "tap_x_spring": mj.mj_name2id(model, mj.mjtObj.mjOBJ_ACTUATOR, "tap_x_spring"),
+            "tap_push": mj.mj_name2id(model, mj.mjtObj.mjOBJ_ACTUATOR, "tap_push"),
+            "peg_x_spring": mj.mj_name2id(model, mj.mjtObj.mjOBJ_ACTUATOR, "peg_x_spring"),
+            "peg_push": mj.mj_name2id(model, mj.mjtObj.mjOBJ_ACTUATOR, "peg_push"),
+        }
+        return model, data, idx
 
     def _descend(self, model: Any, data: Any, jx: int, jz: int, schedule: Any = None) -> None:
         """Step until the driven body is in contact and both its joint speeds stay settled.

@@ -26,10 +26,11 @@ arguments (bit-identical on repeat and across objects).
 from __future__ import annotations
 
 import xml.etree.ElementTree as ET
-from collections import OrderedDict
 from typing import Any
 
 import numpy as np
+
+from probecommit.engines.cache import InstanceCache
 
 from probecommit.engines.pybullet import COLLISION_MARGIN_M  # plain constants: no pybullet import
 from probecommit.tasks.insertion.model import TIP_RADIUS_MM
@@ -120,8 +121,9 @@ class PybulletInsertionSimulator(InsertionSimulator):
         self._p = pbe.import_pybullet()
         self._cid: int | None = None
         self._cid = pbe.new_client(TIMESTEP_S, physics)
-        self._plates: OrderedDict[tuple[float, float], int] = OrderedDict()
-        self._active: tuple[float, float] | None = None
+        self._plates = InstanceCache(self._build_plate, MODEL_CACHE_SIZE, evict=self._drop_plate)
+        self._active: tuple[float, float] | None = None  # the one collidable plate: key and body
+        self._active_body: int | None = None
         r = TIP_RADIUS_MM * MM
         self._tap = self._chain(
             base_z=r + START_CLEARANCE_MM * MM, y=TAP_Y_MM * MM, mass=TAP_MASS_KG, friction=0.0,
@@ -163,35 +165,36 @@ class PybulletInsertionSimulator(InsertionSimulator):
         hx, hy, hz = shape["halfExtents"]
         return [m / 3 * (hy * hy + hz * hz), m / 3 * (hx * hx + hz * hz), m / 3 * (hx * hx + hy * hy)]
 
+    def _build_plate(self, x_hole: float, c: float) -> int:
+        """The instance's plate body (kept by the LRU ``self._plates``)."""
+        p, cid = self._p, self._cid
+        boxes = plate_boxes(x_hole, c)
+        col = p.createCollisionShapeArray(
+            shapeTypes=[p.GEOM_BOX] * len(boxes), halfExtents=[b["half"] for b in boxes],
+            collisionFramePositions=[b["pos"] for b in boxes],
+            collisionFrameOrientations=[[b["quat"][1], b["quat"][2], b["quat"][3], b["quat"][0]] for b in boxes],
+            physicsClientId=cid)
+        body = p.createMultiBody(baseMass=0.0, baseCollisionShapeIndex=col, baseVisualShapeIndex=-1,
+                                 basePosition=[0, 0, 0], physicsClientId=cid)
+        # Friction is a product in Bullet: plate 1.0 x peg 0.3 = 0.3, plate x tip 0 = 0.
+        self._pbe.mm_dynamics(body, -1, cid, margin=self._margin, lateralFriction=1.0)
+        return body
+
+    def _drop_plate(self, key: tuple[float, float], body: int) -> None:
+        self._p.removeBody(body, physicsClientId=self._cid)
+        if self._active == key:
+            self._active, self._active_body = None, None
+
     def _instance(self, x_hole: float, c: float) -> int:
         """The instance's plate body, built once (LRU-cached) and made the only collidable plate."""
         p, cid = self._p, self._cid
         key = (float(x_hole), float(c))
-        body = self._plates.get(key)
-        if body is None:
-            boxes = plate_boxes(*key)
-            col = p.createCollisionShapeArray(
-                shapeTypes=[p.GEOM_BOX] * len(boxes), halfExtents=[b["half"] for b in boxes],
-                collisionFramePositions=[b["pos"] for b in boxes],
-                collisionFrameOrientations=[[b["quat"][1], b["quat"][2], b["quat"][3], b["quat"][0]] for b in boxes],
-                physicsClientId=cid)
-            body = p.createMultiBody(baseMass=0.0, baseCollisionShapeIndex=col, baseVisualShapeIndex=-1,
-                                     basePosition=[0, 0, 0], physicsClientId=cid)
-            # Friction is a product in Bullet: plate 1.0 x peg 0.3 = 0.3, plate x tip 0 = 0.
-            self._pbe.mm_dynamics(body, -1, cid, margin=self._margin, lateralFriction=1.0)
-            self._plates[key] = body
-            if len(self._plates) > MODEL_CACHE_SIZE:
-                _, old = self._plates.popitem(last=False)
-                p.removeBody(old, physicsClientId=cid)
-                if self._active is not None and self._active not in self._plates:
-                    self._active = None
-        else:
-            self._plates.move_to_end(key)
+        body = self._plates.get(*key)
         if self._active != key:
             if self._active is not None:
-                p.setCollisionFilterGroupMask(self._plates[self._active], -1, 0, 0, physicsClientId=cid)
+                p.setCollisionFilterGroupMask(self._active_body, -1, 0, 0, physicsClientId=cid)
             p.setCollisionFilterGroupMask(body, -1, 1, 1, physicsClientId=cid)
-            self._active = key
+            self._active, self._active_body = key, body
         return body
 
     def _reset(self) -> None:

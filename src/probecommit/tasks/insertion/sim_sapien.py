@@ -26,10 +26,11 @@ state and drive targets, so a query is a pure function of its arguments.
 
 from __future__ import annotations
 
-from collections import OrderedDict
 from typing import Any
 
 import numpy as np
+
+from probecommit.engines.cache import InstanceCache
 
 from probecommit.tasks.insertion.model import POCKET_DEPTH_MM, TIP_RADIUS_MM, half_gap
 from probecommit.tasks.insertion.sim_base import InsertionSimulator
@@ -124,7 +125,8 @@ class SapienInsertionSimulator(InsertionSimulator):
         self._se = se
         self._sapien = se.import_sapien()
         self._overrides = (scene_config, body, shape)
-        self._scenes: OrderedDict[tuple[float, float], dict[str, Any]] = OrderedDict()
+        self._scenes = InstanceCache(self._build_scene, MODEL_CACHE_SIZE)
+        self._instance = self._scenes.get
 
     # ------------------------------------------------------------------ scene
     def _material(self, friction: float) -> Any:
@@ -181,16 +183,11 @@ class SapienInsertionSimulator(InsertionSimulator):
         self._se.mm_articulation(art, self._overrides[1], self._overrides[2])
         return art
 
-    def _instance(self, x_hole: float, c: float) -> dict[str, Any]:
-        """The instance's PhysX scene with plate, tap and peg, built once and LRU-cached."""
-        key = (float(x_hole), float(c))
-        entry = self._scenes.get(key)
-        if entry is not None:
-            self._scenes.move_to_end(key)
-            return entry
+    def _build_scene(self, x_hole: float, c: float) -> dict[str, Any]:
+        """The instance's PhysX scene with plate, tap and peg (kept by the LRU ``self._instance``)."""
         sapien = self._sapien
         scene = self._se.new_scene(TIMESTEP_S, self._overrides[0])
-        self._plate(scene, *key)
+        self._plate(scene, x_hole, c)
         r = TIP_RADIUS_MM * MM
         tap_base = [0.0, TAP_Y_MM * MM, r + START_CLEARANCE_MM * MM]
         tap = self._chain(scene, "tap", tap_base, TAP_MASS_KG, [0.4 * TAP_MASS_KG * r * r] * 3, 0.0,
@@ -201,11 +198,7 @@ class SapienInsertionSimulator(InsertionSimulator):
                        PEG_MASS_KG / 3 * (pw * pw + pl * pl)]
         peg = self._chain(scene, "peg", peg_base, PEG_MASS_KG, peg_inertia, PEG_FRICTION,
                           lambda lb, m: lb.add_box_collision(sapien.Pose(), (pw, pl, ph), material=m))
-        entry = {"scene": scene, "tap": tap, "peg": peg, "tap_z0": tap_base[2], "peg_z0": peg_base[2]}
-        self._scenes[key] = entry
-        if len(self._scenes) > MODEL_CACHE_SIZE:
-            self._scenes.popitem(last=False)
-        return entry
+        return {"scene": scene, "tap": tap, "peg": peg, "tap_z0": tap_base[2], "peg_z0": peg_base[2]}
 
     @staticmethod
     def _reset(entry: dict[str, Any]) -> None:

@@ -25,12 +25,12 @@ cached per ``(theta, impulse)`` by :class:`~probecommit.tasks.base.CachedSimulat
 
 from __future__ import annotations
 
-from collections import OrderedDict
 from typing import Any, Iterable
 
 import numpy as np
 
 from probecommit.engines import require
+from probecommit.engines.cache import InstanceCache
 from probecommit.tasks.base import CachedSimulator
 
 BOX_HALF_M = 0.05
@@ -87,20 +87,11 @@ class MujocoPush2DSimulator(CachedSimulator):
             raise ValueError(f"noise_sigma must be >= 0, got {noise_sigma!r}")
         self.noise_sigma = float(noise_sigma)
         self._mj = require("mujoco")
-        self._models: OrderedDict[tuple[float, float, float], Any] = OrderedDict()
+        self._instance = InstanceCache(self._compile, MODEL_CACHE_SIZE).get
 
-    def _instance(self, mu: float, m: float, k_d: float) -> tuple[Any, Any]:
-        key = (float(mu), float(m), float(k_d))
-        entry = self._models.get(key)
-        if entry is None:
-            model = self._mj.MjModel.from_xml_string(scene_xml(*key))
-            entry = (model, self._mj.MjData(model))
-            self._models[key] = entry
-            if len(self._models) > MODEL_CACHE_SIZE:
-                self._models.popitem(last=False)
-        else:
-            self._models.move_to_end(key)
-        return entry
+    def _compile(self, mu: float, m: float, k_d: float) -> tuple[Any, Any]:
+        model = self._mj.MjModel.from_xml_string(scene_xml(mu, m, k_d))
+        return model, self._mj.MjData(model)
 
     def rest(self, mu: float, m: float, k_d: float, jx: float, jy: float) -> np.ndarray:
         """Named query: 2-D displacement (m) of the box after an impulse ``(jx, jy)`` (N s)."""

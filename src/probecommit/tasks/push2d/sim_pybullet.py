@@ -17,10 +17,11 @@ stays below ``STOP_SPEED``: a deterministic function of ``(theta, impulse)``, ca
 
 from __future__ import annotations
 
-from collections import OrderedDict
 from typing import Any
 
 import numpy as np
+
+from probecommit.engines.cache import InstanceCache
 
 from probecommit.engines.pybullet import disconnect, import_pybullet, mm_dynamics, new_client
 from probecommit.tasks.base import CachedSimulator
@@ -58,15 +59,12 @@ class PybulletPush2DSimulator(CachedSimulator):
             raise ValueError(f"noise_sigma must be >= 0, got {noise_sigma!r}")
         self.noise_sigma = float(noise_sigma)
         self._p = import_pybullet()
-        self._clients: OrderedDict[tuple[float, float, float], tuple[int, int]] = OrderedDict()
+        self._clients = InstanceCache(self._build_client, MODEL_CACHE_SIZE,
+                                      evict=lambda key, entry: disconnect(entry[0]))
+        self._instance = self._clients.get
 
-    def _instance(self, mu: float, m: float) -> tuple[int, int]:
-        """A client holding the plane and the box chain of one ``(mu, m)``."""
-        key = (float(mu), float(m), 0.0)
-        entry = self._clients.get(key)
-        if entry is not None:
-            self._clients.move_to_end(key)
-            return entry
+    def _build_client(self, mu: float, m: float) -> tuple[int, int]:
+        """A client holding the plane and the box chain of one ``(mu, m)`` (kept by the LRU ``self._instance``)."""
         p = self._p
         cid = new_client(TIMESTEP_S, PHYSICS)
         p.setGravity(0.0, 0.0, -GRAVITY, physicsClientId=cid)
@@ -88,12 +86,7 @@ class PybulletPush2DSimulator(CachedSimulator):
             mm_dynamics(body, link, cid, margin=None, lateralFriction=float(mu), localInertiaDiagonal=inertia)
             # Free joints: disable the default velocity motors.
             p.setJointMotorControl2(body, link, p.VELOCITY_CONTROL, force=0.0, physicsClientId=cid)
-        entry = (cid, body)
-        self._clients[key] = entry
-        if len(self._clients) > MODEL_CACHE_SIZE:
-            _, (old, _) = self._clients.popitem(last=False)
-            disconnect(old)
-        return entry
+        return cid, body
 
     def rest(self, mu: float, m: float, k_d: float, jx: float, jy: float) -> np.ndarray:
         """Named query: 2-D displacement (m) of the box after an impulse ``(jx, jy)`` (N s)."""

@@ -16,12 +16,12 @@ repeat). A compiled model is cached per instance.
 
 from __future__ import annotations
 
-from collections import OrderedDict
 from typing import Any
 
 import numpy as np
 
 from probecommit.engines import require
+from probecommit.engines.cache import InstanceCache
 from probecommit.tasks.rig.model import ALLOWANCE_MM, POCKET_DEPTH_MM, TOOL_RADIUS_MM, rig_half_gap
 from probecommit.tasks.rig.sim_base import RigSimulator, descent_heights
 
@@ -78,20 +78,11 @@ class MujocoRigSimulator(RigSimulator):
     def __init__(self, **kwargs: Any) -> None:
         super().__init__(**kwargs)
         self._mj = require("mujoco")
-        self._models: OrderedDict[tuple[float, float], tuple[Any, Any]] = OrderedDict()
+        self._instance = InstanceCache(self._compile, MODEL_CACHE_SIZE).get
 
-    def _instance(self, x_hole: float, c: float) -> tuple[Any, Any]:
-        key = (float(x_hole), float(c))
-        entry = self._models.get(key)
-        if entry is None:
-            model = self._mj.MjModel.from_xml_string(rig_scene_xml(*key))
-            entry = (model, self._mj.MjData(model))
-            self._models[key] = entry
-            if len(self._models) > MODEL_CACHE_SIZE:
-                self._models.popitem(last=False)
-        else:
-            self._models.move_to_end(key)
-        return entry
+    def _compile(self, x_hole: float, c: float) -> tuple[Any, Any]:
+        model = self._mj.MjModel.from_xml_string(rig_scene_xml(x_hole, c))
+        return model, self._mj.MjData(model)
 
     def _touching(self, model: Any, data: Any, x_mm: float, bottom_mm: float) -> bool:
         """Whether the tool, its bottom at ``bottom_mm`` and centre at ``x_mm``, touches the block."""
