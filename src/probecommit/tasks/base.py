@@ -220,6 +220,53 @@ class CachedSimulator:
                 self._cache[key] = np.asarray(r["value"], dtype=float)
 
 
+class NoisySimulator(CachedSimulator):
+    """A cached simulator whose readings carry Gaussian noise of ``noise_sigma`` (validated once here).
+
+    Args:
+        noise_sigma: Standard deviation of the noise added to every reading (>= 0).
+    """
+
+    def __init__(self, noise_sigma: float) -> None:
+        super().__init__()
+        if not (np.isfinite(noise_sigma) and noise_sigma >= 0):
+            raise ValueError(f"noise_sigma must be >= 0, got {noise_sigma!r}")
+        self.noise_sigma = float(noise_sigma)
+
+
+class TargetMissSimulator(NoisySimulator):
+    """Ground truth of a family whose probe and commit both run one named scalar query and whose
+    commit should land on a target (the context): a slide, a coast, a throw.
+
+    A probe reads ``query(theta, u)`` plus noise; a commit's realized outcome is the miss
+    ``|query(theta, action) - target|``. Subclasses define the query method and name it.
+
+    Attributes:
+        query: Name of the named query method (``"slide"``, ``"coast"``, ...).
+        outcome: Key of the query's raw value in ``execute``'s result.
+        target: What the context is, for the error message (``"target distance"``).
+        not_finite: Message when the engine returns a non-finite value (``{action}`` is filled in).
+    """
+
+    query = "?"
+    outcome = "value"
+    target = "target"
+    not_finite = "{engine} {query} returned a non-finite value for action {action}"
+
+    def probe(self, theta: np.ndarray, u: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+        clean = self.cached(self.query, theta, np.ravel(u))
+        return clean + self.noise_sigma * rng.standard_normal(1)
+
+    def execute(self, theta: np.ndarray, action: np.ndarray, context: np.ndarray | None = None) -> dict[str, Any]:
+        if context is None:
+            raise ValueError(f"the {self.family} outcome needs the {self.target} (context)")
+        value = float(self.cached(self.query, theta, np.ravel(action))[0])
+        if not np.isfinite(value):
+            raise FloatingPointError(self.not_finite.format(engine=self.engine, query=self.query,
+                                                            action=np.ravel(action).tolist()))
+        return {"realized": abs(value - float(np.ravel(context)[0])), self.outcome: value}
+
+
 @dataclass(frozen=True)
 class TaskSpec:
     """What a family registers (dm_control suite / Gymnasium ``register`` style).

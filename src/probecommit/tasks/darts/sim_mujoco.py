@@ -24,7 +24,7 @@ import numpy as np
 
 from probecommit.engines import require
 from probecommit.engines.cache import InstanceCache
-from probecommit.tasks.base import CachedSimulator
+from probecommit.tasks.base import TargetMissSimulator
 from probecommit.tasks.darts.model import RELEASE_HEIGHT
 
 SPHERE_RADIUS_M = 0.01
@@ -55,7 +55,7 @@ def scene_xml(k_d: float, m: float, g: float) -> str:
 """
 
 
-class MujocoDartsSimulator(CachedSimulator):
+class MujocoDartsSimulator(TargetMissSimulator):
     """Darts ground truth in MuJoCo (scene in the module docstring).
 
     Args:
@@ -63,12 +63,12 @@ class MujocoDartsSimulator(CachedSimulator):
     """
 
     engine = "mujoco"
+    family = "darts"
+    query, outcome, target = "landing", "landing", "target distance"
+    not_finite = "mujoco dart did not land for launch {action}"
 
     def __init__(self, noise_sigma: float = 0.02) -> None:
-        super().__init__()
-        if not (np.isfinite(noise_sigma) and noise_sigma >= 0):
-            raise ValueError(f"noise_sigma must be >= 0, got {noise_sigma!r}")
-        self.noise_sigma = float(noise_sigma)
+        super().__init__(noise_sigma)
         self._mj = require("mujoco")
         self._instance = InstanceCache(self._compile, MODEL_CACHE_SIZE).get
 
@@ -92,15 +92,3 @@ class MujocoDartsSimulator(CachedSimulator):
                 return x_prev + (x - x_prev) * z_prev / (z_prev - z)
             x_prev, z_prev = x, z
         return float("nan")  # never landed: the study marks the episode failed
-
-    def probe(self, theta: np.ndarray, u: np.ndarray, rng: np.random.Generator) -> np.ndarray:
-        clean = self.cached("landing", theta, np.ravel(u)[:2])
-        return clean + self.noise_sigma * rng.standard_normal(1)
-
-    def execute(self, theta: np.ndarray, action: np.ndarray, context: np.ndarray | None = None) -> dict[str, Any]:
-        if context is None:
-            raise ValueError("the darts outcome needs the target distance (context)")
-        x = float(self.cached("landing", theta, np.ravel(action)[:2])[0])
-        if not np.isfinite(x):
-            raise FloatingPointError(f"mujoco dart did not land for launch {np.ravel(action).tolist()}")
-        return {"realized": abs(x - float(np.ravel(context)[0])), "landing": x}

@@ -14,14 +14,14 @@ from typing import Any
 
 import numpy as np
 
-from probecommit.tasks.base import CachedSimulator
+from probecommit.tasks.base import NoisySimulator
 from probecommit.tasks.grasp.model import CRUSH_RATIO, LIFT_ACCEL, hold_force, squeeze_slip_mm
 
 #: The lift held if the object slid less than this relative to the pads (mm).
 HOLD_SLIP_MM = 2.0
 
 
-class GraspSimulator(CachedSimulator):
+class GraspSimulator(NoisySimulator):
     """Base class: cached queries, reading noise, and the success rule.
 
     Args:
@@ -31,10 +31,7 @@ class GraspSimulator(CachedSimulator):
     engine = "abstract"
 
     def __init__(self, noise_sigma: float = 2.0) -> None:
-        super().__init__()
-        if not (np.isfinite(noise_sigma) and noise_sigma >= 0):
-            raise ValueError(f"noise_sigma must be >= 0, got {noise_sigma!r}")
-        self.noise_sigma = float(noise_sigma)
+        super().__init__(noise_sigma)
 
     def squeeze(self, mu: float, m: float, u: float) -> float:  # pragma: no cover
         raise NotImplementedError

@@ -16,11 +16,9 @@ from __future__ import annotations
 
 from typing import Any
 
-import numpy as np
-
 from probecommit.engines import require
 from probecommit.engines.cache import InstanceCache
-from probecommit.tasks.base import CachedSimulator
+from probecommit.tasks.base import TargetMissSimulator
 from probecommit.tasks.hinge.model import DOOR_WIDTH_M
 
 TIMESTEP_S = 1e-3
@@ -59,7 +57,7 @@ def scene_xml(f: float, b: float, m: float) -> str:
 """
 
 
-class MujocoHingeSimulator(CachedSimulator):
+class MujocoHingeSimulator(TargetMissSimulator):
     """Hinge ground truth in MuJoCo (scene in the module docstring).
 
     Args:
@@ -67,12 +65,12 @@ class MujocoHingeSimulator(CachedSimulator):
     """
 
     engine = "mujoco"
+    family = "hinge"
+    query, outcome, target = "coast", "angle", "target angle"
+    not_finite = "mujoco door did not stop after release at {action} rad/s"
 
     def __init__(self, noise_sigma: float = 0.02) -> None:
-        super().__init__()
-        if not (np.isfinite(noise_sigma) and noise_sigma >= 0):
-            raise ValueError(f"noise_sigma must be >= 0, got {noise_sigma!r}")
-        self.noise_sigma = float(noise_sigma)
+        super().__init__(noise_sigma)
         self._mj = require("mujoco")
         self._instance = InstanceCache(self._compile, MODEL_CACHE_SIZE).get
 
@@ -93,15 +91,3 @@ class MujocoHingeSimulator(CachedSimulator):
             if quiet >= STOP_STEPS:
                 return float(data.qpos[0])
         return float("nan")  # never stopped: the study marks the episode failed
-
-    def probe(self, theta: np.ndarray, u: np.ndarray, rng: np.random.Generator) -> np.ndarray:
-        clean = self.cached("coast", theta, (float(np.ravel(u)[0]),))
-        return clean + self.noise_sigma * rng.standard_normal(1)
-
-    def execute(self, theta: np.ndarray, action: np.ndarray, context: np.ndarray | None = None) -> dict[str, Any]:
-        if context is None:
-            raise ValueError("the hinge outcome needs the target angle (context)")
-        angle = float(self.cached("coast", theta, (float(np.ravel(action)[0]),))[0])
-        if not np.isfinite(angle):
-            raise FloatingPointError(f"mujoco door did not stop after release at {np.ravel(action).tolist()} rad/s")
-        return {"realized": abs(angle - float(np.ravel(context)[0])), "angle": angle}

@@ -15,14 +15,14 @@ from typing import Any
 
 import numpy as np
 
-from probecommit.tasks.base import CachedSimulator
+from probecommit.tasks.base import NoisySimulator
 from probecommit.tasks.insertion.model import PAPER_DELTA_MM, POCKET_DEPTH_MM
 
 #: The peg fails if it reaches less than this fraction of the pocket depth.
 ENTRY_DEPTH_FRACTION = 0.6
 
 
-class InsertionSimulator(CachedSimulator):
+class InsertionSimulator(NoisySimulator):
     """Base class: cached deterministic queries + simulator-side noise and frame offset.
 
     Args:
@@ -33,10 +33,7 @@ class InsertionSimulator(CachedSimulator):
     engine = "abstract"
 
     def __init__(self, noise_sigma: float = 0.5, aim_offset: float = 0.0) -> None:
-        super().__init__()
-        if not (np.isfinite(noise_sigma) and noise_sigma >= 0):
-            raise ValueError(f"noise_sigma must be >= 0, got {noise_sigma!r}")
-        self.noise_sigma = float(noise_sigma)
+        super().__init__(noise_sigma)
         self.aim_offset = float(aim_offset)
         self.engine_calls = {"tap_reading": 0, "peg_depth": 0}
 

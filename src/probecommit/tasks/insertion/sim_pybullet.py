@@ -28,7 +28,6 @@ from __future__ import annotations
 import xml.etree.ElementTree as ET
 from typing import Any
 
-import numpy as np
 
 from probecommit.engines.cache import InstanceCache
 

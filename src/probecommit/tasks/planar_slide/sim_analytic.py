@@ -6,11 +6,11 @@ from typing import Any
 
 import numpy as np
 
-from probecommit.tasks.base import CachedSimulator
+from probecommit.tasks.base import NoisySimulator
 from probecommit.tasks.planar_slide.model import rest_position
 
 
-class AnalyticPlanarSlideSimulator(CachedSimulator):
+class AnalyticPlanarSlideSimulator(NoisySimulator):
     """Closed-form planar slide with Gaussian reading noise.
 
     Args:
@@ -20,10 +20,7 @@ class AnalyticPlanarSlideSimulator(CachedSimulator):
     engine = "analytic"
 
     def __init__(self, noise_sigma: float = 0.02) -> None:
-        super().__init__()
-        if not (np.isfinite(noise_sigma) and noise_sigma >= 0):
-            raise ValueError(f"noise_sigma must be >= 0, got {noise_sigma!r}")
-        self.noise_sigma = float(noise_sigma)
+        super().__init__(noise_sigma)
 
     def rest(self, mu: float, phi: float, m: float, jx: float, jy: float) -> np.ndarray:
         """Named query: rest position of a strike ``(jx, jy)``."""

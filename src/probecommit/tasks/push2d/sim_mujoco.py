@@ -31,7 +31,7 @@ import numpy as np
 
 from probecommit.engines import require
 from probecommit.engines.cache import InstanceCache
-from probecommit.tasks.base import CachedSimulator
+from probecommit.tasks.base import NoisySimulator
 
 BOX_HALF_M = 0.05
 TIMESTEP_S = 1e-3
@@ -72,7 +72,7 @@ def scene_xml(mu: float, m: float, k_d: float) -> str:
 """
 
 
-class MujocoPush2DSimulator(CachedSimulator):
+class MujocoPush2DSimulator(NoisySimulator):
     """2-D push ground truth in MuJoCo (scene in the module docstring).
 
     Args:
@@ -82,10 +82,7 @@ class MujocoPush2DSimulator(CachedSimulator):
     engine = "mujoco"
 
     def __init__(self, noise_sigma: float = 0.05) -> None:
-        super().__init__()
-        if not (np.isfinite(noise_sigma) and noise_sigma >= 0):
-            raise ValueError(f"noise_sigma must be >= 0, got {noise_sigma!r}")
-        self.noise_sigma = float(noise_sigma)
+        super().__init__(noise_sigma)
         self._mj = require("mujoco")
         self._instance = InstanceCache(self._compile, MODEL_CACHE_SIZE).get
 

@@ -24,7 +24,7 @@ import numpy as np
 from probecommit.engines.cache import InstanceCache
 
 from probecommit.engines.pybullet import disconnect, import_pybullet, mm_dynamics, new_client
-from probecommit.tasks.base import CachedSimulator
+from probecommit.tasks.base import NoisySimulator
 from probecommit.tasks.push2d.sim_mujoco import (
     BOX_HALF_M,
     CHUNK_STEPS,
@@ -44,7 +44,7 @@ PHYSICS = {"deterministicOverlappingPairs": 1, "numSolverIterations": 50}
 MODEL_CACHE_SIZE = 16
 
 
-class PybulletPush2DSimulator(CachedSimulator):
+class PybulletPush2DSimulator(NoisySimulator):
     """2-D push ground truth in PyBullet (scene in the module docstring).
 
     Args:
@@ -54,10 +54,7 @@ class PybulletPush2DSimulator(CachedSimulator):
     engine = "pybullet"
 
     def __init__(self, noise_sigma: float = 0.05) -> None:
-        super().__init__()
-        if not (np.isfinite(noise_sigma) and noise_sigma >= 0):
-            raise ValueError(f"noise_sigma must be >= 0, got {noise_sigma!r}")
-        self.noise_sigma = float(noise_sigma)
+        super().__init__(noise_sigma)
         self._p = import_pybullet()
         self._clients = InstanceCache(self._build_client, MODEL_CACHE_SIZE,
                                       evict=lambda key, entry: disconnect(entry[0]))

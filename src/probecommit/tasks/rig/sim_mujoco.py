@@ -18,7 +18,6 @@ from __future__ import annotations
 
 from typing import Any
 
-import numpy as np
 
 from probecommit.engines import require
 from probecommit.engines.cache import InstanceCache

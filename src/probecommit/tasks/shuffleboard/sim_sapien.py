@@ -22,7 +22,7 @@ from typing import Any
 
 import numpy as np
 
-from probecommit.tasks.base import CachedSimulator
+from probecommit.tasks.base import TargetMissSimulator
 
 TIMESTEP_S = 1e-3
 SETTLE_STEPS = 50
@@ -35,7 +35,7 @@ BOARD_CENTRE_X = 55.0
 PUCK_HALF = (0.03, 0.03, 0.01)  # m
 
 
-class SapienShuffleboardSimulator(CachedSimulator):
+class SapienShuffleboardSimulator(TargetMissSimulator):
     """Shuffleboard ground truth in SAPIEN (scene in the module docstring).
 
     Args:
@@ -43,12 +43,12 @@ class SapienShuffleboardSimulator(CachedSimulator):
     """
 
     engine = "sapien"
+    family = "shuffleboard"
+    query, outcome, target = "slide", "stop", "target distance"
+    not_finite = "sapien puck did not stop after a strike of {action} N s"
 
     def __init__(self, noise_sigma: float = 0.05) -> None:
-        super().__init__()
-        if not (np.isfinite(noise_sigma) and noise_sigma >= 0):
-            raise ValueError(f"noise_sigma must be >= 0, got {noise_sigma!r}")
-        self.noise_sigma = float(noise_sigma)
+        super().__init__(noise_sigma)
         from probecommit.engines.sapien import import_sapien
 
         self._sapien = import_sapien()
@@ -97,15 +97,3 @@ class SapienShuffleboardSimulator(CachedSimulator):
             if still >= STILL_CHUNKS:
                 return x - x0
         return float("nan")  # never stopped: the study marks the episode failed
-
-    def probe(self, theta: np.ndarray, u: np.ndarray, rng: np.random.Generator) -> np.ndarray:
-        clean = self.cached("slide", theta, (float(np.ravel(u)[0]),))
-        return clean + self.noise_sigma * rng.standard_normal(1)
-
-    def execute(self, theta: np.ndarray, action: np.ndarray, context: np.ndarray | None = None) -> dict[str, Any]:
-        if context is None:
-            raise ValueError("the shuffleboard outcome needs the target distance (context)")
-        stop = float(self.cached("slide", theta, (float(np.ravel(action)[0]),))[0])
-        if not np.isfinite(stop):
-            raise FloatingPointError(f"sapien puck did not stop after a strike of {np.ravel(action).tolist()} N s")
-        return {"realized": abs(stop - float(np.ravel(context)[0])), "stop": stop}

@@ -1,0 +1,36 @@
+"""The shared simulator bases: noise validated once, a target miss scored the same way for every family."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from probecommit.tasks.base import NoisySimulator, TargetMissSimulator
+
+
+class Ramp(TargetMissSimulator):
+    engine, family = "toy", "ramp"
+    query, outcome, target = "slide", "stop", "target distance"
+    not_finite = "toy ramp broke at {action}"
+
+    def slide(self, a: float, u: float) -> float:
+        return a * u if u >= 0 else float("nan")
+
+
+def test_noise_is_validated_once_for_every_simulator():
+    for bad in (-0.1, float("nan"), float("inf")):
+        with pytest.raises(ValueError, match="noise_sigma must be >= 0"):
+            NoisySimulator(bad)
+    assert NoisySimulator(0.0).noise_sigma == 0.0
+
+
+def test_probe_and_miss_from_one_cached_query():
+    sim = Ramp(noise_sigma=0.0)
+    theta = np.array([2.0])
+    assert sim.probe(theta, np.array([3.0]), np.random.default_rng(0))[0] == 6.0
+    assert sim.execute(theta, np.array([1.5]), np.array([2.0])) == {"realized": 1.0, "stop": 3.0}
+    assert sim.engine_calls == {"slide": 2}
+    with pytest.raises(ValueError, match="the ramp outcome needs the target distance"):
+        sim.execute(theta, np.array([1.5]))
+    with pytest.raises(FloatingPointError, match=r"toy ramp broke at \[-1.0\]"):
+        sim.execute(theta, np.array([-1.0]), np.array([2.0]))
