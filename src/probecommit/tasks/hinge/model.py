@@ -26,12 +26,11 @@ The decision coordinate is the friction torque ``f`` (latent 0).
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 
 import numpy as np
 
-from probecommit.tasks.base import TaskModelBase
-from probecommit.tasks.push1d.model import G, MIN_FRICTION, stop_distance
+from probecommit.tasks.push1d.model import G, CoastModel, stop_distance
 
 #: Door panel width (m): a 0.5 m cabinet-size door; I = m W^2 / 3.
 DOOR_WIDTH_M = 0.5
@@ -62,8 +61,8 @@ def stop_angle(speed: np.ndarray, f: np.ndarray, b: np.ndarray, m: np.ndarray) -
 
 
 @dataclass(frozen=True)
-class HingeModel(TaskModelBase):
-    """The hinge task model.
+class HingeModel(CoastModel):
+    """The hinge task model: the shared coast model with the door's closed form.
 
     Args:
         sigma: Observation noise the likelihood assumes (rad).
@@ -82,55 +81,10 @@ class HingeModel(TaskModelBase):
 
     name = "hinge"
     latent_names = ("f", "b", "m")
-    context_names = ("target",)
+    outcome = staticmethod(stop_angle)
+    target_name = "target angle"
     probe_grid = np.array(PROBE_SPEEDS)[:, None]
     action_grid = ACTION_SPEEDS[:, None]
-    binary_loss = False
     decision_domain_width = PRIOR_HIGH[0] - PRIOR_LOW[0]
-    probe_dim = 1
-    observation_dim = 1
-    action_dim = 1
     #: Stop angles a coast can physically read (rad): the door swings at most half a turn here.
     observation_range = (-0.2, 3.5)
-
-    def __post_init__(self) -> None:
-        if not (np.isfinite(self.sigma) and self.sigma > 0):
-            raise ValueError(f"sigma must be positive, got {self.sigma!r}")
-        if not 0 < self.margin <= 1.5:
-            raise ValueError(f"margin gamma must be in (0, 1.5], got {self.margin!r}")
-        if np.any(np.asarray(self.prior_low) <= 0):
-            raise ValueError("every hinge latent must be positive")
-
-    def with_margin(self, gamma: float) -> "HingeModel":
-        """Scale the modeled miss by ``1 / gamma``: actions keep their order, scores grow."""
-        return replace(self, margin=float(gamma))
-
-    def grown_scenarios(self, particles: np.ndarray, z_points: np.ndarray) -> np.ndarray:
-        """The default grown scenarios with the friction torque kept positive.
-
-        A conformal threshold ``t > 1`` grows the decision interval by ``(t - 1) D`` on each
-        side, which can reach below zero, where the closed form is undefined (NaN); a
-        scenario there is the least friction torque that still slides, ``MIN_FRICTION``.
-        """
-        extra = super().grown_scenarios(particles, z_points)
-        extra[..., 0] = np.maximum(extra[..., 0], MIN_FRICTION)
-        return extra
-
-    def predict(self, u: np.ndarray, theta: np.ndarray) -> np.ndarray:
-        """Stop angle ``[E, N, 1]`` of coasts released at ``u[E]`` rad/s."""
-        theta = np.asarray(theta, dtype=float)
-        u = np.asarray(u, dtype=float).reshape(theta.shape[0], 1)
-        return stop_angle(u, theta[..., 0], theta[..., 1], theta[..., 2])[..., None]
-
-    def loss(self, actions: np.ndarray, theta: np.ndarray, context: np.ndarray | None = None) -> np.ndarray:
-        """Modeled miss ``[E, A, N]`` (``[A, S]`` for ``theta[S, d]`` and one target), rad."""
-        if context is None:
-            raise ValueError("the hinge loss needs the target angle (context)")
-        theta = np.asarray(theta, dtype=float)
-        w = np.asarray(actions, dtype=float).reshape(-1)
-        target = np.asarray(context, dtype=float)
-        if theta.ndim == 2:
-            a = stop_angle(w[:, None], theta[None, :, 0], theta[None, :, 1], theta[None, :, 2])
-            return np.abs(a - float(target.reshape(-1)[0])) / self.margin
-        a = stop_angle(w[None, :, None], theta[:, None, :, 0], theta[:, None, :, 1], theta[:, None, :, 2])
-        return np.abs(a - target.reshape(-1, 1, 1)) / self.margin

@@ -67,8 +67,71 @@ def stop_distance(impulse: np.ndarray, mu: np.ndarray, m: np.ndarray, k_d: np.nd
     return scale * out
 
 
+class CoastModel(TaskModelBase):
+    """A body coasting under Coulomb friction and viscous damping to a stop, aimed at a target.
+
+    The shared part of every family whose probe and action are one scalar (an impulse,
+    a release speed), whose outcome is the closed-form stop of a coast (``outcome``), and
+    whose loss is the miss ``|outcome - target| / margin`` (the context is the target).
+    Latent 0 is the friction, the decision coordinate. A family is a frozen dataclass
+    with the fields ``sigma``, ``margin``, ``prior_low``, ``prior_high``, ``jitter_scale``
+    and ``variant``, its grids, and its ``outcome(action, *latents)``.
+    """
+
+    outcome = staticmethod(stop_distance)
+    #: What the context is, for the error message.
+    target_name = "target distance"
+    context_names = ("target",)
+    binary_loss = False
+    probe_dim = 1
+    observation_dim = 1
+    action_dim = 1
+
+    def __post_init__(self) -> None:
+        if not (np.isfinite(self.sigma) and self.sigma > 0):
+            raise ValueError(f"sigma must be positive, got {self.sigma!r}")
+        if not 0 < self.margin <= 1.5:
+            raise ValueError(f"margin gamma must be in (0, 1.5], got {self.margin!r}")
+        if np.any(np.asarray(self.prior_low) <= 0):
+            raise ValueError(f"every {self.name} latent must be positive")
+
+    def with_margin(self, gamma: float) -> "CoastModel":
+        """Scale the modeled miss by ``1 / gamma``: actions keep their order, scores grow."""
+        return replace(self, margin=float(gamma))
+
+    def grown_scenarios(self, particles: np.ndarray, z_points: np.ndarray) -> np.ndarray:
+        """The default grown scenarios with the friction kept positive.
+
+        A conformal threshold ``t > 1`` grows the decision interval by ``(t - 1) D`` on each
+        side, which can reach below zero, where the closed form is undefined (NaN); a
+        scenario there is the least friction that still slides, ``MIN_FRICTION``.
+        """
+        extra = super().grown_scenarios(particles, z_points)
+        extra[..., 0] = np.maximum(extra[..., 0], MIN_FRICTION)
+        return extra
+
+    def predict(self, u: np.ndarray, theta: np.ndarray) -> np.ndarray:
+        """The coast's stop ``[E, N, 1]`` for probes ``u[E]`` (or ``[E, 1]``)."""
+        theta = np.asarray(theta, dtype=float)
+        u = np.asarray(u, dtype=float).reshape(theta.shape[0], 1)
+        return self.outcome(u, theta[..., 0], theta[..., 1], theta[..., 2])[..., None]
+
+    def loss(self, actions: np.ndarray, theta: np.ndarray, context: np.ndarray | None = None) -> np.ndarray:
+        """Modeled miss ``[E, A, N]`` (``[A, S]`` for ``theta[S, d]`` and one target)."""
+        if context is None:
+            raise ValueError(f"the {self.name} loss needs the {self.target_name} (context)")
+        theta = np.asarray(theta, dtype=float)
+        j = np.asarray(actions, dtype=float).reshape(-1)
+        target = np.asarray(context, dtype=float)
+        if theta.ndim == 2:
+            d = self.outcome(j[:, None], theta[None, :, 0], theta[None, :, 1], theta[None, :, 2])
+            return np.abs(d - float(target.reshape(-1)[0])) / self.margin
+        d = self.outcome(j[None, :, None], theta[:, None, :, 0], theta[:, None, :, 1], theta[:, None, :, 2])
+        return np.abs(d - target.reshape(-1, 1, 1)) / self.margin
+
+
 @dataclass(frozen=True)
-class Push1DModel(TaskModelBase):
+class Push1DModel(CoastModel):
     """The 1-D push task model.
 
     Args:
@@ -88,53 +151,6 @@ class Push1DModel(TaskModelBase):
 
     name = "push1d"
     latent_names = ("mu", "m", "k_d")
-    context_names = ("target",)
     probe_grid = np.array(PROBE_PULSES)[:, None]
     action_grid = ACTION_IMPULSES[:, None]
-    binary_loss = False
     decision_domain_width = PRIOR_HIGH[0] - PRIOR_LOW[0]
-    probe_dim = 1
-    observation_dim = 1
-    action_dim = 1
-
-    def __post_init__(self) -> None:
-        if not (np.isfinite(self.sigma) and self.sigma > 0):
-            raise ValueError(f"sigma must be positive, got {self.sigma!r}")
-        if not 0 < self.margin <= 1.5:
-            raise ValueError(f"margin gamma must be in (0, 1.5], got {self.margin!r}")
-        if np.any(np.asarray(self.prior_low) <= 0):
-            raise ValueError("every push1d latent must be positive")
-
-    def with_margin(self, gamma: float) -> "Push1DModel":
-        """Scale the modeled miss by ``1 / gamma``: actions keep their order, scores grow."""
-        return replace(self, margin=float(gamma))
-
-    def grown_scenarios(self, particles: np.ndarray, z_points: np.ndarray) -> np.ndarray:
-        """The default grown scenarios with the friction kept positive.
-
-        A conformal threshold ``t > 1`` grows the decision interval by ``(t - 1) D`` on each
-        side, which can reach below zero, where the closed form is undefined (NaN); a
-        scenario there is the least friction that still slides, ``MIN_FRICTION``.
-        """
-        extra = super().grown_scenarios(particles, z_points)
-        extra[..., 0] = np.maximum(extra[..., 0], MIN_FRICTION)
-        return extra
-
-    def predict(self, u: np.ndarray, theta: np.ndarray) -> np.ndarray:
-        """Slide distance ``[E, N, 1]`` of pulses ``u[E]`` (or ``[E, 1]``)."""
-        theta = np.asarray(theta, dtype=float)
-        u = np.asarray(u, dtype=float).reshape(theta.shape[0], 1)
-        return stop_distance(u, theta[..., 0], theta[..., 1], theta[..., 2])[..., None]
-
-    def loss(self, actions: np.ndarray, theta: np.ndarray, context: np.ndarray | None = None) -> np.ndarray:
-        """Modeled miss ``[E, A, N]`` (``[A, S]`` for ``theta[S, d]`` and one target)."""
-        if context is None:
-            raise ValueError("the push1d loss needs the target distance (context)")
-        theta = np.asarray(theta, dtype=float)
-        j = np.asarray(actions, dtype=float).reshape(-1)
-        target = np.asarray(context, dtype=float)
-        if theta.ndim == 2:
-            d = stop_distance(j[:, None], theta[None, :, 0], theta[None, :, 1], theta[None, :, 2])
-            return np.abs(d - float(target.reshape(-1)[0])) / self.margin
-        d = stop_distance(j[None, :, None], theta[:, None, :, 0], theta[:, None, :, 1], theta[:, None, :, 2])
-        return np.abs(d - target.reshape(-1, 1, 1)) / self.margin
