@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from typing import Any, ClassVar
 
+import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, StrictBool, field_validator, model_validator
 
 
@@ -65,6 +66,13 @@ class ModelConfigBase(StrictModel):
     prior_low: tuple[float, ...]
     prior_high: tuple[float, ...]
 
+    def model_kwargs(self) -> dict[str, Any]:
+        """The section as keyword arguments of the family's model: every field, the prior box as arrays."""
+        kwargs = self.model_dump()
+        kwargs["prior_low"] = np.array(self.prior_low, dtype=float)
+        kwargs["prior_high"] = np.array(self.prior_high, dtype=float)
+        return kwargs
+
     @model_validator(mode="after")
     def _check_prior(self) -> "ModelConfigBase":
         if len(self.prior_low) != len(self.prior_high):
@@ -98,6 +106,8 @@ class TaskConfigBase(BaseModel):
     latent_names: ClassVar[tuple[str, ...]] = ()
     context_names: ClassVar[tuple[str, ...]] = ()
     probe_dim: ClassVar[int] = 1
+    #: Every latent is a physical magnitude that must be > 0 (friction, mass, damping, ...).
+    positive_latents: ClassVar[bool] = False
 
     @model_validator(mode="after")
     def _check_engine(self) -> "TaskConfigBase":
@@ -126,3 +136,7 @@ class TaskConfigBase(BaseModel):
         for name, box in (("truth_low", low), ("truth_high", high)):
             if n and len(box) != n:
                 raise FieldError(f"{field}.{name}", f"needs {n} coordinates ({', '.join(self.latent_names)}), got {len(box)}")
+        if self.positive_latents and any(v <= 0 for v in low):
+            names = self.latent_names
+            listed = names[0] if len(names) == 1 else f"{', '.join(names[:-1])} and {names[-1]}"
+            raise FieldError(f"{field}.truth_low", f"{listed} must be positive, got {list(low)}")

@@ -28,8 +28,6 @@ budgets and the 6 x 3 instance set size, nothing else):
 
 from __future__ import annotations
 
-import numpy as np
-
 from probecommit.tasks.base import TaskSpec
 from probecommit.tasks.darts.config import DartsConfig
 from probecommit.tasks.darts.model import DartsModel
@@ -37,11 +35,7 @@ from probecommit.tasks.registry import register
 
 
 def build_model(config: DartsConfig) -> DartsModel:
-    cfg = config.model
-    return DartsModel(
-        sigma=cfg.sigma, margin=cfg.margin,
-        prior_low=np.array(cfg.prior_low, dtype=float), prior_high=np.array(cfg.prior_high, dtype=float),
-    )
+    return DartsModel(**config.model.model_kwargs())
 
 
 SPEC = register(

@@ -23,8 +23,6 @@ sigma, budgets, 16 x 80 and "a force-balance model with a MuJoCo lift check", no
 
 from __future__ import annotations
 
-import numpy as np
-
 from probecommit.tasks.base import TaskSpec
 from probecommit.tasks.grasp.config import GraspConfig
 from probecommit.tasks.grasp.model import GraspModel
@@ -32,11 +30,7 @@ from probecommit.tasks.registry import register
 
 
 def build_model(config: GraspConfig) -> GraspModel:
-    cfg = config.model
-    return GraspModel(
-        sigma=cfg.sigma, margin=cfg.margin,
-        prior_low=np.array(cfg.prior_low, dtype=float), prior_high=np.array(cfg.prior_high, dtype=float),
-    )
+    return GraspModel(**config.model.model_kwargs())
 
 
 SPEC = register(

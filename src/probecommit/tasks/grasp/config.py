@@ -6,7 +6,7 @@ from typing import Literal
 
 from pydantic import Field
 
-from probecommit.tasks.config import FieldError, ModelConfigBase, SimulatorConfigBase, TaskConfigBase
+from probecommit.tasks.config import ModelConfigBase, SimulatorConfigBase, TaskConfigBase
 from probecommit.tasks.grasp.model import PRIOR_HIGH, PRIOR_LOW
 
 
@@ -29,9 +29,5 @@ class GraspConfig(TaskConfigBase):
     model: GraspModelConfig = GraspModelConfig()
     simulator: GraspSimulatorConfig = GraspSimulatorConfig()
     latent_names = ("mu", "m")
+    positive_latents = True
     probe_dim = 1
-
-    def check_truth_box(self, low, high, field: str) -> None:
-        super().check_truth_box(low, high, field)
-        if any(v <= 0 for v in low):
-            raise FieldError(f"{field}.truth_low", f"mu and m must be positive, got {list(low)}")

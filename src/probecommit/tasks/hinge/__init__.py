@@ -26,8 +26,6 @@ budgets and the 6 x 3 instance set with 16 seeds, nothing else):
 
 from __future__ import annotations
 
-import numpy as np
-
 from probecommit.tasks.base import TaskSpec
 from probecommit.tasks.hinge.config import HingeConfig
 from probecommit.tasks.hinge.model import HingeModel
@@ -35,11 +33,7 @@ from probecommit.tasks.registry import register
 
 
 def build_model(config: HingeConfig) -> HingeModel:
-    cfg = config.model
-    return HingeModel(
-        sigma=cfg.sigma, margin=cfg.margin,
-        prior_low=np.array(cfg.prior_low, dtype=float), prior_high=np.array(cfg.prior_high, dtype=float),
-    )
+    return HingeModel(**config.model.model_kwargs())
 
 
 SPEC = register(

@@ -6,8 +6,6 @@ rest position, a 2-D impulse action aimed at a per-instance target, continuous m
 
 from __future__ import annotations
 
-import numpy as np
-
 from probecommit.tasks.base import TaskSpec
 from probecommit.tasks.planar_slide.config import PlanarSlideConfig
 from probecommit.tasks.planar_slide.model import PlanarSlideModel
@@ -15,11 +13,7 @@ from probecommit.tasks.registry import register
 
 
 def build_model(config: PlanarSlideConfig) -> PlanarSlideModel:
-    cfg = config.model
-    return PlanarSlideModel(
-        sigma=cfg.sigma, margin=cfg.margin,
-        prior_low=np.array(cfg.prior_low, dtype=float), prior_high=np.array(cfg.prior_high, dtype=float),
-    )
+    return PlanarSlideModel(**config.model.model_kwargs())
 
 
 SPEC = register(

@@ -25,8 +25,6 @@ sigma, budgets and instance count, nothing else):
 
 from __future__ import annotations
 
-import numpy as np
-
 from probecommit.tasks.base import TaskSpec
 from probecommit.tasks.push1d.config import Push1DConfig
 from probecommit.tasks.push1d.model import Push1DModel
@@ -34,11 +32,7 @@ from probecommit.tasks.registry import register
 
 
 def build_model(config: Push1DConfig) -> Push1DModel:
-    cfg = config.model
-    return Push1DModel(
-        sigma=cfg.sigma, margin=cfg.margin,
-        prior_low=np.array(cfg.prior_low, dtype=float), prior_high=np.array(cfg.prior_high, dtype=float),
-    )
+    return Push1DModel(**config.model.model_kwargs())
 
 
 SPEC = register(

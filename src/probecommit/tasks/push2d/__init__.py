@@ -28,8 +28,6 @@ budgets and the 3 x 6 instance set size, nothing else):
 
 from __future__ import annotations
 
-import numpy as np
-
 from probecommit.tasks.base import TaskSpec
 from probecommit.tasks.push2d.config import Push2DConfig
 from probecommit.tasks.push2d.model import Push2DModel
@@ -37,11 +35,7 @@ from probecommit.tasks.registry import register
 
 
 def build_model(config: Push2DConfig) -> Push2DModel:
-    cfg = config.model
-    return Push2DModel(
-        sigma=cfg.sigma, margin=cfg.margin, mu_scale=cfg.mu_scale,
-        prior_low=np.array(cfg.prior_low, dtype=float), prior_high=np.array(cfg.prior_high, dtype=float),
-    )
+    return Push2DModel(**config.model.model_kwargs())
 
 
 SPEC = register(

@@ -22,8 +22,6 @@ sigma 5 cm, budgets 0, 2, 5, 512 particles and 18 x 6, nothing else):
 
 from __future__ import annotations
 
-import numpy as np
-
 from probecommit.tasks.base import TaskSpec
 from probecommit.tasks.registry import register
 from probecommit.tasks.shuffleboard.config import ShuffleboardConfig
@@ -31,11 +29,7 @@ from probecommit.tasks.shuffleboard.model import ShuffleboardModel
 
 
 def build_model(config: ShuffleboardConfig) -> ShuffleboardModel:
-    cfg = config.model
-    return ShuffleboardModel(
-        sigma=cfg.sigma, margin=cfg.margin,
-        prior_low=np.array(cfg.prior_low, dtype=float), prior_high=np.array(cfg.prior_high, dtype=float),
-    )
+    return ShuffleboardModel(**config.model.model_kwargs())
 
 
 SPEC = register(
