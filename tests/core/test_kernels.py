@@ -50,3 +50,79 @@ def test_systematic_resample_matches_numpy_and_is_row_independent():
     assert np.all(fast[3] == 17) and np.all(np.diff(fast, axis=1) >= 0)
     for r in (0, 31, 63):
         np.testing.assert_array_equal(systematic_resample(weights[r:r + 1], offsets[r:r + 1])[0], fast[r])
+
+
+@pytest.mark.parametrize("n", [1, 7, 8, 9, 127, 128, 129, 136, 255, 256, 1000, 1024, 1033, 4096, 10007])
+def test_pairwise_sum_follows_numpy_bit_for_bit(n):
+    rng = np.random.default_rng(n)
+    rows = rng.standard_normal((40, n)) * np.exp(rng.uniform(-30, 30, (40, n)))  # sums that round a lot
+    ours = np.array([kernels._row_sum(row) for row in rows])
+    np.testing.assert_array_equal(ours, np.sum(rows, axis=-1))
+
+
+def _weight_cases():
+    rng = np.random.default_rng(11)
+    e, n = 60, 1024
+    cases = {
+        "continuous": np.exp(3 * rng.standard_normal((e, n))),
+        "concentrated": np.exp(30 * rng.standard_normal((e, n))),
+        "few values (a tap reading)": np.exp(-2.0 * rng.integers(0, 4, (e, n))),
+        "all tied (just resampled)": np.ones((e, n)),
+        "mostly zero": np.where(rng.random((e, n)) < 0.9, 0.0, rng.random((e, n))),
+        "one bucket, all distinct": 1 + 1e-3 * rng.random((e, n)),
+        "tiny rows": rng.random((e, 5)),
+    }
+    return {name: w / w.sum(axis=1, keepdims=True) for name, w in cases.items()}
+
+
+@pytest.mark.parametrize("name", list(_weight_cases()))
+@pytest.mark.parametrize("nu", [0.05, 0.5, 0.8, 0.999, 1.0, 1.5, "per-row"])
+def test_retained_summary_matches_numpy(name, nu):
+    from probecommit.core.retained import retained_summary, retained_summary_numpy
+
+    weights = _weight_cases()[name]
+    rng = np.random.default_rng(5)
+    e, n = weights.shape
+    nu_rows = rng.uniform(0.05, 1.0, e) if nu == "per-row" else np.full(e, nu)
+    z = rng.standard_normal((e, n))
+    z[0, :3] = np.nan  # a NaN in the decision coordinate propagates only if retained
+    particles = rng.standard_normal((e, n, 3))
+    fast = retained_summary(weights, nu_rows, z, particles)
+    slow = retained_summary_numpy(weights, nu_rows, z, particles)
+    for a, b in zip(fast, slow):
+        np.testing.assert_array_equal(a, b)
+
+
+def test_retained_summary_leaves_odd_weights_to_numpy():
+    weights = np.array([[0.5, 0.6, -0.1]])
+    assert kernels.retained_summary_compiled(weights, np.array([0.8]), np.zeros((1, 3)), np.zeros((1, 3, 1))) is None
+
+
+@pytest.mark.parametrize("name", list(_weight_cases()))
+def test_coverage_score_matches_numpy(name):
+    from probecommit.core.retained import coverage_score, coverage_score_numpy
+
+    weights = _weight_cases()[name]
+    rng = np.random.default_rng(9)
+    e, n = weights.shape
+    z = np.round(rng.standard_normal((e, n)), 1)  # ties in z, and truths exactly on particles
+    z_true = np.concatenate([z[: e // 3, 0], rng.uniform(-1, 1, e - e // 3 - 4), [-9.0, 9.0, z[0].min(), z[0].max()]])
+    np.testing.assert_array_equal(coverage_score(z, weights, z_true, 20.0), coverage_score_numpy(z, weights, z_true, 20.0))
+    z[1, 0] = np.nan  # outside the kernel's domain: the NumPy path answers
+    assert kernels.coverage_score_compiled(weights, z, z_true, 20.0) is None
+
+
+def test_jitter_resampled_matches_numpy():
+    from probecommit.core.belief import jitter_resampled
+
+    rng = np.random.default_rng(4)
+    particles = rng.uniform(-1, 1, (9, 64, 3))
+    rows = np.array([0, 4, 8])
+    parents = np.sort(rng.integers(0, 64, (3, 64)), axis=1)
+    noise = rng.standard_normal((3, 64, 3)) * 5  # pushes many copies past the box
+    scale, low, high = np.array([0.1, 0.2, 0.0]), np.full(3, -1.0), np.full(3, 1.0)
+    fast = jitter_resampled(particles, rows, parents, noise, scale, low, high)
+    expected = particles.copy()
+    expected[rows] = np.clip(np.take_along_axis(particles[rows], parents[:, :, None], axis=1) + scale * noise, low, high)
+    np.testing.assert_array_equal(fast, expected)
+    np.testing.assert_array_equal(fast[[1, 2, 3]], particles[[1, 2, 3]])  # rows that did not resample

@@ -12,7 +12,7 @@ from typing import Protocol, Sequence
 
 import numpy as np
 
-from probecommit.core.kernels import systematic_resample_compiled
+from probecommit.core.kernels import jitter_resampled_compiled, systematic_resample_compiled
 from probecommit.core.likelihood import GaussianLikelihood, Likelihood
 
 
@@ -33,7 +33,12 @@ def normalize_log_weights(log_weights: np.ndarray) -> np.ndarray:
     Rows whose weights are all ``-inf`` (every particle impossible) are reset to
     uniform, which is the only belief consistent with "no information left".
     """
-    log_weights = np.asarray(log_weights, dtype=float)
+    return _normalize(np.asarray(log_weights, dtype=float))[0]
+
+
+def _normalize(log_weights: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`normalize_log_weights` and the log normalizer ``log sum exp`` per row ``[E]``
+    (``-inf`` for a row whose every weight is zero), the same bits as both computed apart."""
     row_max = np.max(log_weights, axis=-1, keepdims=True)
     dead = ~np.isfinite(row_max)
     safe_max = np.where(dead, 0.0, row_max)
@@ -41,9 +46,8 @@ def normalize_log_weights(log_weights: np.ndarray) -> np.ndarray:
         log_norm = safe_max + np.log(np.sum(np.exp(log_weights - safe_max), axis=-1, keepdims=True))
         out = log_weights - log_norm
     if np.any(dead):
-        n = log_weights.shape[-1]
-        out = np.where(dead, -np.log(n), out)
-    return out
+        out = np.where(dead, -np.log(log_weights.shape[-1]), out)
+    return out, log_norm[:, 0]
 
 
 def effective_sample_size(weights: np.ndarray) -> np.ndarray:
@@ -87,6 +91,26 @@ def systematic_resample_numpy(weights: np.ndarray, offsets: np.ndarray) -> np.nd
     return np.clip(idx, 0, n - 1)
 
 
+def jitter_resampled(particles: np.ndarray, rows: np.ndarray, parents: np.ndarray, noise: np.ndarray,
+                     scale: np.ndarray, low: np.ndarray, high: np.ndarray) -> np.ndarray:
+    """New particles ``[E, N, d]``: rows ``rows`` replaced by their resampled copies moved by
+    ``scale * noise`` and clipped to ``[low, high]``; every other row unchanged.
+
+    Args:
+        particles: ``[E, N, d]`` current particles (not modified).
+        rows: ``[R]`` episodes that resample; ``parents``: ``[R, N]`` their parent indices.
+        noise: ``[R, N, d]`` standard normal draws (each episode's from its own generator).
+        scale, low, high: ``[d]`` jitter scale and prior box.
+    """
+    compiled = jitter_resampled_compiled(particles, rows, parents, noise, scale, low, high)
+    if compiled is not None:
+        return compiled
+    out = particles.copy()
+    new = np.take_along_axis(particles[rows], parents[:, :, None], axis=1)
+    out[rows] = np.clip(new + scale * noise, low, high)
+    return out
+
+
 @dataclass
 class BeliefState:
     """A batch of particle beliefs.
@@ -101,6 +125,9 @@ class BeliefState:
             when no move ran).
         lost: ``[E]`` whether the last probe gave every particle zero likelihood, so the
             belief was reset to uniform weights over its particles (reported, never silent).
+        log_evidence: ``[E]`` log predictive density of the last probe before it was
+            assimilated (what :meth:`ParticleFilter.log_predictive` returns), a by-product
+            of normalizing the weights.
     """
 
     particles: np.ndarray
@@ -110,6 +137,8 @@ class BeliefState:
     y_hist: np.ndarray | None = None
     accepted: np.ndarray | None = None
     lost: np.ndarray | None = None
+    log_evidence: np.ndarray | None = None
+    _weights: np.ndarray | None = field(default=None, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         if self.resampled is None:
@@ -119,7 +148,10 @@ class BeliefState:
 
     @property
     def weights(self) -> np.ndarray:
-        return np.exp(self.log_weights)
+        """Normalized weights ``exp(log_weights)`` ``[E, N]``, computed once per state."""
+        if self._weights is None or self._weights.shape != self.log_weights.shape:
+            self._weights = np.exp(self.log_weights)
+        return self._weights
 
     @property
     def n_episodes(self) -> int:
@@ -130,10 +162,10 @@ class BeliefState:
         return self.particles.shape[1]
 
     def copy(self) -> "BeliefState":
-        return BeliefState(self.particles.copy(), self.log_weights.copy(), self.resampled.copy(),
-                           None if self.u_hist is None else self.u_hist.copy(),
-                           None if self.y_hist is None else self.y_hist.copy(),
-                           None if self.accepted is None else self.accepted.copy())
+        def maybe(a):
+            return None if a is None else a.copy()
+        return BeliefState(self.particles.copy(), self.log_weights.copy(), self.resampled.copy(), maybe(self.u_hist),
+                           maybe(self.y_hist), maybe(self.accepted), maybe(self.lost), maybe(self.log_evidence))
 
 
 @dataclass
@@ -210,12 +242,12 @@ class ParticleFilter:
         pred = self.model.predict(u, state.particles)
         loglik = self.likelihood.log_likelihood(y, pred)
         unnormalized = state.log_weights + loglik
-        lost = ~np.isfinite(np.max(unnormalized, axis=1))
-        log_w = normalize_log_weights(unnormalized)
+        log_w, log_evidence = _normalize(unnormalized)
+        lost = ~np.isfinite(log_evidence)
         u_now, y_now = u.reshape(n_e, 1, -1), y.reshape(n_e, 1, -1)
         u_hist = u_now if state.u_hist is None else np.concatenate([state.u_hist, u_now], axis=1)
         y_hist = y_now if state.y_hist is None else np.concatenate([state.y_hist, y_now], axis=1)
-        particles = state.particles.copy()
+        particles = state.particles  # copied below only if some episode resamples
         weights = np.exp(log_w)
         ess = effective_sample_size(weights)
         resample = ess < self.resample_fraction * self.n_particles
@@ -224,25 +256,40 @@ class ParticleFilter:
             rows = np.flatnonzero(resample)
             offsets = np.array([rngs[r].random() for r in rows])
             parents = systematic_resample(weights[rows], offsets)
-            new = np.take_along_axis(particles[rows], parents[:, :, None], axis=1)
             low = np.asarray(self.model.prior_low, dtype=float)
             high = np.asarray(self.model.prior_high, dtype=float)
             scale = np.asarray(self.model.jitter_scale, dtype=float)
-            if self.jitter and self.move == "mh":
-                new, accepted[rows] = self._mh_move(new, u_hist[rows], y_hist[rows], [rngs[r] for r in rows],
-                                                    low, high, scale)
-            for i, r in enumerate(rows):
-                rng = rngs[r]
-                if self.jitter and self.move == "jitter":
-                    new[i] = new[i] + scale * rng.standard_normal(new[i].shape)
-                if self.rejuvenation > 0:
-                    n_fresh = int(round(self.rejuvenation * self.n_particles))
-                    if n_fresh:
-                        which = rng.choice(self.n_particles, size=n_fresh, replace=False)
-                        new[i, which] = low + (high - low) * rng.random((n_fresh, low.shape[0]))
-            particles[rows] = np.clip(new, low, high)
+            if self.jitter and self.move == "jitter" and self.rejuvenation == 0:  # the paper's filter, one pass
+                noise = np.stack([rngs[r].standard_normal(particles.shape[1:]) for r in rows])
+                particles = jitter_resampled(particles, rows, parents, noise, scale, low, high)
+            else:
+                particles = particles.copy()
+                particles[rows], accepted[rows] = self._move(particles[rows], parents, u_hist[rows], y_hist[rows],
+                                                             [rngs[r] for r in rows], low, high, scale)
             log_w[rows] = -np.log(self.n_particles)
-        return BeliefState(particles, log_w, resample, u_hist, y_hist, accepted, lost)
+            weights[rows] = np.exp(log_w[rows])
+        return BeliefState(particles, log_w, resample, u_hist, y_hist, accepted, lost, log_evidence, weights)
+
+    def _move(self, particles, parents, u_hist, y_hist, rngs, low, high, scale):
+        """Resampled copies of ``particles`` (the resampling rows) after the configured move:
+        MH, jitter, rejuvenation from the prior, then clipped to the box.
+
+        Returns:
+            The new particles and the MH acceptance rate per row (NaN without MH).
+        """
+        new = np.take_along_axis(particles, parents[:, :, None], axis=1)
+        accepted = np.full(len(rngs), np.nan)
+        if self.jitter and self.move == "mh":
+            new, accepted = self._mh_move(new, u_hist, y_hist, rngs, low, high, scale)
+        for i, rng in enumerate(rngs):
+            if self.jitter and self.move == "jitter":
+                new[i] = new[i] + scale * rng.standard_normal(new[i].shape)
+            if self.rejuvenation > 0:
+                n_fresh = int(round(self.rejuvenation * self.n_particles))
+                if n_fresh:
+                    which = rng.choice(self.n_particles, size=n_fresh, replace=False)
+                    new[i, which] = low + (high - low) * rng.random((n_fresh, low.shape[0]))
+        return np.clip(new, low, high), accepted
 
     def history_log_likelihood(self, particles: np.ndarray, u_hist: np.ndarray, y_hist: np.ndarray) -> np.ndarray:
         """Log-likelihood ``[E, N]`` of every probe seen so far, ``sum_j log p(y_j | u_j, theta)``."""

@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 
 from probecommit.core.kernels import interval_success_counts_compiled
-from probecommit.core.retained import masked_interval, retained_mask, weighted_mean
+from probecommit.core.retained import belief_reference, masked_interval, retained_summary
 
 SCORE_TIE_TOLERANCE = 1e-12
 #: Number of evenly spaced scenarios added across the grown interval when t > 1.
@@ -126,11 +126,6 @@ def scenario_scores(model: Any, scenarios: np.ndarray, mask: np.ndarray, context
     return scenario_max_loss(model.loss(model.action_grid, scenarios, context), mask)
 
 
-def belief_reference(particles: np.ndarray, weights: np.ndarray, mask: np.ndarray | None = None) -> np.ndarray:
-    """Weighted mean of every latent over ``mask`` ``[E, d]``: the tie-break reference."""
-    return np.stack([weighted_mean(particles[..., j], weights, mask) for j in range(particles.shape[-1])], axis=-1)
-
-
 @dataclass
 class Commitment:
     """What an executor decided for a batch of episodes.
@@ -225,9 +220,8 @@ class ProbeRobust:
             lo, hi = masked_interval(model.decision(particles), mask)
             return RetainedSet(particles, mask, mask, lo, hi, belief_reference(particles, weights))
         if threshold <= 1:
-            mask = retained_mask(weights, threshold)
-            lo, hi = masked_interval(model.decision(particles), mask)
-            return RetainedSet(particles, mask, mask, lo, hi, belief_reference(particles, weights, mask))
+            mask, lo, hi, reference = retained_summary(weights, threshold, model.decision(particles), particles)
+            return RetainedSet(particles, mask, mask, lo, hi, reference)
         scenarios, lo, hi = grown_set(model, particles, threshold)
         return RetainedSet(scenarios, np.ones(scenarios.shape[:2], dtype=bool), np.ones_like(weights, dtype=bool),
                            lo, hi, belief_reference(particles, weights))

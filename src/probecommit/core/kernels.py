@@ -103,6 +103,38 @@ if HAVE_NUMBA:
         return out
 
 
+if HAVE_NUMBA:
+
+    @numba.njit(cache=True, nogil=True)
+    def _jitter_resampled(particles, rows, parents, noise, scale, low, high):  # pragma: no cover - compiled
+        out = particles.copy()
+        n_rows, n = parents.shape
+        d = particles.shape[2]
+        for i in range(n_rows):
+            r = rows[i]
+            for k in range(n):
+                p = parents[i, k]
+                for j in range(d):
+                    value = particles[r, p, j] + scale[j] * noise[i, k, j]
+                    # np.clip: NaN stays NaN, otherwise max with low, then min with high
+                    if value == value:
+                        value = min(max(value, low[j]), high[j])
+                    out[r, k, j] = value
+        return out
+
+
+def jitter_resampled_compiled(particles: np.ndarray, rows: np.ndarray, parents: np.ndarray, noise: np.ndarray,
+                              scale: np.ndarray, low: np.ndarray, high: np.ndarray) -> np.ndarray | None:
+    """The compiled resample-and-jitter step (see ``core.belief.jitter_resampled``), or None without numba."""
+    if not HAVE_NUMBA:
+        return None
+    f64 = np.float64
+    return _jitter_resampled(np.ascontiguousarray(particles, dtype=f64), np.ascontiguousarray(rows, dtype=np.int64),
+                             np.ascontiguousarray(parents, dtype=np.int64), np.ascontiguousarray(noise, dtype=f64),
+                             np.ascontiguousarray(scale, dtype=f64), np.ascontiguousarray(low, dtype=f64),
+                             np.ascontiguousarray(high, dtype=f64))
+
+
 def systematic_resample_compiled(weights: np.ndarray, offsets: np.ndarray) -> np.ndarray | None:
     """The compiled systematic resampler (see ``core.belief.systematic_resample``), or None without numba."""
     if not HAVE_NUMBA:
@@ -126,3 +158,312 @@ def interval_success_counts_compiled(lo: np.ndarray, hi: np.ndarray, mask: np.nd
     actions = np.ascontiguousarray(actions, dtype=np.float64)
     return _interval_success_counts(np.ascontiguousarray(lo, dtype=np.float64), np.ascontiguousarray(hi, dtype=np.float64),
                                     np.ascontiguousarray(mask, dtype=np.bool_), actions, uniform_step(actions))
+
+
+# --- The top-weight retained set ------------------------------------------------------------
+#
+# NumPy's path (core.retained) sorts every row in full (a stable argsort) and takes the
+# cumulative mass in that order. The kernel gets the same bits without the full sort: it
+# buckets the weights by their leading 16 bits (sign, exponent, four mantissa bits: one
+# bucket per sixteenth of an octave below the row's largest weight), finds the buckets that
+# certainly hold the prefix's mass, and sorts only those candidates. Every non-candidate
+# weighs strictly less than every candidate, so the candidates' order and cumulative sums
+# are exactly the first entries of the full sort's. Sums that NumPy takes with ``np.sum``
+# follow its pairwise summation bit for bit (``_pairwise_sum``; tested).
+
+#: Buckets below the largest weight; anything 16 octaves down shares the last one.
+_N_BUCKETS = 256
+#: Slack on the bucket mass (summed in another order) before the candidates surely reach nu.
+_BUCKET_SLACK = 1e-9
+#: Buckets at most this long are sorted by insertion (they are usually ties or tiny).
+_INSERTION_SORT_MAX = 48
+
+if HAVE_NUMBA:
+
+    @numba.njit(cache=True, nogil=True, inline="always")
+    def _block_sum(a, start, n):  # pragma: no cover - compiled
+        """NumPy's pairwise-sum leaf (``n <= 128``): sequential below 8, else 8 running sums."""
+        if n < 8:
+            total = 0.0
+            for i in range(n):
+                total += a[start + i]
+            return total
+        r0, r1, r2, r3 = a[start], a[start + 1], a[start + 2], a[start + 3]
+        r4, r5, r6, r7 = a[start + 4], a[start + 5], a[start + 6], a[start + 7]
+        i = 8
+        stop = n - n % 8
+        while i < stop:
+            r0 += a[start + i]
+            r1 += a[start + i + 1]
+            r2 += a[start + i + 2]
+            r3 += a[start + i + 3]
+            r4 += a[start + i + 4]
+            r5 += a[start + i + 5]
+            r6 += a[start + i + 6]
+            r7 += a[start + i + 7]
+            i += 8
+        total = ((r0 + r1) + (r2 + r3)) + ((r4 + r5) + (r6 + r7))
+        while i < n:
+            total += a[start + i]
+            i += 1
+        return total
+
+    @numba.njit(cache=True, nogil=True)
+    def _pairwise_sum(a, start, n):  # pragma: no cover - compiled
+        """``np.sum(a[start:start + n])`` in NumPy's pairwise order: halves (rounded down to a
+        multiple of 8) until blocks of at most 128. Iterative, with an explicit stack: numba's
+        on-disk cache does not survive recursive functions."""
+        if n <= 128:
+            return _block_sum(a, start, n)
+        # Pending nodes (start, length, children done?) and finished partial sums.
+        node_start = np.empty(128, dtype=np.int64)
+        node_n = np.empty(128, dtype=np.int64)
+        node_open = np.empty(128, dtype=np.bool_)
+        values = np.empty(128)
+        top, n_values = 0, 0
+        node_start[0], node_n[0], node_open[0] = start, n, False
+        while top >= 0:
+            s, m, expanded = node_start[top], node_n[top], node_open[top]
+            top -= 1
+            if m <= 128:
+                values[n_values] = _block_sum(a, s, m)
+                n_values += 1
+            elif expanded:  # both halves summed: combine them (addition commutes exactly)
+                n_values -= 1
+                values[n_values - 1] = values[n_values - 1] + values[n_values]
+            else:
+                half = m // 2
+                half -= half % 8
+                top += 1
+                node_start[top], node_n[top], node_open[top] = s, m, True
+                top += 1
+                node_start[top], node_n[top], node_open[top] = s + half, m - half, False
+                top += 1
+                node_start[top], node_n[top], node_open[top] = s, half, False
+        return values[0]
+
+    @numba.njit(cache=True, nogil=True)
+    def _row_sum(a):  # pragma: no cover - compiled
+        """``np.sum(a)`` of a contiguous row, bit for bit (the reduction starts from 0.0)."""
+        return 0.0 + _pairwise_sum(a, 0, a.shape[0])
+
+    @numba.njit(cache=True, nogil=True)
+    def _bucket_order(w, nu, order, buckets, counts, mass, starts):  # pragma: no cover - compiled
+        """Counting-sort the particles of the buckets that certainly reach mass ``nu`` (all of
+        them for ``nu`` past one) into ``order``, index order within a bucket.
+
+        Returns the last bucket taken; ``counts[b]`` is bucket ``b``'s size.
+        """
+        n = w.shape[0]
+        w_max = 0.0
+        for i in range(n):
+            if w[i] > w_max:
+                w_max = w[i]
+        top = np.int64(np.float64(w_max).view(np.uint64) >> np.uint64(48))
+        counts[:] = 0
+        mass[:] = 0.0
+        for i in range(n):
+            b = top - np.int64(np.float64(w[i]).view(np.uint64) >> np.uint64(48))
+            if b > _N_BUCKETS - 1:
+                b = _N_BUCKETS - 1
+            buckets[i] = b
+            counts[b] += 1
+            mass[b] += w[i]
+        last = _N_BUCKETS - 1
+        reached = 0.0
+        for b in range(_N_BUCKETS):
+            reached += mass[b]
+            if reached >= nu + _BUCKET_SLACK:
+                last = b
+                break
+        total = 0
+        for b in range(last + 1):
+            starts[b] = total
+            total += counts[b]
+        for i in range(n):
+            b = buckets[i]
+            if b <= last:
+                order[starts[b]] = i
+                starts[b] += 1
+        return last
+
+    @numba.njit(cache=True, nogil=True)
+    def _sort_bucket(w, order, begin, end):  # pragma: no cover - compiled
+        """Sort ``order[begin:end]`` (index order on entry) by descending weight, stably."""
+        for i in range(begin + 1, end):
+            if w[order[i]] > w[order[i - 1]]:
+                break
+        else:
+            return  # ties in index order (a resampled belief): already sorted
+        if end - begin <= _INSERTION_SORT_MAX:
+            for i in range(begin + 1, end):
+                item = order[i]
+                value = w[item]
+                j = i - 1
+                while j >= begin and w[order[j]] < value:
+                    order[j + 1] = order[j]
+                    j -= 1
+                order[j + 1] = item
+        else:
+            block = order[begin:end].copy()
+            keys = np.empty(end - begin)
+            for i in range(end - begin):
+                keys[i] = -w[block[i]]
+            ranked = np.argsort(keys, kind="mergesort")
+            for i in range(end - begin):
+                order[begin + i] = block[ranked[i]]
+
+    @numba.njit(cache=True, nogil=True)
+    def _top_weight_prefix(w, nu, order, buckets, counts, mass, starts):  # pragma: no cover - compiled
+        """Put the retained particles first in ``order`` and return their count: the shortest
+        prefix of the stable descending weight order whose cumulative mass reaches
+        ``nu - 1e-12``, or ``n`` (every particle) when none does."""
+        n = w.shape[0]
+        cumulative = 0.0
+        target = nu - 1e-12
+        tied = True
+        for i in range(1, n):
+            if w[i] != w[0]:
+                tied = False
+                break
+        if tied:  # a belief just resampled: the order is the index order
+            for i in range(n):
+                order[i] = i
+                cumulative += w[i]
+                if cumulative >= target:
+                    return i + 1
+            return n
+        last = _bucket_order(w, nu, order, buckets, counts, mass, starts)
+        begin = 0
+        for b in range(last + 1):
+            end = begin + counts[b]
+            _sort_bucket(w, order, begin, end)
+            for i in range(begin, end):
+                cumulative += w[order[i]]
+                if cumulative >= target:
+                    return i + 1
+            begin = end
+        return w.shape[0]
+
+    @numba.njit(cache=True, nogil=True)
+    def _coverage_score(weights, z, z_true, width):  # pragma: no cover - compiled
+        n_e, n = weights.shape
+        out = np.empty(n_e)
+        order = np.empty(n, dtype=np.int64)
+        buckets = np.empty(n, dtype=np.int64)
+        counts = np.empty(_N_BUCKETS, dtype=np.int64)
+        mass = np.empty(_N_BUCKETS)
+        starts = np.empty(_N_BUCKETS, dtype=np.int64)
+        for e in range(n_e):
+            truth = z_true[e]
+            hull_lo, hull_hi = np.inf, -np.inf
+            for i in range(n):
+                hull_lo = min(hull_lo, z[e, i])
+                hull_hi = max(hull_hi, z[e, i])
+            if not (hull_lo <= truth <= hull_hi):  # escaped: 1 + distance past the hull / D
+                out[e] = 1.0 + (max(hull_lo - truth, 0.0) + max(truth - hull_hi, 0.0)) / width
+                continue
+            w = weights[e]
+            last = _bucket_order(w, np.inf, order, buckets, counts, mass, starts)
+            cumulative = 0.0
+            run_lo, run_hi = np.inf, -np.inf
+            begin = 0
+            found = False
+            for b in range(last + 1):  # sort bucket by bucket, only until the prefix covers
+                end = begin + counts[b]
+                _sort_bucket(w, order, begin, end)
+                for i in range(begin, end):
+                    cumulative += w[order[i]]
+                    run_lo = min(run_lo, z[e, order[i]])
+                    run_hi = max(run_hi, z[e, order[i]])
+                    if run_lo <= truth <= run_hi:
+                        found = True
+                        break
+                if found:
+                    break
+                begin = end
+            out[e] = min(cumulative, 1.0)
+        return out
+
+    @numba.njit(cache=True, nogil=True)
+    def _retained_summary(weights, nu, z, particles):  # pragma: no cover - compiled
+        n_e, n = weights.shape
+        d = particles.shape[2]
+        mask = np.zeros((n_e, n), dtype=np.bool_)
+        lo = np.empty(n_e)
+        hi = np.empty(n_e)
+        reference = np.empty((n_e, d))
+        order = np.empty(n, dtype=np.int64)
+        buckets = np.empty(n, dtype=np.int64)
+        counts = np.empty(_N_BUCKETS, dtype=np.int64)
+        mass = np.empty(_N_BUCKETS)
+        starts = np.empty(_N_BUCKETS, dtype=np.int64)
+        masked_w = np.empty(n)
+        product = np.empty(n)
+        for e in range(n_e):
+            w = weights[e]
+            m = _top_weight_prefix(w, nu[e], order, buckets, counts, mass, starts)
+            if m == n:
+                mask[e, :] = True
+            else:
+                for i in range(m):
+                    mask[e, order[i]] = True
+            # masked_interval: NaN in a retained z propagates, as np.min / np.max do.
+            low, high = np.inf, -np.inf
+            for i in range(n):
+                if mask[e, i]:
+                    value = z[e, i]
+                    if value != value or low != low:
+                        low = high = np.nan
+                    else:
+                        low = min(low, value)
+                        high = max(high, value)
+            lo[e], hi[e] = low, high
+            # belief_reference: weighted means over the mask, summed in NumPy's order.
+            kept = 0
+            for i in range(n):
+                masked_w[i] = w[i] if mask[e, i] else 0.0
+                kept += mask[e, i]
+            total = _row_sum(masked_w)
+            for j in range(d):
+                if total > 0:
+                    for i in range(n):
+                        product[i] = masked_w[i] * particles[e, i, j]
+                    reference[e, j] = _row_sum(product) / total
+                else:
+                    for i in range(n):
+                        product[i] = particles[e, i, j] if mask[e, i] else 0.0
+                    reference[e, j] = _row_sum(product) / max(kept, 1)
+        return mask, lo, hi, reference
+
+
+def retained_summary_compiled(weights: np.ndarray, nu: np.ndarray, z: np.ndarray,
+                              particles: np.ndarray) -> tuple[np.ndarray, ...] | None:
+    """The compiled retained set (see ``core.retained.retained_summary``), or None.
+
+    None without numba, and for weights outside the kernel's domain (negative, NaN or
+    infinite entries), which the NumPy path handles.
+    """
+    if not HAVE_NUMBA:
+        return None
+    weights = np.ascontiguousarray(weights, dtype=np.float64)
+    if not (np.all(np.isfinite(weights)) and np.all(weights >= 0)):
+        return None
+    return _retained_summary(weights, np.ascontiguousarray(nu, dtype=np.float64), np.ascontiguousarray(z, dtype=np.float64),
+                             np.ascontiguousarray(particles, dtype=np.float64))
+
+
+def coverage_score_compiled(weights: np.ndarray, z: np.ndarray, z_true: np.ndarray, width: float) -> np.ndarray | None:
+    """The compiled coverage score (see ``core.retained.coverage_score``), or None.
+
+    None without numba and outside the kernel's domain (weights that are negative or not
+    finite, a decision coordinate or truth that is not finite), which NumPy handles.
+    """
+    if not HAVE_NUMBA:
+        return None
+    weights = np.ascontiguousarray(weights, dtype=np.float64)
+    z = np.ascontiguousarray(z, dtype=np.float64)
+    z_true = np.ascontiguousarray(z_true, dtype=np.float64)
+    if not (np.all(np.isfinite(weights)) and np.all(weights >= 0) and np.all(np.isfinite(z)) and np.all(np.isfinite(z_true))):
+        return None
+    return _coverage_score(weights, z, z_true, float(width))

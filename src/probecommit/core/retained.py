@@ -10,6 +10,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from probecommit.core.kernels import coverage_score_compiled, retained_summary_compiled
+
 # Cumulative sums of float weights may fall a hair short of an exactly reachable
 # mass (e.g. 820 copies of 1/1024 against nu = 0.8); this tolerance absorbs that.
 MASS_TOLERANCE = 1e-12
@@ -64,6 +66,43 @@ def weighted_mean(z: np.ndarray, weights: np.ndarray, mask: np.ndarray | None = 
     return np.where(total > 0, np.sum(w * z, axis=-1) / np.where(total > 0, total, 1.0), plain)
 
 
+def belief_reference(particles: np.ndarray, weights: np.ndarray, mask: np.ndarray | None = None) -> np.ndarray:
+    """Weighted mean of every latent over ``mask`` ``[E, d]``: the executors' tie-break reference."""
+    return np.stack([weighted_mean(particles[..., j], weights, mask) for j in range(particles.shape[-1])], axis=-1)
+
+
+def retained_summary(weights: np.ndarray, nu: float | np.ndarray, z: np.ndarray,
+                     particles: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The retained set at mass ``nu`` with what an executor needs from it, in one pass.
+
+    Args:
+        weights: Normalized weights ``[E, N]``.
+        nu: Retained mass, one for all episodes or ``[E]``.
+        z: Decision coordinate of every particle ``[E, N]``.
+        particles: ``[E, N, d]``.
+
+    Returns:
+        ``(mask, lo, hi, reference)``: :func:`retained_mask`, the decision interval over
+        it (:func:`masked_interval`) and the weighted mean of every latent over it
+        (:func:`belief_reference`). The compiled kernel (``core.kernels``) gives the
+        same bits as this NumPy path without sorting whole rows.
+    """
+    weights = np.asarray(weights, dtype=float)
+    nu_rows = np.broadcast_to(np.asarray(nu, dtype=float), weights.shape[:1])
+    compiled = retained_summary_compiled(weights, nu_rows, z, particles)
+    if compiled is not None:
+        return compiled
+    return retained_summary_numpy(weights, nu_rows, z, particles)
+
+
+def retained_summary_numpy(weights: np.ndarray, nu: np.ndarray, z: np.ndarray,
+                           particles: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """NumPy path of :func:`retained_summary` (the compiled kernel's reference)."""
+    mask = retained_mask(weights, nu)
+    lo, hi = masked_interval(z, mask)
+    return mask, lo, hi, belief_reference(particles, weights, mask)
+
+
 def weighted_variance(z: np.ndarray, weights: np.ndarray) -> np.ndarray:
     """Posterior variance of ``z[E, N]`` under normalized ``weights`` ``[E]``."""
     mean = np.sum(weights * z, axis=-1)
@@ -83,6 +122,14 @@ def coverage_score(z: np.ndarray, weights: np.ndarray, z_true: np.ndarray, domai
         ``[E]`` scores; ``<= 1`` when the truth is inside the hull (clipped at 1
         against round-off), ``1 + d / D`` exactly when it escapes.
     """
+    compiled = coverage_score_compiled(weights, z, z_true, domain_width)
+    if compiled is not None:
+        return compiled
+    return coverage_score_numpy(z, weights, z_true, domain_width)
+
+
+def coverage_score_numpy(z: np.ndarray, weights: np.ndarray, z_true: np.ndarray, domain_width: float) -> np.ndarray:
+    """NumPy path of :func:`coverage_score` (the compiled kernel's reference): a full stable sort."""
     z = np.asarray(z, dtype=float)
     z_true = np.asarray(z_true, dtype=float)
     order, cum = prefix_mass(np.asarray(weights, dtype=float))

@@ -225,8 +225,8 @@ def build_trace(pfilter: ParticleFilter, batch: ProbeBatch, seed: int, budgets: 
     lost = np.zeros((batch.n_episodes, batch.u.shape[1]), dtype=bool)
     for j in range(1, k_max + 1):
         u_j, y_j = batch.u[:, j - 1], batch.y[:, j - 1]
-        surprise[:, j - 1] = -pfilter.log_predictive(state, u_j, y_j)
         state = pfilter.update(state, u_j, y_j, rngs)
+        surprise[:, j - 1] = -state.log_evidence  # the probe's log predictive density, before it was assimilated
         lost[:, j - 1] = state.lost
         if j in budgets:
             states[j] = state

@@ -178,6 +178,13 @@ class Simulator(Protocol):
     def load_cache(self, records: Iterable[dict[str, Any]]) -> None: ...
 
 
+def _key_part(values: Iterable[float]) -> tuple[float, ...]:
+    """A query argument as a tuple of Python floats (a cache key; one call per engine query, so kept lean)."""
+    if isinstance(values, np.ndarray):
+        return tuple(values.astype(float, copy=False).ravel().tolist())
+    return tuple(map(float, values))
+
+
 class CachedSimulator:
     """Base for simulators: every deterministic engine query is run once and cached.
 
@@ -196,7 +203,7 @@ class CachedSimulator:
 
     def cached(self, kind: str, theta: Iterable[float], arg: Iterable[float]) -> np.ndarray:
         """Cached named query ``self.<kind>(*theta, *arg)``; the engine runs once per key."""
-        key = (kind, tuple(float(v) for v in np.ravel(theta)), tuple(float(v) for v in np.ravel(arg)))
+        key = (kind, _key_part(theta), _key_part(arg))
         hit = self._cache.get(key)
         if hit is None:
             start = time.perf_counter()
