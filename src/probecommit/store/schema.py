@@ -102,13 +102,13 @@ def cache_frame(records: list[dict], latent_names: tuple[str, ...]):
     """Engine-cache rows (``Simulator.cache_records``) as a table keyed by the latent names."""
     import pandas as pd
 
-    columns = ["engine", "query", *latent_names, "arg", "value"]
-    rows = [
-        {"engine": r["engine"], "query": r["query"], **dict(zip(latent_names, r["theta"])),
-         "arg": list(r["arg"]), "value": list(r["value"])}
-        for r in records
-    ]
-    return pd.DataFrame(rows, columns=columns)
+    columns: dict[str, list] = {"engine": [r["engine"] for r in records], "query": [r["query"] for r in records]}
+    thetas = [tuple(r["theta"]) for r in records]
+    for i, name in enumerate(latent_names):  # built column by column: a run may hold 10^5 answers
+        columns[name] = [theta[i] if i < len(theta) else None for theta in thetas]
+    columns["arg"] = [list(r["arg"]) for r in records]
+    columns["value"] = [list(r["value"]) for r in records]
+    return pd.DataFrame(columns, columns=["engine", "query", *latent_names, "arg", "value"])
 
 
 def cache_records(frame, latent_names: tuple[str, ...]) -> list[dict]:

@@ -203,7 +203,11 @@ class CachedSimulator:
 
     def cached(self, kind: str, theta: Iterable[float], arg: Iterable[float]) -> np.ndarray:
         """Cached named query ``self.<kind>(*theta, *arg)``; the engine runs once per key."""
-        key = (kind, _key_part(theta), _key_part(arg))
+        return self.cached_key((kind, _key_part(theta), _key_part(arg)))
+
+    def cached_key(self, key: tuple[str, tuple[float, ...], tuple[float, ...]]) -> np.ndarray:
+        """:meth:`cached` for a key already built: ``(kind, theta floats, arg floats)``."""
+        kind = key[0]
         hit = self._cache.get(key)
         if hit is None:
             start = time.perf_counter()

@@ -46,7 +46,7 @@ class InsertionSimulator(NoisySimulator):
 
     def query(self, kind: str, x_hole: float, c: float, q: float) -> float:
         """Cached ``tap_reading`` or ``peg_depth`` in mm; the engine runs once per key."""
-        return float(self.cached(kind, (x_hole, c), (q,))[0])
+        return float(self.cached_key((kind, (float(x_hole), float(c)), (float(q),)))[0])
 
     def probe(self, theta: np.ndarray, u: np.ndarray, rng: np.random.Generator) -> np.ndarray:
         reading = self.query("tap_reading", theta[0], theta[1], float(np.ravel(u)[0]))
