@@ -138,7 +138,6 @@ class BeliefState:
     accepted: np.ndarray | None = None
     lost: np.ndarray | None = None
     log_evidence: np.ndarray | None = None
-    _weights: np.ndarray | None = field(default=None, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         if self.resampled is None:
@@ -148,10 +147,9 @@ class BeliefState:
 
     @property
     def weights(self) -> np.ndarray:
-        """Normalized weights ``exp(log_weights)`` ``[E, N]``, computed once per state."""
-        if self._weights is None or self._weights.shape != self.log_weights.shape:
-            self._weights = np.exp(self.log_weights)
-        return self._weights
+        """Normalized weights ``exp(log_weights)`` ``[E, N]``. Computed on each access, not kept:
+        a trace holds a state per budget, and a third array per state costs a third more memory."""
+        return np.exp(self.log_weights)
 
     @property
     def n_episodes(self) -> int:
@@ -267,8 +265,7 @@ class ParticleFilter:
                 particles[rows], accepted[rows] = self._move(particles[rows], parents, u_hist[rows], y_hist[rows],
                                                              [rngs[r] for r in rows], low, high, scale)
             log_w[rows] = -np.log(self.n_particles)
-            weights[rows] = np.exp(log_w[rows])
-        return BeliefState(particles, log_w, resample, u_hist, y_hist, accepted, lost, log_evidence, weights)
+        return BeliefState(particles, log_w, resample, u_hist, y_hist, accepted, lost, log_evidence)
 
     def _move(self, particles, parents, u_hist, y_hist, rngs, low, high, scale):
         """Resampled copies of ``particles`` (the resampling rows) after the configured move:
