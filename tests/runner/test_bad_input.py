@@ -155,6 +155,13 @@ def check_config_outcome(data: dict, path: str) -> None:
         assert got == expect, (path, given_value, parsed)
 
 
+@pytest.mark.parametrize("contexts", [[[]], [[1.0]]])
+def test_contexts_for_a_family_without_context_are_refused(contexts):
+    # [[]] once passed validation for insertion and then crashed drawing the instances.
+    with pytest.raises(ConfigError, match=r"^invalid config field 'instances.contexts'.*insertion family has no context"):
+        parse_config({"instances": {"count": 4, "contexts": contexts}})
+
+
 @settings(max_examples=600, **SETTINGS)
 @given(data=st.data())
 def test_config_field_gets_a_valid_value_or_a_one_line_error_naming_it(data):

@@ -233,6 +233,8 @@ class StudyConfig(_Strict):
                     "(an unset end defaults to the model's prior box)",
                 )
         n_ctx = len(task.context_names)
+        if inst.contexts is not None and not n_ctx:
+            raise _FieldError("instances.contexts", f"the {task.family} family has no context; remove instances.contexts")
         if inst.contexts is not None and len(inst.contexts[0]) != n_ctx:
             raise _FieldError("instances.contexts", f"rows need {n_ctx} coordinates ({', '.join(task.context_names) or 'the family has no context'}), got {len(inst.contexts[0])}")
         if n_ctx and inst.contexts is None:
