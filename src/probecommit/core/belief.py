@@ -7,7 +7,7 @@ episode's result never depends on which other episodes share its batch.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Protocol, Sequence
 
 import numpy as np
@@ -138,6 +138,9 @@ class BeliefState:
     accepted: np.ndarray | None = None
     lost: np.ndarray | None = None
     log_evidence: np.ndarray | None = None
+    #: ``exp(log_weights)`` as the update computed it, for the decision that follows; dropped by
+    #: :meth:`compact` (a trace holds a state per budget, and a third array per state costs memory).
+    fresh_weights: np.ndarray | None = field(default=None, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         if self.resampled is None:
@@ -147,9 +150,12 @@ class BeliefState:
 
     @property
     def weights(self) -> np.ndarray:
-        """Normalized weights ``exp(log_weights)`` ``[E, N]``. Computed on each access, not kept:
-        a trace holds a state per budget, and a third array per state costs a third more memory."""
-        return np.exp(self.log_weights)
+        """Normalized weights ``exp(log_weights)`` ``[E, N]`` (the update's own, or computed now)."""
+        return np.exp(self.log_weights) if self.fresh_weights is None else self.fresh_weights
+
+    def compact(self) -> "BeliefState":
+        """The same state without :attr:`fresh_weights` (arrays shared, nothing copied)."""
+        return replace(self, fresh_weights=None)
 
     @property
     def n_episodes(self) -> int:
@@ -265,7 +271,8 @@ class ParticleFilter:
                 particles[rows], accepted[rows] = self._move(particles[rows], parents, u_hist[rows], y_hist[rows],
                                                              [rngs[r] for r in rows], low, high, scale)
             log_w[rows] = -np.log(self.n_particles)
-        return BeliefState(particles, log_w, resample, u_hist, y_hist, accepted, lost, log_evidence)
+            weights[rows] = np.exp(log_w[rows])
+        return BeliefState(particles, log_w, resample, u_hist, y_hist, accepted, lost, log_evidence, weights)
 
     def _move(self, particles, parents, u_hist, y_hist, rngs, low, high, scale):
         """Resampled copies of ``particles`` (the resampling rows) after the configured move:

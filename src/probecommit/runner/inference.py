@@ -229,7 +229,7 @@ def build_trace(pfilter: ParticleFilter, batch: ProbeBatch, seed: int, budgets: 
         surprise[:, j - 1] = -state.log_evidence  # the probe's log predictive density, before it was assimilated
         lost[:, j - 1] = state.lost
         if j in budgets:
-            states[j] = state
+            states[j] = state.compact()
     return BeliefTrace(batch, states, surprise, lost)
 
 
