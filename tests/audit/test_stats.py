@@ -134,3 +134,17 @@ def test_pairing_refuses_different_episodes_and_duplicates():
     assert len(pair_episodes(base, other, strict=False)) == 4
     with pytest.raises(ValueError, match="duplicate episodes"):
         pair_episodes(pd.concat([base, base]), base)
+
+
+def test_sign_flip_monte_carlo_in_blocks_equals_one_draw(monkeypatch):
+    """The signs are drawn in row blocks to bound memory; the p-value is that of one draw."""
+    import probecommit.audit.stats as stats
+
+    d = np.random.default_rng(3).normal(0.1, 1.0, 37)
+    resamples = 5001
+    signs = np.random.default_rng(8).choice((-1.0, 1.0), size=(resamples, d.size))
+    tol = 1e-12 * max(1.0, np.abs(d).sum())
+    one_draw = (1 + int(np.count_nonzero(np.abs(signs @ d) >= abs(d.sum()) - tol))) / (1 + resamples)
+    for block in (37, 37 * 7, 1000, 1 << 21):  # 1, 7, 27 rows, all rows
+        monkeypatch.setattr(stats, "SIGN_BLOCK_ELEMENTS", block)
+        assert sign_flip_test(d, max_exact=5, resamples=resamples, seed=8) == one_draw

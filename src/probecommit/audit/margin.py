@@ -70,6 +70,11 @@ def margin_satisfied(episodes: pd.DataFrame, budgets: Iterable[int] | None = Non
     return ok, len(df), float(pred.mean()), float(real.mean())
 
 
+def margin_candidates(grid: Iterable[float]) -> list[float]:
+    """The distinct grid values (rounded to 10 decimals) in the order the search scans them, largest first."""
+    return sorted({float(g) for g in np.round(np.asarray(list(grid), dtype=float), 10)}, reverse=True)
+
+
 def select_margin(evaluate: Callable[[float], pd.DataFrame], grid: Iterable[float] = GAMMA_GRID, *,
                   budgets: Iterable[int] | None = None, exhaustive: bool = False) -> MarginResult:
     """Largest gamma on the grid whose calibration episodes are not optimistic on average.
@@ -88,7 +93,7 @@ def select_margin(evaluate: Callable[[float], pd.DataFrame], grid: Iterable[floa
     Returns:
         The selected margin and the search table.
     """
-    values = sorted({float(g) for g in np.round(np.asarray(list(grid), dtype=float), 10)}, reverse=True)
+    values = margin_candidates(grid)
     if not values:
         raise ValueError("margin grid is empty")
     rows = []

@@ -264,6 +264,10 @@ def paired_bootstrap(baseline: pd.DataFrame, treatment: pd.DataFrame, value: str
                             len(pairs), labels.size)
 
 
+#: Sign draws held at once by the Monte Carlo sign-flip test.
+SIGN_BLOCK_ELEMENTS = 1 << 21
+
+
 def sign_flip_test(cluster_differences: np.ndarray, *, max_exact: int = 20, resamples: int = 100_000,
                    seed: int | np.random.Generator | None = DEFAULT_SEED) -> float:
     """Two-sided sign-flip (randomization) test of zero mean over clusters.
@@ -307,8 +311,14 @@ def sign_flip_test(cluster_differences: np.ndarray, *, max_exact: int = 20, resa
             total += s.size
         return hits / total
     rng = _rng(seed)
-    signs = rng.choice((-1.0, 1.0), size=(resamples, d.size))
-    hits = int(np.count_nonzero(np.abs(signs @ d) >= observed - tol))
+    # Draw the [resamples, M] signs in blocks of rows (about 16 MB each; all of them at
+    # once is 600 MB at M = 768): consecutive draws continue the generator's stream, so
+    # the signs, and the p-value, are those of a single draw.
+    rows = max(1, SIGN_BLOCK_ELEMENTS // d.size)
+    hits = 0
+    for start in range(0, resamples, rows):
+        signs = rng.choice((-1.0, 1.0), size=(min(rows, resamples - start), d.size))
+        hits += int(np.count_nonzero(np.abs(signs @ d) >= observed - tol))
     return (1 + hits) / (1 + resamples)
 
 

@@ -1,10 +1,11 @@
 """Calibration and commit gates on run directories (paper Secs. IV and VI).
 
 These functions tie the pure audit modules to the runner: beliefs are recomputed
-from each run's stored probes (``runner.replay.trace_for_run``) and the commit is
-re-executed (``runner.inference.commit``) under each threshold and margin, so every
-arm of a comparison sees identical probes and every coverage is measured on the
-set as constructed. Ground truth comes from the runs' engine caches; a run made
+from each run's stored probes (``runner.replay.RunBeliefs``, a chunk of instances at
+a time, so memory stays flat in the run's size) and the commit is re-executed
+(``runner.inference.commit``) under each threshold and margin, so every arm of a
+comparison sees identical probes and every coverage is measured on the set as
+constructed. Ground truth comes from the runs' engine caches; a run made
 with ``execute_all_aims`` never needs the engine again.
 """
 
@@ -25,7 +26,7 @@ from probecommit.audit.conformal import (
 )
 from probecommit.audit.gates import DEFAULT_TARGET_RATE, GatesResult, gates_from_tables
 from probecommit.audit.io import ok_episodes, validate_episodes
-from probecommit.audit.margin import GAMMA_GRID, MarginResult, distribution_free_margin, select_margin
+from probecommit.audit.margin import GAMMA_GRID, MarginResult, distribution_free_margin, margin_candidates, select_margin
 from probecommit.audit.metrics import audit_table, summary_row
 from probecommit.audit.stats import (
     DEFAULT_LEVEL,
@@ -37,8 +38,7 @@ from probecommit.audit.stats import (
     resample_counts,
 )
 from probecommit.audit.surprise import surprise_auc
-from probecommit.runner.inference import commit as commit_episodes
-from probecommit.runner.replay import LoadedRun, load_run, trace_for_run
+from probecommit.runner.replay import CHUNK_INSTANCES, LoadedRun, RunBeliefs, load_run
 
 #: The executor's method whose commits are calibrated.
 PROBE_METHOD = "probe_robust"
@@ -47,19 +47,25 @@ PROBE_METHOD = "probe_robust"
 # ----------------------------------------------------------------------------- runs
 
 
+#: The columns a margin search reads from each re-executed table (``audit.margin.margin_satisfied``).
+MARGIN_COLUMNS = ("k", "status", "predicted", "realized")
+
+#: A commit request: the thresholds (mass ``nu``, ``t`` or ``{k: t_k}``) and the margin (None: the model's).
+Request = tuple[float | dict[int, float], float | None]
+
+
 @dataclass
 class _Run:
-    """A loaded run with its recomputed beliefs (internal)."""
+    """A loaded run whose commits are re-executed from recomputed beliefs (internal)."""
 
-    loaded: Any
-    trace: Any
-    model: Any
-    simulator: Any
-    #: Margin-independent work (retained sets, coverage scores) shared by every commit;
-    #: None recomputes it each time (the reference path the benchmark compares against).
-    cache: dict | None = field(default_factory=dict)
+    loaded: LoadedRun
+    beliefs: RunBeliefs
+    #: Share margin-independent work (retained sets, coverage scores) between commits;
+    #: False recomputes it each time (the reference path the benchmark compares against).
+    reuse: bool = True
     #: The set construction at t = 1, if not the run config's (``calibrate(..., plateau=)``).
     override_plateau: str | None = None
+    structure_checked: bool = False
 
     @property
     def nu(self) -> float:
@@ -69,21 +75,71 @@ class _Run:
     def plateau(self) -> str:
         return self.override_plateau or self.loaded.config.calibration.plateau
 
-    def commit(self, thresholds: float | dict[int, float], margin: float | None = None) -> pd.DataFrame:
-        table = commit_episodes(self.trace, self.model, self.simulator, thresholds=_executable(thresholds), margin=margin,
-                                methods=(PROBE_METHOD,), cache=self.cache, plateau=self.plateau)
+    def commit(self, *requests: Request, keep: Sequence[Sequence[str] | None] | None = None) -> list[pd.DataFrame]:
+        """Episode tables of the probe executor, one per request, in one pass over the run's chunks.
+
+        Args:
+            *requests: ``(thresholds, margin)`` pairs.
+            keep: Per request, the columns to keep (None: all, validated). A margin search
+                reads four columns of dozens of tables; those are not validated (the
+                validation needs every column) and not kept whole.
+        """
+        keep = list(keep) if keep is not None else [None] * len(requests)
+        tables = self.beliefs.commit([{"thresholds": _executable(t), "margin": g} for t, g in requests], keep=keep,
+                                     reuse=self.reuse, methods=(PROBE_METHOD,), plateau=self.plateau)
+        return [self._finish(table, columns) for table, columns in zip(tables, keep)]
+
+    def _finish(self, table: pd.DataFrame, columns: Sequence[str] | None) -> pd.DataFrame:
         # Trajectories whose probing failed have no belief; carry the run's failure
         # rows along so they stay counted (and the repeat-count check sees them).
         stored = self.loaded.episodes
         failed = stored.loc[(stored["status"] == "failed") & (stored["method"] == "rollout")]
         if len(failed):
-            table = pd.concat([table, failed.assign(variant=self.model.variant)], ignore_index=True)
+            failed = failed.assign(variant=self.beliefs.model.variant)
+            table = pd.concat([table, failed if columns is None else failed[list(columns)]], ignore_index=True)
+        if columns is not None:
+            return table
         # The re-executed table has the same episodes every time: check its structure once.
-        checked = self.cache is not None and self.cache.get("structure_checked", False)
-        table = validate_episodes(table, f"{self.loaded.path} (re-executed)", structure=not checked)
-        if self.cache is not None:
-            self.cache["structure_checked"] = True
+        table = validate_episodes(table, f"{self.loaded.path} (re-executed)", structure=not self.structure_checked)
+        self.structure_checked = True
         return table
+
+    def search_margin(self, thresholds: float | dict[int, float], grid: Iterable[float], budgets: Sequence[int],
+                      *extra: Request) -> tuple[MarginResult, list[pd.DataFrame]]:
+        """The validation-tuned margin under ``thresholds`` (``audit.margin.select_margin``).
+
+        A run of one chunk keeps its beliefs, so each margin is committed when the scan
+        asks for it. A run of several chunks would recompute its beliefs for each one,
+        so the first evaluation commits every margin still to be scanned in one pass.
+
+        Args:
+            thresholds: The set calibration the margin is searched under.
+            grid: Margin candidates.
+            budgets: Budgets the margin rule averages over.
+            *extra: Further requests, committed in the first pass; their whole tables are returned.
+
+        Returns:
+            The margin and the tables of ``extra``.
+        """
+        candidates = margin_candidates(grid)
+        tables: dict[float, pd.DataFrame] = {}
+        extras: list[pd.DataFrame] = []
+
+        def evaluate(gamma: float) -> pd.DataFrame:
+            if gamma not in tables:
+                block = [gamma] if len(self.beliefs.chunks) == 1 else [g for g in candidates if g <= gamma]
+                first = [] if extras else list(extra)
+                out = self.commit(*[(thresholds, g) for g in block], *first,
+                                  keep=[MARGIN_COLUMNS] * len(block) + [None] * len(first))
+                tables.update(zip(block, out[:len(block)]))
+                extras.extend(out[len(block):])
+            return tables[gamma]
+
+        return select_margin(evaluate, candidates, budgets=budgets), extras
+
+    def release(self) -> None:
+        """Drop the beliefs kept between commits (the run's last commit is done)."""
+        self.beliefs.release()
 
 
 def _executable(thresholds: float | dict[int, float]) -> float | dict[int, float]:
@@ -97,10 +153,9 @@ def _executable(thresholds: float | dict[int, float]) -> float | dict[int, float
     return 2.0 if math.isinf(thresholds) else float(thresholds)
 
 
-def _load(run, reuse: bool = True, plateau: str | None = None) -> _Run:
+def _load(run, reuse: bool = True, plateau: str | None = None, chunk_instances: int | None = CHUNK_INSTANCES) -> _Run:
     loaded = run if isinstance(run, LoadedRun) else load_run(run)
-    trace, model, simulator = trace_for_run(loaded)
-    return _Run(loaded, trace, model, simulator, {} if reuse else None, plateau)
+    return _Run(loaded, RunBeliefs.of(loaded, chunk_instances=chunk_instances), reuse, plateau)
 
 
 def _check_pair(cal: _Run, test: _Run) -> None:
@@ -128,7 +183,7 @@ def _check_pair(cal: _Run, test: _Run) -> None:
 
 
 def _budgets(run: _Run, budgets: Iterable[int] | None) -> list[int]:
-    have = list(run.trace.budgets)
+    have = run.beliefs.budgets
     if budgets is None:
         return have
     budgets = sorted(int(b) for b in budgets)
@@ -218,7 +273,8 @@ def _failure_at(table: pd.DataFrame, k: int, counts: np.ndarray, names: np.ndarr
 def calibrate(cal_run, test_run, alpha: float = DEFAULT_ALPHA, budgets: Sequence[int] | None = None, *,
               cost_budget: int | None = None, margin_grid: Iterable[float] = GAMMA_GRID,
               resamples: int = DEFAULT_RESAMPLES, seed: int = DEFAULT_SEED, level: float = DEFAULT_LEVEL,
-              reuse: bool = True, plateau: str | None = None) -> CalibrationResult:
+              reuse: bool = True, plateau: str | None = None,
+              chunk_instances: int | None = CHUNK_INSTANCES) -> CalibrationResult:
     """Calibrate the executor on one run and report its effect on another.
 
     Steps: beliefs of both runs are recomputed from stored probes; worst-repeat
@@ -243,11 +299,13 @@ def calibrate(cal_run, test_run, alpha: float = DEFAULT_ALPHA, budgets: Sequence
             reference path of ``benchmarks/calibrate.py``. Identical results.
         plateau: The set at ``t = 1``: ``prefix`` (the paper) or ``hull`` (no exception
             to the guarantee); default the runs' ``calibration.plateau``.
+        chunk_instances: Instances whose beliefs are held at once (None: a whole run), so
+            memory does not grow with the runs' size. Identical results.
 
     Returns:
         The calibration result.
     """
-    cal, test = _load(cal_run, reuse, plateau), _load(test_run, reuse, plateau)
+    cal, test = _load(cal_run, reuse, plateau, chunk_instances), _load(test_run, reuse, plateau, chunk_instances)
     _check_pair(cal, test)
     budgets = _budgets(cal, budgets)
     _budgets(test, budgets)
@@ -255,16 +313,17 @@ def calibrate(cal_run, test_run, alpha: float = DEFAULT_ALPHA, budgets: Sequence
     if cost_budget not in budgets:
         raise ValueError(f"cost budget {cost_budget} is not among the calibrated budgets {budgets}")
 
-    cal_orig = cal.commit(cal.nu)
+    [cal_orig] = cal.commit((cal.nu, None))
     t_k = fixed_budget_thresholds(cal_orig, alpha, budgets)
     t_sim = simultaneous_threshold(cal_orig, budgets, alpha)
-    margin = select_margin(lambda g: cal.commit(t_k, g), margin_grid, budgets=budgets)
-    cal_set = cal.commit(t_k)
+    margin, [cal_set] = cal.search_margin(t_k, margin_grid, budgets, (t_k, None))
+    cal.release()
     df_margin = distribution_free_margin(cal_set, alpha, budgets)
 
-    test_orig = test.commit(test.nu)
-    test_set = test.commit(t_k)
-    test_full = test.commit(t_k, margin.gamma)
+    # Every test commit in one pass over the test run's chunks.
+    test_orig, test_set, test_full, test_sim = test.commit((test.nu, None), (t_k, None), (t_k, margin.gamma),
+                                                           (t_sim, None))
+    test.release()
     a_orig = audit_table(test_orig, budgets=budgets, resamples=resamples, seed=seed, level=level)
     a_cal = audit_table(test_full, budgets=budgets, resamples=resamples, seed=seed, level=level)
     table3 = pd.DataFrame({"k": a_orig["k"]})
@@ -302,7 +361,6 @@ def calibrate(cal_run, test_run, alpha: float = DEFAULT_ALPHA, budgets: Sequence
                       "n_pairs": pdiff.n_pairs, "n_clusters": pdiff.n_clusters})
 
     # Simultaneous coverage on test, measured on the sets as constructed at t.
-    test_sim = test.commit(t_sim)
     test_sim = ok_episodes(test_sim).loc[lambda d: d["k"].isin(budgets)]
     per_inst = test_sim.groupby("instance_id")["covered"].all().astype(float)
     sim_iv = cluster_bootstrap_mean(per_inst.to_numpy(), per_inst.index.to_numpy(), resamples=resamples,
@@ -323,7 +381,8 @@ def calibrate(cal_run, test_run, alpha: float = DEFAULT_ALPHA, budgets: Sequence
 def gates(cal_run, test_run, alpha: float = DEFAULT_ALPHA, budgets: Sequence[int] | None = None, *,
           target_rate: float = DEFAULT_TARGET_RATE, margin_grid: Iterable[float] = GAMMA_GRID,
           post_var_executor: str = "raw", resamples: int = DEFAULT_RESAMPLES, seed: int = DEFAULT_SEED,
-          reuse: bool = True, plateau: str | None = None) -> GatesResult:
+          reuse: bool = True, plateau: str | None = None,
+          chunk_instances: int | None = CHUNK_INSTANCES) -> GatesResult:
     """Commit gates on the test run with the decision layer calibrated on the calibration run.
 
     The decision layer uses the budget-simultaneous threshold ``t`` over the
@@ -346,20 +405,22 @@ def gates(cal_run, test_run, alpha: float = DEFAULT_ALPHA, budgets: Sequence[int
             reference path of ``benchmarks/calibrate.py``. Identical results.
         plateau: The set at ``t = 1``: ``prefix`` (the paper) or ``hull`` (no exception
             to the guarantee); default the runs' ``calibration.plateau``.
+        chunk_instances: Instances whose beliefs are held at once (None: a whole run).
 
     Returns:
         Curves, areas and the committed pools; ``info`` holds ``t``, ``gamma``
         and the surprise AUC table of the raw test episodes.
     """
-    cal, test = _load(cal_run, reuse, plateau), _load(test_run, reuse, plateau)
+    cal, test = _load(cal_run, reuse, plateau, chunk_instances), _load(test_run, reuse, plateau, chunk_instances)
     _check_pair(cal, test)
     budgets = _budgets(cal, budgets)
     _budgets(test, budgets)
-    cal_orig = cal.commit(cal.nu)
+    [cal_orig] = cal.commit((cal.nu, None))
     t_sim = simultaneous_threshold(cal_orig, budgets, alpha)
-    margin = select_margin(lambda g: cal.commit(t_sim, g), margin_grid, budgets=budgets)
-    raw = test.commit(test.nu)
-    adjusted = test.commit(t_sim, margin.gamma)
+    margin, _ = cal.search_margin(t_sim, margin_grid, budgets)
+    cal.release()
+    raw, adjusted = test.commit((test.nu, None), (t_sim, margin.gamma))
+    test.release()
     result = gates_from_tables(raw, adjusted, budgets=budgets, target_rate=target_rate,
                                post_var_executor=post_var_executor)
     raw_b = raw.loc[raw["k"].isin(budgets)]

@@ -8,13 +8,14 @@ needs the engine installed).
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, Mapping, Sequence
 
 import numpy as np
 import pandas as pd
 
+from probecommit.core.belief import ParticleFilter
 from probecommit.runner.build import build_filter, build_model, build_simulator
 from probecommit.runner.config import StudyConfig, config_data, dump_config, parse_config
 from probecommit.runner.inference import BeliefTrace, ProbeBatch, blind_bayes_executor, build_trace, commit, instance_arrays
@@ -96,15 +97,127 @@ def simulator_for_run(loaded: LoadedRun, config: StudyConfig | None = None):
 def trace_for_run(run_dir: str | Path | LoadedRun, config: StudyConfig | None = None) -> tuple[BeliefTrace, Any, Any]:
     """Beliefs of every stored episode at every budget, under ``config`` (default: the run's).
 
+    The whole run is held at once (every budget's particle state, about 0.3 MB per
+    episode at N = 1024); replays and calibration go through :class:`RunBeliefs`,
+    which holds one chunk of instances at a time.
+
     Returns:
         ``(trace, model, simulator)``.
     """
-    loaded = run_dir if isinstance(run_dir, LoadedRun) else load_run(run_dir)
-    config = config or loaded.config
-    model = build_model(config)
-    batch = probe_batch(loaded, model)
-    trace = build_trace(build_filter(model, config.belief), batch, config.seed, config.probes.commit_budgets)
-    return trace, model, simulator_for_run(loaded, config)
+    beliefs = RunBeliefs.of(run_dir, config, chunk_instances=None)
+    return beliefs.trace(beliefs.chunks[0]), beliefs.model, beliefs.simulator
+
+
+#: Instances whose beliefs are held at once by a replay or a calibration. A chunk keeps
+#: every committed budget's particle state of its episodes alive (about 0.3 MB per episode
+#: at N = 1024, plus the retained sets of a commit), so memory is bounded by the chunk,
+#: not by the run. 96 = one paper split (384 episodes), which stays a single chunk.
+CHUNK_INSTANCES = 96
+
+
+@dataclass
+class RunBeliefs:
+    """A run's stored probe trajectories, whose beliefs are recomputed a chunk of instances at a time.
+
+    An episode's beliefs and commits never depend on the batch it is computed in
+    (``tests/runner/test_batch_independence.py``), and chunks are contiguous in the
+    run's canonical episode order, so a table assembled from chunks equals the
+    whole-run table bit for bit.
+
+    Attributes:
+        config: The config beliefs are computed under (the run's, or a replay's).
+        model: Its model.
+        simulator: The run's simulator, loaded with the run's engine cache.
+        pfilter: The particle filter of ``config``.
+        batch: Every successful stored trajectory, in the run's episode order.
+        chunks: Row slices of ``batch``, each a whole number of instances (all repeats).
+    """
+
+    config: StudyConfig
+    model: Any
+    simulator: Any
+    pfilter: ParticleFilter
+    batch: ProbeBatch
+    chunks: list[slice]
+    #: The trace of a run that is one chunk, kept across ``commit`` calls (with its reuse cache).
+    _kept: tuple[BeliefTrace, dict] | None = field(default=None, repr=False)
+
+    @classmethod
+    def of(cls, run: str | Path | LoadedRun, config: StudyConfig | None = None,
+           chunk_instances: int | None = CHUNK_INSTANCES) -> "RunBeliefs":
+        """Prepare a run for belief recomputation.
+
+        Args:
+            run: A run directory or a loaded run.
+            config: The config to infer under (default: the run's).
+            chunk_instances: Instances per chunk; None holds the whole run as one chunk.
+        """
+        loaded = run if isinstance(run, LoadedRun) else load_run(run)
+        config = config or loaded.config
+        model = build_model(config)
+        batch = probe_batch(loaded, model)
+        return cls(config, model, simulator_for_run(loaded, config), build_filter(model, config.belief), batch,
+                   _chunk_slices(batch.instance_id, chunk_instances))
+
+    def trace(self, rows: slice) -> BeliefTrace:
+        """Beliefs of the episodes ``batch[rows]`` at every committed budget."""
+        return build_trace(self.pfilter, self.batch.subset(rows), self.config.seed, self.config.probes.commit_budgets)
+
+    @property
+    def budgets(self) -> list[int]:
+        """The budgets a trace of this run holds."""
+        return [k for k in self.config.probes.commit_budgets if k > 0]
+
+    def commit(self, requests: Sequence[Mapping[str, Any]], *, keep: Sequence[Sequence[str] | None] | None = None,
+               reuse: bool = True, **common: Any) -> list[pd.DataFrame]:
+        """Episode tables of several commits, computed chunk by chunk in one pass.
+
+        Each chunk's beliefs are computed once and every request is committed on them
+        before the next chunk, so several commits cost one belief recomputation.
+
+        Args:
+            requests: Per-table keyword arguments of ``runner.inference.commit``
+                (e.g. ``{"thresholds": t, "margin": g}``).
+            keep: Per request, the columns to keep (None: all); a margin search reads four
+                columns of dozens of tables.
+            reuse: Share margin-independent work (retained sets) between the requests of a
+                chunk, and between calls when the run is one chunk; False recomputes it per commit.
+            **common: Keyword arguments of ``commit`` shared by every request.
+
+        Returns:
+            One table per request, in the run's canonical episode order.
+        """
+        keep = list(keep) if keep is not None else [None] * len(requests)
+        parts: list[list[pd.DataFrame]] = [[] for _ in requests]
+        for rows in self.chunks:
+            if self._kept is not None:
+                trace, cache = self._kept
+            else:
+                trace, cache = self.trace(rows), {}
+                if len(self.chunks) == 1:
+                    self._kept = trace, cache
+            for part, request, columns in zip(parts, requests, keep):
+                table = commit(trace, self.model, self.simulator, cache=cache if reuse else None, **common, **request)
+                # A copy: a column selection is a view that would keep the whole table alive.
+                part.append(table if columns is None else table[list(columns)].copy())
+            del trace, cache  # let a finished chunk's beliefs go before the next is computed
+        return [p[0] if len(p) == 1 else pd.concat(p, ignore_index=True) for p in parts]
+
+    def release(self) -> None:
+        """Drop the kept trace of a one-chunk run (its last commit is done)."""
+        self._kept = None
+
+
+def _chunk_slices(instance_id: np.ndarray, chunk_instances: int | None) -> list[slice]:
+    """Contiguous row slices of a batch ordered by instance, ``chunk_instances`` instances each."""
+    n = len(instance_id)
+    if chunk_instances is None or n == 0:
+        return [slice(0, n)]
+    if chunk_instances < 1:
+        raise ValueError(f"chunk_instances must be at least 1, got {chunk_instances}")
+    starts = np.flatnonzero(np.r_[True, instance_id[1:] != instance_id[:-1]])  # first row of each instance
+    bounds = [*starts[::chunk_instances].tolist(), n]
+    return [slice(a, b) for a, b in zip(bounds[:-1], bounds[1:])]
 
 
 def replay_config(config: StudyConfig, overrides: dict[str, dict[str, Any]]) -> StudyConfig:
@@ -120,6 +233,7 @@ def replay_episodes(
     thresholds: float | dict[int, float] | None = None,
     margin: float | None = None,
     fixed_probes: bool = False,
+    chunk_instances: int | None = CHUNK_INSTANCES,
 ) -> tuple[pd.DataFrame, Any]:
     """Episodes re-inferred from a run's stored probes, without writing anything.
 
@@ -134,6 +248,8 @@ def replay_episodes(
             Its probes were chosen by the run's own belief, so the other model would
             have probed elsewhere: the replay answers "this model on those probes",
             and a difference between the two is not a paired comparison.
+        chunk_instances: Instances whose beliefs are held at once (None: the whole
+            run); the table does not depend on it.
 
     Returns:
         ``(episodes, simulator)``; the simulator carries the engine-call counts.
@@ -153,12 +269,11 @@ def replay_episodes(
             "Pass fixed_probes=True (CLI: --fixed-probes) to replay the recorded probes anyway."
         )
     config = replay_config(loaded.config, overrides)
-    trace, model, sim = trace_for_run(loaded, config)
+    beliefs = RunBeliefs.of(loaded, config, chunk_instances)
+    model, sim = beliefs.model, beliefs.simulator
     blind = blind_bayes_executor(model, config.seed, config.blind_prior_samples) if "blind_bayes" in config.methods else None
-    episodes = commit(
-        trace, model, sim, thresholds=config.belief.nu if thresholds is None else thresholds,
-        margin=margin, methods=config.methods, blind=blind,
-    )
+    request = {"thresholds": config.belief.nu if thresholds is None else thresholds, "margin": margin}
+    [episodes] = beliefs.commit([request], methods=config.methods, blind=blind)
     failed = loaded.episodes[loaded.episodes["method"] == "rollout"]
     if len(failed):
         episodes = pd.concat([episodes, failed.assign(variant=model.variant)], ignore_index=True)

@@ -1,0 +1,126 @@
+"""Benchmark: peak memory of `replay` and `calibrate` at E = 384 and 3072 episodes, side by side.
+
+Usage::
+
+    python benchmarks/memory.py                # this tree: chunked (default) vs one chunk per run
+    python benchmarks/memory.py --against REF  # ... and a git ref (e.g. bd8b117) in a temporary worktree
+
+The runs are analytic insertion runs of 96 and 768 instances x 4 repeats, random
+taps, k = 1..8, N = 1024 (a calibration and a test run per size), made once into a
+temporary folder. Each case runs in a fresh subprocess, which reports its own peak
+resident memory (``ru_maxrss``) and wall time, so the numbers are independent. A
+replay re-infers the calibration run under the corrected model; a calibration
+calibrates on one run and tests on the other. Every arm's output is compared with
+the first arm's: calibration JSON (``CalibrationResult.to_dict``) and the replayed
+episode table (pandas hash of every cell, dtypes included).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+SIZES = {384: 96, 3072: 768}  # episodes: instances (4 repeats each)
+CONFIG = """name: {name}
+task: insertion
+seed: 2026
+repeats: 4
+instances: {{split: {split}, count: {count}, seed: 103}}
+probes: {{schedule: random, budget: 8}}
+belief: {{particles: 1024, nu: 0.8}}
+simulator: {{engine: analytic}}
+"""
+
+MAKE = """
+import sys
+from probecommit.runner.config import load_config
+from probecommit.runner.study import run_study
+out = sys.argv[1]
+for name in sys.argv[2:]:
+    run_study(load_config(f"{out}/{name}.yaml"), f"{out}/{name}")
+"""
+
+CASE = """
+import hashlib, json, resource, sys, time
+import pandas as pd
+case, cal, test, chunk = sys.argv[1], sys.argv[2], sys.argv[3], sys.argv[4]
+kwargs = {} if chunk == "default" else {"chunk_instances": None if chunk == "none" else int(chunk)}
+t0 = time.perf_counter()
+if case == "calibrate":
+    try:
+        from probecommit.runner.calibration import calibrate
+    except ImportError:
+        from probecommit.audit.pipeline import calibrate
+    output = json.dumps(calibrate(cal, test, **kwargs).to_dict(), default=str, sort_keys=True)
+else:
+    from probecommit.runner.replay import load_run, replay_episodes
+    table, _ = replay_episodes(load_run(cal), {"model": {"boundary": "corrected"}}, **kwargs)
+    output = str(table.dtypes.to_dict()) + hashlib.sha256(pd.util.hash_pandas_object(table).to_numpy().tobytes()).hexdigest()
+seconds = time.perf_counter() - t0
+print(json.dumps({"seconds": seconds, "peak_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
+                  "digest": hashlib.sha256(output.encode()).hexdigest()}))
+"""
+
+
+def make_runs(src: Path, out: Path) -> None:
+    names = []
+    for episodes, count in SIZES.items():
+        for part in ("cal", "test"):
+            name = f"{part}{episodes}"
+            (out / f"{name}.yaml").write_text(CONFIG.format(name=name, split=f"B_{part}", count=count))
+            names.append(name)
+    # A complete run directory is returned untouched, so a kept folder is reused.
+    subprocess.run([sys.executable, "-c", MAKE, str(out), *names], check=True,
+                   env={**os.environ, "PYTHONPATH": str(src)})
+
+
+def run_case(src: Path, runs: Path, case: str, episodes: int, chunk: str) -> dict:
+    done = subprocess.run([sys.executable, "-c", CASE, case, str(runs / f"cal{episodes}"), str(runs / f"test{episodes}"),
+                           chunk], capture_output=True, text=True, env={**os.environ, "PYTHONPATH": str(src)})
+    if done.returncode:
+        raise RuntimeError(done.stderr)
+    return json.loads(done.stdout.strip().splitlines()[-1])
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--against", help="A git ref measured as the baseline (checked out into a temporary worktree).")
+    parser.add_argument("--runs", type=Path, help="Keep the runs in this folder (and reuse them when complete).")
+    args = parser.parse_args()
+    with tempfile.TemporaryDirectory() as tmp:
+        tmp = Path(tmp)
+        runs = args.runs or tmp / "runs"
+        runs.mkdir(parents=True, exist_ok=True)
+        make_runs(ROOT / "src", runs)
+        arms = {"this tree, chunked (default)": (ROOT / "src", "default"),
+                "this tree, one chunk per run": (ROOT / "src", "none")}
+        tree = tmp / "baseline"
+        if args.against:
+            subprocess.run(["git", "-C", str(ROOT), "worktree", "add", "--detach", str(tree), args.against],
+                           check=True, capture_output=True)
+            arms[f"git {args.against}"] = (tree / "src", "default")
+        try:
+            results = {(case, episodes, arm): run_case(src, runs, case, episodes, chunk)
+                       for case in ("replay", "calibrate") for episodes in SIZES for arm, (src, chunk) in arms.items()}
+        finally:
+            if args.against:
+                subprocess.run(["git", "-C", str(ROOT), "worktree", "remove", "--force", str(tree)], capture_output=True)
+    print("peak resident memory (ru_maxrss) of replay and calibrate, each case in a fresh process "
+          "(analytic insertion, 4 repeats, k = 1..8, N = 1024)")
+    first = next(iter(arms))
+    for case in ("replay", "calibrate"):
+        for arm in arms:
+            cells = "   ".join(f"E = {e:4d}: {results[case, e, arm]['peak_mb']:7.1f} MB {results[case, e, arm]['seconds']:6.1f} s"
+                               for e in SIZES)
+            same = all(results[case, e, arm]["digest"] == results[case, e, first]["digest"] for e in SIZES)
+            print(f"  {case:9s} {arm:32s} {cells}   identical: {same}")
+
+
+if __name__ == "__main__":
+    main()
