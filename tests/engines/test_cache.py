@@ -25,3 +25,32 @@ def test_lru_builds_once_and_evicts_the_least_recently_used():
 def test_size_must_be_positive():
     with pytest.raises(ValueError, match="cache size"):
         InstanceCache(lambda: None, 0)
+
+
+def test_a_simulator_and_its_engine_instances_go_as_soon_as_it_is_dropped():
+    import gc
+    import weakref
+
+    class Simulator:
+        def __init__(self):
+            self._instance = InstanceCache(self._compile, 4, evict=self._drop).get
+
+        def _compile(self, x):
+            return [x]
+
+        def _drop(self, key, entry):
+            pass
+
+    gc.disable()  # no collector: only reference counts may free it
+    try:
+        sim = Simulator()
+        entry = sim._instance(1.0)
+        alive = weakref.ref(sim)
+        del sim
+        assert alive() is None  # no reference cycle through the cache's bound builder
+    finally:
+        gc.enable()
+    assert entry == [1.0]
+    orphan = InstanceCache(Simulator()._compile, 4)  # its owner is gone at once
+    with pytest.raises(ReferenceError, match="no longer exists"):
+        orphan.get(1.0)

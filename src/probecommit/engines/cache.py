@@ -8,7 +8,9 @@ and bounds how many it keeps. The queries themselves are cached above this, in
 
 from __future__ import annotations
 
+import weakref
 from collections import OrderedDict
+from inspect import ismethod
 from typing import Any, Callable
 
 
@@ -25,9 +27,13 @@ class InstanceCache:
     def __init__(self, build: Callable[..., Any], size: int, evict: Callable[[tuple, Any], None] | None = None) -> None:
         if size < 1:
             raise ValueError(f"cache size must be >= 1, got {size!r}")
-        self._build = build
+        # A simulator keeps its cache and the cache its builders: held strongly, a bound method
+        # of the simulator would close a reference cycle, and every simulator (with its compiled
+        # engine instances, C memory the garbage collector does not see) would live until the
+        # next full collection. Held weakly, a simulator's instances go when it does.
+        self._build = _weak(build)
+        self._evict = None if evict is None else _weak(evict)
         self._size = int(size)
-        self._evict = evict
         self._entries: OrderedDict[tuple[float, ...], Any] = OrderedDict()
 
     def get(self, *key: float) -> Any:
@@ -37,11 +43,15 @@ class InstanceCache:
         if entry is not None:
             self._entries.move_to_end(key)
             return entry
-        entry = self._entries[key] = self._build(*key)
+        build = self._build()
+        if build is None:
+            raise ReferenceError("the object whose method builds this cache's entries no longer exists")
+        entry = self._entries[key] = build(*key)
         if len(self._entries) > self._size:
             old_key, old = self._entries.popitem(last=False)
-            if self._evict is not None:
-                self._evict(old_key, old)
+            evict = None if self._evict is None else self._evict()
+            if evict is not None:
+                evict(old_key, old)
         return entry
 
     def values(self) -> list[Any]:
@@ -57,3 +67,10 @@ class InstanceCache:
 
     def __len__(self) -> int:
         return len(self._entries)
+
+
+def _weak(function: Callable[..., Any]) -> Callable[[], Callable[..., Any]]:
+    """A getter of ``function`` that holds a bound method's object weakly (anything else strongly)."""
+    if ismethod(function):
+        return weakref.WeakMethod(function)  # type: ignore[return-value]
+    return lambda: function
