@@ -255,15 +255,16 @@ if HAVE_NUMBA:
         Returns the last bucket taken; ``counts[b]`` is bucket ``b``'s size.
         """
         n = w.shape[0]
-        w_max = 0.0
+        bits = w.view(np.int64)  # non-negative doubles order as their bit patterns do
+        top = np.int64(0)
         for i in range(n):
-            if w[i] > w_max:
-                w_max = w[i]
-        top = np.int64(np.float64(w_max).view(np.uint64) >> np.uint64(48))
+            if bits[i] > top:
+                top = bits[i]
+        top >>= 48
         counts[:] = 0
         mass[:] = 0.0
         for i in range(n):
-            b = top - np.int64(np.float64(w[i]).view(np.uint64) >> np.uint64(48))
+            b = top - (bits[i] >> 48)
             if b > _N_BUCKETS - 1:
                 b = _N_BUCKETS - 1
             buckets[i] = b
