@@ -34,3 +34,27 @@ def test_probe_and_miss_from_one_cached_query():
         sim.execute(theta, np.array([1.5]))
     with pytest.raises(FloatingPointError, match=r"toy ramp broke at \[-1.0\]"):
         sim.execute(theta, np.array([-1.0]), np.array([2.0]))
+
+
+def test_simulators_of_one_ground_truth_share_engine_answers_inside_the_block_only():
+    from probecommit.tasks.base import shared_engine_answers
+    from probecommit.tasks.insertion.config import InsertionConfig
+    from probecommit.tasks.registry import build_simulator
+
+    analytic = InsertionConfig.model_validate({"simulator": {"engine": "analytic"}})
+    other = InsertionConfig.model_validate({"simulator": {"engine": "analytic", "boundary_offset": 0.3}})
+    theta, aim = np.array([1.5, 1.0]), np.array([2.0])
+
+    def depth_calls(sim):
+        sim.execute(theta, aim)
+        return sim.engine_calls.get("peg_depth", 0)
+
+    with shared_engine_answers():
+        first, second, shifted = (build_simulator("insertion", c) for c in (analytic, analytic, other))
+        assert depth_calls(first) == 1
+        assert depth_calls(second) == 0  # answered from the shared store
+        assert second.cache_records() == first.cache_records()  # still recorded as its own
+        assert depth_calls(shifted) == 1  # another ground truth shares nothing
+        with shared_engine_answers():  # nested: the same store
+            assert depth_calls(build_simulator("insertion", analytic)) == 0
+    assert depth_calls(build_simulator("insertion", analytic)) == 1  # outside: its own engine

@@ -20,6 +20,8 @@ from typing import Any, Callable
 
 import numpy as np
 
+from probecommit.tasks.base import shared_engine_answers
+
 Progress = Callable[[str, int, int], None]
 
 
@@ -251,11 +253,12 @@ def reproduce(names: list[str], root: str | Path, quick: bool = False, progress:
     OPTIONS.clear()
     OPTIONS.update(options or {})
     out: dict[str, Any] = {"targets": {}, "wall_s": {}, "engine_calls": {}}
-    for name in resolve(names):
-        start = time.perf_counter()
-        out["targets"][name] = str(TARGETS[name].run(root, quick, progress, workers))
-        out["wall_s"][name] = time.perf_counter() - start
-        out["engine_calls"][name] = engine_calls_under(root / name)
+    with shared_engine_answers():  # one engine cache for every run and replay: no query twice
+        for name in resolve(names):
+            start = time.perf_counter()
+            out["targets"][name] = str(TARGETS[name].run(root, quick, progress, workers))
+            out["wall_s"][name] = time.perf_counter() - start
+            out["engine_calls"][name] = engine_calls_under(root / name)
     root.mkdir(parents=True, exist_ok=True)
     (root / "reproduction.json").write_text(json.dumps(out, indent=1))
     return out

@@ -20,8 +20,9 @@ model; :class:`TaskModelBase` gives the defaults a family overrides.
 from __future__ import annotations
 
 import time
+from contextlib import contextmanager
 from dataclasses import dataclass, field
-from typing import Any, Callable, Iterable, Protocol, runtime_checkable
+from typing import Any, Callable, Iterable, Iterator, Protocol, runtime_checkable
 
 import numpy as np
 
@@ -178,6 +179,38 @@ class Simulator(Protocol):
     def load_cache(self, records: Iterable[dict[str, Any]]) -> None: ...
 
 
+#: Engine answers shared by the simulators built inside :func:`shared_engine_answers`, per
+#: ground truth (family, engine, simulator settings); None outside such a block.
+_ANSWER_STORE: dict[str, dict] | None = None
+
+
+@contextmanager
+def shared_engine_answers() -> Iterator[dict[str, dict]]:
+    """Within this block, simulators of the same ground truth share their engine answers.
+
+    Every simulator the registry builds inside the block (same family, engine and
+    simulator settings) looks an answer up in one store before running its engine, so a
+    query is run once per process however many runs and replays ask it (a reproduction).
+    Each simulator still records every answer it used (its run's engine cache is the same
+    as without the block); its ``engine_calls`` count only the queries its engine ran.
+    Nested blocks share the outer store. Units run in worker processes do not share.
+    """
+    global _ANSWER_STORE
+    if _ANSWER_STORE is not None:
+        yield _ANSWER_STORE
+        return
+    _ANSWER_STORE = {}
+    try:
+        yield _ANSWER_STORE
+    finally:
+        _ANSWER_STORE = None
+
+
+def answer_store(identity: str) -> dict | None:
+    """The shared answers of a ground truth inside :func:`shared_engine_answers`, else None."""
+    return None if _ANSWER_STORE is None else _ANSWER_STORE.setdefault(identity, {})
+
+
 def _key_part(values: Iterable[float]) -> tuple[float, ...]:
     """A query argument as a tuple of Python floats (a cache key; one call per engine query, so kept lean)."""
     if isinstance(values, np.ndarray):
@@ -198,6 +231,8 @@ class CachedSimulator:
 
     def __init__(self) -> None:
         self._cache: dict[tuple[str, tuple[float, ...], tuple[float, ...]], np.ndarray] = {}
+        #: Answers shared with other simulators of the same ground truth (``shared_engine_answers``).
+        self.shared_answers: dict | None = None
         self.engine_calls: dict[str, int] = {}
         self.engine_seconds = 0.0
 
@@ -210,11 +245,16 @@ class CachedSimulator:
         kind = key[0]
         hit = self._cache.get(key)
         if hit is None:
-            start = time.perf_counter()
-            value = np.atleast_1d(np.asarray(getattr(self, kind)(*key[1], *key[2]), dtype=float))
-            self.engine_seconds += time.perf_counter() - start
-            self.engine_calls[kind] = self.engine_calls.get(kind, 0) + 1
-            self._cache[key] = hit = value
+            shared = self.shared_answers
+            hit = None if shared is None else shared.get(key)
+            if hit is None:
+                start = time.perf_counter()
+                hit = np.atleast_1d(np.asarray(getattr(self, kind)(*key[1], *key[2]), dtype=float))
+                self.engine_seconds += time.perf_counter() - start
+                self.engine_calls[kind] = self.engine_calls.get(kind, 0) + 1
+                if shared is not None:
+                    shared[key] = hit
+            self._cache[key] = hit
         return hit
 
     def cache_records(self) -> list[dict[str, Any]]:

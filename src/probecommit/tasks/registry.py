@@ -10,10 +10,11 @@ engine is imported only when a study asks for it.
 from __future__ import annotations
 
 import importlib
+import json
 from importlib.metadata import entry_points
 from typing import Any
 
-from probecommit.tasks.base import TaskSpec
+from probecommit.tasks.base import TaskSpec, answer_store
 
 #: Built-in family packages, imported on first use of the registry.
 BUILTIN_FAMILIES = ("insertion", "planar_slide", "push1d", "push2d", "darts", "hinge", "shuffleboard", "grasp", "rig")
@@ -94,7 +95,12 @@ def simulator_class(family: str, engine: str) -> type:
 def build_simulator(family: str, task_config: Any) -> Any:
     """The ground-truth simulator of a family config (engine imported only here)."""
     cls = simulator_class(family, task_config.simulator.engine)
-    return cls(**task_config.simulator_kwargs())
+    kwargs = task_config.simulator_kwargs()
+    simulator = cls(**kwargs)
+    shared = answer_store(json.dumps([family, task_config.simulator.engine, kwargs], sort_keys=True, default=str))
+    if shared is not None and hasattr(simulator, "shared_answers"):
+        simulator.shared_answers = shared
+    return simulator
 
 
 def build_model(task_config: Any) -> Any:
