@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import time
 from contextlib import contextmanager
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields, is_dataclass, replace
 from typing import Any, Callable, Iterable, Iterator, Protocol, runtime_checkable
 
 import numpy as np
@@ -146,7 +146,19 @@ class TaskModelBase:
         extra[..., 0] = z_points
         return extra
 
+    def check_sigma_and_margin(self) -> None:
+        """Refuse a likelihood sigma that is not positive and finite, or a margin outside (0, 1.5]."""
+        sigma, margin = self.sigma, self.margin  # type: ignore[attr-defined]
+        if not (np.isfinite(sigma) and sigma > 0):
+            raise ValueError(f"sigma must be positive, got {sigma!r}")
+        if not 0 < margin <= 1.5:
+            raise ValueError(f"margin gamma must be in (0, 1.5], got {margin!r}")
+
     def with_margin(self, gamma: float) -> "TaskModelBase":
+        """The same model with margin ``gamma`` (a dataclass model with a ``margin`` field; the
+        modeled miss or window scales with it, so actions keep their order and scores grow)."""
+        if is_dataclass(self) and any(f.name == "margin" for f in fields(self)):
+            return replace(self, margin=float(gamma))
         raise NotImplementedError(f"the {self.name} model has no execution margin")
 
     def success_interval(self, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:

@@ -26,7 +26,7 @@ depends on besides ``g``); grown scenarios set ``k_d = z * median(m)``.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -128,16 +128,9 @@ class DartsModel(TaskModelBase):
     action_dim = 2
 
     def __post_init__(self) -> None:
-        if not (np.isfinite(self.sigma) and self.sigma > 0):
-            raise ValueError(f"sigma must be positive, got {self.sigma!r}")
-        if not 0 < self.margin <= 1.5:
-            raise ValueError(f"margin gamma must be in (0, 1.5], got {self.margin!r}")
+        self.check_sigma_and_margin()
         if np.any(np.asarray(self.prior_low) <= 0):
             raise ValueError("every darts latent must be positive")
-
-    def with_margin(self, gamma: float) -> "DartsModel":
-        """Scale the modeled miss by ``1 / gamma``: actions keep their order, scores grow."""
-        return replace(self, margin=float(gamma))
 
     def decision(self, theta: np.ndarray) -> np.ndarray:
         """The drag rate ``b = k_d / m`` (1/s)."""

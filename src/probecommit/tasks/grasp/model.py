@@ -21,7 +21,7 @@ grip needs. The decision coordinate is ``F_lift`` (N).
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -89,15 +89,9 @@ class GraspModel(TaskModelBase):
     observation_range = (-10.0, 25.0)
 
     def __post_init__(self) -> None:
-        if not (np.isfinite(self.sigma) and self.sigma > 0):
-            raise ValueError(f"sigma must be positive, got {self.sigma!r}")
-        if not 0 < self.margin <= 1.5:
-            raise ValueError(f"margin gamma must be in (0, 1.5], got {self.margin!r}")
+        self.check_sigma_and_margin()
         if np.any(np.asarray(self.prior_low) <= 0):
             raise ValueError("mu and m must be positive")
-
-    def with_margin(self, gamma: float) -> "GraspModel":
-        return replace(self, margin=float(gamma))
 
     def decision(self, theta: np.ndarray) -> np.ndarray:
         """The lift's hold force ``F_lift`` (N)."""

@@ -11,7 +11,7 @@ evaluated as the open interval test ``x - gamma w < a < x + gamma w``.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -70,10 +70,7 @@ class InsertionModel(TaskModelBase):
     action_dim = 1
 
     def __post_init__(self) -> None:
-        if not (np.isfinite(self.sigma) and self.sigma > 0):
-            raise ValueError(f"sigma must be positive, got {self.sigma!r}")
-        if not (0 < self.margin <= 1.5):
-            raise ValueError(f"margin gamma must be in (0, 1.5], got {self.margin!r}")
+        self.check_sigma_and_margin()
         if np.any(np.asarray(self.prior_high) <= np.asarray(self.prior_low)):
             raise ValueError("prior box must have high > low in every coordinate")
 
@@ -86,9 +83,6 @@ class InsertionModel(TaskModelBase):
     def corrected(cls, delta: float = PAPER_DELTA_MM, **kwargs) -> "InsertionModel":
         """The corrected boundary ``hg(c) + delta``."""
         return cls(boundary_offset=float(delta), variant="corrected", **kwargs)
-
-    def with_margin(self, gamma: float) -> "InsertionModel":
-        return replace(self, margin=float(gamma))
 
     def decision(self, theta: np.ndarray) -> np.ndarray:
         """The hole position ``x_hole``."""

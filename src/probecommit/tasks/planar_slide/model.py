@@ -16,7 +16,7 @@ all the same, a deliberate weak spot for the audit to see.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -65,14 +65,7 @@ class PlanarSlideModel(TaskModelBase):
     action_dim = 2
 
     def __post_init__(self) -> None:
-        if not (np.isfinite(self.sigma) and self.sigma > 0):
-            raise ValueError(f"sigma must be positive, got {self.sigma!r}")
-        if not 0 < self.margin <= 1.5:
-            raise ValueError(f"margin gamma must be in (0, 1.5], got {self.margin!r}")
-
-    def with_margin(self, gamma: float) -> "PlanarSlideModel":
-        """Scale the modeled miss by ``1 / gamma``: actions keep their order, scores grow."""
-        return replace(self, margin=float(gamma))
+        self.check_sigma_and_margin()
 
     def predict(self, u: np.ndarray, theta: np.ndarray) -> np.ndarray:
         """Rest position ``[E, N, 2]`` of a strike of magnitude ``u[E, 1]`` along +x."""

@@ -27,7 +27,7 @@ The decision coordinate is the friction ``mu`` (latent 0, the default).
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -88,16 +88,9 @@ class CoastModel(TaskModelBase):
     action_dim = 1
 
     def __post_init__(self) -> None:
-        if not (np.isfinite(self.sigma) and self.sigma > 0):
-            raise ValueError(f"sigma must be positive, got {self.sigma!r}")
-        if not 0 < self.margin <= 1.5:
-            raise ValueError(f"margin gamma must be in (0, 1.5], got {self.margin!r}")
+        self.check_sigma_and_margin()
         if np.any(np.asarray(self.prior_low) <= 0):
             raise ValueError(f"every {self.name} latent must be positive")
-
-    def with_margin(self, gamma: float) -> "CoastModel":
-        """Scale the modeled miss by ``1 / gamma``: actions keep their order, scores grow."""
-        return replace(self, margin=float(gamma))
 
     def grown_scenarios(self, particles: np.ndarray, z_points: np.ndarray) -> np.ndarray:
         """The default grown scenarios with the friction kept positive.

@@ -23,7 +23,7 @@ The decision coordinate is ``mu`` (latent 0).
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -91,16 +91,9 @@ class Push2DModel(TaskModelBase):
     action_dim = 2
 
     def __post_init__(self) -> None:
-        if not (np.isfinite(self.sigma) and self.sigma > 0):
-            raise ValueError(f"sigma must be positive, got {self.sigma!r}")
-        if not 0 < self.margin <= 1.5:
-            raise ValueError(f"margin gamma must be in (0, 1.5], got {self.margin!r}")
+        self.check_sigma_and_margin()
         if not (np.isfinite(self.mu_scale) and self.mu_scale > 0):
             raise ValueError(f"mu_scale must be positive, got {self.mu_scale!r}")
-
-    def with_margin(self, gamma: float) -> "Push2DModel":
-        """Scale the modeled miss by ``1 / gamma``: actions keep their order, scores grow."""
-        return replace(self, margin=float(gamma))
 
     def predict(self, u: np.ndarray, theta: np.ndarray) -> np.ndarray:
         """Rest position ``[E, N, 2]`` of a pulse of magnitude ``u[E]`` along +x."""
