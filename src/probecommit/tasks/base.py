@@ -19,6 +19,7 @@ model; :class:`TaskModelBase` gives the defaults a family overrides.
 
 from __future__ import annotations
 
+import json
 import time
 from contextlib import contextmanager
 from dataclasses import dataclass, field, fields, is_dataclass, replace
@@ -218,9 +219,13 @@ def shared_engine_answers() -> Iterator[dict[str, dict]]:
         _ANSWER_STORE = None
 
 
-def answer_store(identity: str) -> dict | None:
-    """The shared answers of a ground truth inside :func:`shared_engine_answers`, else None."""
-    return None if _ANSWER_STORE is None else _ANSWER_STORE.setdefault(identity, {})
+def answer_store(family: str, engine: str, settings: dict[str, Any]) -> dict | None:
+    """The shared answers of a ground truth (family, engine, simulator settings) inside
+    :func:`shared_engine_answers`, else None."""
+    if _ANSWER_STORE is None:
+        return None
+    identity = json.dumps([family, engine, settings], sort_keys=True, default=str)
+    return _ANSWER_STORE.setdefault(identity, {})
 
 
 def _key_part(values: Iterable[float]) -> tuple[float, ...]:

@@ -10,7 +10,6 @@ engine is imported only when a study asks for it.
 from __future__ import annotations
 
 import importlib
-import json
 from importlib.metadata import entry_points
 from typing import Any
 
@@ -97,7 +96,7 @@ def build_simulator(family: str, task_config: Any) -> Any:
     cls = simulator_class(family, task_config.simulator.engine)
     kwargs = task_config.simulator_kwargs()
     simulator = cls(**kwargs)
-    shared = answer_store(json.dumps([family, task_config.simulator.engine, kwargs], sort_keys=True, default=str))
+    shared = answer_store(family, task_config.simulator.engine, kwargs)
     if shared is not None and hasattr(simulator, "shared_answers"):
         simulator.shared_answers = shared
     return simulator
