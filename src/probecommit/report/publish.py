@@ -208,7 +208,9 @@ def write_reproduction_md(repo_root: str | Path) -> Path:
             parts.append(" Engine queries recorded in the run manifests (each a distinct, cached query): "
                          + ", ".join(f"{e} {n}" for e, n in sorted(per_engine.items()))
                          + f" (total {sum(per_engine.values())}); the robot session's simulated-rig queries are in "
-                         "its log, not counted here.")
+                         "its log, not counted here. Every run and replay of a reproduction shares one engine cache "
+                         "(`shared_engine_answers`), so a query several runs ask is run and counted once; a run "
+                         "made on its own records all of its queries.")
         parts.append("\n\n")
     if (frozen / "setup" / "table_2.md").is_file():
         parts.append("## The task families (Table II) and a belief (Fig. 1b)\n\n"
