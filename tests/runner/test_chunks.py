@@ -78,3 +78,38 @@ def test_chunked_gates_equal_whole_run(runs):
     pd.testing.assert_frame_equal(chunked.summary, whole.summary, check_exact=True)
     pd.testing.assert_frame_equal(chunked.curves, whole.curves, check_exact=True)
     assert json.dumps(chunked.info, sort_keys=True, default=str) == json.dumps(whole.info, sort_keys=True, default=str)
+
+
+def test_restricted_beliefs_equal_beliefs_computed_alone(runs):
+    """A re-split takes its instances' beliefs from the pool's: the same arrays, bit for bit."""
+    pool = RunBeliefs.of(runs["cal"], chunk_instances=None)
+    ids = sorted(set(pool.batch.instance_id))
+    keep = [ids[4], ids[1], ids[6]]  # any order: rows stay in the run's order
+    part = pool.restrict(keep)
+    alone = RunBeliefs(pool.config, pool.model, pool.simulator, pool.pfilter,
+                       pool.batch.subset(np.flatnonzero(np.isin(pool.batch.instance_id, keep))), [slice(0, 9)])
+    taken, computed = part._kept[0], alone.trace(alone.chunks[0])
+    assert list(taken.batch.instance_id) == list(computed.batch.instance_id) and len(taken.batch.instance_id) == 9
+    assert taken.budgets == computed.budgets
+    for k in computed.states:
+        a, b = taken.states[k], computed.states[k]
+        for name in ("particles", "log_weights", "resampled", "u_hist", "y_hist", "lost", "log_evidence"):
+            x, y = getattr(a, name), getattr(b, name)
+            assert (x is None and y is None) or np.array_equal(x, y, equal_nan=True), (k, name)
+    np.testing.assert_array_equal(taken.surprise, computed.surprise)
+    pd.testing.assert_frame_equal(part.commit([{"thresholds": 0.8}])[0], alone.commit([{"thresholds": 0.8}])[0],
+                                  check_exact=True)
+    with pytest.raises(ValueError, match="one chunk"):
+        RunBeliefs.of(runs["cal"], chunk_instances=2).restrict(keep)
+
+
+def test_calibration_of_a_subset_with_the_pools_beliefs_equals_recomputing(runs):
+    from probecommit.report.reproduce import subset_run
+
+    loaded, test = load_run(runs["cal"]), load_run(runs["test"])
+    ids = sorted(set(loaded.instances["instance_id"]))[:5]
+    pool = RunBeliefs.of(loaded, chunk_instances=None)
+    shared = calibrate(subset_run(loaded, ids, pool), test, resamples=50)
+    alone = calibrate(subset_run(loaded, ids), test, resamples=50)
+    assert json.dumps(shared.to_dict(), sort_keys=True, default=str) == json.dumps(alone.to_dict(), sort_keys=True, default=str)
+    pd.testing.assert_frame_equal(shared.table3, alone.table3, check_exact=True)

@@ -58,3 +58,24 @@ def test_simulators_of_one_ground_truth_share_engine_answers_inside_the_block_on
         with shared_engine_answers():  # nested: the same store
             assert depth_calls(build_simulator("insertion", analytic)) == 0
     assert depth_calls(build_simulator("insertion", analytic)) == 1  # outside: its own engine
+
+
+def test_settings_applied_outside_the_queries_do_not_split_the_shared_answers():
+    from probecommit.tasks.base import shared_engine_answers
+    from probecommit.tasks.insertion.config import InsertionConfig
+    from probecommit.tasks.registry import build_simulator
+
+    clean = InsertionConfig.model_validate({"simulator": {"engine": "analytic", "noise_sigma": 0.0}})
+    noisy = InsertionConfig.model_validate({"simulator": {"engine": "analytic", "noise_sigma": 2.0}})
+    offset = InsertionConfig.model_validate({"simulator": {"engine": "analytic", "aim_offset": 0.5}})
+    theta = np.array([1.5, 1.0])
+    with shared_engine_answers():
+        first, louder, shifted = (build_simulator("insertion", c) for c in (clean, noisy, offset))
+        first.execute(theta, np.array([2.5]))
+        first.probe(theta, np.array([1.0]), np.random.default_rng(0))
+        louder.probe(theta, np.array([1.0]), np.random.default_rng(0))
+        shifted.execute(theta, np.array([2.0]))  # the engine is asked for aim 2.5, already answered
+        assert louder.engine_calls["tap_reading"] == 0 and shifted.engine_calls["peg_depth"] == 0
+        # The noise is still each simulator's own: the same draw, a reading scaled by its sigma.
+        assert first.probe(theta, np.array([1.0]), np.random.default_rng(3))[0] != \
+            louder.probe(theta, np.array([1.0]), np.random.default_rng(3))[0]

@@ -25,7 +25,7 @@ from probecommit.audit.surprise import surprise_auc
 from probecommit.report.figures import save_figure
 from probecommit.report.study_figures import decisive_tap_figure, fault_signatures, scan_figure
 from probecommit.runner.build import build_model, build_simulator
-from probecommit.runner.replay import LoadedRun, load_run, replay_episodes, replay_run, trace_for_run
+from probecommit.runner.replay import LoadedRun, RunBeliefs, load_run, replay_episodes, replay_run, trace_for_run
 from probecommit.runner.study import run_study
 from probecommit.tasks.insertion import make_simulator
 from probecommit.studies.cover_search import search_cover_schedule
@@ -63,15 +63,20 @@ def probe_rows(episodes: pd.DataFrame, k: int | None = None) -> pd.DataFrame:
     return out if k is None else out[out.k == k]
 
 
-def subset_run(loaded: LoadedRun, instance_ids) -> LoadedRun:
-    """The same run restricted to some instances (for re-splits of one pool)."""
+def subset_run(loaded: LoadedRun, instance_ids, beliefs: RunBeliefs | None = None) -> LoadedRun:
+    """The same run restricted to some instances (for re-splits of one pool).
+
+    Args:
+        beliefs: The whole run's beliefs (one chunk); the subset then takes its episodes'
+            beliefs from them instead of recomputing them.
+    """
     keep = set(instance_ids)
     return LoadedRun(
         loaded.path, loaded.config,
         loaded.instances[loaded.instances.instance_id.isin(keep)].reset_index(drop=True),
         loaded.probes[loaded.probes.instance_id.isin(keep)].reset_index(drop=True),
         loaded.episodes[loaded.episodes.instance_id.isin(keep)].reset_index(drop=True),
-        loaded.engine_cache, loaded.manifest,
+        loaded.engine_cache, loaded.manifest, None if beliefs is None else beliefs.restrict(keep),
     )
 
 
@@ -385,11 +390,12 @@ class InsertionReproduction:
         rng = np.random.default_rng(p.resplits["seed"])
         rows = []
         count = p.resplits["count"]
+        beliefs = RunBeliefs.of(pool, chunk_instances=None)  # the pool's beliefs, computed once for every split
         for n in range(count):
             perm = rng.permutation(len(ids))
             half = len(ids) // 2
-            cal = subset_run(pool, ids[perm[:half]])
-            test = subset_run(pool, ids[perm[half:]])
+            cal = subset_run(pool, ids[perm[:half]], beliefs)
+            test = subset_run(pool, ids[perm[half:]], beliefs)
             res = calibrate(cal, test, alpha=p.alpha, budgets=[5], resamples=50, seed=p.bootstrap.seed + n)
             t3 = res.table3
             rows.append({

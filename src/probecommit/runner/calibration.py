@@ -5,8 +5,9 @@ from each run's stored probes (``runner.replay.RunBeliefs``, a chunk of instance
 a time, so memory stays flat in the run's size) and the commit is re-executed
 (``runner.inference.commit``) under each threshold and margin, so every arm of a
 comparison sees identical probes and every coverage is measured on the set as
-constructed. Ground truth comes from the runs' engine caches; a run made
-with ``execute_all_aims`` never needs the engine again.
+constructed. Ground truth comes from the runs' engine caches; an action no episode of
+the run committed to is executed in the engine (never, for a run made with
+``execute_all_aims``).
 """
 
 from __future__ import annotations
@@ -155,7 +156,8 @@ def _executable(thresholds: float | dict[int, float]) -> float | dict[int, float
 
 def _load(run, reuse: bool = True, plateau: str | None = None, chunk_instances: int | None = CHUNK_INSTANCES) -> _Run:
     loaded = run if isinstance(run, LoadedRun) else load_run(run)
-    return _Run(loaded, RunBeliefs.of(loaded, chunk_instances=chunk_instances), reuse, plateau)
+    beliefs = loaded.beliefs or RunBeliefs.of(loaded, chunk_instances=chunk_instances)
+    return _Run(loaded, beliefs, reuse, plateau)
 
 
 def _check_pair(cal: _Run, test: _Run) -> None:

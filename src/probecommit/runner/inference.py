@@ -9,7 +9,7 @@ faults and calibration all reuse stored probes, so compared arms see identical t
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 from typing import Any, Iterable, Mapping
 
 import numpy as np
@@ -207,6 +207,24 @@ class BeliefTrace:
     @property
     def budgets(self) -> list[int]:
         return sorted(k for k in self.states if k > 0)
+
+    def subset(self, rows: np.ndarray) -> "BeliefTrace":
+        """The trace of episodes ``rows`` (indices into this trace's batch), arrays copied.
+
+        An episode's beliefs never depend on its batch, so this equals the trace built
+        from those episodes alone, bit for bit (tested).
+        """
+        taken: dict[int, np.ndarray] = {}
+
+        def take(a):  # an array several budgets share (no resampling between them) is taken once
+            if a is None:
+                return None
+            if id(a) not in taken:
+                taken[id(a)] = a[rows]
+            return taken[id(a)]
+        states = {k: BeliefState(*(take(getattr(s, f.name)) for f in fields(BeliefState) if f.name != "fresh_weights"))
+                  for k, s in self.states.items()}
+        return BeliefTrace(self.batch.subset(rows), states, self.surprise[rows], take(self.lost))
 
 
 def build_trace(pfilter: ParticleFilter, batch: ProbeBatch, seed: int, budgets: Iterable[int]) -> BeliefTrace:

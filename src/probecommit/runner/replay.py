@@ -10,7 +10,7 @@ from __future__ import annotations
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Mapping, Sequence
+from typing import Any, Iterable, Mapping, Sequence
 
 import numpy as np
 import pandas as pd
@@ -37,6 +37,9 @@ class LoadedRun:
     episodes: pd.DataFrame
     engine_cache: pd.DataFrame
     manifest: dict[str, Any]
+    #: Beliefs already computed for exactly these episodes (a re-split's share of its pool's,
+    #: ``RunBeliefs.restrict``); calibration then recomputes none. None: computed from the probes.
+    beliefs: "RunBeliefs | None" = None
 
 
 def load_run(run_dir: str | Path) -> LoadedRun:
@@ -162,6 +165,22 @@ class RunBeliefs:
     def trace(self, rows: slice) -> BeliefTrace:
         """Beliefs of the episodes ``batch[rows]`` at every committed budget."""
         return build_trace(self.pfilter, self.batch.subset(rows), self.config.seed, self.config.probes.commit_budgets)
+
+    def restrict(self, instance_ids: Iterable[str]) -> "RunBeliefs":
+        """The beliefs of some of the run's instances, taken from this run's, computed once.
+
+        For re-splits of one pool: the whole run's beliefs are computed on the first call
+        and kept (it must be a single chunk), and each restriction takes its episodes'
+        rows, which equal their beliefs computed alone (an episode never depends on its
+        batch). The restriction shares this run's simulator and is a single chunk.
+        """
+        if len(self.chunks) != 1:
+            raise ValueError("restrict() needs a run held as one chunk (RunBeliefs.of(..., chunk_instances=None))")
+        if self._kept is None:
+            self._kept = self.trace(self.chunks[0]), {}
+        rows = np.flatnonzero(np.isin(self.batch.instance_id, list(instance_ids)))  # the run's order
+        return RunBeliefs(self.config, self.model, self.simulator, self.pfilter, self.batch.subset(rows),
+                          [slice(0, len(rows))], (self._kept[0].subset(rows), {}))
 
     @property
     def budgets(self) -> list[int]:

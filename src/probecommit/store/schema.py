@@ -8,6 +8,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numpy as np
 import pyarrow as pa
 
 
@@ -118,11 +119,23 @@ def cache_records(frame, latent_names: tuple[str, ...]) -> list[dict]:
     missing = [c for c in ("engine", "query", *latent_names, "arg", "value") if c not in frame.columns]
     if missing:
         raise ValueError(f"engine cache lacks column(s) {', '.join(missing)}; it was written for another task family")
-    thetas = frame[list(latent_names)].to_numpy(float)
+    # Whole columns at once (a replay loads every answer of a run, often 10^4 rows or more).
+    thetas = frame[list(latent_names)].to_numpy(float).tolist()
     return [
-        {"engine": e, "query": q, "theta": list(t), "arg": list(a), "value": list(v)}
-        for e, q, t, a, v in zip(frame["engine"], frame["query"], thetas, frame["arg"], frame["value"])
+        {"engine": e, "query": q, "theta": t, "arg": a, "value": v}
+        for e, q, t, a, v in zip(frame["engine"].tolist(), frame["query"].tolist(), thetas,
+                                 _float_rows(frame["arg"]), _float_rows(frame["value"]))
     ]
+
+
+def _float_rows(column) -> list[list[float]]:
+    """A column of float vectors as lists of Python floats: one conversion when every row
+    has the same length, row by row otherwise."""
+    items = column.tolist()
+    try:
+        return np.asarray(items, dtype=float).reshape(len(items), -1).tolist()
+    except ValueError:  # rows of different lengths
+        return [np.asarray(v, dtype=float).ravel().tolist() for v in items]
 
 
 #: Columns a user's own log must provide for ``probecommit audit``.

@@ -245,6 +245,10 @@ class CachedSimulator:
     """
 
     engine = "abstract"
+    #: Constructor settings applied outside the named queries (reading noise, a frame offset
+    #: added to the action before the query): simulators that differ only in these give the
+    #: same engine answers, so :func:`shared_engine_answers` lets them share.
+    answer_independent_settings: tuple[str, ...] = ()
 
     def __init__(self) -> None:
         self._cache: dict[tuple[str, tuple[float, ...], tuple[float, ...]], np.ndarray] = {}
@@ -284,7 +288,7 @@ class CachedSimulator:
     def load_cache(self, records: Iterable[dict[str, Any]]) -> None:
         for r in records:
             if r["engine"] == self.engine:
-                key = (str(r["query"]), tuple(float(v) for v in r["theta"]), tuple(float(v) for v in r["arg"]))
+                key = (str(r["query"]), tuple(map(float, r["theta"])), tuple(map(float, r["arg"])))
                 self._cache[key] = np.asarray(r["value"], dtype=float)
 
 
@@ -294,6 +298,8 @@ class NoisySimulator(CachedSimulator):
     Args:
         noise_sigma: Standard deviation of the noise added to every reading (>= 0).
     """
+
+    answer_independent_settings = ("noise_sigma",)  # noise is added to a query's answer, never inside it
 
     def __init__(self, noise_sigma: float) -> None:
         super().__init__()

@@ -87,7 +87,9 @@ class SimulatorConfigBase(StrictModel):
 
     engine: str = "analytic"
     noise_sigma: float = Field(ge=0, le=1e6)
-    #: Execute every action of the grid once per instance up front (insertion's cache fill).
+    #: Execute every action of the grid once per instance up front, so replays and calibration
+    #: under any model never need the engine again. Off: an action is executed when an episode
+    #: commits to it (a paper split commits to 8-17 of insertion's 41 aims per instance).
     execute_all_aims: StrictBool = False
 
 

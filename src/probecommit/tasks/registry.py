@@ -96,7 +96,8 @@ def build_simulator(family: str, task_config: Any) -> Any:
     cls = simulator_class(family, task_config.simulator.engine)
     kwargs = task_config.simulator_kwargs()
     simulator = cls(**kwargs)
-    shared = answer_store(family, task_config.simulator.engine, kwargs)
+    ignored = getattr(cls, "answer_independent_settings", ())
+    shared = answer_store(family, task_config.simulator.engine, {k: v for k, v in kwargs.items() if k not in ignored})
     if shared is not None and hasattr(simulator, "shared_answers"):
         simulator.shared_answers = shared
     return simulator

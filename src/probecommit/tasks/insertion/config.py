@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from typing import Any, Literal
 
-from pydantic import Field, StrictBool, model_validator
+from pydantic import Field, model_validator
 
 from probecommit.tasks.config import FieldError, ModelConfigBase, SimulatorConfigBase, TaskConfigBase
 from probecommit.tasks.insertion.model import PAPER_DELTA_MM
@@ -51,9 +51,6 @@ class InsertionSimulatorConfig(SimulatorConfigBase):
     #: Analytic engine only: its tap boundary offset and capture scale.
     boundary_offset: float = Field(PAPER_DELTA_MM, ge=-BOX_LIMIT_MM, le=BOX_LIMIT_MM)
     capture_scale: float = Field(1.0, gt=0, le=100)
-    #: Execute every aim of the grid once per instance, so replays and calibration
-    #: under any model never need the engine again.
-    execute_all_aims: StrictBool = True
 
 
 class InsertionConfig(TaskConfigBase):

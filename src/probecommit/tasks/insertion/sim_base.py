@@ -31,6 +31,7 @@ class InsertionSimulator(NoisySimulator):
     """
 
     engine = "abstract"
+    answer_independent_settings = ("noise_sigma", "aim_offset")  # the offset moves the aim before the query
 
     def __init__(self, noise_sigma: float = 0.5, aim_offset: float = 0.0) -> None:
         super().__init__(noise_sigma)

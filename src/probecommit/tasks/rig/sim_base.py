@@ -30,6 +30,7 @@ class RigSimulator(InsertionSimulator):
     """
 
     engine = "abstract"
+    answer_independent_settings = ("noise_sigma", "aim_offset", "misread_rate")  # misreads flip an answer after the query
 
     def __init__(self, noise_sigma: float = 0.0, misread_rate: float = 0.01, aim_offset: float = 0.0) -> None:
         super().__init__(noise_sigma=noise_sigma, aim_offset=aim_offset)
