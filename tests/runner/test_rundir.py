@@ -90,3 +90,19 @@ def test_canonical_order_follows_the_instances_not_the_id_text():
     assert out["probes"][["instance_id", "j"]].values.tolist() == [["s-9999", 1], ["s-9999", 2], ["s-10000", 1]]
     assert out["episodes"]["method"].tolist() == ["c", "b", "a"]
     assert out["engine_cache"][["x_hole", "query"]].values.tolist() == [[1.0, "p"], [1.0, "t"], [2.0, "t"]]
+
+
+@pytest.mark.parametrize("args", [
+    [[1.0, 2.0], [1.0, -1.0], [0.5, 9.0], [1.0, 2.0]],  # one length: one column per component
+    [[1.0, 2.0], [1.0], [0.5, 9.0, 1.0], [1.0, 2.0, -3.0]],  # lengths differ: tuples
+])
+def test_engine_cache_arguments_sort_as_tuples(args):
+    import pandas as pd
+
+    from probecommit.store.rundir import canonical_tables
+
+    frame = pd.DataFrame({"engine": "e", "query": "q", "x": 0.0, "arg": args, "value": [[float(i)] for i in range(4)]})
+    out = canonical_tables({"engine_cache": frame})["engine_cache"]
+    expected = sorted(range(4), key=lambda i: tuple(args[i]))  # stable: equal arguments keep their order
+    assert out["value"].map(lambda v: int(v[0])).tolist() == expected
+    assert list(out.columns) == list(frame.columns)

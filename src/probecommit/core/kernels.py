@@ -27,17 +27,18 @@ except ImportError:  # pragma: no cover
 if HAVE_NUMBA:
 
     @numba.njit(cache=True, nogil=True, inline="always")
-    def _position(actions, value, step, right):  # pragma: no cover - compiled
+    def _position(actions, value, inv_step, right):  # pragma: no cover - compiled
         """``searchsorted(actions, value, side)`` on a sorted grid; exact.
 
-        An arithmetic first guess on an evenly spaced grid (``step > 0``), or the middle
-        otherwise, then walked to the exact answer with the grid's own comparisons.
+        An arithmetic first guess on an evenly spaced grid (``inv_step`` = 1 / spacing > 0;
+        a product, not a division, which costs more than the rest of the guess), or the
+        middle otherwise, then walked to the exact answer with the grid's own comparisons.
         """
         n = actions.shape[0]
         if value != value:  # NaN sorts last, as in NumPy
             return n
-        if step > 0.0:
-            guess = (value - actions[0]) / step
+        if inv_step > 0.0:
+            guess = (value - actions[0]) * inv_step
             if guess < 0.0:
                 i = 0
             elif guess > n:
@@ -64,12 +65,13 @@ if HAVE_NUMBA:
         n_a = actions.shape[0]
         out = np.zeros((n_e, n_a), dtype=np.int64)
         diff = np.zeros(n_a + 1, dtype=np.int64)
+        inv_step = 1.0 / step if step > 0.0 else 0.0
         for e in range(n_e):
             diff[:] = 0
             for s in range(n_s):
                 if mask[e, s]:
-                    first = _position(actions, lo[e, s], step, True)
-                    last = _position(actions, hi[e, s], step, False)
+                    first = _position(actions, lo[e, s], inv_step, True)
+                    last = _position(actions, hi[e, s], inv_step, False)
                     if first < last:
                         diff[first] += 1
                         diff[last] -= 1
@@ -468,3 +470,4 @@ def coverage_score_compiled(weights: np.ndarray, z: np.ndarray, z_true: np.ndarr
     if not (np.all(np.isfinite(weights)) and np.all(weights >= 0) and np.all(np.isfinite(z)) and np.all(np.isfinite(z_true))):
         return None
     return _coverage_score(weights, z, z_true, float(width))
+

@@ -30,6 +30,7 @@ import tempfile
 from pathlib import Path
 from typing import Any, Iterator
 
+import numpy as np
 import pandas as pd
 import pyarrow as pa
 import pyarrow.parquet as pq
@@ -423,9 +424,10 @@ def canonical_tables(frames: dict[str, pd.DataFrame]) -> dict[str, pd.DataFrame]
     if cache is not None and len(cache) and {"engine", "query", "arg"} <= set(cache.columns):
         cols = list(cache.columns)
         latents = cols[cols.index("query") + 1: cols.index("arg")]  # the family's latent names
-        ranked = cache.assign(_arg=cache["arg"].map(lambda a: tuple(float(v) for v in a)))
-        out["engine_cache"] = ranked.sort_values(["engine", *latents, "query", "_arg"], kind="stable",
-                                                 ignore_index=True).drop(columns="_arg")
+        arg_keys = _arg_sort_keys(cache["arg"])
+        ranked = cache.assign(**arg_keys)
+        out["engine_cache"] = ranked.sort_values(["engine", *latents, "query", *arg_keys], kind="stable",
+                                                 ignore_index=True).drop(columns=list(arg_keys))
     for name, columns in _SCHEMAS.items():
         frame = out.get(name)
         if frame is not None and len(frame.columns):
@@ -436,3 +438,15 @@ def canonical_tables(frames: dict[str, pd.DataFrame]) -> dict[str, pd.DataFrame]
                 frame = frame.assign(**missing)
             out[name] = frame[names + [c for c in frame.columns if c not in names]]
     return {name: out[name] for name in frames}
+
+
+def _arg_sort_keys(args: pd.Series) -> dict[str, Any]:
+    """Sort keys that order query arguments as tuples of floats do: one column per component
+    when every argument has the same length (one conversion for the whole column), else the
+    tuples themselves."""
+    values = args.tolist()
+    try:
+        matrix = np.asarray(values, dtype=float).reshape(len(values), -1)
+    except ValueError:  # arguments of different lengths
+        return {"_arg": pd.Series([tuple(float(v) for v in a) for a in values], index=args.index, dtype=object)}
+    return {f"_arg{i}": matrix[:, i] for i in range(matrix.shape[1])}
