@@ -179,6 +179,8 @@ _N_BUCKETS = 256
 _BUCKET_SLACK = 1e-9
 #: Buckets at most this long are sorted by insertion (they are usually ties or tiny).
 _INSERTION_SORT_MAX = 48
+#: A coverage prefix of at most this many particles is sorted directly, without buckets.
+_FEW = 48
 
 if HAVE_NUMBA:
 
@@ -359,14 +361,38 @@ if HAVE_NUMBA:
         starts = np.empty(_N_BUCKETS, dtype=np.int64)
         for e in range(n_e):
             truth = z_true[e]
+            w = weights[e]
+            # The prefix covers the truth once it holds a particle at or left of it and one at or
+            # right of it: it ends at the later (in the stable descending order) of the heaviest
+            # particle on each side. When few particles come before that one, sort only them.
             hull_lo, hull_hi = np.inf, -np.inf
+            left = right = -1
             for i in range(n):
-                hull_lo = min(hull_lo, z[e, i])
-                hull_hi = max(hull_hi, z[e, i])
+                value = z[e, i]
+                hull_lo = min(hull_lo, value)
+                hull_hi = max(hull_hi, value)
+                if value <= truth and (left < 0 or w[i] > w[left]):
+                    left = i
+                if value >= truth and (right < 0 or w[i] > w[right]):
+                    right = i
             if not (hull_lo <= truth <= hull_hi):  # escaped: 1 + distance past the hull / D
                 out[e] = 1.0 + (max(hull_lo - truth, 0.0) + max(truth - hull_hi, 0.0)) / width
                 continue
-            w = weights[e]
+            stop = right if (w[right] < w[left] or (w[right] == w[left] and right > left)) else left
+            w_stop = w[stop]
+            count = 0
+            for i in range(n):
+                if w[i] > w_stop or (w[i] == w_stop and i <= stop):
+                    if count < _FEW:
+                        order[count] = i
+                    count += 1
+            if count <= _FEW:
+                _sort_bucket(w, order, 0, count)
+                cumulative = 0.0
+                for i in range(count):
+                    cumulative += w[order[i]]
+                out[e] = min(cumulative, 1.0)
+                continue
             last = _bucket_order(w, np.inf, order, buckets, counts, mass, starts)
             cumulative = 0.0
             run_lo, run_hi = np.inf, -np.inf
