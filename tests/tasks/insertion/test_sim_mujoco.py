@@ -73,6 +73,20 @@ def test_same_inputs_bit_identical_across_objects():
         assert a.peg_depth(X_HOLE, C, aim) == a.peg_depth(X_HOLE, C, aim) == b.peg_depth(X_HOLE, C, aim)
 
 
+def test_instances_sharing_one_data_buffer_answer_as_alone():
+    """Every instance's model shares one MjData; interleaving instances changes no answer."""
+    rng = np.random.default_rng(3)
+    truths = np.column_stack([rng.uniform(-10, 10, 6), rng.uniform(0.7, 1.3, 6)])
+    queries = [(x, c, kind, q) for x, c in truths for kind in ("tap_reading", "peg_depth")
+               for q in (x + rng.uniform(-3, 3), rng.uniform(-10, 10))]
+    alone = [getattr(MujocoInsertionSimulator(), kind)(x, c, q) for x, c, kind, q in queries]  # a fresh buffer each
+    shared = MujocoInsertionSimulator()
+    order = rng.permutation(len(queries))
+    interleaved = {int(i): getattr(shared, queries[i][2])(queries[i][0], queries[i][1], queries[i][3]) for i in order}
+    assert [interleaved[i] for i in range(len(queries))] == alone
+    assert len(shared._data) == 1  # one layout, one buffer
+
+
 def test_repeated_query_hits_cache():
     s = MujocoInsertionSimulator()
     first = s.query("tap_reading", X_HOLE, C, 3.0)

@@ -18,8 +18,9 @@ analytic sphere-box and box-box colliders (no mesh, no GJK).
   ``|a - x_hole| < hg + CHAMFER_MM - PEG_HALF_WIDTH_MM = 0.6 c + 1.1`` mm.
 
 All public arguments and returns are in mm; MuJoCo works in metres. A compiled model is
-cached per instance ``(x_hole, c)``; each query resets the data, so a query is a pure
-function of its arguments (bit-identical on repeat). See ``docs/decisions.md``,
+cached per instance ``(x_hole, c)`` (one LRU for the process) and a simulator keeps one
+MjData for every instance; each query resets the data, so a query is a pure function of
+its arguments (bit-identical on repeat, and whatever the data served before). See ``docs/decisions.md``,
 "MuJoCo insertion scene", for every parameter and why.
 """
 
@@ -77,7 +78,7 @@ SETTLE_SPEED = 1e-4  # m/s: both joint speeds below this ...
 SETTLE_CHUNKS = 3  # ... for this many consecutive chunks, with contact, means stopped
 MAX_TIME_S = 0.5
 
-MODEL_CACHE_SIZE = 32  # instances (0.6 MB each); queries are cached anyway, so a miss costs one compile (ms)
+MODEL_CACHE_SIZE = 128  # compiled instances kept per process (0.3 MB each: a chunk of 96 and room)
 
 
 def _f(x: float) -> str:
@@ -174,6 +175,43 @@ def scene_xml(x_hole_mm: float, c: float) -> str:
 """
 
 
+def _compile(x_hole: float, c: float) -> tuple[Any, dict[str, int]]:
+    """Compiled model and named indices of an instance (the scene depends on ``x_hole`` and ``c`` only)."""
+    mj = require("mujoco")
+    model = mj.MjModel.from_xml_string(scene_xml(x_hole, c))
+    idx = {
+        "tap_x": model.jnt_qposadr[mj.mj_name2id(model, mj.mjtObj.mjOBJ_JOINT, "tap_x")],
+        "tap_z": model.jnt_qposadr[mj.mj_name2id(model, mj.mjtObj.mjOBJ_JOINT, "tap_z")],
+        "peg_x": model.jnt_qposadr[mj.mj_name2id(model, mj.mjtObj.mjOBJ_JOINT, "peg_x")],
+        "peg_z": model.jnt_qposadr[mj.mj_name2id(model, mj.mjtObj.mjOBJ_JOINT, "peg_z")],
+        "tip": mj.mj_name2id(model, mj.mjtObj.mjOBJ_GEOM, "tip"),
+        "peg": mj.mj_name2id(model, mj.mjtObj.mjOBJ_GEOM, "peg"),
+        "tap_x_spring": mj.mj_name2id(model, mj.mjtObj.mjOBJ_ACTUATOR, "tap_x_spring"),
+        "tap_push": mj.mj_name2id(model, mj.mjtObj.mjOBJ_ACTUATOR, "tap_push"),
+        "peg_x_spring": mj.mj_name2id(model, mj.mjtObj.mjOBJ_ACTUATOR, "peg_x_spring"),
+        "peg_push": mj.mj_name2id(model, mj.mjtObj.mjOBJ_ACTUATOR, "peg_push"),
+    }
+    return model, idx
+
+
+#: Compiled instances, shared by every MuJoCo insertion simulator of the process: a model is
+#: a pure function of (x_hole, c) and is never modified (queries write only MjData), so runs,
+#: replays and calibrations of the same instances compile each once while it stays cached.
+compiled_instance = InstanceCache(_compile, MODEL_CACHE_SIZE).get
+
+
+def _size_fields(model: Any) -> tuple[str, ...]:
+    """Names of the model's integer size fields (``nq``, ``nbody``, ...), which fix an MjData's layout."""
+    global _SIZE_FIELDS
+    if _SIZE_FIELDS is None:
+        _SIZE_FIELDS = tuple(name for name in dir(model)
+                             if name.startswith("n") and isinstance(getattr(model, name, None), int))
+    return _SIZE_FIELDS
+
+
+_SIZE_FIELDS: tuple[str, ...] | None = None
+
+
 class MujocoInsertionSimulator(InsertionSimulator):
     """Insertion ground truth in MuJoCo (see the module docstring for the scene).
 
@@ -187,26 +225,20 @@ class MujocoInsertionSimulator(InsertionSimulator):
     def __init__(self, **kwargs: Any) -> None:
         super().__init__(**kwargs)
         self._mj = require("mujoco")  # lazy: importing this module never needs mujoco
-        self._instance = InstanceCache(self._compile, MODEL_CACHE_SIZE).get
+        #: One MjData per memory layout, shared by every instance's model with that layout.
+        self._data: dict[tuple[int, ...], Any] = {}
 
     # ------------------------------------------------------------------ model cache
-    def _compile(self, x_hole: float, c: float) -> tuple[Any, Any, dict[str, int]]:
-        """Compiled (model, data, indices) for an instance (kept by the LRU ``self._instance``)."""
-        mj = self._mj
-        model = mj.MjModel.from_xml_string(scene_xml(x_hole, c))
-        data = mj.MjData(model)
-        idx = {
-            "tap_x": model.jnt_qposadr[mj.mj_name2id(model, mj.mjtObj.mjOBJ_JOINT, "tap_x")],
-            "tap_z": model.jnt_qposadr[mj.mj_name2id(model, mj.mjtObj.mjOBJ_JOINT, "tap_z")],
-            "peg_x": model.jnt_qposadr[mj.mj_name2id(model, mj.mjtObj.mjOBJ_JOINT, "peg_x")],
-            "peg_z": model.jnt_qposadr[mj.mj_name2id(model, mj.mjtObj.mjOBJ_JOINT, "peg_z")],
-            "tip": mj.mj_name2id(model, mj.mjtObj.mjOBJ_GEOM, "tip"),
-            "peg": mj.mj_name2id(model, mj.mjtObj.mjOBJ_GEOM, "peg"),
-            "tap_x_spring": mj.mj_name2id(model, mj.mjtObj.mjOBJ_ACTUATOR, "tap_x_spring"),
-            "tap_push": mj.mj_name2id(model, mj.mjtObj.mjOBJ_ACTUATOR, "tap_push"),
-            "peg_x_spring": mj.mj_name2id(model, mj.mjtObj.mjOBJ_ACTUATOR, "peg_x_spring"),
-            "peg_push": mj.mj_name2id(model, mj.mjtObj.mjOBJ_ACTUATOR, "peg_push"),
-        }
+    def _instance(self, x_hole: float, c: float) -> tuple[Any, Any, dict[str, int]]:
+        """(model, data, indices) of an instance: its compiled model (from the process-wide LRU
+        ``compiled_instance``) and a data buffer this simulator shares across instances. Every
+        query resets the data first (``mj_resetData``), so an answer does not depend on the
+        instance the buffer served before (tested)."""
+        model, idx = compiled_instance(x_hole, c)
+        layout = tuple(getattr(model, name) for name in _size_fields(model))
+        data = self._data.get(layout)
+        if data is None:
+            data = self._data[layout] = self._mj.MjData(model)
         return model, data, idx
 
     def _descend(self, model: Any, data: Any, jx: int, jz: int, schedule: Any = None) -> None:
