@@ -1,9 +1,10 @@
-"""TaskModelBase: the shared sigma/margin checks and with_margin."""
+"""TaskModelBase: the shared sigma/margin checks, with_margin and the default grown scenarios."""
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numpy as np
 import pytest
 
 from probecommit.tasks.base import TaskModelBase
@@ -35,3 +36,17 @@ def test_a_model_without_a_margin_field_says_so():
 
     with pytest.raises(NotImplementedError, match="the toy model has no execution margin"):
         NoMargin().with_margin(0.5)
+
+
+def test_default_grown_scenarios_take_the_median_of_the_other_latents():
+    from probecommit.tasks.insertion.model import InsertionModel
+
+    rng = np.random.default_rng(0)
+    particles, z_points = rng.standard_normal((6, 101, 2)), rng.standard_normal((6, 9))
+    particles[1, 3, 0] = np.nan  # latent 0 is replaced by the points: its NaN does not matter
+    particles[2, 4, 1] = np.nan  # a NaN in another latent propagates, as np.median does
+    out = InsertionModel.deployed().grown_scenarios(particles, z_points)
+    expected = np.repeat(np.median(particles, axis=1)[:, None, :], 9, axis=1)
+    expected[..., 0] = z_points
+    np.testing.assert_array_equal(out, expected)
+    assert np.isnan(out[2, :, 1]).all() and not np.isnan(out[1]).any()

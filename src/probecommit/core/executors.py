@@ -114,12 +114,13 @@ def scenario_scores(model: Any, scenarios: np.ndarray, mask: np.ndarray, context
     Continuous loss: the maximum loss over the retained scenarios.
     """
     if model.binary_loss:
-        kept = np.maximum(mask.sum(axis=-1), 1)
+        retained_count = mask.sum(axis=-1)
+        kept = np.maximum(retained_count, 1)
         interval = model.success_interval(scenarios)
         if interval is not None:
             lo, hi = interval
             grid = np.asarray(model.action_grid, dtype=float).reshape(-1)
-            failures = mask.sum(axis=-1)[:, None] - interval_success_counts(lo, hi, mask, grid)
+            failures = retained_count[:, None] - interval_success_counts(lo, hi, mask, grid)
         else:
             failures = np.sum(model.loss(model.action_grid, scenarios, context) & mask[:, None, :], axis=-1)
         return failures / kept[:, None]

@@ -143,7 +143,11 @@ class TaskModelBase:
         Valid for families whose decision coordinate is latent 0 (the default ``decision``);
         a family with another decision coordinate overrides this.
         """
-        extra = np.repeat(np.median(particles, axis=1)[:, None, :], z_points.shape[1], axis=1)
+        particles = np.asarray(particles)
+        centre = np.zeros((particles.shape[0], particles.shape[2]))
+        if particles.shape[2] > 1:  # latent 0 is replaced below: its median is not needed
+            centre[:, 1:] = np.median(particles[:, :, 1:], axis=1)
+        extra = np.repeat(centre[:, None, :], z_points.shape[1], axis=1)
         extra[..., 0] = z_points
         return extra
 
