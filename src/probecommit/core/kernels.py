@@ -496,4 +496,3 @@ def coverage_score_compiled(weights: np.ndarray, z: np.ndarray, z_true: np.ndarr
     if not (np.all(np.isfinite(weights)) and np.all(weights >= 0) and np.all(np.isfinite(z)) and np.all(np.isfinite(z_true))):
         return None
     return _coverage_score(weights, z, z_true, float(width))
-

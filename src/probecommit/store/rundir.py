@@ -30,14 +30,14 @@ import tempfile
 from pathlib import Path
 from typing import Any, Iterator
 
-import numpy as np
 import pandas as pd
 import pyarrow as pa
 import pyarrow.parquet as pq
 import yaml
 
 from probecommit import __version__
-from probecommit.store.schema import EPISODE_COLUMNS, INSTANCE_COLUMNS, PROBE_COLUMNS, Column, vector_columns
+from probecommit.store.schema import (EPISODE_COLUMNS, INSTANCE_COLUMNS, PROBE_COLUMNS, Column, float_matrix,
+                                      vector_columns)
 
 MANIFEST = "manifest.json"
 CONFIG = "config.yaml"
@@ -445,8 +445,7 @@ def _arg_sort_keys(args: pd.Series) -> dict[str, Any]:
     when every argument has the same length (one conversion for the whole column), else the
     tuples themselves."""
     values = args.tolist()
-    try:
-        matrix = np.asarray(values, dtype=float).reshape(len(values), -1)
-    except ValueError:  # arguments of different lengths
+    matrix = float_matrix(values)
+    if matrix is None:  # arguments of different lengths
         return {"_arg": pd.Series([tuple(float(v) for v in a) for a in values], index=args.index, dtype=object)}
     return {f"_arg{i}": matrix[:, i] for i in range(matrix.shape[1])}

@@ -128,14 +128,20 @@ def cache_records(frame, latent_names: tuple[str, ...]) -> list[dict]:
     ]
 
 
-def _float_rows(column) -> list[list[float]]:
-    """A column of float vectors as lists of Python floats: one conversion when every row
-    has the same length, row by row otherwise."""
-    items = column.tolist()
+def float_matrix(items: list) -> np.ndarray | None:
+    """Float vectors of one length as one ``[rows, length]`` array (one conversion for a whole
+    column of an engine cache); None when their lengths differ."""
     try:
-        return np.asarray(items, dtype=float).reshape(len(items), -1).tolist()
+        return np.asarray(items, dtype=float).reshape(len(items), -1)
     except ValueError:  # rows of different lengths
-        return [np.asarray(v, dtype=float).ravel().tolist() for v in items]
+        return None
+
+
+def _float_rows(column) -> list[list[float]]:
+    """A column of float vectors as lists of Python floats (``float_matrix``, else row by row)."""
+    items = column.tolist()
+    matrix = float_matrix(items)
+    return matrix.tolist() if matrix is not None else [np.asarray(v, dtype=float).ravel().tolist() for v in items]
 
 
 #: Columns a user's own log must provide for ``probecommit audit``.

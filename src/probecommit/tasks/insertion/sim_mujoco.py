@@ -175,8 +175,10 @@ def scene_xml(x_hole_mm: float, c: float) -> str:
 """
 
 
-def _compile(x_hole: float, c: float) -> tuple[Any, dict[str, int]]:
-    """Compiled model and named indices of an instance (the scene depends on ``x_hole`` and ``c`` only)."""
+def _compile(x_hole: float, c: float) -> tuple[Any, dict[str, int], tuple[int, ...]]:
+    """Compiled model, named indices and MjData layout of an instance (the scene depends on
+    ``x_hole`` and ``c`` only). The layout is the model's integer size fields (``nq``,
+    ``nbody``, ...), which fix the size and arrangement of an MjData's buffers."""
     mj = require("mujoco")
     model = mj.MjModel.from_xml_string(scene_xml(x_hole, c))
     idx = {
@@ -191,25 +193,15 @@ def _compile(x_hole: float, c: float) -> tuple[Any, dict[str, int]]:
         "peg_x_spring": mj.mj_name2id(model, mj.mjtObj.mjOBJ_ACTUATOR, "peg_x_spring"),
         "peg_push": mj.mj_name2id(model, mj.mjtObj.mjOBJ_ACTUATOR, "peg_push"),
     }
-    return model, idx
+    layout = tuple(getattr(model, name) for name in sorted(dir(model))
+                   if name.startswith("n") and isinstance(getattr(model, name, None), int))
+    return model, idx, layout
 
 
 #: Compiled instances, shared by every MuJoCo insertion simulator of the process: a model is
 #: a pure function of (x_hole, c) and is never modified (queries write only MjData), so runs,
 #: replays and calibrations of the same instances compile each once while it stays cached.
 compiled_instance = InstanceCache(_compile, MODEL_CACHE_SIZE).get
-
-
-def _size_fields(model: Any) -> tuple[str, ...]:
-    """Names of the model's integer size fields (``nq``, ``nbody``, ...), which fix an MjData's layout."""
-    global _SIZE_FIELDS
-    if _SIZE_FIELDS is None:
-        _SIZE_FIELDS = tuple(name for name in dir(model)
-                             if name.startswith("n") and isinstance(getattr(model, name, None), int))
-    return _SIZE_FIELDS
-
-
-_SIZE_FIELDS: tuple[str, ...] | None = None
 
 
 class MujocoInsertionSimulator(InsertionSimulator):
@@ -234,8 +226,7 @@ class MujocoInsertionSimulator(InsertionSimulator):
         ``compiled_instance``) and a data buffer this simulator shares across instances. Every
         query resets the data first (``mj_resetData``), so an answer does not depend on the
         instance the buffer served before (tested)."""
-        model, idx = compiled_instance(x_hole, c)
-        layout = tuple(getattr(model, name) for name in _size_fields(model))
+        model, idx, layout = compiled_instance(x_hole, c)
         data = self._data.get(layout)
         if data is None:
             data = self._data[layout] = self._mj.MjData(model)
