@@ -210,7 +210,15 @@ def write_reproduction_md(repo_root: str | Path) -> Path:
                          + f" (total {sum(per_engine.values())}); the robot session's simulated-rig queries are in "
                          "its log, not counted here. Every run and replay of a reproduction shares one engine cache "
                          "(`shared_engine_answers`), so a query several runs ask is run and counted once; a run "
-                         "made on its own records all of its queries.")
+                         "made on its own records all of its queries. An action is executed when an episode commits "
+                         "to it, not every grid action up front (`simulator.execute_all_aims`, off), which is why "
+                         "insertion records far fewer peg queries than its 41 aims per instance.")
+        parts.append(" The frozen results were last regenerated on an AMD EPYC (AVX-512) machine. On another CPU a "
+                     "few values can differ in the last binary digit, because NumPy picks its vector routines by CPU: "
+                     "that regeneration moved beyond's adaptive table, two Table V bootstrap bounds and the commit "
+                     "gates' thresholds by at most 5e-16 relative (the gate thresholds and the adaptive table's "
+                     "posterior variance come out the same from the code of 01b9326 run on that machine) and left every number of Tables III-IX unchanged "
+                     "(`docs/decisions.md`, \"Second session's measurements\").")
         parts.append("\n\n")
     if (frozen / "setup" / "table_2.md").is_file():
         parts.append("## The task families (Table II) and a belief (Fig. 1b)\n\n"
