@@ -5,9 +5,12 @@ of the package (NumPy, one episode at a time): Gaussian reweighting in log space
 ESS < N/2 -> systematic resampling + jitter + clip, the top-weight 0.8-mass retained
 set by a stable sort, and the scenario failure fraction of every aim by broadcasting.
 Both arms see the same data and draw the same random numbers in the same order, and
-both run once as a warm-up (numba compilation, allocator) before the timed run.
+both run once as a warm-up (numba compilation, allocator). Then the arms take turns for
+``--rounds`` rounds (a shared virtual machine's speed drifts by 10-30 % within a minute,
+so one timing per arm is not a ratio): each arm's median is printed, and the ratio of
+the medians with the smallest and largest ratio of a single round.
 
-    python benchmarks/belief.py [--episodes 384] [--particles 1024] [--taps 8]
+    python benchmarks/belief.py [--episodes 384] [--particles 1024] [--taps 8] [--rounds 5]
 """
 
 from __future__ import annotations
@@ -81,10 +84,26 @@ def run_plain(model, u, y, seeds, n, sigma=0.5):
 
 
 def timed(fn, *args):
-    fn(*args)  # warm-up: numba compilation, allocator
     t0 = time.perf_counter()
     out = fn(*args)
     return time.perf_counter() - t0, out
+
+
+def interleaved(arms: dict, rounds: int) -> tuple[dict, dict]:
+    """Each arm once as a warm-up, then ``rounds`` rounds in turn: ``({arm: [seconds]}, {arm: output})``."""
+    outputs = {name: fn() for name, fn in arms.items()}  # warm-up: numba compilation, allocator
+    times: dict = {name: [] for name in arms}
+    for _ in range(rounds):
+        for name, fn in arms.items():
+            times[name].append(timed(fn)[0])
+    return times, outputs
+
+
+def ratio_text(times: dict, slow: str, fast: str) -> str:
+    """``median(slow) / median(fast)`` and the range of the per-round ratios."""
+    per_round = [s / f for s, f in zip(times[slow], times[fast])]
+    return (f"{float(np.median(times[slow]) / np.median(times[fast])):.2f}x "
+            f"(rounds {min(per_round):.2f}-{max(per_round):.2f}, {len(per_round)} rounds)")
 
 
 def main() -> None:
@@ -92,22 +111,29 @@ def main() -> None:
     ap.add_argument("--episodes", type=int, default=384)
     ap.add_argument("--particles", type=int, default=1024)
     ap.add_argument("--taps", type=int, default=8)
+    ap.add_argument("--rounds", type=int, default=5)
     args = ap.parse_args()
     model, u, y = make_data(args.episodes, args.taps)
     seeds = list(range(args.episodes))
     steps = args.episodes * args.taps
     pf = ParticleFilter.gaussian(model, model.sigma, n_particles=args.particles)
     pf_mh = ParticleFilter.gaussian(model, model.sigma, n_particles=args.particles, move="mh")
-    t_core, (state, actions) = timed(run_core, pf, model, u, y, seeds)
-    t_mh, _ = timed(run_core, pf_mh, model, u, y, seeds)
-    t_plain, (particles, plain_actions) = timed(run_plain, model, u, y, seeds, args.particles)
+    times, out = interleaved({
+        "core": lambda: run_core(pf, model, u, y, seeds),
+        "mh": lambda: run_core(pf_mh, model, u, y, seeds),
+        "plain": lambda: run_plain(model, u, y, seeds, args.particles),
+    }, args.rounds)
+    (state, actions), (particles, plain_actions) = out["core"], out["plain"]
     same_particles = np.array_equal(state.particles, particles)
     same_actions = np.array_equal(actions, plain_actions)
-    print(f"E={args.episodes} N={args.particles} taps={args.taps}: update + retained set + executor per episode-step")
-    print(f"  batched core (jitter, the paper):  {t_core / steps * 1e6:7.1f} us per episode-step  ({t_core:.2f} s)")
-    print(f"  batched core (move = mh):          {t_mh / steps * 1e6:7.1f} us per episode-step  ({t_mh:.2f} s)")
-    print(f"  plain per-episode NumPy loop:      {t_plain / steps * 1e6:7.1f} us per episode-step  ({t_plain:.2f} s)")
-    print(f"  ratio plain / core: {t_plain / t_core:.2f}x   identical particles: {same_particles}   identical aims: {same_actions}")
+    med = {name: float(np.median(t)) for name, t in times.items()}
+    print(f"E={args.episodes} N={args.particles} taps={args.taps}: update + retained set + executor per episode-step "
+          f"(median of {args.rounds} interleaved rounds)")
+    print(f"  batched core (jitter, the paper):  {med['core'] / steps * 1e6:7.1f} us per episode-step  ({med['core']:.2f} s)")
+    print(f"  batched core (move = mh):          {med['mh'] / steps * 1e6:7.1f} us per episode-step  ({med['mh']:.2f} s)")
+    print(f"  plain per-episode NumPy loop:      {med['plain'] / steps * 1e6:7.1f} us per episode-step  ({med['plain']:.2f} s)")
+    print(f"  ratio plain / core: {ratio_text(times, 'plain', 'core')}   identical particles: {same_particles}   "
+          f"identical aims: {same_actions}")
 
 
 if __name__ == "__main__":
