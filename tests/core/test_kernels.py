@@ -52,7 +52,7 @@ def test_systematic_resample_matches_numpy_and_is_row_independent():
         np.testing.assert_array_equal(systematic_resample(weights[r:r + 1], offsets[r:r + 1])[0], fast[r])
 
 
-@pytest.mark.parametrize("n", [1, 7, 8, 9, 127, 128, 129, 136, 255, 256, 1000, 1024, 1033, 4096, 10007])
+@pytest.mark.parametrize("n", [1, 7, 8, 9, 127, 128, 129, 136, 255, 256, 1000, 1024, 1033, 4096, 10007, 16384, 32768])
 def test_pairwise_sum_follows_numpy_bit_for_bit(n):
     rng = np.random.default_rng(n)
     rows = rng.standard_normal((40, n)) * np.exp(rng.uniform(-30, 30, (40, n)))  # sums that round a lot

@@ -43,8 +43,10 @@ def _normalize(log_weights: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     dead = ~np.isfinite(row_max)
     safe_max = np.where(dead, 0.0, row_max)
     with np.errstate(divide="ignore", invalid="ignore"):  # dead rows are replaced below
-        log_norm = safe_max + np.log(np.sum(np.exp(log_weights - safe_max), axis=-1, keepdims=True))
-        out = log_weights - log_norm
+        # One [E, N] temporary, shifted and exponentiated in place (same bits as out of place).
+        shifted = np.subtract(log_weights, safe_max)
+        log_norm = safe_max + np.log(np.sum(np.exp(shifted, out=shifted), axis=-1, keepdims=True))
+        out = np.subtract(log_weights, log_norm, out=shifted)
     if np.any(dead):
         out = np.where(dead, -np.log(log_weights.shape[-1]), out)
     return out, log_norm[:, 0]
@@ -53,6 +55,11 @@ def _normalize(log_weights: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 def effective_sample_size(weights: np.ndarray) -> np.ndarray:
     """Kish effective sample size ``1 / sum w^2`` of normalized weights ``[E, N] -> [E]``."""
     return 1.0 / np.sum(np.square(weights), axis=-1)
+
+
+def _effective_sample_size_into(weights: np.ndarray, scratch: np.ndarray) -> np.ndarray:
+    """:func:`effective_sample_size` with the squares written into ``scratch`` (same bits)."""
+    return 1.0 / np.sum(np.square(weights, out=scratch), axis=-1)
 
 
 def systematic_resample(weights: np.ndarray, offsets: np.ndarray) -> np.ndarray:
@@ -216,7 +223,11 @@ class ParticleFilter:
         low = np.asarray(self.model.prior_low, dtype=float)
         high = np.asarray(self.model.prior_high, dtype=float)
         d = low.shape[0]
-        particles = np.stack([low + (high - low) * rng.random((self.n_particles, d)) for rng in rngs])
+        particles = np.empty((len(rngs), self.n_particles, d))
+        for rng, row in zip(rngs, particles):  # each episode's draws written in place: no stack copy
+            rng.random(out=row)
+        particles *= high - low
+        particles += low
         log_w = np.full((len(rngs), self.n_particles), -np.log(self.n_particles))
         return BeliefState(particles, log_w)
 
@@ -253,7 +264,7 @@ class ParticleFilter:
         y_hist = y_now if state.y_hist is None else np.concatenate([state.y_hist, y_now], axis=1)
         particles = state.particles  # copied below only if some episode resamples
         weights = np.exp(log_w)
-        ess = effective_sample_size(weights)
+        ess = _effective_sample_size_into(weights, unnormalized)  # unnormalized is spent: its buffer takes the squares
         resample = ess < self.resample_fraction * self.n_particles
         accepted = np.full(n_e, np.nan)
         if np.any(resample):
@@ -264,7 +275,9 @@ class ParticleFilter:
             high = np.asarray(self.model.prior_high, dtype=float)
             scale = np.asarray(self.model.jitter_scale, dtype=float)
             if self.jitter and self.move == "jitter" and self.rejuvenation == 0:  # the paper's filter, one pass
-                noise = np.stack([rngs[r].standard_normal(particles.shape[1:]) for r in rows])
+                noise = np.empty((len(rows), *particles.shape[1:]))
+                for r, row in zip(rows, noise):  # in place: the same draws as standard_normal(shape), no stack copy
+                    rngs[r].standard_normal(out=row)
                 particles = jitter_resampled(particles, rows, parents, noise, scale, low, high)
             else:
                 particles = particles.copy()

@@ -213,17 +213,25 @@ if HAVE_NUMBA:
         return total
 
     @numba.njit(cache=True, nogil=True)
-    def _pairwise_sum(a, start, n):  # pragma: no cover - compiled
+    def _pairwise_sum_with(a, start, n, node_start, node_n, node_open, values):  # pragma: no cover - compiled
         """``np.sum(a[start:start + n])`` in NumPy's pairwise order: halves (rounded down to a
-        multiple of 8) until blocks of at most 128. Iterative, with an explicit stack: numba's
-        on-disk cache does not survive recursive functions."""
+        multiple of 8) until blocks of at most 128. Iterative, with an explicit stack in the
+        caller's scratch arrays (128 entries each; :func:`_pairwise_scratch`): numba's on-disk
+        cache does not survive recursive functions, and a caller summing many rows allocates once."""
         if n <= 128:
             return _block_sum(a, start, n)
+        blocks = n // 128
+        if n % 128 == 0 and blocks & (blocks - 1) == 0 and blocks <= values.shape[0]:
+            # n = 128 * 2^k (N = 1024 particles, say): the halves are exact, the tree is perfect,
+            # so its leaves are the 128-blocks in order, combined pairwise level by level.
+            for b in range(blocks):
+                values[b] = _block_sum(a, start + 128 * b, 128)
+            while blocks > 1:
+                blocks //= 2
+                for b in range(blocks):
+                    values[b] = values[2 * b] + values[2 * b + 1]
+            return values[0]
         # Pending nodes (start, length, children done?) and finished partial sums.
-        node_start = np.empty(128, dtype=np.int64)
-        node_n = np.empty(128, dtype=np.int64)
-        node_open = np.empty(128, dtype=np.bool_)
-        values = np.empty(128)
         top, n_values = 0, 0
         node_start[0], node_n[0], node_open[0] = start, n, False
         while top >= 0:
@@ -247,9 +255,26 @@ if HAVE_NUMBA:
         return values[0]
 
     @numba.njit(cache=True, nogil=True)
+    def _pairwise_scratch():  # pragma: no cover - compiled
+        """The stack of :func:`_pairwise_sum_with`: 128 entries, enough for any row (a halving adds two)."""
+        return (np.empty(128, dtype=np.int64), np.empty(128, dtype=np.int64), np.empty(128, dtype=np.bool_),
+                np.empty(128))
+
+    @numba.njit(cache=True, nogil=True)
+    def _pairwise_sum(a, start, n):  # pragma: no cover - compiled
+        """:func:`_pairwise_sum_with` with its own scratch."""
+        node_start, node_n, node_open, values = _pairwise_scratch()
+        return _pairwise_sum_with(a, start, n, node_start, node_n, node_open, values)
+
+    @numba.njit(cache=True, nogil=True)
     def _row_sum(a):  # pragma: no cover - compiled
         """``np.sum(a)`` of a contiguous row, bit for bit (the reduction starts from 0.0)."""
         return 0.0 + _pairwise_sum(a, 0, a.shape[0])
+
+    @numba.njit(cache=True, nogil=True)
+    def _row_sum_with(a, node_start, node_n, node_open, values):  # pragma: no cover - compiled
+        """:func:`_row_sum` on the caller's scratch."""
+        return 0.0 + _pairwise_sum_with(a, 0, a.shape[0], node_start, node_n, node_open, values)
 
     @numba.njit(cache=True, nogil=True)
     def _bucket_order(w, nu, order, buckets, counts, mass, starts):  # pragma: no cover - compiled
@@ -429,6 +454,7 @@ if HAVE_NUMBA:
         starts = np.empty(_N_BUCKETS, dtype=np.int64)
         masked_w = np.empty(n)
         product = np.empty(n)
+        node_start, node_n, node_open, values = _pairwise_scratch()
         for e in range(n_e):
             w = weights[e]
             m = _top_weight_prefix(w, nu[e], order, buckets, counts, mass, starts)
@@ -437,8 +463,10 @@ if HAVE_NUMBA:
             else:
                 for i in range(m):
                     mask[e, order[i]] = True
-            # masked_interval: NaN in a retained z propagates, as np.min / np.max do.
+            # One pass: masked_interval (NaN in a retained z propagates, as np.min / np.max do)
+            # and the masked weights that belief_reference sums.
             low, high = np.inf, -np.inf
+            kept = 0
             for i in range(n):
                 if mask[e, i]:
                     value = z[e, i]
@@ -447,22 +475,22 @@ if HAVE_NUMBA:
                     else:
                         low = min(low, value)
                         high = max(high, value)
+                    masked_w[i] = w[i]
+                    kept += 1
+                else:
+                    masked_w[i] = 0.0
             lo[e], hi[e] = low, high
             # belief_reference: weighted means over the mask, summed in NumPy's order.
-            kept = 0
-            for i in range(n):
-                masked_w[i] = w[i] if mask[e, i] else 0.0
-                kept += mask[e, i]
-            total = _row_sum(masked_w)
+            total = _row_sum_with(masked_w, node_start, node_n, node_open, values)
             for j in range(d):
                 if total > 0:
                     for i in range(n):
                         product[i] = masked_w[i] * particles[e, i, j]
-                    reference[e, j] = _row_sum(product) / total
+                    reference[e, j] = _row_sum_with(product, node_start, node_n, node_open, values) / total
                 else:
                     for i in range(n):
                         product[i] = particles[e, i, j] if mask[e, i] else 0.0
-                    reference[e, j] = _row_sum(product) / max(kept, 1)
+                    reference[e, j] = _row_sum_with(product, node_start, node_n, node_open, values) / max(kept, 1)
         return mask, lo, hi, reference
 
 
@@ -478,7 +506,8 @@ def retained_summary_compiled(weights: np.ndarray, nu: np.ndarray, z: np.ndarray
     weights = np.ascontiguousarray(weights, dtype=np.float64)
     if not (np.all(np.isfinite(weights)) and np.all(weights >= 0)):
         return None
-    return _retained_summary(weights, np.ascontiguousarray(nu, dtype=np.float64), np.ascontiguousarray(z, dtype=np.float64),
+    # z is often a strided view (one latent of the particles): the kernel reads it in place.
+    return _retained_summary(weights, np.ascontiguousarray(nu, dtype=np.float64), np.asarray(z, dtype=np.float64),
                              np.ascontiguousarray(particles, dtype=np.float64))
 
 

@@ -34,9 +34,17 @@ class GaussianLikelihood:
         _check_sigma(self.sigma)
 
     def log_likelihood(self, y: np.ndarray, pred: np.ndarray) -> np.ndarray:
-        resid = (y[:, None, :] - pred) / self.sigma
+        # The textbook expression -0.5 * sum(((y - f) / sigma)^2) - m log(sigma sqrt(2 pi)), evaluated
+        # in one [E, N, m] buffer: the same operations in the same order, so the same bits.
+        resid = np.subtract(y[:, None, :], pred, dtype=float)
+        resid /= self.sigma
+        squares = np.multiply(resid, resid, out=resid)
         m = pred.shape[-1]
-        return -0.5 * np.sum(resid * resid, axis=-1) - m * np.log(self.sigma * np.sqrt(2 * np.pi))
+        # A sum over one squared residual is that square (0.0 + x == x for x >= +0 and NaN).
+        total = squares[..., 0] if m == 1 else np.sum(squares, axis=-1)
+        total *= -0.5
+        total -= m * np.log(self.sigma * np.sqrt(2 * np.pi))
+        return total
 
 
 @dataclass(frozen=True)

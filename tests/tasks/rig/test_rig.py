@@ -46,6 +46,25 @@ def test_mujoco_rig_matches_the_closed_form_on_a_grid():
             assert (mj.tool_depth(x, c, a) > 0) == (an.tool_depth(x, c, a) > 0)
 
 
+def test_instances_sharing_one_data_buffer_answer_as_alone():
+    """A simulator's instances share one MjData (their compiled models are process-wide);
+    interleaving instances changes no answer."""
+    rng = np.random.default_rng(5)
+    model = RigModel()
+    truths = rng.uniform(model.prior_low, model.prior_high, (5, 2))
+    queries = [(x, c, kind, q) for x, c in truths for kind in ("tap_reading", "tool_depth")
+               for q in (x + rng.uniform(-20, 20), rng.uniform(model.prior_low[0], model.prior_high[0]))]
+    alone = [getattr(MujocoRigSimulator(misread_rate=0.0), kind)(x, c, q) for x, c, kind, q in queries]  # fresh buffers
+    shared = MujocoRigSimulator(misread_rate=0.0)
+    interleaved = {int(i): getattr(shared, queries[i][2])(queries[i][0], queries[i][1], queries[i][3])
+                   for i in rng.permutation(len(queries))}
+    assert [interleaved[i] for i in range(len(queries))] == alone
+    for kind in ("tap_reading", "tool_depth"):  # not a trivial check: each query kind gets both outcomes
+        assert len({a < 0 if kind == "tap_reading" else a > 0
+                    for (_, _, k, _), a in zip(queries, alone) if k == kind}) == 2
+    assert len(shared._data) == 1  # one layout, one buffer
+
+
 def test_model_agrees_with_the_simulated_rig_as_deployed():
     model, sim = RigModel(), AnalyticRigSimulator(misread_rate=0.0)
     theta = np.array([[[4.0, 0.9]]])

@@ -25,8 +25,10 @@ PAPER_DELTA_MM = 0.905
 
 
 def half_gap(c: np.ndarray) -> np.ndarray:
-    """Slot half-gap ``hg(c) = 4 + 0.6 c`` in mm."""
-    return 4.0 + 0.6 * np.asarray(c)
+    """Slot half-gap ``hg(c) = 4 + 0.6 c`` in mm (a new array; the same bits as ``4.0 + 0.6 * c``)."""
+    gap = np.multiply(0.6, c, dtype=float)
+    gap += 4.0
+    return gap
 
 
 def capture_half_width(c: np.ndarray) -> np.ndarray:
@@ -97,7 +99,12 @@ class InsertionModel(TaskModelBase):
         """Whether a tap at ``u[E]`` (or ``[E, 1]``) reads the pocket for each particle ``[E, N]``."""
         theta = np.asarray(theta)
         u = np.asarray(u, dtype=float).reshape(theta.shape[0], 1)
-        return np.abs(u - theta[..., 0]) < half_gap(theta[..., 1]) + self.boundary_offset
+        # |u - x| < hg(c) + offset, with the temporaries reused in place (same operations, same bits).
+        distance = np.subtract(u, theta[..., 0], dtype=float)
+        np.abs(distance, out=distance)
+        boundary = half_gap(theta[..., 1])
+        boundary += self.boundary_offset
+        return np.less(distance, boundary)
 
     def predict(self, u: np.ndarray, theta: np.ndarray) -> np.ndarray:
         pocket = self.reads_pocket(u, theta)

@@ -32,6 +32,7 @@ import numpy as np
 
 from probecommit.engines import require
 from probecommit.engines.cache import InstanceCache
+from probecommit.engines.mujoco import DataBuffers, data_layout
 from probecommit.tasks.insertion.model import PAPER_DELTA_MM, POCKET_DEPTH_MM, TIP_RADIUS_MM, half_gap
 from probecommit.tasks.insertion.sim_base import InsertionSimulator
 
@@ -193,9 +194,7 @@ def _compile(x_hole: float, c: float) -> tuple[Any, dict[str, int], tuple[int, .
         "peg_x_spring": mj.mj_name2id(model, mj.mjtObj.mjOBJ_ACTUATOR, "peg_x_spring"),
         "peg_push": mj.mj_name2id(model, mj.mjtObj.mjOBJ_ACTUATOR, "peg_push"),
     }
-    layout = tuple(getattr(model, name) for name in sorted(dir(model))
-                   if name.startswith("n") and isinstance(getattr(model, name, None), int))
-    return model, idx, layout
+    return model, idx, data_layout(model)
 
 
 #: Compiled instances, shared by every MuJoCo insertion simulator of the process: a model is
@@ -218,7 +217,7 @@ class MujocoInsertionSimulator(InsertionSimulator):
         super().__init__(**kwargs)
         self._mj = require("mujoco")  # lazy: importing this module never needs mujoco
         #: One MjData per memory layout, shared by every instance's model with that layout.
-        self._data: dict[tuple[int, ...], Any] = {}
+        self._data = DataBuffers(self._mj)
 
     # ------------------------------------------------------------------ model cache
     def _instance(self, x_hole: float, c: float) -> tuple[Any, Any, dict[str, int]]:
@@ -227,10 +226,7 @@ class MujocoInsertionSimulator(InsertionSimulator):
         query resets the data first (``mj_resetData``), so an answer does not depend on the
         instance the buffer served before (tested)."""
         model, idx, layout = compiled_instance(x_hole, c)
-        data = self._data.get(layout)
-        if data is None:
-            data = self._data[layout] = self._mj.MjData(model)
-        return model, data, idx
+        return model, self._data.get(model, layout), idx
 
     def _descend(self, model: Any, data: Any, jx: int, jz: int, schedule: Any = None) -> None:
         """Step until the driven body is in contact and both its joint speeds stay settled.

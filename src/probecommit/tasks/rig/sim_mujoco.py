@@ -11,16 +11,19 @@ is ``ALLOWANCE_MM`` below the top; the commit descends to the pocket floor.
 
 Everything is boxes, so every contact uses MuJoCo's analytic box-box collider, and each
 query is a pure function of its arguments (a fresh ``qpos`` each step; bit-identical on
-repeat). A compiled model is cached per instance.
+repeat). Compiled instances are kept per process (``compiled_rig_instance``), and a
+simulator's instances share one data buffer: every step sets the whole ``qpos``, all the
+state ``mj_fwdPosition`` reads, so an answer does not depend on the instance the buffer
+served before (tested).
 """
 
 from __future__ import annotations
 
 from typing import Any
 
-
 from probecommit.engines import require
 from probecommit.engines.cache import InstanceCache
+from probecommit.engines.mujoco import DataBuffers, data_layout
 from probecommit.tasks.rig.model import ALLOWANCE_MM, POCKET_DEPTH_MM, TOOL_RADIUS_MM, rig_half_gap
 from probecommit.tasks.rig.sim_base import RigSimulator, descent_heights
 
@@ -31,7 +34,8 @@ FLOOR_THICKNESS_MM = 20.0
 TOOL_HALF_HEIGHT_MM = 40.0
 #: Contacts are reported within this distance; the switch closes at distance <= 0.
 CONTACT_MARGIN_MM = 0.01
-MODEL_CACHE_SIZE = 32
+#: Compiled instances kept per process (a rig model is a few tens of kB).
+MODEL_CACHE_SIZE = 128
 
 
 def _f(x: float) -> str:
@@ -69,6 +73,17 @@ def rig_scene_xml(x_hole_mm: float, c: float) -> str:
 """
 
 
+def _compile(x_hole: float, c: float) -> tuple[Any, tuple[int, ...]]:
+    """Compiled model of an instance and its MjData layout (the scene depends on ``x_hole`` and ``c`` only)."""
+    model = require("mujoco").MjModel.from_xml_string(rig_scene_xml(x_hole, c))
+    return model, data_layout(model)
+
+
+#: Compiled instances, shared by every MuJoCo rig simulator of the process (a model is never
+#: modified: queries write only MjData).
+compiled_rig_instance = InstanceCache(_compile, MODEL_CACHE_SIZE).get
+
+
 class MujocoRigSimulator(RigSimulator):
     """The simulated rig in MuJoCo (see the module docstring)."""
 
@@ -76,12 +91,9 @@ class MujocoRigSimulator(RigSimulator):
 
     def __init__(self, **kwargs: Any) -> None:
         super().__init__(**kwargs)
-        self._mj = require("mujoco")
-        self._instance = InstanceCache(self._compile, MODEL_CACHE_SIZE).get
-
-    def _compile(self, x_hole: float, c: float) -> tuple[Any, Any]:
-        model = self._mj.MjModel.from_xml_string(rig_scene_xml(x_hole, c))
-        return model, self._mj.MjData(model)
+        self._mj = require("mujoco")  # lazy: importing this module never needs mujoco
+        #: One MjData per memory layout, shared by every instance's model with that layout.
+        self._data = DataBuffers(self._mj)
 
     def _touching(self, model: Any, data: Any, x_mm: float, bottom_mm: float) -> bool:
         """Whether the tool, its bottom at ``bottom_mm`` and centre at ``x_mm``, touches the block."""
@@ -92,7 +104,8 @@ class MujocoRigSimulator(RigSimulator):
 
     def _descend(self, x_hole: float, c: float, x: float, stop: float) -> float:
         """The height (mm) where the switch closed, or ``-stop`` when it never did."""
-        model, data = self._instance(x_hole, c)
+        model, layout = compiled_rig_instance(x_hole, c)
+        data = self._data.get(model, layout)
         for h in descent_heights(stop):
             if self._touching(model, data, x, float(h)):
                 return float(h)
