@@ -113,3 +113,18 @@ def test_calibration_of_a_subset_with_the_pools_beliefs_equals_recomputing(runs)
     alone = calibrate(subset_run(loaded, ids), test, resamples=50)
     assert json.dumps(shared.to_dict(), sort_keys=True, default=str) == json.dumps(alone.to_dict(), sort_keys=True, default=str)
     pd.testing.assert_frame_equal(shared.table3, alone.table3, check_exact=True)
+
+
+def test_commit_of_some_columns_equals_those_columns_of_the_whole_table(runs):
+    """``commit(..., columns=C)`` (what a margin search asks for) is ``commit(...)[C]``, dtypes included."""
+    from probecommit.runner.inference import commit
+
+    beliefs = RunBeliefs.of(runs["cal"], chunk_instances=None)
+    trace = beliefs.trace(beliefs.chunks[0])
+    kwargs = dict(thresholds=1.3, margin=0.9, methods=("blind_robust", "probe_robust"))
+    whole = commit(trace, beliefs.model, beliefs.simulator, **kwargs)
+    for columns in (("k", "status", "predicted", "realized"), ("covered", "instance_id", "action", "n_retained")):
+        some = commit(trace, beliefs.model, beliefs.simulator, columns=columns, **kwargs)
+        pd.testing.assert_frame_equal(some, whole[list(columns)], check_exact=True)
+    with pytest.raises(ValueError, match="no column 'aim'"):
+        commit(trace, beliefs.model, beliefs.simulator, columns=("k", "aim"), **kwargs)

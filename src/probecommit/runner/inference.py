@@ -10,7 +10,7 @@ faults and calibration all reuse stored probes, so compared arms see identical t
 from __future__ import annotations
 
 from dataclasses import dataclass, field, fields
-from typing import Any, Iterable, Mapping
+from typing import Any, Iterable, Mapping, Sequence
 
 import numpy as np
 import pandas as pd
@@ -266,6 +266,7 @@ def commit(
     blind: BlindBayes | None = None,
     cache: dict | None = None,
     plateau: str = "prefix",
+    columns: Sequence[str] | None = None,
 ) -> pd.DataFrame:
     """Commit once per episode and budget, and score the commit against ground truth.
 
@@ -285,6 +286,8 @@ def commit(
             Results are identical with or without it.
         plateau: The set at ``t = 1`` (``core.executors.ProbeRobust``): ``prefix`` (the
             paper) or ``hull``.
+        columns: Build only these columns, in this order (None: all). A margin search reads
+            four columns of dozens of tables; the result equals ``table[list(columns)]``.
 
     Returns:
         The episode table (columns of ``store.schema.EPISODE_COLUMNS``).
@@ -337,35 +340,38 @@ def commit(
             index, predicted, mask, lo, hi = chosen.index, chosen.score, chosen.mask, chosen.lo, chosen.hi
         action = grid[index]
         realized, status, error = _execute(simulator, batch, action, index, len(grid), cache.setdefault("outcomes", {}))
-        surprise = trace.surprise[:, :k]
         hull_lo, hull_hi = belief["hull_lo"], belief["hull_hi"]
-        columns = {
-            "instance_id": batch.instance_id.astype(str),
-            "repeat": batch.repeat.astype(np.int64),
-            "k": np.int64(k),
-            "method": method,
-            "variant": model.variant,
+        # Each column made only when asked for (a margin search asks for four).
+        makers = {
+            "instance_id": lambda: batch.instance_id.astype(str),
+            "repeat": lambda: batch.repeat.astype(np.int64),
+            "k": lambda: np.int64(k),
+            "method": lambda: method,
+            "variant": lambda: model.variant,
+            **{name: (lambda i=i: action[:, i]) for i, name in enumerate(action_names)},
+            "predicted": lambda: np.asarray(predicted, dtype=float),
+            "realized": lambda: realized,
+            "z_true": lambda: z_true,
+            "retained_lo": lambda: lo,
+            "retained_hi": lambda: hi,
+            "hull_lo": lambda: hull_lo,
+            "hull_hi": lambda: hull_hi,
+            "covered": lambda: (lo <= z_true) & (z_true <= hi),
+            "escaped": lambda: (z_true < hull_lo) | (z_true > hull_hi),
+            "score_s": lambda: belief["score_s"],
+            "post_var": lambda: belief["post_var"],
+            "max_surprise": lambda: trace.surprise[:, :k].max(axis=1) if k > 0 else np.full(batch.n_episodes, np.nan),
+            "n_retained": lambda: mask.sum(axis=1).astype(np.int64),
+            "belief_resets": lambda: (trace.lost[:, :k].sum(axis=1) if trace.lost is not None
+                                      else np.zeros(batch.n_episodes)).astype(np.int64),
+            "status": lambda: status,
+            "error": lambda: error,
         }
-        columns.update({name: action[:, i] for i, name in enumerate(action_names)})
-        columns.update({
-            "predicted": np.asarray(predicted, dtype=float),
-            "realized": realized,
-            "z_true": z_true,
-            "retained_lo": lo,
-            "retained_hi": hi,
-            "hull_lo": hull_lo,
-            "hull_hi": hull_hi,
-            "covered": (lo <= z_true) & (z_true <= hi),
-            "escaped": (z_true < hull_lo) | (z_true > hull_hi),
-            "score_s": belief["score_s"],
-            "post_var": belief["post_var"],
-            "max_surprise": surprise.max(axis=1) if k > 0 else np.full(batch.n_episodes, np.nan),
-            "n_retained": mask.sum(axis=1).astype(np.int64),
-            "belief_resets": (trace.lost[:, :k].sum(axis=1) if trace.lost is not None else np.zeros(batch.n_episodes)).astype(np.int64),
-            "status": status,
-            "error": error,
-        })
-        frames.append(columns)
+        wanted = list(makers) if columns is None else list(columns)
+        unknown = [name for name in wanted if name not in makers]
+        if unknown:
+            raise ValueError(f"commit has no column {unknown[0]!r}; it makes {', '.join(makers)}")
+        frames.append({name: makers[name]() for name in wanted})
     if not frames:
         return pd.DataFrame()
     return _interleave(frames, batch.n_episodes)

@@ -216,9 +216,8 @@ class RunBeliefs:
                 if len(self.chunks) == 1:
                     self._kept = trace, cache
             for part, request, columns in zip(parts, requests, keep):
-                table = commit(trace, self.model, self.simulator, cache=cache if reuse else None, **common, **request)
-                # A copy: a column selection is a view that would keep the whole table alive.
-                part.append(table if columns is None else table[list(columns)].copy())
+                part.append(commit(trace, self.model, self.simulator, cache=cache if reuse else None,
+                                   columns=columns, **common, **request))
             del trace, cache  # let a finished chunk's beliefs go before the next is computed
         return [p[0] if len(p) == 1 else pd.concat(p, ignore_index=True) for p in parts]
 
