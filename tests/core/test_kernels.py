@@ -6,7 +6,11 @@ import numpy as np
 import pytest
 
 from probecommit.core import kernels
-from probecommit.core.executors import interval_success_counts, interval_success_counts_numpy
+from probecommit.core.executors import (
+    interval_success_counts,
+    interval_success_counts_numpy,
+    scaled_interval_success_counts,
+)
 
 pytestmark = pytest.mark.skipif(not kernels.HAVE_NUMBA, reason="numba not installed (pip install 'probecommit[fast]')")
 
@@ -27,6 +31,24 @@ def test_interval_counts_match_numpy_including_ties_and_non_finite(grid):
     lo[1, :4] = np.nextafter(grid[:1], np.inf)[0], np.nextafter(grid[-1:], -np.inf)[0], grid[-1], grid[0]
     mask = rng.random((50, 300)) < 0.8
     np.testing.assert_array_equal(interval_success_counts(lo, hi, mask, grid), interval_success_counts_numpy(lo, hi, mask, grid))
+
+
+@pytest.mark.parametrize("margin", [1.0, 0.73, 1.37])
+def test_scaled_interval_counts_match_counting_the_numpy_ends(margin):
+    """The kernel forms centre -+ half * margin per scenario: the same ends as NumPy's, bit for bit
+    (random doubles would expose a fused multiply-add), from a strided centre too."""
+    rng = np.random.default_rng(4)
+    grid = np.round(np.arange(-10.0, 10.0 + 1e-9, 0.5), 10)
+    theta = rng.uniform(-12, 12, (40, 500, 2))
+    theta[:, :60, 0] = np.round(theta[:, :60, 0] * 2) / 2
+    centre = theta[..., 0]  # a strided view, as a model's parts give it
+    half = rng.uniform(0.0, 2.0, (40, 500))
+    half[:, :60] = 0.5 * rng.integers(0, 4, (40, 60))  # ends exactly on grid points when the margin is one
+    mask = rng.random((40, 500)) < 0.8
+    width = half * margin
+    expected = interval_success_counts_numpy(centre - width, centre + width, mask, grid)
+    np.testing.assert_array_equal(scaled_interval_success_counts(centre, half, margin, mask, grid), expected)
+    assert not centre.flags.c_contiguous and expected.sum() > 0
 
 
 def test_uniform_step_detects_even_grids_only():

@@ -50,3 +50,42 @@ def test_default_grown_scenarios_take_the_median_of_the_other_latents():
     expected[..., 0] = z_points
     np.testing.assert_array_equal(out, expected)
     assert np.isnan(out[2, :, 1]).all() and not np.isnan(out[1]).any()
+
+
+def _closed_form_interval(model, theta):
+    """Each interval family's success interval as written before the parts existed (the paper's formulas)."""
+    from probecommit.tasks.grasp.model import CRUSH_RATIO
+    from probecommit.tasks.rig.model import RigModel, rig_window
+
+    x, c = theta[..., 0], theta[..., 1]
+    if isinstance(model, RigModel):
+        window = model.margin * rig_window(c)
+        return x - window, x + window
+    if isinstance(model, InsertionModel):
+        window = model.margin * (0.6 * c + 1.1)
+        return x - window, x + window
+    f_lift = model.decision(theta)
+    centre, half = 0.5 * (1.0 + CRUSH_RATIO) * f_lift, 0.5 * (CRUSH_RATIO - 1.0) * f_lift * model.margin
+    return centre - half, centre + half
+
+
+@pytest.mark.parametrize("name", ["insertion", "rig", "grasp"])
+@pytest.mark.parametrize("margin", [1.0, 0.8, 1.3])
+def test_success_interval_is_its_parts_scaled_by_the_margin_bit_for_bit(name, margin):
+    from probecommit.tasks.rig.model import RigModel
+
+    model = {"insertion": InsertionModel, "rig": RigModel, "grasp": GraspModel}[name]().with_margin(margin)
+    rng = np.random.default_rng(8)
+    theta = rng.uniform(model.prior_low, model.prior_high, (6, 300, len(model.prior_low)))
+    centre, half = model.success_interval_parts(theta)
+    assert np.array_equal(model.with_margin(0.5).success_interval_parts(theta)[1], half)  # margin-free
+    lo, hi = model.success_interval(theta)
+    want_lo, want_hi = _closed_form_interval(model, theta)
+    assert np.array_equal(lo, want_lo) and np.array_equal(hi, want_hi)
+    width = half * margin
+    assert np.array_equal(centre - width, lo) and np.array_equal(centre + width, hi)
+
+
+def test_a_model_without_interval_parts_has_no_interval():
+    assert Push1DModel().success_interval_parts(np.zeros((2, 3, 3))) is None
+    assert Push1DModel().success_interval(np.zeros((2, 3, 3))) is None

@@ -14,12 +14,12 @@ index. The truth is never used.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
-from probecommit.core.kernels import interval_success_counts_compiled
+from probecommit.core.kernels import interval_success_counts_compiled, scaled_interval_success_counts_compiled
 from probecommit.core.retained import belief_reference, masked_interval, retained_summary
 
 SCORE_TIE_TOLERANCE = 1e-12
@@ -81,6 +81,21 @@ def interval_success_counts(lo: np.ndarray, hi: np.ndarray, mask: np.ndarray, ac
     return interval_success_counts_numpy(lo, hi, mask, actions)
 
 
+def scaled_interval_success_counts(centre: np.ndarray, half: np.ndarray, margin: float, mask: np.ndarray,
+                                   actions: np.ndarray) -> np.ndarray:
+    """:func:`interval_success_counts` of the intervals ``centre -+ half * margin`` (a model's
+    ``success_interval_parts``), identical to counting over ``model.success_interval``.
+
+    The compiled kernel forms each retained scenario's ends itself, so a margin search
+    rescoring one retained set under many margins never materializes the ``[E, N]`` ends.
+    """
+    compiled = scaled_interval_success_counts_compiled(centre, half, margin, mask, actions)
+    if compiled is not None:
+        return compiled
+    width = np.multiply(half, margin)
+    return interval_success_counts_numpy(centre - width, centre + width, mask, actions)
+
+
 def interval_success_counts_numpy(lo: np.ndarray, hi: np.ndarray, mask: np.ndarray, actions: np.ndarray) -> np.ndarray:
     """NumPy path of :func:`interval_success_counts` (the compiled kernel's reference)."""
     actions = np.asarray(actions, dtype=float)
@@ -106,21 +121,28 @@ def prior_expected_loss(losses: np.ndarray) -> np.ndarray:
     return np.mean(np.asarray(losses, dtype=float), axis=-1)
 
 
-def scenario_scores(model: Any, scenarios: np.ndarray, mask: np.ndarray, context: np.ndarray | None = None) -> np.ndarray:
+def scenario_scores(model: Any, scenarios: np.ndarray, mask: np.ndarray, context: np.ndarray | None = None,
+                    parts: tuple[np.ndarray, np.ndarray] | None = None) -> np.ndarray:
     """Scenario score of every grid action ``[E, A]`` over the retained scenarios.
 
     Binary loss: failure fraction (exact integer counts over a retained count); the
-    interval-counting fast path is used when the model declares ``success_interval``.
-    Continuous loss: the maximum loss over the retained scenarios.
+    interval-counting fast path is used when the model declares ``success_interval_parts``
+    (or only ``success_interval``). Continuous loss: the maximum loss over the retained
+    scenarios.
+
+    Args:
+        parts: ``model.success_interval_parts(scenarios)`` if already computed (they do not
+            depend on the margin: a margin search passes them for every margin).
     """
     if model.binary_loss:
         retained_count = mask.sum(axis=-1)
         kept = np.maximum(retained_count, 1)
-        interval = model.success_interval(scenarios)
-        if interval is not None:
-            lo, hi = interval
-            grid = np.asarray(model.action_grid, dtype=float).reshape(-1)
-            failures = retained_count[:, None] - interval_success_counts(lo, hi, mask, grid)
+        grid = np.asarray(model.action_grid, dtype=float).reshape(-1)
+        parts = model.success_interval_parts(scenarios) if parts is None else parts
+        if parts is not None:
+            failures = retained_count[:, None] - scaled_interval_success_counts(*parts, model.margin, mask, grid)
+        elif (interval := model.success_interval(scenarios)) is not None:  # a model with only the interval
+            failures = retained_count[:, None] - interval_success_counts(*interval, mask, grid)
         else:
             failures = np.sum(model.loss(model.action_grid, scenarios, context) & mask[:, None, :], axis=-1)
         return failures / kept[:, None]
@@ -183,6 +205,16 @@ class RetainedSet:
     lo: np.ndarray
     hi: np.ndarray
     reference: np.ndarray
+    #: ``model.success_interval_parts(scenarios)`` per model kind and variant, filled on first use.
+    _interval_parts: dict = field(default_factory=dict, repr=False, compare=False)
+
+    def interval_parts(self, model: Any) -> tuple[np.ndarray, np.ndarray] | None:
+        """The model's success-interval parts of the scenarios, computed once per set and model
+        (kind and variant label): they do not depend on the margin, which a margin search varies."""
+        key = (type(model), getattr(model, "variant", None))
+        if key not in self._interval_parts:
+            self._interval_parts[key] = model.success_interval_parts(self.scenarios)
+        return self._interval_parts[key]
 
 
 #: Set constructions at t = 1: the paper's top-weight prefix, or every particle.
@@ -230,7 +262,8 @@ class ProbeRobust:
     def choose(self, retained: RetainedSet, context: np.ndarray | None = None) -> Commitment:
         """Score every grid action over a retained set and pick one per episode."""
         model = self.model
-        scores = scenario_scores(model, retained.scenarios, retained.scenario_mask, context)
+        parts = retained.interval_parts(model) if model.binary_loss else None
+        scores = scenario_scores(model, retained.scenarios, retained.scenario_mask, context, parts)
         index = select_action(scores, model.tie_break_cost(model.action_grid, retained.reference, context))
         return Commitment(index, np.take_along_axis(scores, index[:, None], axis=1)[:, 0], retained.mask,
                           retained.lo, retained.hi)

@@ -85,6 +85,34 @@ if HAVE_NUMBA:
 if HAVE_NUMBA:
 
     @numba.njit(cache=True, nogil=True)
+    def _scaled_interval_success_counts(centre, half, margin, mask, actions, step):  # pragma: no cover - compiled
+        """:func:`_interval_success_counts` of ``centre -+ half * margin``, made per retained
+        scenario here (the same IEEE operations as NumPy's, so the same ends)."""
+        n_e, n_s = mask.shape
+        n_a = actions.shape[0]
+        out = np.zeros((n_e, n_a), dtype=np.int64)
+        diff = np.zeros(n_a + 1, dtype=np.int64)
+        inv_step = 1.0 / step if step > 0.0 else 0.0
+        for e in range(n_e):
+            diff[:] = 0
+            for s in range(n_s):
+                if mask[e, s]:
+                    width = half[e, s] * margin
+                    first = _position(actions, centre[e, s] - width, inv_step, True)
+                    last = _position(actions, centre[e, s] + width, inv_step, False)
+                    if first < last:
+                        diff[first] += 1
+                        diff[last] -= 1
+            run = 0
+            for a in range(n_a):
+                run += diff[a]
+                out[e, a] = run
+        return out
+
+
+if HAVE_NUMBA:
+
+    @numba.njit(cache=True, nogil=True)
     def _systematic_resample(weights, offsets):  # pragma: no cover - compiled
         n_rows, n = weights.shape
         out = np.empty((n_rows, n), dtype=np.int64)
@@ -142,6 +170,18 @@ def systematic_resample_compiled(weights: np.ndarray, offsets: np.ndarray) -> np
     if not HAVE_NUMBA:
         return None
     return _systematic_resample(np.ascontiguousarray(weights, dtype=np.float64), np.ascontiguousarray(offsets, dtype=np.float64))
+
+
+def scaled_interval_success_counts_compiled(centre: np.ndarray, half: np.ndarray, margin: float, mask: np.ndarray,
+                                            actions: np.ndarray) -> np.ndarray | None:
+    """The compiled count over ``centre -+ half * margin`` (see ``core.executors.scaled_interval_success_counts``),
+    or None without numba. ``centre`` may be a strided view (one latent of the scenarios): read in place."""
+    if not HAVE_NUMBA:
+        return None
+    actions = np.ascontiguousarray(actions, dtype=np.float64)
+    return _scaled_interval_success_counts(np.asarray(centre, dtype=np.float64), np.asarray(half, dtype=np.float64),
+                                           float(margin), np.ascontiguousarray(mask, dtype=np.bool_), actions,
+                                           uniform_step(actions))
 
 
 def uniform_step(actions: np.ndarray) -> float:

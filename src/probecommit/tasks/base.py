@@ -89,6 +89,11 @@ class TaskModel(Protocol):
     def success_interval(self, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
         """Open interval of 1-D actions that succeed per scenario, or None (no fast path)."""
 
+    def success_interval_parts(self, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
+        """The success interval as ``(centre, half)`` at margin one, or None: the interval is
+        ``centre -+ half * margin``, bit for bit. Both parts are margin-free, so a margin search
+        computes them once per retained set; ``half`` is a new array the caller may modify."""
+
     def sample_prior(self, rng: np.random.Generator, n: int) -> np.ndarray:
         """``n`` draws ``[n, d]`` from the prior."""
 
@@ -167,6 +172,15 @@ class TaskModelBase:
         raise NotImplementedError(f"the {self.name} model has no execution margin")
 
     def success_interval(self, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
+        """``centre -+ half * margin`` from :meth:`success_interval_parts` (None without them)."""
+        parts = self.success_interval_parts(theta)
+        if parts is None:
+            return None
+        centre, half = parts
+        half *= self.margin  # in place: half is the model's own new array
+        return centre - half, centre + half
+
+    def success_interval_parts(self, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
         return None
 
     def sample_prior(self, rng: np.random.Generator, n: int) -> np.ndarray:

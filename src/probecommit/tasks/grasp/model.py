@@ -110,12 +110,11 @@ class GraspModel(TaskModelBase):
         u = np.asarray(u, dtype=float).reshape(theta.shape[0], 1)
         return squeeze_slip_mm(u, theta[..., 0], theta[..., 1])[..., None]
 
-    def success_interval(self, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Open interval of grip forces that hold without crushing: ``(F_lift, 1.5 F_lift)`` at gamma = 1."""
+    def success_interval_parts(self, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Open interval of grip forces that hold without crushing, ``(F_lift, 1.5 F_lift)`` at gamma = 1,
+        as its centre and half-width (the half-width scales with the margin)."""
         f_lift = self.decision(theta)
-        centre = 0.5 * (1.0 + CRUSH_RATIO) * f_lift
-        half = 0.5 * (CRUSH_RATIO - 1.0) * f_lift * self.margin
-        return centre - half, centre + half
+        return 0.5 * (1.0 + CRUSH_RATIO) * f_lift, np.multiply(0.5 * (CRUSH_RATIO - 1.0), f_lift)
 
     def loss(self, actions: np.ndarray, theta: np.ndarray, context: np.ndarray | None = None) -> np.ndarray:
         """Modeled failure ``[E, A, N]`` (``[A, S]`` for ``theta[S, d]``)."""

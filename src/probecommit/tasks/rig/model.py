@@ -90,9 +90,7 @@ class RigModel(InsertionModel):
     def predict(self, u: np.ndarray, theta: np.ndarray) -> np.ndarray:
         return np.where(self.reads_pocket(u, theta), -ALLOWANCE_MM, 0.0)[..., None]
 
-    def success_interval(self, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Open interval of aims inside the model's window: ``x -+ gamma w_rig(c)``."""
+    def success_interval_parts(self, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Open interval of aims inside the model's window, ``x -+ gamma w_rig(c)``, as ``(x, w_rig(c))``."""
         theta = np.asarray(theta)
-        x = theta[..., 0]
-        window = self.margin * rig_window(theta[..., 1])
-        return x - window, x + window
+        return theta[..., 0], rig_window(theta[..., 1])
