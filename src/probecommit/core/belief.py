@@ -52,13 +52,13 @@ def _normalize(log_weights: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return out, log_norm[:, 0]
 
 
-def effective_sample_size(weights: np.ndarray) -> np.ndarray:
-    """Kish effective sample size ``1 / sum w^2`` of normalized weights ``[E, N] -> [E]``."""
-    return 1.0 / np.sum(np.square(weights), axis=-1)
+def effective_sample_size(weights: np.ndarray, scratch: np.ndarray | None = None) -> np.ndarray:
+    """Kish effective sample size ``1 / sum w^2`` of normalized weights ``[E, N] -> [E]``.
 
-
-def _effective_sample_size_into(weights: np.ndarray, scratch: np.ndarray) -> np.ndarray:
-    """:func:`effective_sample_size` with the squares written into ``scratch`` (same bits)."""
+    Args:
+        weights: Normalized weights.
+        scratch: An array of the weights' shape and dtype to take the squares (same bits), or None.
+    """
     return 1.0 / np.sum(np.square(weights, out=scratch), axis=-1)
 
 
@@ -264,7 +264,7 @@ class ParticleFilter:
         y_hist = y_now if state.y_hist is None else np.concatenate([state.y_hist, y_now], axis=1)
         particles = state.particles  # copied below only if some episode resamples
         weights = np.exp(log_w)
-        ess = _effective_sample_size_into(weights, unnormalized)  # unnormalized is spent: its buffer takes the squares
+        ess = effective_sample_size(weights, unnormalized)  # unnormalized is spent: its buffer takes the squares
         resample = ess < self.resample_fraction * self.n_particles
         accepted = np.full(n_e, np.nan)
         if np.any(resample):

@@ -59,26 +59,35 @@ if HAVE_NUMBA:
                 i -= 1
         return i
 
+    @numba.njit(cache=True, nogil=True, inline="always")
+    def _add_interval(diff, actions, lo, hi, inv_step):  # pragma: no cover - compiled
+        """Add one scenario's open interval ``(lo, hi)`` to the difference array of the grid actions."""
+        first = _position(actions, lo, inv_step, True)
+        last = _position(actions, hi, inv_step, False)
+        if first < last:
+            diff[first] += 1
+            diff[last] -= 1
+
+    @numba.njit(cache=True, nogil=True, inline="always")
+    def _take_counts(diff, out_row):  # pragma: no cover - compiled
+        """Write the counts of a difference array into ``out_row`` and clear it for the next episode."""
+        run = 0
+        for a in range(out_row.shape[0]):
+            run += diff[a]
+            out_row[a] = run
+        diff[:] = 0
+
     @numba.njit(cache=True, nogil=True)
     def _interval_success_counts(lo, hi, mask, actions, step):  # pragma: no cover - compiled
         n_e, n_s = mask.shape
-        n_a = actions.shape[0]
-        out = np.zeros((n_e, n_a), dtype=np.int64)
-        diff = np.zeros(n_a + 1, dtype=np.int64)
+        out = np.zeros((n_e, actions.shape[0]), dtype=np.int64)
+        diff = np.zeros(actions.shape[0] + 1, dtype=np.int64)
         inv_step = 1.0 / step if step > 0.0 else 0.0
         for e in range(n_e):
-            diff[:] = 0
             for s in range(n_s):
                 if mask[e, s]:
-                    first = _position(actions, lo[e, s], inv_step, True)
-                    last = _position(actions, hi[e, s], inv_step, False)
-                    if first < last:
-                        diff[first] += 1
-                        diff[last] -= 1
-            run = 0
-            for a in range(n_a):
-                run += diff[a]
-                out[e, a] = run
+                    _add_interval(diff, actions, lo[e, s], hi[e, s], inv_step)
+            _take_counts(diff, out[e])
         return out
 
 
@@ -89,24 +98,15 @@ if HAVE_NUMBA:
         """:func:`_interval_success_counts` of ``centre -+ half * margin``, made per retained
         scenario here (the same IEEE operations as NumPy's, so the same ends)."""
         n_e, n_s = mask.shape
-        n_a = actions.shape[0]
-        out = np.zeros((n_e, n_a), dtype=np.int64)
-        diff = np.zeros(n_a + 1, dtype=np.int64)
+        out = np.zeros((n_e, actions.shape[0]), dtype=np.int64)
+        diff = np.zeros(actions.shape[0] + 1, dtype=np.int64)
         inv_step = 1.0 / step if step > 0.0 else 0.0
         for e in range(n_e):
-            diff[:] = 0
             for s in range(n_s):
                 if mask[e, s]:
                     width = half[e, s] * margin
-                    first = _position(actions, centre[e, s] - width, inv_step, True)
-                    last = _position(actions, centre[e, s] + width, inv_step, False)
-                    if first < last:
-                        diff[first] += 1
-                        diff[last] -= 1
-            run = 0
-            for a in range(n_a):
-                run += diff[a]
-                out[e, a] = run
+                    _add_interval(diff, actions, centre[e, s] - width, centre[e, s] + width, inv_step)
+            _take_counts(diff, out[e])
         return out
 
 
