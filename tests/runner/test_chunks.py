@@ -128,3 +128,35 @@ def test_commit_of_some_columns_equals_those_columns_of_the_whole_table(runs):
         pd.testing.assert_frame_equal(some, whole[list(columns)], check_exact=True)
     with pytest.raises(ValueError, match="no column 'aim'"):
         commit(trace, beliefs.model, beliefs.simulator, columns=("k", "aim"), **kwargs)
+
+
+def test_beliefs_kept_at_some_budgets_commit_the_rows_of_the_whole_trace(runs):
+    """``RunBeliefs.of(..., budgets=K)`` keeps and commits only K; its rows are the full trace's rows at K."""
+    whole = RunBeliefs.of(runs["cal"], chunk_instances=None)
+    some = RunBeliefs.of(runs["cal"], chunk_instances=2, budgets=[4, 2])
+    assert some.budgets == [2, 4] and whole.budgets == [1, 2, 3, 4, 5]
+    assert sorted(some.trace(some.chunks[0]).states) == [0, 2, 4]
+    full = whole.commit([{"thresholds": 0.8}])[0]
+    kept = some.commit([{"thresholds": 0.8}])[0]
+    expected = full[full.k.isin([2, 4])].reset_index(drop=True)
+    pd.testing.assert_frame_equal(kept, expected, check_exact=True)
+    with pytest.raises(ValueError, match=r"budget\(s\) \[7\] not in the run"):
+        RunBeliefs.of(runs["cal"], budgets=[2, 7])
+
+
+def test_calibration_and_gates_of_some_budgets_equal_keeping_every_budget(runs):
+    """calibrate/gates with ``budgets`` keep only those beliefs; the result equals keeping them all."""
+    def with_every_budget(run_dir):
+        loaded = load_run(run_dir)
+        loaded.beliefs = RunBeliefs.of(loaded)
+        return loaded
+
+    for budgets in ([3], [1, 4]):
+        fast = calibrate(runs["cal"], runs["test"], budgets=budgets, resamples=50)
+        every = calibrate(with_every_budget(runs["cal"]), with_every_budget(runs["test"]), budgets=budgets, resamples=50)
+        assert json.dumps(fast.to_dict(), sort_keys=True, default=str) == json.dumps(every.to_dict(), sort_keys=True, default=str)
+        pd.testing.assert_frame_equal(fast.audit_original, every.audit_original, check_exact=True)
+    g_fast = gates(runs["cal"], runs["test"], budgets=[2, 3], resamples=50)
+    g_every = gates(with_every_budget(runs["cal"]), with_every_budget(runs["test"]), budgets=[2, 3], resamples=50)
+    pd.testing.assert_frame_equal(g_fast.summary, g_every.summary, check_exact=True)
+    pd.testing.assert_frame_equal(g_fast.curves, g_every.curves, check_exact=True)

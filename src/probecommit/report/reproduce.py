@@ -390,16 +390,18 @@ class InsertionReproduction:
         rng = np.random.default_rng(p.resplits["seed"])
         rows = []
         count = p.resplits["count"]
-        beliefs = RunBeliefs.of(pool, chunk_instances=None)  # the pool's beliefs, computed once for every split
+        k = 5  # the re-split study calibrates the cover schedule's last budget only
+        # The pool's beliefs at k, computed once for every split (no other budget is kept or committed).
+        beliefs = RunBeliefs.of(pool, chunk_instances=None, budgets=[k])
         for n in range(count):
             perm = rng.permutation(len(ids))
             half = len(ids) // 2
             cal = subset_run(pool, ids[perm[:half]], beliefs)
             test = subset_run(pool, ids[perm[half:]], beliefs)
-            res = calibrate(cal, test, alpha=p.alpha, budgets=[5], resamples=50, seed=p.bootstrap.seed + n)
+            res = calibrate(cal, test, alpha=p.alpha, budgets=[k], resamples=50, seed=p.bootstrap.seed + n)
             t3 = res.table3
             rows.append({
-                "split": n, "level": float(res.thresholds[5]), "failure": self._setmargin_failure(res),
+                "split": n, "level": float(res.thresholds[k]), "failure": self._setmargin_failure(res),
                 "heldout_cluster_coverage": float(t3["cluster_coverage_calibrated"].iloc[0]),
                 "margin_optimistic": bool(t3["optimism_calibrated"].iloc[0] > 0),
                 "gamma": res.margin.gamma,

@@ -134,6 +134,8 @@ class RunBeliefs:
         pfilter: The particle filter of ``config``.
         batch: Every successful stored trajectory, in the run's episode order.
         chunks: Row slices of ``batch``, each a whole number of instances (all repeats).
+        kept_budgets: The budgets whose beliefs a trace keeps (None: every budget the run
+            commits at). A study of one budget (re-splits at k = 5) keeps and commits only it.
     """
 
     config: StudyConfig
@@ -142,29 +144,44 @@ class RunBeliefs:
     pfilter: ParticleFilter
     batch: ProbeBatch
     chunks: list[slice]
+    kept_budgets: tuple[int, ...] | None = None
     #: The trace of a run that is one chunk, kept across ``commit`` calls (with its reuse cache).
     _kept: tuple[BeliefTrace, dict] | None = field(default=None, repr=False)
 
     @classmethod
     def of(cls, run: str | Path | LoadedRun, config: StudyConfig | None = None,
-           chunk_instances: int | None = CHUNK_INSTANCES) -> "RunBeliefs":
+           chunk_instances: int | None = CHUNK_INSTANCES, budgets: Iterable[int] | None = None) -> "RunBeliefs":
         """Prepare a run for belief recomputation.
 
         Args:
             run: A run directory or a loaded run.
             config: The config to infer under (default: the run's).
             chunk_instances: Instances per chunk; None holds the whole run as one chunk.
+            budgets: Keep and commit only these of the run's budgets (None: all of them). An
+                episode's belief at budget k does not depend on which budgets are kept, so its
+                rows equal those of a full trace (tested).
+
+        Raises:
+            ValueError: A budget the run does not commit at.
         """
         loaded = run if isinstance(run, LoadedRun) else load_run(run)
         config = config or loaded.config
+        kept = None
+        if budgets is not None:
+            kept = tuple(sorted({int(k) for k in budgets}))
+            have = [k for k in config.probes.commit_budgets if k > 0]
+            missing = [k for k in kept if k not in have]
+            if missing or not kept:
+                raise ValueError(f"budget(s) {missing or '[]'} not in the run (it commits at {have})")
         model = build_model(config)
         batch = probe_batch(loaded, model)
         return cls(config, model, simulator_for_run(loaded, config), build_filter(model, config.belief), batch,
-                   _chunk_slices(batch.instance_id, chunk_instances))
+                   _chunk_slices(batch.instance_id, chunk_instances), kept)
 
     def trace(self, rows: slice) -> BeliefTrace:
-        """Beliefs of the episodes ``batch[rows]`` at every committed budget."""
-        return build_trace(self.pfilter, self.batch.subset(rows), self.config.seed, self.config.probes.commit_budgets)
+        """Beliefs of the episodes ``batch[rows]`` at every kept budget."""
+        budgets = self.config.probes.commit_budgets if self.kept_budgets is None else self.kept_budgets
+        return build_trace(self.pfilter, self.batch.subset(rows), self.config.seed, budgets)
 
     def restrict(self, instance_ids: Iterable[str]) -> "RunBeliefs":
         """The beliefs of some of the run's instances, taken from this run's, computed once.
@@ -180,11 +197,13 @@ class RunBeliefs:
             self._kept = self.trace(self.chunks[0]), {}
         rows = np.flatnonzero(np.isin(self.batch.instance_id, list(instance_ids)))  # the run's order
         return RunBeliefs(self.config, self.model, self.simulator, self.pfilter, self.batch.subset(rows),
-                          [slice(0, len(rows))], (self._kept[0].subset(rows), {}))
+                          [slice(0, len(rows))], self.kept_budgets, (self._kept[0].subset(rows), {}))
 
     @property
     def budgets(self) -> list[int]:
         """The budgets a trace of this run holds."""
+        if self.kept_budgets is not None:
+            return list(self.kept_budgets)
         return [k for k in self.config.probes.commit_budgets if k > 0]
 
     def commit(self, requests: Sequence[Mapping[str, Any]], *, keep: Sequence[Sequence[str] | None] | None = None,
