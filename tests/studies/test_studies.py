@@ -11,7 +11,7 @@ from probecommit.tasks.insertion.model import InsertionModel
 from probecommit.runner.replay import load_run, replay_episodes
 from probecommit.runner.study import run_study
 from probecommit.studies.cover_search import candidate_schedules
-from probecommit.studies.faults import fault_arms
+from probecommit.studies.faults import Arm, fault_arms, run_fault_harness
 from probecommit.studies.protocol import load_protocol
 from probecommit.studies.scan import boundary_scan
 from probecommit.tasks.insertion.model import InsertionModel
@@ -114,6 +114,18 @@ def test_fault_arms_cover_five_classes_with_fix_and_tempering():
         assert {a.arm for a in arms if a.fault == fault} == {"fault", "fix", "tempered"}
     noise_fix = next(a for a in arms if a.fault == "noise" and a.arm == "fix")
     assert noise_fix.overrides == {"model": {"sigma": 2.0}}
+
+
+def test_fault_harness_arms_sharing_a_replay_equal_their_own_replays(base_run):
+    """Arms with the same rollout and overrides share one replay; every arm's rows equal its own replay."""
+    arms = [Arm("none", "fault", "base", {}), Arm("boundary", "fault", "base", {"model": {"boundary": "deployed"}}),
+            Arm("boundary", "fix", "base", {}), Arm("frame", "fix", "base", {})]
+    episodes = run_fault_harness({"base": base_run}, arms)
+    for arm in arms:
+        rows = episodes[(episodes.fault == arm.fault) & (episodes.arm == arm.arm)].drop(columns=["fault", "arm"])
+        alone, _ = replay_episodes(base_run, arm.overrides)
+        pd.testing.assert_frame_equal(rows.reset_index(drop=True), alone, check_exact=True)
+    assert len(episodes) == 4 * len(alone)
 
 
 def test_replay_refuses_to_change_readings(base_run):

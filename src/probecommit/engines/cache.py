@@ -8,6 +8,7 @@ and bounds how many it keeps. The queries themselves are cached above this, in
 
 from __future__ import annotations
 
+import threading
 import weakref
 from collections import OrderedDict
 from inspect import ismethod
@@ -35,10 +36,16 @@ class InstanceCache:
         self._evict = None if evict is None else _weak(evict)
         self._size = int(size)
         self._entries: OrderedDict[tuple[float, ...], Any] = OrderedDict()
+        # Engine threads (CachedSimulator.prefetch) share the cache: one builder at a time.
+        self._lock = threading.Lock()
 
     def get(self, *key: float) -> Any:
-        """The entry of instance ``key``, built on first use."""
+        """The entry of instance ``key``, built on first use (thread-safe)."""
         key = tuple(float(k) for k in key)
+        with self._lock:
+            return self._get(key)
+
+    def _get(self, key: tuple[float, ...]) -> Any:
         entry = self._entries.get(key)
         if entry is not None:
             self._entries.move_to_end(key)

@@ -5,10 +5,13 @@ so families keep compiled instances in a process-wide :class:`~probecommit.engin
 and each simulator keeps one ``MjData`` per layout (:class:`DataBuffers`), shared by every
 instance whose model has that layout. A query must then set (or reset) every piece of
 state it reads; each family's tests check that interleaving instances changes no answer.
+Buffers are per thread, so a simulator's queries can run in engine threads at once
+(:meth:`probecommit.tasks.base.CachedSimulator.prefetch`).
 """
 
 from __future__ import annotations
 
+import threading
 from typing import Any
 
 
@@ -20,7 +23,7 @@ def data_layout(model: Any) -> tuple[int, ...]:
 
 
 class DataBuffers:
-    """One ``MjData`` per memory layout, made on first use.
+    """One ``MjData`` per memory layout and thread, made on first use.
 
     Args:
         mj: The imported ``mujoco`` module (the caller imports it lazily).
@@ -28,14 +31,25 @@ class DataBuffers:
 
     def __init__(self, mj: Any) -> None:
         self._mj = mj
-        self._data: dict[tuple[int, ...], Any] = {}
+        self._local = threading.local()
+
+    @property
+    def _data(self) -> dict[tuple[int, ...], Any]:
+        """The calling thread's buffers by layout."""
+        data = getattr(self._local, "data", None)
+        if data is None:
+            data = self._local.data = {}
+        return data
 
     def get(self, model: Any, layout: tuple[int, ...]) -> Any:
-        """The buffer for ``model``, whose :func:`data_layout` is ``layout`` (computed once, by the caller's cache)."""
-        data = self._data.get(layout)
+        """The calling thread's buffer for ``model``, whose :func:`data_layout` is ``layout``
+        (computed once, by the caller's cache)."""
+        buffers = self._data
+        data = buffers.get(layout)
         if data is None:
-            data = self._data[layout] = self._mj.MjData(model)
+            data = buffers[layout] = self._mj.MjData(model)
         return data
 
     def __len__(self) -> int:
+        """Buffers of the calling thread."""
         return len(self._data)

@@ -18,6 +18,7 @@ Every arm of a fault reuses one set of stored probes, so arms are paired.
 
 from __future__ import annotations
 
+import json
 from dataclasses import dataclass
 from typing import Any
 
@@ -66,11 +67,18 @@ def fault_arms(noise_factor: float, prior_half_width: float, particles: int, fra
 
 
 def run_fault_harness(rollouts: dict[str, LoadedRun], arms: list[Arm], progress=None) -> pd.DataFrame:
-    """Episodes of every arm, tagged with ``fault`` and ``arm`` columns."""
+    """Episodes of every arm, tagged with ``fault`` and ``arm`` columns.
+
+    Arms that replay the same rollout under the same overrides (the fixes that are the
+    unfaulted model) share one replay: a replay is a deterministic function of the two.
+    """
     frames = []
+    replayed: dict[tuple[str, str], pd.DataFrame] = {}
     for n, arm in enumerate(arms):
-        episodes, _ = replay_episodes(rollouts[arm.rollout], arm.overrides)
-        frames.append(episodes.assign(fault=arm.fault, arm=arm.arm))
+        key = (arm.rollout, json.dumps(arm.overrides, sort_keys=True, default=str))
+        if key not in replayed:
+            replayed[key], _ = replay_episodes(rollouts[arm.rollout], arm.overrides)
+        frames.append(replayed[key].assign(fault=arm.fault, arm=arm.arm))
         if progress:
             progress(n + 1, len(arms))
     return pd.concat(frames, ignore_index=True)

@@ -20,7 +20,10 @@ model; :class:`TaskModelBase` gives the defaults a family overrides.
 from __future__ import annotations
 
 import json
+import os
+import threading
 import time
+from concurrent.futures import ThreadPoolExecutor
 from contextlib import contextmanager
 from dataclasses import dataclass, field, fields, is_dataclass, replace
 from typing import Any, Callable, Iterable, Iterator, Protocol, runtime_checkable
@@ -253,6 +256,39 @@ def _key_part(values: Iterable[float]) -> tuple[float, ...]:
     return tuple(map(float, values))
 
 
+#: Environment variable: engine threads for :meth:`CachedSimulator.prefetch` (1 turns them off).
+ENGINE_THREADS_ENV = "PROBECOMMIT_ENGINE_THREADS"
+_POOL: ThreadPoolExecutor | None = None
+_POOL_LOCK = threading.Lock()
+
+
+def engine_threads() -> int:
+    """Threads that answer engine queries at once: ``$PROBECOMMIT_ENGINE_THREADS``, else the
+    CPUs this process may use (at most 4).
+
+    Raises:
+        ValueError: The variable is set to something other than a positive integer.
+    """
+    text = os.environ.get(ENGINE_THREADS_ENV, "").strip()
+    if text:
+        if not text.isdigit() or int(text) < 1:
+            raise ValueError(f"{ENGINE_THREADS_ENV} must be a positive integer, got {text!r}")
+        return int(text)
+    cpus = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
+    return max(1, min(4, cpus))
+
+
+def _engine_pool(threads: int) -> ThreadPoolExecutor:
+    """The process's engine threads (kept: a thread keeps its engine buffers between batches)."""
+    global _POOL
+    with _POOL_LOCK:
+        if _POOL is None or _POOL._max_workers != threads:  # noqa: SLF001 - the size it was made with
+            if _POOL is not None:
+                _POOL.shutdown(wait=True)
+            _POOL = ThreadPoolExecutor(max_workers=threads, thread_name_prefix="probecommit-engine")
+        return _POOL
+
+
 class CachedSimulator:
     """Base for simulators: every deterministic engine query is run once and cached.
 
@@ -267,6 +303,10 @@ class CachedSimulator:
     #: added to the action before the query): simulators that differ only in these give the
     #: same engine answers, so :func:`shared_engine_answers` lets them share.
     answer_independent_settings: tuple[str, ...] = ()
+    #: Whether the named queries may run in several threads at once (each thread with its own
+    #: engine buffers, the engine releasing the GIL while it steps): :meth:`prefetch` then runs
+    #: a batch of them in engine threads. Off unless an engine's simulator says so.
+    parallel_queries: bool = False
 
     def __init__(self) -> None:
         self._cache: dict[tuple[str, tuple[float, ...], tuple[float, ...]], np.ndarray] = {}
@@ -295,6 +335,52 @@ class CachedSimulator:
                     shared[key] = hit
             self._cache[key] = hit
         return hit
+
+    def prefetch(self, keys: Iterable[tuple[str, tuple[float, ...], tuple[float, ...]]]) -> int:
+        """Answer the queries ``keys`` not answered yet, several at once in engine threads.
+
+        What a caller is about to ask for anyway (every distinct action of a commit), run
+        ahead in parallel: the answers are the engine's own (a query is a pure function of
+        its key), cached in the order given, and counted as if asked one by one. Does
+        nothing unless :attr:`parallel_queries` and :func:`engine_threads` > 1. A query that
+        raises is left unanswered, so the caller's own request raises it where it is handled.
+
+        Returns:
+            The number of queries run.
+        """
+        threads = engine_threads() if self.parallel_queries else 1
+        if threads < 2:
+            return 0
+        shared = self.shared_answers
+        missing: list[tuple[str, tuple[float, ...], tuple[float, ...]]] = []
+        seen: set = set()
+        for key in keys:
+            if key in seen or key in self._cache or (shared is not None and key in shared):
+                continue
+            seen.add(key)
+            missing.append(key)
+        if len(missing) < 2:
+            return 0
+
+        def answer(key):
+            start = time.perf_counter()
+            try:
+                value = np.atleast_1d(np.asarray(getattr(self, key[0])(*key[1], *key[2]), dtype=float))
+            except Exception:  # noqa: BLE001 - re-raised by the caller's own request
+                value = None
+            return value, time.perf_counter() - start
+
+        run = 0
+        for key, (value, seconds) in zip(missing, _engine_pool(threads).map(answer, missing)):
+            if value is None:
+                continue
+            run += 1
+            self.engine_seconds += seconds
+            self.engine_calls[key[0]] = self.engine_calls.get(key[0], 0) + 1
+            if shared is not None:
+                shared[key] = value
+            self._cache[key] = value
+        return run
 
     def cache_records(self) -> list[dict[str, Any]]:
         """Cache rows: engine, query, theta and arg tuples, value vector."""

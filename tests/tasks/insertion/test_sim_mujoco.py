@@ -87,6 +87,29 @@ def test_instances_sharing_one_data_buffer_answer_as_alone():
     assert len(shared._data) == 1  # one layout, one buffer
 
 
+def test_prefetch_in_engine_threads_answers_as_one_by_one(monkeypatch):
+    """Queries run ahead in engine threads give the one-by-one answers, counts and cache order."""
+    rng = np.random.default_rng(5)
+    truths = np.column_stack([rng.uniform(-10, 10, 5), rng.uniform(0.7, 1.3, 5)])
+    keys = [("peg_depth" if i % 2 else "tap_reading", (float(x), float(c)), (float(x + rng.uniform(-3, 3)),))
+            for i, (x, c) in enumerate(np.repeat(truths, 3, axis=0))]
+    one_by_one = MujocoInsertionSimulator()
+    expected = [one_by_one.cached_key(k) for k in keys]
+    monkeypatch.setenv("PROBECOMMIT_ENGINE_THREADS", "3")
+    ahead = MujocoInsertionSimulator()
+    assert ahead.prefetch(keys + keys[:2]) == len(keys)  # a repeated key runs once
+    assert ahead.engine_calls == one_by_one.engine_calls
+    assert list(ahead._cache) == list(one_by_one._cache)
+    assert all(np.array_equal(ahead.cached_key(k), v) for k, v in zip(keys, expected))
+    assert ahead.engine_calls == one_by_one.engine_calls  # nothing asked twice
+    assert ahead.prefetch(keys) == 0
+    monkeypatch.setenv("PROBECOMMIT_ENGINE_THREADS", "1")
+    assert MujocoInsertionSimulator().prefetch(keys) == 0  # threads off: answered on demand
+    monkeypatch.setenv("PROBECOMMIT_ENGINE_THREADS", "two")
+    with pytest.raises(ValueError, match="PROBECOMMIT_ENGINE_THREADS must be a positive integer"):
+        MujocoInsertionSimulator().prefetch(keys)
+
+
 def test_repeated_query_hits_cache():
     s = MujocoInsertionSimulator()
     first = s.query("tap_reading", X_HOLE, C, 3.0)

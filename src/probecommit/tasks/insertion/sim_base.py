@@ -49,13 +49,22 @@ class InsertionSimulator(NoisySimulator):
         """Cached ``tap_reading`` or ``peg_depth`` in mm; the engine runs once per key."""
         return float(self.cached_key((kind, (float(x_hole), float(c)), (float(q),)))[0])
 
+    def probe_query_key(self, theta: np.ndarray, u: np.ndarray) -> tuple:
+        """The cache key of the engine query behind ``probe(theta, u, ...)`` (for :meth:`prefetch`)."""
+        return ("tap_reading", (float(theta[0]), float(theta[1])), (float(np.ravel(u)[0]),))
+
+    def execute_query_key(self, theta: np.ndarray, action: np.ndarray, context: np.ndarray | None = None) -> tuple:
+        """The cache key of the engine query behind ``execute(theta, action)`` (for :meth:`prefetch`)."""
+        return ("peg_depth", (float(theta[0]), float(theta[1])), (float(np.ravel(action)[0]) + self.aim_offset,))
+
     def probe(self, theta: np.ndarray, u: np.ndarray, rng: np.random.Generator) -> np.ndarray:
-        reading = self.query("tap_reading", theta[0], theta[1], float(np.ravel(u)[0]))
+        reading = float(self.cached_key(self.probe_query_key(theta, u))[0])
         return np.array([reading + self.noise_sigma * rng.standard_normal()])
 
     def execute(self, theta: np.ndarray, action: np.ndarray, context: np.ndarray | None = None) -> dict[str, Any]:
-        aim = float(np.ravel(action)[0]) + self.aim_offset
-        depth = self.query("peg_depth", theta[0], theta[1], aim)
+        key = self.execute_query_key(theta, action)
+        aim = key[2][0]
+        depth = float(self.cached_key(key)[0])
         if not np.isfinite(depth):
             raise FloatingPointError(f"{self.engine} peg_depth returned {depth} at aim {aim}")
         return {"realized": float(depth < ENTRY_DEPTH_FRACTION * POCKET_DEPTH_MM), "depth": depth}

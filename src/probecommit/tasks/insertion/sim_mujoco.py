@@ -212,6 +212,8 @@ class MujocoInsertionSimulator(InsertionSimulator):
     """
 
     engine = "mujoco"
+    # MuJoCo releases the GIL in mj_step; a thread's queries use that thread's MjData.
+    parallel_queries = True
 
     def __init__(self, **kwargs: Any) -> None:
         super().__init__(**kwargs)
