@@ -122,13 +122,20 @@ def _run_serial(jobs: list[Job]) -> Iterator[Result]:
         yield compute_unit(*job)
 
 
-def _die_with_parent(parent_pid: int, poll_s: float = 0.5) -> None:
+def _die_with_parent(parent_pid: int, poll_s: float = 0.5, engine_threads: int | None = None) -> None:
     """Pool-worker initializer: exit as soon as the parent is gone (even after SIGKILL).
 
     A killed parent cannot clean up its pool; each worker watches its parent pid from a
-    daemon thread and leaves when it changes (the worker was re-parented).
+    daemon thread and leaves when it changes (the worker was re-parented). With
+    ``engine_threads``, the worker's engine threads (``tasks.base.engine_threads``) unless
+    the user set them: the workers share the CPUs.
     """
     import threading
+
+    from probecommit.tasks.base import ENGINE_THREADS_ENV
+
+    if engine_threads is not None:
+        os.environ.setdefault(ENGINE_THREADS_ENV, str(engine_threads))
 
     def watch() -> None:
         while True:
@@ -145,8 +152,12 @@ def _run_processes(jobs: list[Job], workers: int) -> Iterator[Result]:
 
     # "spawn": engines (MuJoCo, PyBullet, SAPIEN) hold native state that must not be
     # forked, and a spawned worker starts from the same imports on every platform.
-    with ProcessPoolExecutor(max_workers=min(workers, len(jobs)), mp_context=mp.get_context("spawn"),
-                             initializer=_die_with_parent, initargs=(os.getpid(),)) as pool:
+    from probecommit.tasks.base import engine_threads
+
+    n_workers = min(workers, len(jobs))
+    threads = max(1, engine_threads() // n_workers)  # the processes share the CPUs the threads would use
+    with ProcessPoolExecutor(max_workers=n_workers, mp_context=mp.get_context("spawn"),
+                             initializer=_die_with_parent, initargs=(os.getpid(), 0.5, threads)) as pool:
         pending = {pool.submit(compute_unit, *job) for job in jobs}
         try:
             while pending:
