@@ -70,6 +70,24 @@ def test_scan_reports_a_pocket_that_never_closes():
         boundary_scan(sim, inst, step=0.25, half_range=7.0)
 
 
+@pytest.mark.mujoco
+def test_scan_with_engine_threads_equals_one_by_one(monkeypatch):
+    """A MuJoCo scan runs its grid taps in engine threads first: same scans, same engine calls."""
+    from probecommit.tasks.insertion.sim_mujoco import MujocoInsertionSimulator
+
+    p = load_protocol()
+    inst = draw_instances(p.run_config("d", "development", "development", "random"), InsertionModel()).head(2)
+    results = {}
+    for threads in ("1", "2"):
+        monkeypatch.setenv("PROBECOMMIT_ENGINE_THREADS", threads)
+        sim = MujocoInsertionSimulator()
+        results[threads] = boundary_scan(sim, inst, step=0.5, half_range=7.0, tolerance=1e-2), dict(sim.engine_calls)
+    (one, calls_one), (two, calls_two) = results["1"], results["2"]
+    pd.testing.assert_frame_equal(one.scans, two.scans, check_exact=True)
+    pd.testing.assert_frame_equal(one.grid, two.grid, check_exact=True)
+    assert calls_one == calls_two
+
+
 def test_there_are_126_increasing_cover_candidates():
     cands = candidate_schedules(InsertionModel.deployed().probe_grid)
     assert len(cands) == 126 and all(list(c) == sorted(c) for c in cands)

@@ -46,9 +46,14 @@ def _is_pocket(simulator, x_hole: float, c: float, u: float) -> bool:
     return simulator.query("tap_reading", x_hole, c, u) < POCKET_THRESHOLD_MM
 
 
+def scan_offsets(step: float, half_range: float) -> np.ndarray:
+    """The scan grid's tap offsets from the hole centre."""
+    return np.round(np.arange(-half_range, half_range + step / 2, step), 10)
+
+
 def scan_instance(simulator, x_hole: float, c: float, step: float, half_range: float, tolerance: float):
     """Grid and bisection scan of one truth; returns (grid rows, per-side boundary distances)."""
-    offsets = np.round(np.arange(-half_range, half_range + step / 2, step), 10)
+    offsets = scan_offsets(step, half_range)
     readings = np.array([simulator.query("tap_reading", x_hole, c, x_hole + o) for o in offsets])
     pocket = readings < POCKET_THRESHOLD_MM
     if not pocket.any():
@@ -75,6 +80,10 @@ def scan_instance(simulator, x_hole: float, c: float, step: float, half_range: f
 def boundary_scan(simulator, instances: pd.DataFrame, step: float = 0.25, half_range: float = 7.0, tolerance: float = 1e-3) -> ScanResult:
     """Scan every truth of ``instances`` (columns ``instance_id, true_x_hole, true_c``)."""
     rows, grids = [], []
+    if getattr(simulator, "parallel_queries", False):  # every truth's grid taps are needed: run them in engine threads
+        offsets = scan_offsets(step, half_range)
+        simulator.prefetch([simulator.query_key("tap_reading", x, c, x + o) for x, c in
+                            zip(instances["true_x_hole"].astype(float), instances["true_c"].astype(float)) for o in offsets])
     for _, inst in instances.iterrows():
         x, c = float(inst["true_x_hole"]), float(inst["true_c"])
         grid, sides = scan_instance(simulator, x, c, step, half_range, tolerance)

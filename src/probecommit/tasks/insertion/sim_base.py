@@ -45,17 +45,22 @@ class InsertionSimulator(NoisySimulator):
     def peg_depth(self, x_hole: float, c: float, a: float) -> float:  # pragma: no cover
         raise NotImplementedError
 
+    @staticmethod
+    def query_key(kind: str, x_hole: float, c: float, q: float) -> tuple:
+        """The cache key of ``query(kind, x_hole, c, q)`` (for :meth:`prefetch`)."""
+        return (kind, (float(x_hole), float(c)), (float(q),))
+
     def query(self, kind: str, x_hole: float, c: float, q: float) -> float:
         """Cached ``tap_reading`` or ``peg_depth`` in mm; the engine runs once per key."""
-        return float(self.cached_key((kind, (float(x_hole), float(c)), (float(q),)))[0])
+        return float(self.cached_key(self.query_key(kind, x_hole, c, q))[0])
 
     def probe_query_key(self, theta: np.ndarray, u: np.ndarray) -> tuple:
         """The cache key of the engine query behind ``probe(theta, u, ...)`` (for :meth:`prefetch`)."""
-        return ("tap_reading", (float(theta[0]), float(theta[1])), (float(np.ravel(u)[0]),))
+        return self.query_key("tap_reading", theta[0], theta[1], np.ravel(u)[0])
 
     def execute_query_key(self, theta: np.ndarray, action: np.ndarray, context: np.ndarray | None = None) -> tuple:
         """The cache key of the engine query behind ``execute(theta, action)`` (for :meth:`prefetch`)."""
-        return ("peg_depth", (float(theta[0]), float(theta[1])), (float(np.ravel(action)[0]) + self.aim_offset,))
+        return self.query_key("peg_depth", theta[0], theta[1], float(np.ravel(action)[0]) + self.aim_offset)
 
     def probe(self, theta: np.ndarray, u: np.ndarray, rng: np.random.Generator) -> np.ndarray:
         reading = float(self.cached_key(self.probe_query_key(theta, u))[0])
