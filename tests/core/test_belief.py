@@ -152,3 +152,71 @@ def test_resampling_triggers_below_half_ess_and_resets_weights():
 def test_rejects_bad_sigma():
     with pytest.raises(ValueError, match="sigma"):
         GaussianLikelihood(-0.5)
+
+
+class _OpaqueGaussian:
+    """A Gaussian likelihood the filter cannot see inside (no ``arithmetic``): the generic path."""
+
+    def __init__(self, sigma):
+        self.inner = GaussianLikelihood(sigma)
+
+    def log_likelihood(self, y, pred):
+        return self.inner.log_likelihood(y, pred)
+
+
+def _two_level_models():
+    from probecommit.tasks.insertion.model import InsertionModel
+    from probecommit.tasks.rig.model import RigModel
+
+    return [InsertionModel.deployed(), InsertionModel.corrected(), RigModel()]
+
+
+@pytest.mark.parametrize("model", _two_level_models(), ids=lambda m: f"{type(m).__name__}-{m.variant}")
+@pytest.mark.parametrize("temperature", [None, 4.0])
+def test_reading_levels_reweight_as_predicting_every_particle(model, temperature, monkeypatch):
+    """Per-level log-likelihoods picked per particle (compiled and NumPy) equal predicting every particle."""
+    from probecommit.core import kernels
+    from probecommit.core.likelihood import TemperedLikelihood
+
+    rng = np.random.default_rng(11)
+    e, n = 7, 301
+    low, high = np.asarray(model.prior_low), np.asarray(model.prior_high)
+    theta = low + (high - low) * rng.random((e, n, 2))
+    u = rng.choice(np.asarray(model.probe_grid)[:, 0], e)
+    theta[:, :5, 0] = u[:, None] + rng.uniform(-1, 1, (e, 5)) * 0.2 + 4.0  # near the boundary
+    y = np.column_stack([np.where(rng.random(e) < 0.5, model.reading_levels[0], 0.0) + 0.5 * rng.standard_normal(e)])
+    likelihood = GaussianLikelihood(model.sigma)
+    if temperature:
+        likelihood = TemperedLikelihood(likelihood, temperature)
+    log_w = np.log(rng.dirichlet(np.ones(n), e))
+    pred = model.predict(u, theta)
+    assert set(np.unique(pred)) <= set(model.reading_levels)
+    expected = log_w + likelihood.log_likelihood(y, pred)
+    level_pred = np.empty((e, 2, 1))
+    level_pred[:, :, 0] = model.reading_levels
+    level_ll = likelihood.log_likelihood(y, level_pred)
+    assert np.array_equal(model.add_reading_log_likelihood(u, theta, log_w, level_ll), expected)
+    monkeypatch.setattr(kernels, "slot_tap_log_weights_compiled", lambda *args: None)
+    assert np.array_equal(model.add_reading_log_likelihood(u, theta, log_w, level_ll), expected)
+
+
+@pytest.mark.parametrize("model", _two_level_models(), ids=lambda m: f"{type(m).__name__}-{m.variant}")
+def test_filter_with_reading_levels_equals_the_generic_update(model):
+    """Eight updates (with resampling) through the level path give the generic path's states bit for bit."""
+    rng = np.random.default_rng(2)
+    e = 9
+    truths = np.column_stack([rng.uniform(-8, 8, e), rng.uniform(0.75, 1.25, e)])
+    fast = ParticleFilter.gaussian(model, model.sigma, n_particles=256)
+    generic = ParticleFilter(model=model, likelihood=_OpaqueGaussian(model.sigma), n_particles=256)
+    rngs_a = [np.random.default_rng(s) for s in range(e)]
+    rngs_b = [np.random.default_rng(s) for s in range(e)]
+    a, b = fast.initial(rngs_a), generic.initial(rngs_b)
+    resampled = 0
+    for _ in range(8):
+        u = rng.choice(np.asarray(model.probe_grid)[:, 0], e)
+        y = model.predict(u, truths[:, None, :])[:, 0, :] + 0.5 * rng.standard_normal((e, 1))
+        a, b = fast.update(a, u, y, rngs_a), generic.update(b, u, y, rngs_b)
+        resampled += int(a.resampled.sum())
+        for name in ("particles", "log_weights", "log_evidence", "resampled", "lost"):
+            assert np.array_equal(getattr(a, name), getattr(b, name)), name
+    assert resampled > 0

@@ -254,9 +254,7 @@ class ParticleFilter:
         n_e = state.n_episodes
         u = np.asarray(u, dtype=float)
         y = np.asarray(y, dtype=float)
-        pred = self.model.predict(u, state.particles)
-        loglik = self.likelihood.log_likelihood(y, pred)
-        unnormalized = state.log_weights + loglik
+        unnormalized = self._reweighted(state, u, y)
         log_w, log_evidence = _normalize(unnormalized)
         lost = ~np.isfinite(log_evidence)
         u_now, y_now = u.reshape(n_e, 1, -1), y.reshape(n_e, 1, -1)
@@ -286,6 +284,22 @@ class ParticleFilter:
             log_w[rows] = -np.log(self.n_particles)
             weights[rows] = np.exp(log_w[rows])
         return BeliefState(particles, log_w, resample, u_hist, y_hist, accepted, lost, log_evidence, weights)
+
+    def _reweighted(self, state: BeliefState, u: np.ndarray, y: np.ndarray) -> np.ndarray:
+        """Unnormalized log-weights ``log_weights + log p(y | u, theta)`` ``[E, N]``.
+
+        A model whose readings take a few levels (``reading_levels``) under an arithmetic
+        likelihood has one log-likelihood per level and episode: the model picks each
+        particle's (``add_reading_log_likelihood``); the same bits as predicting every particle.
+        """
+        levels = getattr(self.model, "reading_levels", None)
+        if levels is not None and getattr(self.likelihood, "arithmetic", False) and y.shape[-1] == 1:
+            level_pred = np.empty((state.n_episodes, len(levels), 1))
+            level_pred[:, :, 0] = levels
+            level_ll = self.likelihood.log_likelihood(y.reshape(-1, 1), level_pred)
+            return self.model.add_reading_log_likelihood(u, state.particles, state.log_weights, level_ll)
+        loglik = self.likelihood.log_likelihood(y, self.model.predict(u, state.particles))
+        return state.log_weights + loglik
 
     def _move(self, particles, parents, u_hist, y_hist, rngs, low, high, scale):
         """Resampled copies of ``particles`` (the resampling rows) after the configured move:

@@ -29,6 +29,9 @@ class GaussianLikelihood:
     """Isotropic Gaussian ``N(y; f(u, theta), sigma^2 I)``."""
 
     sigma: float
+    #: Built from + - * / only, so a value depends on its own prediction alone, computed anywhere
+    #: (an array of two levels or of every particle) to the same bits.
+    arithmetic = True
 
     def __post_init__(self) -> None:
         _check_sigma(self.sigma)
@@ -57,6 +60,11 @@ class TemperedLikelihood:
     def __post_init__(self) -> None:
         if not self.temperature >= 1:
             raise ValueError(f"temperature must be >= 1, got {self.temperature!r}")
+
+    @property
+    def arithmetic(self) -> bool:
+        """A division of the base's value: arithmetic when the base is."""
+        return bool(getattr(self.base, "arithmetic", False))
 
     def log_likelihood(self, y: np.ndarray, pred: np.ndarray) -> np.ndarray:
         return self.base.log_likelihood(y, pred) / self.temperature

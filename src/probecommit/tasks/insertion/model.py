@@ -106,9 +106,31 @@ class InsertionModel(TaskModelBase):
         boundary += self.boundary_offset
         return np.less(distance, boundary)
 
+    #: The two readings a tap can predict, ``(pocket floor, plate top)`` (see :meth:`add_reading_log_likelihood`).
+    reading_levels = (PLATE_TOP_MM - POCKET_DEPTH_MM, PLATE_TOP_MM)
+
     def predict(self, u: np.ndarray, theta: np.ndarray) -> np.ndarray:
         pocket = self.reads_pocket(u, theta)
-        return np.where(pocket, PLATE_TOP_MM - POCKET_DEPTH_MM, PLATE_TOP_MM)[..., None]
+        return np.where(pocket, *self.reading_levels)[..., None]
+
+    def add_reading_log_likelihood(self, u: np.ndarray, theta: np.ndarray, log_weights: np.ndarray,
+                                   level_ll: np.ndarray) -> np.ndarray:
+        """``log_weights + loglik`` where each particle's log-likelihood is that of its predicted level.
+
+        A tap predicts one of two readings (:attr:`reading_levels`), so an arithmetic likelihood
+        takes one of two values per episode, ``level_ll[E, 2]``; this picks each particle's
+        without forming ``predict``'s ``[E, N, 1]`` array (a compiled pass when numba is there).
+        The same bits as ``log_weights + likelihood.log_likelihood(y, predict(u, theta))``
+        (tested).
+        """
+        from probecommit.core.kernels import slot_tap_log_weights_compiled
+
+        # The kernel computes this class's reads_pocket; a subclass with its own (the rig) takes NumPy's.
+        if type(self).reads_pocket is InsertionModel.reads_pocket:
+            compiled = slot_tap_log_weights_compiled(u, theta, log_weights, level_ll, self.boundary_offset)
+            if compiled is not None:
+                return compiled
+        return log_weights + np.where(self.reads_pocket(u, theta), level_ll[:, :1], level_ll[:, 1:])
 
     def success_interval_parts(self, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The open interval of aims that succeed, ``x - gamma w(c) < a < x + gamma w(c)``, as
