@@ -106,28 +106,32 @@ def rollout(
     grid = np.asarray(model.probe_grid, dtype=float)
     p, m = model.probe_dim, model.observation_dim
     truths, contexts = instance_arrays(instances, model)
-    if schedule != "random" and getattr(simulator, "parallel_queries", False) and hasattr(simulator, "probe_query_key"):
+    random_schedule = isinstance(schedule, str) and schedule == "random"
+    if not random_schedule and getattr(simulator, "parallel_queries", False) and hasattr(simulator, "probe_query_key"):
         # A fixed schedule taps the same positions in every episode: run those engine queries in threads first.
         simulator.prefetch([simulator.probe_query_key(theta, np.atleast_1d(np.asarray(schedule[j], dtype=float)))
                             for theta in truths for j in range(budget)])
     rows = []
-    for i, (_, inst) in enumerate(instances.iterrows()):
+    # Column arrays, not iterrows: a Series per instance costs more than its taps on the analytic engine.
+    meta = zip(instances["instance_id"].to_numpy(), instances["split"].astype(str).to_numpy(),
+               instances["instance_index"].to_numpy(np.int64).tolist())
+    for i, (instance_id, split, index) in enumerate(meta):
         theta = truths[i]
         for r in range(repeats):
-            rng = episode_rng(seed, str(inst["split"]), int(inst["instance_index"]), r, ROLLOUT)
+            rng = episode_rng(seed, split, index, r, ROLLOUT)
             u = np.empty((budget, p))
             y = np.full((budget, m), np.nan)
             status, error = "ok", ""
             try:
                 for j in range(budget):
-                    u[j] = grid[rng.integers(len(grid))] if schedule == "random" else schedule[j]
+                    u[j] = grid[rng.integers(len(grid))] if random_schedule else schedule[j]
                     y[j] = simulator.probe(theta, u[j], rng)
-                    if not np.all(np.isfinite(y[j])):
+                    if not np.isfinite(y[j]).all():
                         shown = u[j][0] if p == 1 else u[j].tolist()
                         raise FloatingPointError(f"{simulator.engine} returned {y[j].tolist()} for probe u={shown}")
             except Exception as exc:  # noqa: BLE001 - one bad engine query must not end the study
                 status, error = "failed", f"probe {j + 1}: {type(exc).__name__}: {exc}"
-            rows.append((inst["instance_id"], int(inst["instance_index"]), r, theta, u, y, status, error, contexts[i]))
+            rows.append((instance_id, index, r, theta, u, y, status, error, contexts[i]))
     split = str(instances["split"].iloc[0]) if len(instances) else ""
     n = len(rows)
     return ProbeBatch(
@@ -231,8 +235,15 @@ class BeliefTrace:
         return BeliefTrace(self.batch.subset(rows), states, self.surprise[rows], take(self.lost))
 
 
-def build_trace(pfilter: ParticleFilter, batch: ProbeBatch, seed: int, budgets: Iterable[int]) -> BeliefTrace:
-    """Recompute beliefs from stored probes (successful episodes of ``batch`` only)."""
+def build_trace(pfilter: ParticleFilter, batch: ProbeBatch, seed: int, budgets: Iterable[int],
+                keep_weights: bool = False) -> BeliefTrace:
+    """Recompute beliefs from stored probes (successful episodes of ``batch`` only).
+
+    Args:
+        keep_weights: Keep each budget's normalized weights as the update computed them, so
+            a commit does not exponentiate the log-weights again (one more ``[E, N]`` array
+            per budget: for a bounded work unit, not a whole run's trace).
+    """
     ok = np.flatnonzero(batch.status == "ok")
     batch = batch.subset(ok)
     rngs = [
@@ -251,7 +262,7 @@ def build_trace(pfilter: ParticleFilter, batch: ProbeBatch, seed: int, budgets: 
         surprise[:, j - 1] = -state.log_evidence  # the probe's log predictive density, before it was assimilated
         lost[:, j - 1] = state.lost
         if j in budgets:
-            states[j] = state.compact()
+            states[j] = state if keep_weights else state.compact()
     return BeliefTrace(batch, states, surprise, lost)
 
 

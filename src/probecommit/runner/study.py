@@ -81,7 +81,7 @@ def compute_unit(config_data: dict, instances: pd.DataFrame, unit: str) -> tuple
                     pass
     episodes = pd.DataFrame()
     if np.any(batch.status == "ok"):  # a unit whose every trajectory failed has nothing to infer
-        trace = build_trace(pfilter, batch, config.seed, config.probes.commit_budgets)
+        trace = build_trace(pfilter, batch, config.seed, config.probes.commit_budgets, keep_weights=True)
         blind = blind_bayes_executor(model, config.seed, config.blind_prior_samples) if "blind_bayes" in config.methods else None
         episodes = commit(trace, model, simulator, thresholds=config.belief.nu, methods=config.methods, blind=blind)
     failed = failed_episode_rows(batch, model.variant)
