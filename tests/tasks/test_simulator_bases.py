@@ -79,3 +79,41 @@ def test_settings_applied_outside_the_queries_do_not_split_the_shared_answers():
         # The noise is still each simulator's own: the same draw, a reading scaled by its sigma.
         assert first.probe(theta, np.array([1.0]), np.random.default_rng(3))[0] != \
             louder.probe(theta, np.array([1.0]), np.random.default_rng(3))[0]
+
+
+class ThreadedToy(NoisySimulator):
+    """A thread-safe toy engine whose query fails at one argument."""
+
+    engine = "toy"
+    parallel_queries = True
+
+    def __init__(self) -> None:
+        super().__init__(0.0)
+        import threading
+
+        self.threads: set[str] = set()
+        self._lock = threading.Lock()
+
+    def depth(self, x: float, a: float) -> float:
+        import threading
+
+        with self._lock:
+            self.threads.add(threading.current_thread().name)
+        if a == 3.0:
+            raise RuntimeError("toy engine failed at a = 3")
+        return x * a
+
+
+def test_prefetch_runs_in_engine_threads_and_leaves_a_failing_query_to_its_caller(monkeypatch):
+    monkeypatch.setenv("PROBECOMMIT_ENGINE_THREADS", "2")
+    sim = ThreadedToy()
+    keys = [("depth", (2.0,), (float(a),)) for a in (1, 2, 3, 4, 2)]
+    assert sim.prefetch(keys) == 3  # 1, 2, 4 answered; 3 failed; the repeated 2 ran once
+    assert sim.engine_calls == {"depth": 3}
+    assert all(name.startswith("probecommit-engine") for name in sim.threads)
+    assert [float(sim.cached_key(k)[0]) for k in keys if k[2] != (3.0,)] == [2.0, 4.0, 8.0, 4.0]
+    with pytest.raises(RuntimeError, match="toy engine failed at a = 3"):
+        sim.cached_key(keys[2])  # asked on demand, it raises where the caller handles it
+    assert sim.engine_calls == {"depth": 3}
+    assert not NoisySimulator.parallel_queries  # the default stays off
+    assert NoisySimulator(0.0).prefetch(keys) == 0
