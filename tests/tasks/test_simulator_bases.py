@@ -117,3 +117,23 @@ def test_prefetch_runs_in_engine_threads_and_leaves_a_failing_query_to_its_calle
     assert sim.engine_calls == {"depth": 3}
     assert not NoisySimulator.parallel_queries  # the default stays off
     assert NoisySimulator(0.0).prefetch(keys) == 0
+
+
+@pytest.mark.skipif(not hasattr(__import__("os"), "fork"), reason="needs fork")
+def test_a_forked_child_makes_its_own_engine_threads(monkeypatch):
+    """The parent's pool has no threads in a forked child: the child prefetches with a new one."""
+    import os
+
+    monkeypatch.setenv("PROBECOMMIT_ENGINE_THREADS", "2")
+    keys = [("depth", (2.0,), (float(a),)) for a in (1, 2, 4)]
+    assert ThreadedToy().prefetch(keys) == 3  # the parent's pool exists now
+    read, write = os.pipe()
+    pid = os.fork()
+    if pid == 0:  # pragma: no cover - the child reports through the pipe
+        try:
+            os.write(write, str(ThreadedToy().prefetch(keys)).encode())
+        finally:
+            os._exit(0)
+    os.close(write)
+    _, status = os.waitpid(pid, 0)
+    assert os.read(read, 16) == b"3" and status == 0
