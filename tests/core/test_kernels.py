@@ -148,3 +148,23 @@ def test_jitter_resampled_matches_numpy():
     expected[rows] = np.clip(np.take_along_axis(particles[rows], parents[:, :, None], axis=1) + scale * noise, low, high)
     np.testing.assert_array_equal(fast, expected)
     np.testing.assert_array_equal(fast[[1, 2, 3]], particles[[1, 2, 3]])  # rows that did not resample
+
+
+@pytest.mark.parametrize("n", [1, 7, 128, 1000, 1024, 4099])
+def test_weighted_variance_matches_numpy(n):
+    """Posterior variance: the same products summed in NumPy's pairwise order, strided z included."""
+    from probecommit.core.retained import weighted_variance, weighted_variance_numpy
+
+    rng = np.random.default_rng(n)
+    particles = rng.uniform(-10, 10, (6, n, 2))
+    weights = rng.dirichlet(np.ones(n), 6)
+    weights[1] = 1.0 / n  # uniform, as after a resampling
+    weights[2, : n // 2] = 0.0
+    z = particles[..., 0]  # strided, as a commit passes it
+    z_nan = z.copy()
+    z_nan[3, n // 2] = np.nan
+    for values in (z, z_nan, np.ascontiguousarray(z)):
+        assert np.array_equal(kernels.weighted_variance_compiled(values, weights), weighted_variance_numpy(values, weights),
+                              equal_nan=True)
+        assert np.array_equal(weighted_variance(values, weights), weighted_variance_numpy(values, weights), equal_nan=True)
+    assert kernels.weighted_variance_compiled(z[0], weights[0]) is None  # 1-D: NumPy's path

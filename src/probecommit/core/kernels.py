@@ -564,6 +564,38 @@ if HAVE_NUMBA:
         return mask, lo, hi, reference
 
 
+if HAVE_NUMBA:
+
+    @numba.njit(cache=True, nogil=True)
+    def _weighted_variance(z, weights):  # pragma: no cover - compiled
+        n_e, n = weights.shape
+        out = np.empty(n_e)
+        product = np.empty(n)
+        node_start, node_n, node_open, values = _pairwise_scratch()
+        for e in range(n_e):
+            # NumPy's sum(w * z), then sum(w * (z - mean) ** 2): the same products, summed in its order.
+            for i in range(n):
+                product[i] = weights[e, i] * z[e, i]
+            mean = _row_sum_with(product, node_start, node_n, node_open, values)
+            for i in range(n):
+                deviation = z[e, i] - mean
+                product[i] = weights[e, i] * (deviation * deviation)
+            out[e] = _row_sum_with(product, node_start, node_n, node_open, values)
+        return out
+
+
+def weighted_variance_compiled(z: np.ndarray, weights: np.ndarray) -> np.ndarray | None:
+    """The compiled posterior variance (see ``core.retained.weighted_variance``), or None without
+    numba and for anything but two float64 ``[E, N]`` arrays with N >= 1. ``z`` may be strided."""
+    if not HAVE_NUMBA:
+        return None
+    z, weights = np.asarray(z), np.asarray(weights)
+    if (z.ndim != 2 or z.shape != weights.shape or z.shape[1] == 0
+            or z.dtype != np.float64 or weights.dtype != np.float64):
+        return None
+    return _weighted_variance(z, np.ascontiguousarray(weights))
+
+
 def retained_summary_compiled(weights: np.ndarray, nu: np.ndarray, z: np.ndarray,
                               particles: np.ndarray) -> tuple[np.ndarray, ...] | None:
     """The compiled retained set (see ``core.retained.retained_summary``), or None.

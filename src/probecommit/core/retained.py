@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from probecommit.core.kernels import coverage_score_compiled, retained_summary_compiled
+from probecommit.core.kernels import coverage_score_compiled, retained_summary_compiled, weighted_variance_compiled
 
 # Cumulative sums of float weights may fall a hair short of an exactly reachable
 # mass (e.g. 820 copies of 1/1024 against nu = 0.8); this tolerance absorbs that.
@@ -104,7 +104,15 @@ def retained_summary_numpy(weights: np.ndarray, nu: np.ndarray, z: np.ndarray,
 
 
 def weighted_variance(z: np.ndarray, weights: np.ndarray) -> np.ndarray:
-    """Posterior variance of ``z[E, N]`` under normalized ``weights`` ``[E]``."""
+    """Posterior variance of ``z[E, N]`` under normalized ``weights`` ``[E, N]``, per episode ``[E]``."""
+    compiled = weighted_variance_compiled(z, weights)
+    if compiled is not None:
+        return compiled
+    return weighted_variance_numpy(z, weights)
+
+
+def weighted_variance_numpy(z: np.ndarray, weights: np.ndarray) -> np.ndarray:
+    """NumPy path of :func:`weighted_variance` (the compiled kernel's reference)."""
     mean = np.sum(weights * z, axis=-1)
     return np.sum(weights * (z - mean[:, None]) ** 2, axis=-1)
 

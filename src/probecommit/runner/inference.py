@@ -335,9 +335,10 @@ def commit(
         if belief is None:
             z = model.decision(particles)
             weights = state.weights
+            z_rows = np.ascontiguousarray(z)  # one copy of a strided coordinate for the row reductions below
             belief = cache[("belief", k)] = {
-                "z": z, "weights": weights, "hull_lo": z.min(axis=1), "hull_hi": z.max(axis=1),
-                "score_s": coverage_score(z, weights, z_true, model.decision_domain_width),
+                "z": z, "weights": weights, "hull_lo": z_rows.min(axis=1), "hull_hi": z_rows.max(axis=1),
+                "score_s": coverage_score(z_rows, weights, z_true, model.decision_domain_width),
                 "post_var": weighted_variance(z, weights),
             }
         z, weights = belief["z"], belief["weights"]
