@@ -39,7 +39,7 @@ from probecommit.audit.stats import (
     resample_counts,
 )
 from probecommit.audit.surprise import surprise_auc
-from probecommit.runner.replay import CHUNK_INSTANCES, LoadedRun, RunBeliefs, load_run
+from probecommit.runner.replay import CHUNK_INSTANCES, LoadedRun, RunBeliefs, load_run, require_budgets
 
 #: The executor's method whose commits are calibrated.
 PROBE_METHOD = "probe_robust"
@@ -189,13 +189,7 @@ def _check_pair(cal: _Run, test: _Run) -> None:
 
 def _budgets(run: _Run, budgets: Iterable[int] | None) -> list[int]:
     have = run.beliefs.budgets
-    if budgets is None:
-        return have
-    budgets = sorted(int(b) for b in budgets)
-    missing = [b for b in budgets if b not in have]
-    if missing:
-        raise ValueError(f"budget(s) {missing} not in the run (it commits at {have})")
-    return budgets
+    return have if budgets is None else require_budgets(budgets, have)
 
 
 # ----------------------------------------------------------------------------- calibrate

@@ -339,7 +339,7 @@ def commit(
             belief = cache[("belief", k)] = {
                 "z": z, "weights": weights, "hull_lo": z_rows.min(axis=1), "hull_hi": z_rows.max(axis=1),
                 "score_s": coverage_score(z_rows, weights, z_true, model.decision_domain_width),
-                "post_var": weighted_variance(z, weights),
+                "post_var": weighted_variance(z_rows, weights),
             }
         z, weights = belief["z"], belief["weights"]
         if method == "blind_bayes":

@@ -168,11 +168,9 @@ class RunBeliefs:
         config = config or loaded.config
         kept = None
         if budgets is not None:
-            kept = tuple(sorted({int(k) for k in budgets}))
-            have = [k for k in config.probes.commit_budgets if k > 0]
-            missing = [k for k in kept if k not in have]
-            if missing or not kept:
-                raise ValueError(f"budget(s) {missing or '[]'} not in the run (it commits at {have})")
+            kept = tuple(dict.fromkeys(require_budgets(budgets, committed_budgets(config))))
+            if not kept:
+                raise ValueError(f"budget(s) [] not in the run (it commits at {committed_budgets(config)})")
         model = build_model(config)
         batch = probe_batch(loaded, model)
         return cls(config, model, simulator_for_run(loaded, config), build_filter(model, config.belief), batch,
@@ -202,9 +200,7 @@ class RunBeliefs:
     @property
     def budgets(self) -> list[int]:
         """The budgets a trace of this run holds."""
-        if self.kept_budgets is not None:
-            return list(self.kept_budgets)
-        return [k for k in self.config.probes.commit_budgets if k > 0]
+        return committed_budgets(self.config) if self.kept_budgets is None else list(self.kept_budgets)
 
     def commit(self, requests: Sequence[Mapping[str, Any]], *, keep: Sequence[Sequence[str] | None] | None = None,
                reuse: bool = True, **common: Any) -> list[pd.DataFrame]:
@@ -243,6 +239,24 @@ class RunBeliefs:
     def release(self) -> None:
         """Drop the kept trace of a one-chunk run (its last commit is done)."""
         self._kept = None
+
+
+def committed_budgets(config: StudyConfig) -> list[int]:
+    """The probe budgets ``k >= 1`` a run of ``config`` commits at."""
+    return [k for k in config.probes.commit_budgets if k > 0]
+
+
+def require_budgets(requested: Iterable[int], have: Sequence[int]) -> list[int]:
+    """``requested`` sorted, every one among ``have``.
+
+    Raises:
+        ValueError: One line naming the budgets the run does not commit at.
+    """
+    budgets = sorted(int(b) for b in requested)
+    missing = [b for b in budgets if b not in have]
+    if missing:
+        raise ValueError(f"budget(s) {missing} not in the run (it commits at {list(have)})")
+    return budgets
 
 
 def _chunk_slices(instance_id: np.ndarray, chunk_instances: int | None) -> list[slice]:

@@ -122,7 +122,7 @@ def _run_serial(jobs: list[Job]) -> Iterator[Result]:
         yield compute_unit(*job)
 
 
-def _die_with_parent(parent_pid: int, poll_s: float = 0.5, engine_threads: int | None = None) -> None:
+def _init_worker(parent_pid: int, poll_s: float = 0.5, engine_threads: int | None = None) -> None:
     """Pool-worker initializer: exit as soon as the parent is gone (even after SIGKILL).
 
     A killed parent cannot clean up its pool; each worker watches its parent pid from a
@@ -157,7 +157,7 @@ def _run_processes(jobs: list[Job], workers: int) -> Iterator[Result]:
     n_workers = min(workers, len(jobs))
     threads = max(1, engine_threads() // n_workers)  # the processes share the CPUs the threads would use
     with ProcessPoolExecutor(max_workers=n_workers, mp_context=mp.get_context("spawn"),
-                             initializer=_die_with_parent, initargs=(os.getpid(), 0.5, threads)) as pool:
+                             initializer=_init_worker, initargs=(os.getpid(), 0.5, threads)) as pool:
         pending = {pool.submit(compute_unit, *job) for job in jobs}
         try:
             while pending:

@@ -87,11 +87,9 @@ class RigModel(InsertionModel):
         u = np.asarray(u, dtype=float).reshape(theta.shape[0], 1)
         return np.abs(u - theta[..., 0]) < rig_half_gap(theta[..., 1]) + self.boundary_offset
 
-    #: The switch reads the allowance through the opening, the plate top elsewhere.
+    #: The switch reads the allowance through the opening, the plate top elsewhere (``predict``
+    #: is insertion's: the level of whether ``reads_pocket``).
     reading_levels = (-ALLOWANCE_MM, 0.0)
-
-    def predict(self, u: np.ndarray, theta: np.ndarray) -> np.ndarray:
-        return np.where(self.reads_pocket(u, theta), *self.reading_levels)[..., None]
 
     def success_interval_parts(self, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Open interval of aims inside the model's window, ``x -+ gamma w_rig(c)``, as ``(x, w_rig(c))``."""
