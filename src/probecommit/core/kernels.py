@@ -153,36 +153,6 @@ if HAVE_NUMBA:
         return out
 
 
-if HAVE_NUMBA:
-
-    @numba.njit(cache=True, nogil=True)
-    def _slot_tap_log_weights(u, particles, log_weights, level_ll, offset):  # pragma: no cover - compiled
-        n_e, n = log_weights.shape
-        out = np.empty((n_e, n))
-        for e in range(n_e):
-            in_pocket, on_top = level_ll[e, 0], level_ll[e, 1]
-            for i in range(n):
-                # |u - x| < (0.6 c + 4) + offset: insertion's reads_pocket, the same IEEE operations in order
-                distance = abs(u[e] - particles[e, i, 0])
-                boundary = 0.6 * particles[e, i, 1]
-                boundary += 4.0
-                boundary += offset
-                out[e, i] = log_weights[e, i] + (in_pocket if distance < boundary else on_top)
-        return out
-
-
-def slot_tap_log_weights_compiled(u: np.ndarray, particles: np.ndarray, log_weights: np.ndarray,
-                                  level_ll: np.ndarray, offset: float) -> np.ndarray | None:
-    """Insertion's reweighting in one pass (see ``InsertionModel.add_reading_log_likelihood``), or None
-    without numba: ``log_weights + (level_ll[:, 0] if the tap at u reads the pocket else level_ll[:, 1])``."""
-    if not HAVE_NUMBA:
-        return None
-    f64 = np.float64
-    return _slot_tap_log_weights(np.ascontiguousarray(u, dtype=f64).reshape(-1), np.ascontiguousarray(particles, dtype=f64),
-                                 np.ascontiguousarray(log_weights, dtype=f64), np.ascontiguousarray(level_ll, dtype=f64),
-                                 float(offset))
-
-
 def jitter_resampled_compiled(particles: np.ndarray, rows: np.ndarray, parents: np.ndarray, noise: np.ndarray,
                               scale: np.ndarray, low: np.ndarray, high: np.ndarray) -> np.ndarray | None:
     """The compiled resample-and-jitter step (see ``core.belief.jitter_resampled``), or None without numba."""

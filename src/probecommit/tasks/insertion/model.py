@@ -123,7 +123,7 @@ class InsertionModel(TaskModelBase):
         The same bits as ``log_weights + likelihood.log_likelihood(y, predict(u, theta))``
         (tested).
         """
-        from probecommit.core.kernels import slot_tap_log_weights_compiled
+        from probecommit.tasks.insertion.kernels import slot_tap_log_weights_compiled
 
         # The kernel computes this class's reads_pocket; a subclass with its own (the rig) takes NumPy's.
         if type(self).reads_pocket is InsertionModel.reads_pocket:
