@@ -5,19 +5,66 @@ import os
 import pandas as pd
 import pytest
 
-from probecommit.runner.study import run_study
+from probecommit.runner import study
+from probecommit.runner.study import run_study, unit_threads
 from tests.runner.test_resume import assert_same_tables
 
 
 def test_two_worker_processes_match_a_serial_run(tmp_path, make_config):
     cfg = make_config(unit_instances=1)  # 6 units over 2 workers, finishing out of order
-    serial = run_study(cfg, tmp_path / "serial")
+    serial = run_study(cfg, tmp_path / "serial", threads=1)
+    assert serial.manifest["backend"] == "serial"
     parallel = run_study(cfg, tmp_path / "parallel", workers=2)
     assert parallel.manifest["backend"] == "processes:2"
     assert len({s for s in _unit_pids(parallel.run_dir)}) == 2
     pd.testing.assert_frame_equal(parallel.episodes, serial.episodes, check_exact=True)
     assert_same_tables(serial.run_dir, parallel.run_dir)
     assert parallel.manifest["engine_calls"] == serial.manifest["engine_calls"]
+
+
+def test_unit_threads_match_a_serial_run(tmp_path, make_config):
+    cfg = make_config(unit_instances=1)  # 6 units over 3 threads, finishing out of order
+    serial = run_study(cfg, tmp_path / "serial", threads=1)
+    threaded = run_study(cfg, tmp_path / "threads", threads=3)
+    assert threaded.manifest["backend"] == "threads:3"
+    pd.testing.assert_frame_equal(threaded.episodes, serial.episodes, check_exact=True)
+    assert_same_tables(serial.run_dir, threaded.run_dir)
+    assert threaded.manifest["engine_calls"] == serial.manifest["engine_calls"]
+
+
+def test_unit_threads_follow_the_engine_threads_and_the_simulator(monkeypatch, make_config):
+    cfg = make_config()
+    monkeypatch.setenv("PROBECOMMIT_ENGINE_THREADS", "3")
+    assert unit_threads(cfg) == 3 and unit_threads(cfg, 2) == 2 and unit_threads(cfg, 1) == 1
+    with pytest.raises(ValueError, match="threads must be >= 1"):
+        unit_threads(cfg, 0)
+
+    class Unsafe:  # a simulator that does not declare itself thread-safe runs its units one by one
+        pass
+
+    monkeypatch.setattr(study.build, "build_simulator", lambda config: Unsafe())
+    assert unit_threads(cfg, 4) == 1
+
+
+def test_a_failing_unit_thread_stops_the_run_and_leaves_it_resumable(tmp_path, monkeypatch, make_config):
+    cfg = make_config(unit_instances=1)
+    real = study.compute_unit
+
+    def flaky(config_data, instances, unit):
+        if unit == "unit-00003":
+            raise RuntimeError("engine crashed in unit 3")
+        return real(config_data, instances, unit)
+
+    monkeypatch.setattr(study, "compute_unit", flaky)
+    with pytest.raises(RuntimeError, match="unit 3"):
+        run_study(cfg, tmp_path / "run", threads=2)
+    monkeypatch.setattr(study, "compute_unit", real)
+    finished = len(list((tmp_path / "run" / "shards").glob("*.episodes.parquet")))  # whole units written before the error
+    assert finished < 6
+    resumed = run_study(cfg, tmp_path / "run", threads=2)
+    assert resumed.manifest["resumed_units"] == finished
+    serial = run_study(cfg, tmp_path / "serial", threads=1)
+    pd.testing.assert_frame_equal(resumed.episodes, serial.episodes, check_exact=True)
 
 
 def _unit_pids(run_dir):

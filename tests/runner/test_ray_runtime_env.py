@@ -25,7 +25,7 @@ def test_units_run_on_a_two_node_cluster_with_the_shipped_package(tmp_path):
     try:
         config = small_config(name="ray2", instances={"count": 8}, belief={"particles": 64}, unit_instances=2)
         result = run_study(config, tmp_path / "ray", ray_address=cluster.address)
-        serial = run_study(config, tmp_path / "serial")
+        serial = run_study(config, tmp_path / "serial", threads=1)
         pd.testing.assert_frame_equal(result.episodes, serial.episodes)
         assert result.manifest["backend"].startswith("ray:")
 

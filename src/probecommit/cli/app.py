@@ -41,7 +41,7 @@ def print_budget_table(episodes, title: str) -> None:
     console.print(table)
 
 
-def _run(config, out: Path, workers: int, ray: Optional[str]):
+def _run(config, out: Path, workers: int, ray: Optional[str], threads: Optional[int] = None):
     from probecommit.runner.study import preflight, run_study
     from probecommit.store.rundir import RunDir
     from probecommit.runner.config import dump_config
@@ -51,7 +51,7 @@ def _run(config, out: Path, workers: int, ray: Optional[str]):
     RunDir(out).check_writable(dump_config(config))
     bar, update = progress_bar(f"{config.name}: units")
     with bar:
-        return run_study(config, out, workers=workers, ray_address=ray, progress=update)
+        return run_study(config, out, workers=workers, ray_address=ray, progress=update, threads=threads)
 
 
 def warn_failed(result) -> None:
@@ -81,17 +81,22 @@ def run(
     ray: Optional[str] = typer.Option(
         None, "--ray", help="Run on Ray: 'auto' (an existing cluster), host:port, or 'local' (start one here)."
     ),
+    threads: Optional[int] = typer.Option(
+        None, "--threads", "-t", min=1,
+        help="Units run in this many threads of one process (thread-safe simulators: analytic, MuJoCo insertion; "
+             "default: $PROBECOMMIT_ENGINE_THREADS, else the CPUs up to 4; 1: one after the other).",
+    ),
 ) -> None:
     """Run (or resume) a study into a run directory.
 
     Rerunning the same command after an interruption (Ctrl-C, a crash, SIGKILL)
     keeps the finished units and redoes the rest; results are identical to an
-    uninterrupted run, whatever --workers or --ray.
+    uninterrupted run, whatever --workers, --threads or --ray.
     """
     from probecommit.runner.config import load_config
 
     cfg = load_config(config)
-    result = _run(cfg, out or Path("runs") / cfg.name, workers, ray)
+    result = _run(cfg, out or Path("runs") / cfg.name, workers, ray, threads)
     print_budget_table(result.episodes, f"{cfg.name}: per-budget summary")
     warn_failed(result)
     console.print(f"run directory: [bold]{safe(result.run_dir)}[/bold]")

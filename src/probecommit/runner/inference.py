@@ -18,7 +18,7 @@ import pandas as pd
 from probecommit.core.belief import BeliefState, ParticleFilter
 from probecommit.core.executors import BlindBayes, BlindRobust, ProbeRobust
 from probecommit.core.retained import coverage_score, masked_interval, weighted_variance
-from probecommit.runner.seeding import INFERENCE, ROLLOUT, blind_rng, episode_rng
+from probecommit.runner.seeding import INFERENCE, ROLLOUT, blind_rng, episode_rngs
 from probecommit.store.schema import component_names
 
 
@@ -88,6 +88,18 @@ def instance_arrays(instances: pd.DataFrame, model: Any) -> tuple[np.ndarray, np
     return truths, context
 
 
+def _streams(seed: int, splits: np.ndarray, indices: list[int], repeats: int, purpose: int) -> list[np.random.Generator]:
+    """Each instance's ``repeats`` episode generators, instance by instance (one batch per split)."""
+    streams: list = [None] * (len(indices) * repeats)
+    for split in dict.fromkeys(splits.tolist()):
+        rows = [i for i, s in enumerate(splits) if s == split]
+        made = episode_rngs(seed, split, [indices[i] for i in rows for _ in range(repeats)],
+                            [r for _ in rows for r in range(repeats)], purpose)
+        for n, (i, r) in enumerate((i, r) for i in rows for r in range(repeats)):
+            streams[i * repeats + r] = made[n]
+    return streams
+
+
 def rollout(
     instances: pd.DataFrame,
     repeats: int,
@@ -113,12 +125,13 @@ def rollout(
                             for theta in truths for j in range(budget)])
     rows = []
     # Column arrays, not iterrows: a Series per instance costs more than its taps on the analytic engine.
-    meta = zip(instances["instance_id"].to_numpy(), instances["split"].astype(str).to_numpy(),
-               instances["instance_index"].to_numpy(np.int64).tolist())
-    for i, (instance_id, split, index) in enumerate(meta):
+    splits = instances["split"].astype(str).to_numpy()
+    indices = instances["instance_index"].to_numpy(np.int64).tolist()
+    streams = _streams(seed, splits, indices, repeats, ROLLOUT)
+    for i, (instance_id, index) in enumerate(zip(instances["instance_id"].to_numpy(), indices)):
         theta = truths[i]
         for r in range(repeats):
-            rng = episode_rng(seed, split, index, r, ROLLOUT)
+            rng = streams[i * repeats + r]
             u = np.empty((budget, p))
             y = np.full((budget, m), np.nan)
             status, error = "ok", ""
@@ -174,8 +187,8 @@ def rollout_adaptive(
     index = np.array([m[1] for m in meta], dtype=np.int64)
     rep = np.array([m[2] for m in meta], dtype=np.int64)
     rows = np.array([m[3] for m in meta], dtype=np.int64)
-    roll = [episode_rng(seed, split, int(i), int(r), ROLLOUT) for i, r in zip(index, rep)]
-    infer = [episode_rng(seed, split, int(i), int(r), INFERENCE) for i, r in zip(index, rep)]
+    roll = episode_rngs(seed, split, index, rep, ROLLOUT)
+    infer = episode_rngs(seed, split, index, rep, INFERENCE)
     u = np.empty((n, budget, model.probe_dim))
     y = np.full((n, budget, model.observation_dim), np.nan)
     status = np.full(n, "ok", dtype=object)
@@ -246,10 +259,7 @@ def build_trace(pfilter: ParticleFilter, batch: ProbeBatch, seed: int, budgets: 
     """
     ok = np.flatnonzero(batch.status == "ok")
     batch = batch.subset(ok)
-    rngs = [
-        episode_rng(seed, batch.split, int(i), int(r), INFERENCE)
-        for i, r in zip(batch.instance_index, batch.repeat)
-    ]
+    rngs = episode_rngs(seed, batch.split, batch.instance_index, batch.repeat, INFERENCE)
     budgets = set(budgets)
     state = pfilter.initial(rngs)
     states = {0: state}

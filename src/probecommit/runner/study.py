@@ -10,6 +10,7 @@ whatever the backend or the number of workers.
 from __future__ import annotations
 
 import contextlib
+import itertools
 import os
 import time
 from dataclasses import dataclass
@@ -120,6 +121,43 @@ Result = tuple[str, dict[str, pd.DataFrame], dict[str, Any]]
 def _run_serial(jobs: list[Job]) -> Iterator[Result]:
     for job in jobs:
         yield compute_unit(*job)
+
+
+def _run_threads(jobs: list[Job], threads: int) -> Iterator[Result]:
+    """Units in ``threads`` threads of this process, yielded as they finish.
+
+    For thread-safe simulators only (``CachedSimulator.thread_safe``): the compiled kernels
+    and NumPy's array operations release the GIL, so two units use two cores without a
+    second interpreter's imports. At most ``2 * threads`` units are in memory at once.
+    """
+    from concurrent.futures import FIRST_COMPLETED, ThreadPoolExecutor, wait
+
+    queue = iter(jobs)
+    with ThreadPoolExecutor(max_workers=threads, thread_name_prefix="probecommit-unit") as pool:
+        pending = {pool.submit(compute_unit, *job) for job in itertools.islice(queue, 2 * threads)}
+        try:
+            while pending:
+                done, pending = wait(pending, return_when=FIRST_COMPLETED)
+                pending |= {pool.submit(compute_unit, *job) for job in itertools.islice(queue, len(done))}
+                for fut in done:
+                    yield fut.result()
+        finally:
+            for fut in pending:
+                fut.cancel()
+
+
+def unit_threads(config: StudyConfig, threads: int | None = None) -> int:
+    """Threads for a study's units in this process: ``threads``, else :func:`tasks.base.engine_threads`
+    (``$PROBECOMMIT_ENGINE_THREADS`` or the CPUs, at most 4); 1 unless the study's simulator is
+    ``thread_safe``."""
+    from probecommit.tasks.base import engine_threads
+
+    wanted = engine_threads() if threads is None else int(threads)
+    if wanted < 1:
+        raise ValueError(f"threads must be >= 1, got {threads!r}")
+    if wanted == 1 or not getattr(build.build_simulator(config), "thread_safe", False):
+        return 1
+    return wanted
 
 
 def _init_worker(parent_pid: int, poll_s: float = 0.5, engine_threads: int | None = None) -> None:
@@ -270,6 +308,7 @@ def run_study(
     workers: int = 1,
     ray_address: str | None = None,
     progress: Callable[[int, int], None] | None = None,
+    threads: int | None = None,
 ) -> StudyResult:
     """Run (or resume) a study into ``out``.
 
@@ -286,6 +325,9 @@ def run_study(
             ``ray_address="local"``, the CPUs of the local Ray instance.
         ray_address: Run units on Ray instead: ``"auto"``, ``"local"`` or ``host:port``.
         progress: Called as ``progress(done, total)`` after each unit.
+        threads: With ``workers=1`` and no Ray, units run in this many threads of this
+            process when the simulator is thread-safe (:func:`unit_threads`; None: the CPUs,
+            at most 4, or ``$PROBECOMMIT_ENGINE_THREADS``; 1: one after the other).
     """
     start = time.perf_counter()
     instances = preflight(config)  # a bad config fails here: no directory is created
@@ -310,10 +352,11 @@ def run_study(
         stack.enter_context(run.writing(config_yaml))
         if (done := complete()) is not None:  # finished by another process meanwhile
             return done
-        return _run_units(config, run, instances, workers, ray, ray_address, timing, progress, start)
+        return _run_units(config, run, instances, workers, ray, ray_address, timing, progress, start, threads)
 
 
-def _run_units(config, run: RunDir, instances, workers, ray, ray_address, timing, progress, start) -> StudyResult:
+def _run_units(config, run: RunDir, instances, workers, ray, ray_address, timing, progress, start,
+               threads: int | None = None) -> StudyResult:
     units = unit_names(len(instances), config.unit_instances)
     config_data = config.model_dump(mode="json")
     jobs = [(config_data, instances.iloc[sl], name) for name, sl in units if not run.unit_done(name)]
@@ -326,6 +369,9 @@ def _run_units(config, run: RunDir, instances, workers, ray, ray_address, timing
     elif workers > 1 and len(jobs) > 1:
         results = _run_processes(jobs, workers)
         backend = f"processes:{min(workers, len(jobs))}"
+    elif len(jobs) > 1 and (n_threads := unit_threads(config, threads)) > 1:
+        results = _run_threads(jobs, n_threads)
+        backend = f"threads:{min(n_threads, len(jobs))}"
     else:
         results = _run_serial(jobs)
         backend = "serial"

@@ -317,6 +317,10 @@ class CachedSimulator:
     #: engine buffers, the engine releasing the GIL while it steps): :meth:`prefetch` then runs
     #: a batch of them in engine threads. Off unless an engine's simulator says so.
     parallel_queries: bool = False
+    #: Whether two simulators of this class may be used from two threads at once (no state
+    #: shared between instances but under a lock): a study then runs its work units in threads
+    #: (``runner.study.run_study``). Off unless a simulator says so.
+    thread_safe: bool = False
 
     def __init__(self) -> None:
         self._cache: dict[tuple[str, tuple[float, ...], tuple[float, ...]], np.ndarray] = {}

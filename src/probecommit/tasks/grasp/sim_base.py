@@ -63,6 +63,7 @@ class AnalyticGraspSimulator(GraspSimulator):
     """The force balance itself as ground truth (for tests and quick runs)."""
 
     engine = "analytic"
+    thread_safe = True  # pure Python and NumPy, no state shared between simulators
 
     def squeeze(self, mu: float, m: float, u: float) -> float:
         return float(squeeze_slip_mm(u, mu, m))

@@ -14,6 +14,7 @@ class AnalyticHingeSimulator(TargetMissSimulator):
     """
 
     engine = "analytic"
+    thread_safe = True  # pure Python and NumPy, no state shared between simulators
     family = "hinge"
     query, outcome, target = "coast", "angle", "target angle"
 

@@ -56,11 +56,11 @@ class InsertionSimulator(NoisySimulator):
 
     def probe_query_key(self, theta: np.ndarray, u: np.ndarray) -> tuple:
         """The cache key of the engine query behind ``probe(theta, u, ...)`` (for :meth:`prefetch`)."""
-        return self.query_key("tap_reading", theta[0], theta[1], np.ravel(u)[0])
+        return self.query_key("tap_reading", theta[0], theta[1], np.asarray(u).item(0))
 
     def execute_query_key(self, theta: np.ndarray, action: np.ndarray, context: np.ndarray | None = None) -> tuple:
         """The cache key of the engine query behind ``execute(theta, action)`` (for :meth:`prefetch`)."""
-        return self.query_key("peg_depth", theta[0], theta[1], float(np.ravel(action)[0]) + self.aim_offset)
+        return self.query_key("peg_depth", theta[0], theta[1], float(np.asarray(action).item(0)) + self.aim_offset)
 
     def probe(self, theta: np.ndarray, u: np.ndarray, rng: np.random.Generator) -> np.ndarray:
         reading = float(self.cached_key(self.probe_query_key(theta, u))[0])
@@ -84,6 +84,7 @@ class AnalyticInsertionSimulator(InsertionSimulator):
     """
 
     engine = "analytic"
+    thread_safe = True  # pure Python and NumPy, no state shared between simulators
 
     def __init__(self, boundary_offset: float = PAPER_DELTA_MM, capture_scale: float = 1.0, **kwargs) -> None:
         super().__init__(**kwargs)

@@ -214,6 +214,7 @@ class MujocoInsertionSimulator(InsertionSimulator):
     engine = "mujoco"
     # MuJoCo releases the GIL in mj_step; a thread's queries use that thread's MjData.
     parallel_queries = True
+    thread_safe = True  # buffers per thread, compiled instances behind a lock
 
     def __init__(self, **kwargs: Any) -> None:
         super().__init__(**kwargs)

@@ -18,6 +18,7 @@ class AnalyticPlanarSlideSimulator(NoisySimulator):
     """
 
     engine = "analytic"
+    thread_safe = True  # pure Python and NumPy, no state shared between simulators
 
     def __init__(self, noise_sigma: float = 0.02) -> None:
         super().__init__(noise_sigma)

@@ -19,6 +19,7 @@ class AnalyticPush1DSimulator(TargetMissSimulator):
     """
 
     engine = "analytic"
+    thread_safe = True  # pure Python and NumPy, no state shared between simulators
     family = "push1d"
     query, outcome, target = "slide", "stop", "target distance"
 

@@ -64,6 +64,7 @@ class AnalyticRigSimulator(RigSimulator):
     """The rig's geometry in closed form: a flat tool of radius r fits when ``|u - x| < hg - r``."""
 
     engine = "analytic"
+    thread_safe = True  # pure Python and NumPy, no state shared between simulators
 
     def tap_reading(self, x_hole: float, c: float, u: float) -> float:
         fits = abs(u - x_hole) < float(rig_half_gap(c)) - TOOL_RADIUS_MM
