@@ -106,3 +106,16 @@ def test_engine_cache_arguments_sort_as_tuples(args):
     expected = sorted(range(4), key=lambda i: tuple(args[i]))  # stable: equal arguments keep their order
     assert out["value"].map(lambda v: int(v[0])).tolist() == expected
     assert list(out.columns) == list(frame.columns)
+
+
+def test_the_merge_of_kept_shard_tables_equals_the_merge_of_the_files(tmp_path, monkeypatch, make_config):
+    from tests.runner.faults import inject, pick_faults
+
+    cfg = make_config(repeats=4, methods=["blind_bayes", "blind_robust", "probe_robust"])
+    clean = run_study(cfg, tmp_path / "clean", threads=1)
+    inject(monkeypatch, **pick_faults(clean.run_dir)["faults"])  # failed rollouts and commits: rows of every kind
+    kept = run_study(cfg, tmp_path / "kept", threads=1)
+    monkeypatch.setattr(RunDir, "KEEP_WRITTEN_BYTES", 0)  # every shard read back from its file
+    read = run_study(cfg, tmp_path / "read", threads=1)
+    assert kept.failed_episodes > 0
+    assert kept.manifest["sha256"] == read.manifest["sha256"]

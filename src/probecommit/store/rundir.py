@@ -90,9 +90,14 @@ def _is_tmp(path: Path) -> bool:
     return path.name.startswith(".") and path.name.endswith(".tmp")
 
 
-def atomic_write_parquet(path: Path, frame: pd.DataFrame, columns: tuple[Column, ...] = ()) -> None:
-    """Write a table atomically; columns named in ``columns`` get their schema type."""
-    table = pa.Table.from_pandas(frame, preserve_index=False)
+def atomic_write_parquet(path: Path, frame: pd.DataFrame, columns: tuple[Column, ...] = ()) -> pa.Table:
+    """Write a table atomically; columns named in ``columns`` get their schema type.
+
+    Returns:
+        The Arrow table written (what reading the file back gives).
+    """
+    # One thread: for a long table pyarrow would start (and join) a thread pool per call.
+    table = pa.Table.from_pandas(frame, preserve_index=False, nthreads=1)
     types = {c.name: c.type for c in columns}
     for c in columns:
         if c.vector:  # u_0, u_1, ... take the type of u
@@ -104,6 +109,7 @@ def atomic_write_parquet(path: Path, frame: pd.DataFrame, columns: tuple[Column,
     sink = pa.BufferOutputStream()
     pq.write_table(table, sink)
     atomic_write_bytes(path, sink.getvalue().to_pybytes())
+    return table
 
 
 def _flatten(data: Any, prefix: str = "") -> dict[str, Any]:
@@ -189,8 +195,14 @@ def engine_versions() -> dict[str, str | None]:
 class RunDir:
     """A run directory on disk."""
 
+    #: Shard tables this object wrote are kept for the merge up to this many bytes in all
+    #: (the merge then converts them instead of reading and decoding the files again).
+    KEEP_WRITTEN_BYTES = 256 * 2**20
+
     def __init__(self, path: str | Path) -> None:
         self.path = Path(path)
+        self._written: dict[Path, pa.Table] = {}
+        self._written_bytes = 0
 
     @property
     def shards(self) -> Path:
@@ -348,9 +360,26 @@ class RunDir:
 
     def write_unit(self, unit: str, tables: dict[str, pd.DataFrame], stats: dict[str, Any]) -> None:
         for name in ("instances", "probes", "engine_cache"):
-            atomic_write_parquet(self.shard_path(unit, name), tables[name], _SCHEMAS.get(name, ()))
+            self._keep(self.shard_path(unit, name),
+                       atomic_write_parquet(self.shard_path(unit, name), tables[name], _SCHEMAS.get(name, ())))
         atomic_write_bytes(self.shards / f"{unit}.stats.json", json.dumps(stats).encode())
-        atomic_write_parquet(self.shard_path(unit, "episodes"), tables["episodes"], EPISODE_COLUMNS)
+        path = self.shard_path(unit, "episodes")
+        self._keep(path, atomic_write_parquet(path, tables["episodes"], EPISODE_COLUMNS))
+
+    def _keep(self, path: Path, table: pa.Table) -> None:
+        old = self._written.pop(path, None)
+        self._written_bytes -= 0 if old is None else old.nbytes
+        if self._written_bytes + table.nbytes <= self.KEEP_WRITTEN_BYTES:
+            self._written[path] = table
+            self._written_bytes += table.nbytes
+
+    def _read_shard(self, path: Path) -> pd.DataFrame:
+        """A shard as ``pd.read_parquet`` gives it: from the table this object wrote, if kept."""
+        table = self._written.pop(path, None)
+        if table is None:
+            return pd.read_parquet(path)
+        self._written_bytes -= table.nbytes
+        return table.to_pandas()
 
     def unit_stats(self, unit: str) -> dict[str, Any]:
         return json.loads((self.shards / f"{unit}.stats.json").read_text())
@@ -359,7 +388,7 @@ class RunDir:
         """Merge unit shards into the final tables (canonical order), then write the manifest."""
         frames = {}
         for name in TABLES:
-            parts = [pd.read_parquet(self.shard_path(u, name)) for u in units]
+            parts = [self._read_shard(self.shard_path(u, name)) for u in units]
             nonempty = [p for p in parts if len(p)]
             frames[name] = pd.concat(nonempty or parts[:1], ignore_index=True) if parts else pd.DataFrame()
         digests = {}
