@@ -168,3 +168,25 @@ def test_weighted_variance_matches_numpy(n):
                               equal_nan=True)
         assert np.array_equal(weighted_variance(values, weights), weighted_variance_numpy(values, weights), equal_nan=True)
     assert kernels.weighted_variance_compiled(z[0], weights[0]) is None  # 1-D: NumPy's path
+
+
+@pytest.mark.parametrize("n", [1, 7, 64, 1023, 4099])
+def test_exp_exact_is_numpy_exp_bit_for_bit(n):
+    rng = np.random.default_rng(n)
+    for trial in range(20):
+        # Log-weights far below the best (results zero), at the subnormal edge, near the fast
+        # path's floor, ordinary ones, and the non-finite cases.
+        kinds = np.stack([rng.uniform(-3000, -746, n), rng.uniform(-746.5, -744, n), rng.uniform(-710, -690, n),
+                          rng.uniform(-60, 5, n)])
+        x = kinds[rng.integers(0, 4, n), np.arange(n)]
+        x[rng.random(n) < 0.02] = -np.inf
+        x[rng.random(n) < 0.01] = np.nan
+        x[rng.random(n) < 0.01] = np.inf
+        expected = np.exp(x).view(np.int64)
+        assert np.array_equal(kernels.exp_exact(x).view(np.int64), expected)
+        in_place = x.copy()
+        assert kernels.exp_exact(in_place, out=in_place) is in_place
+        assert np.array_equal(in_place.view(np.int64), expected)
+        rows = x.reshape(1, n)  # a 2-D row of weights, and a strided view (NumPy's own exp then)
+        assert np.array_equal(kernels.exp_exact(rows).view(np.int64).ravel(), expected)
+        assert np.array_equal(kernels.exp_exact(x[::2]).view(np.int64), expected[::2])

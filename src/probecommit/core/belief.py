@@ -12,7 +12,7 @@ from typing import Protocol, Sequence
 
 import numpy as np
 
-from probecommit.core.kernels import jitter_resampled_compiled, systematic_resample_compiled
+from probecommit.core.kernels import exp_exact, jitter_resampled_compiled, systematic_resample_compiled
 from probecommit.core.likelihood import GaussianLikelihood, Likelihood
 
 
@@ -43,10 +43,9 @@ def _normalize(log_weights: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     dead = ~np.isfinite(row_max)
     safe_max = np.where(dead, 0.0, row_max)
     with np.errstate(divide="ignore", invalid="ignore"):  # dead rows are replaced below
-        # One [E, N] temporary, shifted and exponentiated in place (same bits as out of place).
         shifted = np.subtract(log_weights, safe_max)
-        log_norm = safe_max + np.log(np.sum(np.exp(shifted, out=shifted), axis=-1, keepdims=True))
-        out = np.subtract(log_weights, log_norm, out=shifted)
+        log_norm = safe_max + np.log(np.sum(exp_exact(shifted), axis=-1, keepdims=True))
+        out = np.subtract(log_weights, log_norm, out=shifted)  # the shifted values are spent: reuse their array
     if np.any(dead):
         out = np.where(dead, -np.log(log_weights.shape[-1]), out)
     return out, log_norm[:, 0]
@@ -158,7 +157,7 @@ class BeliefState:
     @property
     def weights(self) -> np.ndarray:
         """Normalized weights ``exp(log_weights)`` ``[E, N]`` (the update's own, or computed now)."""
-        return np.exp(self.log_weights) if self.fresh_weights is None else self.fresh_weights
+        return exp_exact(self.log_weights) if self.fresh_weights is None else self.fresh_weights
 
     def compact(self) -> "BeliefState":
         """The same state without :attr:`fresh_weights` (arrays shared, nothing copied)."""
@@ -261,7 +260,7 @@ class ParticleFilter:
         u_hist = u_now if state.u_hist is None else np.concatenate([state.u_hist, u_now], axis=1)
         y_hist = y_now if state.y_hist is None else np.concatenate([state.y_hist, y_now], axis=1)
         particles = state.particles  # copied below only if some episode resamples
-        weights = np.exp(log_w)
+        weights = exp_exact(log_w)
         ess = effective_sample_size(weights, unnormalized)  # unnormalized is spent: its buffer takes the squares
         resample = ess < self.resample_fraction * self.n_particles
         accepted = np.full(n_e, np.nan)
