@@ -74,3 +74,22 @@ def test_run_directory_of_another_config_is_refused_in_one_line(tmp_path, monkey
     assert "holds a run of a different config (seed is 1 there, 2 here)" in line
     # The resumable run is untouched; the same command finishes (no-op) fine.
     assert invoke(tmp_path, monkeypatch, GOOD).exit_code == 0
+
+
+def test_the_command_takes_arrow_buffers_from_the_c_allocator_unless_told_otherwise(monkeypatch):
+    import os
+    import subprocess
+    import sys
+
+    from probecommit.cli.app import ARROW_POOL_ENV, use_system_arrow_pool
+
+    monkeypatch.delenv(ARROW_POOL_ENV, raising=False)
+    use_system_arrow_pool()
+    assert os.environ[ARROW_POOL_ENV] == "system"
+    # pyarrow reads the variable when its pool is first used: a fresh process shows the effect.
+    probe = "import pyarrow as pa; print(pa.default_memory_pool().backend_name)"
+    assert subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True,
+                          env=dict(os.environ)).stdout.strip() == "system"
+    monkeypatch.setenv(ARROW_POOL_ENV, "jemalloc")  # the user's choice stands
+    use_system_arrow_pool()
+    assert os.environ[ARROW_POOL_ENV] == "jemalloc"

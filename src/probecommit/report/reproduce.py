@@ -141,7 +141,9 @@ class InsertionReproduction:
     def run(self, name: str, config) -> LoadedRun:
         self.progress(f"run {name}", 0, 1)
         already_done = RunDir(self.runs / name).is_complete()
-        result = run_study(config, self.runs / name, workers=self.workers,
+        # Units one after the other: the MuJoCo runs' engine queries already fill the cores in
+        # engine threads, so unit threads gave no time here (111.7 s vs 112.7 s) and 107 MB more peak.
+        result = run_study(config, self.runs / name, workers=self.workers, threads=1,
                            progress=lambda d, t: self.progress(f"run {name}", d, t))
         # Count only engine work done now: a complete run from an earlier invocation made no calls.
         if not already_done and result.manifest.get("resumed_units", 0) == 0:
