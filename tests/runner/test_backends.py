@@ -42,7 +42,7 @@ def test_unit_threads_follow_the_engine_threads_and_the_simulator(monkeypatch, m
     class Unsafe:  # a simulator that does not declare itself thread-safe runs its units one by one
         pass
 
-    monkeypatch.setattr(study.build, "build_simulator", lambda config: Unsafe())
+    monkeypatch.setattr(study.build, "simulator_class", lambda config: Unsafe)
     assert unit_threads(cfg, 4) == 1
 
 
@@ -87,3 +87,18 @@ def test_local_ray_matches_a_serial_run(tmp_path, make_config):
     assert os.getpid() not in _unit_pids(on_ray.run_dir)  # the units really ran in Ray workers
     pd.testing.assert_frame_equal(on_ray.episodes, serial.episodes, check_exact=True)
     assert_same_tables(serial.run_dir, on_ray.run_dir)
+
+
+@pytest.mark.mujoco
+def test_mujoco_units_in_threads_match_one_by_one(tmp_path, monkeypatch, make_config):
+    """MuJoCo insertion is thread-safe: units in threads, each prefetching in engine threads, give the serial tables."""
+    pytest.importorskip("mujoco")
+    cfg = make_config(unit_instances=1, instances={"count": 4}, probes={"budget": 3}, belief={"particles": 128},
+                      simulator={"engine": "mujoco"}, methods=["blind_robust", "probe_robust"])
+    monkeypatch.setenv("PROBECOMMIT_ENGINE_THREADS", "1")
+    serial = run_study(cfg, tmp_path / "serial")
+    monkeypatch.setenv("PROBECOMMIT_ENGINE_THREADS", "2")
+    threaded = run_study(cfg, tmp_path / "threads")
+    assert (serial.manifest["backend"], threaded.manifest["backend"]) == ("serial", "threads:2")
+    assert_same_tables(serial.run_dir, threaded.run_dir)
+    assert threaded.manifest["engine_calls"] == serial.manifest["engine_calls"]

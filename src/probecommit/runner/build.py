@@ -37,6 +37,11 @@ def build_filter(model: Any, cfg: BeliefConfig) -> ParticleFilter:
     )
 
 
+def simulator_class(config: StudyConfig) -> type:
+    """The class of a study's simulator (its engine module is imported, nothing is built)."""
+    return registry.simulator_class(config.family, config.task.simulator.engine)
+
+
 def build_simulator(config: StudyConfig) -> Any:
     """The ground-truth simulator of a study config (its engine is imported only here)."""
     return registry.build_simulator(config.family, config.task)
