@@ -1,4 +1,4 @@
-"""Scaling: the insertion study (MuJoCo) serially, on local processes and on local Ray, side by side.
+"""Scaling: the insertion study (MuJoCo) serially, in unit threads, on local processes and on local Ray, side by side.
 
 Every mode runs the same config into a fresh run directory in a temporary folder,
 checks that its tables are byte-identical to the serial run's, and reports episodes
@@ -55,7 +55,7 @@ def _import_runner(_: int) -> int:
     return os.getpid()
 
 
-def run_mode(name: str, cfg, root: Path, **kwargs) -> dict:
+def run_mode(name: str, cfg, root: Path, parallel: int | None = None, **kwargs) -> dict:
     t0 = time.perf_counter()
     result = run_study(cfg, root / name, **kwargs)
     wall = time.perf_counter() - t0
@@ -72,6 +72,7 @@ def run_mode(name: str, cfg, root: Path, **kwargs) -> dict:
         "units_s": m["timing"]["units_wall_s"],
         "backend_start_s": m["timing"]["backend_start_s"],
         "worker_processes": workers,
+        "parallel": parallel or workers,  # unit threads share one process
         "dir": root / name,
     }
 
@@ -97,7 +98,8 @@ def main() -> None:
     rows = []
     with tempfile.TemporaryDirectory(prefix="probecommit-scale-") as tmp:
         root = Path(tmp)
-        rows.append(run_mode("serial", cfg, root))
+        rows.append(run_mode("serial", cfg, root, threads=1))
+        rows.append(run_mode(f"threads x{args.workers}", cfg, root, parallel=args.workers, threads=args.workers))
         rows.append(run_mode(f"processes x{args.workers}", cfg, root, workers=args.workers))
         if not args.no_ray:
             try:
@@ -121,7 +123,7 @@ def main() -> None:
     print("-" * len(header))
     for row in rows:
         speedup = base["wall_s"] / row["wall_s"]
-        n = row["worker_processes"] if row is not base else 1
+        n = row["parallel"] if row is not base else 1
         # Overhead: wall time not explained by the units' own work spread over the workers.
         overhead = row["wall_s"] - row["units_s"] / n
         print(f"{row['mode']:<16}{row['wall_s']:>8.2f}{row['trajectories'] / row['wall_s']:>8.1f}"
@@ -139,7 +141,7 @@ def main() -> None:
                   "as are task shipping and ray.shutdown)")
     print(f"1-minute load average before / after: {load:.2f} / {os.getloadavg()[0]:.2f} on {os.cpu_count()} CPUs "
           "(other work on the machine lowers the parallel modes' numbers)")
-    print("efficiency = speedup / worker processes; 'rest' = units' wall minus engine time (belief, executor, "
+    print("efficiency = speedup / worker processes or unit threads; 'rest' = units' wall minus engine time (belief, executor, "
           "commit); overhead = wall - units' work / workers (start-up, transfer, merge, idle)")
 
 
