@@ -197,7 +197,7 @@ class RunDir:
 
     #: Shard tables this object wrote are kept for the merge up to this many bytes in all
     #: (the merge then converts them instead of reading and decoding the files again).
-    KEEP_WRITTEN_BYTES = 256 * 2**20
+    KEEP_WRITTEN_BYTES = 64 * 2**20
 
     def __init__(self, path: str | Path) -> None:
         self.path = Path(path)
