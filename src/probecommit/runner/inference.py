@@ -9,6 +9,7 @@ faults and calibration all reuse stored probes, so compared arms see identical t
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field, fields
 from typing import Any, Iterable, Mapping, Sequence
 
@@ -139,7 +140,7 @@ def rollout(
                 for j in range(budget):
                     u[j] = grid[rng.integers(len(grid))] if random_schedule else schedule[j]
                     y[j] = simulator.probe(theta, u[j], rng)
-                    if not np.isfinite(y[j]).all():
+                    if not (math.isfinite(y[j, 0]) if m == 1 else np.isfinite(y[j]).all()):
                         shown = u[j][0] if p == 1 else u[j].tolist()
                         raise FloatingPointError(f"{simulator.engine} returned {y[j].tolist()} for probe u={shown}")
             except Exception as exc:  # noqa: BLE001 - one bad engine query must not end the study
