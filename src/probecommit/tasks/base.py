@@ -335,20 +335,29 @@ class CachedSimulator:
 
     def cached_key(self, key: tuple[str, tuple[float, ...], tuple[float, ...]]) -> np.ndarray:
         """:meth:`cached` for a key already built: ``(kind, theta floats, arg floats)``."""
-        kind = key[0]
         hit = self._cache.get(key)
         if hit is None:
             shared = self.shared_answers
             hit = None if shared is None else shared.get(key)
             if hit is None:
                 start = time.perf_counter()
-                hit = np.atleast_1d(np.asarray(getattr(self, kind)(*key[1], *key[2]), dtype=float))
-                self.engine_seconds += time.perf_counter() - start
-                self.engine_calls[kind] = self.engine_calls.get(kind, 0) + 1
-                if shared is not None:
-                    shared[key] = hit
-            self._cache[key] = hit
+                hit = self._engine_answer(key)
+                self._record(key, hit, time.perf_counter() - start)
+            else:
+                self._cache[key] = hit
         return hit
+
+    def _engine_answer(self, key: tuple[str, tuple[float, ...], tuple[float, ...]]) -> np.ndarray:
+        """Run the engine for one query: its answer as a float vector (neither cached nor counted)."""
+        return np.atleast_1d(np.asarray(getattr(self, key[0])(*key[1], *key[2]), dtype=float))
+
+    def _record(self, key: tuple[str, tuple[float, ...], tuple[float, ...]], answer: np.ndarray, seconds: float) -> None:
+        """Count an answer the engine just gave and keep it (in the shared answers too)."""
+        self.engine_seconds += seconds
+        self.engine_calls[key[0]] = self.engine_calls.get(key[0], 0) + 1
+        if self.shared_answers is not None:
+            self.shared_answers[key] = answer
+        self._cache[key] = answer
 
     def prefetch(self, keys: Iterable[tuple[str, tuple[float, ...], tuple[float, ...]]]) -> int:
         """Answer the queries ``keys`` not answered yet, several at once in engine threads.
@@ -379,21 +388,16 @@ class CachedSimulator:
         def answer(key):
             start = time.perf_counter()
             try:
-                value = np.atleast_1d(np.asarray(getattr(self, key[0])(*key[1], *key[2]), dtype=float))
+                value = self._engine_answer(key)
             except Exception:  # noqa: BLE001 - re-raised by the caller's own request
                 value = None
             return value, time.perf_counter() - start
 
         run = 0
         for key, (value, seconds) in zip(missing, _engine_pool(threads).map(answer, missing)):
-            if value is None:
-                continue
-            run += 1
-            self.engine_seconds += seconds
-            self.engine_calls[key[0]] = self.engine_calls.get(key[0], 0) + 1
-            if shared is not None:
-                shared[key] = value
-            self._cache[key] = value
+            if value is not None:
+                run += 1
+                self._record(key, value, seconds)
         return run
 
     def cache_records(self) -> list[dict[str, Any]]:
