@@ -47,3 +47,10 @@ def test_state_words_serve_pcg64_only():
     words = seeding._StateWords(np.arange(4, dtype=np.uint64))
     with pytest.raises(ValueError, match="PCG64"):
         words.generate_state(8, np.uint32)
+
+
+def test_a_split_per_episode_gives_each_its_own_stream():
+    splits, indices, repeats = ["val", "test", "val"], [4, 4, 9], [0, 1, 2]
+    got = episode_rngs(8, splits, indices, repeats, ROLLOUT)
+    assert [g.bit_generator.state for g in got] == [numpy_stream(8, s, i, r, ROLLOUT).bit_generator.state
+                                                     for s, i, r in zip(splits, indices, repeats)]

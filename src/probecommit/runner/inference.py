@@ -89,18 +89,6 @@ def instance_arrays(instances: pd.DataFrame, model: Any) -> tuple[np.ndarray, np
     return truths, context
 
 
-def _streams(seed: int, splits: np.ndarray, indices: list[int], repeats: int, purpose: int) -> list[np.random.Generator]:
-    """Each instance's ``repeats`` episode generators, instance by instance (one batch per split)."""
-    streams: list = [None] * (len(indices) * repeats)
-    for split in dict.fromkeys(splits.tolist()):
-        rows = [i for i, s in enumerate(splits) if s == split]
-        made = episode_rngs(seed, split, [indices[i] for i in rows for _ in range(repeats)],
-                            [r for _ in rows for r in range(repeats)], purpose)
-        for n, (i, r) in enumerate((i, r) for i in rows for r in range(repeats)):
-            streams[i * repeats + r] = made[n]
-    return streams
-
-
 def rollout(
     instances: pd.DataFrame,
     repeats: int,
@@ -126,9 +114,10 @@ def rollout(
                             for theta in truths for j in range(budget)])
     rows = []
     # Column arrays, not iterrows: a Series per instance costs more than its taps on the analytic engine.
-    splits = instances["split"].astype(str).to_numpy()
+    splits = instances["split"].astype(str).tolist()
     indices = instances["instance_index"].to_numpy(np.int64).tolist()
-    streams = _streams(seed, splits, indices, repeats, ROLLOUT)
+    streams = episode_rngs(seed, [s for s in splits for _ in range(repeats)], [i for i in indices for _ in range(repeats)],
+                           [r for _ in indices for r in range(repeats)], ROLLOUT)  # instance by instance, repeats inside
     for i, (instance_id, index) in enumerate(zip(instances["instance_id"].to_numpy(), indices)):
         theta = truths[i]
         for r in range(repeats):

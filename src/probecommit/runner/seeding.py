@@ -30,15 +30,20 @@ def episode_rng(seed: int, split: str, instance_index: int, repeat: int, purpose
     return episode_rngs(seed, split, [instance_index], [repeat], purpose)[0]
 
 
-def episode_rngs(seed: int, split: str, instance_indices: Sequence[int], repeats: Sequence[int],
+def episode_rngs(seed: int, split: str | Sequence[str], instance_indices: Sequence[int], repeats: Sequence[int],
                  purpose: int) -> list[np.random.Generator]:
-    """:func:`episode_rng` of many episodes of one split: the same generators, built faster.
+    """:func:`episode_rng` of many episodes: the same generators, built faster.
 
     NumPy's ``SeedSequence`` hashes its entropy in Python-level steps (~30 us per episode);
     the compiled kernel hashes every episode's key in one call (the same words, tested against
     NumPy), and each PCG64 takes its state from them as it would from the SeedSequence.
+
+    Args:
+        split: The episodes' split, or one per episode.
     """
-    keys = [(split_code(split), int(i), int(r), purpose) for i, r in zip(instance_indices, repeats)]
+    splits = [split] * len(instance_indices) if isinstance(split, str) else list(split)
+    codes = {name: split_code(name) for name in set(splits)}
+    keys = [(codes[name], int(i), int(r), purpose) for name, i, r in zip(splits, instance_indices, repeats)]
     run_entropy = _uint32_words(seed) if isinstance(seed, (int, np.integer)) and seed >= 0 else None
     simple = run_entropy is not None and all(0 <= part <= 0xFFFFFFFF for key in keys for part in key)
     words = None
