@@ -93,3 +93,17 @@ def test_the_command_takes_arrow_buffers_from_the_c_allocator_unless_told_otherw
     monkeypatch.setenv(ARROW_POOL_ENV, "jemalloc")  # the user's choice stands
     use_system_arrow_pool()
     assert os.environ[ARROW_POOL_ENV] == "jemalloc"
+
+
+def test_threads_option_runs_units_in_threads_and_refuses_zero(tmp_path, monkeypatch):
+    import json
+
+    cfg = {**GOOD, "unit_instances": 1}
+    done = invoke(tmp_path, monkeypatch, cfg, "--threads", "2", "-o", "threaded")
+    assert done.exit_code == 0, done.output
+    assert json.loads((tmp_path / "threaded" / "manifest.json").read_text())["backend"] == "threads:2"
+    bad = CliRunner().invoke(app, ["run", str(tmp_path / "study.yaml"), "--threads", "0", "-o", "never"],
+                             env={"COLUMNS": "200"})  # typer's usage error, in one box line at this width
+    assert bad.exit_code == 2
+    assert "Invalid value for '--threads' / '-t': Input should be greater than or equal to 1" in bad.stderr
+    assert not (tmp_path / "never").exists()
