@@ -1,8 +1,14 @@
-"""Memory estimates before large allocations: refuse with the number and the setting to change."""
+"""Memory estimates before large allocations (refuse with the number and the setting to
+change), and handing freed heap memory back to the system between long phases."""
 
 from __future__ import annotations
 
+import ctypes
+import ctypes.util
+import functools
+import gc
 import os
+from typing import Callable
 
 #: Share of the available memory one allocation may take.
 SHARE = 0.5
@@ -35,3 +41,35 @@ def check_fits(needed_bytes: float, what: str, setting: str) -> None:
     if needed_bytes > limit:
         raise MemoryError(f"{what} would need about {needed_bytes / 1024**3:.1f} GiB, more than half the "
                           f"{available_bytes() / 1024**3:.1f} GiB available; reduce {setting}")
+
+
+@functools.lru_cache(maxsize=1)
+def _malloc_trim() -> Callable[[int], int] | None:
+    """glibc's ``malloc_trim``, or None where the C library has none (macOS, musl)."""
+    name = ctypes.util.find_library("c")
+    try:
+        trim = ctypes.CDLL(name).malloc_trim if name else None
+    except (OSError, AttributeError):
+        return None
+    if trim is not None:
+        trim.argtypes, trim.restype = [ctypes.c_size_t], ctypes.c_int
+    return trim
+
+
+def release_free_heap() -> bool:
+    """Collect garbage and return the C heap's free pages to the system.
+
+    glibc keeps the memory of freed arrays in its heap for reuse; after a phase that
+    held a run's beliefs, a long job would carry that retained memory into the next
+    phase. Called between the phases of a reproduction, so each phase's peak starts
+    from what is live rather than from the last phase's high-water mark.
+
+    Returns:
+        True when the heap was trimmed (glibc), False where the C library cannot.
+    """
+    gc.collect()
+    trim = _malloc_trim()
+    if trim is None:
+        return False
+    trim(0)
+    return True

@@ -22,6 +22,7 @@ import pandas as pd
 from probecommit.runner.calibration import calibrate
 from probecommit.audit.stats import cluster_bootstrap_mean, paired_bootstrap
 from probecommit.audit.surprise import surprise_auc
+from probecommit.core.memory import release_free_heap
 from probecommit.report.figures import save_figure
 from probecommit.report.study_figures import decisive_tap_figure, fault_signatures, scan_figure
 from probecommit.runner.build import build_model, build_simulator
@@ -159,6 +160,7 @@ class InsertionReproduction:
         self.loaded[name] = load_run(path)
         if fresh:
             self.rep.add_calls(self.loaded[name].manifest["engine_calls"])
+            release_free_heap()  # a replay held a chunk of beliefs at a time: give their pages back
         return self.loaded[name]
 
     def write_table(self, key: str, title: str, table: str, note: str = "") -> None:
@@ -487,18 +489,12 @@ class InsertionReproduction:
     # ---------------------------------------------------------------- all
     def run_all(self, cover_limit: int | None = None) -> Reproduction:
         start = time.perf_counter()
-        self.scan()
-        self.cover_search(cover_limit)
-        self.rollouts()
-        self.table_insertion()
-        self.table_audit()
-        self.table_testc()
-        self.faults()
-        self.robust()
-        self.resplits()
-        self.commit_gates()
-        self.setup_table()
-        self.decisive_tap()
+        steps = [self.scan, lambda: self.cover_search(cover_limit), self.rollouts, self.table_insertion,
+                 self.table_audit, self.table_testc, self.faults, self.robust, self.resplits, self.commit_gates,
+                 self.setup_table, self.decisive_tap]
+        for step in steps:
+            step()
+            release_free_heap()  # the next step's peak starts from what is live, not this one's high-water mark
         self.rep.wall_s = time.perf_counter() - start
         payload = {"results": self.rep.results, "engine_calls": self.rep.engine_calls, "wall_s": self.rep.wall_s,
                    "figures": self.rep.figures}
