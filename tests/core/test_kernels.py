@@ -190,3 +190,45 @@ def test_exp_exact_is_numpy_exp_bit_for_bit(n):
         rows = x.reshape(1, n)  # a 2-D row of weights, and a strided view (NumPy's own exp then)
         assert np.array_equal(kernels.exp_exact(rows).view(np.int64).ravel(), expected)
         assert np.array_equal(kernels.exp_exact(x[::2]).view(np.int64), expected[::2])
+
+
+def _numpy_normalized(log_weights):
+    """The NumPy path of ``core.belief.normalized_weights``, with the kernels switched off."""
+    from probecommit.core.belief import _normalize, effective_sample_size
+
+    log_w, log_norm = _normalize(log_weights.copy())
+    weights = np.exp(log_w)
+    return log_w, log_norm, weights, effective_sample_size(weights)
+
+
+@pytest.mark.parametrize("n", [1, 5, 128, 1000, 1024, 4096])
+def test_normalized_weights_match_numpy_bit_for_bit(n):
+    from probecommit.core.belief import normalized_weights
+
+    rng = np.random.default_rng(n)
+    e = 50
+    # A tap's two levels (ties in runs), continuous log-likelihoods, particles thousands of nats
+    # below the best (weights exactly zero), at the subnormal edge, and impossible ones (-inf).
+    log_weights = np.where(rng.random((e, n)) < 0.5, -0.5, -450.0) + np.repeat(rng.uniform(-5, 5, (e, 1)), n, 1)
+    log_weights[e // 2:] = rng.uniform(-60, 0, (e - e // 2, n)) * rng.choice([1.0, 30.0], (e - e // 2, 1))
+    log_weights[rng.random((e, n)) < 0.05] = -np.inf
+    log_weights[:, 1 % n] = -720.0  # subnormal after the shift; after normalizing in the continuous rows
+    log_weights[:, 0] = 0.0  # every row keeps a finite best
+    compiled = kernels.normalized_weights_compiled(log_weights)
+    assert compiled is not None
+    ours = normalized_weights(log_weights.copy())
+    for a, b in zip(ours, _numpy_normalized(log_weights)):
+        assert np.array_equal(a.view(np.int64), np.asarray(b).view(np.int64))
+
+
+@pytest.mark.parametrize("case", ["lost row", "nan", "plus inf"])
+def test_normalized_weights_leave_the_odd_rows_to_numpy(case):
+    from probecommit.core.belief import normalized_weights
+
+    log_weights = np.log(np.random.default_rng(3).random((4, 64)))
+    log_weights[2, 1:] = {"lost row": -np.inf, "nan": np.nan, "plus inf": np.inf}[case]
+    log_weights[2, 0] = -np.inf if case == "lost row" else log_weights[2, 0]
+    assert kernels.normalized_weights_compiled(log_weights) is None
+    ours = normalized_weights(log_weights.copy())
+    for a, b in zip(ours, _numpy_normalized(log_weights)):
+        assert np.array_equal(a.view(np.int64), np.asarray(b).view(np.int64))

@@ -12,7 +12,12 @@ from typing import Protocol, Sequence
 
 import numpy as np
 
-from probecommit.core.kernels import exp_exact, jitter_resampled_compiled, systematic_resample_compiled
+from probecommit.core.kernels import (
+    exp_exact,
+    jitter_resampled_compiled,
+    normalized_weights_compiled,
+    systematic_resample_compiled,
+)
 from probecommit.core.likelihood import GaussianLikelihood, Likelihood
 
 
@@ -49,6 +54,24 @@ def _normalize(log_weights: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     if np.any(dead):
         out = np.where(dead, -np.log(log_weights.shape[-1]), out)
     return out, log_norm[:, 0]
+
+
+def normalized_weights(log_weights: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Normalize unnormalized log-weights ``[E, N]`` and take what an update needs of them.
+
+    Returns:
+        ``(log_w, log_norm, weights, ess)``: :func:`normalize_log_weights`, the log normalizer
+        ``[E]`` (``-inf`` for a row whose every weight is zero), ``exp(log_w)`` and
+        :func:`effective_sample_size`. One compiled set of fused passes when numba is there,
+        the same bits as the NumPy path (tested); ``log_weights`` may be overwritten.
+    """
+    compiled = normalized_weights_compiled(log_weights)
+    if compiled is not None:
+        log_w, log_norm, weights, sum_of_squares = compiled
+        return log_w, log_norm, weights, 1.0 / sum_of_squares
+    log_w, log_norm = _normalize(log_weights)
+    weights = exp_exact(log_w)
+    return log_w, log_norm, weights, effective_sample_size(weights, log_weights)  # log_weights is spent: scratch
 
 
 def effective_sample_size(weights: np.ndarray, scratch: np.ndarray | None = None) -> np.ndarray:
@@ -254,14 +277,12 @@ class ParticleFilter:
         u = np.asarray(u, dtype=float)
         y = np.asarray(y, dtype=float)
         unnormalized = self._reweighted(state, u, y)
-        log_w, log_evidence = _normalize(unnormalized)
+        log_w, log_evidence, weights, ess = normalized_weights(unnormalized)
         lost = ~np.isfinite(log_evidence)
         u_now, y_now = u.reshape(n_e, 1, -1), y.reshape(n_e, 1, -1)
         u_hist = u_now if state.u_hist is None else np.concatenate([state.u_hist, u_now], axis=1)
         y_hist = y_now if state.y_hist is None else np.concatenate([state.y_hist, y_now], axis=1)
         particles = state.particles  # copied below only if some episode resamples
-        weights = exp_exact(log_w)
-        ess = effective_sample_size(weights, unnormalized)  # unnormalized is spent: its buffer takes the squares
         resample = ess < self.resample_fraction * self.n_particles
         accepted = np.full(n_e, np.nan)
         if np.any(resample):

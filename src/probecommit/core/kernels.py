@@ -701,3 +701,121 @@ def exp_exact(x: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
         between = (flat_x < _EXP_FAST_FLOOR) & (flat_x >= _EXP_ZERO_BELOW)
         flat_out[between] = np.exp(flat_x[between])
     return out
+
+
+# --- Normalizing a batch of log-weights -----------------------------------------------------
+#
+# ``core.belief`` normalizes log-weights, takes their weights and the ESS in about a dozen
+# NumPy passes over the ``[E, N]`` batch (max, shift, exp, sum, log, shift, exp, square, sum
+# and the underflow clamps of ``exp_exact``). These kernels fuse the passes around NumPy's own
+# ``exp`` and ``log`` (whose bits a compiled ``exp`` does not reproduce), with ``exp_exact``'s
+# treatment of the arguments below -700: the same operations on the same values, so the same
+# bits (tested against the NumPy path).
+
+if HAVE_NUMBA:
+
+    @numba.njit(cache=True, nogil=True)
+    def _shift_and_clamp(log_weights, row_max, out):  # pragma: no cover - compiled
+        """``row_max = max(log_weights, axis=1)``; ``out = log_weights - row_max`` raised to
+        ``_EXP_FAST_FLOOR``. Returns how many shifted values lie in ``[-746, -700)`` (their
+        ``exp`` is NumPy's of the value itself), or -1 if a row holds NaN or has no finite
+        maximum (nothing promised then)."""
+        n_e, n = log_weights.shape
+        between = 0
+        for e in range(n_e):
+            top = -np.inf
+            odd = False
+            for i in range(n):
+                value = log_weights[e, i]
+                odd |= value != value
+                top = value if value > top else top
+            if odd or not np.isfinite(top):
+                return -1
+            row_max[e] = top
+            for i in range(n):
+                value = log_weights[e, i] - top
+                low = value < _EXP_FAST_FLOOR
+                between += low and value >= _EXP_ZERO_BELOW
+                out[e, i] = _EXP_FAST_FLOOR if low else value
+        return between
+
+    @numba.njit(cache=True, nogil=True)
+    def _zeroed_row_sums(log_weights, row_max, exps, sums):  # pragma: no cover - compiled
+        """Zero the ``exp`` lanes whose shifted argument is below -746, then ``sums = np.sum(exps, axis=1)``."""
+        n_e, n = log_weights.shape
+        node_start, node_n, node_open, values = _pairwise_scratch()
+        for e in range(n_e):
+            top = row_max[e]
+            for i in range(n):
+                exps[e, i] = 0.0 if log_weights[e, i] - top < _EXP_ZERO_BELOW else exps[e, i]
+            sums[e] = _row_sum_with(exps[e], node_start, node_n, node_open, values)
+
+    @numba.njit(cache=True, nogil=True)
+    def _subtract_and_clamp(log_weights, log_norm, normalized, clamped):  # pragma: no cover - compiled
+        """``normalized = log_weights - log_norm[:, None]`` and its copy raised to ``_EXP_FAST_FLOOR``
+        in ``clamped``. Returns how many values lie in ``[-746, -700)``."""
+        n_e, n = log_weights.shape
+        between = 0
+        for e in range(n_e):
+            shift = log_norm[e]
+            for i in range(n):
+                value = log_weights[e, i] - shift
+                normalized[e, i] = value
+                low = value < _EXP_FAST_FLOOR
+                between += low and value >= _EXP_ZERO_BELOW
+                clamped[e, i] = _EXP_FAST_FLOOR if low else value
+        return between
+
+    @numba.njit(cache=True, nogil=True)
+    def _zeroed_sums_of_squares(normalized, weights, squares):  # pragma: no cover - compiled
+        """Zero the weights whose argument is below -746; ``squares = np.sum(np.square(weights), axis=1)``."""
+        n_e, n = normalized.shape
+        node_start, node_n, node_open, values = _pairwise_scratch()
+        square = np.empty(n)
+        for e in range(n_e):
+            for i in range(n):
+                value = 0.0 if normalized[e, i] < _EXP_ZERO_BELOW else weights[e, i]
+                weights[e, i] = value
+                square[i] = value * value
+            squares[e] = _row_sum_with(square, node_start, node_n, node_open, values)
+
+
+def _exp_of_between(arguments: np.ndarray, exps: np.ndarray) -> None:
+    """``exps`` at the arguments in ``[-746, -700)``: NumPy's ``exp`` of the argument itself (rare)."""
+    between = (arguments < _EXP_FAST_FLOOR) & (arguments >= _EXP_ZERO_BELOW)
+    exps[between] = np.exp(arguments[between])
+
+
+def normalized_weights_compiled(log_weights: np.ndarray) -> tuple[np.ndarray, ...] | None:
+    """Normalize log-weights ``[E, N]`` in fused passes (see ``core.belief.normalized_weights``).
+
+    Returns:
+        ``(normalized log-weights, log normalizer [E], weights, sum of squared weights [E])``, the
+        same bits as the NumPy path; None without numba, for an array that is not float64
+        ``[E, N]`` with N >= 1, and for a row with NaN or no finite maximum (a lost belief),
+        which the NumPy path handles.
+    """
+    if (not HAVE_NUMBA or not isinstance(log_weights, np.ndarray) or log_weights.dtype != np.float64
+            or log_weights.ndim != 2 or log_weights.shape[1] == 0):
+        return None
+    log_weights = np.ascontiguousarray(log_weights)
+    n_e = log_weights.shape[0]
+    row_max = np.empty(n_e)
+    exps = np.empty_like(log_weights)
+    between = _shift_and_clamp(log_weights, row_max, exps)
+    if between < 0:
+        return None
+    np.exp(exps, out=exps)
+    if between:
+        _exp_of_between(log_weights - row_max[:, None], exps)
+    sums = np.empty(n_e)
+    _zeroed_row_sums(log_weights, row_max, exps, sums)
+    log_norm = row_max + np.log(sums)
+    normalized = np.empty_like(log_weights)
+    between = _subtract_and_clamp(log_weights, log_norm, normalized, exps)  # exps is spent: it takes the weights
+    np.exp(exps, out=exps)
+    if between:
+        _exp_of_between(normalized, exps)
+    squares = np.empty(n_e)
+    _zeroed_sums_of_squares(normalized, exps, squares)
+    return normalized, log_norm, exps, squares
