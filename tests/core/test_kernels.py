@@ -93,6 +93,15 @@ def _weight_cases():
         "mostly zero": np.where(rng.random((e, n)) < 0.9, 0.0, rng.random((e, n))),
         "one bucket, all distinct": 1 + 1e-3 * rng.random((e, n)),
         "tiny rows": rng.random((e, 5)),
+        # A resampled belief after a few taps: runs of copies sharing a weight.
+        "runs of few values": np.repeat(np.exp(-3.0 * rng.integers(0, 5, (e, n // 8))), 8, axis=1),
+        # At and just past the few-weight table's capacity (16 distinct values).
+        "sixteen values": np.exp(-0.25 * rng.integers(0, 16, (e, n))),
+        "seventeen values": np.exp(-0.25 * np.concatenate([np.arange(17)[None].repeat(e, 0),
+                                                           rng.integers(0, 17, (e, n - 17))], axis=1)),
+        # -0.0 ties with 0.0 (the stable order keeps them in index order).
+        "signed zeros": np.where(rng.random((e, n)) < 0.5, np.where(rng.random((e, n)) < 0.5, -0.0, 0.0),
+                                 np.exp(-rng.integers(0, 3, (e, n)))),
     }
     return {name: w / w.sum(axis=1, keepdims=True) for name, w in cases.items()}
 

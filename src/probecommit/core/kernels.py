@@ -221,6 +221,8 @@ _BUCKET_SLACK = 1e-9
 _INSERTION_SORT_MAX = 48
 #: A coverage prefix of at most this many particles is sorted directly, without buckets.
 _FEW = 48
+#: A row of at most this many distinct weights takes its prefix without ordering particles.
+_FEW_WEIGHTS = 16
 
 if HAVE_NUMBA:
 
@@ -416,6 +418,62 @@ if HAVE_NUMBA:
         return w.shape[0]
 
     @numba.njit(cache=True, nogil=True)
+    def _few_weight_prefix(w, nu, values, counts):  # pragma: no cover - compiled
+        """:func:`_top_weight_prefix` for a row of few distinct weights, without ordering particles.
+
+        A belief's weights take few values (each tap multiplies a weight by one of the reading
+        levels' likelihoods; a resampling makes them equal) and come in runs (a parent's copies
+        are neighbours). The prefix then holds every particle heavier than some weight ``t`` and
+        the first ``r`` particles (in index order) of weight ``t``: the stable order's cumulative
+        sums are those of the sorted distinct values, each repeated, so they have the same bits.
+
+        Returns:
+            ``(m, t, r)``; ``m = n`` and ``t = -inf`` when the mass is never reached; ``m = -1``
+            when the row holds more distinct weights than ``values`` has room for.
+        """
+        n = w.shape[0]
+        if n == 0:
+            return 0, -np.inf, 0
+        run_value = w[0]
+        values[0], counts[0] = run_value, 0
+        n_values, slot, run_length = 1, 0, 0
+        for i in range(n):
+            value = w[i]
+            if value != run_value:  # a run ends: its count goes to its value's slot at once
+                counts[slot] += run_length
+                run_value, run_length, slot = value, 0, -1
+                for s in range(n_values):
+                    if values[s] == value:
+                        slot = s
+                        break
+                if slot < 0:
+                    if n_values == values.shape[0]:
+                        return -1, 0.0, 0
+                    values[n_values], counts[n_values] = value, 0
+                    slot = n_values
+                    n_values += 1
+            run_length += 1
+        counts[slot] += run_length
+        for a in range(1, n_values):  # descending by weight (distinct values: no ties to keep)
+            value, count = values[a], counts[a]
+            b = a - 1
+            while b >= 0 and values[b] < value:
+                values[b + 1], counts[b + 1] = values[b], counts[b]
+                b -= 1
+            values[b + 1], counts[b + 1] = value, count
+        target = nu - 1e-12
+        cumulative = 0.0
+        taken = 0
+        for s in range(n_values):
+            value = values[s]
+            for c in range(counts[s]):
+                cumulative += value
+                if cumulative >= target:
+                    return taken + c + 1, value, c + 1
+            taken += counts[s]
+        return n, -np.inf, 0
+
+    @numba.njit(cache=True, nogil=True)
     def _coverage_score(weights, z, z_true, width):  # pragma: no cover - compiled
         n_e, n = weights.shape
         out = np.empty(n_e)
@@ -492,33 +550,49 @@ if HAVE_NUMBA:
         counts = np.empty(_N_BUCKETS, dtype=np.int64)
         mass = np.empty(_N_BUCKETS)
         starts = np.empty(_N_BUCKETS, dtype=np.int64)
+        few_values = np.empty(_FEW_WEIGHTS)
         masked_w = np.empty(n)
         product = np.empty(n)
         node_start, node_n, node_open, values = _pairwise_scratch()
         for e in range(n_e):
             w = weights[e]
-            m = _top_weight_prefix(w, nu[e], order, buckets, counts, mass, starts)
-            if m == n:
-                mask[e, :] = True
-            else:
-                for i in range(m):
-                    mask[e, order[i]] = True
-            # One pass: masked_interval (NaN in a retained z propagates, as np.min / np.max do)
-            # and the masked weights that belief_reference sums.
-            low, high = np.inf, -np.inf
-            kept = 0
+            outside = False  # negative, NaN or infinite weights: the NumPy path answers
             for i in range(n):
-                if mask[e, i]:
-                    value = z[e, i]
-                    if value != value or low != low:
-                        low = high = np.nan
-                    else:
-                        low = min(low, value)
-                        high = max(high, value)
-                    masked_w[i] = w[i]
-                    kept += 1
+                outside |= not (w[i] >= 0.0 and w[i] < np.inf)
+            if outside:
+                return False, mask, lo, hi, reference
+            m, threshold, ties = _few_weight_prefix(w, nu[e], few_values, counts)
+            few = m >= 0
+            if not few:
+                m = _top_weight_prefix(w, nu[e], order, buckets, counts, mass, starts)
+                if m == n:
+                    mask[e, :] = True
                 else:
-                    masked_w[i] = 0.0
+                    for i in range(m):
+                        mask[e, order[i]] = True
+            # One pass, without a branch on the mask (retained particles are scattered through
+            # the row): the mask of a few-weight row (heavier than the threshold, or among its
+            # first ``ties`` particles), masked_interval (NaN in a retained z propagates, as
+            # np.min / np.max do) and the masked weights that belief_reference sums.
+            low, high = np.inf, -np.inf
+            retained_nan = False
+            kept = seen = 0
+            for i in range(n):
+                if few:  # loop-invariant: the compiler makes two loops
+                    tie = w[i] == threshold
+                    keep = w[i] > threshold or (tie and seen < ties)
+                    seen += tie
+                    mask[e, i] = keep
+                else:
+                    keep = mask[e, i]
+                value = z[e, i]
+                retained_nan |= keep and value != value
+                low = min(low, value if keep else np.inf)
+                high = max(high, value if keep else -np.inf)
+                masked_w[i] = w[i] if keep else 0.0
+                kept += keep
+            if retained_nan:
+                low = high = np.nan
             lo[e], hi[e] = low, high
             # belief_reference: weighted means over the mask, summed in NumPy's order.
             total = _row_sum_with(masked_w, node_start, node_n, node_open, values)
@@ -531,7 +605,7 @@ if HAVE_NUMBA:
                     for i in range(n):
                         product[i] = particles[e, i, j] if mask[e, i] else 0.0
                     reference[e, j] = _row_sum_with(product, node_start, node_n, node_open, values) / max(kept, 1)
-        return mask, lo, hi, reference
+        return True, mask, lo, hi, reference
 
 
 if HAVE_NUMBA:
@@ -575,12 +649,11 @@ def retained_summary_compiled(weights: np.ndarray, nu: np.ndarray, z: np.ndarray
     """
     if not HAVE_NUMBA:
         return None
-    weights = np.ascontiguousarray(weights, dtype=np.float64)
-    if not (np.all(np.isfinite(weights)) and np.all(weights >= 0)):
-        return None
     # z is often a strided view (one latent of the particles): the kernel reads it in place.
-    return _retained_summary(weights, np.ascontiguousarray(nu, dtype=np.float64), np.asarray(z, dtype=np.float64),
-                             np.ascontiguousarray(particles, dtype=np.float64))
+    inside, *summary = _retained_summary(np.ascontiguousarray(weights, dtype=np.float64),
+                                         np.ascontiguousarray(nu, dtype=np.float64), np.asarray(z, dtype=np.float64),
+                                         np.ascontiguousarray(particles, dtype=np.float64))
+    return tuple(summary) if inside else None
 
 
 def coverage_score_compiled(weights: np.ndarray, z: np.ndarray, z_true: np.ndarray, width: float) -> np.ndarray | None:
