@@ -131,7 +131,7 @@ def test_retained_summary_leaves_odd_weights_to_numpy():
 
 @pytest.mark.parametrize("name", list(_weight_cases()))
 def test_coverage_score_matches_numpy(name):
-    from probecommit.core.retained import coverage_score, coverage_score_numpy
+    from probecommit.core.retained import coverage_score, coverage_score_numpy, coverage_with_hull
 
     weights = _weight_cases()[name]
     rng = np.random.default_rng(9)
@@ -139,8 +139,20 @@ def test_coverage_score_matches_numpy(name):
     z = np.round(rng.standard_normal((e, n)), 1)  # ties in z, and truths exactly on particles
     z_true = np.concatenate([z[: e // 3, 0], rng.uniform(-1, 1, e - e // 3 - 4), [-9.0, 9.0, z[0].min(), z[0].max()]])
     np.testing.assert_array_equal(coverage_score(z, weights, z_true, 20.0), coverage_score_numpy(z, weights, z_true, 20.0))
+    # With the hull, from a strided coordinate (one latent of the particles), signed zeros included.
+    particles = np.stack([z, rng.standard_normal((e, n))], axis=-1)
+    particles[2, :2, 0], particles[3, :2, 0] = [0.0, -0.0], [-0.0, 0.0]
+    particles[2:4, 2:, 0] = np.abs(particles[2:4, 2:, 0]) + 0.5  # rows whose hull starts at a zero
+    particles[4:6, :2, 0], particles[4:6, 2:, 0] = [[-0.0, 0.0], [0.0, -0.0]], -np.abs(particles[4:6, 2:, 0]) - 0.5
+    strided = particles[..., 0]
+    score, low, high = coverage_with_hull(strided, weights, z_true, 20.0)
+    rows = np.ascontiguousarray(strided)
+    for ours, numpys in ((score, coverage_score_numpy(rows, weights, z_true, 20.0)), (low, rows.min(axis=1)),
+                         (high, rows.max(axis=1))):
+        assert np.array_equal(ours.view(np.int64), numpys.view(np.int64))
     z[1, 0] = np.nan  # outside the kernel's domain: the NumPy path answers
     assert kernels.coverage_score_compiled(weights, z, z_true, 20.0) is None
+    np.testing.assert_array_equal(coverage_with_hull(z, weights, z_true, 20.0)[1], z.min(axis=1))
 
 
 def test_jitter_resampled_matches_numpy():

@@ -475,8 +475,12 @@ if HAVE_NUMBA:
 
     @numba.njit(cache=True, nogil=True)
     def _coverage_score(weights, z, z_true, width):  # pragma: no cover - compiled
+        """The coverage score and the hull ``(min z, max z)`` per row, and whether every input
+        was inside the kernel's domain (finite, non-negative weights; finite z and truth)."""
         n_e, n = weights.shape
         out = np.empty(n_e)
+        hull_low = np.empty(n_e)
+        hull_high = np.empty(n_e)
         order = np.empty(n, dtype=np.int64)
         buckets = np.empty(n, dtype=np.int64)
         counts = np.empty(_N_BUCKETS, dtype=np.int64)
@@ -485,6 +489,11 @@ if HAVE_NUMBA:
         for e in range(n_e):
             truth = z_true[e]
             w = weights[e]
+            outside = not np.isfinite(truth)
+            for i in range(n):
+                outside |= not (w[i] >= 0.0 and w[i] < np.inf and np.isfinite(z[e, i]))
+            if outside:
+                return False, out, hull_low, hull_high
             # The prefix covers the truth once it holds a particle at or left of it and one at or
             # right of it: it ends at the later (in the stable descending order) of the heaviest
             # particle on each side. When few particles come before that one, sort only them.
@@ -498,6 +507,7 @@ if HAVE_NUMBA:
                     left = i
                 if value >= truth and (right < 0 or w[i] > w[right]):
                     right = i
+            hull_low[e], hull_high[e] = hull_lo, hull_hi
             if not (hull_lo <= truth <= hull_hi):  # escaped: 1 + distance past the hull / D
                 out[e] = 1.0 + (max(hull_lo - truth, 0.0) + max(truth - hull_hi, 0.0)) / width
                 continue
@@ -535,7 +545,7 @@ if HAVE_NUMBA:
                     break
                 begin = end
             out[e] = min(cumulative, 1.0)
-        return out
+        return True, out, hull_low, hull_high
 
     @numba.njit(cache=True, nogil=True)
     def _retained_summary(weights, nu, z, particles):  # pragma: no cover - compiled
@@ -656,20 +666,28 @@ def retained_summary_compiled(weights: np.ndarray, nu: np.ndarray, z: np.ndarray
     return tuple(summary) if inside else None
 
 
-def coverage_score_compiled(weights: np.ndarray, z: np.ndarray, z_true: np.ndarray, width: float) -> np.ndarray | None:
-    """The compiled coverage score (see ``core.retained.coverage_score``), or None.
+def coverage_score_compiled(weights: np.ndarray, z: np.ndarray, z_true: np.ndarray,
+                            width: float) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+    """The compiled coverage score with the hull it passes (see ``core.retained.coverage_with_hull``),
+    ``(score, min z, max z)`` per row, or None.
 
     None without numba and outside the kernel's domain (weights that are negative or not
-    finite, a decision coordinate or truth that is not finite), which NumPy handles.
+    finite, a decision coordinate or truth that is not finite), which NumPy handles. ``z`` may
+    be a strided view (one latent of the particles): the kernel reads it in place.
     """
     if not HAVE_NUMBA:
         return None
-    weights = np.ascontiguousarray(weights, dtype=np.float64)
-    z = np.ascontiguousarray(z, dtype=np.float64)
-    z_true = np.ascontiguousarray(z_true, dtype=np.float64)
-    if not (np.all(np.isfinite(weights)) and np.all(weights >= 0) and np.all(np.isfinite(z)) and np.all(np.isfinite(z_true))):
+    z = np.asarray(z, dtype=np.float64)
+    inside, score, low, high = _coverage_score(np.ascontiguousarray(weights, dtype=np.float64), z,
+                                               np.ascontiguousarray(z_true, dtype=np.float64), float(width))
+    if not inside:
         return None
-    return _coverage_score(weights, z, z_true, float(width))
+    # NumPy's min and max pick between -0.0 and 0.0 by position: rows whose hull ends at a zero take theirs.
+    signed = np.flatnonzero((low == 0.0) | (high == 0.0))
+    if signed.size:
+        rows = np.ascontiguousarray(z[signed])
+        low[signed], high[signed] = rows.min(axis=1), rows.max(axis=1)
+    return score, low, high
 
 
 if HAVE_NUMBA:

@@ -130,10 +130,21 @@ def coverage_score(z: np.ndarray, weights: np.ndarray, z_true: np.ndarray, domai
         ``[E]`` scores; ``<= 1`` when the truth is inside the hull (clipped at 1
         against round-off), ``1 + d / D`` exactly when it escapes.
     """
+    return coverage_with_hull(z, weights, z_true, domain_width)[0]
+
+
+def coverage_with_hull(z: np.ndarray, weights: np.ndarray, z_true: np.ndarray,
+                       domain_width: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`coverage_score` and the hull ``(min z, max z)`` per episode, from one pass.
+
+    ``z`` may be a strided view (one latent of the particles): the compiled kernel reads it in
+    place and finds the hull on the way (the same bits as NumPy's ``min`` and ``max``).
+    """
     compiled = coverage_score_compiled(weights, z, z_true, domain_width)
     if compiled is not None:
         return compiled
-    return coverage_score_numpy(z, weights, z_true, domain_width)
+    z_rows = np.ascontiguousarray(z)
+    return coverage_score_numpy(z_rows, weights, z_true, domain_width), z_rows.min(axis=1), z_rows.max(axis=1)
 
 
 def coverage_score_numpy(z: np.ndarray, weights: np.ndarray, z_true: np.ndarray, domain_width: float) -> np.ndarray:

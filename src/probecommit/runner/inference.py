@@ -18,7 +18,7 @@ import pandas as pd
 
 from probecommit.core.belief import BeliefState, ParticleFilter
 from probecommit.core.executors import BlindBayes, BlindRobust, ProbeRobust
-from probecommit.core.retained import coverage_score, masked_interval, weighted_variance
+from probecommit.core.retained import coverage_with_hull, masked_interval, weighted_variance
 from probecommit.runner.seeding import INFERENCE, ROLLOUT, blind_rng, episode_rngs
 from probecommit.store.schema import component_names
 
@@ -335,12 +335,9 @@ def commit(
         if belief is None:
             z = model.decision(particles)
             weights = state.weights
-            z_rows = np.ascontiguousarray(z)  # one copy of a strided coordinate for the row reductions below
-            belief = cache[("belief", k)] = {
-                "z": z, "weights": weights, "hull_lo": z_rows.min(axis=1), "hull_hi": z_rows.max(axis=1),
-                "score_s": coverage_score(z_rows, weights, z_true, model.decision_domain_width),
-                "post_var": weighted_variance(z_rows, weights),
-            }
+            score_s, hull_lo, hull_hi = coverage_with_hull(z, weights, z_true, model.decision_domain_width)
+            belief = cache[("belief", k)] = {"z": z, "weights": weights, "hull_lo": hull_lo, "hull_hi": hull_hi,
+                                             "score_s": score_s, "post_var": weighted_variance(z, weights)}
         z, weights = belief["z"], belief["weights"]
         if method == "blind_bayes":
             if blind is None:
