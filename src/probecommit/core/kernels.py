@@ -418,28 +418,23 @@ if HAVE_NUMBA:
         return w.shape[0]
 
     @numba.njit(cache=True, nogil=True)
-    def _few_weight_prefix(w, nu, values, counts):  # pragma: no cover - compiled
-        """:func:`_top_weight_prefix` for a row of few distinct weights, without ordering particles.
+    def _few_weight_table(w, values, counts):  # pragma: no cover - compiled
+        """The distinct weights of a non-empty row in descending order, with how many particles
+        carry each, in ``values`` and ``counts``; returns how many there are, or -1 when there
+        are more than ``values`` holds.
 
         A belief's weights take few values (each tap multiplies a weight by one of the reading
         levels' likelihoods; a resampling makes them equal) and come in runs (a parent's copies
-        are neighbours). The prefix then holds every particle heavier than some weight ``t`` and
-        the first ``r`` particles (in index order) of weight ``t``: the stable order's cumulative
-        sums are those of the sorted distinct values, each repeated, so they have the same bits.
-
-        Returns:
-            ``(m, t, r)``; ``m = n`` and ``t = -inf`` when the mass is never reached; ``m = -1``
-            when the row holds more distinct weights than ``values`` has room for.
+        are neighbours), so a run's count goes to its value at once. The stable descending
+        order's cumulative sums are those of the sorted distinct values, each repeated: they can
+        be taken, with the same bits, without ordering particles.
         """
-        n = w.shape[0]
-        if n == 0:
-            return 0, -np.inf, 0
         run_value = w[0]
         values[0], counts[0] = run_value, 0
         n_values, slot, run_length = 1, 0, 0
-        for i in range(n):
+        for i in range(w.shape[0]):
             value = w[i]
-            if value != run_value:  # a run ends: its count goes to its value's slot at once
+            if value != run_value:
                 counts[slot] += run_length
                 run_value, run_length, slot = value, 0, -1
                 for s in range(n_values):
@@ -448,7 +443,7 @@ if HAVE_NUMBA:
                         break
                 if slot < 0:
                     if n_values == values.shape[0]:
-                        return -1, 0.0, 0
+                        return -1
                     values[n_values], counts[n_values] = value, 0
                     slot = n_values
                     n_values += 1
@@ -461,6 +456,24 @@ if HAVE_NUMBA:
                 values[b + 1], counts[b + 1] = values[b], counts[b]
                 b -= 1
             values[b + 1], counts[b + 1] = value, count
+        return n_values
+
+    @numba.njit(cache=True, nogil=True)
+    def _few_weight_prefix(w, nu, values, counts):  # pragma: no cover - compiled
+        """:func:`_top_weight_prefix` for a row of few distinct weights (:func:`_few_weight_table`):
+        the prefix holds every particle heavier than some weight ``t`` and the first ``r``
+        particles (in index order) of weight ``t``.
+
+        Returns:
+            ``(m, t, r)``; ``m = n`` and ``t = -inf`` when the mass is never reached; ``m = -1``
+            when the row holds more distinct weights than ``values`` has room for.
+        """
+        n = w.shape[0]
+        if n == 0:
+            return 0, -np.inf, 0
+        n_values = _few_weight_table(w, values, counts)
+        if n_values < 0:
+            return -1, 0.0, 0
         target = nu - 1e-12
         cumulative = 0.0
         taken = 0
@@ -486,27 +499,34 @@ if HAVE_NUMBA:
         counts = np.empty(_N_BUCKETS, dtype=np.int64)
         mass = np.empty(_N_BUCKETS)
         starts = np.empty(_N_BUCKETS, dtype=np.int64)
+        few_values = np.empty(_FEW_WEIGHTS)
+        few_counts = np.empty(_FEW_WEIGHTS, dtype=np.int64)
         for e in range(n_e):
             truth = z_true[e]
             w = weights[e]
-            outside = not np.isfinite(truth)
-            for i in range(n):
-                outside |= not (w[i] >= 0.0 and w[i] < np.inf and np.isfinite(z[e, i]))
-            if outside:
-                return False, out, hull_low, hull_high
             # The prefix covers the truth once it holds a particle at or left of it and one at or
             # right of it: it ends at the later (in the stable descending order) of the heaviest
             # particle on each side. When few particles come before that one, sort only them.
+            # Branch-free (which side a particle lies on is a coin flip): the heaviest on each side
+            # is tracked with its weight, which starts below any weight (-1) for "none yet".
             hull_lo, hull_hi = np.inf, -np.inf
             left = right = -1
+            left_w = right_w = -1.0
+            outside = not np.isfinite(truth)
             for i in range(n):
                 value = z[e, i]
+                weight = w[i]
+                outside |= not ((weight >= 0.0) & (weight < np.inf) & np.isfinite(value))
                 hull_lo = min(hull_lo, value)
                 hull_hi = max(hull_hi, value)
-                if value <= truth and (left < 0 or w[i] > w[left]):
-                    left = i
-                if value >= truth and (right < 0 or w[i] > w[right]):
-                    right = i
+                heavier_left = (value <= truth) & (weight > left_w)
+                left = i if heavier_left else left
+                left_w = weight if heavier_left else left_w
+                heavier_right = (value >= truth) & (weight > right_w)
+                right = i if heavier_right else right
+                right_w = weight if heavier_right else right_w
+            if outside:
+                return False, out, hull_low, hull_high
             hull_low[e], hull_high[e] = hull_lo, hull_hi
             if not (hull_lo <= truth <= hull_hi):  # escaped: 1 + distance past the hull / D
                 out[e] = 1.0 + (max(hull_lo - truth, 0.0) + max(truth - hull_hi, 0.0)) / width
@@ -514,16 +534,28 @@ if HAVE_NUMBA:
             stop = right if (w[right] < w[left] or (w[right] == w[left] and right > left)) else left
             w_stop = w[stop]
             count = 0
-            for i in range(n):
-                if w[i] > w_stop or (w[i] == w_stop and i <= stop):
-                    if count < _FEW:
-                        order[count] = i
-                    count += 1
+            for i in range(n):  # branch-free: a slot is written always and kept only if taken
+                order[min(count, _FEW)] = i
+                count += (w[i] > w_stop) | ((w[i] == w_stop) & (i <= stop))
             if count <= _FEW:
                 _sort_bucket(w, order, 0, count)
                 cumulative = 0.0
                 for i in range(count):
                     cumulative += w[order[i]]
+                out[e] = min(cumulative, 1.0)
+                continue
+            n_values = _few_weight_table(w, few_values, few_counts)
+            if n_values >= 0:  # the prefix's weights: each heavier value in full, then the ties up to the stop
+                ties = 0
+                for i in range(stop + 1):
+                    ties += w[i] == w_stop
+                cumulative = 0.0
+                for s in range(n_values):
+                    value = few_values[s]
+                    if value < w_stop:
+                        break
+                    for _ in range(few_counts[s] if value > w_stop else ties):
+                        cumulative += value
                 out[e] = min(cumulative, 1.0)
                 continue
             last = _bucket_order(w, np.inf, order, buckets, counts, mass, starts)
