@@ -205,7 +205,9 @@ def interval_success_counts_compiled(lo: np.ndarray, hi: np.ndarray, mask: np.nd
 # --- The top-weight retained set ------------------------------------------------------------
 #
 # NumPy's path (core.retained) sorts every row in full (a stable argsort) and takes the
-# cumulative mass in that order. The kernel gets the same bits without the full sort: it
+# cumulative mass in that order. The kernel gets the same bits without the full sort. A row
+# of at most ``_FEW_WEIGHTS`` distinct weights (a tap belief's) needs no order at all: the
+# cumulative sums are those of its sorted distinct values (``_few_weight_table``). Otherwise it
 # buckets the weights by their leading 16 bits (sign, exponent, four mantissa bits: one
 # bucket per sixteenth of an octave below the row's largest weight), finds the buckets that
 # certainly hold the prefix's mass, and sorts only those candidates. Every non-candidate
