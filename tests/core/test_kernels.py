@@ -33,6 +33,35 @@ def test_interval_counts_match_numpy_including_ties_and_non_finite(grid):
     np.testing.assert_array_equal(interval_success_counts(lo, hi, mask, grid), interval_success_counts_numpy(lo, hi, mask, grid))
 
 
+@pytest.mark.parametrize("grid", [
+    np.round(np.arange(-10.0, 10.0 + 1e-9, 0.5), 10),  # insertion's aims
+    np.linspace(-1.0, 1.0, 41),  # a spacing that is not a binary fraction
+    np.linspace(-1.0, 1.0, 41) + 1e-12 * np.random.default_rng(2).standard_normal(41),  # "even" within tolerance only
+    np.sort(np.random.default_rng(7).uniform(-10, 10, 41)),  # uneven: the walk
+])
+def test_each_interval_end_is_numpys_searchsorted(grid):
+    """One scenario per row, so the counts show each end's position alone: the kernel's guess
+    and walk give NumPy's ``searchsorted`` at grid points, one ulp either side, near misses,
+    beyond the grid and at the non-finite values."""
+    near = np.concatenate([grid, np.nextafter(grid, np.inf), np.nextafter(grid, -np.inf), grid + 1e-13, grid - 1e-13,
+                           (grid[1:] + grid[:-1]) / 2])
+    values = np.concatenate([near, np.random.default_rng(1).uniform(2 * grid[0], 2 * grid[-1], 500),
+                             [np.inf, -np.inf, np.nan, 1e300, -1e300, 0.0, -0.0]])[:, None]
+    mask = np.ones_like(values, dtype=bool)
+    wide = np.full_like(values, 1e308)
+    # The mean spacing passed for any grid, even the uneven one, whose first guesses are then
+    # wrong by several cells: the walk still ends at the exact answer.
+    mean_step = (grid[-1] - grid[0]) / (len(grid) - 1)
+    for lo, hi in ((values, wide), (-wide, values)):
+        expected = interval_success_counts_numpy(lo, hi, mask, grid)
+        np.testing.assert_array_equal(interval_success_counts(lo, hi, mask, grid), expected)
+        np.testing.assert_array_equal(kernels._interval_success_counts(lo, hi, mask, grid, mean_step), expected)
+    with np.errstate(invalid="ignore"):  # inf - inf: a NaN end, which sorts last
+        centre, half = values, np.full_like(values, np.inf)
+        np.testing.assert_array_equal(scaled_interval_success_counts(centre, half, 1.0, mask, grid),
+                                      interval_success_counts_numpy(centre - half, centre + half, mask, grid))
+
+
 @pytest.mark.parametrize("margin", [1.0, 0.73, 1.37])
 def test_scaled_interval_counts_match_counting_the_numpy_ends(margin):
     """The kernel forms centre -+ half * margin per scenario: the same ends as NumPy's, bit for bit
