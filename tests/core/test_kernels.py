@@ -243,7 +243,7 @@ def test_exp_exact_is_numpy_exp_bit_for_bit(n):
 
 
 def _numpy_normalized(log_weights):
-    """The NumPy path of ``core.belief.normalized_weights``, with the kernels switched off."""
+    """``core.belief.normalized_weights`` the unfused way: ``_normalize``, NumPy's ``exp`` and the ESS."""
     from probecommit.core.belief import _normalize, effective_sample_size
 
     log_w, log_norm = _normalize(log_weights.copy())

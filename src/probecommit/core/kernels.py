@@ -419,6 +419,11 @@ if HAVE_NUMBA:
             begin = end
         return w.shape[0]
 
+    @numba.njit(cache=True, nogil=True, inline="always")
+    def _is_weight(value):  # pragma: no cover - compiled
+        """Inside the kernels' domain: a finite, non-negative weight (NaN is not)."""
+        return (value >= 0.0) & (value < np.inf)
+
     @numba.njit(cache=True, nogil=True)
     def _few_weight_table(w, values, counts):  # pragma: no cover - compiled
         """The distinct weights of a non-empty row in descending order, with how many particles
@@ -518,7 +523,7 @@ if HAVE_NUMBA:
             for i in range(n):
                 value = z[e, i]
                 weight = w[i]
-                outside |= not ((weight >= 0.0) & (weight < np.inf) & np.isfinite(value))
+                outside |= not (_is_weight(weight) & np.isfinite(value))
                 hull_lo = min(hull_lo, value)
                 hull_hi = max(hull_hi, value)
                 heavier_left = (value <= truth) & (weight > left_w)
@@ -602,7 +607,7 @@ if HAVE_NUMBA:
             w = weights[e]
             outside = False  # negative, NaN or infinite weights: the NumPy path answers
             for i in range(n):
-                outside |= not (w[i] >= 0.0 and w[i] < np.inf)
+                outside |= not _is_weight(w[i])
             if outside:
                 return False, mask, lo, hi, reference
             m, threshold, ties = _few_weight_prefix(w, nu[e], few_values, counts)
@@ -800,6 +805,12 @@ if HAVE_NUMBA:
         return n_between
 
 
+def _exp_of_between(arguments: np.ndarray, exps: np.ndarray) -> None:
+    """``exps`` at the arguments in ``[-746, -700)``: NumPy's ``exp`` of the argument itself (rare)."""
+    between = (arguments < _EXP_FAST_FLOOR) & (arguments >= _EXP_ZERO_BELOW)
+    exps[between] = np.exp(arguments[between])
+
+
 def exp_exact(x: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
     """``np.exp(x, out=out)``, the same bits, without the cost of arguments whose result underflows.
 
@@ -823,8 +834,7 @@ def exp_exact(x: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
     _clamp_for_exp(flat_x, flat_out)
     np.exp(out, out=out)
     if _zero_underflows(flat_x, flat_out):
-        between = (flat_x < _EXP_FAST_FLOOR) & (flat_x >= _EXP_ZERO_BELOW)
-        flat_out[between] = np.exp(flat_x[between])
+        _exp_of_between(flat_x, flat_out)
     return out
 
 
@@ -903,12 +913,6 @@ if HAVE_NUMBA:
                 weights[e, i] = value
                 square[i] = value * value
             squares[e] = _row_sum_with(square, node_start, node_n, node_open, values)
-
-
-def _exp_of_between(arguments: np.ndarray, exps: np.ndarray) -> None:
-    """``exps`` at the arguments in ``[-746, -700)``: NumPy's ``exp`` of the argument itself (rare)."""
-    between = (arguments < _EXP_FAST_FLOOR) & (arguments >= _EXP_ZERO_BELOW)
-    exps[between] = np.exp(arguments[between])
 
 
 def normalized_weights_compiled(log_weights: np.ndarray) -> tuple[np.ndarray, ...] | None:
