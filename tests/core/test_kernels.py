@@ -12,7 +12,7 @@ from probecommit.core.executors import (
     scaled_interval_success_counts,
 )
 
-pytestmark = pytest.mark.skipif(not kernels.HAVE_NUMBA, reason="numba not installed (pip install 'probecommit[fast]')")
+pytestmark = pytest.mark.skipif(not kernels.HAVE_KERNELS, reason="numba not installed (pip install 'probecommit[fast]')")
 
 
 @pytest.mark.parametrize("grid", [

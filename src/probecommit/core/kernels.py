@@ -3,30 +3,21 @@
 numba is an optional, pinned dependency (``pip install 'probecommit[fast]'``, part of
 ``all``). Every kernel here has a NumPy twin in the calling module and a test that the
 two agree bit for bit (``tests/core/test_kernels.py``); without numba, or with
-``PROBECOMMIT_NO_NUMBA=1``, the NumPy path runs. Compiled code is cached on disk
-(``cache=True``), so only the first run on a machine pays the compile time.
+``PROBECOMMIT_NO_NUMBA=1``, the NumPy path runs. The kernels run from a module built
+ahead of time when it is current, else through numba's JIT with its on-disk cache
+(:mod:`probecommit.core.compiled`): either way, the same functions below.
 """
 
 from __future__ import annotations
 
-import os
-
 import numpy as np
 
-try:  # pragma: no cover - exercised in both states by the tests' environment switch
-    if os.environ.get("PROBECOMMIT_NO_NUMBA"):
-        raise ImportError("disabled by PROBECOMMIT_NO_NUMBA")
-    import numba
+from probecommit.core.compiled import AVAILABLE as HAVE_KERNELS
+from probecommit.core.compiled import helper, kernel
 
-    HAVE_NUMBA = True
-except ImportError:  # pragma: no cover
-    numba = None
-    HAVE_NUMBA = False
+if HAVE_KERNELS:
 
-
-if HAVE_NUMBA:
-
-    @numba.njit(cache=True, nogil=True, inline="always")
+    @helper(inline=True)
     def _position(actions, value, inv_step, right):  # pragma: no cover - compiled
         """``searchsorted(actions, value, side)`` on a sorted grid; exact.
 
@@ -59,7 +50,7 @@ if HAVE_NUMBA:
                 i -= 1
         return i
 
-    @numba.njit(cache=True, nogil=True, inline="always")
+    @helper(inline=True)
     def _add_interval(diff, actions, lo, hi, inv_step):  # pragma: no cover - compiled
         """Add one scenario's open interval ``(lo, hi)`` to the difference array of the grid actions."""
         first = _position(actions, lo, inv_step, True)
@@ -68,7 +59,7 @@ if HAVE_NUMBA:
             diff[first] += 1
             diff[last] -= 1
 
-    @numba.njit(cache=True, nogil=True, inline="always")
+    @helper(inline=True)
     def _take_counts(diff, out_row):  # pragma: no cover - compiled
         """Write the counts of a difference array into ``out_row`` and clear it for the next episode."""
         run = 0
@@ -77,7 +68,7 @@ if HAVE_NUMBA:
             out_row[a] = run
         diff[:] = 0
 
-    @numba.njit(cache=True, nogil=True)
+    @kernel("i8[:, ::1](f8[:, ::1], f8[:, ::1], b1[:, ::1], f8[::1], f8)")
     def _interval_success_counts(lo, hi, mask, actions, step):  # pragma: no cover - compiled
         n_e, n_s = mask.shape
         out = np.zeros((n_e, actions.shape[0]), dtype=np.int64)
@@ -91,9 +82,12 @@ if HAVE_NUMBA:
         return out
 
 
-if HAVE_NUMBA:
+if HAVE_KERNELS:
 
-    @numba.njit(cache=True, nogil=True)
+    @kernel(
+        "i8[:, ::1](f8[:, ::1], f8[:, ::1], f8, b1[:, ::1], f8[::1], f8)",
+        "i8[:, ::1](f8[:, :], f8[:, ::1], f8, b1[:, ::1], f8[::1], f8)",
+    )
     def _scaled_interval_success_counts(centre, half, margin, mask, actions, step):  # pragma: no cover - compiled
         """:func:`_interval_success_counts` of ``centre -+ half * margin``, made per retained
         scenario here (the same IEEE operations as NumPy's, so the same ends)."""
@@ -110,9 +104,9 @@ if HAVE_NUMBA:
         return out
 
 
-if HAVE_NUMBA:
+if HAVE_KERNELS:
 
-    @numba.njit(cache=True, nogil=True)
+    @kernel("i8[:, ::1](f8[:, ::1], f8[::1])")
     def _systematic_resample(weights, offsets):  # pragma: no cover - compiled
         n_rows, n = weights.shape
         out = np.empty((n_rows, n), dtype=np.int64)
@@ -133,9 +127,9 @@ if HAVE_NUMBA:
         return out
 
 
-if HAVE_NUMBA:
+if HAVE_KERNELS:
 
-    @numba.njit(cache=True, nogil=True)
+    @kernel("f8[:, :, ::1](f8[:, :, ::1], i8[::1], i8[:, ::1], f8[:, :, ::1], f8[::1], f8[::1], f8[::1])")
     def _jitter_resampled(particles, rows, parents, noise, scale, low, high):  # pragma: no cover - compiled
         out = particles.copy()
         n_rows, n = parents.shape
@@ -155,8 +149,8 @@ if HAVE_NUMBA:
 
 def jitter_resampled_compiled(particles: np.ndarray, rows: np.ndarray, parents: np.ndarray, noise: np.ndarray,
                               scale: np.ndarray, low: np.ndarray, high: np.ndarray) -> np.ndarray | None:
-    """The compiled resample-and-jitter step (see ``core.belief.jitter_resampled``), or None without numba."""
-    if not HAVE_NUMBA:
+    """The compiled resample-and-jitter step (see ``core.belief.jitter_resampled``), or None without compiled kernels."""
+    if not HAVE_KERNELS:
         return None
     f64 = np.float64
     return _jitter_resampled(np.ascontiguousarray(particles, dtype=f64), np.ascontiguousarray(rows, dtype=np.int64),
@@ -166,8 +160,8 @@ def jitter_resampled_compiled(particles: np.ndarray, rows: np.ndarray, parents: 
 
 
 def systematic_resample_compiled(weights: np.ndarray, offsets: np.ndarray) -> np.ndarray | None:
-    """The compiled systematic resampler (see ``core.belief.systematic_resample``), or None without numba."""
-    if not HAVE_NUMBA:
+    """The compiled systematic resampler (see ``core.belief.systematic_resample``), or None without compiled kernels."""
+    if not HAVE_KERNELS:
         return None
     return _systematic_resample(np.ascontiguousarray(weights, dtype=np.float64), np.ascontiguousarray(offsets, dtype=np.float64))
 
@@ -175,8 +169,8 @@ def systematic_resample_compiled(weights: np.ndarray, offsets: np.ndarray) -> np
 def scaled_interval_success_counts_compiled(centre: np.ndarray, half: np.ndarray, margin: float, mask: np.ndarray,
                                             actions: np.ndarray) -> np.ndarray | None:
     """The compiled count over ``centre -+ half * margin`` (see ``core.executors.scaled_interval_success_counts``),
-    or None without numba. ``centre`` may be a strided view (one latent of the scenarios): read in place."""
-    if not HAVE_NUMBA:
+    or None without compiled kernels. ``centre`` may be a strided view (one latent of the scenarios): read in place."""
+    if not HAVE_KERNELS:
         return None
     actions = np.ascontiguousarray(actions, dtype=np.float64)
     return _scaled_interval_success_counts(np.asarray(centre, dtype=np.float64), np.asarray(half, dtype=np.float64),
@@ -194,8 +188,8 @@ def uniform_step(actions: np.ndarray) -> float:
 
 
 def interval_success_counts_compiled(lo: np.ndarray, hi: np.ndarray, mask: np.ndarray, actions: np.ndarray) -> np.ndarray | None:
-    """The compiled interval count (see ``core.executors.interval_success_counts``), or None without numba."""
-    if not HAVE_NUMBA:
+    """The compiled interval count (see ``core.executors.interval_success_counts``), or None without compiled kernels."""
+    if not HAVE_KERNELS:
         return None
     actions = np.ascontiguousarray(actions, dtype=np.float64)
     return _interval_success_counts(np.ascontiguousarray(lo, dtype=np.float64), np.ascontiguousarray(hi, dtype=np.float64),
@@ -226,9 +220,9 @@ _FEW = 48
 #: A row of at most this many distinct weights takes its prefix without ordering particles.
 _FEW_WEIGHTS = 16
 
-if HAVE_NUMBA:
+if HAVE_KERNELS:
 
-    @numba.njit(cache=True, nogil=True, inline="always")
+    @helper(inline=True)
     def _block_sum(a, start, n):  # pragma: no cover - compiled
         """NumPy's pairwise-sum leaf (``n <= 128``): sequential below 8, else 8 running sums."""
         if n < 8:
@@ -256,7 +250,7 @@ if HAVE_NUMBA:
             i += 1
         return total
 
-    @numba.njit(cache=True, nogil=True)
+    @helper()
     def _pairwise_sum_with(a, start, n, node_start, node_n, node_open, values):  # pragma: no cover - compiled
         """``np.sum(a[start:start + n])`` in NumPy's pairwise order: halves (rounded down to a
         multiple of 8) until blocks of at most 128. Iterative, with an explicit stack in the
@@ -298,29 +292,29 @@ if HAVE_NUMBA:
                 node_start[top], node_n[top], node_open[top] = s, half, False
         return values[0]
 
-    @numba.njit(cache=True, nogil=True)
+    @helper()
     def _pairwise_scratch():  # pragma: no cover - compiled
         """The stack of :func:`_pairwise_sum_with`: 128 entries, enough for any row (a halving adds two)."""
         return (np.empty(128, dtype=np.int64), np.empty(128, dtype=np.int64), np.empty(128, dtype=np.bool_),
                 np.empty(128))
 
-    @numba.njit(cache=True, nogil=True)
+    @helper()
     def _pairwise_sum(a, start, n):  # pragma: no cover - compiled
         """:func:`_pairwise_sum_with` with its own scratch."""
         node_start, node_n, node_open, values = _pairwise_scratch()
         return _pairwise_sum_with(a, start, n, node_start, node_n, node_open, values)
 
-    @numba.njit(cache=True, nogil=True)
+    @kernel("f8(f8[::1])")
     def _row_sum(a):  # pragma: no cover - compiled
         """``np.sum(a)`` of a contiguous row, bit for bit (the reduction starts from 0.0)."""
         return 0.0 + _pairwise_sum(a, 0, a.shape[0])
 
-    @numba.njit(cache=True, nogil=True)
+    @helper()
     def _row_sum_with(a, node_start, node_n, node_open, values):  # pragma: no cover - compiled
         """:func:`_row_sum` on the caller's scratch."""
         return 0.0 + _pairwise_sum_with(a, 0, a.shape[0], node_start, node_n, node_open, values)
 
-    @numba.njit(cache=True, nogil=True)
+    @helper()
     def _bucket_order(w, nu, order, buckets, counts, mass, starts):  # pragma: no cover - compiled
         """Counting-sort the particles of the buckets that certainly reach mass ``nu`` (all of
         them for ``nu`` past one) into ``order``, index order within a bucket.
@@ -361,7 +355,7 @@ if HAVE_NUMBA:
                 starts[b] += 1
         return last
 
-    @numba.njit(cache=True, nogil=True)
+    @helper()
     def _sort_bucket(w, order, begin, end):  # pragma: no cover - compiled
         """Sort ``order[begin:end]`` (index order on entry) by descending weight, stably."""
         for i in range(begin + 1, end):
@@ -387,7 +381,7 @@ if HAVE_NUMBA:
             for i in range(end - begin):
                 order[begin + i] = block[ranked[i]]
 
-    @numba.njit(cache=True, nogil=True)
+    @helper()
     def _top_weight_prefix(w, nu, order, buckets, counts, mass, starts):  # pragma: no cover - compiled
         """Put the retained particles first in ``order`` and return their count: the shortest
         prefix of the stable descending weight order whose cumulative mass reaches
@@ -419,12 +413,12 @@ if HAVE_NUMBA:
             begin = end
         return w.shape[0]
 
-    @numba.njit(cache=True, nogil=True, inline="always")
+    @helper(inline=True)
     def _is_weight(value):  # pragma: no cover - compiled
         """Inside the kernels' domain: a finite, non-negative weight (NaN is not)."""
         return (value >= 0.0) & (value < np.inf)
 
-    @numba.njit(cache=True, nogil=True)
+    @helper()
     def _few_weight_table(w, values, counts):  # pragma: no cover - compiled
         """The distinct weights of a non-empty row in descending order, with how many particles
         carry each, in ``values`` and ``counts``; returns how many there are, or -1 when there
@@ -465,7 +459,7 @@ if HAVE_NUMBA:
             values[b + 1], counts[b + 1] = value, count
         return n_values
 
-    @numba.njit(cache=True, nogil=True)
+    @helper()
     def _few_weight_prefix(w, nu, values, counts):  # pragma: no cover - compiled
         """:func:`_top_weight_prefix` for a row of few distinct weights (:func:`_few_weight_table`):
         the prefix holds every particle heavier than some weight ``t`` and the first ``r``
@@ -493,7 +487,10 @@ if HAVE_NUMBA:
             taken += counts[s]
         return n, -np.inf, 0
 
-    @numba.njit(cache=True, nogil=True)
+    @kernel(
+        "Tuple((b1, f8[::1], f8[::1], f8[::1]))(f8[:, ::1], f8[:, ::1], f8[::1], f8)",
+        "Tuple((b1, f8[::1], f8[::1], f8[::1]))(f8[:, ::1], f8[:, :], f8[::1], f8)",
+    )
     def _coverage_score(weights, z, z_true, width):  # pragma: no cover - compiled
         """The coverage score and the hull ``(min z, max z)`` per row, and whether every input
         was inside the kernel's domain (finite, non-negative weights; finite z and truth)."""
@@ -586,7 +583,10 @@ if HAVE_NUMBA:
             out[e] = min(cumulative, 1.0)
         return True, out, hull_low, hull_high
 
-    @numba.njit(cache=True, nogil=True)
+    @kernel(
+        "Tuple((b1, b1[:, ::1], f8[::1], f8[::1], f8[:, ::1]))(f8[:, ::1], f8[::1], f8[:, ::1], f8[:, :, ::1])",
+        "Tuple((b1, b1[:, ::1], f8[::1], f8[::1], f8[:, ::1]))(f8[:, ::1], f8[::1], f8[:, :], f8[:, :, ::1])",
+    )
     def _retained_summary(weights, nu, z, particles):  # pragma: no cover - compiled
         n_e, n = weights.shape
         d = particles.shape[2]
@@ -657,9 +657,12 @@ if HAVE_NUMBA:
         return True, mask, lo, hi, reference
 
 
-if HAVE_NUMBA:
+if HAVE_KERNELS:
 
-    @numba.njit(cache=True, nogil=True)
+    @kernel(
+        "f8[::1](f8[:, ::1], f8[:, ::1])",
+        "f8[::1](f8[:, :], f8[:, ::1])",
+    )
     def _weighted_variance(z, weights):  # pragma: no cover - compiled
         n_e, n = weights.shape
         out = np.empty(n_e)
@@ -678,9 +681,9 @@ if HAVE_NUMBA:
 
 
 def weighted_variance_compiled(z: np.ndarray, weights: np.ndarray) -> np.ndarray | None:
-    """The compiled posterior variance (see ``core.retained.weighted_variance``), or None without
-    numba and for anything but two float64 ``[E, N]`` arrays with N >= 1. ``z`` may be strided."""
-    if not HAVE_NUMBA:
+    """The compiled posterior variance (see ``core.retained.weighted_variance``), or None without compiled
+    kernels and for anything but two float64 ``[E, N]`` arrays with N >= 1. ``z`` may be strided."""
+    if not HAVE_KERNELS:
         return None
     z, weights = np.asarray(z), np.asarray(weights)
     if (z.ndim != 2 or z.shape != weights.shape or z.shape[1] == 0
@@ -693,10 +696,10 @@ def retained_summary_compiled(weights: np.ndarray, nu: np.ndarray, z: np.ndarray
                               particles: np.ndarray) -> tuple[np.ndarray, ...] | None:
     """The compiled retained set (see ``core.retained.retained_summary``), or None.
 
-    None without numba, and for weights outside the kernel's domain (negative, NaN or
+    None without compiled kernels, and for weights outside the kernel's domain (negative, NaN or
     infinite entries), which the NumPy path handles.
     """
-    if not HAVE_NUMBA:
+    if not HAVE_KERNELS:
         return None
     # z is often a strided view (one latent of the particles): the kernel reads it in place.
     inside, *summary = _retained_summary(np.ascontiguousarray(weights, dtype=np.float64),
@@ -710,11 +713,11 @@ def coverage_score_compiled(weights: np.ndarray, z: np.ndarray, z_true: np.ndarr
     """The compiled coverage score with the hull it passes (see ``core.retained.coverage_with_hull``),
     ``(score, min z, max z)`` per row, or None.
 
-    None without numba and outside the kernel's domain (weights that are negative or not
+    None without compiled kernels and outside the kernel's domain (weights that are negative or not
     finite, a decision coordinate or truth that is not finite), which NumPy handles. ``z`` may
     be a strided view (one latent of the particles): the kernel reads it in place.
     """
-    if not HAVE_NUMBA:
+    if not HAVE_KERNELS:
         return None
     z = np.asarray(z, dtype=np.float64)
     inside, score, low, high = _coverage_score(np.ascontiguousarray(weights, dtype=np.float64), z,
@@ -729,11 +732,11 @@ def coverage_score_compiled(weights: np.ndarray, z: np.ndarray, z_true: np.ndarr
     return score, low, high
 
 
-if HAVE_NUMBA:
+if HAVE_KERNELS:
     _MASK32 = np.uint64(0xFFFFFFFF)
     _SHIFT16 = np.uint64(16)
 
-    @numba.njit(cache=True, nogil=True)
+    @kernel("u4[:, ::1](u8[:, ::1], i8)")
     def _seed_sequence_words(entropy, n_words):  # pragma: no cover - compiled
         """``SeedSequence`` (pool size 4) of each row of assembled entropy words, then
         ``generate_state(n_words, uint32)``: O'Neill's seed_seq hash, in uint64 arithmetic
@@ -772,8 +775,8 @@ if HAVE_NUMBA:
 
 def seed_sequence_words_compiled(entropy: np.ndarray, n_words: int) -> np.ndarray | None:
     """The state words ``[K, n_words]`` (uint32) that ``numpy.random.SeedSequence`` (pool
-    size 4) generates from each row of assembled entropy words ``[K, L]``, or None without numba."""
-    if not HAVE_NUMBA:
+    size 4) generates from each row of assembled entropy words ``[K, L]``, or None without compiled kernels."""
+    if not HAVE_KERNELS:
         return None
     return _seed_sequence_words(np.ascontiguousarray(entropy, dtype=np.uint64), int(n_words))
 
@@ -784,16 +787,16 @@ _EXP_FAST_FLOOR = -700.0
 #: ``exp`` of anything below this is +0.0 (the smallest subnormal is exp(-744.44)).
 _EXP_ZERO_BELOW = -746.0
 
-if HAVE_NUMBA:
+if HAVE_KERNELS:
 
-    @numba.njit(cache=True, nogil=True)
+    @kernel("void(f8[::1], f8[::1])")
     def _clamp_for_exp(x, out):  # pragma: no cover - compiled
         """``out = x``, raised to ``_EXP_FAST_FLOOR`` where below it (NaN kept); branch-free."""
         for i in range(x.shape[0]):
             value = x[i]
             out[i] = _EXP_FAST_FLOOR if value < _EXP_FAST_FLOOR else value
 
-    @numba.njit(cache=True, nogil=True)
+    @kernel("i8(f8[::1], f8[::1])")
     def _zero_underflows(x, out):  # pragma: no cover - compiled
         """Zero the results whose argument was below ``_EXP_ZERO_BELOW``; count the other clamped ones."""
         n_between = 0
@@ -822,7 +825,7 @@ def exp_exact(x: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
     every result equals NumPy's over the whole array (tested bit for bit). Float64 C-contiguous
     arrays only (else plain ``np.exp``); ``out`` may be ``x``.
     """
-    if (not HAVE_NUMBA or not isinstance(x, np.ndarray) or x.dtype != np.float64 or not x.flags.c_contiguous
+    if (not HAVE_KERNELS or not isinstance(x, np.ndarray) or x.dtype != np.float64 or not x.flags.c_contiguous
             or (out is not None and (not isinstance(out, np.ndarray) or out.dtype != np.float64
                                      or out.shape != x.shape or not out.flags.c_contiguous))):
         return np.exp(x, out=out)
@@ -847,9 +850,9 @@ def exp_exact(x: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
 # treatment of the arguments below -700: the same operations on the same values, so the same
 # bits (tested against the NumPy path).
 
-if HAVE_NUMBA:
+if HAVE_KERNELS:
 
-    @numba.njit(cache=True, nogil=True)
+    @kernel("i8(f8[:, ::1], f8[::1], f8[:, ::1])")
     def _shift_and_clamp(log_weights, row_max, out):  # pragma: no cover - compiled
         """``row_max = max(log_weights, axis=1)``; ``out = log_weights - row_max`` raised to
         ``_EXP_FAST_FLOOR``. Returns how many shifted values lie in ``[-746, -700)`` (their
@@ -874,7 +877,7 @@ if HAVE_NUMBA:
                 out[e, i] = _EXP_FAST_FLOOR if low else value
         return between
 
-    @numba.njit(cache=True, nogil=True)
+    @kernel("void(f8[:, ::1], f8[::1], f8[:, ::1], f8[::1])")
     def _zeroed_row_sums(log_weights, row_max, exps, sums):  # pragma: no cover - compiled
         """Zero the ``exp`` lanes whose shifted argument is below -746, then ``sums = np.sum(exps, axis=1)``."""
         n_e, n = log_weights.shape
@@ -885,7 +888,7 @@ if HAVE_NUMBA:
                 exps[e, i] = 0.0 if log_weights[e, i] - top < _EXP_ZERO_BELOW else exps[e, i]
             sums[e] = _row_sum_with(exps[e], node_start, node_n, node_open, values)
 
-    @numba.njit(cache=True, nogil=True)
+    @kernel("i8(f8[:, ::1], f8[::1], f8[:, ::1], f8[:, ::1])")
     def _subtract_and_clamp(log_weights, log_norm, normalized, clamped):  # pragma: no cover - compiled
         """``normalized = log_weights - log_norm[:, None]`` and its copy raised to ``_EXP_FAST_FLOOR``
         in ``clamped``. Returns how many values lie in ``[-746, -700)``."""
@@ -901,7 +904,7 @@ if HAVE_NUMBA:
                 clamped[e, i] = _EXP_FAST_FLOOR if low else value
         return between
 
-    @numba.njit(cache=True, nogil=True)
+    @kernel("void(f8[:, ::1], f8[:, ::1], f8[::1])")
     def _zeroed_sums_of_squares(normalized, weights, squares):  # pragma: no cover - compiled
         """Zero the weights whose argument is below -746; ``squares = np.sum(np.square(weights), axis=1)``."""
         n_e, n = normalized.shape
@@ -920,11 +923,11 @@ def normalized_weights_compiled(log_weights: np.ndarray) -> tuple[np.ndarray, ..
 
     Returns:
         ``(normalized log-weights, log normalizer [E], weights, sum of squared weights [E])``, the
-        same bits as the NumPy path; None without numba, for an array that is not float64
+        same bits as the NumPy path; None without compiled kernels, for an array that is not float64
         ``[E, N]`` with N >= 1, and for a row with NaN or no finite maximum (a lost belief),
         which the NumPy path handles.
     """
-    if (not HAVE_NUMBA or not isinstance(log_weights, np.ndarray) or log_weights.dtype != np.float64
+    if (not HAVE_KERNELS or not isinstance(log_weights, np.ndarray) or log_weights.dtype != np.float64
             or log_weights.ndim != 2 or log_weights.shape[1] == 0):
         return None
     log_weights = np.ascontiguousarray(log_weights)

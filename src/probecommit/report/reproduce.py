@@ -22,7 +22,7 @@ import pandas as pd
 from probecommit.runner.calibration import calibrate
 from probecommit.audit.stats import cluster_bootstrap_mean, paired_bootstrap
 from probecommit.audit.surprise import surprise_auc
-from probecommit.core.memory import release_free_heap
+from probecommit.core.memory import release_free_heap, trim_heap
 from probecommit.report.figures import save_figure
 from probecommit.report.study_figures import decisive_tap_figure, fault_signatures, scan_figure
 from probecommit.runner.build import build_model, build_simulator
@@ -126,6 +126,12 @@ def md_table(header: list[str], rows: list[list[Any]]) -> str:
 class InsertionReproduction:
     """Runs the insertion reproduction step by step into ``root``."""
 
+    #: Instances whose beliefs a calibration or replay holds at once. Half the library default:
+    #: a split's calibration then takes two chunks and recomputes its beliefs per commit call
+    #: (about +10 % in those steps) but holds half as much, which keeps the whole
+    #: reproduction's peak under 400 MB (docs/decisions.md).
+    CHUNK_INSTANCES = 48
+
     def __init__(self, protocol: Protocol, root: Path, progress: Progress = _noop, workers: int = 1) -> None:
         self.p = protocol
         self.root = Path(root)
@@ -136,6 +142,7 @@ class InsertionReproduction:
         self.workers = workers
         self.rep = Reproduction(self.root)
         self.boot = dict(resamples=protocol.bootstrap.resamples, seed=protocol.bootstrap.seed)
+        self.chunk = dict(chunk_instances=self.CHUNK_INSTANCES)
         self.loaded: dict[str, LoadedRun] = {}
 
     # ---------------------------------------------------------------- helpers
@@ -156,7 +163,7 @@ class InsertionReproduction:
         path = self.runs / name
         fresh = not RunDir(path).is_complete()
         if fresh:
-            replay_run(self.runs / source, path, overrides)
+            replay_run(self.runs / source, path, overrides, **self.chunk)
         self.loaded[name] = load_run(path)
         if fresh:
             self.rep.add_calls(self.loaded[name].manifest["engine_calls"])
@@ -243,8 +250,8 @@ class InsertionReproduction:
         # Table V's insertion row: Blind-Bayes minus cover k = 5, paired on (instance, repeat).
         cover_a = a[(a.method == "probe_robust") & (a.k == 5) & (a.status == "ok")]
         a_paired = paired_bootstrap(cover_a, blind_a, "realized", keys=("instance_id", "repeat"), **b)
-        self.cal_cover = calibrate(L["B_cal_cover"], L["B_test_cover"], alpha=self.p.alpha, budgets=[1, 2, 3, 4, 5], **b)
-        self.cal_random = calibrate(L["B_cal_random"], L["B_test_random"], alpha=self.p.alpha, budgets=[1, 2, 3, 5, 8], **b)
+        self.cal_cover = calibrate(L["B_cal_cover"], L["B_test_cover"], alpha=self.p.alpha, budgets=[1, 2, 3, 4, 5], **b, **self.chunk)
+        self.cal_random = calibrate(L["B_cal_random"], L["B_test_random"], alpha=self.p.alpha, budgets=[1, 2, 3, 5, 8], **b, **self.chunk)
         res = {
             "A.no_probe": [a_no.estimate, a_no.lo, a_no.hi],
             "A.cover_k5": a_k5,
@@ -307,8 +314,8 @@ class InsertionReproduction:
             d = paired(new, old, k, col, **b)  # old - corrected
             res[key] = {"old": mo[name], "corrected": mn[name], "old_minus_corrected": d}
             rows.append([key, fmt(mo[name][0]), fmt(mn[name][0]), fmt(d, signed=True)])
-        cal_old = calibrate(L["B_cal_cover"], L["C_cover"], alpha=self.p.alpha, budgets=[1, 2, 3, 4, 5], **b)
-        cal_new = calibrate(L["B_cal_cover_corrected"], L["C_cover_corrected"], alpha=self.p.alpha, budgets=[1, 2, 3, 4, 5], **b)
+        cal_old = calibrate(L["B_cal_cover"], L["C_cover"], alpha=self.p.alpha, budgets=[1, 2, 3, 4, 5], **b, **self.chunk)
+        cal_new = calibrate(L["B_cal_cover_corrected"], L["C_cover_corrected"], alpha=self.p.alpha, budgets=[1, 2, 3, 4, 5], **b, **self.chunk)
         fo, fn = self._setmargin_failure(cal_old), self._setmargin_failure(cal_new)
         res["failure_cover_k5_setcal_margin"] = {"old": fo, "corrected": fn,
                                                  "simultaneous_threshold": {"old": cal_old.simultaneous_threshold, "corrected": cal_new.simultaneous_threshold}}
@@ -328,7 +335,7 @@ class InsertionReproduction:
         f = p.faults
         arms = fault_arms(f.noise_factor, f.prior_half_width, f.particles, f.frame_offset, f.temperature, p.sigma)
         rollouts = {"base": L["faults_base"], "noise": L["faults_noise"], "prior": L["faults_prior"]}
-        episodes = run_fault_harness(rollouts, arms, progress=lambda d, t: self.progress("fault harness", d, t))
+        episodes = run_fault_harness(rollouts, arms, progress=lambda d, t: self.progress("fault harness", d, t), **self.chunk)
         episodes.to_parquet(self.out / "faults_episodes.parquet")
         kmax = p.budgets["random"]
         table, res = [], {}
@@ -361,24 +368,24 @@ class InsertionReproduction:
         p, L, b = self.p, self.loaded, self.boot
         r = p.robust
         cands = robust_candidates(r.temperatures, r.epsilons, r.rejuvenation, r.mixture_range)
-        tuning = tune_robust_filters(L["dev_random"], cands, progress=lambda d, t: self.progress("robust tuning", d, t))
+        tuning = tune_robust_filters(L["dev_random"], cands, progress=lambda d, t: self.progress("robust tuning", d, t), **self.chunk)
         chosen = {row.family: (row.value, row.belief) for row in tuning[tuning.chosen].itertuples()}
         base = L["faults_base"]
         kmax = p.budgets["random"]
-        deployed, _ = replay_episodes(base, {"model": {"boundary": "deployed"}})
+        deployed, _ = replay_episodes(base, {"model": {"boundary": "deployed"}}, **self.chunk)
         res = {"tuning": tuning.drop(columns="belief").to_dict("records"), "chosen": {k: v[0] for k, v in chosen.items()},
                "deployed": episode_metrics(deployed, kmax, **b)}
         rows = [["deployed (no robust filter)", "--", fmt(res["deployed"]["escape"][0]), fmt(res["deployed"]["failure"][0]),
                  fmt(res["deployed"]["optimism"][0], signed=True), "--"]]
         for family, (value, belief) in chosen.items():
-            ep, _ = replay_episodes(base, {"model": {"boundary": "deployed"}, "belief": belief})
+            ep, _ = replay_episodes(base, {"model": {"boundary": "deployed"}, "belief": belief}, **self.chunk)
             m = episode_metrics(ep, kmax, **b)
             d = paired(deployed, ep, kmax, "realized", **b)
             res[family] = {"value": value, **m, "failure_diff": d}
             rows.append([family, f"{value:g}", fmt(m["escape"][0]), fmt(m["failure"][0]), fmt(m["optimism"][0], signed=True), fmt(d, signed=True)])
         if "mixture" in chosen:
             right = probe_rows(base.episodes, kmax)["realized"].mean()
-            mix, _ = replay_episodes(base, {"belief": chosen["mixture"][1]})
+            mix, _ = replay_episodes(base, {"belief": chosen["mixture"][1]}, **self.chunk)
             res["mixture_cost_when_right"] = [float(right), float(probe_rows(mix, kmax)["realized"].mean())]
         self.rep.results["robust"] = res
         self.write_table("robust", f"Robust filters under the boundary error, random k = {kmax} (MuJoCo)",
@@ -411,6 +418,8 @@ class InsertionReproduction:
                 "gamma": res.margin.gamma,
             })
             self.progress("re-splits", n + 1, count)
+            del cal, test, res
+            trim_heap()  # a split's copies go back before the next split copies its halves
         table = pd.DataFrame(rows)
         table.to_parquet(self.out / "resplits.parquet")
         summary = {"level_mean_sd": [float(table.level.mean()), float(table.level.std(ddof=1))],
@@ -432,7 +441,7 @@ class InsertionReproduction:
         from probecommit.report.study_figures import coverage_vs_nominal, decision_figure
 
         L = self.loaded
-        result = gates(L["B_cal_cover"], L["B_test_cover"], alpha=self.p.alpha, **self.boot)
+        result = gates(L["B_cal_cover"], L["B_test_cover"], alpha=self.p.alpha, **self.boot, **self.chunk)
         k = self.p.budgets["random"]
         coverage = coverage_vs_nominal(L["B_cal_random"].episodes, L["B_test_random"].episodes, k)
         coverage.to_parquet(self.out / "coverage_vs_nominal.parquet")

@@ -16,6 +16,7 @@ import numpy as np
 import pandas as pd
 
 from probecommit.core.belief import ParticleFilter
+from probecommit.core.memory import trim_heap
 from probecommit.runner.build import build_filter, build_model, build_simulator
 from probecommit.runner.config import StudyConfig, config_data, dump_config, parse_config
 from probecommit.runner.inference import BeliefTrace, ProbeBatch, blind_bayes_executor, build_trace, commit, instance_arrays
@@ -234,6 +235,8 @@ class RunBeliefs:
                 part.append(commit(trace, self.model, self.simulator, cache=cache if reuse else None,
                                    columns=columns, **common, **request))
             del trace, cache  # let a finished chunk's beliefs go before the next is computed
+            if len(self.chunks) > 1:
+                trim_heap()  # ... and their pages, so chunks do not pile up as heap fragments
         return [p[0] if len(p) == 1 else pd.concat(p, ignore_index=True) for p in parts]
 
     def release(self) -> None:
@@ -331,7 +334,8 @@ def replay_episodes(
     return episodes, sim
 
 
-def replay_run(src: str | Path, out: str | Path, overrides: dict[str, dict[str, Any]], fixed_probes: bool = False) -> Path:
+def replay_run(src: str | Path, out: str | Path, overrides: dict[str, dict[str, Any]], fixed_probes: bool = False,
+               chunk_instances: int | None = CHUNK_INSTANCES) -> Path:
     """Write a new run directory: the source's probes, re-inferred under ``overrides``.
 
     Args:
@@ -339,13 +343,15 @@ def replay_run(src: str | Path, out: str | Path, overrides: dict[str, dict[str, 
         out: The new run directory (must not hold another run).
         overrides: Config sections to change, e.g. ``{"model": {"boundary": "corrected"}}``
             (see ``replay_episodes``).
+        fixed_probes: See ``replay_episodes``.
+        chunk_instances: Instances whose beliefs are held at once (see ``replay_episodes``).
     """
     start = time.perf_counter()
     if Path(out).resolve() == Path(src).resolve():
         raise ValueError(f"replay would overwrite its source run {src}; give another --out")
     loaded = load_run(src)
     config = replay_config(loaded.config, overrides)
-    episodes, sim = replay_episodes(loaded, overrides, fixed_probes=fixed_probes)
+    episodes, sim = replay_episodes(loaded, overrides, fixed_probes=fixed_probes, chunk_instances=chunk_instances)
     run = RunDir(out)
     run.prepare(dump_config(config))
     unit = "replay"

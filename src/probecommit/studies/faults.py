@@ -24,7 +24,7 @@ from typing import Any
 
 import pandas as pd
 
-from probecommit.runner.replay import LoadedRun, replay_episodes
+from probecommit.runner.replay import CHUNK_INSTANCES, LoadedRun, replay_episodes
 
 FAULTS = ("none", "noise", "boundary", "prior", "particles", "frame")
 ROLLOUTS = ("base", "noise", "prior")  # runs the harness needs: the rest are replays of "base"
@@ -66,18 +66,20 @@ def fault_arms(noise_factor: float, prior_half_width: float, particles: int, fra
     ]
 
 
-def run_fault_harness(rollouts: dict[str, LoadedRun], arms: list[Arm], progress=None) -> pd.DataFrame:
+def run_fault_harness(rollouts: dict[str, LoadedRun], arms: list[Arm], progress=None,
+                      chunk_instances: int | None = CHUNK_INSTANCES) -> pd.DataFrame:
     """Episodes of every arm, tagged with ``fault`` and ``arm`` columns.
 
     Arms that replay the same rollout under the same overrides (the fixes that are the
     unfaulted model) share one replay: a replay is a deterministic function of the two.
+    ``chunk_instances``: instances whose beliefs a replay holds at once.
     """
     frames = []
     replayed: dict[tuple[str, str], pd.DataFrame] = {}
     for n, arm in enumerate(arms):
         key = (arm.rollout, json.dumps(arm.overrides, sort_keys=True, default=str))
         if key not in replayed:
-            replayed[key], _ = replay_episodes(rollouts[arm.rollout], arm.overrides)
+            replayed[key], _ = replay_episodes(rollouts[arm.rollout], arm.overrides, chunk_instances=chunk_instances)
         frames.append(replayed[key].assign(fault=arm.fault, arm=arm.arm))
         if progress:
             progress(n + 1, len(arms))

@@ -13,7 +13,7 @@ from typing import Any
 
 import pandas as pd
 
-from probecommit.runner.replay import LoadedRun, replay_episodes
+from probecommit.runner.replay import CHUNK_INSTANCES, LoadedRun, replay_episodes
 
 
 def robust_candidates(temperatures, epsilons, rejuvenation, mixture_range) -> dict[str, list[tuple[float, dict[str, Any]]]]:
@@ -31,13 +31,17 @@ def final_failure(episodes: pd.DataFrame) -> float:
     return float(probe[probe.k == probe.k.max()]["realized"].mean())
 
 
-def tune_robust_filters(development: LoadedRun, candidates, progress=None) -> pd.DataFrame:
-    """Final-budget failure of every candidate on the development run; ``chosen`` marks the winners."""
+def tune_robust_filters(development: LoadedRun, candidates, progress=None,
+                        chunk_instances: int | None = CHUNK_INSTANCES) -> pd.DataFrame:
+    """Final-budget failure of every candidate on the development run; ``chosen`` marks the winners.
+
+    ``chunk_instances``: instances whose beliefs a replay holds at once.
+    """
     rows = []
     total = sum(len(v) for v in candidates.values())
     for family, grid in candidates.items():
         for value, belief in grid:
-            episodes, _ = replay_episodes(development, {"belief": belief})
+            episodes, _ = replay_episodes(development, {"belief": belief}, chunk_instances=chunk_instances)
             rows.append({"family": family, "value": value, "failure": final_failure(episodes), "belief": belief})
             if progress:
                 progress(len(rows), total)

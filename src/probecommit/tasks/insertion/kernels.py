@@ -10,12 +10,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from probecommit.core.kernels import HAVE_NUMBA
+from probecommit.core.compiled import AVAILABLE as HAVE_KERNELS
+from probecommit.core.compiled import kernel
 
-if HAVE_NUMBA:  # pragma: no cover - exercised in both states by the tests' environment switch
-    import numba
+if HAVE_KERNELS:  # pragma: no cover - exercised in both states by the tests' environment switch
 
-    @numba.njit(cache=True, nogil=True)
+    @kernel("f8[:, ::1](f8[::1], f8[:, :, ::1], f8[:, ::1], f8[:, ::1], f8)")
     def _slot_tap_log_weights(u, particles, log_weights, level_ll, offset):  # pragma: no cover - compiled
         n_e, n = log_weights.shape
         out = np.empty((n_e, n))
@@ -34,8 +34,8 @@ if HAVE_NUMBA:  # pragma: no cover - exercised in both states by the tests' envi
 def slot_tap_log_weights_compiled(u: np.ndarray, particles: np.ndarray, log_weights: np.ndarray,
                                   level_ll: np.ndarray, offset: float) -> np.ndarray | None:
     """Insertion's reweighting in one pass (see ``InsertionModel.add_reading_log_likelihood``), or None
-    without numba: ``log_weights + (level_ll[:, 0] if the tap at u reads the pocket else level_ll[:, 1])``."""
-    if not HAVE_NUMBA:
+    without compiled kernels: ``log_weights + (level_ll[:, 0] if the tap at u reads the pocket else level_ll[:, 1])``."""
+    if not HAVE_KERNELS:
         return None
     f64 = np.float64
     return _slot_tap_log_weights(np.ascontiguousarray(u, dtype=f64).reshape(-1), np.ascontiguousarray(particles, dtype=f64),
