@@ -16,7 +16,10 @@ def test_two_worker_processes_match_a_serial_run(tmp_path, make_config):
     assert serial.manifest["backend"] == "serial"
     parallel = run_study(cfg, tmp_path / "parallel", workers=2)
     assert parallel.manifest["backend"] == "processes:2"
-    assert len({s for s in _unit_pids(parallel.run_dir)}) == 2
+    pids = set(_unit_pids(parallel.run_dir))
+    # The units ran in worker processes. Which worker takes which unit is the pool's choice: a
+    # worker that starts first may take all six quick units before the second has imported.
+    assert os.getpid() not in pids and 1 <= len(pids) <= 2
     pd.testing.assert_frame_equal(parallel.episodes, serial.episodes, check_exact=True)
     assert_same_tables(serial.run_dir, parallel.run_dir)
     assert parallel.manifest["engine_calls"] == serial.manifest["engine_calls"]
