@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import importlib.util
 import os
 import subprocess
 import sys
@@ -51,7 +52,7 @@ def test_an_edited_kernel_is_never_served_by_a_stale_build(tmp_path, monkeypatch
     assert compiled._current_aot() is None  # no digest: not built (or interrupted)
     digest.write_text("0" * 64 + "\n")
     assert compiled._current_aot() is None  # built from other sources
-    if __import__("importlib").util.find_spec(compiled.AOT_MODULE) is not None:
+    if importlib.util.find_spec(compiled.AOT_MODULE) is not None:
         digest.write_text(compiled.source_digest() + "\n")
         assert compiled._current_aot() is not None
 
@@ -67,6 +68,14 @@ def test_the_mode_can_be_forced_and_a_wrong_one_is_named():
     assert out.stdout.strip() == "numpy", out.stderr
     out = _child("import probecommit.core.compiled", PROBECOMMIT_KERNELS="fast")
     assert out.returncode != 0 and "PROBECOMMIT_KERNELS='fast': expected one of aot, jit, numpy" in out.stderr
+
+
+def test_the_build_command_has_help_and_builds_nothing_with_it():
+    out = subprocess.run([sys.executable, "-m", "probecommit.core.compiled", "--help"], capture_output=True, text=True)
+    assert out.returncode == 0 and "Build the compiled kernels ahead of time" in out.stdout
+    assert "entry points" not in out.stdout  # the build's own line: nothing was built
+    out = subprocess.run([sys.executable, "-m", "probecommit.core.compiled", "--bogus"], capture_output=True, text=True)
+    assert out.returncode == 2 and "unrecognized arguments: --bogus" in out.stderr
 
 
 aot_only = pytest.mark.skipif(compiled.MODE != "aot", reason="the ahead-of-time kernels are not built here (make kernels)")

@@ -10,8 +10,9 @@ call. How they run is chosen once per process, by :data:`MODE`:
     from these same functions (``make kernels``, run by ``make demo`` and ``make test``;
     or ``python -m probecommit.core.compiled``). It runs without importing numba or
     LLVM, which are about 115 MB of a process's memory, and compiles nothing at start.
-    Used only while its recorded digest matches the kernel sources on disk: an edited
-    kernel is never served by a stale build.
+    Built for this machine's CPU, with the GIL released around each call (as the JIT's
+    ``nogil=True``). Used only while its recorded digest matches the kernel sources and
+    the CPU: an edited kernel is never served by a stale build.
 ``"jit"``
     numba compiles each kernel on first use and caches it on disk (``cache=True``).
 ``"numpy"``
@@ -45,9 +46,14 @@ KERNEL_FILE = "kernels.py"
 MODES = ("aot", "jit", "numpy")
 
 
+def kernel_files() -> list[Path]:
+    """Every ``kernels.py`` of the package."""
+    return sorted(PACKAGE_DIR.rglob(KERNEL_FILE))
+
+
 def kernel_sources() -> list[Path]:
     """The files the ahead-of-time build compiles from: every ``kernels.py`` and this file."""
-    return sorted(PACKAGE_DIR.rglob(KERNEL_FILE)) + [Path(__file__).resolve()]
+    return kernel_files() + [Path(__file__).resolve()]
 
 
 def source_digest() -> str:
@@ -247,18 +253,17 @@ def _checked(name: str, variants: list[tuple[Callable[..., Any], list]]) -> Call
 
 def kernel_modules() -> list[str]:
     """Import names of every kernel module of the package."""
-    names = []
-    for path in kernel_sources()[:-1]:
-        parts = path.relative_to(PACKAGE_DIR.parent).with_suffix("").parts
-        names.append(".".join(parts))
-    return names
+    return [".".join(path.relative_to(PACKAGE_DIR.parent).with_suffix("").parts) for path in kernel_files()]
 
 
-def build(output_dir: Path = PACKAGE_DIR) -> Path:
+def build() -> Path:
     """Compile every kernel entry point into ``probecommit._aot_kernels`` with numba's AOT compiler.
 
     Runs in a process whose kernels are in ``jit`` mode (the module is built from the numba
     functions themselves); writes the digest last, so an interrupted build is never used.
+
+    Returns:
+        The folder of the built module and its digest (the package's own).
     """
     if MODE != "jit":
         raise RuntimeError(f"the build needs numba's functions: run it with PROBECOMMIT_KERNELS=jit (mode is {MODE})")
@@ -273,7 +278,7 @@ def build(output_dir: Path = PACKAGE_DIR) -> Path:
         import numba.pycc.compiler as pycc_compiler
 
         cc = CC(AOT_MODULE.rsplit(".", 1)[1])
-        cc.output_dir = str(output_dir)
+        cc.output_dir = str(PACKAGE_DIR)
         cc.verbose = False
         cc.target_cpu = "host"  # as the JIT does (numba's AOT default is a generic x86-64: slower)
         for func, signatures in ENTRIES:
@@ -291,7 +296,7 @@ def build(output_dir: Path = PACKAGE_DIR) -> Path:
         finally:
             pycc_compiler.Flags = plain_flags
     AOT_DIGEST.write_text(digest + "\n")
-    return output_dir
+    return PACKAGE_DIR
 
 
 def _nogil_flags(flags_class: type) -> type:
@@ -303,12 +308,18 @@ def _nogil_flags(flags_class: type) -> type:
     return NoGilFlags
 
 
-def main() -> None:
+def main(argv: list[str] | None = None) -> None:
     """``python -m probecommit.core.compiled``: build the ahead-of-time module (in a JIT-mode child)."""
+    import argparse
     import subprocess
     import sys
     import time
 
+    argparse.ArgumentParser(
+        prog="python -m probecommit.core.compiled",
+        description=f"Build the compiled kernels ahead of time into {AOT_MODULE} for this machine's CPU "
+                    "(needs numba and a C compiler; `make kernels` runs it). Until it is rebuilt after a "
+                    "kernel source changes, numba's JIT runs the kernels.").parse_args(argv)
     if os.environ.get("PROBECOMMIT_KERNELS") != "jit" or os.environ.get("PROBECOMMIT_NO_NUMBA"):
         env = {**os.environ, "PROBECOMMIT_KERNELS": "jit"}
         env.pop("PROBECOMMIT_NO_NUMBA", None)
@@ -318,7 +329,10 @@ def main() -> None:
     from probecommit.core import compiled
 
     start = time.perf_counter()
-    out = compiled.build()
+    try:
+        out = compiled.build()
+    except Exception as error:  # a missing compiler or numba: one line, and the JIT stays in use
+        raise SystemExit(f"could not build {AOT_MODULE}: {type(error).__name__}: {error}") from None
     print(f"built {AOT_MODULE} ({sum(len(s) for _, s in compiled.ENTRIES)} entry points) into {out} "
           f"in {time.perf_counter() - start:.0f} s")
 
