@@ -148,3 +148,25 @@ def test_sign_flip_monte_carlo_in_blocks_equals_one_draw(monkeypatch):
     for block in (37, 37 * 7, 1000, 1 << 21):  # 1, 7, 27 rows, all rows
         monkeypatch.setattr(stats, "SIGN_BLOCK_ELEMENTS", block)
         assert sign_flip_test(d, max_exact=5, resamples=resamples, seed=8) == one_draw
+
+
+def test_resample_counts_and_auc_in_blocks_equal_one_draw(monkeypatch):
+    """Counts and AUC weights are built a block of resamples at a time to bound memory; the
+    numbers are those of one [B, M] draw and one [B, E] weight matrix."""
+    import probecommit.audit.stats as stats
+
+    n_clusters, resamples = 13, 101
+    draws = np.random.default_rng(5).integers(0, n_clusters, size=(resamples, n_clusters))
+    one_draw = np.stack([np.bincount(row, minlength=n_clusters) for row in draws])
+    rng = np.random.default_rng(6)
+    clusters = np.repeat(np.arange(n_clusters), 3)
+    y = rng.random(clusters.size) < 0.4
+    s = np.round(y + rng.normal(0, 1.0, clusters.size), 1)  # rounded: tied scores too
+    weights = one_draw[:, clusters].astype(float)
+    auc_draws = _weighted_auc(s, y, weights)
+    expected = stats.percentile_interval(auc_draws)
+    for block in (1, n_clusters * 7, 40, 1 << 20):  # one row, 7 rows, a block not a multiple of M, all rows
+        monkeypatch.setattr(stats, "BOOTSTRAP_BLOCK_ELEMENTS", block)
+        np.testing.assert_array_equal(resample_counts(n_clusters, resamples, seed=5), one_draw)
+        iv = cluster_bootstrap_auc(s, y, clusters, resamples=resamples, seed=5)
+        assert (iv.lo, iv.hi) == expected

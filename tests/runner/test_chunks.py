@@ -160,3 +160,34 @@ def test_calibration_and_gates_of_some_budgets_equal_keeping_every_budget(runs):
     g_every = gates(with_every_budget(runs["cal"]), with_every_budget(runs["test"]), budgets=[2, 3], resamples=50)
     pd.testing.assert_frame_equal(g_fast.summary, g_every.summary, check_exact=True)
     pd.testing.assert_frame_equal(g_fast.curves, g_every.curves, check_exact=True)
+
+
+def test_prune_retained_sets_keeps_what_later_commits_read():
+    from probecommit.runner.inference import prune_retained_sets
+
+    cache = {("belief", 1): "b1", "outcomes": {}, ("set", "probe_robust", 1, 0.8, "prefix"): "s",
+             ("set", "probe_robust", 1, 1.3, "prefix"): "grown1", ("set", "probe_robust", 2, 1.3, "prefix"): "grown2",
+             ("set", "blind_robust", 0, 0.8, "prefix"): "blind"}
+    prune_retained_sets(cache, [{2: 1.3}])
+    assert set(cache) == {("belief", 1), "outcomes", ("set", "probe_robust", 2, 1.3, "prefix")}
+    prune_retained_sets(cache, [0.8])
+    assert set(cache) == {("belief", 1), "outcomes"}
+
+
+def test_several_requests_in_one_pass_equal_each_alone(runs):
+    """Sets pruned after their last use, and a final pass releasing a kept trace, change no row."""
+    loaded = load_run(runs["cal"])
+    requests = [{"thresholds": 0.8}, {"thresholds": {1: 1.2, 3: 1.4}}, {"thresholds": 1.2, "margin": 0.7},
+                {"thresholds": 0.8, "margin": 0.9}]
+    alone = [RunBeliefs.of(loaded, chunk_instances=None).commit([r], reuse=False)[0] for r in requests]
+    for chunk in (None, 3):
+        beliefs = RunBeliefs.of(loaded, chunk_instances=chunk)
+        together = beliefs.commit(requests, final=True)
+        assert beliefs._kept is None
+        for a, b in zip(together, alone):
+            pd.testing.assert_frame_equal(a, b, check_exact=True)
+    kept = RunBeliefs.of(loaded, chunk_instances=None)
+    kept.commit(requests[:1])
+    assert kept._kept is not None  # a one-chunk run keeps its beliefs for the next call unless told it is the last
+    pd.testing.assert_frame_equal(kept.commit(requests[1:2], final=True)[0], alone[1], check_exact=True)
+    assert kept._kept is None

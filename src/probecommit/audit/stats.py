@@ -61,6 +61,11 @@ def _rng(seed: int | np.random.Generator | None) -> np.random.Generator:
     return np.random.default_rng(seed)
 
 
+#: Elements of a bootstrap's per-resample work held at once (draws of a block of resamples, or
+#: their episode weights in the AUC): 2^20 float64 or int64 values are 8 MB.
+BOOTSTRAP_BLOCK_ELEMENTS = 1 << 20
+
+
 def resample_counts(n_clusters: int, resamples: int = DEFAULT_RESAMPLES,
                     seed: int | np.random.Generator | None = DEFAULT_SEED) -> np.ndarray:
     """Cluster multiplicities of ``resamples`` bootstrap draws.
@@ -79,13 +84,20 @@ def resample_counts(n_clusters: int, resamples: int = DEFAULT_RESAMPLES,
         raise ValueError("resamples must be positive")
     from probecommit.core.memory import check_fits
 
-    check_fits(8.0 * resamples * n_clusters * 3, f"a cluster bootstrap of {n_clusters} clusters x {resamples} resamples",
+    check_fits(8.0 * resamples * n_clusters, f"a cluster bootstrap of {n_clusters} clusters x {resamples} resamples",
                "the number of resamples (--resamples)")
     rng = _rng(seed)
-    draws = rng.integers(0, n_clusters, size=(resamples, n_clusters))
-    # One bincount over all rows: shift row b's indices into [b*M, (b+1)*M).
-    flat = draws + (np.arange(resamples) * n_clusters)[:, None]
-    return np.bincount(flat.ravel(), minlength=resamples * n_clusters).reshape(resamples, n_clusters)
+    counts = np.empty((resamples, n_clusters), dtype=np.int64)
+    # Drawn and counted a block of rows at a time, so the draws never take more than a block
+    # beside the result: consecutive draws continue the generator's stream (the same numbers as
+    # one [B, M] draw, tested). One bincount per block: row b's indices shifted into [b*M, (b+1)*M).
+    rows = max(1, BOOTSTRAP_BLOCK_ELEMENTS // n_clusters)
+    for start in range(0, resamples, rows):
+        block = min(rows, resamples - start)
+        flat = rng.integers(0, n_clusters, size=(block, n_clusters))
+        flat += (np.arange(block) * n_clusters)[:, None]
+        counts[start:start + block] = np.bincount(flat.ravel(), minlength=block * n_clusters).reshape(block, n_clusters)
+    return counts
 
 
 def percentile_interval(draws: np.ndarray, level: float = DEFAULT_LEVEL) -> tuple[float, float]:
@@ -382,6 +394,10 @@ def cluster_bootstrap_auc(scores: np.ndarray, labels: np.ndarray, clusters: Sequ
     if scores.size == 0:
         return Interval(math.nan, math.nan, math.nan, 0, resamples, level)
     counts = resample_counts(names.size, resamples, seed)
-    draws = _weighted_auc(scores, labels, counts[:, inverse].astype(float))
+    # Each resample's AUC is computed from its own row of episode weights: a block of rows at a
+    # time, so the [B, E] weights (0.5 GB at B = 2000, E = 30720) never exist at once.
+    rows = max(1, BOOTSTRAP_BLOCK_ELEMENTS // scores.size)
+    draws = np.concatenate([_weighted_auc(scores, labels, counts[start:start + rows][:, inverse].astype(float))
+                            for start in range(0, resamples, rows)])
     lo, hi = percentile_interval(draws, level)
     return Interval(estimate, lo, hi, names.size, resamples, level)

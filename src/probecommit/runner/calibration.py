@@ -76,7 +76,8 @@ class _Run:
     def plateau(self) -> str:
         return self.override_plateau or self.loaded.config.calibration.plateau
 
-    def commit(self, *requests: Request, keep: Sequence[Sequence[str] | None] | None = None) -> list[pd.DataFrame]:
+    def commit(self, *requests: Request, keep: Sequence[Sequence[str] | None] | None = None,
+               final: bool = False) -> list[pd.DataFrame]:
         """Episode tables of the probe executor, one per request, in one pass over the run's chunks.
 
         Args:
@@ -84,10 +85,11 @@ class _Run:
             keep: Per request, the columns to keep (None: all, validated). A margin search
                 reads four columns of dozens of tables; those are not validated (the
                 validation needs every column) and not kept whole.
+            final: The run's last commit: its beliefs are released as the pass goes.
         """
         keep = list(keep) if keep is not None else [None] * len(requests)
         tables = self.beliefs.commit([{"thresholds": _executable(t), "margin": g} for t, g in requests], keep=keep,
-                                     reuse=self.reuse, methods=(PROBE_METHOD,), plateau=self.plateau)
+                                     reuse=self.reuse, final=final, methods=(PROBE_METHOD,), plateau=self.plateau)
         return [self._finish(table, columns) for table, columns in zip(tables, keep)]
 
     def _finish(self, table: pd.DataFrame, columns: Sequence[str] | None) -> pd.DataFrame:
@@ -322,8 +324,7 @@ def calibrate(cal_run, test_run, alpha: float = DEFAULT_ALPHA, budgets: Sequence
 
     # Every test commit in one pass over the test run's chunks.
     test_orig, test_set, test_full, test_sim = test.commit((test.nu, None), (t_k, None), (t_k, margin.gamma),
-                                                           (t_sim, None))
-    test.release()
+                                                           (t_sim, None), final=True)
     a_orig = audit_table(test_orig, budgets=budgets, resamples=resamples, seed=seed, level=level)
     a_cal = audit_table(test_full, budgets=budgets, resamples=resamples, seed=seed, level=level)
     table3 = pd.DataFrame({"k": a_orig["k"]})
@@ -420,8 +421,7 @@ def gates(cal_run, test_run, alpha: float = DEFAULT_ALPHA, budgets: Sequence[int
     t_sim = simultaneous_threshold(cal_orig, budgets, alpha)
     margin, _ = cal.search_margin(t_sim, margin_grid, budgets)
     cal.release()
-    raw, adjusted = test.commit((test.nu, None), (t_sim, margin.gamma))
-    test.release()
+    raw, adjusted = test.commit((test.nu, None), (t_sim, margin.gamma), final=True)
     result = gates_from_tables(raw, adjusted, budgets=budgets, target_rate=target_rate,
                                post_var_executor=post_var_executor)
     raw_b = raw.loc[raw["k"].isin(budgets)]

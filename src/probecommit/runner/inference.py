@@ -390,6 +390,27 @@ def commit(
     return _interleave(frames, batch.n_episodes)
 
 
+def prune_retained_sets(cache: dict, later: Iterable[float | Mapping[int, float]]) -> None:
+    """Drop the retained sets in a :func:`commit` cache that no commit under ``later`` thresholds reads.
+
+    A grown set (``t > 1``) holds a copy of its budget's particles and their success
+    intervals, so a pass committing several thresholds in turn keeps only the sets still
+    to be scored. The beliefs' own entries (coverage score, hull) stay.
+
+    Args:
+        cache: The dict passed as ``commit(cache=...)``.
+        later: The thresholds of the commits still to come on this cache (a float for every
+            budget or ``{k: t}``, as ``commit`` takes them).
+    """
+    later = list(later)
+    uniform = {float(t) for t in later if not isinstance(t, Mapping)}
+    per_budget = {(int(k), float(t)) for ts in later if isinstance(ts, Mapping) for k, t in ts.items()}
+    for key in [key for key in cache if key[0] == "set"]:
+        _, _, k, t, _ = key
+        if t not in uniform and (k, t) not in per_budget:
+            del cache[key]
+
+
 def _interleave(plans: list[dict[str, Any]], n_episodes: int) -> pd.DataFrame:
     """One table from per-plan columns, in canonical order: episode by episode, each in plan
     order (blind first, then budgets). Row ``e * P + p`` is episode ``e`` of plan ``p``;

@@ -19,7 +19,15 @@ from probecommit.core.belief import ParticleFilter
 from probecommit.core.memory import trim_heap
 from probecommit.runner.build import build_filter, build_model, build_simulator
 from probecommit.runner.config import StudyConfig, config_data, dump_config, parse_config
-from probecommit.runner.inference import BeliefTrace, ProbeBatch, blind_bayes_executor, build_trace, commit, instance_arrays
+from probecommit.runner.inference import (
+    BeliefTrace,
+    ProbeBatch,
+    blind_bayes_executor,
+    build_trace,
+    commit,
+    instance_arrays,
+    prune_retained_sets,
+)
 from probecommit.store.probes import validate_probes
 from probecommit.store.rundir import RunDir, RunDirError
 from probecommit.store.schema import cache_frame, cache_records, component_names
@@ -204,7 +212,7 @@ class RunBeliefs:
         return committed_budgets(self.config) if self.kept_budgets is None else list(self.kept_budgets)
 
     def commit(self, requests: Sequence[Mapping[str, Any]], *, keep: Sequence[Sequence[str] | None] | None = None,
-               reuse: bool = True, **common: Any) -> list[pd.DataFrame]:
+               reuse: bool = True, final: bool = False, **common: Any) -> list[pd.DataFrame]:
         """Episode tables of several commits, computed chunk by chunk in one pass.
 
         Each chunk's beliefs are computed once and every request is committed on them
@@ -217,6 +225,8 @@ class RunBeliefs:
                 columns of dozens of tables.
             reuse: Share margin-independent work (retained sets) between the requests of a
                 chunk, and between calls when the run is one chunk; False recomputes it per commit.
+            final: No later call needs this run's beliefs: a one-chunk run's kept trace is
+                released by this call (as :meth:`release` would after it).
             **common: Keyword arguments of ``commit`` shared by every request.
 
         Returns:
@@ -224,24 +234,36 @@ class RunBeliefs:
         """
         keep = list(keep) if keep is not None else [None] * len(requests)
         parts: list[list[pd.DataFrame]] = [[] for _ in requests]
+        several = len(self.chunks) > 1
+        if several:
+            trim_heap()  # what earlier calls freed goes back before the first chunk is computed
         for rows in self.chunks:
             if self._kept is not None:
                 trace, cache = self._kept
             else:
                 trace, cache = self.trace(rows), {}
-                if len(self.chunks) == 1:
+                if not several and not final:
                     self._kept = trace, cache
-            for part, request, columns in zip(parts, requests, keep):
+            if final:
+                self._kept = None
+            # A cache that outlives this call keeps every set; otherwise each set goes after its last use.
+            passing = several or final
+            for i, (part, request, columns) in enumerate(zip(parts, requests, keep)):
                 part.append(commit(trace, self.model, self.simulator, cache=cache if reuse else None,
                                    columns=columns, **common, **request))
+                later = requests[i + 1:]
+                if passing and all("thresholds" in upcoming for upcoming in later):
+                    prune_retained_sets(cache, [upcoming["thresholds"] for upcoming in later])
             del trace, cache  # let a finished chunk's beliefs go before the next is computed
-            if len(self.chunks) > 1:
+            if several:
                 trim_heap()  # ... and their pages, so chunks do not pile up as heap fragments
         return [p[0] if len(p) == 1 else pd.concat(p, ignore_index=True) for p in parts]
 
     def release(self) -> None:
-        """Drop the kept trace of a one-chunk run (its last commit is done)."""
-        self._kept = None
+        """Drop the kept trace of a one-chunk run (its last commit is done) and hand its pages back."""
+        if self._kept is not None:
+            self._kept = None
+            trim_heap()
 
 
 def committed_budgets(config: StudyConfig) -> list[int]:
