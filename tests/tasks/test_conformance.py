@@ -15,7 +15,7 @@ import pandas as pd
 import pytest
 
 from probecommit.core.belief import ParticleFilter
-from probecommit.core.executors import ProbeRobust
+from probecommit.core.executors import ProbeRobust, grown_set, retained_scores, scenario_scores, select_action
 from probecommit.runner.config import parse_config
 from probecommit.runner.replay import load_run, replay_episodes
 from probecommit.runner.study import run_study
@@ -92,6 +92,33 @@ def test_one_particle_belief_commits_to_that_particles_optimum(family):
     loss = model.loss(model.action_grid, theta, context)[:, :, 0].astype(float)
     np.testing.assert_array_equal(chosen.score, loss.min(axis=1))
     np.testing.assert_array_equal(loss[np.arange(5), chosen.index], loss.min(axis=1))
+
+
+@pytest.mark.parametrize("family", FAMILIES)
+@pytest.mark.parametrize("margin", [1.0, 0.8])
+def test_grown_set_scored_in_blocks_equals_its_scenarios_scored_at_once(family, margin):
+    """A grown set (t > 1) scores its particles and its added points as two blocks, copying neither:
+    the scores, the action and its score are those of scoring the concatenated scenarios."""
+    spec = families()[family]
+    model = spec.build_model(spec.config()).with_margin(margin)
+    rng = np.random.default_rng(2)
+    theta = np.stack([model.sample_prior(rng, 40) for _ in range(4)])  # [E=4, N=40, d]
+    weights = rng.random((4, 40))
+    weights /= weights.sum(axis=1, keepdims=True)
+    context = np.zeros((4, len(model.context_names))) + 0.6 if model.context_names else None
+    executor = ProbeRobust(model)
+    retained = executor.retain(theta, weights, 1.3)
+    assert retained.grown is not None and retained.particles is theta  # no copy of the particles
+    scenarios, lo, hi = grown_set(model, theta, 1.3)
+    at_once = scenario_scores(model, scenarios, np.ones(scenarios.shape[:2], dtype=bool), context)
+    np.testing.assert_array_equal(retained_scores(model, retained, context), at_once)
+    np.testing.assert_array_equal(retained.scenarios, scenarios)
+    chosen = executor.choose(retained, context)
+    expected = select_action(at_once, model.tie_break_cost(model.action_grid, retained.reference, context))
+    np.testing.assert_array_equal(chosen.index, expected)
+    np.testing.assert_array_equal(chosen.score, at_once[np.arange(4), expected])
+    np.testing.assert_array_equal(chosen.lo, lo)
+    np.testing.assert_array_equal(chosen.hi, hi)
 
 
 @pytest.mark.parametrize("family,engine", PAIRS)

@@ -135,18 +135,22 @@ def scenario_scores(model: Any, scenarios: np.ndarray, mask: np.ndarray, context
             depend on the margin: a margin search passes them for every margin).
     """
     if model.binary_loss:
-        retained_count = mask.sum(axis=-1)
-        kept = np.maximum(retained_count, 1)
-        grid = np.asarray(model.action_grid, dtype=float).reshape(-1)
-        parts = model.success_interval_parts(scenarios) if parts is None else parts
-        if parts is not None:
-            failures = retained_count[:, None] - scaled_interval_success_counts(*parts, model.margin, mask, grid)
-        elif (interval := model.success_interval(scenarios)) is not None:  # a model with only the interval
-            failures = retained_count[:, None] - interval_success_counts(*interval, mask, grid)
-        else:
-            failures = np.sum(model.loss(model.action_grid, scenarios, context) & mask[:, None, :], axis=-1)
-        return failures / kept[:, None]
+        kept = np.maximum(mask.sum(axis=-1), 1)
+        return _failure_counts(model, scenarios, mask, context, parts) / kept[:, None]
     return scenario_max_loss(model.loss(model.action_grid, scenarios, context), mask)
+
+
+def _failure_counts(model: Any, scenarios: np.ndarray, mask: np.ndarray, context: np.ndarray | None,
+                    parts: tuple[np.ndarray, np.ndarray] | None) -> np.ndarray:
+    """Retained scenarios that fail under each grid action ``[E, A]`` (integers), binary loss."""
+    retained_count = mask.sum(axis=-1)
+    grid = np.asarray(model.action_grid, dtype=float).reshape(-1)
+    parts = model.success_interval_parts(scenarios) if parts is None else parts
+    if parts is not None:
+        return retained_count[:, None] - scaled_interval_success_counts(*parts, model.margin, mask, grid)
+    if (interval := model.success_interval(scenarios)) is not None:  # a model with only the interval
+        return retained_count[:, None] - interval_success_counts(*interval, mask, grid)
+    return np.sum(model.loss(model.action_grid, scenarios, context) & mask[:, None, :], axis=-1)
 
 
 @dataclass
@@ -177,11 +181,18 @@ def grown_set(model: Any, particles: np.ndarray, threshold: float) -> tuple[np.n
     Returns:
         Scenarios ``[E, N + 9, d]`` and the grown interval ``(lo, hi)`` per episode.
     """
+    points, lo, hi = grown_points(model, particles, threshold)
+    return np.concatenate([particles, points], axis=1), lo, hi
+
+
+def grown_points(model: Any, particles: np.ndarray, threshold: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The ``GROWN_SET_POINTS`` scenarios a grown set adds to the particles ``[E, 9, d]``, and
+    its interval ``(lo, hi)`` (see :func:`grown_set`)."""
     z = model.decision(particles)
     grow = (threshold - 1.0) * model.decision_domain_width
     lo, hi = z.min(axis=1) - grow, z.max(axis=1) + grow
     z_points = lo[:, None] + (hi - lo)[:, None] * np.linspace(0.0, 1.0, GROWN_SET_POINTS)[None, :]
-    return np.concatenate([particles, model.grown_scenarios(particles, z_points)], axis=1), lo, hi
+    return model.grown_scenarios(particles, z_points), lo, hi
 
 
 @dataclass
@@ -189,32 +200,74 @@ class RetainedSet:
     """The scenario set an executor scores, built from a belief and a threshold.
 
     It does not depend on the model's margin, so a margin search builds it once per
-    threshold and rescores it per margin (:meth:`ProbeRobust.choose`).
+    threshold and rescores it per margin (:meth:`ProbeRobust.choose`). A grown set holds
+    the belief's particles (not a copy) and the points it adds, scored as two blocks.
 
     Attributes:
-        scenarios: ``[E, S, d]`` scenarios scored (the particles, plus the grown points for t > 1).
-        scenario_mask: ``[E, S]`` which scenarios are retained.
+        particles: ``[E, N, d]`` the belief's particles.
         mask: ``[E, N]`` retained particles (all of them for a grown set).
         lo, hi: ``[E]`` the set's decision-coordinate interval.
         reference: ``[E, d]`` the tie-break reference.
+        grown: ``[E, G, d]`` the scenarios a grown set (t > 1) adds, every one retained; None otherwise.
     """
 
-    scenarios: np.ndarray
-    scenario_mask: np.ndarray
+    particles: np.ndarray
     mask: np.ndarray
     lo: np.ndarray
     hi: np.ndarray
     reference: np.ndarray
-    #: ``model.success_interval_parts(scenarios)`` per model kind and variant, filled on first use.
+    grown: np.ndarray | None = None
+    #: ``model.success_interval_parts`` of each block per model kind and variant, filled on first use.
     _interval_parts: dict = field(default_factory=dict, repr=False, compare=False)
 
-    def interval_parts(self, model: Any) -> tuple[np.ndarray, np.ndarray] | None:
-        """The model's success-interval parts of the scenarios, computed once per set and model
+    @property
+    def scenarios(self) -> np.ndarray:
+        """Every scenario scored ``[E, S, d]``: the particles, then the grown points (a new array then)."""
+        return self.particles if self.grown is None else np.concatenate([self.particles, self.grown], axis=1)
+
+    @property
+    def scenario_mask(self) -> np.ndarray:
+        """``[E, S]`` which of :attr:`scenarios` are retained."""
+        if self.grown is None:
+            return self.mask
+        return np.concatenate([self.mask, np.ones(self.grown.shape[:2], dtype=bool)], axis=1)
+
+    def blocks(self) -> list[tuple[np.ndarray, np.ndarray]]:
+        """``(scenarios, mask)`` of each block scored: the particles, then any grown points."""
+        if self.grown is None:
+            return [(self.particles, self.mask)]
+        return [(self.particles, self.mask), (self.grown, np.ones(self.grown.shape[:2], dtype=bool))]
+
+    def interval_parts(self, model: Any) -> list[tuple[np.ndarray, np.ndarray] | None]:
+        """The model's success-interval parts of each block, computed once per set and model
         (kind and variant label): they do not depend on the margin, which a margin search varies."""
         key = (type(model), getattr(model, "variant", None))
         if key not in self._interval_parts:
-            self._interval_parts[key] = model.success_interval_parts(self.scenarios)
+            self._interval_parts[key] = [model.success_interval_parts(block) for block, _ in self.blocks()]
         return self._interval_parts[key]
+
+
+def retained_scores(model: Any, retained: RetainedSet, context: np.ndarray | None = None) -> np.ndarray:
+    """:func:`scenario_scores` of every grid action ``[E, A]`` over a retained set, block by block.
+
+    The same numbers as scoring :attr:`RetainedSet.scenarios` at once: a binary loss sums
+    integer failure counts over the blocks before dividing by the retained count, and a
+    continuous loss takes the larger of the blocks' maxima; a grown set's particles are
+    never copied.
+    """
+    blocks = retained.blocks()
+    if len(blocks) == 1:
+        scenarios, mask = blocks[0]
+        parts = retained.interval_parts(model)[0] if model.binary_loss else None
+        return scenario_scores(model, scenarios, mask, context, parts)
+    if model.binary_loss:
+        parts = retained.interval_parts(model)
+        failures = sum(_failure_counts(model, scenarios, mask, context, part)
+                       for (scenarios, mask), part in zip(blocks, parts))
+        kept = np.maximum(sum(mask.sum(axis=-1) for _, mask in blocks), 1)
+        return failures / kept[:, None]
+    return np.maximum.reduce([scenario_max_loss(model.loss(model.action_grid, scenarios, context), mask)
+                              for scenarios, mask in blocks])
 
 
 #: Set constructions at t = 1: the paper's top-weight prefix, or every particle.
@@ -251,19 +304,18 @@ class ProbeRobust:
         if self.plateau == "hull" and 1 - PLATEAU_EPSILON <= threshold <= 1:
             mask = np.ones_like(weights, dtype=bool)
             lo, hi = masked_interval(model.decision(particles), mask)
-            return RetainedSet(particles, mask, mask, lo, hi, belief_reference(particles, weights))
+            return RetainedSet(particles, mask, lo, hi, belief_reference(particles, weights))
         if threshold <= 1:
             mask, lo, hi, reference = retained_summary(weights, threshold, model.decision(particles), particles)
-            return RetainedSet(particles, mask, mask, lo, hi, reference)
-        scenarios, lo, hi = grown_set(model, particles, threshold)
-        return RetainedSet(scenarios, np.ones(scenarios.shape[:2], dtype=bool), np.ones_like(weights, dtype=bool),
-                           lo, hi, belief_reference(particles, weights))
+            return RetainedSet(particles, mask, lo, hi, reference)
+        points, lo, hi = grown_points(model, particles, threshold)
+        return RetainedSet(particles, np.ones_like(weights, dtype=bool), lo, hi, belief_reference(particles, weights),
+                           points)
 
     def choose(self, retained: RetainedSet, context: np.ndarray | None = None) -> Commitment:
         """Score every grid action over a retained set and pick one per episode."""
         model = self.model
-        parts = retained.interval_parts(model) if model.binary_loss else None
-        scores = scenario_scores(model, retained.scenarios, retained.scenario_mask, context, parts)
+        scores = retained_scores(model, retained, context)
         index = select_action(scores, model.tie_break_cost(model.action_grid, retained.reference, context))
         return Commitment(index, np.take_along_axis(scores, index[:, None], axis=1)[:, 0], retained.mask,
                           retained.lo, retained.hi)
