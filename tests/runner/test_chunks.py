@@ -135,13 +135,30 @@ def test_beliefs_kept_at_some_budgets_commit_the_rows_of_the_whole_trace(runs):
     whole = RunBeliefs.of(runs["cal"], chunk_instances=None)
     some = RunBeliefs.of(runs["cal"], chunk_instances=2, budgets=[4, 2])
     assert some.budgets == [2, 4] and whole.budgets == [1, 2, 3, 4, 5]
-    assert sorted(some.trace(some.chunks[0]).states) == [0, 2, 4]
+    assert sorted(some.trace(some.chunks[0]).states) == [2, 4]  # no prior: only the blind methods read it
     full = whole.commit([{"thresholds": 0.8}])[0]
     kept = some.commit([{"thresholds": 0.8}])[0]
     expected = full[full.k.isin([2, 4])].reset_index(drop=True)
     pd.testing.assert_frame_equal(kept, expected, check_exact=True)
     with pytest.raises(ValueError, match=r"budget\(s\) \[7\] not in the run"):
         RunBeliefs.of(runs["cal"], budgets=[2, 7])
+    with pytest.raises(ValueError, match=r"prior belief \(k = 0\)"):
+        some.commit([{"thresholds": 0.8, "methods": ("blind_robust",)}])
+
+
+@pytest.mark.parametrize("budgets", [None, [3]])
+def test_a_whole_trace_built_in_chunks_equals_one_batch(runs, budgets):
+    """The kept trace of a re-split pool, built a few instances at a time, is the one-batch trace bit for bit."""
+    pool = RunBeliefs.of(runs["cal"], chunk_instances=None, budgets=budgets)
+    one, chunked = pool.trace(pool.chunks[0]), pool._whole_trace(chunk_instances=2)
+    assert sorted(chunked.states) == sorted(one.states) and chunked.batch.n_episodes == one.batch.n_episodes == 21
+    assert list(chunked.batch.instance_id) == list(one.batch.instance_id)
+    for k in one.states:
+        for name in ("particles", "log_weights", "resampled", "u_hist", "y_hist", "accepted", "lost", "log_evidence"):
+            x, y = getattr(chunked.states[k], name), getattr(one.states[k], name)
+            assert (x is None and y is None) or (x.dtype == y.dtype and np.array_equal(x, y, equal_nan=True)), (k, name)
+    np.testing.assert_array_equal(chunked.surprise, one.surprise)
+    np.testing.assert_array_equal(chunked.lost, one.lost)
 
 
 def test_calibration_and_gates_of_some_budgets_equal_keeping_every_budget(runs):

@@ -239,20 +239,22 @@ class BeliefTrace:
 
 
 def build_trace(pfilter: ParticleFilter, batch: ProbeBatch, seed: int, budgets: Iterable[int],
-                keep_weights: bool = False) -> BeliefTrace:
+                keep_weights: bool = False, keep_prior: bool = True) -> BeliefTrace:
     """Recompute beliefs from stored probes (successful episodes of ``batch`` only).
 
     Args:
         keep_weights: Keep each budget's normalized weights as the update computed them, so
             a commit does not exponentiate the log-weights again (one more ``[E, N]`` array
             per budget: for a bounded work unit, not a whole run's trace).
+        keep_prior: Keep the prior belief (k = 0) the blind methods commit on; False for a
+            trace that only probe-robust commits read (one ``[E, N, d]`` state less).
     """
     ok = np.flatnonzero(batch.status == "ok")
     batch = batch.subset(ok)
     rngs = episode_rngs(seed, batch.split, batch.instance_index, batch.repeat, INFERENCE)
     budgets = set(budgets)
     state = pfilter.initial(rngs)
-    states = {0: state}
+    states = {0: state} if keep_prior else {}
     k_max = max(budgets) if budgets else 0
     surprise = np.full((batch.n_episodes, batch.u.shape[1]), np.nan)
     lost = np.zeros((batch.n_episodes, batch.u.shape[1]), dtype=bool)
@@ -327,6 +329,9 @@ def commit(
     z_true = model.decision(batch.truths)
     action_names = component_names("action", model.action_dim)
     grid = np.asarray(model.action_grid, dtype=float).reshape(len(model.action_grid), -1)
+    if any(k == 0 for _, k in plan) and 0 not in trace.states:
+        raise ValueError("the blind methods commit on the prior belief (k = 0), which this trace does not keep "
+                         "(RunBeliefs.of(..., budgets=...) keeps only the budgets it names)")
     for plan_index, (method, k) in enumerate(plan):
         state = trace.states[k]
         particles = state.particles

@@ -8,14 +8,14 @@ needs the engine installed).
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 from pathlib import Path
 from typing import Any, Iterable, Mapping, Sequence
 
 import numpy as np
 import pandas as pd
 
-from probecommit.core.belief import ParticleFilter
+from probecommit.core.belief import BeliefState, ParticleFilter
 from probecommit.core.memory import trim_heap
 from probecommit.runner.build import build_filter, build_model, build_simulator
 from probecommit.runner.config import StudyConfig, config_data, dump_config, parse_config
@@ -126,6 +126,10 @@ def trace_for_run(run_dir: str | Path | LoadedRun, config: StudyConfig | None = 
 #: not by the run. 96 = one paper split (384 episodes), which stays a single chunk.
 CHUNK_INSTANCES = 96
 
+#: Instances whose beliefs are computed at once while a whole run's trace is built to be kept
+#: (``RunBeliefs.restrict``): the kept trace is a run's, the update's temporaries a chunk's.
+KEPT_TRACE_CHUNK_INSTANCES = 24
+
 
 @dataclass
 class RunBeliefs:
@@ -186,9 +190,50 @@ class RunBeliefs:
                    _chunk_slices(batch.instance_id, chunk_instances), kept)
 
     def trace(self, rows: slice) -> BeliefTrace:
-        """Beliefs of the episodes ``batch[rows]`` at every kept budget."""
+        """Beliefs of the episodes ``batch[rows]`` at every kept budget.
+
+        With chosen budgets (``RunBeliefs.of(..., budgets=...)``) the trace keeps those only:
+        not the prior (k = 0), which only the blind methods read.
+        """
         budgets = self.config.probes.commit_budgets if self.kept_budgets is None else self.kept_budgets
-        return build_trace(self.pfilter, self.batch.subset(rows), self.config.seed, budgets)
+        return build_trace(self.pfilter, self.batch.subset(rows), self.config.seed, budgets,
+                           keep_prior=self.kept_budgets is None)
+
+    def _whole_trace(self, chunk_instances: int = KEPT_TRACE_CHUNK_INSTANCES) -> BeliefTrace:
+        """The trace of the whole run, computed ``chunk_instances`` instances at a time.
+
+        Each chunk's beliefs are written into arrays sized for the run, so the peak is the
+        kept trace plus one chunk's working memory, not a whole run's update temporaries.
+        Equal to ``self.trace`` of the whole run (an episode never depends on its batch).
+        """
+        whole: BeliefTrace | None = None
+        at = 0
+        ok_rows = np.flatnonzero(self.batch.status == "ok")
+
+        def room(a: np.ndarray | None) -> np.ndarray | None:
+            return None if a is None else np.empty((len(ok_rows), *a.shape[1:]), dtype=a.dtype)
+
+        for rows in _chunk_slices(self.batch.instance_id, chunk_instances):
+            part = self.trace(rows)
+            if whole is None:
+                names = [f.name for f in fields(BeliefState) if f.name != "fresh_weights"]
+                whole = BeliefTrace(self.batch.subset(ok_rows),
+                                    {k: BeliefState(**{n: room(getattr(s, n)) for n in names}) for k, s in part.states.items()},
+                                    room(part.surprise), room(part.lost))
+            n = part.batch.n_episodes
+            for k, state in part.states.items():
+                for name in names:
+                    value = getattr(state, name)
+                    if value is not None:
+                        getattr(whole.states[k], name)[at:at + n] = value
+            whole.surprise[at:at + n] = part.surprise
+            if part.lost is not None:
+                whole.lost[at:at + n] = part.lost
+            at += n
+            del part
+        if whole is None:
+            return self.trace(slice(0, 0))
+        return whole
 
     def restrict(self, instance_ids: Iterable[str]) -> "RunBeliefs":
         """The beliefs of some of the run's instances, taken from this run's, computed once.
@@ -201,7 +246,7 @@ class RunBeliefs:
         if len(self.chunks) != 1:
             raise ValueError("restrict() needs a run held as one chunk (RunBeliefs.of(..., chunk_instances=None))")
         if self._kept is None:
-            self._kept = self.trace(self.chunks[0]), {}
+            self._kept = self._whole_trace(), {}
         rows = np.flatnonzero(np.isin(self.batch.instance_id, list(instance_ids)))  # the run's order
         return RunBeliefs(self.config, self.model, self.simulator, self.pfilter, self.batch.subset(rows),
                           [slice(0, len(rows))], self.kept_budgets, (self._kept[0].subset(rows), {}))
@@ -247,12 +292,12 @@ class RunBeliefs:
             if final:
                 self._kept = None
             # A cache that outlives this call keeps every set; otherwise each set goes after its last use.
-            passing = several or final
+            cache_ends_here = several or final
             for i, (part, request, columns) in enumerate(zip(parts, requests, keep)):
                 part.append(commit(trace, self.model, self.simulator, cache=cache if reuse else None,
                                    columns=columns, **common, **request))
                 later = requests[i + 1:]
-                if passing and all("thresholds" in upcoming for upcoming in later):
+                if cache_ends_here and all("thresholds" in upcoming for upcoming in later):
                     prune_retained_sets(cache, [upcoming["thresholds"] for upcoming in later])
             del trace, cache  # let a finished chunk's beliefs go before the next is computed
             if several:

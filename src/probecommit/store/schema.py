@@ -7,6 +7,7 @@ audit's validation of a user's own log agree by construction.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Iterator
 
 import numpy as np
 import pyarrow as pa
@@ -112,20 +113,29 @@ def cache_frame(records: list[dict], latent_names: tuple[str, ...]):
     return pd.DataFrame(columns, columns=["engine", "query", *latent_names, "arg", "value"])
 
 
-def cache_records(frame, latent_names: tuple[str, ...]) -> list[dict]:
-    """Inverse of :func:`cache_frame`: records a simulator's ``load_cache`` accepts."""
+def cache_records(frame, latent_names: tuple[str, ...]) -> Iterator[dict]:
+    """Inverse of :func:`cache_frame`: the records a simulator's ``load_cache`` accepts.
+
+    Made one at a time as they are read (a replay loads every answer of a run, often 10^4
+    rows or more): no list of them is held beside the simulator's cache, whose small
+    objects would otherwise be interleaved with the freed records' in memory.
+
+    Raises:
+        ValueError: At the call, for a table without the family's columns.
+    """
     if frame is None or not len(frame):
-        return []
+        return iter(())
     missing = [c for c in ("engine", "query", *latent_names, "arg", "value") if c not in frame.columns]
     if missing:
         raise ValueError(f"engine cache lacks column(s) {', '.join(missing)}; it was written for another task family")
-    # Whole columns at once (a replay loads every answer of a run, often 10^4 rows or more).
-    thetas = frame[list(latent_names)].to_numpy(float).tolist()
-    return [
-        {"engine": e, "query": q, "theta": t, "arg": a, "value": v}
-        for e, q, t, a, v in zip(frame["engine"].tolist(), frame["query"].tolist(), thetas,
-                                 _float_rows(frame["arg"]), _float_rows(frame["value"]))
-    ]
+    # Whole columns at once, converted to Python values a row at a time.
+    return _records(frame["engine"].tolist(), frame["query"].tolist(), frame[list(latent_names)].to_numpy(float),
+                    _float_rows(frame["arg"]), _float_rows(frame["value"]))
+
+
+def _records(engines: list, queries: list, thetas: np.ndarray, args, values) -> Iterator[dict]:
+    for e, q, t, a, v in zip(engines, queries, thetas, args, values):
+        yield {"engine": e, "query": q, "theta": t.tolist(), "arg": a.tolist(), "value": v.tolist()}
 
 
 def float_matrix(items: list) -> np.ndarray | None:
@@ -137,11 +147,11 @@ def float_matrix(items: list) -> np.ndarray | None:
         return None
 
 
-def _float_rows(column) -> list[list[float]]:
-    """A column of float vectors as lists of Python floats (``float_matrix``, else row by row)."""
+def _float_rows(column) -> np.ndarray | list[np.ndarray]:
+    """A column of float vectors as rows of float arrays (one ``float_matrix``, else row by row)."""
     items = column.tolist()
     matrix = float_matrix(items)
-    return matrix.tolist() if matrix is not None else [np.asarray(v, dtype=float).ravel().tolist() for v in items]
+    return matrix if matrix is not None else [np.asarray(v, dtype=float).ravel() for v in items]
 
 
 #: Columns a user's own log must provide for ``probecommit audit``.

@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import json
 import os
+import struct
 import threading
 import time
 from concurrent.futures import ThreadPoolExecutor
@@ -355,6 +356,7 @@ class CachedSimulator:
         """Count an answer the engine just gave and keep it (in the shared answers too)."""
         self.engine_seconds += seconds
         self.engine_calls[key[0]] = self.engine_calls.get(key[0], 0) + 1
+        answer.flags.writeable = False  # shared by every caller that asks the same query
         if self.shared_answers is not None:
             self.shared_answers[key] = answer
         self._cache[key] = answer
@@ -408,10 +410,22 @@ class CachedSimulator:
         ]
 
     def load_cache(self, records: Iterable[dict[str, Any]]) -> None:
+        # A run asks many queries of few latents and answers few distinct values: equal tuples
+        # and values are stored once (matched by their bytes, so -0.0 stays -0.0), read-only.
+        shared: dict[bytes | tuple, Any] = {}
+
+        def once(kind: str, items: tuple) -> Any:
+            packed = (kind, struct.pack(f"{len(items)}d", *items))
+            return shared.setdefault(packed, items)
+
         for r in records:
             if r["engine"] == self.engine:
-                key = (str(r["query"]), tuple(map(float, r["theta"])), tuple(map(float, r["arg"])))
-                self._cache[key] = np.asarray(r["value"], dtype=float)
+                theta = once("theta", tuple(map(float, r["theta"])))
+                arg = once("arg", tuple(map(float, r["arg"])))
+                value = np.asarray(r["value"], dtype=float)
+                value = shared.setdefault(("value", value.shape, value.tobytes()), value)
+                value.flags.writeable = False
+                self._cache[(str(r["query"]), theta, arg)] = value
 
 
 class NoisySimulator(CachedSimulator):
