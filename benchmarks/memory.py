@@ -120,6 +120,10 @@ def main() -> None:
         if args.against:
             subprocess.run(["git", "-C", str(ROOT), "worktree", "add", "--detach", str(tree), args.against],
                            check=True, capture_output=True)
+            # The compiled kernels are built files, not in git: without them the baseline would run
+            # numba's JIT (~115 MB more). A ref that predates them just fails this step.
+            subprocess.run([sys.executable, "-m", "probecommit.core.compiled"], capture_output=True,
+                           env={**os.environ, "PYTHONPATH": str(tree / "src")})
             arms[f"git {args.against}"] = (tree / "src", "default")
         try:
             results = {(case, episodes, arm): run_case(src, runs, case, episodes, chunk)

@@ -137,3 +137,26 @@ def test_a_forked_child_makes_its_own_engine_threads(monkeypatch):
     os.close(write)
     _, status = os.waitpid(pid, 0)
     assert os.read(read, 16) == b"3" and status == 0
+
+
+def test_a_loaded_engine_cache_is_stored_once_per_distinct_value_and_written_back_exactly():
+    """load_cache shares equal latents, args and answers (matched by their bytes: -0.0 stays -0.0);
+    answers are read-only, so no caller can change what later queries read."""
+    from probecommit.store.schema import cache_frame, cache_records
+
+    records = [{"engine": "toy", "query": "slide", "theta": [-0.0], "arg": [u], "value": [1.5]} for u in (1.0, 2.0)]
+    records.append({"engine": "toy", "query": "slide", "theta": [2.0], "arg": [1.0], "value": [1.5]})
+    records.append({"engine": "other", "query": "slide", "theta": [3.0], "arg": [1.0], "value": [0.0]})
+    sim = Ramp(noise_sigma=0.0)
+    sim.load_cache(cache_records(cache_frame(records, ("a",)), ("a",)))
+    back = sim.cache_records()
+    assert back == records[:3]
+    assert [np.signbit(r["theta"][0]) for r in back] == [True, True, False]
+    keys, values = list(sim._cache), list(sim._cache.values())
+    assert keys[0][1] is keys[1][1] and keys[0][2] is keys[2][2]  # one tuple per distinct latent / arg
+    assert values[0] is values[1] is values[2]
+    with pytest.raises(ValueError, match="read-only"):
+        values[0][0] = 0.0
+    fresh = sim.cached("slide", [3.0], [2.0])
+    assert fresh[0] == 6.0 and not fresh.flags.writeable
+    assert sim.engine_calls == {"slide": 1}
