@@ -160,3 +160,24 @@ def test_a_loaded_engine_cache_is_stored_once_per_distinct_value_and_written_bac
     fresh = sim.cached("slide", [3.0], [2.0])
     assert fresh[0] == 6.0 and not fresh.flags.writeable
     assert sim.engine_calls == {"slide": 1}
+
+
+def test_cached_answers_are_copies_so_the_engines_and_callers_arrays_stay_writable():
+    class Buffered(NoisySimulator):
+        engine = "toy"
+
+        def __init__(self):
+            super().__init__(0.0)
+            self.buffer = np.zeros(2)
+
+        def reading(self, a: float) -> np.ndarray:
+            self.buffer[:] = a  # an engine writing its own buffer, then returning it
+            return self.buffer
+
+    sim = Buffered()
+    first = sim.cached("reading", [1.0], [])
+    second = sim.cached("reading", [2.0], [])
+    assert first.tolist() == [1.0, 1.0] and second.tolist() == [2.0, 2.0] and sim.buffer.flags.writeable
+    value = np.array([4.0])
+    sim.load_cache([{"engine": "toy", "query": "reading", "theta": [3.0], "arg": [], "value": value}])
+    assert value.flags.writeable and sim.cached("reading", [3.0], []).tolist() == [4.0]

@@ -350,7 +350,8 @@ class CachedSimulator:
 
     def _engine_answer(self, key: tuple[str, tuple[float, ...], tuple[float, ...]]) -> np.ndarray:
         """Run the engine for one query: its answer as a float vector (neither cached nor counted)."""
-        return np.atleast_1d(np.asarray(getattr(self, key[0])(*key[1], *key[2]), dtype=float))
+        # A copy: the answer is made read-only and shared, never the engine's own buffer.
+        return np.atleast_1d(np.array(getattr(self, key[0])(*key[1], *key[2]), dtype=float))
 
     def _record(self, key: tuple[str, tuple[float, ...], tuple[float, ...]], answer: np.ndarray, seconds: float) -> None:
         """Count an answer the engine just gave and keep it (in the shared answers too)."""
@@ -422,7 +423,7 @@ class CachedSimulator:
             if r["engine"] == self.engine:
                 theta = once("theta", tuple(map(float, r["theta"])))
                 arg = once("arg", tuple(map(float, r["arg"])))
-                value = np.asarray(r["value"], dtype=float)
+                value = np.array(r["value"], dtype=float)  # a copy: the caller's arrays stay writable
                 value = shared.setdefault(("value", value.shape, value.tobytes()), value)
                 value.flags.writeable = False
                 self._cache[(str(r["query"]), theta, arg)] = value
