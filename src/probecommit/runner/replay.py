@@ -204,19 +204,21 @@ class RunBeliefs:
 
         Each chunk's beliefs are written into arrays sized for the run, so the peak is the
         kept trace plus one chunk's working memory, not a whole run's update temporaries.
-        Equal to ``self.trace`` of the whole run (an episode never depends on its batch).
+        Equal to ``self.trace`` of the whole run (an episode never depends on its batch), except
+        that an array the one-batch trace shares between budgets (no episode resampled between
+        them) is held once per budget here.
         """
-        whole: BeliefTrace | None = None
-        at = 0
         ok_rows = np.flatnonzero(self.batch.status == "ok")
+        names = [f.name for f in fields(BeliefState) if f.name != "fresh_weights"]
 
         def room(a: np.ndarray | None) -> np.ndarray | None:
             return None if a is None else np.empty((len(ok_rows), *a.shape[1:]), dtype=a.dtype)
 
+        whole: BeliefTrace | None = None
+        at = 0
         for rows in _chunk_slices(self.batch.instance_id, chunk_instances):
             part = self.trace(rows)
-            if whole is None:
-                names = [f.name for f in fields(BeliefState) if f.name != "fresh_weights"]
+            if whole is None:  # the first chunk gives every array's shape and dtype
                 whole = BeliefTrace(self.batch.subset(ok_rows),
                                     {k: BeliefState(**{n: room(getattr(s, n)) for n in names}) for k, s in part.states.items()},
                                     room(part.surprise), room(part.lost))
@@ -231,9 +233,7 @@ class RunBeliefs:
                 whole.lost[at:at + n] = part.lost
             at += n
             del part
-        if whole is None:
-            return self.trace(slice(0, 0))
-        return whole
+        return whole if whole is not None else self.trace(slice(0, 0))
 
     def restrict(self, instance_ids: Iterable[str]) -> "RunBeliefs":
         """The beliefs of some of the run's instances, taken from this run's, computed once.

@@ -413,7 +413,7 @@ class CachedSimulator:
     def load_cache(self, records: Iterable[dict[str, Any]]) -> None:
         # A run asks many queries of few latents and answers few distinct values: equal tuples
         # and values are stored once (matched by their bytes, so -0.0 stays -0.0), read-only.
-        shared: dict[bytes | tuple, Any] = {}
+        shared: dict[tuple, Any] = {}  # (kind, bytes) -> the one object kept
 
         def once(kind: str, items: tuple) -> Any:
             packed = (kind, struct.pack(f"{len(items)}d", *items))
