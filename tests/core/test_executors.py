@@ -104,3 +104,19 @@ def test_interval_counting_equals_direct_counting():
     fast = interval_success_counts(lo, hi, mask, model.action_grid[:, 0])
     direct = np.sum(~model.loss(model.action_grid, theta) & mask[:, None, :], axis=-1)
     np.testing.assert_array_equal(fast, direct)
+
+
+def test_probe_robust_scores_are_the_same_with_the_parts_formed_or_read_in_place(monkeypatch):
+    """Insertion's affine parts read inside the compiled count give the commits and scores of the
+    formed ``[E, N]`` parts (the path of a model without them), grown sets included."""
+    model = InsertionModel.deployed(margin=0.83)
+    rng = np.random.default_rng(8)
+    particles = np.stack([rng.uniform(-10, 10, (20, 256)), rng.uniform(0.7, 1.3, (20, 256))], axis=-1)
+    weights = rng.random((20, 256)) ** 4
+    weights /= weights.sum(axis=1, keepdims=True)
+    in_place = [ProbeRobust(model).act(particles, weights, t) for t in (0.8, 1.0, 1.2)]
+    monkeypatch.setattr(InsertionModel, "success_interval_affine", lambda self: None)
+    formed = [ProbeRobust(model).act(particles, weights, t) for t in (0.8, 1.0, 1.2)]
+    for a, b in zip(in_place, formed):
+        np.testing.assert_array_equal(a.index, b.index)
+        np.testing.assert_array_equal(a.score, b.score)

@@ -80,6 +80,39 @@ def test_scaled_interval_counts_match_counting_the_numpy_ends(margin):
     assert not centre.flags.c_contiguous and expected.sum() > 0
 
 
+@pytest.mark.parametrize("margin", [1.0, 0.73, 1.37])
+def test_affine_interval_counts_equal_counting_the_models_parts(margin):
+    """Insertion's parts ``(x, 0.6 c + 1.1)`` formed per retained scenario inside the kernel give
+    the counts of the NumPy ends the model's ``success_interval`` forms, bit for bit, with ends
+    on grid points and clearances where a fused multiply-add would round otherwise."""
+    from probecommit.tasks.insertion.model import InsertionModel
+
+    model = InsertionModel(margin=margin)
+    rng = np.random.default_rng(11)
+    grid = np.asarray(model.action_grid, dtype=float).reshape(-1)
+    theta = np.stack([rng.uniform(-12, 12, (40, 500)), rng.uniform(-1.5, 3.0, (40, 500))], axis=-1)
+    theta[:, :60, 0] = np.round(theta[:, :60, 0] * 2) / 2
+    theta[:, :60, 1] = rng.choice([-1.0, 0.0, 0.65, 1.5, 2.4], (40, 60))  # half-widths 0.5, 1.1, ...: ends on the grid
+    mask = rng.random((40, 500)) < 0.8
+    lo, hi = model.success_interval(theta)
+    expected = interval_success_counts_numpy(lo, hi, mask, grid)
+    got = kernels.affine_interval_success_counts_compiled(theta, model.success_interval_affine(), margin, mask, grid)
+    np.testing.assert_array_equal(got, expected)
+    assert expected.sum() > 0
+
+
+def test_only_a_model_whose_parts_are_insertions_declares_them_affine():
+    from probecommit.tasks.insertion.model import InsertionModel
+    from probecommit.tasks.rig.model import RigModel
+
+    theta = np.random.default_rng(2).uniform(0.5, 1.5, (3, 7, 2))
+    centre_at, width_at, slope, intercept = InsertionModel().success_interval_affine()
+    centre, half = InsertionModel().success_interval_parts(theta)
+    np.testing.assert_array_equal(theta[..., centre_at], centre)
+    np.testing.assert_array_equal(theta[..., width_at] * slope + intercept, half)
+    assert RigModel().success_interval_affine() is None  # the rig's window is its own
+
+
 def test_uniform_step_detects_even_grids_only():
     assert kernels.uniform_step(np.round(np.arange(-10.0, 10.5, 0.5), 10)) == 0.5
     assert kernels.uniform_step(np.array([0.0, 1.0, 3.0])) == 0.0

@@ -19,7 +19,12 @@ from typing import Any
 
 import numpy as np
 
-from probecommit.core.kernels import interval_success_counts_compiled, scaled_interval_success_counts_compiled
+from probecommit.core.kernels import (
+    HAVE_KERNELS,
+    affine_interval_success_counts_compiled,
+    interval_success_counts_compiled,
+    scaled_interval_success_counts_compiled,
+)
 from probecommit.core.retained import belief_reference, masked_interval, retained_summary
 
 SCORE_TIE_TOLERANCE = 1e-12
@@ -140,11 +145,25 @@ def scenario_scores(model: Any, scenarios: np.ndarray, mask: np.ndarray, context
     return scenario_max_loss(model.loss(model.action_grid, scenarios, context), mask)
 
 
+def _compiled_affine(model: Any) -> tuple[int, int, float, float] | None:
+    """The model's affine success-interval parts (``success_interval_affine``) when a compiled
+    kernel can count with them, so the ``[E, N]`` parts need not be formed; else None."""
+    if not HAVE_KERNELS:
+        return None
+    affine = getattr(model, "success_interval_affine", None)
+    return affine() if affine is not None else None
+
+
 def _failure_counts(model: Any, scenarios: np.ndarray, mask: np.ndarray, context: np.ndarray | None,
                     parts: tuple[np.ndarray, np.ndarray] | None) -> np.ndarray:
     """Retained scenarios that fail under each grid action ``[E, A]`` (integers), binary loss."""
     retained_count = mask.sum(axis=-1)
     grid = np.asarray(model.action_grid, dtype=float).reshape(-1)
+    affine = _compiled_affine(model)
+    if affine is not None and parts is None:  # both parts read from the scenarios inside the kernel
+        counts = affine_interval_success_counts_compiled(np.asarray(scenarios), affine, model.margin, mask, grid)
+        if counts is not None:
+            return retained_count[:, None] - counts
     parts = model.success_interval_parts(scenarios) if parts is None else parts
     if parts is not None:
         return retained_count[:, None] - scaled_interval_success_counts(*parts, model.margin, mask, grid)
@@ -256,12 +275,14 @@ def retained_scores(model: Any, retained: RetainedSet, context: np.ndarray | Non
     never copied.
     """
     blocks = retained.blocks()
+    # Parts formed once per set for a margin search, unless a compiled kernel reads them in place.
+    formed = model.binary_loss and _compiled_affine(model) is None
     if len(blocks) == 1:
         scenarios, mask = blocks[0]
-        parts = retained.interval_parts(model)[0] if model.binary_loss else None
+        parts = retained.interval_parts(model)[0] if formed else None
         return scenario_scores(model, scenarios, mask, context, parts)
     if model.binary_loss:
-        parts = retained.interval_parts(model)
+        parts = retained.interval_parts(model) if formed else [None] * len(blocks)
         failures = sum(_failure_counts(model, scenarios, mask, context, part)
                        for (scenarios, mask), part in zip(blocks, parts))
         kept = np.maximum(sum(mask.sum(axis=-1) for _, mask in blocks), 1)

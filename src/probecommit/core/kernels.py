@@ -104,6 +104,28 @@ if HAVE_KERNELS:
         return out
 
 
+    @kernel("i8[:, ::1](f8[:, :, ::1], i8, i8, f8, f8, f8, b1[:, ::1], f8[::1], f8)")
+    def _affine_interval_success_counts(scenarios, centre_at, width_at, slope, intercept, margin, mask, actions,
+                                        step):  # pragma: no cover - compiled
+        """:func:`_scaled_interval_success_counts` with ``centre = scenarios[..., centre_at]`` and
+        ``half = slope * scenarios[..., width_at] + intercept`` formed per retained scenario (a
+        product, then a sum, as NumPy forms them), so no ``[E, N]`` part is materialized."""
+        n_e, n_s = mask.shape
+        out = np.zeros((n_e, actions.shape[0]), dtype=np.int64)
+        diff = np.zeros(actions.shape[0] + 1, dtype=np.int64)
+        inv_step = 1.0 / step if step > 0.0 else 0.0
+        for e in range(n_e):
+            for s in range(n_s):
+                if mask[e, s]:
+                    half = scenarios[e, s, width_at] * slope
+                    half = half + intercept
+                    width = half * margin
+                    centre = scenarios[e, s, centre_at]
+                    _add_interval(diff, actions, centre - width, centre + width, inv_step)
+            _take_counts(diff, out[e])
+        return out
+
+
 if HAVE_KERNELS:
 
     @kernel("i8[:, ::1](f8[:, ::1], f8[::1])")
@@ -176,6 +198,20 @@ def scaled_interval_success_counts_compiled(centre: np.ndarray, half: np.ndarray
     return _scaled_interval_success_counts(np.asarray(centre, dtype=np.float64), np.asarray(half, dtype=np.float64),
                                            float(margin), np.ascontiguousarray(mask, dtype=np.bool_), actions,
                                            uniform_step(actions))
+
+
+def affine_interval_success_counts_compiled(scenarios: np.ndarray, affine: tuple[int, int, float, float], margin: float,
+                                            mask: np.ndarray, actions: np.ndarray) -> np.ndarray | None:
+    """The compiled count over ``centre -+ half * margin`` of a model whose parts are affine in its
+    latents (``TaskModel.success_interval_affine``), read from ``scenarios[E, N, d]`` in place;
+    None without compiled kernels."""
+    if not HAVE_KERNELS:
+        return None
+    centre_at, width_at, slope, intercept = affine
+    actions = np.ascontiguousarray(actions, dtype=np.float64)
+    return _affine_interval_success_counts(np.ascontiguousarray(scenarios, dtype=np.float64), int(centre_at),
+                                           int(width_at), float(slope), float(intercept), float(margin),
+                                           np.ascontiguousarray(mask, dtype=np.bool_), actions, uniform_step(actions))
 
 
 def uniform_step(actions: np.ndarray) -> float:

@@ -98,6 +98,11 @@ class TaskModel(Protocol):
         ``centre -+ half * margin``, bit for bit. Both parts are margin-free, so a margin search
         computes them once per retained set; ``half`` is a new array the caller may modify."""
 
+    def success_interval_affine(self) -> tuple[int, int, float, float] | None:
+        """``(centre_at, width_at, slope, intercept)`` when :meth:`success_interval_parts` is
+        ``(theta[..., centre_at], slope * theta[..., width_at] + intercept)``, bit for bit; else
+        None. A compiled count then reads both parts from the scenarios in place."""
+
     def sample_prior(self, rng: np.random.Generator, n: int) -> np.ndarray:
         """``n`` draws ``[n, d]`` from the prior."""
 
@@ -185,6 +190,9 @@ class TaskModelBase:
         return centre - half, centre + half
 
     def success_interval_parts(self, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
+        return None
+
+    def success_interval_affine(self) -> tuple[int, int, float, float] | None:
         return None
 
     def sample_prior(self, rng: np.random.Generator, n: int) -> np.ndarray:

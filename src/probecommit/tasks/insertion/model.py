@@ -31,9 +31,13 @@ def half_gap(c: np.ndarray) -> np.ndarray:
     return gap
 
 
+#: The modeled capture half-width ``w(c) = CAPTURE_SLOPE c + CAPTURE_INTERCEPT`` (mm).
+CAPTURE_SLOPE, CAPTURE_INTERCEPT = 0.6, 1.1
+
+
 def capture_half_width(c: np.ndarray) -> np.ndarray:
     """Modeled capture half-width ``w(c) = 0.6 c + 1.1`` in mm."""
-    return 0.6 * np.asarray(c) + 1.1
+    return CAPTURE_SLOPE * np.asarray(c) + CAPTURE_INTERCEPT
 
 
 @dataclass(frozen=True)
@@ -141,9 +145,16 @@ class InsertionModel(TaskModelBase):
         """
         theta = np.asarray(theta)
         # In place, the same operations and order as 0.6 c + 1.1: bit-identical, one temporary.
-        window = np.multiply(theta[..., 1], 0.6)
-        window += 1.1
+        window = np.multiply(theta[..., 1], CAPTURE_SLOPE)
+        window += CAPTURE_INTERCEPT
         return theta[..., 0], window
+
+    def success_interval_affine(self) -> tuple[int, int, float, float] | None:
+        """``(0, 1, 0.6, 1.1)``: :meth:`success_interval_parts` is ``(x, 0.6 c + 1.1)``; None for a
+        subclass with parts of its own (the rig's window)."""
+        if type(self).success_interval_parts is not InsertionModel.success_interval_parts:
+            return None
+        return 0, 1, CAPTURE_SLOPE, CAPTURE_INTERCEPT
 
     def loss(self, actions: np.ndarray, theta: np.ndarray, context: np.ndarray | None = None) -> np.ndarray:
         """Modeled failure ``[E, A, N]`` (or ``[A, S]`` for ``theta[S, d]``); actions ``[A]`` or ``[A, 1]``."""
