@@ -119,3 +119,15 @@ def test_the_merge_of_kept_shard_tables_equals_the_merge_of_the_files(tmp_path, 
     read = run_study(cfg, tmp_path / "read", threads=1)
     assert kept.failed_episodes > 0
     assert kept.manifest["sha256"] == read.manifest["sha256"]
+
+
+def test_manifest_engine_versions_are_the_installed_distributions():
+    from importlib import metadata
+
+    from probecommit.store.rundir import _header_version, engine_versions
+
+    versions = engine_versions()
+    for name in ("numpy", "pandas", "pyarrow"):
+        assert versions[name] == metadata.version(name)
+    assert _header_version("Metadata-Version: 2.1\nName: x\nVersion: 1.2.3\n\nVersion: 9") == "1.2.3"
+    assert _header_version("Name: x\n\nVersion: 9") is None  # a body line is not the header
