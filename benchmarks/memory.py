@@ -7,7 +7,8 @@ Usage::
 
 The runs are analytic insertion runs of 96 and 768 instances x 4 repeats, random
 taps, k = 1..8, N = 1024 (a calibration and a test run per size), made once into a
-temporary folder. Each case runs in a fresh subprocess, which reports its own peak
+temporary folder. Each case runs in a fresh subprocess, with the Arrow memory pool the
+``probecommit`` command uses (``ARROW_DEFAULT_MEMORY_POOL=system`` unless set), which reports its own peak
 resident memory (``ru_maxrss``) and wall time, so the numbers are independent, and the
 resident memory once its input runs are loaded: the peak above it is the working memory
 that chunks bound (the runs themselves, and the tables made from them, grow with E). A
@@ -96,9 +97,15 @@ def make_runs(src: Path, out: Path) -> None:
                    env={**os.environ, "PYTHONPATH": str(src)})
 
 
+#: The Arrow memory pool of the cases: the one the ``probecommit`` command sets (``cli.app.use_system_arrow_pool``),
+#: unless the caller's environment chose one.
+ARROW_POOL = {"ARROW_DEFAULT_MEMORY_POOL": os.environ.get("ARROW_DEFAULT_MEMORY_POOL", "system")}
+
+
 def run_case(src: Path, runs: Path, case: str, episodes: int, chunk: str) -> dict:
     done = subprocess.run([sys.executable, "-c", CASE, case, str(runs / f"cal{episodes}"), str(runs / f"test{episodes}"),
-                           chunk], capture_output=True, text=True, env={**os.environ, "PYTHONPATH": str(src)})
+                           chunk], capture_output=True, text=True,
+                          env={**os.environ, **ARROW_POOL, "PYTHONPATH": str(src)})
     if done.returncode:
         raise RuntimeError(done.stderr)
     return json.loads(done.stdout.strip().splitlines()[-1])
@@ -132,7 +139,8 @@ def main() -> None:
             if args.against:
                 subprocess.run(["git", "-C", str(ROOT), "worktree", "remove", "--force", str(tree)], capture_output=True)
     print("peak resident memory (ru_maxrss) of replay and calibrate, each case in a fresh process "
-          "(analytic insertion, 4 repeats, k = 1..8, N = 1024); in brackets, the peak above the resident "
+          f"(analytic insertion, 4 repeats, k = 1..8, N = 1024, {ARROW_POOL['ARROW_DEFAULT_MEMORY_POOL']} Arrow pool); "
+          "in brackets, the peak above the resident "
           "memory with the input runs loaded (imports and runs, which grow with E)")
     first = next(iter(arms))
     for case in ("replay", "calibrate"):

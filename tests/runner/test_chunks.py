@@ -72,6 +72,54 @@ def test_chunked_calibration_with_a_margin_found_late(runs):
     assert chunked.to_dict() == whole.to_dict()
 
 
+def test_margin_search_in_passes_of_few_margins_equals_the_whole_scan(runs, monkeypatch):
+    """A run of several chunks commits the scan's margins a few per pass (bounded tables): one
+    margin a pass, or two, gives the scan and the result of the whole-run search."""
+    import probecommit.runner.calibration as calibration
+
+    grid = [1.0, 0.9, 0.5, 0.3, 0.1]
+    whole = calibrate(runs["cal"], runs["test"], resamples=50, margin_grid=grid, chunk_instances=None)
+    passes = []
+    original = calibration._Run.commit
+
+    def counted(self, *requests, **kwargs):
+        passes.append(len(requests))
+        return original(self, *requests, **kwargs)
+
+    monkeypatch.setattr(calibration._Run, "commit", counted)
+    rows = 7 * 3 * 5  # the calibration run's episodes x budgets: one margin's table
+    for per_pass in (1, 2):
+        passes.clear()
+        monkeypatch.setattr(calibration, "MARGIN_BLOCK_ROWS", per_pass * rows)
+        chunked = calibrate(runs["cal"], runs["test"], resamples=50, margin_grid=grid, chunk_instances=2)
+        pd.testing.assert_frame_equal(chunked.margin.search, whole.margin.search, check_exact=True)
+        assert chunked.to_dict() == whole.to_dict()
+        # The calibration run's uncalibrated pass, then its margin passes (the first also commits the set table).
+        assert max(passes[1:-1]) - 1 <= per_pass and passes[1] == per_pass + 1
+
+
+def test_a_loaded_run_reads_its_large_tables_when_asked_and_verifies_them(runs, tmp_path):
+    import shutil
+
+    from probecommit.store.rundir import RunDirError
+
+    loaded = load_run(runs["cal"])
+    assert all(loaded._held[name] is None for name in loaded.TABLES)  # nothing read yet
+    whole = pd.read_parquet(runs["cal"] / "episodes.parquet")
+    rows = loaded.table("episodes", where=("method", ["blind_robust", "rollout"]))
+    pd.testing.assert_frame_equal(rows.reset_index(drop=True),
+                                  whole.loc[whole["method"].isin(["blind_robust", "rollout"])].reset_index(drop=True))
+    assert loaded._held["episodes"] is None  # a table asked for is not kept ...
+    pd.testing.assert_frame_equal(loaded.episodes, whole)
+    assert loaded._held["episodes"] is loaded.episodes  # ... the attribute reads it once and keeps it
+    copy = tmp_path / "run"
+    shutil.copytree(runs["cal"], copy)
+    altered = load_run(copy)
+    (copy / "probes.parquet").write_bytes(b"not the run's probes")
+    with pytest.raises(RunDirError, match="probes.parquet changed since the run wrote its manifest"):
+        altered.table("probes")
+
+
 def test_chunked_gates_equal_whole_run(runs):
     whole = gates(runs["cal"], runs["test"], resamples=50, chunk_instances=None)
     chunked = gates(runs["cal"], runs["test"], resamples=50, chunk_instances=2)

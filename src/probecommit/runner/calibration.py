@@ -51,6 +51,17 @@ PROBE_METHOD = "probe_robust"
 #: The columns a margin search reads from each re-executed table (``audit.margin.margin_satisfied``).
 MARGIN_COLUMNS = ("k", "status", "predicted", "realized")
 
+#: The columns the test run's calibrated tables are audited, paired and counted on
+#: (``audit.metrics.audit_table``, ``audit.stats.paired_bootstrap``): a table of every episode
+#: and budget, so its other columns are not built. The uncalibrated table is kept whole (validated).
+AUDIT_COLUMNS = ("instance_id", "repeat", "k", "method", "variant", "status", "predicted", "realized", "covered",
+                 "escaped")
+
+#: Rows of margin-search tables (episodes x budgets, per margin) one pass over a run of several
+#: chunks commits at most: a pass recomputes the run's beliefs, so it commits several margins,
+#: but not so many that their tables grow with the run (E = 3072 at k = 1..8: five a pass).
+MARGIN_BLOCK_ROWS = 2**17
+
 #: A commit request: the thresholds (mass ``nu``, ``t`` or ``{k: t_k}``) and the margin (None: the model's).
 Request = tuple[float | dict[int, float], float | None]
 
@@ -67,6 +78,8 @@ class _Run:
     #: The set construction at t = 1, if not the run config's (``calibrate(..., plateau=)``).
     override_plateau: str | None = None
     structure_checked: bool = False
+    #: The run's episode rows of trajectories whose probing failed (read on the first commit).
+    failed_rollouts: pd.DataFrame | None = None
 
     @property
     def nu(self) -> float:
@@ -95,8 +108,10 @@ class _Run:
     def _finish(self, table: pd.DataFrame, columns: Sequence[str] | None) -> pd.DataFrame:
         # Trajectories whose probing failed have no belief; carry the run's failure
         # rows along so they stay counted (and the repeat-count check sees them).
-        stored = self.loaded.episodes
-        failed = stored.loc[(stored["status"] == "failed") & (stored["method"] == "rollout")]
+        if self.failed_rollouts is None:  # read once: the run's rollout rows, not its whole table
+            rollouts = self.loaded.table("episodes", where=("method", ["rollout"]))
+            self.failed_rollouts = rollouts.loc[rollouts["status"] == "failed"]
+        failed = self.failed_rollouts
         if len(failed):
             failed = failed.assign(variant=self.beliefs.model.variant)
             table = pd.concat([table, failed if columns is None else failed[list(columns)]], ignore_index=True)
@@ -113,7 +128,8 @@ class _Run:
 
         A run of one chunk keeps its beliefs, so each margin is committed when the scan
         asks for it. A run of several chunks would recompute its beliefs for each one,
-        so the first evaluation commits every margin still to be scanned in one pass.
+        so an evaluation commits the next margins of the scan with it, in one pass, as many
+        as :data:`MARGIN_BLOCK_ROWS` rows allow. Each margin's table is let go once scanned.
 
         Args:
             thresholds: The set calibration the margin is searched under.
@@ -127,16 +143,20 @@ class _Run:
         candidates = margin_candidates(grid)
         tables: dict[float, pd.DataFrame] = {}
         extras: list[pd.DataFrame] = []
+        # Margins committed in one pass: as many as MARGIN_BLOCK_ROWS rows of their tables allow,
+        # so the memory held is bounded, not a whole scan's tables of every episode.
+        rows = self.beliefs.batch.n_episodes * max(len(self.beliefs.budgets), 1)
+        per_pass = max(1, MARGIN_BLOCK_ROWS // max(rows, 1))
 
         def evaluate(gamma: float) -> pd.DataFrame:
             if gamma not in tables:
-                block = [gamma] if len(self.beliefs.chunks) == 1 else [g for g in candidates if g <= gamma]
+                block = [gamma] if len(self.beliefs.chunks) == 1 else [g for g in candidates if g <= gamma][:per_pass]
                 first = [] if extras else list(extra)
                 out = self.commit(*[(thresholds, g) for g in block], *first,
                                   keep=[MARGIN_COLUMNS] * len(block) + [None] * len(first))
                 tables.update(zip(block, out[:len(block)]))
                 extras.extend(out[len(block):])
-            return tables[gamma]
+            return tables.pop(gamma)  # the scan reads each margin once
 
         return select_margin(evaluate, candidates, budgets=budgets), extras
 
@@ -324,7 +344,8 @@ def calibrate(cal_run, test_run, alpha: float = DEFAULT_ALPHA, budgets: Sequence
 
     # Every test commit in one pass over the test run's chunks.
     test_orig, test_set, test_full, test_sim = test.commit((test.nu, None), (t_k, None), (t_k, margin.gamma),
-                                                           (t_sim, None), final=True)
+                                                           (t_sim, None), keep=[None] + [AUDIT_COLUMNS] * 3,
+                                                           final=True)
     a_orig = audit_table(test_orig, budgets=budgets, resamples=resamples, seed=seed, level=level)
     a_cal = audit_table(test_full, budgets=budgets, resamples=resamples, seed=seed, level=level)
     table3 = pd.DataFrame({"k": a_orig["k"]})
@@ -342,7 +363,7 @@ def calibrate(cal_run, test_run, alpha: float = DEFAULT_ALPHA, budgets: Sequence
     counts = resample_counts(names.size, resamples, seed)
     arms = {"no calibration": test_orig, "set calibration": test_set, "set calibration + margin": test_full}
     cost_rows = []
-    blind = ok_episodes(test.loaded.episodes)
+    blind = ok_episodes(test.loaded.table("episodes", where=("method", ["blind_robust"])))
     blind = blind.loc[blind["method"] == "blind_robust"] if "method" in blind.columns else blind.iloc[:0]
     if len(blind):
         iv, n = _failure_at(blind, int(blind["k"].iloc[0]), counts, names, level)

@@ -35,24 +35,59 @@ from probecommit.store.schema import cache_frame, cache_records, component_names
 import yaml
 
 
-@dataclass
 class LoadedRun:
-    """A complete run directory read into memory."""
+    """A complete run directory: its config, instances and manifest in memory, and its probes,
+    episodes and engine cache read when first asked for.
 
-    path: Path
-    config: StudyConfig
-    instances: pd.DataFrame
-    probes: pd.DataFrame
-    episodes: pd.DataFrame
-    engine_cache: pd.DataFrame
-    manifest: dict[str, Any]
-    #: Beliefs already computed for exactly these episodes (a re-split's share of its pool's,
-    #: ``RunBeliefs.restrict``); calibration then recomputes none. None: computed from the probes.
-    beliefs: "RunBeliefs | None" = None
+    ``loaded.probes`` (and ``episodes``, ``engine_cache``) reads the table once and keeps it.
+    :meth:`table` gives a table without keeping it, or only some of its rows: a replay or a
+    calibration reads each run's tables once, into what it holds (probe arrays, the engine
+    cache of a simulator), so the tables themselves do not stay in memory beside them.
+    Tables passed in (a re-split's share of a run) are kept and used as they are.
+
+    Args:
+        beliefs: Beliefs already computed for exactly these episodes (a re-split's share of
+            its pool's, ``RunBeliefs.restrict``); calibration then recomputes none. None:
+            computed from the probes.
+    """
+
+    TABLES = ("probes", "episodes", "engine_cache")
+
+    def __init__(self, path: str | Path, config: StudyConfig, instances: pd.DataFrame,
+                 probes: pd.DataFrame | None = None, episodes: pd.DataFrame | None = None,
+                 engine_cache: pd.DataFrame | None = None, manifest: dict[str, Any] | None = None,
+                 beliefs: "RunBeliefs | None" = None) -> None:
+        self.path = Path(path)
+        self.config = config
+        self.instances = instances
+        self.manifest = manifest if manifest is not None else {}
+        self.beliefs = beliefs
+        self._held: dict[str, pd.DataFrame | None] = {"probes": probes, "episodes": episodes,
+                                                      "engine_cache": engine_cache}
+
+    def table(self, name: str, where: tuple[str, list] | None = None) -> pd.DataFrame:
+        """Table ``name``, not kept by this object unless it already was; with ``where =
+        (column, values)``, only the rows whose ``column`` is among ``values`` (original order).
+        A table read from the run directory is checked against the manifest's sha256 again."""
+        held = self._held[name]
+        if held is None:
+            return RunDir(self.path).read_verified(name, where)
+        return held if where is None else held.loc[held[where[0]].isin(list(where[1]))]
+
+    def _kept(self, name: str) -> pd.DataFrame:
+        if self._held[name] is None:
+            self._held[name] = self.table(name)
+        return self._held[name]
+
+    probes = property(lambda self: self._kept("probes"), doc="The stored probes (read once, then kept).")
+    episodes = property(lambda self: self._kept("episodes"), doc="The stored episodes (read once, then kept).")
+    engine_cache = property(lambda self: self._kept("engine_cache"),
+                            doc="Every engine answer the run stored (read once, then kept).")
 
 
 def load_run(run_dir: str | Path) -> LoadedRun:
-    """Read a complete run directory (refuses an incomplete one)."""
+    """Open a complete run directory (refuses an incomplete or altered one); the large tables
+    are read when first asked for (:class:`LoadedRun`)."""
     run = RunDir(run_dir)
     manifest = run.manifest()
     changed = run.verify_digests()
@@ -60,16 +95,13 @@ def load_run(run_dir: str | Path) -> LoadedRun:
         raise RunDirError(f"{run.path}: {', '.join(changed)} changed since the run wrote its manifest (sha256 "
                           "differs); refusing to read an altered run")
     config = parse_config(yaml.safe_load(run.config_text()))
-    return LoadedRun(
-        run.path, config, run.read("instances"), run.read("probes"), run.read("episodes"),
-        run.read("engine_cache"), manifest,
-    )
+    return LoadedRun(run.path, config, run.read("instances"), manifest=manifest)
 
 
 def probe_batch(loaded: LoadedRun, model: Any) -> ProbeBatch:
     """Rebuild the stored probe trajectories (successful episodes) as a batch."""
     # Validate first: a malformed table is refused naming column and row, never reshaped.
-    probes = loaded.probes
+    probes = loaded.table("probes")
     u_cols, y_cols = component_names("u", model.probe_dim), component_names("y", model.observation_dim)
     if len(probes):  # empty when every trajectory failed in rollout
         probes = validate_probes(probes, str(loaded.path / "probes.parquet"),
@@ -77,7 +109,7 @@ def probe_batch(loaded: LoadedRun, model: Any) -> ProbeBatch:
                                  probe_dim=model.probe_dim, observation_dim=model.observation_dim)
     # The run's own episode order: instance order of the instances table, then repeat, then j.
     order = {iid: n for n, iid in enumerate(loaded.instances["instance_id"])}
-    probes = probes.assign(_o=loaded.probes["instance_id"].map(order))
+    probes = probes.assign(_o=probes["instance_id"].map(order))
     probes = probes.sort_values(["_o", "repeat", "j"], kind="stable")
     keys = probes.drop_duplicates(["_o", "repeat"])[["instance_id", "repeat"]]
     n_e = len(keys)
@@ -102,7 +134,7 @@ def simulator_for_run(loaded: LoadedRun, config: StudyConfig | None = None):
     """The run's simulator with every engine answer the run already has."""
     config = config or loaded.config
     sim = build_simulator(config)
-    sim.load_cache(cache_records(loaded.engine_cache, build_model(config).latent_names))
+    sim.load_cache(cache_records(loaded.table("engine_cache"), build_model(config).latent_names))
     return sim
 
 
@@ -395,7 +427,7 @@ def replay_episodes(
     blind = blind_bayes_executor(model, config.seed, config.blind_prior_samples) if "blind_bayes" in config.methods else None
     request = {"thresholds": config.belief.nu if thresholds is None else thresholds, "margin": margin}
     [episodes] = beliefs.commit([request], methods=config.methods, blind=blind)
-    failed = loaded.episodes[loaded.episodes["method"] == "rollout"]
+    failed = loaded.table("episodes", where=("method", ["rollout"]))
     if len(failed):
         episodes = pd.concat([episodes, failed.assign(variant=model.variant)], ignore_index=True)
     return episodes, sim
@@ -426,7 +458,7 @@ def replay_run(src: str | Path, out: str | Path, overrides: dict[str, dict[str, 
         unit,
         {
             "instances": loaded.instances,
-            "probes": loaded.probes,
+            "probes": loaded.table("probes"),
             "engine_cache": cache_frame(sim.cache_records(), build_model(config).latent_names),
             "episodes": episodes,
         },
@@ -440,7 +472,7 @@ def replay_run(src: str | Path, out: str | Path, overrides: dict[str, dict[str, 
             "engine": config.simulator.engine,
             "engine_calls": sim.engine_calls,
             "timing": {"engine_s": sim.engine_seconds, "this_invocation_wall_s": time.perf_counter() - start},
-            "episodes": int(len(loaded.probes[["instance_id", "repeat"]].drop_duplicates())),
+            "episodes": int(len(loaded.table("probes")[["instance_id", "repeat"]].drop_duplicates())),
         },
     )
     return run.path

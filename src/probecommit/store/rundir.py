@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import contextlib
 import hashlib
+import io
 import json
 import os
 import subprocess
@@ -429,6 +430,21 @@ class RunDir:
     def read(self, name: str) -> pd.DataFrame:
         self.manifest()
         return pd.read_parquet(self.table_path(name))
+
+    def read_verified(self, name: str, where: tuple[str, list] | None = None) -> pd.DataFrame:
+        """A final table whose bytes still match the manifest's sha256, optionally only its rows
+        whose column ``where[0]`` takes one of the values ``where[1]`` (read with that filter).
+
+        Raises:
+            RunDirError: The file changed since the run wrote its manifest.
+        """
+        manifest = self.manifest()
+        data = self.table_path(name).read_bytes()
+        if hashlib.sha256(data).hexdigest() != manifest["sha256"].get(f"{name}.parquet"):
+            raise RunDirError(f"{self.path}: {name}.parquet changed since the run wrote its manifest (sha256 "
+                              "differs); refusing to read an altered run")
+        filters = None if where is None else [(where[0], "in", list(where[1]))]
+        return pd.read_parquet(io.BytesIO(data), filters=filters)
 
     def verify_digests(self) -> list[str]:
         """Tables whose sha256 no longer matches the manifest."""
