@@ -147,6 +147,13 @@ def test_resampling_triggers_below_half_ess_and_resets_weights():
     assert state.resampled[0]
     np.testing.assert_allclose(state.weights[0], 1 / 200)
     assert np.all((state.particles >= 0) & (state.particles <= 1))
+    # The weights are exp(log-weights), bit for bit, in the rows that resampled and the rows that did not.
+    pf = ParticleFilter.gaussian(model, 0.2, n_particles=200)
+    rngs = [np.random.default_rng(s) for s in range(6)]
+    state = pf.initial(rngs)
+    state = pf.update(state, np.zeros(6), np.array([[0.3], [0.0], [0.9], [0.3], [1.0], [0.5]]), rngs)
+    assert 0 < state.resampled.sum() < 6
+    assert np.exp(state.log_weights).tobytes() == state.weights.tobytes()
 
 
 def test_rejects_bad_sigma():

@@ -302,7 +302,9 @@ class ParticleFilter:
                 particles[rows], accepted[rows] = self._move(particles[rows], parents, u_hist[rows], y_hist[rows],
                                                              [rngs[r] for r in rows], low, high, scale)
             log_w[rows] = -np.log(self.n_particles)
-            weights[rows] = np.exp(log_w[rows])
+            # Every resampled weight is exp(-log N): one row of NumPy's exp gives each its bits
+            # (its lanes are independent), not one exp per resampled particle.
+            weights[rows] = np.exp(log_w[rows[0]])
         return BeliefState(particles, log_w, resample, u_hist, y_hist, accepted, lost, log_evidence, weights)
 
     def _reweighted(self, state: BeliefState, u: np.ndarray, y: np.ndarray) -> np.ndarray:

@@ -11,6 +11,8 @@ the simulator-side frame offset of the frame fault.
 
 from __future__ import annotations
 
+import math
+
 from typing import Any
 
 import numpy as np
@@ -70,7 +72,7 @@ class InsertionSimulator(NoisySimulator):
         key = self.execute_query_key(theta, action)
         aim = key[2][0]
         depth = float(self.cached_key(key)[0])
-        if not np.isfinite(depth):
+        if not math.isfinite(depth):
             raise FloatingPointError(f"{self.engine} peg_depth returned {depth} at aim {aim}")
         return {"realized": float(depth < ENTRY_DEPTH_FRACTION * POCKET_DEPTH_MM), "depth": depth}
 
