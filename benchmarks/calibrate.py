@@ -22,6 +22,9 @@ import tempfile
 import time
 from pathlib import Path
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from baseline import baseline_tree  # noqa: E402
+
 ROOT = Path(__file__).resolve().parents[1]
 CONFIG = """name: {name}
 task: insertion
@@ -72,15 +75,10 @@ def main() -> None:
                 src, tmp / "b", new_import, ", reuse=False", {"PROBECOMMIT_NO_NUMBA": "1"}),
         }
         if args.against:
-            tree = tmp / "baseline"
-            subprocess.run(["git", "-C", str(ROOT), "worktree", "add", "--detach", str(tree), args.against],
-                           check=True, capture_output=True)
-            try:
+            with baseline_tree(args.against, tmp / "baseline") as tree:
                 old_import = ("try:\n    from probecommit.runner.calibration import calibrate\n"
                               "except ImportError:\n    from probecommit.audit.pipeline import calibrate")
                 arms[f"git {args.against}"] = run_arm(tree / "src", tmp / "c", old_import)
-            finally:
-                subprocess.run(["git", "-C", str(ROOT), "worktree", "remove", "--force", str(tree)], capture_output=True)
     first = next(iter(arms.values()))
     print("calibrate on a Split-B-size pair (96 x 4, k = 1..8, N = 1024, analytic engine)")
     for name, arm in arms.items():

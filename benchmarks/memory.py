@@ -21,12 +21,16 @@ episode table (pandas hash of every cell, dtypes included).
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import os
 import subprocess
 import sys
 import tempfile
 from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from baseline import baseline_tree  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 SIZES = {384: 96, 3072: 768}  # episodes: instances (4 repeats each)
@@ -123,21 +127,12 @@ def main() -> None:
         make_runs(ROOT / "src", runs)
         arms = {"this tree, chunked (default)": (ROOT / "src", "default"),
                 "this tree, one chunk per run": (ROOT / "src", "none")}
-        tree = tmp / "baseline"
-        if args.against:
-            subprocess.run(["git", "-C", str(ROOT), "worktree", "add", "--detach", str(tree), args.against],
-                           check=True, capture_output=True)
-            # The compiled kernels are built files, not in git: without them the baseline would run
-            # numba's JIT (~115 MB more). A ref that predates them just fails this step.
-            subprocess.run([sys.executable, "-m", "probecommit.core.compiled"], capture_output=True,
-                           env={**os.environ, "PYTHONPATH": str(tree / "src")})
-            arms[f"git {args.against}"] = (tree / "src", "default")
-        try:
+        with contextlib.ExitStack() as stack:
+            if args.against:
+                tree = stack.enter_context(baseline_tree(args.against, tmp / "baseline"))
+                arms[f"git {args.against}"] = (tree / "src", "default")
             results = {(case, episodes, arm): run_case(src, runs, case, episodes, chunk)
                        for case in ("replay", "calibrate") for episodes in SIZES for arm, (src, chunk) in arms.items()}
-        finally:
-            if args.against:
-                subprocess.run(["git", "-C", str(ROOT), "worktree", "remove", "--force", str(tree)], capture_output=True)
     print("peak resident memory (ru_maxrss) of replay and calibrate, each case in a fresh process "
           f"(analytic insertion, 4 repeats, k = 1..8, N = 1024, {ARROW_POOL['ARROW_DEFAULT_MEMORY_POOL']} Arrow pool); "
           "in brackets, the peak above the resident "

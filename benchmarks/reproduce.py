@@ -16,6 +16,7 @@ the baseline arm, so it is not part of ``make bench``; nothing else should run m
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import math
 import os
@@ -25,6 +26,9 @@ import tempfile
 import time
 from pathlib import Path
 from typing import Any
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from baseline import baseline_tree  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 #: Keys of results.json that are not results (they are what a faster reproduction changes).
@@ -82,17 +86,11 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)
         arms = {"this tree": (ROOT / "src", ROOT)}
-        if args.against:
-            tree = tmp / "baseline"
-            subprocess.run(["git", "-C", str(ROOT), "worktree", "add", "--detach", str(tree), args.against],
-                           check=True, capture_output=True)
-            arms = {f"git {args.against}": (tree / "src", tree), **arms}
-        try:
-            results = {name: run_arm(src, tmp / f"out{i}", workdir) for i, (name, (src, workdir)) in enumerate(arms.items())}
-        finally:
+        with contextlib.ExitStack() as stack:
             if args.against:
-                subprocess.run(["git", "-C", str(ROOT), "worktree", "remove", "--force", str(tmp / "baseline")],
-                               capture_output=True)
+                tree = stack.enter_context(baseline_tree(args.against, tmp / "baseline"))
+                arms = {f"git {args.against}": (tree / "src", tree), **arms}
+            results = {name: run_arm(src, tmp / f"out{i}", workdir) for i, (name, (src, workdir)) in enumerate(arms.items())}
     print("probecommit reproduce insertion (MuJoCo), each arm a fresh process, one after the other")
     for name, r in results.items():
         calls = r["payload"].get("engine_calls", {})

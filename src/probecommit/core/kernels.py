@@ -68,12 +68,17 @@ if HAVE_KERNELS:
             out_row[a] = run
         diff[:] = 0
 
+    @helper(inline=True)
+    def _count_scratch(n_e, actions, step):  # pragma: no cover - compiled
+        """The counts ``[E, A]`` (zeros), the difference array ``[A + 1]`` and the inverse grid step of a count."""
+        out = np.zeros((n_e, actions.shape[0]), dtype=np.int64)
+        diff = np.zeros(actions.shape[0] + 1, dtype=np.int64)
+        return out, diff, (1.0 / step if step > 0.0 else 0.0)
+
     @kernel("i8[:, ::1](f8[:, ::1], f8[:, ::1], b1[:, ::1], f8[::1], f8)")
     def _interval_success_counts(lo, hi, mask, actions, step):  # pragma: no cover - compiled
         n_e, n_s = mask.shape
-        out = np.zeros((n_e, actions.shape[0]), dtype=np.int64)
-        diff = np.zeros(actions.shape[0] + 1, dtype=np.int64)
-        inv_step = 1.0 / step if step > 0.0 else 0.0
+        out, diff, inv_step = _count_scratch(n_e, actions, step)
         for e in range(n_e):
             for s in range(n_s):
                 if mask[e, s]:
@@ -92,9 +97,7 @@ if HAVE_KERNELS:
         """:func:`_interval_success_counts` of ``centre -+ half * margin``, made per retained
         scenario here (the same IEEE operations as NumPy's, so the same ends)."""
         n_e, n_s = mask.shape
-        out = np.zeros((n_e, actions.shape[0]), dtype=np.int64)
-        diff = np.zeros(actions.shape[0] + 1, dtype=np.int64)
-        inv_step = 1.0 / step if step > 0.0 else 0.0
+        out, diff, inv_step = _count_scratch(n_e, actions, step)
         for e in range(n_e):
             for s in range(n_s):
                 if mask[e, s]:
@@ -103,7 +106,6 @@ if HAVE_KERNELS:
             _take_counts(diff, out[e])
         return out
 
-
     @kernel("i8[:, ::1](f8[:, :, ::1], i8, i8, f8, f8, f8, b1[:, ::1], f8[::1], f8)")
     def _affine_interval_success_counts(scenarios, centre_at, width_at, slope, intercept, margin, mask, actions,
                                         step):  # pragma: no cover - compiled
@@ -111,9 +113,7 @@ if HAVE_KERNELS:
         ``half = slope * scenarios[..., width_at] + intercept`` formed per retained scenario (a
         product, then a sum, as NumPy forms them), so no ``[E, N]`` part is materialized."""
         n_e, n_s = mask.shape
-        out = np.zeros((n_e, actions.shape[0]), dtype=np.int64)
-        diff = np.zeros(actions.shape[0] + 1, dtype=np.int64)
-        inv_step = 1.0 / step if step > 0.0 else 0.0
+        out, diff, inv_step = _count_scratch(n_e, actions, step)
         for e in range(n_e):
             for s in range(n_s):
                 if mask[e, s]:
