@@ -387,24 +387,36 @@ class RunDir:
             self._written[path] = table
             self._written_bytes += table.nbytes
 
-    def _read_shard(self, path: Path) -> pd.DataFrame:
-        """A shard as ``pd.read_parquet`` gives it: from the table this object wrote, if kept."""
+    def _read_shard(self, path: Path) -> pa.Table:
+        """A shard's Arrow table: the one this object wrote, if kept, else read from the file."""
         table = self._written.pop(path, None)
         if table is None:
-            return pd.read_parquet(path)
+            return pq.read_table(path)
         self._written_bytes -= table.nbytes
-        return table.to_pandas()
+        return table
+
+    def _merged(self, name: str, units: list[str]) -> pd.DataFrame:
+        """Table ``name`` of every unit, in unit order: the shards' rows (the empty ones only when
+        every shard is empty), as ``pd.concat`` of each shard read with ``pd.read_parquet`` gives them.
+
+        Shards of one schema (the usual case) are joined as Arrow tables and converted once, not
+        once a shard; shards whose columns differ (a unit whose every trajectory failed has only
+        the rollout rows' columns) are converted one by one and joined by pandas.
+        """
+        tables = [self._read_shard(self.shard_path(u, name)) for u in units]
+        if not tables:
+            return pd.DataFrame()
+        nonempty = [t for t in tables if t.num_rows] or tables[:1]
+        if all(t.schema.equals(nonempty[0].schema) for t in nonempty[1:]):
+            return pa.concat_tables(nonempty).to_pandas()
+        return pd.concat([t.to_pandas() for t in nonempty], ignore_index=True)
 
     def unit_stats(self, unit: str) -> dict[str, Any]:
         return json.loads((self.shards / f"{unit}.stats.json").read_text())
 
     def finalize(self, units: list[str], manifest_extra: dict[str, Any]) -> dict[str, Any]:
         """Merge unit shards into the final tables (canonical order), then write the manifest."""
-        frames = {}
-        for name in TABLES:
-            parts = [self._read_shard(self.shard_path(u, name)) for u in units]
-            nonempty = [p for p in parts if len(p)]
-            frames[name] = pd.concat(nonempty or parts[:1], ignore_index=True) if parts else pd.DataFrame()
+        frames = {name: self._merged(name, units) for name in TABLES}
         digests = {}
         for name, frame in canonical_tables(frames).items():
             atomic_write_parquet(self.table_path(name), frame, _SCHEMAS.get(name, ()))
