@@ -338,9 +338,12 @@ def calibrate(cal_run, test_run, alpha: float = DEFAULT_ALPHA, budgets: Sequence
     [cal_orig] = cal.commit((cal.nu, None))
     t_k = fixed_budget_thresholds(cal_orig, alpha, budgets)
     t_sim = simultaneous_threshold(cal_orig, budgets, alpha)
+    n_calibration = int(simultaneous_scores(cal_orig, budgets).size)
     margin, [cal_set] = cal.search_margin(t_k, margin_grid, budgets, (t_k, None))
-    cal.release()
     df_margin = distribution_free_margin(cal_set, alpha, budgets)
+    # The calibration run is done: its tables, beliefs and engine cache go before the test run's commits.
+    cal.release()
+    del cal, cal_orig, cal_set
 
     # Every test commit in one pass over the test run's chunks.
     test_orig, test_set, test_full, test_sim = test.commit((test.nu, None), (t_k, None), (t_k, margin.gamma),
@@ -388,7 +391,7 @@ def calibrate(cal_run, test_run, alpha: float = DEFAULT_ALPHA, budgets: Sequence
     sim_iv = cluster_bootstrap_mean(per_inst.to_numpy(), per_inst.index.to_numpy(), resamples=resamples,
                                     seed=seed, level=level)
     return CalibrationResult(
-        alpha=alpha, budgets=budgets, n_calibration=int(simultaneous_scores(cal_orig, budgets).size),
+        alpha=alpha, budgets=budgets, n_calibration=n_calibration,
         thresholds=t_k, simultaneous_threshold=t_sim, margin=margin, distribution_free_margin=df_margin,
         table3=table3, summary=summary, cost=pd.DataFrame(cost_rows), cost_differences=pd.DataFrame(diffs),
         cost_budget=cost_budget,
@@ -442,6 +445,7 @@ def gates(cal_run, test_run, alpha: float = DEFAULT_ALPHA, budgets: Sequence[int
     t_sim = simultaneous_threshold(cal_orig, budgets, alpha)
     margin, _ = cal.search_margin(t_sim, margin_grid, budgets)
     cal.release()
+    del cal, cal_orig  # the calibration run is done before the test run's commits
     raw, adjusted = test.commit((test.nu, None), (t_sim, margin.gamma), final=True)
     result = gates_from_tables(raw, adjusted, budgets=budgets, target_rate=target_rate,
                                post_var_executor=post_var_executor)
