@@ -161,6 +161,11 @@ def _weight_cases():
         "sixteen values": np.exp(-0.25 * rng.integers(0, 16, (e, n))),
         "seventeen values": np.exp(-0.25 * np.concatenate([np.arange(17)[None].repeat(e, 0),
                                                            rng.integers(0, 17, (e, n - 17))], axis=1)),
+        # Two values, the first particle's the lighter or the heavier (the two-weight table's rows).
+        "two values": np.where(rng.random((e, n)) < 0.3, 1.0, np.exp(-2.0)),
+        "two values, heavier first": np.concatenate([np.ones((e, 1)), np.where(rng.random((e, n - 1)) < 0.7, np.exp(-2.0), 1.0)],
+                                                     axis=1),
+        "two values and a signed zero": np.where(rng.random((e, n)) < 0.5, np.where(rng.random((e, n)) < 0.5, -0.0, 0.0), 1.0),
         # -0.0 ties with 0.0 (the stable order keeps them in index order).
         "signed zeros": np.where(rng.random((e, n)) < 0.5, np.where(rng.random((e, n)) < 0.5, -0.0, 0.0),
                                  np.exp(-rng.integers(0, 3, (e, n)))),

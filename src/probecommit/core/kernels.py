@@ -454,6 +454,37 @@ if HAVE_KERNELS:
         """Inside the kernels' domain: a finite, non-negative weight (NaN is not)."""
         return (value >= 0.0) & (value < np.inf)
 
+    @helper(inline=True)
+    def _two_weight_table(w, values, counts):  # pragma: no cover - compiled
+        """:func:`_few_weight_table` of a row of at most two distinct weights (most tap beliefs'),
+        counted in one pass without branches; 0 when the row holds more (then the general table
+        is taken). The values kept are the same: the row's first weight and the first that differs."""
+        n = w.shape[0]
+        first = w[0]
+        second = first
+        for i in range(n):
+            if w[i] != first:
+                second = w[i]
+                break
+        n_first = n_second = 0
+        other = False
+        for i in range(n):
+            is_first = w[i] == first
+            is_second = w[i] == second
+            n_first += is_first
+            n_second += is_second
+            other |= not (is_first | is_second)
+        if other or values.shape[0] < 2:
+            return 0
+        if second == first:
+            values[0], counts[0] = first, n
+            return 1
+        if first > second:
+            values[0], counts[0], values[1], counts[1] = first, n_first, second, n_second
+        else:
+            values[0], counts[0], values[1], counts[1] = second, n_second, first, n_first
+        return 2
+
     @helper()
     def _few_weight_table(w, values, counts):  # pragma: no cover - compiled
         """The distinct weights of a non-empty row in descending order, with how many particles
@@ -466,6 +497,9 @@ if HAVE_KERNELS:
         order's cumulative sums are those of the sorted distinct values, each repeated: they can
         be taken, with the same bits, without ordering particles.
         """
+        n_values = _two_weight_table(w, values, counts)
+        if n_values > 0:
+            return n_values
         run_value = w[0]
         values[0], counts[0] = run_value, 0
         n_values, slot, run_length = 1, 0, 0
