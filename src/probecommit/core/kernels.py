@@ -608,10 +608,16 @@ if HAVE_KERNELS:
             stop = right if (w[right] < w[left] or (w[right] == w[left] and right > left)) else left
             w_stop = w[stop]
             count = 0
-            for i in range(n):  # branch-free: a slot is written always and kept only if taken
-                order[min(count, _FEW)] = i
+            for i in range(n):  # counted first, branch-free; only a short prefix is listed in order below
                 count += (w[i] > w_stop) | ((w[i] == w_stop) & (i <= stop))
             if count <= _FEW:
+                taken = 0
+                for i in range(n):
+                    if (w[i] > w_stop) | ((w[i] == w_stop) & (i <= stop)):
+                        order[taken] = i
+                        taken += 1
+                        if taken == count:
+                            break
                 _sort_bucket(w, order, 0, count)
                 cumulative = 0.0
                 for i in range(count):
