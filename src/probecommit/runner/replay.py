@@ -74,6 +74,10 @@ class LoadedRun:
             return RunDir(self.path).read_verified(name, where)
         return held if where is None else held.loc[held[where[0]].isin(list(where[1]))]
 
+    def __repr__(self) -> str:
+        held = [name for name, table in self._held.items() if table is not None]
+        return f"LoadedRun({str(self.path)!r}, {len(self.instances)} instances, tables held: {held or 'none'})"
+
     def _kept(self, name: str) -> pd.DataFrame:
         if self._held[name] is None:
             self._held[name] = self.table(name)
@@ -451,6 +455,7 @@ def replay_run(src: str | Path, out: str | Path, overrides: dict[str, dict[str, 
     loaded = load_run(src)
     config = replay_config(loaded.config, overrides)
     episodes, sim = replay_episodes(loaded, overrides, fixed_probes=fixed_probes, chunk_instances=chunk_instances)
+    probes = loaded.table("probes")
     run = RunDir(out)
     run.prepare(dump_config(config))
     unit = "replay"
@@ -458,7 +463,7 @@ def replay_run(src: str | Path, out: str | Path, overrides: dict[str, dict[str, 
         unit,
         {
             "instances": loaded.instances,
-            "probes": loaded.table("probes"),
+            "probes": probes,
             "engine_cache": cache_frame(sim.cache_records(), build_model(config).latent_names),
             "episodes": episodes,
         },
@@ -472,7 +477,7 @@ def replay_run(src: str | Path, out: str | Path, overrides: dict[str, dict[str, 
             "engine": config.simulator.engine,
             "engine_calls": sim.engine_calls,
             "timing": {"engine_s": sim.engine_seconds, "this_invocation_wall_s": time.perf_counter() - start},
-            "episodes": int(len(loaded.table("probes")[["instance_id", "repeat"]].drop_duplicates())),
+            "episodes": int(len(probes[["instance_id", "repeat"]].drop_duplicates())),
         },
     )
     return run.path
