@@ -367,7 +367,6 @@ def calibrate(cal_run, test_run, alpha: float = DEFAULT_ALPHA, budgets: Sequence
     arms = {"no calibration": test_orig, "set calibration": test_set, "set calibration + margin": test_full}
     cost_rows = []
     blind = ok_episodes(test.loaded.table("episodes", where=("method", ["blind_robust"])))
-    blind = blind.loc[blind["method"] == "blind_robust"] if "method" in blind.columns else blind.iloc[:0]
     if len(blind):
         iv, n = _failure_at(blind, int(blind["k"].iloc[0]), counts, names, level)
         cost_rows.append({"setting": "blind_robust", "k": int(blind["k"].iloc[0]), "n_episodes": n,
