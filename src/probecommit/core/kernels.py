@@ -455,10 +455,18 @@ if HAVE_KERNELS:
         return (value >= 0.0) & (value < np.inf)
 
     @helper(inline=True)
+    def _before_stop(weight, i, w_stop, stop):  # pragma: no cover - compiled
+        """Whether particle ``i`` (of ``weight``) comes no later than the particle ``stop`` (of
+        ``w_stop``) in the stable descending weight order: heavier, or as heavy and not after it."""
+        return (weight > w_stop) | ((weight == w_stop) & (i <= stop))
+
+    @helper(inline=True)
     def _two_weight_table(w, values, counts):  # pragma: no cover - compiled
         """:func:`_few_weight_table` of a row of at most two distinct weights (most tap beliefs'),
         counted in one pass without branches; 0 when the row holds more (then the general table
         is taken). The values kept are the same: the row's first weight and the first that differs."""
+        if values.shape[0] < 2:
+            return 0
         n = w.shape[0]
         first = w[0]
         second = first
@@ -474,7 +482,7 @@ if HAVE_KERNELS:
             n_first += is_first
             n_second += is_second
             other |= not (is_first | is_second)
-        if other or values.shape[0] < 2:
+        if other:
             return 0
         if second == first:
             values[0], counts[0] = first, n
@@ -609,11 +617,11 @@ if HAVE_KERNELS:
             w_stop = w[stop]
             count = 0
             for i in range(n):  # counted first, branch-free; only a short prefix is listed in order below
-                count += (w[i] > w_stop) | ((w[i] == w_stop) & (i <= stop))
+                count += _before_stop(w[i], i, w_stop, stop)
             if count <= _FEW:
                 taken = 0
                 for i in range(n):
-                    if (w[i] > w_stop) | ((w[i] == w_stop) & (i <= stop)):
+                    if _before_stop(w[i], i, w_stop, stop):
                         order[taken] = i
                         taken += 1
                         if taken == count:
