@@ -7,7 +7,7 @@ episode's result never depends on which other episodes share its batch.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field, fields, replace
 from typing import Protocol, Sequence
 
 import numpy as np
@@ -181,6 +181,11 @@ class BeliefState:
     def weights(self) -> np.ndarray:
         """Normalized weights ``exp(log_weights)`` ``[E, N]`` (the update's own, or computed now)."""
         return exp_exact(self.log_weights) if self.fresh_weights is None else self.fresh_weights
+
+    @classmethod
+    def trace_fields(cls) -> list[str]:
+        """The fields a trace keeps of a state: all but :attr:`fresh_weights`."""
+        return [f.name for f in fields(cls) if f.name != "fresh_weights"]
 
     def compact(self) -> "BeliefState":
         """The same state without :attr:`fresh_weights` (arrays shared, nothing copied)."""

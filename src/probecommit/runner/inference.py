@@ -10,7 +10,7 @@ faults and calibration all reuse stored probes, so compared arms see identical t
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field, fields
+from dataclasses import dataclass, field
 from typing import Any, Iterable, Mapping, Sequence
 
 import numpy as np
@@ -233,7 +233,7 @@ class BeliefTrace:
             if id(a) not in taken:
                 taken[id(a)] = a[rows]
             return taken[id(a)]
-        states = {k: BeliefState(*(take(getattr(s, f.name)) for f in fields(BeliefState) if f.name != "fresh_weights"))
+        states = {k: BeliefState(**{name: take(getattr(s, name)) for name in BeliefState.trace_fields()})
                   for k, s in self.states.items()}
         return BeliefTrace(self.batch.subset(rows), states, self.surprise[rows], take(self.lost))
 

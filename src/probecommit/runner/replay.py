@@ -8,7 +8,7 @@ needs the engine installed).
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field, fields
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Iterable, Mapping, Sequence
 
@@ -29,7 +29,7 @@ from probecommit.runner.inference import (
     prune_retained_sets,
 )
 from probecommit.store.probes import validate_probes
-from probecommit.store.rundir import RunDir, RunDirError
+from probecommit.store.rundir import RunDir
 from probecommit.store.schema import cache_frame, cache_records, component_names
 
 import yaml
@@ -96,8 +96,7 @@ def load_run(run_dir: str | Path) -> LoadedRun:
     manifest = run.manifest()
     changed = run.verify_digests()
     if changed:
-        raise RunDirError(f"{run.path}: {', '.join(changed)} changed since the run wrote its manifest (sha256 "
-                          "differs); refusing to read an altered run")
+        raise run.altered(changed)
     config = parse_config(yaml.safe_load(run.config_text()))
     return LoadedRun(run.path, config, run.read("instances"), manifest=manifest)
 
@@ -245,7 +244,7 @@ class RunBeliefs:
         them) is held once per budget here.
         """
         ok_rows = np.flatnonzero(self.batch.status == "ok")
-        names = [f.name for f in fields(BeliefState) if f.name != "fresh_weights"]
+        names = BeliefState.trace_fields()
 
         def room(a: np.ndarray | None) -> np.ndarray | None:
             return None if a is None else np.empty((len(ok_rows), *a.shape[1:]), dtype=a.dtype)

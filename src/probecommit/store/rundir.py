@@ -453,10 +453,14 @@ class RunDir:
         manifest = self.manifest()
         data = self.table_path(name).read_bytes()
         if hashlib.sha256(data).hexdigest() != manifest["sha256"].get(f"{name}.parquet"):
-            raise RunDirError(f"{self.path}: {name}.parquet changed since the run wrote its manifest (sha256 "
-                              "differs); refusing to read an altered run")
+            raise self.altered([f"{name}.parquet"])
         filters = None if where is None else [(where[0], "in", list(where[1]))]
         return pd.read_parquet(io.BytesIO(data), filters=filters)
+
+    def altered(self, files: list[str]) -> RunDirError:
+        """The error for files that no longer match the manifest's sha256."""
+        return RunDirError(f"{self.path}: {', '.join(files)} changed since the run wrote its manifest (sha256 "
+                           "differs); refusing to read an altered run")
 
     def verify_digests(self) -> list[str]:
         """Tables whose sha256 no longer matches the manifest."""
