@@ -10,8 +10,9 @@ taps, k = 1..8, N = 1024 (a calibration and a test run per size), made once into
 temporary folder. Each case runs in a fresh subprocess, with the Arrow memory pool the
 ``probecommit`` command uses (``ARROW_DEFAULT_MEMORY_POOL=system`` unless set), which reports its own peak
 resident memory (``ru_maxrss``) and wall time, so the numbers are independent, and the
-resident memory once its input runs are loaded: the peak above it is the working memory
-that chunks bound (the runs themselves, and the tables made from them, grow with E). A
+resident memory once ``load_run`` has opened its input runs (this tree reads only their
+instances there, and the other tables when a replay or calibration asks; older code read every
+table): the peak above it is what the work itself adds. A
 replay re-infers the calibration run under the corrected model; a calibration
 calibrates on one run and tests on the other. Every arm's output is compared with
 the first arm's: calibration JSON (``CalibrationResult.to_dict``) and the replayed
@@ -136,7 +137,7 @@ def main() -> None:
     print("peak resident memory (ru_maxrss) of replay and calibrate, each case in a fresh process "
           f"(analytic insertion, 4 repeats, k = 1..8, N = 1024, {ARROW_POOL['ARROW_DEFAULT_MEMORY_POOL']} Arrow pool); "
           "in brackets, the peak above the resident "
-          "memory with the input runs loaded (imports and runs, which grow with E)")
+          "memory once load_run has opened the input runs (this tree reads their tables later, older code there)")
     first = next(iter(arms))
     for case in ("replay", "calibrate"):
         for arm in arms:

@@ -12,7 +12,6 @@ the simulator-side frame offset of the frame fault.
 from __future__ import annotations
 
 import math
-
 from typing import Any
 
 import numpy as np
