@@ -33,6 +33,31 @@ def test_interval_counts_match_numpy_including_ties_and_non_finite(grid):
     np.testing.assert_array_equal(interval_success_counts(lo, hi, mask, grid), interval_success_counts_numpy(lo, hi, mask, grid))
 
 
+def test_interval_counts_scan_and_difference_paths_agree_with_numpy():
+    """A span of at most ``_SCAN_ACTIONS_MAX`` actions is counted action by action, a wider one
+    through a difference array: on a 601-action grid, rows whose retained intervals span a few
+    actions up to hundreds, a row with nothing retained and one with one interval all count
+    as NumPy does."""
+    grid = np.round(np.arange(-30.0, 30.0 + 1e-9, 0.1), 10)
+    rng = np.random.default_rng(5)
+    x = rng.uniform(-1.0, 1.0, (30, 400)) * np.geomspace(0.05, 30.0, 30)[:, None]
+    x[:, :50] = np.round(x[:, :50] * 10) / 10  # ends on grid points
+    w = rng.uniform(0.0, 1.0, (30, 400))
+    lo, hi = x - w, x + w
+    lo[2, 3], hi[4, 5] = np.nan, np.nan
+    mask = rng.random((30, 400)) < 0.7
+    mask[0] = False
+    mask[1] = False
+    mask[1, 17] = True
+    spans = np.array([np.nanmax(hi[e][mask[e]]) - np.nanmin(lo[e][mask[e]]) for e in range(2, 30)]) / 0.1
+    assert np.any(spans > kernels._SCAN_ACTIONS_MAX) and np.any(spans <= kernels._SCAN_ACTIONS_MAX)
+    expected = interval_success_counts_numpy(lo, hi, mask, grid)
+    np.testing.assert_array_equal(interval_success_counts(lo, hi, mask, grid), expected)
+    np.testing.assert_array_equal(scaled_interval_success_counts(x, w, 1.0, mask, grid),
+                                  interval_success_counts_numpy(x - w, x + w, mask, grid))
+    assert expected[1].sum() > 0 and expected[0].sum() == 0
+
+
 @pytest.mark.parametrize("grid", [
     np.round(np.arange(-10.0, 10.0 + 1e-9, 0.5), 10),  # insertion's aims
     np.linspace(-1.0, 1.0, 41),  # a spacing that is not a binary fraction

@@ -15,6 +15,10 @@ import numpy as np
 from probecommit.core.compiled import AVAILABLE as HAVE_KERNELS
 from probecommit.core.compiled import helper, kernel
 
+#: A count compares every grid action inside the retained intervals' span with each interval
+#: when the span covers at most this many actions; a wider span takes a difference array.
+_SCAN_ACTIONS_MAX = 64
+
 if HAVE_KERNELS:
 
     @helper(inline=True)
@@ -69,21 +73,69 @@ if HAVE_KERNELS:
         diff[:] = 0
 
     @helper(inline=True)
-    def _count_scratch(n_e, actions, step):  # pragma: no cover - compiled
-        """The counts ``[E, A]`` (zeros), the difference array ``[A + 1]`` and the inverse grid step of a count."""
+    def _count_scratch(n_e, n_s, actions, step):  # pragma: no cover - compiled
+        """The counts ``[E, A]`` (zeros), the difference array ``[A + 1]``, the inverse grid step
+        and the retained intervals' ends ``[S]`` (twice) of a count."""
         out = np.zeros((n_e, actions.shape[0]), dtype=np.int64)
         diff = np.zeros(actions.shape[0] + 1, dtype=np.int64)
-        return out, diff, (1.0 / step if step > 0.0 else 0.0)
+        return out, diff, (1.0 / step if step > 0.0 else 0.0), np.empty(n_s), np.empty(n_s)
+
+    @helper(inline=True)
+    def _keep_interval(lo_kept, hi_kept, k, low, high, keep):  # pragma: no cover - compiled
+        """Write an interval at slot ``k`` of the kept ends; the next slot (``k + 1`` if ``keep``).
+
+        Every scenario is written and only a retained one kept, so the retained intervals are
+        gathered without a branch on the mask. A NaN end becomes +inf, which counts as
+        :func:`_position` sorts NaN: a NaN low end is never counted, a NaN high end bounds nothing.
+        """
+        lo_kept[k] = low if low == low else np.inf
+        hi_kept[k] = high if high == high else np.inf
+        return k + keep
+
+    @helper()
+    def _count_kept_intervals(lo, hi, k, actions, inv_step, diff, out_row):  # pragma: no cover - compiled
+        """``out_row[a]`` (zeros on entry) = how many of the first ``k`` intervals hold
+        ``lo < actions[a] < hi``.
+
+        Each action inside the intervals' span is compared with every kept interval (a loop the
+        compiler vectorizes) when the span covers at most ``_SCAN_ACTIONS_MAX`` actions; a wider
+        one adds each interval to a difference array. Both count the same predicate.
+        """
+        l0 = l1 = l2 = l3 = np.inf  # four running extremes: one would be a chain of dependent minima
+        h0 = h1 = h2 = h3 = -np.inf
+        s = 0
+        stop = k - k % 4
+        while s < stop:
+            l0, l1, l2, l3 = min(l0, lo[s]), min(l1, lo[s + 1]), min(l2, lo[s + 2]), min(l3, lo[s + 3])
+            h0, h1, h2, h3 = max(h0, hi[s]), max(h1, hi[s + 1]), max(h2, hi[s + 2]), max(h3, hi[s + 3])
+            s += 4
+        lo_min, hi_max = min(min(l0, l1), min(l2, l3)), max(max(h0, h1), max(h2, h3))
+        while s < k:
+            lo_min, hi_max = min(lo_min, lo[s]), max(hi_max, hi[s])
+            s += 1
+        first = _position(actions, lo_min, inv_step, True)
+        last = _position(actions, hi_max, inv_step, False)
+        if last - first <= _SCAN_ACTIONS_MAX:
+            for a in range(first, last):
+                value = actions[a]
+                count = 0
+                for s in range(k):
+                    count += (lo[s] < value) & (value < hi[s])
+                out_row[a] = count
+        else:
+            for s in range(k):
+                _add_interval(diff, actions, lo[s], hi[s], inv_step)
+            _take_counts(diff, out_row)
 
     @kernel("i8[:, ::1](f8[:, ::1], f8[:, ::1], b1[:, ::1], f8[::1], f8)")
     def _interval_success_counts(lo, hi, mask, actions, step):  # pragma: no cover - compiled
         n_e, n_s = mask.shape
-        out, diff, inv_step = _count_scratch(n_e, actions, step)
+        out, diff, inv_step, lo_kept, hi_kept = _count_scratch(n_e, n_s, actions, step)
         for e in range(n_e):
+            k = 0
             for s in range(n_s):
-                if mask[e, s]:
-                    _add_interval(diff, actions, lo[e, s], hi[e, s], inv_step)
-            _take_counts(diff, out[e])
+                k = _keep_interval(lo_kept, hi_kept, k, lo[e, s], hi[e, s], mask[e, s])
+            _count_kept_intervals(lo_kept, hi_kept, k, actions, inv_step, diff, out[e])
         return out
 
 
@@ -97,13 +149,13 @@ if HAVE_KERNELS:
         """:func:`_interval_success_counts` of ``centre -+ half * margin``, made per retained
         scenario here (the same IEEE operations as NumPy's, so the same ends)."""
         n_e, n_s = mask.shape
-        out, diff, inv_step = _count_scratch(n_e, actions, step)
+        out, diff, inv_step, lo_kept, hi_kept = _count_scratch(n_e, n_s, actions, step)
         for e in range(n_e):
+            k = 0
             for s in range(n_s):
-                if mask[e, s]:
-                    width = half[e, s] * margin
-                    _add_interval(diff, actions, centre[e, s] - width, centre[e, s] + width, inv_step)
-            _take_counts(diff, out[e])
+                width = half[e, s] * margin
+                k = _keep_interval(lo_kept, hi_kept, k, centre[e, s] - width, centre[e, s] + width, mask[e, s])
+            _count_kept_intervals(lo_kept, hi_kept, k, actions, inv_step, diff, out[e])
         return out
 
     @kernel("i8[:, ::1](f8[:, :, ::1], i8, i8, f8, f8, f8, b1[:, ::1], f8[::1], f8)")
@@ -113,16 +165,16 @@ if HAVE_KERNELS:
         ``half = slope * scenarios[..., width_at] + intercept`` formed per retained scenario (a
         product, then a sum, as NumPy forms them), so no ``[E, N]`` part is materialized."""
         n_e, n_s = mask.shape
-        out, diff, inv_step = _count_scratch(n_e, actions, step)
+        out, diff, inv_step, lo_kept, hi_kept = _count_scratch(n_e, n_s, actions, step)
         for e in range(n_e):
+            k = 0
             for s in range(n_s):
-                if mask[e, s]:
-                    half = scenarios[e, s, width_at] * slope
-                    half = half + intercept
-                    width = half * margin
-                    centre = scenarios[e, s, centre_at]
-                    _add_interval(diff, actions, centre - width, centre + width, inv_step)
-            _take_counts(diff, out[e])
+                half = scenarios[e, s, width_at] * slope
+                half = half + intercept
+                width = half * margin
+                centre = scenarios[e, s, centre_at]
+                k = _keep_interval(lo_kept, hi_kept, k, centre - width, centre + width, mask[e, s])
+            _count_kept_intervals(lo_kept, hi_kept, k, actions, inv_step, diff, out[e])
         return out
 
 
