@@ -8,9 +8,11 @@ Both arms see the same data and draw the same random numbers in the same order, 
 both run once as a warm-up (numba compilation, allocator). Then the arms take turns for
 ``--rounds`` rounds (a shared virtual machine's speed drifts by 10-30 % within a minute,
 so one timing per arm is not a ratio): each arm's median is printed, and the ratio of
-the medians with the smallest and largest ratio of a single round.
+the medians with the smallest and largest ratio of a single round. The process keeps freed
+arrays in its heap as the ``probecommit`` command does (``core.memory.reuse_freed_arrays``;
+the plain loop's arrays are too small to be affected); ``--default-heap`` leaves glibc's defaults.
 
-    python benchmarks/belief.py [--episodes 384] [--particles 1024] [--taps 8] [--rounds 5]
+    python benchmarks/belief.py [--episodes 384] [--particles 1024] [--taps 8] [--rounds 5] [--default-heap]
 """
 
 from __future__ import annotations
@@ -22,6 +24,7 @@ import numpy as np
 
 from probecommit.core.belief import ParticleFilter
 from probecommit.core.executors import ProbeRobust
+from probecommit.core.memory import reuse_freed_arrays
 from probecommit.tasks.insertion.model import InsertionModel, capture_half_width, half_gap
 
 
@@ -112,7 +115,9 @@ def main() -> None:
     ap.add_argument("--particles", type=int, default=1024)
     ap.add_argument("--taps", type=int, default=8)
     ap.add_argument("--rounds", type=int, default=5)
+    ap.add_argument("--default-heap", action="store_true", help="glibc's default heap thresholds, not the command's")
     args = ap.parse_args()
+    heap = "glibc's default heap" if args.default_heap or not reuse_freed_arrays() else "the command's heap thresholds"
     model, u, y = make_data(args.episodes, args.taps)
     seeds = list(range(args.episodes))
     steps = args.episodes * args.taps
@@ -128,7 +133,7 @@ def main() -> None:
     same_actions = np.array_equal(actions, plain_actions)
     med = {name: float(np.median(t)) for name, t in times.items()}
     print(f"E={args.episodes} N={args.particles} taps={args.taps}: update + retained set + executor per episode-step "
-          f"(median of {args.rounds} interleaved rounds)")
+          f"(median of {args.rounds} interleaved rounds, {heap})")
     print(f"  batched core (jitter, the paper):  {med['core'] / steps * 1e6:7.1f} us per episode-step  ({med['core']:.2f} s)")
     print(f"  batched core (move = mh):          {med['mh'] / steps * 1e6:7.1f} us per episode-step  ({med['mh']:.2f} s)")
     print(f"  plain per-episode NumPy loop:      {med['plain'] / steps * 1e6:7.1f} us per episode-step  ({med['plain']:.2f} s)")

@@ -8,9 +8,11 @@ at every budget. ``run`` is timed twice: as a user gets it (units in threads, on
 up to 4, the simulator being thread-safe) and in one thread (``threads=1``), the plain loop
 always using one. All arms run in this process after a warm-up, then take turns for
 ``--rounds`` rounds; the medians and the ratios of the medians (with the range of the
-per-round ratios) are printed.
+per-round ratios) are printed. The process keeps freed arrays in its heap as the
+``probecommit`` command does (``core.memory.reuse_freed_arrays``); ``--default-heap`` leaves
+glibc's defaults.
 
-    python benchmarks/end_to_end.py [--instances 480] [--repeats 4] [--rounds 3]
+    python benchmarks/end_to_end.py [--instances 480] [--repeats 4] [--rounds 3] [--default-heap]
 """
 
 from __future__ import annotations
@@ -25,6 +27,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from belief import interleaved, make_data, run_plain  # noqa: E402
 
+from probecommit.core.memory import reuse_freed_arrays  # noqa: E402
 from probecommit.runner.config import parse_config  # noqa: E402
 from probecommit.runner.study import run_study, unit_threads  # noqa: E402
 
@@ -43,7 +46,9 @@ def main() -> None:
     ap.add_argument("--instances", type=int, default=480)
     ap.add_argument("--repeats", type=int, default=4)
     ap.add_argument("--rounds", type=int, default=3)
+    ap.add_argument("--default-heap", action="store_true", help="glibc's default heap thresholds, not the command's")
     args = ap.parse_args()
+    heap = "glibc's default heap" if args.default_heap or not reuse_freed_arrays() else "the command's heap thresholds"
     episodes = args.instances * args.repeats
     model, u, y = make_data(episodes, 8)
     with tempfile.TemporaryDirectory() as tmp:
@@ -56,7 +61,7 @@ def main() -> None:
         }, args.rounds)
     threads = unit_threads(study(args.instances, args.repeats))
     t_plain = float(np.median(times["plain"]))
-    print(f"{episodes} episodes x 8 taps, N = 1024, analytic insertion (median of {args.rounds} interleaved rounds)")
+    print(f"{episodes} episodes x 8 taps, N = 1024, analytic insertion (median of {args.rounds} interleaved rounds, {heap})")
     print(f"  plain per-episode NumPy loop (filter + commit per tap, one thread): {t_plain:6.2f} s")
     for arm, label in (("run1", "probecommit run, one thread (threads=1)"),
                        ("run", f"probecommit run as shipped ({threads} unit threads)")):

@@ -39,3 +39,52 @@ def test_release_free_heap_returns_freed_small_blocks():
 def test_release_free_heap_without_malloc_trim(monkeypatch):
     monkeypatch.setattr(memory, "_malloc_trim", lambda: None)
     assert memory.release_free_heap() is False
+
+
+#: Three 6 MB arrays made, used and freed per step, as a filter step's weights and particles are.
+_STEPS = """
+import os, resource, sys
+import numpy as np
+from probecommit.core import memory
+taken = memory.reuse_freed_arrays() if sys.argv[1] == "reuse" else None
+def step():
+    arrays = [np.ones(750_000) for _ in range(3)]
+    return sum(float(a[-1]) for a in arrays)
+step()
+before = resource.getrusage(resource.RUSAGE_SELF).ru_minflt
+for _ in range(20):
+    step()
+print(taken, resource.getrusage(resource.RUSAGE_SELF).ru_minflt - before,
+      os.environ.get("MALLOC_MMAP_THRESHOLD_"), os.environ.get("MALLOC_TRIM_THRESHOLD_"))
+"""
+
+
+def _steps(mode: str, **env: str) -> list[str]:
+    import os
+    import subprocess
+
+    clean = {k: v for k, v in os.environ.items() if not k.startswith("MALLOC_")}
+    done = subprocess.run([sys.executable, "-c", _STEPS, mode], capture_output=True, text=True, check=True,
+                          env={**clean, **env})
+    return done.stdout.split()
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux") or memory._mallopt() is None, reason="mallopt is glibc's")
+def test_reuse_freed_arrays_keeps_a_steps_arrays_in_the_heap():
+    # glibc's defaults return the freed arrays past its trim threshold, so each step faults in
+    # fresh pages (~900 per step here); with the command's thresholds the heap reuses them.
+    _, default_faults, *_ = _steps("default")
+    taken, reuse_faults, mmap_env, trim_env = _steps("reuse")
+    assert taken == "True" and mmap_env == trim_env == str(memory.HEAP_REUSE_BYTES)  # exported to workers
+    assert int(default_faults) > 5000 and int(reuse_faults) < 500, (default_faults, reuse_faults)
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux") or memory._mallopt() is None, reason="mallopt is glibc's")
+def test_reuse_freed_arrays_leaves_a_threshold_the_user_set():
+    _, _, mmap_env, trim_env = _steps("reuse", MALLOC_TRIM_THRESHOLD_="131072")
+    assert trim_env == "131072" and mmap_env == str(memory.HEAP_REUSE_BYTES)
+
+
+def test_reuse_freed_arrays_without_mallopt(monkeypatch):
+    monkeypatch.setattr(memory, "_mallopt", lambda: None)
+    assert memory.reuse_freed_arrays() is False

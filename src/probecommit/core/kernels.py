@@ -988,6 +988,41 @@ def exp_exact(x: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
 
 if HAVE_KERNELS:
 
+    @helper(inline=True)
+    def _row_max(row):  # pragma: no cover - compiled
+        """The largest value of a row as a scan keeping the first of equal values finds it (NaN if
+        the row holds one), in four running maxima: one would be a chain of dependent comparisons.
+        Only a maximum of zero can differ between the two orders (+0.0 and -0.0 are equal), so
+        it is then taken again by the scan."""
+        n = row.shape[0]
+        odd = False
+        t0 = t1 = t2 = t3 = -np.inf
+        i = 0
+        stop = n - n % 4
+        while i < stop:
+            v0, v1, v2, v3 = row[i], row[i + 1], row[i + 2], row[i + 3]
+            odd |= (v0 != v0) | (v1 != v1) | (v2 != v2) | (v3 != v3)
+            t0 = v0 if v0 > t0 else t0
+            t1 = v1 if v1 > t1 else t1
+            t2 = v2 if v2 > t2 else t2
+            t3 = v3 if v3 > t3 else t3
+            i += 4
+        top = t0
+        for value in (t1, t2, t3):
+            top = value if value > top else top
+        while i < n:
+            value = row[i]
+            odd |= value != value
+            top = value if value > top else top
+            i += 1
+        if odd:
+            return np.nan
+        if top == 0.0:
+            top = -np.inf
+            for i in range(n):
+                top = row[i] if row[i] > top else top
+        return top
+
     @kernel("i8(f8[:, ::1], f8[::1], f8[:, ::1])")
     def _shift_and_clamp(log_weights, row_max, out):  # pragma: no cover - compiled
         """``row_max = max(log_weights, axis=1)``; ``out = log_weights - row_max`` raised to
@@ -997,19 +1032,14 @@ if HAVE_KERNELS:
         n_e, n = log_weights.shape
         between = 0
         for e in range(n_e):
-            top = -np.inf
-            odd = False
-            for i in range(n):
-                value = log_weights[e, i]
-                odd |= value != value
-                top = value if value > top else top
-            if odd or not np.isfinite(top):
+            top = _row_max(log_weights[e])
+            if top != top or not np.isfinite(top):
                 return -1
             row_max[e] = top
             for i in range(n):
                 value = log_weights[e, i] - top
                 low = value < _EXP_FAST_FLOOR
-                between += low and value >= _EXP_ZERO_BELOW
+                between += low & (value >= _EXP_ZERO_BELOW)
                 out[e, i] = _EXP_FAST_FLOOR if low else value
         return between
 

@@ -1,5 +1,6 @@
 """Memory estimates before large allocations (refuse with the number and the setting to
-change), and handing freed heap memory back to the system between long phases."""
+change), the C heap's reuse of freed arrays, and handing freed heap memory back to the system
+between long phases."""
 
 from __future__ import annotations
 
@@ -51,6 +52,54 @@ def _malloc_trim() -> Callable[[int], int] | None:
         return None
     trim.argtypes, trim.restype = [ctypes.c_size_t], ctypes.c_int
     return trim
+
+
+#: glibc's ``mallopt`` parameters (malloc.h).
+_M_TRIM_THRESHOLD, _M_MMAP_THRESHOLD = -1, -3
+#: The environment variables that set them when a process starts (a user's choice wins).
+HEAP_ENV = {"MALLOC_MMAP_THRESHOLD_": _M_MMAP_THRESHOLD, "MALLOC_TRIM_THRESHOLD_": _M_TRIM_THRESHOLD}
+#: Freed blocks up to this size stay in the heap for reuse, and this much free memory at its top.
+HEAP_REUSE_BYTES = 32 * 1024**2
+
+
+@functools.lru_cache(maxsize=1)
+def _mallopt() -> Callable[[int, int], int] | None:
+    """glibc's ``mallopt``, or None where the C library has none."""
+    try:
+        mallopt = ctypes.CDLL(None).mallopt
+    except (OSError, AttributeError):
+        return None
+    mallopt.argtypes, mallopt.restype = [ctypes.c_int, ctypes.c_int], ctypes.c_int
+    return mallopt
+
+
+def reuse_freed_arrays(limit: int = HEAP_REUSE_BYTES) -> bool:
+    """Let the C heap reuse freed arrays of up to ``limit`` bytes instead of unmapping each one.
+
+    glibc maps a large block (above a threshold that starts at 128 KiB) on pages of its own
+    and unmaps them when it is freed, so the next filter step's arrays of the same size fault
+    in fresh zeroed pages: a belief step over a batch of 384 episodes allocates its weights and
+    particles anew (3-6 MB each) and spent about 2 us per episode-step in page faults here
+    (``benchmarks/belief.py``). Raising the mapping and trimming thresholds keeps such blocks
+    in the heap; the explicit :func:`trim_heap` between chunks and :func:`release_free_heap`
+    between phases still return the memory. The ``probecommit`` command calls this at start;
+    a program importing probecommit keeps its own allocator settings unless it calls it.
+    A threshold set in the environment (``MALLOC_MMAP_THRESHOLD_``, ``MALLOC_TRIM_THRESHOLD_``)
+    is the user's and is left alone; the others are exported so worker processes start with them.
+
+    Returns:
+        True when glibc took the setting, False where the C library has no ``mallopt``.
+    """
+    mallopt = _mallopt()
+    if mallopt is None:
+        return False
+    taken = True
+    for name, parameter in HEAP_ENV.items():
+        if name in os.environ:
+            continue
+        taken &= mallopt(parameter, int(limit)) == 1
+        os.environ[name] = str(int(limit))
+    return taken
 
 
 def trim_heap() -> bool:
