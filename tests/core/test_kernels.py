@@ -180,6 +180,9 @@ def _weight_cases():
         "mostly zero": np.where(rng.random((e, n)) < 0.9, 0.0, rng.random((e, n))),
         "one bucket, all distinct": 1 + 1e-3 * rng.random((e, n)),
         "tiny rows": rng.random((e, 5)),
+        # Particle counts whose pairwise tree is not perfect (sums of products through an array).
+        "1000 particles": np.exp(3 * rng.standard_normal((e, 1000))),
+        "200 particles": np.exp(-2.0 * rng.integers(0, 4, (e, 200))),
         # A resampled belief after a few taps: runs of copies sharing a weight.
         "runs of few values": np.repeat(np.exp(-3.0 * rng.integers(0, 5, (e, n // 8))), 8, axis=1),
         # At and just past the few-weight table's capacity (16 distinct values).

@@ -380,6 +380,57 @@ if HAVE_KERNELS:
                 node_start[top], node_n[top], node_open[top] = s, half, False
         return values[0]
 
+    @helper(inline=True)
+    def _block_dot(a, p, e, j, start, n):  # pragma: no cover - compiled
+        """:func:`_block_sum` of the products ``a[i] * p[e, i, j]``, formed as it reads them."""
+        if n < 8:
+            total = 0.0
+            for i in range(n):
+                total += a[start + i] * p[e, start + i, j]
+            return total
+        r0, r1 = a[start] * p[e, start, j], a[start + 1] * p[e, start + 1, j]
+        r2, r3 = a[start + 2] * p[e, start + 2, j], a[start + 3] * p[e, start + 3, j]
+        r4, r5 = a[start + 4] * p[e, start + 4, j], a[start + 5] * p[e, start + 5, j]
+        r6, r7 = a[start + 6] * p[e, start + 6, j], a[start + 7] * p[e, start + 7, j]
+        i = start + 8
+        stop = start + n - n % 8
+        while i < stop:
+            r0 += a[i] * p[e, i, j]
+            r1 += a[i + 1] * p[e, i + 1, j]
+            r2 += a[i + 2] * p[e, i + 2, j]
+            r3 += a[i + 3] * p[e, i + 3, j]
+            r4 += a[i + 4] * p[e, i + 4, j]
+            r5 += a[i + 5] * p[e, i + 5, j]
+            r6 += a[i + 6] * p[e, i + 6, j]
+            r7 += a[i + 7] * p[e, i + 7, j]
+            i += 8
+        total = ((r0 + r1) + (r2 + r3)) + ((r4 + r5) + (r6 + r7))
+        while i < start + n:
+            total += a[i] * p[e, i, j]
+            i += 1
+        return total
+
+    @helper()
+    def _row_dot_with(a, p, e, j, product, node_start, node_n, node_open, values):  # pragma: no cover - compiled
+        """``np.sum(a * p[e, :, j])`` bit for bit: the products summed in NumPy's pairwise order,
+        formed inside the leaves when the tree is perfect (``N = 128 * 2^k``, or at most 128),
+        else written to ``product`` and summed by :func:`_row_sum_with`."""
+        n = a.shape[0]
+        blocks = n // 128
+        if n <= 128:
+            return 0.0 + _block_dot(a, p, e, j, 0, n)
+        if n % 128 == 0 and blocks & (blocks - 1) == 0 and blocks <= values.shape[0]:
+            for b in range(blocks):
+                values[b] = _block_dot(a, p, e, j, 128 * b, 128)
+            while blocks > 1:
+                blocks //= 2
+                for b in range(blocks):
+                    values[b] = values[2 * b] + values[2 * b + 1]
+            return 0.0 + values[0]
+        for i in range(n):
+            product[i] = a[i] * p[e, i, j]
+        return _row_sum_with(product, node_start, node_n, node_open, values)
+
     @helper()
     def _pairwise_scratch():  # pragma: no cover - compiled
         """The stack of :func:`_pairwise_sum_with`: 128 entries, enough for any row (a halving adds two)."""
@@ -783,9 +834,8 @@ if HAVE_KERNELS:
             total = _row_sum_with(masked_w, node_start, node_n, node_open, values)
             for j in range(d):
                 if total > 0:
-                    for i in range(n):
-                        product[i] = masked_w[i] * particles[e, i, j]
-                    reference[e, j] = _row_sum_with(product, node_start, node_n, node_open, values) / total
+                    reference[e, j] = _row_dot_with(masked_w, particles, e, j, product, node_start, node_n, node_open,
+                                                    values) / total
                 else:
                     for i in range(n):
                         product[i] = particles[e, i, j] if mask[e, i] else 0.0
