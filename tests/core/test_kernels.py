@@ -121,8 +121,10 @@ def test_affine_interval_counts_equal_counting_the_models_parts(margin):
     mask = rng.random((40, 500)) < 0.8
     lo, hi = model.success_interval(theta)
     expected = interval_success_counts_numpy(lo, hi, mask, grid)
-    got = kernels.affine_interval_success_counts_compiled(theta, model.success_interval_affine(), margin, mask, grid)
+    kept = np.full(40, -1)
+    got = kernels.affine_interval_success_counts_compiled(theta, model.success_interval_affine(), margin, mask, grid, kept)
     np.testing.assert_array_equal(got, expected)
+    np.testing.assert_array_equal(kept, mask.sum(axis=-1))
     assert expected.sum() > 0
 
 

@@ -140,8 +140,8 @@ def scenario_scores(model: Any, scenarios: np.ndarray, mask: np.ndarray, context
             depend on the margin: a margin search passes them for every margin).
     """
     if model.binary_loss:
-        kept = np.maximum(mask.sum(axis=-1), 1)
-        return _failure_counts(model, scenarios, mask, context, parts) / kept[:, None]
+        failures, retained = _failure_counts(model, scenarios, mask, context, parts)
+        return failures / np.maximum(retained, 1)[:, None]
     return scenario_max_loss(model.loss(model.action_grid, scenarios, context), mask)
 
 
@@ -155,21 +155,24 @@ def _compiled_affine(model: Any) -> tuple[int, int, float, float] | None:
 
 
 def _failure_counts(model: Any, scenarios: np.ndarray, mask: np.ndarray, context: np.ndarray | None,
-                    parts: tuple[np.ndarray, np.ndarray] | None) -> np.ndarray:
-    """Retained scenarios that fail under each grid action ``[E, A]`` (integers), binary loss."""
-    retained_count = mask.sum(axis=-1)
+                    parts: tuple[np.ndarray, np.ndarray] | None) -> tuple[np.ndarray, np.ndarray]:
+    """Retained scenarios that fail under each grid action ``[E, A]`` (integers), binary loss,
+    and how many are retained ``[E]``."""
     grid = np.asarray(model.action_grid, dtype=float).reshape(-1)
     affine = _compiled_affine(model)
     if affine is not None and parts is None:  # both parts read from the scenarios inside the kernel
-        counts = affine_interval_success_counts_compiled(np.asarray(scenarios), affine, model.margin, mask, grid)
+        retained_count = np.empty(mask.shape[0], dtype=np.int64)
+        counts = affine_interval_success_counts_compiled(np.asarray(scenarios), affine, model.margin, mask, grid,
+                                                         retained_count)
         if counts is not None:
-            return retained_count[:, None] - counts
+            return retained_count[:, None] - counts, retained_count
+    retained_count = mask.sum(axis=-1)
     parts = model.success_interval_parts(scenarios) if parts is None else parts
     if parts is not None:
-        return retained_count[:, None] - scaled_interval_success_counts(*parts, model.margin, mask, grid)
+        return retained_count[:, None] - scaled_interval_success_counts(*parts, model.margin, mask, grid), retained_count
     if (interval := model.success_interval(scenarios)) is not None:  # a model with only the interval
-        return retained_count[:, None] - interval_success_counts(*interval, mask, grid)
-    return np.sum(model.loss(model.action_grid, scenarios, context) & mask[:, None, :], axis=-1)
+        return retained_count[:, None] - interval_success_counts(*interval, mask, grid), retained_count
+    return np.sum(model.loss(model.action_grid, scenarios, context) & mask[:, None, :], axis=-1), retained_count
 
 
 @dataclass
@@ -283,9 +286,9 @@ def retained_scores(model: Any, retained: RetainedSet, context: np.ndarray | Non
         return scenario_scores(model, scenarios, mask, context, parts)
     if model.binary_loss:
         parts = retained.interval_parts(model) if formed else [None] * len(blocks)
-        failures = sum(_failure_counts(model, scenarios, mask, context, part)
-                       for (scenarios, mask), part in zip(blocks, parts))
-        kept = np.maximum(sum(mask.sum(axis=-1) for _, mask in blocks), 1)
+        counted = [_failure_counts(model, scenarios, mask, context, part) for (scenarios, mask), part in zip(blocks, parts)]
+        failures = sum(failed for failed, _ in counted)
+        kept = np.maximum(sum(n_kept for _, n_kept in counted), 1)
         return failures / kept[:, None]
     return np.maximum.reduce([scenario_max_loss(model.loss(model.action_grid, scenarios, context), mask)
                               for scenarios, mask in blocks])

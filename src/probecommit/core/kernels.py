@@ -158,12 +158,13 @@ if HAVE_KERNELS:
             _count_kept_intervals(lo_kept, hi_kept, k, actions, inv_step, diff, out[e])
         return out
 
-    @kernel("i8[:, ::1](f8[:, :, ::1], i8, i8, f8, f8, f8, b1[:, ::1], f8[::1], f8)")
+    @kernel("i8[:, ::1](f8[:, :, ::1], i8, i8, f8, f8, f8, b1[:, ::1], f8[::1], f8, i8[::1])")
     def _affine_interval_success_counts(scenarios, centre_at, width_at, slope, intercept, margin, mask, actions,
-                                        step):  # pragma: no cover - compiled
+                                        step, kept):  # pragma: no cover - compiled
         """:func:`_scaled_interval_success_counts` with ``centre = scenarios[..., centre_at]`` and
         ``half = slope * scenarios[..., width_at] + intercept`` formed per retained scenario (a
-        product, then a sum, as NumPy forms them), so no ``[E, N]`` part is materialized."""
+        product, then a sum, as NumPy forms them), so no ``[E, N]`` part is materialized; ``kept[e]``
+        takes the row's retained count (``mask.sum(axis=-1)``, which NumPy takes slowly of booleans)."""
         n_e, n_s = mask.shape
         out, diff, inv_step, lo_kept, hi_kept = _count_scratch(n_e, n_s, actions, step)
         for e in range(n_e):
@@ -175,6 +176,7 @@ if HAVE_KERNELS:
                 centre = scenarios[e, s, centre_at]
                 k = _keep_interval(lo_kept, hi_kept, k, centre - width, centre + width, mask[e, s])
             _count_kept_intervals(lo_kept, hi_kept, k, actions, inv_step, diff, out[e])
+            kept[e] = k
         return out
 
 
@@ -253,17 +255,20 @@ def scaled_interval_success_counts_compiled(centre: np.ndarray, half: np.ndarray
 
 
 def affine_interval_success_counts_compiled(scenarios: np.ndarray, affine: tuple[int, int, float, float], margin: float,
-                                            mask: np.ndarray, actions: np.ndarray) -> np.ndarray | None:
+                                            mask: np.ndarray, actions: np.ndarray,
+                                            kept: np.ndarray | None = None) -> np.ndarray | None:
     """The compiled count over ``centre -+ half * margin`` of a model whose parts are affine in its
     latents (``TaskModel.success_interval_affine``), read from ``scenarios[E, N, d]`` in place;
-    None without compiled kernels."""
+    None without compiled kernels. ``kept`` (int64 ``[E]``), if given, takes each row's retained count."""
     if not HAVE_KERNELS:
         return None
     centre_at, width_at, slope, intercept = affine
     actions = np.ascontiguousarray(actions, dtype=np.float64)
+    kept = np.empty(mask.shape[0], dtype=np.int64) if kept is None else kept
     return _affine_interval_success_counts(np.ascontiguousarray(scenarios, dtype=np.float64), int(centre_at),
                                            int(width_at), float(slope), float(intercept), float(margin),
-                                           np.ascontiguousarray(mask, dtype=np.bool_), actions, uniform_step(actions))
+                                           np.ascontiguousarray(mask, dtype=np.bool_), actions, uniform_step(actions),
+                                           kept)
 
 
 def uniform_step(actions: np.ndarray) -> float:
