@@ -171,6 +171,37 @@ def test_pairwise_sum_follows_numpy_bit_for_bit(n):
     np.testing.assert_array_equal(ours, np.sum(rows, axis=-1))
 
 
+def test_repeated_additions_match_the_plain_loop_bit_for_bit():
+    """``_add_repeated`` jumps through each binade of a running sum: its totals and stopping
+    points equal adding one at a time, for weights of every scale, exact powers of two (a
+    resampled 1/1024), values halfway between two multiples of the spacing, zeros, sums
+    starting at zero, subnormal or above the value, targets reached or not."""
+    rng = np.random.default_rng(17)
+    m = 4000
+    values = rng.random(m) * 10.0 ** rng.integers(-12, 1, m)
+    values[:200] = 2.0 ** -rng.integers(1, 40, 200)  # powers of two: sums exact for a while
+    values[200:300] = (2 * rng.integers(1, 2**20, 100) + 1) * 2.0 ** -60  # odd multiples: halfway cases later
+    values[300:320] = 0.0
+    totals = np.where(rng.random(m) < 0.4, 0.0, rng.random(m) * 10.0 ** rng.integers(-8, 1, m))
+    totals[200:300] = rng.uniform(2.0 ** -7, 2.0 ** -6, 100)  # spacing 2^-59 there: the odd multiples lie halfway
+    totals[320:340] = 5e-324 * rng.integers(1, 100, 20)  # subnormal starts
+    totals[340:360] = -0.0
+    counts = rng.integers(0, 3000, m)
+    targets = np.where(rng.random(m) < 0.3, np.inf, totals + values * counts * rng.uniform(0.0, 1.2, m))
+    targets[360:380] = totals[360:380]  # reached at the first addition
+    steps, got = np.empty(m, dtype=np.int64), np.empty(m)
+    kernels._add_repeated_rows(totals, values, counts, targets, steps, got)
+    for i in range(m):
+        total, taken = float(totals[i]), 0
+        while taken < counts[i]:
+            total += float(values[i])
+            taken += 1
+            if total >= targets[i]:
+                break
+        assert (steps[i], np.float64(got[i]).tobytes()) == (taken, np.float64(total).tobytes()), i
+    assert np.any(steps < counts) and np.any(steps == counts)
+
+
 def _weight_cases():
     rng = np.random.default_rng(11)
     e, n = 60, 1024

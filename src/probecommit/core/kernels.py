@@ -10,6 +10,8 @@ ahead of time when it is current, else through numba's JIT with its on-disk cach
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from probecommit.core.compiled import AVAILABLE as HAVE_KERNELS
@@ -646,6 +648,63 @@ if HAVE_KERNELS:
         return n_values
 
     @helper()
+    def _add_repeated(total, value, count, target):  # pragma: no cover - compiled
+        """``total += value`` repeated ``count`` times, each sum rounded as IEEE doubles round it,
+        stopping after the first sum ``>= target``: ``(sums taken, total)``, the same bits as the loop.
+
+        A running sum of one value is a chain of dependent additions (a cumulative mass over a
+        few-weight row adds each weight hundreds of times), but while the sum stays in one binade
+        ``[2^E, 2^(E+1))`` of spacing ``u`` each addition adds the same amount: ``value`` rounded
+        to a multiple of ``u``, unless it lies exactly halfway between two (then the rounding to
+        even depends on the sum: taken one addition at a time, as are sums below ``value`` or
+        not normal). So the sums of a binade are taken at once, in integers of ``u``, and the
+        first one to reach ``target`` by a few exact comparisons.
+        """
+        steps = 0
+        if value == 0.0 and count > 0:  # one addition (-0.0 becomes 0.0), then the sum never moves
+            total += value
+            return (1, total) if total >= target else (count, total)
+        while steps < count:
+            if value > 0.0 and total >= value and total >= 2.2250738585072014e-308 and total < np.inf:
+                _, exponent = math.frexp(total)  # 2^(exponent - 1) <= total < 2^exponent
+                unit = math.ldexp(1.0, exponent - 53)
+                in_units = value / unit  # exact: a power of two apart, and below 2^53
+                whole = math.floor(in_units)
+                fraction = in_units - whole
+                if fraction != 0.5:
+                    step_units = int(whole) + (1 if fraction > 0.5 else 0)
+                    if step_units == 0:  # the sum never moves again
+                        if total >= target:
+                            return steps + 1, total
+                        return count, total
+                    room = (1 << 53) - int(total / unit) - int(whole)
+                    if room >= 1:
+                        # Sums j = 0..k-1 of this binade have sum + value below 2^exponent.
+                        k = min((room - 1) // step_units + 1, count - steps)
+                        step = step_units * unit
+                        if total + k * step >= target:  # every product and sum here is exact
+                            j = max(1, min(k, int(math.ceil((target - total) / step))))
+                            while j > 1 and total + (j - 1) * step >= target:
+                                j -= 1
+                            while total + j * step < target:
+                                j += 1
+                            return steps + j, total + j * step
+                        total = total + k * step
+                        steps += k
+                        continue
+            total += value
+            steps += 1
+            if total >= target:
+                return steps, total
+        return steps, total
+
+    @kernel("void(f8[::1], f8[::1], i8[::1], f8[::1], i8[::1], f8[::1])")
+    def _add_repeated_rows(totals, values, counts, targets, steps_out, totals_out):  # pragma: no cover - compiled
+        """:func:`_add_repeated` of each entry (what its tests compare with the plain loop)."""
+        for i in range(totals.shape[0]):
+            steps_out[i], totals_out[i] = _add_repeated(totals[i], values[i], counts[i], targets[i])
+
+    @helper()
     def _few_weight_prefix(w, nu, values, counts):  # pragma: no cover - compiled
         """:func:`_top_weight_prefix` for a row of few distinct weights (:func:`_few_weight_table`):
         the prefix holds every particle heavier than some weight ``t`` and the first ``r``
@@ -666,10 +725,9 @@ if HAVE_KERNELS:
         taken = 0
         for s in range(n_values):
             value = values[s]
-            for c in range(counts[s]):
-                cumulative += value
-                if cumulative >= target:
-                    return taken + c + 1, value, c + 1
+            added, cumulative = _add_repeated(cumulative, value, counts[s], target)
+            if added > 0 and cumulative >= target:
+                return taken + added, value, added
             taken += counts[s]
         return n, -np.inf, 0
 
@@ -750,8 +808,7 @@ if HAVE_KERNELS:
                     value = few_values[s]
                     if value < w_stop:
                         break
-                    for _ in range(few_counts[s] if value > w_stop else ties):
-                        cumulative += value
+                    _, cumulative = _add_repeated(cumulative, value, few_counts[s] if value > w_stop else ties, np.inf)
                 out[e] = min(cumulative, 1.0)
                 continue
             last = _bucket_order(w, np.inf, order, buckets, counts, mass, starts)
