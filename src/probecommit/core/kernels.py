@@ -189,16 +189,20 @@ if HAVE_KERNELS:
         n_rows, n = weights.shape
         out = np.empty((n_rows, n), dtype=np.int64)
         cumulative = np.empty(n)
+        positions = np.empty(n)
         for r in range(n_rows):
             total = 0.0
             for i in range(n):
                 total += weights[r, i]
                 cumulative[i] = total
             cumulative[n - 1] = 1.0
+            offset = offsets[r]
+            for i in range(n):  # the divisions apart, in a loop of their own (vectorized)
+                positions[i] = (offset + i) / n
             j = 0
             for i in range(n):
                 # searchsorted(cumulative, position, side="right"), walking forward: positions increase
-                position = (offsets[r] + i) / n
+                position = positions[i]
                 while j < n and cumulative[j] <= position:
                     j += 1
                 out[r, i] = j if j < n else n - 1
