@@ -1,5 +1,6 @@
 """Memory estimates refuse what does not fit; freed heap memory goes back to the system."""
 
+import platform
 import sys
 
 import numpy as np
@@ -69,7 +70,7 @@ def _steps(mode: str, **env: str) -> list[str]:
     return done.stdout.split()
 
 
-@pytest.mark.skipif(not sys.platform.startswith("linux") or memory._mallopt() is None, reason="mallopt is glibc's")
+@pytest.mark.skipif(platform.libc_ver()[0] != "glibc" or memory._mallopt() is None, reason="the thresholds are glibc's")
 def test_reuse_freed_arrays_keeps_a_steps_arrays_in_the_heap():
     # glibc's defaults return the freed arrays past its trim threshold, so each step faults in
     # fresh pages (~900 per step here); with the command's thresholds the heap reuses them.
@@ -79,7 +80,7 @@ def test_reuse_freed_arrays_keeps_a_steps_arrays_in_the_heap():
     assert int(default_faults) > 5000 and int(reuse_faults) < 500, (default_faults, reuse_faults)
 
 
-@pytest.mark.skipif(not sys.platform.startswith("linux") or memory._mallopt() is None, reason="mallopt is glibc's")
+@pytest.mark.skipif(platform.libc_ver()[0] != "glibc" or memory._mallopt() is None, reason="the thresholds are glibc's")
 def test_reuse_freed_arrays_leaves_a_threshold_the_user_set():
     _, _, mmap_env, trim_env = _steps("reuse", MALLOC_TRIM_THRESHOLD_="131072")
     assert trim_env == "131072" and mmap_env == str(memory.HEAP_REUSE_BYTES)
