@@ -1139,10 +1139,11 @@ if HAVE_KERNELS:
                 top = row[i] if row[i] > top else top
         return top
 
-    @kernel("i8(f8[:, ::1], f8[::1], f8[:, ::1])")
-    def _shift_and_clamp(log_weights, row_max, out):  # pragma: no cover - compiled
+    @kernel("i8(f8[:, ::1], f8[::1], f8[:, ::1], b1[::1])")
+    def _shift_and_clamp(log_weights, row_max, out, zero_rows):  # pragma: no cover - compiled
         """``row_max = max(log_weights, axis=1)``; ``out = log_weights - row_max`` raised to
-        ``_EXP_FAST_FLOOR``. Returns how many shifted values lie in ``[-746, -700)`` (their
+        ``_EXP_FAST_FLOOR``; ``zero_rows[e]``: whether row ``e`` has a shifted value below -746
+        (an ``exp`` of zero). Returns how many shifted values lie in ``[-746, -700)`` (their
         ``exp`` is NumPy's of the value itself), or -1 if a row holds NaN or has no finite
         maximum (nothing promised then)."""
         n_e, n = log_weights.shape
@@ -1152,51 +1153,65 @@ if HAVE_KERNELS:
             if top != top or not np.isfinite(top):
                 return -1
             row_max[e] = top
+            zero = False
             for i in range(n):
                 value = log_weights[e, i] - top
                 low = value < _EXP_FAST_FLOOR
                 between += low & (value >= _EXP_ZERO_BELOW)
+                zero |= value < _EXP_ZERO_BELOW
                 out[e, i] = _EXP_FAST_FLOOR if low else value
+            zero_rows[e] = zero
         return between
 
-    @kernel("void(f8[:, ::1], f8[::1], f8[:, ::1], f8[::1])")
-    def _zeroed_row_sums(log_weights, row_max, exps, sums):  # pragma: no cover - compiled
-        """Zero the ``exp`` lanes whose shifted argument is below -746, then ``sums = np.sum(exps, axis=1)``."""
+    @kernel("void(f8[:, ::1], f8[::1], f8[:, ::1], f8[::1], b1[::1])")
+    def _zeroed_row_sums(log_weights, row_max, exps, sums, zero_rows):  # pragma: no cover - compiled
+        """Zero the ``exp`` lanes whose shifted argument is below -746 (in the ``zero_rows`` only),
+        then ``sums = np.sum(exps, axis=1)``."""
         n_e, n = log_weights.shape
         node_start, node_n, node_open, values = _pairwise_scratch()
         for e in range(n_e):
             top = row_max[e]
-            for i in range(n):
-                exps[e, i] = 0.0 if log_weights[e, i] - top < _EXP_ZERO_BELOW else exps[e, i]
+            if zero_rows[e]:
+                for i in range(n):
+                    exps[e, i] = 0.0 if log_weights[e, i] - top < _EXP_ZERO_BELOW else exps[e, i]
             sums[e] = _row_sum_with(exps[e], node_start, node_n, node_open, values)
 
-    @kernel("i8(f8[:, ::1], f8[::1], f8[:, ::1], f8[:, ::1])")
-    def _subtract_and_clamp(log_weights, log_norm, normalized, clamped):  # pragma: no cover - compiled
+    @kernel("i8(f8[:, ::1], f8[::1], f8[:, ::1], f8[:, ::1], b1[::1])")
+    def _subtract_and_clamp(log_weights, log_norm, normalized, clamped, zero_rows):  # pragma: no cover - compiled
         """``normalized = log_weights - log_norm[:, None]`` and its copy raised to ``_EXP_FAST_FLOOR``
-        in ``clamped``. Returns how many values lie in ``[-746, -700)``."""
+        in ``clamped``; ``zero_rows`` as :func:`_shift_and_clamp` sets it. Returns how many values
+        lie in ``[-746, -700)``."""
         n_e, n = log_weights.shape
         between = 0
         for e in range(n_e):
             shift = log_norm[e]
+            zero = False
             for i in range(n):
                 value = log_weights[e, i] - shift
                 normalized[e, i] = value
                 low = value < _EXP_FAST_FLOOR
                 between += low and value >= _EXP_ZERO_BELOW
+                zero |= value < _EXP_ZERO_BELOW
                 clamped[e, i] = _EXP_FAST_FLOOR if low else value
+            zero_rows[e] = zero
         return between
 
-    @kernel("void(f8[:, ::1], f8[:, ::1], f8[::1])")
-    def _zeroed_sums_of_squares(normalized, weights, squares):  # pragma: no cover - compiled
-        """Zero the weights whose argument is below -746; ``squares = np.sum(np.square(weights), axis=1)``."""
+    @kernel("void(f8[:, ::1], f8[:, ::1], f8[::1], b1[::1])")
+    def _zeroed_sums_of_squares(normalized, weights, squares, zero_rows):  # pragma: no cover - compiled
+        """Zero the weights whose argument is below -746 (in the ``zero_rows`` only);
+        ``squares = np.sum(np.square(weights), axis=1)``."""
         n_e, n = normalized.shape
         node_start, node_n, node_open, values = _pairwise_scratch()
         square = np.empty(n)
         for e in range(n_e):
-            for i in range(n):
-                value = 0.0 if normalized[e, i] < _EXP_ZERO_BELOW else weights[e, i]
-                weights[e, i] = value
-                square[i] = value * value
+            if zero_rows[e]:
+                for i in range(n):
+                    value = 0.0 if normalized[e, i] < _EXP_ZERO_BELOW else weights[e, i]
+                    weights[e, i] = value
+                    square[i] = value * value
+            else:
+                for i in range(n):
+                    square[i] = weights[e, i] * weights[e, i]
             squares[e] = _row_sum_with(square, node_start, node_n, node_open, values)
 
 
@@ -1216,20 +1231,21 @@ def normalized_weights_compiled(log_weights: np.ndarray) -> tuple[np.ndarray, ..
     n_e = log_weights.shape[0]
     row_max = np.empty(n_e)
     exps = np.empty_like(log_weights)
-    between = _shift_and_clamp(log_weights, row_max, exps)
+    zero_rows = np.empty(n_e, dtype=np.bool_)  # rows with a weight of exactly zero (many have none)
+    between = _shift_and_clamp(log_weights, row_max, exps, zero_rows)
     if between < 0:
         return None
     np.exp(exps, out=exps)
     if between:
         _exp_of_between(log_weights - row_max[:, None], exps)
     sums = np.empty(n_e)
-    _zeroed_row_sums(log_weights, row_max, exps, sums)
+    _zeroed_row_sums(log_weights, row_max, exps, sums, zero_rows)
     log_norm = row_max + np.log(sums)
     normalized = np.empty_like(log_weights)
-    between = _subtract_and_clamp(log_weights, log_norm, normalized, exps)  # exps is spent: it takes the weights
+    between = _subtract_and_clamp(log_weights, log_norm, normalized, exps, zero_rows)  # exps is spent: the weights
     np.exp(exps, out=exps)
     if between:
         _exp_of_between(normalized, exps)
     squares = np.empty(n_e)
-    _zeroed_sums_of_squares(normalized, exps, squares)
+    _zeroed_sums_of_squares(normalized, exps, squares, zero_rows)
     return normalized, log_norm, exps, squares
