@@ -79,8 +79,8 @@ def reuse_freed_arrays(limit: int = HEAP_REUSE_BYTES) -> bool:
     glibc maps a large block (above a threshold that starts at 128 KiB) on pages of its own
     and unmaps them when it is freed, so the next filter step's arrays of the same size fault
     in fresh zeroed pages: a belief step over a batch of 384 episodes allocates its weights and
-    particles anew (3-6 MB each) and spent about 2 us per episode-step in page faults here
-    (``benchmarks/belief.py``). Raising the mapping and trimming thresholds keeps such blocks
+    particles anew (3-6 MB each) and spent 1-7 us per episode-step in page faults here, depending
+    on what ran before (``benchmarks/belief.py``). Raising the mapping and trimming thresholds keeps such blocks
     in the heap; the explicit :func:`trim_heap` between chunks and :func:`release_free_heap`
     between phases still return the memory. The ``probecommit`` command calls this at start;
     a program importing probecommit keeps its own allocator settings unless it calls it.
