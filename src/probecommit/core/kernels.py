@@ -349,6 +349,22 @@ if HAVE_KERNELS:
             i += 1
         return total
 
+    @helper(inline=True)
+    def _perfect_blocks(n, values):  # pragma: no cover - compiled
+        """The number of 128-blocks when NumPy's pairwise tree over ``n > 128`` values is perfect
+        (``n = 128 * 2^k``, and ``values`` holds a slot per block), else 0."""
+        blocks = n // 128
+        return blocks if n % 128 == 0 and blocks & (blocks - 1) == 0 and blocks <= values.shape[0] else 0
+
+    @helper(inline=True)
+    def _combine_levels(values, blocks):  # pragma: no cover - compiled
+        """The sum of the perfect tree whose leaves are ``values[:blocks]``, pairs added level by level."""
+        while blocks > 1:
+            blocks //= 2
+            for b in range(blocks):
+                values[b] = values[2 * b] + values[2 * b + 1]
+        return values[0]
+
     @helper()
     def _pairwise_sum_with(a, start, n, node_start, node_n, node_open, values):  # pragma: no cover - compiled
         """``np.sum(a[start:start + n])`` in NumPy's pairwise order: halves (rounded down to a
@@ -357,17 +373,13 @@ if HAVE_KERNELS:
         cache does not survive recursive functions, and a caller summing many rows allocates once."""
         if n <= 128:
             return _block_sum(a, start, n)
-        blocks = n // 128
-        if n % 128 == 0 and blocks & (blocks - 1) == 0 and blocks <= values.shape[0]:
+        blocks = _perfect_blocks(n, values)
+        if blocks:
             # n = 128 * 2^k (N = 1024 particles, say): the halves are exact, the tree is perfect,
             # so its leaves are the 128-blocks in order, combined pairwise level by level.
             for b in range(blocks):
                 values[b] = _block_sum(a, start + 128 * b, 128)
-            while blocks > 1:
-                blocks //= 2
-                for b in range(blocks):
-                    values[b] = values[2 * b] + values[2 * b + 1]
-            return values[0]
+            return _combine_levels(values, blocks)
         # Pending nodes (start, length, children done?) and finished partial sums.
         top, n_values = 0, 0
         node_start[0], node_n[0], node_open[0] = start, n, False
@@ -427,17 +439,13 @@ if HAVE_KERNELS:
         formed inside the leaves when the tree is perfect (``N = 128 * 2^k``, or at most 128),
         else written to ``product`` and summed by :func:`_row_sum_with`."""
         n = a.shape[0]
-        blocks = n // 128
         if n <= 128:
             return 0.0 + _block_dot(a, p, e, j, 0, n)
-        if n % 128 == 0 and blocks & (blocks - 1) == 0 and blocks <= values.shape[0]:
+        blocks = _perfect_blocks(n, values)
+        if blocks:
             for b in range(blocks):
                 values[b] = _block_dot(a, p, e, j, 128 * b, 128)
-            while blocks > 1:
-                blocks //= 2
-                for b in range(blocks):
-                    values[b] = values[2 * b] + values[2 * b + 1]
-            return 0.0 + values[0]
+            return 0.0 + _combine_levels(values, blocks)
         for i in range(n):
             product[i] = a[i] * p[e, i, j]
         return _row_sum_with(product, node_start, node_n, node_open, values)
