@@ -169,10 +169,12 @@ def _failure_counts(model: Any, scenarios: np.ndarray, mask: np.ndarray, context
     retained_count = mask.sum(axis=-1)
     parts = model.success_interval_parts(scenarios) if parts is None else parts
     if parts is not None:
-        return retained_count[:, None] - scaled_interval_success_counts(*parts, model.margin, mask, grid), retained_count
-    if (interval := model.success_interval(scenarios)) is not None:  # a model with only the interval
-        return retained_count[:, None] - interval_success_counts(*interval, mask, grid), retained_count
-    return np.sum(model.loss(model.action_grid, scenarios, context) & mask[:, None, :], axis=-1), retained_count
+        successes = scaled_interval_success_counts(*parts, model.margin, mask, grid)
+    elif (interval := model.success_interval(scenarios)) is not None:  # a model with only the interval
+        successes = interval_success_counts(*interval, mask, grid)
+    else:
+        return np.sum(model.loss(model.action_grid, scenarios, context) & mask[:, None, :], axis=-1), retained_count
+    return retained_count[:, None] - successes, retained_count
 
 
 @dataclass
