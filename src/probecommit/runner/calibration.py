@@ -109,8 +109,7 @@ class _Run:
         # Trajectories whose probing failed have no belief; carry the run's failure
         # rows along so they stay counted (and the repeat-count check sees them).
         if self.failed_rollouts is None:  # read once: the run's rollout rows, not its whole table
-            rollouts = self.loaded.table("episodes", where=("method", ["rollout"]))
-            self.failed_rollouts = rollouts.loc[rollouts["status"] == "failed"]
+            self.failed_rollouts = self.loaded.failed_rollouts()
         failed = self.failed_rollouts
         if len(failed):
             failed = failed.assign(variant=self.beliefs.model.variant)

@@ -74,6 +74,12 @@ class LoadedRun:
             return RunDir(self.path).read_verified(name, where)
         return held if where is None else held.loc[held[where[0]].isin(list(where[1]))]
 
+    def failed_rollouts(self) -> pd.DataFrame:
+        """The episode rows of the trajectories whose probing failed (``method == "rollout"``,
+        :func:`~probecommit.runner.inference.failed_episode_rows`), read without the other rows."""
+        rollouts = self.table("episodes", where=("method", ["rollout"]))
+        return rollouts.loc[rollouts["status"] == "failed"]
+
     def __repr__(self) -> str:
         held = [name for name, table in self._held.items() if table is not None]
         return f"LoadedRun({str(self.path)!r}, {len(self.instances)} instances, tables held: {held or 'none'})"
@@ -430,7 +436,7 @@ def replay_episodes(
     blind = blind_bayes_executor(model, config.seed, config.blind_prior_samples) if "blind_bayes" in config.methods else None
     request = {"thresholds": config.belief.nu if thresholds is None else thresholds, "margin": margin}
     [episodes] = beliefs.commit([request], methods=config.methods, blind=blind)
-    failed = loaded.table("episodes", where=("method", ["rollout"]))
+    failed = loaded.failed_rollouts()
     if len(failed):
         episodes = pd.concat([episodes, failed.assign(variant=model.variant)], ignore_index=True)
     return episodes, sim
