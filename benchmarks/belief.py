@@ -87,6 +87,16 @@ def run_plain(model, u, y, seeds, n, sigma=0.5):
     return np.stack(out_particles), np.array(out_actions)
 
 
+def add_heap_option(parser: argparse.ArgumentParser) -> None:
+    """``--default-heap``: measure with glibc's default heap thresholds instead of the command's."""
+    parser.add_argument("--default-heap", action="store_true", help="glibc's default heap thresholds, not the command's")
+
+
+def heap_setting(args: argparse.Namespace) -> str:
+    """Set the command's heap thresholds (``core.memory.reuse_freed_arrays``) unless ``--default-heap``; say which."""
+    return "glibc's default heap" if args.default_heap or not reuse_freed_arrays() else "the command's heap thresholds"
+
+
 def timed(fn, *args):
     t0 = time.perf_counter()
     out = fn(*args)
@@ -116,12 +126,12 @@ def main() -> None:
     ap.add_argument("--particles", type=int, default=1024)
     ap.add_argument("--taps", type=int, default=8)
     ap.add_argument("--rounds", type=int, default=5)
-    ap.add_argument("--default-heap", action="store_true", help="glibc's default heap thresholds, not the command's")
+    add_heap_option(ap)
     ap.add_argument("--without-mh", action="store_true",
                     help="time only the two arms of the comparison (the resample-move arm's large allocations slow "
                          "the arm after it by a few us here)")
     args = ap.parse_args()
-    heap = "glibc's default heap" if args.default_heap or not reuse_freed_arrays() else "the command's heap thresholds"
+    heap = heap_setting(args)
     model, u, y = make_data(args.episodes, args.taps)
     seeds = list(range(args.episodes))
     steps = args.episodes * args.taps

@@ -25,9 +25,8 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from belief import interleaved, make_data, run_plain  # noqa: E402
+from belief import add_heap_option, heap_setting, interleaved, make_data, run_plain  # noqa: E402
 
-from probecommit.core.memory import reuse_freed_arrays  # noqa: E402
 from probecommit.runner.config import parse_config  # noqa: E402
 from probecommit.runner.study import run_study, unit_threads  # noqa: E402
 
@@ -46,9 +45,9 @@ def main() -> None:
     ap.add_argument("--instances", type=int, default=480)
     ap.add_argument("--repeats", type=int, default=4)
     ap.add_argument("--rounds", type=int, default=3)
-    ap.add_argument("--default-heap", action="store_true", help="glibc's default heap thresholds, not the command's")
+    add_heap_option(ap)
     args = ap.parse_args()
-    heap = "glibc's default heap" if args.default_heap or not reuse_freed_arrays() else "the command's heap thresholds"
+    heap = heap_setting(args)
     episodes = args.instances * args.repeats
     model, u, y = make_data(episodes, 8)
     with tempfile.TemporaryDirectory() as tmp:
