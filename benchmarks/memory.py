@@ -9,7 +9,7 @@ The runs are analytic insertion runs of 96 and 768 instances x 4 repeats, random
 taps, k = 1..8, N = 1024 (a calibration and a test run per size), made once into a
 temporary folder. Each case runs in a fresh subprocess, with the Arrow memory pool the
 ``probecommit`` command uses (``ARROW_DEFAULT_MEMORY_POOL=system`` unless set) and its heap thresholds
-(``MALLOC_MMAP_THRESHOLD_`` and ``MALLOC_TRIM_THRESHOLD_``, 32 MiB unless set), which reports its own peak
+(``MALLOC_MMAP_THRESHOLD_`` 32 MiB and ``MALLOC_TRIM_THRESHOLD_`` 256 MiB unless set), which reports its own peak
 resident memory (``ru_maxrss``) and wall time, so the numbers are independent, and the
 resident memory once ``load_run`` has opened its input runs (this tree reads only their
 instances there, and the other tables when a replay or calibration asks; older code read every
@@ -34,7 +34,7 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from baseline import baseline_tree  # noqa: E402
 
-from probecommit.core.memory import HEAP_ENV, HEAP_REUSE_BYTES  # noqa: E402
+from probecommit.core.memory import heap_environment  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 SIZES = {384: 96, 3072: 768}  # episodes: instances (4 repeats each)
@@ -110,7 +110,7 @@ def make_runs(src: Path, out: Path) -> None:
 ARROW_POOL = {"ARROW_DEFAULT_MEMORY_POOL": os.environ.get("ARROW_DEFAULT_MEMORY_POOL", "system")}
 #: The heap thresholds the command sets (``core.memory.reuse_freed_arrays``), unless the caller's
 #: environment chose them: every arm, a baseline's too, runs with the same allocator.
-HEAP = {name: os.environ.get(name, str(HEAP_REUSE_BYTES)) for name in HEAP_ENV}
+HEAP = heap_environment()
 
 
 def run_case(src: Path, runs: Path, case: str, episodes: int, chunk: str) -> dict:
@@ -142,7 +142,8 @@ def main() -> None:
                        for case in ("replay", "calibrate") for episodes in SIZES for arm, (src, chunk) in arms.items()}
     print("peak resident memory (ru_maxrss) of replay and calibrate, each case in a fresh process "
           f"(analytic insertion, 4 repeats, k = 1..8, N = 1024, {ARROW_POOL['ARROW_DEFAULT_MEMORY_POOL']} Arrow pool, "
-          f"heap thresholds {int(HEAP['MALLOC_MMAP_THRESHOLD_']) / 2**20:g} MiB); "
+          f"heap thresholds {int(HEAP['MALLOC_MMAP_THRESHOLD_']) / 2**20:g} MiB mmap, "
+          f"{int(HEAP['MALLOC_TRIM_THRESHOLD_']) / 2**20:g} MiB trim); "
           "in brackets, the peak above the resident "
           "memory once load_run has opened the input runs (this tree reads their tables later, older code there)")
     first = next(iter(arms))

@@ -56,10 +56,23 @@ def _malloc_trim() -> Callable[[int], int] | None:
 
 #: glibc's ``mallopt`` parameters (malloc.h).
 _M_TRIM_THRESHOLD, _M_MMAP_THRESHOLD = -1, -3
-#: The environment variables that set them when a process starts (a user's choice wins).
-HEAP_ENV = {"MALLOC_MMAP_THRESHOLD_": _M_MMAP_THRESHOLD, "MALLOC_TRIM_THRESHOLD_": _M_TRIM_THRESHOLD}
-#: Freed blocks up to this size stay in the heap for reuse, and this much free memory at its top.
+#: Freed blocks up to this size stay in the heap for reuse (larger ones get pages of their own).
 HEAP_REUSE_BYTES = 32 * 1024**2
+#: Free memory at the heap's top kept for the next step instead of handed back at each free.
+#: A batch step's arrays together (E = 384, N = 1024: tens of MB, more with resample-move) come
+#: and go every step; at a 32 MiB trim threshold the resample-move arm's larger footprint was
+#: handed back and faulted in again each round (5700 faults, 3 us per episode-step of the next arm,
+#: ``benchmarks/belief.py``). The explicit trims between chunks and phases still bound the peak.
+HEAP_TOP_BYTES = 256 * 1024**2
+#: The environment variables that set the thresholds when a process starts (a user's choice
+#: wins), each with its ``mallopt`` parameter and the command's value.
+HEAP_ENV = {"MALLOC_MMAP_THRESHOLD_": (_M_MMAP_THRESHOLD, HEAP_REUSE_BYTES),
+            "MALLOC_TRIM_THRESHOLD_": (_M_TRIM_THRESHOLD, HEAP_TOP_BYTES)}
+
+
+def heap_environment() -> dict[str, str]:
+    """The heap thresholds a process of the command starts with: the environment's, else the command's."""
+    return {name: os.environ.get(name, str(value)) for name, (_, value) in HEAP_ENV.items()}
 
 
 @functools.lru_cache(maxsize=1)
@@ -73,15 +86,15 @@ def _mallopt() -> Callable[[int, int], int] | None:
     return mallopt
 
 
-def reuse_freed_arrays(limit: int = HEAP_REUSE_BYTES) -> bool:
-    """Let the C heap reuse freed arrays of up to ``limit`` bytes instead of unmapping each one.
+def reuse_freed_arrays() -> bool:
+    """Let the C heap reuse freed arrays (up to :data:`HEAP_REUSE_BYTES`) instead of unmapping each one.
 
     glibc maps a large block (above a threshold that starts at 128 KiB) on pages of its own
     and unmaps them when it is freed, so the next filter step's arrays of the same size fault
     in fresh zeroed pages: a belief step over a batch of 384 episodes allocates its weights and
     particles anew (3-6 MB each) and spent 1-7 us per episode-step in page faults here, depending
     on what ran before (``benchmarks/belief.py``). Raising the mapping and trimming thresholds keeps such blocks
-    in the heap; the explicit :func:`trim_heap` between chunks and :func:`release_free_heap`
+    in the heap, and up to :data:`HEAP_TOP_BYTES` of free memory at its top; the explicit :func:`trim_heap` between chunks and :func:`release_free_heap`
     between phases still return the memory. The ``probecommit`` command calls this at start;
     a program importing probecommit keeps its own allocator settings unless it calls it.
     A threshold set in the environment (``MALLOC_MMAP_THRESHOLD_``, ``MALLOC_TRIM_THRESHOLD_``)
@@ -94,11 +107,11 @@ def reuse_freed_arrays(limit: int = HEAP_REUSE_BYTES) -> bool:
     if mallopt is None:
         return False
     taken = True
-    for name, parameter in HEAP_ENV.items():
+    for name, (parameter, value) in HEAP_ENV.items():
         if name in os.environ:
             continue
-        taken &= mallopt(parameter, int(limit)) == 1
-        os.environ[name] = str(int(limit))
+        taken &= mallopt(parameter, value) == 1
+        os.environ[name] = str(value)
     return taken
 
 
