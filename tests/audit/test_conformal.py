@@ -7,6 +7,7 @@ import pandas as pd
 import pytest
 
 from probecommit.audit.conformal import (
+    budget_thresholds,
     conformal_quantile,
     conformal_rank,
     fixed_budget_thresholds,
@@ -14,6 +15,7 @@ from probecommit.audit.conformal import (
     score_coverage,
     simultaneous_scores,
     simultaneous_threshold,
+    worst_budget_scores,
 )
 
 
@@ -53,6 +55,17 @@ def test_instance_and_simultaneous_scores_by_hand():
     cov = score_coverage(t, {1: 0.5, 2: 0.8}).set_index("k")
     assert cov.loc[1, "cluster_coverage"] == pytest.approx(2 / 3)  # a and c
     assert cov.loc[2, "episode_coverage"] == pytest.approx(5 / 6)
+
+
+def test_scores_of_instance_parts_give_the_whole_tables_thresholds():
+    # Calibration keeps each chunk's worst-repeat scores (whole instances per chunk) and joins them.
+    t = _table()
+    parts = pd.concat([instance_scores(t.loc[t.instance_id.isin(ids)]) for ids in (["b"], ["c", "a"])]).sort_index()
+    pd.testing.assert_frame_equal(parts, instance_scores(t))
+    assert budget_thresholds(parts, 0.5) == fixed_budget_thresholds(t, 0.5) == {1: 0.5, 2: 0.8}
+    pd.testing.assert_series_equal(worst_budget_scores(parts, [1, 2]), simultaneous_scores(t, [1, 2]))
+    with pytest.raises(ValueError, match="lacks episodes"):
+        worst_budget_scores(parts.drop(columns=2).assign(**{"2": np.nan}).rename(columns={"2": 2}), [1, 2])
 
 
 def test_failed_rows_and_mixed_methods():

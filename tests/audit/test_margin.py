@@ -6,7 +6,13 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from probecommit.audit.margin import GAMMA_GRID, distribution_free_margin, instance_optimism, select_margin
+from probecommit.audit.margin import (
+    GAMMA_GRID,
+    distribution_free_margin,
+    instance_optimism,
+    optimism_margin,
+    select_margin,
+)
 
 
 def test_grid_is_exactly_one_to_point_three_in_steps_of_point_02():
@@ -78,3 +84,7 @@ def test_distribution_free_margin_by_hand():
     assert distribution_free_margin(t, 0.5) == pytest.approx(0.4)
     # Too few instances for the level: +inf.
     assert math.isinf(distribution_free_margin(t[t.instance_id != "d"], 0.2))
+    # From each part's optimism (whole instances per part), as the calibration keeps it chunk by chunk.
+    parts = pd.concat([instance_optimism(t.loc[t.instance_id.isin(ids)]) for ids in (["c", "a"], ["d", "b"])])
+    pd.testing.assert_frame_equal(parts.sort_index(), opt)
+    assert optimism_margin(parts, 0.5) == distribution_free_margin(t, 0.5)

@@ -5,7 +5,7 @@ import pandas as pd
 import pytest
 
 from probecommit.audit.io import validate_episodes
-from probecommit.audit.metrics import audit_table, summary_row
+from probecommit.audit.metrics import audit_from_sums, audit_table, instance_sums, summary_row
 
 
 def _hand():
@@ -64,3 +64,50 @@ def test_failed_rows_are_excluded_and_counted_and_budgets_filter():
 def test_summary_row():
     a = pd.DataFrame({"cluster_coverage": [0.7, 0.9], "optimism": [0.1, -0.3]})
     assert summary_row(a) == pytest.approx({"mean_abs_cluster_coverage_gap": 0.1, "mean_abs_optimism": 0.2})
+
+
+def _random_table(seed: int = 3, instances: int = 23) -> pd.DataFrame:
+    # Two methods, three budgets, uneven repeats, realized and predicted with long fractions, some failed rows,
+    # and a "rollout" group whose every row failed (trajectories whose probing failed).
+    rng = np.random.default_rng(seed)
+    rows = []
+    for i in range(instances):
+        for r in range(int(rng.integers(1, 4))):
+            for method in ("probe_robust", "blind_robust"):
+                for k in (1, 3, 5):
+                    lo = rng.normal()
+                    rows.append({"instance_id": f"i{i:03d}", "repeat": r, "k": k, "method": method,
+                                 "variant": "deployed", "predicted": rng.random() / 3, "realized": rng.random(),
+                                 "z_true": rng.normal(), "retained_lo": lo, "retained_hi": lo + rng.random(),
+                                 "hull_lo": lo - 1, "hull_hi": lo + 2, "status": "ok"})
+    table = pd.DataFrame(rows)
+    failed = rng.random(len(table)) < 0.08
+    table.loc[failed, ["status", "realized"]] = ["failed", np.nan]
+    rollout = {"instance_id": "i007", "repeat": 9, "k": 0, "method": "rollout", "variant": "deployed", "status": "failed"}
+    return validate_episodes(pd.concat([table, pd.DataFrame([rollout])], ignore_index=True), structure=False)
+
+
+@pytest.mark.parametrize("budgets", [None, [1, 5]])
+def test_audit_from_sums_of_instance_parts_is_the_whole_tables_audit(budgets):
+    # The calibration keeps only each chunk's per-instance sums: whole instances per part, rows in
+    # order, the rollout rows last, as runner.calibration concatenates them.
+    table = _random_table()
+    whole = audit_table(table, budgets=budgets, resamples=300, seed=4)
+    ids = table["instance_id"]
+    parts = [table.loc[(table.method != "rollout") & ids.isin(chunk)] for chunk in
+             (["i000", "i001", "i002"], [f"i{i:03d}" for i in range(3, 17)], [f"i{i:03d}" for i in range(17, 23)])]
+    parts.append(table.loc[table.method == "rollout"])
+    sums = [instance_sums(part) for part in parts]
+    joined = audit_from_sums(pd.concat([s for s, _ in sums]), pd.concat([f for _, f in sums]), budgets=budgets,
+                             resamples=300, seed=4)
+    pd.testing.assert_frame_equal(joined, whole, check_exact=True)
+    assert whole["n_failed"].min() >= 1  # the rollout trajectory is counted at every budget
+
+
+def test_instance_sums_by_hand():
+    t = _hand()
+    t.loc[1, ["realized", "status"]] = [np.nan, "failed"]
+    sums, failed = instance_sums(t)
+    row = sums.set_index(["method", "instance_id"]).loc[("probe_robust", "a")]
+    assert (row["n"], row["covered"], row["realized"], row["n_repeats"], row["n_failed"]) == (1, 1, 0, 1, 1)
+    assert failed[["instance_id", "repeat", "method"]].values.tolist() == [["a", 1, "probe_robust"]]

@@ -98,12 +98,20 @@ def simultaneous_scores(episodes: pd.DataFrame, budgets: Iterable[int], score: s
         ValueError: An instance lacks a budget of the set (its ``S_i`` would be
             taken over fewer budgets and no longer be simultaneous).
     """
+    return worst_budget_scores(instance_scores(episodes, None, score), budgets)
+
+
+def worst_budget_scores(scores: pd.DataFrame, budgets: Iterable[int]) -> pd.Series:
+    """:func:`simultaneous_scores` from the worst-repeat scores ``instance_scores(episodes)``.
+
+    Instances are independent rows of ``scores``, so the scores of a table's parts
+    (whole instances each), concatenated, give the whole table's.
+    """
     budgets = sorted(int(b) for b in budgets)
-    table = instance_scores(episodes, None, score)
-    missing = [b for b in budgets if b not in table.columns]
+    missing = [b for b in budgets if b not in scores.columns]
     if missing:
         raise ValueError(f"no episodes at budget(s) {missing}")
-    sub = table[budgets]
+    sub = scores[budgets]
     incomplete = sub.isna().any(axis=1)
     if incomplete.any():
         raise ValueError(f"instance {sub.index[incomplete][0]!r} lacks episodes at some budget of {budgets}")
@@ -113,9 +121,14 @@ def simultaneous_scores(episodes: pd.DataFrame, budgets: Iterable[int], score: s
 def fixed_budget_thresholds(episodes: pd.DataFrame, alpha: float = DEFAULT_ALPHA, budgets: Iterable[int] | None = None,
                             score: str = "score_s") -> dict[int, float]:
     """Per-budget thresholds ``t_k`` from worst-repeat calibration scores."""
-    table = instance_scores(episodes, None, score)
-    budgets = sorted(table.columns) if budgets is None else sorted(int(b) for b in budgets)
-    return {int(k): conformal_quantile(table[k].dropna().to_numpy(), alpha) for k in budgets}
+    return budget_thresholds(instance_scores(episodes, None, score), alpha, budgets)
+
+
+def budget_thresholds(scores: pd.DataFrame, alpha: float = DEFAULT_ALPHA,
+                      budgets: Iterable[int] | None = None) -> dict[int, float]:
+    """:func:`fixed_budget_thresholds` from the worst-repeat scores ``instance_scores(episodes)``."""
+    budgets = sorted(scores.columns) if budgets is None else sorted(int(b) for b in budgets)
+    return {int(k): conformal_quantile(scores[k].dropna().to_numpy(), alpha) for k in budgets}
 
 
 def simultaneous_threshold(episodes: pd.DataFrame, budgets: Iterable[int], alpha: float = DEFAULT_ALPHA,

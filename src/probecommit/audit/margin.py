@@ -137,5 +137,11 @@ def distribution_free_margin(episodes: pd.DataFrame, alpha: float = DEFAULT_ALPH
     Returns:
         The quantile (``+inf`` when the calibration set is too small).
     """
-    worst = instance_optimism(episodes, budgets).max(axis=1, skipna=True).dropna()
+    return optimism_margin(instance_optimism(episodes, budgets), alpha)
+
+
+def optimism_margin(optimism: pd.DataFrame, alpha: float = DEFAULT_ALPHA) -> float:
+    """:func:`distribution_free_margin` from ``instance_optimism(episodes, budgets)`` (of a table,
+    or of its parts of whole instances, concatenated)."""
+    worst = optimism.max(axis=1, skipna=True).dropna()
     return conformal_quantile(worst.to_numpy(), alpha)

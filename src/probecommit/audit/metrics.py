@@ -32,27 +32,57 @@ from probecommit.audit.stats import (
 METRICS = ("coverage", "cluster_coverage", "escape", "realized", "predicted", "optimism")
 
 
-def _instance_sums(g: pd.DataFrame, names: np.ndarray) -> dict[str, np.ndarray]:
-    """Per-instance sums and counts aligned with ``names`` (zero where absent)."""
-    idx = np.searchsorted(names, g["instance_id"].to_numpy())
-    m = names.size
+#: Per-instance sums of one group and budget (``instance_sums``), in report order.
+SUM_COLUMNS = ("n", "covered", "escaped", "realized", "predicted", "n_repeats", "n_failed")
 
-    def total(values) -> np.ndarray:
-        return np.bincount(idx, weights=np.asarray(values, dtype=float), minlength=m)
 
-    n = np.bincount(idx, minlength=m).astype(float)
-    covered = total(g["covered"].to_numpy(bool))
-    return {
-        "n": n,
-        "covered": covered,
-        "escaped": total(g["escaped"].to_numpy(bool)),
-        "realized": total(g["realized"]),
-        "predicted": total(g["predicted"]),
-        # An instance counts for cluster coverage when it has episodes here; it is
-        # covered when every one of them is.
-        "present": (n > 0).astype(float),
-        "all_covered": ((n > 0) & (covered == n)).astype(float),
-    }
+def instance_sums(episodes: pd.DataFrame) -> tuple[pd.DataFrame, pd.DataFrame]:
+    """The audit's sufficient statistics: per group, budget and instance, sums over its episodes.
+
+    Every sum is a ``np.bincount`` over one instance's rows in table order, so the sums
+    of a table split between instances (whole instances in each part, rows in order)
+    are those of the whole table: :func:`audit_table` of a table equals
+    :func:`audit_from_sums` of its parts' sums concatenated.
+
+    Args:
+        episodes: A validated episode table.
+
+    Returns:
+        ``(sums, failed)``: ``sums`` has the group columns, ``k``, ``instance_id`` and
+        :data:`SUM_COLUMNS` (ok episodes counted, summed and their repeats counted; failed
+        rows counted in ``n_failed``), one row per group, budget and instance with any row;
+        ``failed`` holds the group columns, ``k``, ``instance_id`` and ``repeat`` of the
+        failed rows.
+    """
+    groups = group_columns(episodes)
+    keys = groups + ["k"]
+    failed = (episodes["status"].astype(str).eq("failed").to_numpy() if "status" in episodes.columns
+              else np.zeros(len(episodes), bool))
+    ids = episodes["instance_id"].to_numpy().astype(str)
+    values = {name: episodes[name].to_numpy(float) for name in ("covered", "escaped", "realized", "predicted")}
+    repeat = episodes["repeat"].to_numpy()
+    parts = []
+    # Positions of each group's rows, in table order (groupby's indices keep it).
+    for gkey, pos in (episodes.groupby(keys).indices.items() if len(episodes) else ()):
+        gkey = gkey if isinstance(gkey, tuple) else (gkey,)
+        names, idx = np.unique(ids[pos], return_inverse=True)
+        fk = failed[pos]
+        ok, oi, m = pos[~fk], idx[~fk], names.size
+
+        def total(column: str) -> np.ndarray:
+            return np.bincount(oi, weights=values[column][ok], minlength=m)
+
+        n_repeats = np.zeros(m, np.int64)
+        if ok.size:
+            per_instance = pd.Series(repeat[ok]).groupby(oi).nunique()
+            n_repeats[per_instance.index.to_numpy()] = per_instance.to_numpy()
+        parts.append(pd.DataFrame({**dict(zip(keys, gkey)), "instance_id": names,
+                                   "n": np.bincount(oi, minlength=m).astype(float),
+                                   **{column: total(column) for column in values},
+                                   "n_repeats": n_repeats, "n_failed": np.bincount(idx[fk], minlength=m)}))
+    columns = keys + ["instance_id", *SUM_COLUMNS]
+    sums = pd.concat(parts, ignore_index=True) if parts else pd.DataFrame(columns=columns)
+    return sums[columns], episodes.loc[failed, keys + ["instance_id", "repeat"]].reset_index(drop=True)
 
 
 def audit_table(episodes: pd.DataFrame, *, budgets=None, resamples: int = DEFAULT_RESAMPLES,
@@ -72,36 +102,64 @@ def audit_table(episodes: pd.DataFrame, *, budgets=None, resamples: int = DEFAUL
         metric in :data:`METRICS`, the columns ``<metric>``, ``<metric>_lo``,
         ``<metric>_hi``.
     """
-    groups = group_columns(episodes)
-    df = episodes
-    failed = df["status"].astype(str).eq("failed") if "status" in df.columns else pd.Series(False, index=df.index)
+    return audit_from_sums(*instance_sums(episodes), budgets=budgets, resamples=resamples, seed=seed, level=level)
+
+
+def audit_from_sums(sums: pd.DataFrame, failed: pd.DataFrame, *, budgets=None, resamples: int = DEFAULT_RESAMPLES,
+                    seed: int = DEFAULT_SEED, level: float = DEFAULT_LEVEL) -> pd.DataFrame:
+    """:func:`audit_table` from :func:`instance_sums` (of a table, or of its parts concatenated).
+
+    Args:
+        sums: The per-instance sums.
+        failed: The failed rows' keys.
+        budgets: Budgets to report (all present when None).
+        resamples: Cluster-bootstrap resamples.
+        seed: Bootstrap seed (the same draws for every group).
+        level: Interval level.
+
+    Returns:
+        The table :func:`audit_table` returns.
+    """
+    groups = [c for c in sums.columns if c not in ("k", "instance_id", *SUM_COLUMNS)]
     # Groups with no ok row at all (our runner's "rollout" rows for trajectories
     # whose probing failed) are not audited; their trajectories are missing from
     # every budget of every group, so they add to each row's failed count.
-    all_groups = list(df.groupby(groups, sort=True)) if groups else [((), df)]
-    dead = [g for _, g in all_groups if failed.loc[g.index].all()]
-    n_dead = len(pd.concat([g[["instance_id", "repeat"]] for g in dead]).drop_duplicates()) if dead else 0
+    ok_rows = sums.groupby(groups, sort=True)["n"].sum() if groups else pd.Series([sums["n"].sum()])
+    dead_keys = [key if isinstance(key, tuple) else (key,) for key, n in ok_rows.items() if n == 0]
+    n_dead = 0
+    if dead_keys and groups:
+        dead = failed.set_index(groups).index.isin(dead_keys)
+        n_dead = len(failed.loc[dead, ["instance_id", "repeat"]].drop_duplicates())
+    elif dead_keys:
+        n_dead = len(failed[["instance_id", "repeat"]].drop_duplicates())
     if budgets is not None:
-        df = df.loc[df["k"].isin(list(budgets))]
+        sums = sums.loc[sums["k"].isin(list(budgets))]
     rows = []
-    grouped = list(df.groupby(groups, sort=True)) if groups else [((), df)]
+    grouped = list(sums.groupby(groups, sort=True)) if groups else [((), sums)]
     for gkey, g in grouped:
         gkey = gkey if isinstance(gkey, tuple) else (gkey,)
-        if failed.loc[g.index].all():
+        if g["n"].sum() == 0:
             continue
         names = np.unique(g["instance_id"].to_numpy().astype(str))
         counts = resample_counts(names.size, resamples, seed)
         for k, gk in g.groupby("k", sort=True):
-            fk = failed.loc[gk.index].to_numpy()
-            ok = gk.loc[~fk]
+            present = gk["n"].to_numpy() > 0
             row = dict(zip(groups, gkey))
-            row.update(k=int(k), n_episodes=int(len(ok)), n_instances=int(ok["instance_id"].nunique()),
-                       n_repeats=int(ok.groupby("instance_id")["repeat"].nunique().max()) if len(ok) else 0,
-                       n_failed=int(fk.sum()) + n_dead)
-            if len(ok) == 0:
+            row.update(k=int(k), n_episodes=int(gk["n"].sum()), n_instances=int(present.sum()),
+                       n_repeats=int(gk["n_repeats"].max()) if present.any() else 0,
+                       n_failed=int(gk["n_failed"].sum()) + n_dead)
+            if not present.any():
                 rows.append(row)
                 continue
-            s = _instance_sums(ok, names)
+            at = np.searchsorted(names, gk["instance_id"].to_numpy().astype(str))
+            s = {}
+            for column in ("n", "covered", "escaped", "realized", "predicted"):
+                s[column] = np.zeros(names.size)
+                s[column][at] = gk[column].to_numpy(float)
+            # An instance counts for cluster coverage when it has episodes here; it is
+            # covered when every one of them is.
+            s["present"] = (s["n"] > 0).astype(float)
+            s["all_covered"] = ((s["n"] > 0) & (s["covered"] == s["n"])).astype(float)
             stats = {
                 "coverage": bootstrap_ratio(s["covered"], s["n"], counts=counts, level=level),
                 "cluster_coverage": bootstrap_ratio(s["all_covered"], s["present"], counts=counts, level=level),

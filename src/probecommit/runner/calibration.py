@@ -12,27 +12,38 @@ the run committed to is executed in the engine (never, for a run made with
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, field
-from typing import Any, Iterable, Sequence
+from typing import Any, Callable, Iterable, Sequence
 
 import numpy as np
 import pandas as pd
 
 from probecommit.audit.conformal import (
     DEFAULT_ALPHA,
-    fixed_budget_thresholds,
-    simultaneous_scores,
+    budget_thresholds,
+    conformal_quantile,
+    instance_scores,
     simultaneous_threshold,
+    worst_budget_scores,
 )
 from probecommit.audit.gates import DEFAULT_TARGET_RATE, GatesResult, gates_from_tables
 from probecommit.audit.io import ok_episodes, validate_episodes
-from probecommit.audit.margin import GAMMA_GRID, MarginResult, distribution_free_margin, margin_candidates, select_margin
-from probecommit.audit.metrics import audit_table, summary_row
+from probecommit.audit.margin import (
+    GAMMA_GRID,
+    MarginResult,
+    instance_optimism,
+    margin_candidates,
+    optimism_margin,
+    select_margin,
+)
+from probecommit.audit.metrics import audit_from_sums, instance_sums, summary_row
 from probecommit.audit.stats import (
     DEFAULT_LEVEL,
     DEFAULT_RESAMPLES,
     DEFAULT_SEED,
+    EPISODE_KEYS,
     bootstrap_ratio,
     cluster_bootstrap_mean,
     paired_bootstrap,
@@ -64,6 +75,50 @@ MARGIN_BLOCK_ROWS = 2**17
 
 #: A commit request: the thresholds (mass ``nu``, ``t`` or ``{k: t_k}``) and the margin (None: the model's).
 Request = tuple[float | dict[int, float], float | None]
+#: What is kept of a chunk's episode table: a DataFrame, a tuple of DataFrames, or None.
+Reduction = Callable[[pd.DataFrame], Any]
+
+
+def _concat_parts(parts: Sequence[Any]) -> Any:
+    """The reductions of a run's parts joined: DataFrames concatenated (their index kept), tuples
+    element by element; None parts (nothing kept) skipped."""
+    parts = [part for part in parts if part is not None]
+    if parts and isinstance(parts[0], tuple):
+        return tuple(_concat_parts(column) for column in zip(*parts))
+    return pd.concat(parts) if len(parts) > 1 else parts[0]
+
+
+def _margin_rows(table: pd.DataFrame, budgets: list[int]) -> pd.DataFrame:
+    """The rows and columns ``audit.margin.margin_satisfied(table, budgets)`` reads, in order."""
+    ok = ok_episodes(table)
+    return ok.loc[ok["k"].isin(budgets), ["k", "predicted", "realized"]]
+
+
+def _scores(table: pd.DataFrame) -> pd.DataFrame | None:
+    """Worst-repeat coverage scores, instances x budgets (``audit.conformal.instance_scores``)."""
+    return instance_scores(table, None) if len(ok_episodes(table)) else None
+
+
+def _optimism(table: pd.DataFrame, budgets: list[int]) -> pd.DataFrame | None:
+    """Mean optimism over repeats, instances x budgets (``audit.margin.instance_optimism``)."""
+    return instance_optimism(table, budgets) if len(ok_episodes(table)) else None
+
+
+def _cost_rows(table: pd.DataFrame, k: int) -> pd.DataFrame:
+    """The rows at budget ``k`` and the columns a failure comparison reads (``_failure_at``, pairing)."""
+    return table.loc[table["k"] == k, [*EPISODE_KEYS, "status", "realized"]]
+
+
+def _audited(table: pd.DataFrame, k: int) -> tuple[pd.DataFrame, pd.DataFrame, pd.DataFrame]:
+    """The audit's per-instance sums (``audit.metrics.instance_sums``) and the rows at budget ``k``."""
+    return (*instance_sums(table), _cost_rows(table, k))
+
+
+def _all_covered(table: pd.DataFrame, budgets: list[int]) -> pd.Series | None:
+    """Per instance, whether every ok episode at ``budgets`` is covered."""
+    ok = ok_episodes(table)
+    ok = ok.loc[ok["k"].isin(budgets)]
+    return ok.groupby("instance_id")["covered"].all() if len(ok) else None
 
 
 @dataclass
@@ -90,7 +145,7 @@ class _Run:
         return self.override_plateau or self.loaded.config.calibration.plateau
 
     def commit(self, *requests: Request, keep: Sequence[Sequence[str] | None] | None = None,
-               final: bool = False) -> list[pd.DataFrame]:
+               reduce: Sequence[Reduction | None] | None = None, final: bool = False) -> list[Any]:
         """Episode tables of the probe executor, one per request, in one pass over the run's chunks.
 
         Args:
@@ -98,61 +153,103 @@ class _Run:
             keep: Per request, the columns to keep (None: all, validated). A margin search
                 reads four columns of dozens of tables; those are not validated (the
                 validation needs every column) and not kept whole.
+            reduce: Per request, what is kept of each chunk's table (and of the run's failed
+                rollout rows) instead of the table: a function of a table returning a
+                DataFrame or a tuple of them (None: nothing), concatenated over the parts.
+                A whole table (``keep`` None) is validated chunk by chunk before it is reduced.
             final: The run's last commit: its beliefs are released as the pass goes.
+
+        Returns:
+            Per request, its table or, with ``reduce``, its concatenated reductions.
         """
         keep = list(keep) if keep is not None else [None] * len(requests)
+        reduce = list(reduce) if reduce is not None else [None] * len(requests)
+        per_chunk = [None if reducer is None else self._checked(reducer, columns)
+                     for reducer, columns in zip(reduce, keep)]
         tables = self.beliefs.commit([{"thresholds": _executable(t), "margin": g} for t, g in requests], keep=keep,
-                                     reuse=self.reuse, final=final, methods=(PROBE_METHOD,), plateau=self.plateau)
-        return [self._finish(table, columns) for table, columns in zip(tables, keep)]
+                                     reduce=per_chunk, reuse=self.reuse, final=final, methods=(PROBE_METHOD,),
+                                     plateau=self.plateau)
+        out = []
+        for table, columns, reducer in zip(tables, keep, reduce):
+            if reducer is None:
+                out.append(self._finish(table, columns))
+                continue
+            failed = self._failed()
+            out.append(_concat_parts([*table, reducer(failed if columns is None else failed[list(columns)])
+                                      if len(failed) else None]))
+        return out
+
+    def _failed(self) -> pd.DataFrame:
+        """The run's rollout rows (read once), of the variant the beliefs are computed under."""
+        if self.failed_rollouts is None:  # read once: the run's rollout rows, not its whole table
+            self.failed_rollouts = self.loaded.failed_rollouts()
+        failed = self.failed_rollouts
+        return failed.assign(variant=self.beliefs.model.variant) if len(failed) else failed
+
+    def _checked(self, reducer: Reduction, columns: Sequence[str] | None) -> Reduction:
+        """``reducer`` after the chunk's whole table (with its instances' rollout rows) is validated."""
+        if columns is not None:
+            return reducer
+
+        def check_then_reduce(table: pd.DataFrame) -> Any:
+            failed = self._failed()
+            mine = failed.loc[failed["instance_id"].isin(table["instance_id"].unique())] if len(failed) else failed
+            self._validate(pd.concat([table, mine], ignore_index=True) if len(mine) else table)
+            return reducer(table)
+
+        return check_then_reduce
 
     def _finish(self, table: pd.DataFrame, columns: Sequence[str] | None) -> pd.DataFrame:
         # Trajectories whose probing failed have no belief; carry the run's failure
         # rows along so they stay counted (and the repeat-count check sees them).
-        if self.failed_rollouts is None:  # read once: the run's rollout rows, not its whole table
-            self.failed_rollouts = self.loaded.failed_rollouts()
-        failed = self.failed_rollouts
+        failed = self._failed()
         if len(failed):
-            failed = failed.assign(variant=self.beliefs.model.variant)
             table = pd.concat([table, failed if columns is None else failed[list(columns)]], ignore_index=True)
         if columns is not None:
             return table
-        # The re-executed table has the same episodes every time: check its structure once.
+        return self._validate(table)
+
+    def _validate(self, table: pd.DataFrame) -> pd.DataFrame:
         table = validate_episodes(table, f"{self.loaded.path} (re-executed)", structure=not self.structure_checked)
         self.structure_checked = True
         return table
 
     def search_margin(self, thresholds: float | dict[int, float], grid: Iterable[float], budgets: Sequence[int],
-                      *extra: Request) -> tuple[MarginResult, list[pd.DataFrame]]:
+                      *extra: tuple[Request, Reduction | None]) -> tuple[MarginResult, list[Any]]:
         """The validation-tuned margin under ``thresholds`` (``audit.margin.select_margin``).
 
         A run of one chunk keeps its beliefs, so each margin is committed when the scan
         asks for it. A run of several chunks would recompute its beliefs for each one,
         so an evaluation commits the next margins of the scan with it, in one pass, as many
-        as :data:`MARGIN_BLOCK_ROWS` rows allow. Each margin's table is let go once scanned.
+        as :data:`MARGIN_BLOCK_ROWS` rows allow. Of each margin's table, only the rows the
+        margin rule reads are kept, and let go once scanned.
 
         Args:
             thresholds: The set calibration the margin is searched under.
             grid: Margin candidates.
             budgets: Budgets the margin rule averages over.
-            *extra: Further requests, committed in the first pass; their whole tables are returned.
+            *extra: Further requests with their reductions (see :meth:`commit`), committed in
+                the first pass.
 
         Returns:
-            The margin and the tables of ``extra``.
+            The margin and what :meth:`commit` returns for ``extra``.
         """
         candidates = margin_candidates(grid)
         tables: dict[float, pd.DataFrame] = {}
-        extras: list[pd.DataFrame] = []
+        extras: list[Any] = []
         # Margins committed in one pass: as many as MARGIN_BLOCK_ROWS rows of their tables allow,
         # so the memory held is bounded, not a whole scan's tables of every episode.
         rows = self.beliefs.batch.n_episodes * max(len(self.beliefs.budgets), 1)
         per_pass = max(1, MARGIN_BLOCK_ROWS // max(rows, 1))
+        margin_rows = functools.partial(_margin_rows, budgets=list(budgets))
 
         def evaluate(gamma: float) -> pd.DataFrame:
             if gamma not in tables:
                 block = [gamma] if len(self.beliefs.chunks) == 1 else [g for g in candidates if g <= gamma][:per_pass]
                 first = [] if extras else list(extra)
-                out = self.commit(*[(thresholds, g) for g in block], *first,
-                                  keep=[MARGIN_COLUMNS] * len(block) + [None] * len(first))
+                out = self.commit(*[(thresholds, g) for g in block], *[request for request, _ in first],
+                                  keep=[MARGIN_COLUMNS] * len(block) + [None] * len(first),
+                                  reduce=[margin_rows] * len(block) + [reducer for _, reducer in first])
                 tables.update(zip(block, out[:len(block)]))
                 extras.extend(out[len(block):])
             return tables.pop(gamma)  # the scan reads each margin once
@@ -334,22 +431,28 @@ def calibrate(cal_run, test_run, alpha: float = DEFAULT_ALPHA, budgets: Sequence
     if cost_budget not in budgets:
         raise ValueError(f"cost budget {cost_budget} is not among the calibrated budgets {budgets}")
 
-    [cal_orig] = cal.commit((cal.nu, None))
-    t_k = fixed_budget_thresholds(cal_orig, alpha, budgets)
-    t_sim = simultaneous_threshold(cal_orig, budgets, alpha)
-    n_calibration = int(simultaneous_scores(cal_orig, budgets).size)
-    margin, [cal_set] = cal.search_margin(t_k, margin_grid, budgets, (t_k, None))
-    df_margin = distribution_free_margin(cal_set, alpha, budgets)
+    # Of each table, only what the results read is kept, chunk by chunk: per-instance scores, sums and
+    # optimism, the rows at the cost budget and the margin rows, so memory does not grow with the runs.
+    [scores] = cal.commit((cal.nu, None), reduce=[_scores])
+    scores = scores.sort_index()
+    t_k = budget_thresholds(scores, alpha, budgets)
+    simultaneous = worst_budget_scores(scores, budgets)
+    t_sim, n_calibration = conformal_quantile(simultaneous.to_numpy(), alpha), int(simultaneous.size)
+    margin, [optimism] = cal.search_margin(t_k, margin_grid, budgets,
+                                           ((t_k, None), functools.partial(_optimism, budgets=budgets)))
+    df_margin = optimism_margin(optimism.sort_index(), alpha)
     # The calibration run is done: its tables, beliefs and engine cache go before the test run's commits.
     cal.release()
-    del cal, cal_orig, cal_set
+    del cal, scores, optimism
 
     # Every test commit in one pass over the test run's chunks.
-    test_orig, test_set, test_full, test_sim = test.commit((test.nu, None), (t_k, None), (t_k, margin.gamma),
-                                                           (t_sim, None), keep=[None] + [AUDIT_COLUMNS] * 3,
-                                                           final=True)
-    a_orig = audit_table(test_orig, budgets=budgets, resamples=resamples, seed=seed, level=level)
-    a_cal = audit_table(test_full, budgets=budgets, resamples=resamples, seed=seed, level=level)
+    audited = functools.partial(_audited, k=cost_budget)
+    orig, set_rows, full, covered = test.commit(
+        (test.nu, None), (t_k, None), (t_k, margin.gamma), (t_sim, None), keep=[None] + [AUDIT_COLUMNS] * 3,
+        reduce=[audited, functools.partial(_cost_rows, k=cost_budget), audited,
+                functools.partial(_all_covered, budgets=budgets)], final=True)
+    a_orig = audit_from_sums(*orig[:2], budgets=budgets, resamples=resamples, seed=seed, level=level)
+    a_cal = audit_from_sums(*full[:2], budgets=budgets, resamples=resamples, seed=seed, level=level)
     table3 = pd.DataFrame({"k": a_orig["k"]})
     for name, src in (("original", a_orig), ("calibrated", a_cal)):
         for metric in ("cluster_coverage", "coverage", "optimism"):
@@ -361,9 +464,9 @@ def calibrate(cal_run, test_run, alpha: float = DEFAULT_ALPHA, budgets: Sequence
     summary = {f"{k}_original": v for k, v in s_orig.items()} | {f"{k}_calibrated": v for k, v in s_cal.items()}
 
     # Cost of calibration (Table IV): failure at the cost budget, paired over identical episodes.
-    names = np.unique(test_orig["instance_id"].to_numpy().astype(str))
+    names = np.unique(orig[0]["instance_id"].to_numpy().astype(str))
     counts = resample_counts(names.size, resamples, seed)
-    arms = {"no calibration": test_orig, "set calibration": test_set, "set calibration + margin": test_full}
+    arms = {"no calibration": orig[2], "set calibration": set_rows, "set calibration + margin": full[2]}
     cost_rows = []
     blind = ok_episodes(test.loaded.table("episodes", where=("method", ["blind_robust"])))
     if len(blind):
@@ -375,17 +478,15 @@ def calibrate(cal_run, test_run, alpha: float = DEFAULT_ALPHA, budgets: Sequence
         cost_rows.append({"setting": label, "k": cost_budget, "n_episodes": n,
                           "failure": iv.estimate, "failure_lo": iv.lo, "failure_hi": iv.hi})
     diffs = []
-    at = lambda t: t.loc[t["k"] == cost_budget]  # noqa: E731
     for base, treat in (("no calibration", "set calibration + margin"), ("no calibration", "set calibration"),
                         ("set calibration", "set calibration + margin")):
-        pdiff = paired_bootstrap(at(arms[base]), at(arms[treat]), "realized", resamples=resamples, seed=seed, level=level)
+        pdiff = paired_bootstrap(arms[base], arms[treat], "realized", resamples=resamples, seed=seed, level=level)
         diffs.append({"baseline": base, "treatment": treat, "difference": pdiff.difference.estimate,
                       "lo": pdiff.difference.lo, "hi": pdiff.difference.hi, "p_sign_flip": pdiff.p_sign_flip,
                       "n_pairs": pdiff.n_pairs, "n_clusters": pdiff.n_clusters})
 
     # Simultaneous coverage on test, measured on the sets as constructed at t.
-    test_sim = ok_episodes(test_sim).loc[lambda d: d["k"].isin(budgets)]
-    per_inst = test_sim.groupby("instance_id")["covered"].all().astype(float)
+    per_inst = covered.sort_index().astype(float)
     sim_iv = cluster_bootstrap_mean(per_inst.to_numpy(), per_inst.index.to_numpy(), resamples=resamples,
                                     seed=seed, level=level)
     return CalibrationResult(

@@ -10,7 +10,7 @@ from __future__ import annotations
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Iterable, Mapping, Sequence
+from typing import Any, Callable, Iterable, Mapping, Sequence
 
 import numpy as np
 import pandas as pd
@@ -298,7 +298,8 @@ class RunBeliefs:
         return committed_budgets(self.config) if self.kept_budgets is None else list(self.kept_budgets)
 
     def commit(self, requests: Sequence[Mapping[str, Any]], *, keep: Sequence[Sequence[str] | None] | None = None,
-               reuse: bool = True, final: bool = False, **common: Any) -> list[pd.DataFrame]:
+               reduce: Sequence[Callable[[pd.DataFrame], Any] | None] | None = None,
+               reuse: bool = True, final: bool = False, **common: Any) -> list[pd.DataFrame | list[Any]]:
         """Episode tables of several commits, computed chunk by chunk in one pass.
 
         Each chunk's beliefs are computed once and every request is committed on them
@@ -309,6 +310,9 @@ class RunBeliefs:
                 (e.g. ``{"thresholds": t, "margin": g}``).
             keep: Per request, the columns to keep (None: all); a margin search reads four
                 columns of dozens of tables.
+            reduce: Per request, a function applied to each chunk's table as soon as it is
+                made (None: keep the table): what a caller needs of a run's table (its
+                per-instance sums, say), without the table of every episode.
             reuse: Share margin-independent work (retained sets) between the requests of a
                 chunk, and between calls when the run is one chunk; False recomputes it per commit.
             final: No later call needs this run's beliefs: a one-chunk run's kept trace is
@@ -316,10 +320,12 @@ class RunBeliefs:
             **common: Keyword arguments of ``commit`` shared by every request.
 
         Returns:
-            One table per request, in the run's canonical episode order.
+            Per request, its table in the run's canonical episode order, or with ``reduce``,
+            the list of what it returned for each chunk, in that order.
         """
         keep = list(keep) if keep is not None else [None] * len(requests)
-        parts: list[list[pd.DataFrame]] = [[] for _ in requests]
+        reduce = list(reduce) if reduce is not None else [None] * len(requests)
+        parts: list[list[Any]] = [[] for _ in requests]
         several = len(self.chunks) > 1
         if several:
             trim_heap()  # what earlier calls freed goes back before the first chunk is computed
@@ -334,16 +340,19 @@ class RunBeliefs:
                 self._kept = None
             # A cache that outlives this call keeps every set; otherwise each set goes after its last use.
             cache_ends_here = several or final
-            for i, (part, request, columns) in enumerate(zip(parts, requests, keep)):
-                part.append(commit(trace, self.model, self.simulator, cache=cache if reuse else None,
-                                   columns=columns, **common, **request))
+            for i, (part, request, columns, reducer) in enumerate(zip(parts, requests, keep, reduce)):
+                table = commit(trace, self.model, self.simulator, cache=cache if reuse else None,
+                               columns=columns, **common, **request)
+                part.append(table if reducer is None else reducer(table))
+                del table
                 later = requests[i + 1:]
                 if cache_ends_here and all("thresholds" in upcoming for upcoming in later):
                     prune_retained_sets(cache, [upcoming["thresholds"] for upcoming in later])
             del trace, cache  # let a finished chunk's beliefs go before the next is computed
             if several:
                 trim_heap()  # ... and their pages, so chunks do not pile up as heap fragments
-        return [p[0] if len(p) == 1 else pd.concat(p, ignore_index=True) for p in parts]
+        return [p if reducer is not None else p[0] if len(p) == 1 else pd.concat(p, ignore_index=True)
+                for p, reducer in zip(parts, reduce)]
 
     def release(self) -> None:
         """Drop the kept trace of a one-chunk run (its last commit is done) and hand its pages back."""

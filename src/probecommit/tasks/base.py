@@ -22,6 +22,7 @@ from __future__ import annotations
 import json
 import os
 import struct
+import sys
 import threading
 import time
 from concurrent.futures import ThreadPoolExecutor
@@ -434,7 +435,8 @@ class CachedSimulator:
                 value = np.array(r["value"], dtype=float)  # a copy: the caller's arrays stay writable
                 value = shared.setdefault(("value", value.shape, value.tobytes()), value)
                 value.flags.writeable = False
-                self._cache[(str(r["query"]), theta, arg)] = value
+                # One string object per query name, not one per row read from a table.
+                self._cache[(sys.intern(str(r["query"])), theta, arg)] = value
 
 
 class NoisySimulator(CachedSimulator):
