@@ -256,3 +256,29 @@ def test_several_requests_in_one_pass_equal_each_alone(runs):
     assert kept._kept is not None  # a one-chunk run keeps its beliefs for the next call unless told it is the last
     pd.testing.assert_frame_equal(kept.commit(requests[1:2], final=True)[0], alone[1], check_exact=True)
     assert kept._kept is None
+
+
+def test_calibration_of_runs_with_failed_episodes_keeps_what_the_whole_tables_give(tmp_path, monkeypatch):
+    """Failed commits inside the chunks and rollout rows after them: the kept reductions (per-instance
+    sums, scores and optimism, rows at the cost budget) give the whole tables' audit, in chunks or not."""
+    from probecommit.audit.metrics import audit_table
+    from probecommit.runner.calibration import _load
+    from probecommit.runner.study import run_study
+    from tests.runner.faults import inject, pick_faults
+
+    configs = {split: small_config(name=split, instances={"split": split, "count": 7, "seed": seed}, repeats=4,
+                                   methods=["blind_robust", "probe_robust"]) for split, seed in (("cal", 5), ("test", 6))}
+    clean = run_study(configs["test"], tmp_path / "clean").run_dir
+    inject(monkeypatch, **pick_faults(clean)["faults"])  # faults on two test instances, kept while calibrating
+    cal, test = (run_study(configs[split], tmp_path / split).run_dir for split in ("cal", "test"))
+    stored = pd.read_parquet(test / "episodes.parquet")
+    assert (stored["method"] == "rollout").any() and ((stored["method"] == "probe_robust") & (stored["status"] == "failed")).any()
+
+    whole = calibrate(cal, test, resamples=100, chunk_instances=None)
+    for chunk in (2, 3):
+        assert calibrate(cal, test, resamples=100, chunk_instances=chunk).to_dict() == whole.to_dict()
+    run = _load(test)
+    [table] = run.commit((run.nu, None))  # the whole validated table, as calibrate audited it before
+    pd.testing.assert_frame_equal(whole.audit_original, audit_table(table, budgets=whole.budgets, resamples=100),
+                                  check_exact=True)
+    assert whole.audit_original["n_failed"].min() >= 1

@@ -2,7 +2,8 @@
 
 These functions tie the pure audit modules to the runner: beliefs are recomputed
 from each run's stored probes (``runner.replay.RunBeliefs``, a chunk of instances at
-a time, so memory stays flat in the run's size) and the commit is re-executed
+a time; of each chunk's tables only per-instance reductions and a few rows are kept, so
+memory barely grows with the run's size) and the commit is re-executed
 (``runner.inference.commit``) under each threshold and margin, so every arm of a
 comparison sees identical probes and every coverage is measured on the set as
 constructed. Ground truth comes from the runs' engine caches; an action no episode of
