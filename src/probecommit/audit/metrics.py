@@ -59,7 +59,8 @@ def instance_sums(episodes: pd.DataFrame) -> tuple[pd.DataFrame, pd.DataFrame]:
     failed = (episodes["status"].astype(str).eq("failed").to_numpy() if "status" in episodes.columns
               else np.zeros(len(episodes), bool))
     ids = episodes["instance_id"].to_numpy().astype(str)
-    values = {name: episodes[name].to_numpy(float) for name in ("covered", "escaped", "realized", "predicted")}
+    values = {name: episodes[name].to_numpy(bool).astype(float) for name in ("covered", "escaped")}
+    values |= {name: episodes[name].to_numpy(float) for name in ("realized", "predicted")}
     repeat = episodes["repeat"].to_numpy()
     parts = []
     # Positions of each group's rows, in table order (groupby's indices keep it).

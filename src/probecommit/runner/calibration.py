@@ -82,9 +82,11 @@ Reduction = Callable[[pd.DataFrame], Any]
 
 def _concat_parts(parts: Sequence[Any]) -> Any:
     """The reductions of a run's parts joined: DataFrames concatenated (their index kept), tuples
-    element by element; None parts (nothing kept) skipped."""
+    element by element; None parts (nothing kept) skipped, and None when every part is."""
     parts = [part for part in parts if part is not None]
-    if parts and isinstance(parts[0], tuple):
+    if not parts:
+        return None
+    if isinstance(parts[0], tuple):
         return tuple(_concat_parts(column) for column in zip(*parts))
     return pd.concat(parts) if len(parts) > 1 else parts[0]
 
@@ -115,11 +117,10 @@ def _audited(table: pd.DataFrame, k: int) -> tuple[pd.DataFrame, pd.DataFrame, p
     return (*instance_sums(table), _cost_rows(table, k))
 
 
-def _all_covered(table: pd.DataFrame, budgets: list[int]) -> pd.Series | None:
+def _all_covered(table: pd.DataFrame, budgets: list[int]) -> pd.Series:
     """Per instance, whether every ok episode at ``budgets`` is covered."""
     ok = ok_episodes(table)
-    ok = ok.loc[ok["k"].isin(budgets)]
-    return ok.groupby("instance_id")["covered"].all() if len(ok) else None
+    return ok.loc[ok["k"].isin(budgets)].groupby("instance_id")["covered"].all()
 
 
 @dataclass
@@ -435,6 +436,8 @@ def calibrate(cal_run, test_run, alpha: float = DEFAULT_ALPHA, budgets: Sequence
     # Of each table, only what the results read is kept, chunk by chunk: per-instance scores, sums and
     # optimism, the rows at the cost budget and the margin rows, so memory does not grow with the runs.
     [scores] = cal.commit((cal.nu, None), reduce=[_scores])
+    if scores is None:
+        raise ValueError(f"{cal.loaded.path}: no episode of the calibration run committed (every one failed)")
     scores = scores.sort_index()
     t_k = budget_thresholds(scores, alpha, budgets)
     simultaneous = worst_budget_scores(scores, budgets)
