@@ -17,7 +17,8 @@ table): the peak above it is what the work itself adds. A
 replay re-infers the calibration run under the corrected model; a calibration
 calibrates on one run and tests on the other. Every arm's output is compared with
 the first arm's: calibration JSON (``CalibrationResult.to_dict``) and the replayed
-episode table (pandas hash of every cell, dtypes included).
+episode table (pandas hash of every cell, dtypes included). Each line ends with the peak's growth
+from the smaller to the larger size, in per cent and per added episode (of each run).
 """
 
 from __future__ import annotations
@@ -153,7 +154,9 @@ def main() -> None:
                                f"[+{results[case, e, arm]['peak_mb'] - results[case, e, arm]['loaded_mb']:6.1f}] "
                                f"{results[case, e, arm]['seconds']:5.1f} s" for e in SIZES)
             same = all(results[case, e, arm]["digest"] == results[case, e, first]["digest"] for e in SIZES)
-            print(f"  {case:9s} {arm:30s} {cells}   identical: {same}")
+            small, large = (results[case, e, arm]["peak_mb"] for e in (min(SIZES), max(SIZES)))
+            growth = f"growth {large / small - 1:+6.1%} ({(large - small) * 1024 / (max(SIZES) - min(SIZES)):4.1f} KB per episode)"
+            print(f"  {case:9s} {arm:30s} {cells}   {growth}   identical: {same}")
 
 
 if __name__ == "__main__":
