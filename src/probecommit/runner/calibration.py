@@ -26,7 +26,6 @@ from probecommit.audit.conformal import (
     budget_thresholds,
     conformal_quantile,
     instance_scores,
-    simultaneous_threshold,
     worst_budget_scores,
 )
 from probecommit.audit.gates import DEFAULT_TARGET_RATE, GatesResult, gates_from_tables
@@ -91,6 +90,18 @@ def _concat_parts(parts: Sequence[Any]) -> Any:
     return pd.concat(parts) if len(parts) > 1 else parts[0]
 
 
+def _calibration_scores(cal: "_Run") -> pd.DataFrame:
+    """The uncalibrated commit's worst-repeat scores, instances (sorted) x budgets, kept chunk by chunk.
+
+    Raises:
+        ValueError: No episode of the run committed.
+    """
+    [scores] = cal.commit((cal.nu, None), reduce=[_scores])
+    if scores is None:
+        raise ValueError(f"{cal.loaded.path}: no episode of the calibration run committed (every one failed)")
+    return scores.sort_index()
+
+
 def _margin_rows(table: pd.DataFrame, budgets: list[int]) -> pd.DataFrame:
     """The rows and columns ``audit.margin.margin_satisfied(table, budgets)`` reads, in order."""
     ok = ok_episodes(table)
@@ -135,7 +146,8 @@ class _Run:
     #: The set construction at t = 1, if not the run config's (``calibrate(..., plateau=)``).
     override_plateau: str | None = None
     structure_checked: bool = False
-    #: The run's episode rows of trajectories whose probing failed (read on the first commit).
+    #: The run's episode rows of trajectories whose probing failed (read on the first commit), of the
+    #: beliefs' model variant.
     failed_rollouts: pd.DataFrame | None = None
 
     @property
@@ -184,9 +196,9 @@ class _Run:
     def _failed(self) -> pd.DataFrame:
         """The run's rollout rows (read once), of the variant the beliefs are computed under."""
         if self.failed_rollouts is None:  # read once: the run's rollout rows, not its whole table
-            self.failed_rollouts = self.loaded.failed_rollouts()
-        failed = self.failed_rollouts
-        return failed.assign(variant=self.beliefs.model.variant) if len(failed) else failed
+            rows = self.loaded.failed_rollouts()
+            self.failed_rollouts = rows.assign(variant=self.beliefs.model.variant) if len(rows) else rows
+        return self.failed_rollouts
 
     def _checked(self, reducer: Reduction, columns: Sequence[str] | None) -> Reduction:
         """``reducer`` after the chunk's whole table (with its instances' rollout rows) is validated."""
@@ -435,10 +447,7 @@ def calibrate(cal_run, test_run, alpha: float = DEFAULT_ALPHA, budgets: Sequence
 
     # Of each table, only what the results read is kept, chunk by chunk: per-instance scores, sums and
     # optimism, the rows at the cost budget and the margin rows, so memory does not grow with the runs.
-    [scores] = cal.commit((cal.nu, None), reduce=[_scores])
-    if scores is None:
-        raise ValueError(f"{cal.loaded.path}: no episode of the calibration run committed (every one failed)")
-    scores = scores.sort_index()
+    scores = _calibration_scores(cal)
     t_k = budget_thresholds(scores, alpha, budgets)
     simultaneous = worst_budget_scores(scores, budgets)
     t_sim, n_calibration = conformal_quantile(simultaneous.to_numpy(), alpha), int(simultaneous.size)
@@ -544,11 +553,10 @@ def gates(cal_run, test_run, alpha: float = DEFAULT_ALPHA, budgets: Sequence[int
     _check_pair(cal, test)
     budgets = _budgets(cal, budgets)
     _budgets(test, budgets)
-    [cal_orig] = cal.commit((cal.nu, None))
-    t_sim = simultaneous_threshold(cal_orig, budgets, alpha)
+    t_sim = conformal_quantile(worst_budget_scores(_calibration_scores(cal), budgets).to_numpy(), alpha)
     margin, _ = cal.search_margin(t_sim, margin_grid, budgets)
     cal.release()
-    del cal, cal_orig  # the calibration run is done before the test run's commits
+    del cal  # the calibration run is done before the test run's commits
     raw, adjusted = test.commit((test.nu, None), (t_sim, margin.gamma), final=True)
     result = gates_from_tables(raw, adjusted, budgets=budgets, target_rate=target_rate,
                                post_var_executor=post_var_executor)
