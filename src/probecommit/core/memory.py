@@ -43,15 +43,20 @@ def check_fits(needed_bytes: float, what: str, setting: str) -> None:
                           f"{available_bytes() / 1024**3:.1f} GiB available; reduce {setting}")
 
 
-@functools.lru_cache(maxsize=1)
-def _malloc_trim() -> Callable[[int], int] | None:
-    """glibc's ``malloc_trim``, or None where the C library has none (macOS, musl)."""
+def _libc_function(name: str, argtypes: list) -> Callable[..., int] | None:
+    """The C library's function ``name`` returning an int, or None where it has none (macOS, musl)."""
     try:
-        trim = ctypes.CDLL(None).malloc_trim  # the symbols already loaded: no library search
+        function = getattr(ctypes.CDLL(None), name)  # the symbols already loaded: no library search
     except (OSError, AttributeError):
         return None
-    trim.argtypes, trim.restype = [ctypes.c_size_t], ctypes.c_int
-    return trim
+    function.argtypes, function.restype = argtypes, ctypes.c_int
+    return function
+
+
+@functools.lru_cache(maxsize=1)
+def _malloc_trim() -> Callable[[int], int] | None:
+    """glibc's ``malloc_trim``, or None where the C library has none."""
+    return _libc_function("malloc_trim", [ctypes.c_size_t])
 
 
 #: glibc's ``mallopt`` parameters (malloc.h).
@@ -78,12 +83,7 @@ def heap_environment() -> dict[str, str]:
 @functools.lru_cache(maxsize=1)
 def _mallopt() -> Callable[[int, int], int] | None:
     """glibc's ``mallopt``, or None where the C library has none."""
-    try:
-        mallopt = ctypes.CDLL(None).mallopt
-    except (OSError, AttributeError):
-        return None
-    mallopt.argtypes, mallopt.restype = [ctypes.c_int, ctypes.c_int], ctypes.c_int
-    return mallopt
+    return _libc_function("mallopt", [ctypes.c_int, ctypes.c_int])
 
 
 def reuse_freed_arrays() -> bool:
@@ -93,9 +93,10 @@ def reuse_freed_arrays() -> bool:
     and unmaps them when it is freed, so the next filter step's arrays of the same size fault
     in fresh zeroed pages: a belief step over a batch of 384 episodes allocates its weights and
     particles anew (3-6 MB each) and spent 1-7 us per episode-step in page faults here, depending
-    on what ran before (``benchmarks/belief.py``). Raising the mapping and trimming thresholds keeps such blocks
-    in the heap, and up to :data:`HEAP_TOP_BYTES` of free memory at its top; the explicit :func:`trim_heap` between chunks and :func:`release_free_heap`
-    between phases still return the memory. The ``probecommit`` command calls this at start;
+    on what ran before (``benchmarks/belief.py``). Raising the mapping threshold keeps such
+    blocks in the heap, and the trimming threshold up to :data:`HEAP_TOP_BYTES` of free memory at
+    its top; the explicit :func:`trim_heap` between chunks and :func:`release_free_heap` between
+    phases still return the memory. The ``probecommit`` command calls this at start;
     a program importing probecommit keeps its own allocator settings unless it calls it.
     A threshold set in the environment (``MALLOC_MMAP_THRESHOLD_``, ``MALLOC_TRIM_THRESHOLD_``)
     is the user's and is left alone; the others are exported so worker processes start with them.
