@@ -282,3 +282,55 @@ def test_calibration_of_runs_with_failed_episodes_keeps_what_the_whole_tables_gi
     pd.testing.assert_frame_equal(whole.audit_original, audit_table(table, budgets=whole.budgets, resamples=100),
                                   check_exact=True)
     assert whole.audit_original["n_failed"].min() >= 1
+
+
+def test_a_chunk_is_given_only_its_instances_engine_answers_and_none_is_asked_twice(runs, tmp_path):
+    """A run of several chunks gives its simulator a chunk's stored answers while that chunk is
+    committed (the answers about its instances' truths), keeps the engine's own answers apart,
+    and asks the engine exactly the queries the whole-run replay asks; the replay run it writes
+    holds the same engine cache."""
+    from probecommit.runner.inference import blind_bayes_executor
+    from probecommit.runner.replay import replay_run
+
+    loaded = load_run(runs["cal"])
+    overrides = {"model": {"boundary": "corrected"}}
+    whole, whole_sim = replay_episodes(loaded, overrides, chunk_instances=None)
+    beliefs = RunBeliefs.of(loaded, replace_config(loaded, overrides), chunk_instances=2)
+    assert beliefs.answers is not None and not beliefs.simulator.answered_keys()  # every answer is about an instance
+    held = []
+    commit = beliefs.simulator.cached_key
+
+    def asked(key):
+        held.append((key[1], len(beliefs.simulator.answered_keys())))
+        return commit(key)
+
+    beliefs.simulator.cached_key = asked
+    config = beliefs.config
+    request = dict(methods=config.methods, blind=blind_bayes_executor(beliefs.model, config.seed, config.blind_prior_samples))
+    [chunked] = beliefs.commit([{"thresholds": config.belief.nu, "margin": None}], **request)
+    pd.testing.assert_frame_equal(chunked, whole, check_exact=True)
+    assert beliefs.simulator.engine_calls == whole_sim.engine_calls
+    assert not beliefs.simulator.answered_keys()  # everything went back to the Arrow tables
+    # While a chunk is committed, the simulator holds at most the answers about its 2 instances.
+    truths = {tuple(t) for t in beliefs.batch.truths.tolist()}
+    stored = loaded.table("engine_cache")
+    per_truth = stored.groupby(["x_hole", "c"]).size()
+    assert {theta for theta, _ in held} <= truths
+    assert max(n for _, n in held) <= 2 * per_truth.max() + whole_sim.engine_calls["peg_depth"]
+    assert max(n for _, n in held) < len(stored)
+    # A second pass takes the engine's answers from where the first left them: no new engine call.
+    calls = dict(beliefs.simulator.engine_calls)
+    beliefs.commit([{"thresholds": config.belief.nu, "margin": None}], **request)
+    assert beliefs.simulator.engine_calls == calls
+
+    chunked_run = replay_run(runs["cal"], tmp_path / "chunked", overrides, chunk_instances=2)
+    whole_run = replay_run(runs["cal"], tmp_path / "whole", overrides, chunk_instances=None)
+    pd.testing.assert_frame_equal(load_run(chunked_run).table("engine_cache"), load_run(whole_run).table("engine_cache"),
+                                  check_exact=True)
+    assert len(load_run(whole_run).table("engine_cache")) == len(stored) + whole_sim.engine_calls["peg_depth"]
+
+
+def replace_config(loaded, overrides):
+    from probecommit.runner.replay import replay_config
+
+    return replay_config(loaded.config, overrides)

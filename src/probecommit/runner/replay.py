@@ -10,10 +10,11 @@ from __future__ import annotations
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Callable, Iterable, Mapping, Sequence
+from typing import Any, Callable, Iterable, Iterator, Mapping, Sequence
 
 import numpy as np
 import pandas as pd
+import pyarrow as pa
 
 from probecommit.core.belief import BeliefState, ParticleFilter
 from probecommit.core.memory import trim_heap
@@ -73,6 +74,13 @@ class LoadedRun:
         if held is None:
             return RunDir(self.path).read_verified(name, where)
         return held if where is None else held.loc[held[where[0]].isin(list(where[1]))]
+
+    def arrow_table(self, name: str) -> pa.Table:
+        """Table ``name`` as an Arrow table (a few column buffers), not kept by this object."""
+        held = self._held[name]
+        if held is None:
+            return RunDir(self.path).read_verified_arrow(name)
+        return pa.Table.from_pandas(held, preserve_index=False)
 
     def failed_rollouts(self) -> pd.DataFrame:
         """The episode rows of the trajectories whose probing failed (``method == "rollout"``,
@@ -147,6 +155,83 @@ def simulator_for_run(loaded: LoadedRun, config: StudyConfig | None = None):
     return sim
 
 
+class StoredAnswers:
+    """A run's engine answers, given to its simulator a chunk of instances at a time.
+
+    A chunk's commits ask the engine about its own instances' ground truths only. So a replay
+    or a calibration in chunks holds the run's answers as Arrow tables (a few column buffers
+    each), and a chunk's answers become the simulator's keys, tuples and arrays only while
+    that chunk is worked on: what stays in memory between chunks does not grow by a Python
+    object per answer. The answers the engine gives during a chunk are kept the same way
+    (:meth:`add`), so none is asked twice. Answers about no instance's truth are given once, for good.
+
+    Args:
+        table: The run's engine cache (``store.schema.cache_frame`` columns).
+        latent_names: The family's latent names, in the order of an instance's truth.
+    """
+
+    def __init__(self, table: pa.Table, latent_names: Sequence[str]) -> None:
+        self.latent_names = tuple(latent_names)
+        #: Tables of answers with their latent columns as arrays: the run's, then the engine's.
+        self._parts: list[tuple[pa.Table, list[np.ndarray]]] = []
+        #: Keys given for good (answers about no instance's truth).
+        self.permanent: frozenset = frozenset()
+        self._append(table)
+
+    @classmethod
+    def usable(cls, table: pa.Table, latent_names: Sequence[str], truths: np.ndarray) -> bool:
+        """Whether a table's answers can be told apart by instance: it has every latent column,
+        and a truth has one value per latent. Otherwise every answer is given at once."""
+        return set(latent_names) <= set(table.column_names) and truths.ndim == 2 and truths.shape[1] == len(latent_names)
+
+    def _append(self, table: pa.Table) -> None:
+        self._parts.append((table, [np.asarray(table.column(name).to_numpy(), dtype=float) for name in self.latent_names]))
+
+    def add(self, records: list[dict[str, Any]]) -> None:
+        """Keep answers the engine gave (``cache_records`` rows), to give again with their chunk's."""
+        if records:
+            self._append(pa.Table.from_pandas(cache_frame(records, self.latent_names), preserve_index=False))
+
+    def about(self, truths: np.ndarray) -> list[np.ndarray]:
+        """Per table, which rows may be about one of ``truths`` ``[M, d]`` (each latent among the
+        truths' values): every row a commit on those instances reads, and rarely a few more."""
+        truths = np.asarray(truths, dtype=float).reshape(-1, len(self.latent_names))
+        masks = []
+        for table, thetas in self._parts:
+            rows = np.ones(table.num_rows, dtype=bool)
+            for column, values in zip(thetas, truths.T):
+                rows &= np.isin(column, values)
+            masks.append(rows)
+        return masks
+
+    def records(self, masks: list[np.ndarray]) -> Iterator[dict[str, Any]]:
+        """The answers of the rows ``masks`` select, per table, as ``load_cache`` takes them."""
+        for (table, _), rows in zip(self._parts, masks):
+            if rows.any():
+                yield from cache_records(table.filter(pa.array(rows)).to_pandas(), self.latent_names)
+
+    def engine_records(self) -> Iterator[dict[str, Any]]:
+        """Every answer kept by :meth:`add`, in the order given."""
+        return self.records([np.ones(table.num_rows, dtype=bool) if n else np.zeros(table.num_rows, dtype=bool)
+                             for n, (table, _) in enumerate(self._parts)])
+
+
+def _chunked_simulator(loaded: LoadedRun, config: StudyConfig, latent_names: Sequence[str],
+                       truths: np.ndarray) -> tuple[Any, StoredAnswers | None]:
+    """The run's simulator with the answers about no instance of ``truths``, and the rest of the
+    run's answers to give it a chunk at a time (None: every answer given now, where they cannot
+    be told apart by instance or the simulator cannot forget them)."""
+    sim = build_simulator(config)
+    table = loaded.arrow_table("engine_cache")
+    if not (hasattr(sim, "forget_answers") and hasattr(sim, "answered_keys")
+            and StoredAnswers.usable(table, latent_names, truths)):
+        sim.load_cache(cache_records(table.to_pandas(), latent_names))
+        return sim, None
+    answers = StoredAnswers(table, latent_names)
+    answers.permanent = frozenset(sim.load_cache(answers.records([~rows for rows in answers.about(truths)])))
+    return sim, answers
+
+
 def trace_for_run(run_dir: str | Path | LoadedRun, config: StudyConfig | None = None) -> tuple[BeliefTrace, Any, Any]:
     """Beliefs of every stored episode at every budget, under ``config`` (default: the run's).
 
@@ -184,7 +269,8 @@ class RunBeliefs:
     Attributes:
         config: The config beliefs are computed under (the run's, or a replay's).
         model: Its model.
-        simulator: The run's simulator, loaded with the run's engine cache.
+        simulator: The run's simulator: with the run's engine cache when the run is one chunk, else
+            with the answers of the chunk being committed (:class:`StoredAnswers`).
         pfilter: The particle filter of ``config``.
         batch: Every successful stored trajectory, in the run's episode order.
         chunks: Row slices of ``batch``, each a whole number of instances (all repeats).
@@ -199,6 +285,8 @@ class RunBeliefs:
     batch: ProbeBatch
     chunks: list[slice]
     kept_budgets: tuple[int, ...] | None = None
+    #: The run's stored engine answers, given to ``simulator`` a chunk at a time (None: it holds them all).
+    answers: StoredAnswers | None = None
     #: The trace of a run that is one chunk, kept across ``commit`` calls (with its reuse cache).
     _kept: tuple[BeliefTrace, dict] | None = field(default=None, repr=False)
 
@@ -227,8 +315,12 @@ class RunBeliefs:
                 raise ValueError(f"budget(s) [] not in the run (it commits at {committed_budgets(config)})")
         model = build_model(config)
         batch = probe_batch(loaded, model)
-        return cls(config, model, simulator_for_run(loaded, config), build_filter(model, config.belief), batch,
-                   _chunk_slices(batch.instance_id, chunk_instances), kept)
+        chunks = _chunk_slices(batch.instance_id, chunk_instances)
+        if len(chunks) > 1:  # each chunk's engine answers only while it is worked on
+            simulator, answers = _chunked_simulator(loaded, config, model.latent_names, batch.truths)
+        else:
+            simulator, answers = simulator_for_run(loaded, config), None
+        return cls(config, model, simulator, build_filter(model, config.belief), batch, chunks, kept, answers)
 
     def trace(self, rows: slice) -> BeliefTrace:
         """Beliefs of the episodes ``batch[rows]`` at every kept budget.
@@ -290,7 +382,7 @@ class RunBeliefs:
             self._kept = self._whole_trace(), {}
         rows = np.flatnonzero(np.isin(self.batch.instance_id, list(instance_ids)))  # the run's order
         return RunBeliefs(self.config, self.model, self.simulator, self.pfilter, self.batch.subset(rows),
-                          [slice(0, len(rows))], self.kept_budgets, (self._kept[0].subset(rows), {}))
+                          [slice(0, len(rows))], self.kept_budgets, _kept=(self._kept[0].subset(rows), {}))
 
     @property
     def budgets(self) -> list[int]:
@@ -330,6 +422,7 @@ class RunBeliefs:
         if several:
             trim_heap()  # what earlier calls freed goes back before the first chunk is computed
         for rows in self.chunks:
+            taken = self._take_answers(rows)
             if self._kept is not None:
                 trace, cache = self._kept
             else:
@@ -349,10 +442,28 @@ class RunBeliefs:
                 if cache_ends_here and all("thresholds" in upcoming for upcoming in later):
                     prune_retained_sets(cache, [upcoming["thresholds"] for upcoming in later])
             del trace, cache  # let a finished chunk's beliefs go before the next is computed
+            self._put_back_answers(taken)
             if several:
                 trim_heap()  # ... and their pages, so chunks do not pile up as heap fragments
         return [p if reducer is not None else p[0] if len(p) == 1 else pd.concat(p, ignore_index=True)
                 for p, reducer in zip(parts, reduce)]
+
+    def _take_answers(self, rows: slice) -> list:
+        """Give the simulator the stored answers about the instances of ``batch[rows]``; their keys."""
+        if self.answers is None:
+            return []
+        return self.simulator.load_cache(self.answers.records(self.answers.about(self.batch.truths[rows])))
+
+    def _put_back_answers(self, taken: list) -> None:
+        """After a chunk: drop the stored answers it was given, and keep those its engine gave in
+        :attr:`answers` (a later pass over the chunk takes them from there)."""
+        if self.answers is None:
+            return
+        self.simulator.forget_answers(taken)
+        fresh = [key for key in self.simulator.answered_keys() if key not in self.answers.permanent]
+        if fresh:
+            self.answers.add(self.simulator.cache_records(fresh))
+            self.simulator.forget_answers(fresh)
 
     def release(self) -> None:
         """Drop the kept trace of a one-chunk run (its last commit is done) and hand its pages back."""
@@ -425,6 +536,13 @@ def replay_episodes(
     Returns:
         ``(episodes, simulator)``; the simulator carries the engine-call counts.
     """
+    episodes, beliefs = _replayed(loaded, overrides, thresholds, margin, fixed_probes, chunk_instances)
+    return episodes, beliefs.simulator
+
+
+def _replayed(loaded: LoadedRun, overrides: dict[str, dict[str, Any]] | None, thresholds: float | dict[int, float] | None,
+              margin: float | None, fixed_probes: bool, chunk_instances: int | None) -> tuple[pd.DataFrame, RunBeliefs]:
+    """:func:`replay_episodes`, with the beliefs the episodes came from instead of their simulator."""
     overrides = overrides or {}
     bad = set(overrides) - {"model", "belief", "simulator"}
     if bad:
@@ -441,14 +559,14 @@ def replay_episodes(
         )
     config = replay_config(loaded.config, overrides)
     beliefs = RunBeliefs.of(loaded, config, chunk_instances)
-    model, sim = beliefs.model, beliefs.simulator
+    model = beliefs.model
     blind = blind_bayes_executor(model, config.seed, config.blind_prior_samples) if "blind_bayes" in config.methods else None
     request = {"thresholds": config.belief.nu if thresholds is None else thresholds, "margin": margin}
     [episodes] = beliefs.commit([request], methods=config.methods, blind=blind)
     failed = loaded.failed_rollouts()
     if len(failed):
         episodes = pd.concat([episodes, failed.assign(variant=model.variant)], ignore_index=True)
-    return episodes, sim
+    return episodes, beliefs
 
 
 def replay_run(src: str | Path, out: str | Path, overrides: dict[str, dict[str, Any]], fixed_probes: bool = False,
@@ -468,7 +586,13 @@ def replay_run(src: str | Path, out: str | Path, overrides: dict[str, dict[str, 
         raise ValueError(f"replay would overwrite its source run {src}; give another --out")
     loaded = load_run(src)
     config = replay_config(loaded.config, overrides)
-    episodes, sim = replay_episodes(loaded, overrides, fixed_probes=fixed_probes, chunk_instances=chunk_instances)
+    episodes, beliefs = _replayed(loaded, overrides, None, None, fixed_probes, chunk_instances)
+    sim = beliefs.simulator
+    if beliefs.answers is not None:
+        # The new run's engine cache: the source's answers and those the engine gave during the
+        # replay (a chunked replay gave them to the simulator a chunk at a time).
+        sim.load_cache(cache_records(loaded.table("engine_cache"), beliefs.model.latent_names))
+        sim.load_cache(beliefs.answers.engine_records())
     probes = loaded.table("probes")
     run = RunDir(out)
     run.prepare(dump_config(config))
@@ -478,7 +602,7 @@ def replay_run(src: str | Path, out: str | Path, overrides: dict[str, dict[str, 
         {
             "instances": loaded.instances,
             "probes": probes,
-            "engine_cache": cache_frame(sim.cache_records(), build_model(config).latent_names),
+            "engine_cache": cache_frame(sim.cache_records(), beliefs.model.latent_names),
             "episodes": episodes,
         },
         {"engine_calls": sim.engine_calls, "engine_s": sim.engine_seconds},

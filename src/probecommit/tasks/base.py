@@ -220,7 +220,7 @@ class Simulator(Protocol):
 
     def cache_records(self) -> list[dict[str, Any]]: ...
 
-    def load_cache(self, records: Iterable[dict[str, Any]]) -> None: ...
+    def load_cache(self, records: Iterable[dict[str, Any]]) -> list: ...
 
 
 #: Engine answers shared by the simulators built inside :func:`shared_engine_answers`, per
@@ -412,17 +412,27 @@ class CachedSimulator:
                 self._record(key, value, seconds)
         return run
 
-    def cache_records(self) -> list[dict[str, Any]]:
-        """Cache rows: engine, query, theta and arg tuples, value vector."""
-        return [
-            {"engine": self.engine, "query": k[0], "theta": list(k[1]), "arg": list(k[2]), "value": v.tolist()}
-            for k, v in self._cache.items()
-        ]
+    def cache_records(self, keys: Iterable[tuple[str, tuple[float, ...], tuple[float, ...]]] | None = None
+                      ) -> list[dict[str, Any]]:
+        """Cache rows: engine, query, theta and arg tuples, value vector; of every answer held, or of ``keys``."""
+        items = self._cache.items() if keys is None else ((k, self._cache[k]) for k in keys)
+        return [{"engine": self.engine, "query": k[0], "theta": list(k[1]), "arg": list(k[2]), "value": v.tolist()}
+                for k, v in items]
 
-    def load_cache(self, records: Iterable[dict[str, Any]]) -> None:
+    def answered_keys(self) -> list[tuple[str, tuple[float, ...], tuple[float, ...]]]:
+        """The keys of every answer held (taken by :meth:`load_cache` or given by the engine)."""
+        return list(self._cache)
+
+    def load_cache(self, records: Iterable[dict[str, Any]]) -> list[tuple[str, tuple[float, ...], tuple[float, ...]]]:
+        """Take stored answers (``cache_records`` rows of this engine; other engines' are skipped).
+
+        Returns:
+            The keys of the answers taken, for :meth:`forget_answers`.
+        """
         # A run asks many queries of few latents and answers few distinct values: equal tuples
         # and values are stored once (matched by their bytes, so -0.0 stays -0.0), read-only.
         shared: dict[tuple, Any] = {}  # (kind, bytes) -> the one object kept
+        taken = []
 
         def once(kind: str, items: tuple) -> Any:
             packed = (kind, struct.pack(f"{len(items)}d", *items))
@@ -436,7 +446,16 @@ class CachedSimulator:
                 value = shared.setdefault(("value", value.shape, value.tobytes()), value)
                 value.flags.writeable = False
                 # One string object per query name, not one per row read from a table.
-                self._cache[(sys.intern(str(r["query"])), theta, arg)] = value
+                key = (sys.intern(str(r["query"])), theta, arg)
+                self._cache[key] = value
+                taken.append(key)
+        return taken
+
+    def forget_answers(self, keys: Iterable[tuple[str, tuple[float, ...], tuple[float, ...]]]) -> None:
+        """Drop answers taken by :meth:`load_cache` that are no longer needed (a replay's finished
+        chunk of instances). The answers this simulator's engine gave stay: none is run twice."""
+        for key in keys:
+            self._cache.pop(key, None)
 
 
 class NoisySimulator(CachedSimulator):
