@@ -90,3 +90,46 @@ def test_reuse_freed_arrays_leaves_a_threshold_the_user_set():
 def test_reuse_freed_arrays_without_mallopt(monkeypatch):
     monkeypatch.setattr(memory, "_mallopt", lambda: None)
     assert memory.reuse_freed_arrays() is False
+
+
+#: Whether a 3 MiB array gets pages of its own (glibc's mallinfo2: bytes in mmapped blocks), before,
+#: inside and after ``large_arrays_apart``.
+_APART = """
+import ctypes, sys
+import numpy as np
+from probecommit.core import memory
+if sys.argv[1] == "reuse":
+    memory.reuse_freed_arrays()
+class Info(ctypes.Structure):
+    _fields_ = [(name, ctypes.c_size_t) for name in
+                ("arena", "ordblks", "smblks", "hblks", "hblkhd", "usmblks", "fsmblks", "uordblks", "fordblks", "keepcost")]
+mallinfo2 = ctypes.CDLL(None).mallinfo2
+mallinfo2.restype = Info
+def apart():
+    memory.trim_heap()  # no free block left at the heap's top to take the array from
+    before = mallinfo2().hblkhd
+    block = np.ones(3 * 2**20 // 8)
+    return mallinfo2().hblkhd - before >= block.nbytes
+outside = apart()
+with memory.large_arrays_apart() as changed:
+    inside = apart()
+print(changed, outside, inside, apart())
+"""
+
+
+@pytest.mark.skipif(platform.libc_ver()[0] != "glibc" or memory._mallopt() is None, reason="the thresholds are glibc's")
+def test_large_arrays_apart_maps_large_arrays_only_within_and_only_under_the_commands_setting():
+    import os
+    import subprocess
+
+    def run(mode: str, **env: str) -> list[str]:
+        clean = {k: v for k, v in os.environ.items() if not k.startswith("MALLOC_")}
+        return subprocess.run([sys.executable, "-c", _APART, mode], capture_output=True, text=True, check=True,
+                              env={**clean, **env}).stdout.split()
+
+    # changed, outside, inside, after: the command's 32 MiB threshold keeps 3 MiB in the heap but within.
+    assert run("reuse") == ["True", "False", "True", "False"]
+    # A threshold the user chose is theirs: left alone (here 1 MiB: every 3 MiB array is mapped).
+    assert run("reuse", MALLOC_MMAP_THRESHOLD_="1048576") == ["False", "True", "True", "True"]
+    # A program that never took the command's setting keeps glibc's dynamic threshold.
+    assert run("plain")[0] == "False"

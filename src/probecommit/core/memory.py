@@ -4,11 +4,12 @@ between long phases."""
 
 from __future__ import annotations
 
+import contextlib
 import ctypes
 import functools
 import gc
 import os
-from typing import Callable
+from typing import Callable, Iterator
 
 #: Share of the available memory one allocation may take.
 SHARE = 0.5
@@ -114,6 +115,38 @@ def reuse_freed_arrays() -> bool:
         taken &= mallopt(parameter, value) == 1
         os.environ[name] = str(value)
     return taken
+
+
+#: Within :func:`large_arrays_apart`, blocks above this size get pages of their own.
+APART_BYTES = 2 * 1024**2
+
+
+@contextlib.contextmanager
+def large_arrays_apart(threshold: int = APART_BYTES) -> Iterator[bool]:
+    """Within the block, an array above ``threshold`` bytes that no free block of the heap can
+    hold gets pages of its own (glibc's mmap threshold), handed back when freed, instead of
+    growing the heap; while the command's heap setting is in force.
+
+    A loop over chunks frees each chunk's arrays before the next chunk allocates its own (and
+    trims the heap), but the small objects a chunk leaves behind (its share of the output,
+    answers kept for later passes) sit between the freed blocks, and the next chunk's large
+    arrays no longer all fit where the last chunk's were: the heap grew by a few MB over a long
+    run's chunks (``benchmarks/memory.py``). It costs page faults (calibrate on 3072 episodes:
+    about 10 % longer here), so it is used around loops over several chunks only. A threshold
+    other than the command's (a user's ``MALLOC_MMAP_THRESHOLD_``, or a program that never set
+    one) is left alone.
+
+    Yields:
+        Whether the threshold was changed.
+    """
+    mallopt = _mallopt()
+    ours = os.environ.get("MALLOC_MMAP_THRESHOLD_") == str(HEAP_REUSE_BYTES)
+    changed = mallopt is not None and ours and mallopt(_M_MMAP_THRESHOLD, threshold) == 1
+    try:
+        yield changed
+    finally:
+        if changed:
+            mallopt(_M_MMAP_THRESHOLD, HEAP_REUSE_BYTES)
 
 
 def trim_heap() -> bool:

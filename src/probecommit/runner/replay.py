@@ -7,6 +7,7 @@ needs the engine installed).
 
 from __future__ import annotations
 
+import contextlib
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -17,7 +18,7 @@ import pandas as pd
 import pyarrow as pa
 
 from probecommit.core.belief import BeliefState, ParticleFilter
-from probecommit.core.memory import trim_heap
+from probecommit.core.memory import large_arrays_apart, trim_heap
 from probecommit.runner.build import build_filter, build_model, build_simulator
 from probecommit.runner.config import StudyConfig, config_data, dump_config, parse_config
 from probecommit.runner.inference import (
@@ -421,6 +422,15 @@ class RunBeliefs:
         several = len(self.chunks) > 1
         if several:
             trim_heap()  # what earlier calls freed goes back before the first chunk is computed
+        with large_arrays_apart() if several else contextlib.nullcontext():
+            self._commit_chunks(parts, requests, keep, reduce, reuse, final, common)
+        return [p if reducer is not None else p[0] if len(p) == 1 else pd.concat(p, ignore_index=True)
+                for p, reducer in zip(parts, reduce)]
+
+    def _commit_chunks(self, parts: list[list[Any]], requests: Sequence[Mapping[str, Any]],
+                       keep: list, reduce: list, reuse: bool, final: bool, common: dict[str, Any]) -> None:
+        """:meth:`commit`'s loop over the chunks: each request's table (or reduction) per chunk into ``parts``."""
+        several = len(self.chunks) > 1
         for rows in self.chunks:
             taken = self._take_answers(rows)
             if self._kept is not None:
@@ -445,8 +455,6 @@ class RunBeliefs:
             self._put_back_answers(taken)
             if several:
                 trim_heap()  # ... and their pages, so chunks do not pile up as heap fragments
-        return [p if reducer is not None else p[0] if len(p) == 1 else pd.concat(p, ignore_index=True)
-                for p, reducer in zip(parts, reduce)]
 
     def _take_answers(self, rows: slice) -> list:
         """Give the simulator the stored answers about the instances of ``batch[rows]``; their keys."""
