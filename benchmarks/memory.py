@@ -18,7 +18,9 @@ replay re-infers the calibration run under the corrected model; a calibration
 calibrates on one run and tests on the other. Every arm's output is compared with
 the first arm's: calibration JSON (``CalibrationResult.to_dict``) and the replayed
 episode table (pandas hash of every cell, dtypes included). Each line ends with the peak's growth
-from the smaller to the larger size, in per cent and per added episode (of each run).
+from the smaller to the larger size, in per cent and per added episode (of each run). The size of
+the table a replay returns (its chunks' parts are held until the last chunk is done) is printed
+last: that much of replay's growth is its output.
 """
 
 from __future__ import annotations
@@ -90,7 +92,8 @@ else:
     output = str(table.dtypes.to_dict()) + hashlib.sha256(pd.util.hash_pandas_object(table).to_numpy().tobytes()).hexdigest()
 seconds = time.perf_counter() - t0
 print(json.dumps({"seconds": seconds, "peak_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
-                  "loaded_mb": loaded_mb, "digest": hashlib.sha256(output.encode()).hexdigest()}))
+                  "loaded_mb": loaded_mb, "digest": hashlib.sha256(output.encode()).hexdigest(),
+                  "returned_mb": table.memory_usage(deep=True).sum() / 2**20 if case == "replay" else 0.0}))
 """
 
 
@@ -157,6 +160,9 @@ def main() -> None:
             small, large = (results[case, e, arm]["peak_mb"] for e in (min(SIZES), max(SIZES)))
             growth = f"growth {large / small - 1:+6.1%} ({(large - small) * 1024 / (max(SIZES) - min(SIZES)):4.1f} KB per episode)"
             print(f"  {case:9s} {arm:30s} {cells}   {growth}   identical: {same}")
+    returned = [results["replay", e, first]["returned_mb"] for e in SIZES]
+    print(f"  (the table replay returns, part of its peak at the end: {returned[0]:.1f} MB at E = {min(SIZES)}, "
+          f"{returned[1]:.1f} MB at E = {max(SIZES)})")
 
 
 if __name__ == "__main__":
