@@ -236,7 +236,8 @@ def _weight_cases():
 
 @pytest.mark.parametrize("name", list(_weight_cases()))
 @pytest.mark.parametrize("nu", [0.05, 0.5, 0.8, 0.999, 1.0, 1.5, "per-row"])
-def test_retained_summary_matches_numpy(name, nu):
+@pytest.mark.parametrize("latents", [2, 3])  # two: the mass and both weighted sums from one pass per leaf
+def test_retained_summary_matches_numpy(name, nu, latents):
     from probecommit.core.retained import retained_summary, retained_summary_numpy
 
     weights = _weight_cases()[name]
@@ -245,11 +246,23 @@ def test_retained_summary_matches_numpy(name, nu):
     nu_rows = rng.uniform(0.05, 1.0, e) if nu == "per-row" else np.full(e, nu)
     z = rng.standard_normal((e, n))
     z[0, :3] = np.nan  # a NaN in the decision coordinate propagates only if retained
-    particles = rng.standard_normal((e, n, 3))
+    z[1:4] = np.where(rng.random((3, n)) < 0.5, 0.0, -0.0) + np.where(rng.random((3, n)) < 0.1, 1.0, 0.0)  # zeros
+    particles = rng.standard_normal((e, n, latents))
     fast = retained_summary(weights, nu_rows, z, particles)
     slow = retained_summary_numpy(weights, nu_rows, z, particles)
     for a, b in zip(fast, slow):
         np.testing.assert_array_equal(a, b)
+    if kernels.HAVE_KERNELS:  # the set's interval in the order of a plain scan, signed zeros included
+        mask, lo, hi, _ = fast
+        for row in range(e):
+            low, high = np.inf, -np.inf
+            for value, keep in zip(z[row].tolist(), mask[row].tolist()):
+                low = min(low, value if keep else np.inf)
+                high = max(high, value if keep else -np.inf)
+            if np.isnan(z[row][mask[row]]).any():
+                low = high = np.nan
+            assert np.float64(lo[row]).tobytes() == np.float64(low).tobytes()
+            assert np.float64(hi[row]).tobytes() == np.float64(high).tobytes()
 
 
 def test_retained_summary_leaves_odd_weights_to_numpy():

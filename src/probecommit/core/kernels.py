@@ -844,6 +844,125 @@ if HAVE_KERNELS:
             out[e] = min(cumulative, 1.0)
         return True, out, hull_low, hull_high
 
+    @helper(inline=True)
+    def _tie_cut(w, threshold, ties):  # pragma: no cover - compiled
+        """The index of the ``ties``-th particle of weight ``threshold`` (index order), or -1 for
+        none: a few-weight prefix keeps the ties up to it. Counted a block of 64 at a time (the
+        count vectorizes), then particle by particle within the block that reaches ``ties``."""
+        n = w.shape[0]
+        if ties <= 0:
+            return -1
+        count = 0
+        start = 0
+        while start < n:
+            stop = min(start + 64, n)
+            block = 0
+            for i in range(start, stop):
+                block += w[i] == threshold
+            if count + block >= ties:
+                for i in range(start, stop):
+                    count += w[i] == threshold
+                    if count == ties:
+                        return i
+            count += block
+            start = stop
+        return -1
+
+    @helper(inline=True)
+    def _kept_interval(z, e, keep):  # pragma: no cover - compiled
+        """``(min, max)`` of ``z[e]`` over ``keep`` and whether a kept value is NaN, as the scan
+        ``low = min(low, z if kept else inf)`` (and ``max``) finds them: in four running extremes
+        (one is a chain of dependent comparisons). Only which zero (+0.0 or -0.0) comes first can
+        differ between the two orders, so an extreme of zero is taken again by the scan."""
+        n = keep.shape[0]
+        odd = False
+        l0 = l1 = l2 = l3 = np.inf
+        h0 = h1 = h2 = h3 = -np.inf
+        i = 0
+        stop = n - n % 4
+        while i < stop:
+            v0, v1, v2, v3 = z[e, i], z[e, i + 1], z[e, i + 2], z[e, i + 3]
+            k0, k1, k2, k3 = keep[i], keep[i + 1], keep[i + 2], keep[i + 3]
+            odd |= (k0 & (v0 != v0)) | (k1 & (v1 != v1)) | (k2 & (v2 != v2)) | (k3 & (v3 != v3))
+            a0, a1 = (v0 if k0 else np.inf), (v1 if k1 else np.inf)
+            a2, a3 = (v2 if k2 else np.inf), (v3 if k3 else np.inf)
+            l0 = a0 if a0 < l0 else l0
+            l1 = a1 if a1 < l1 else l1
+            l2 = a2 if a2 < l2 else l2
+            l3 = a3 if a3 < l3 else l3
+            b0, b1 = (v0 if k0 else -np.inf), (v1 if k1 else -np.inf)
+            b2, b3 = (v2 if k2 else -np.inf), (v3 if k3 else -np.inf)
+            h0 = b0 if b0 > h0 else h0
+            h1 = b1 if b1 > h1 else h1
+            h2 = b2 if b2 > h2 else h2
+            h3 = b3 if b3 > h3 else h3
+            i += 4
+        low = min(min(l0, l1), min(l2, l3))
+        high = max(max(h0, h1), max(h2, h3))
+        while i < n:
+            value = z[e, i]
+            odd |= keep[i] & (value != value)
+            low = min(low, value if keep[i] else np.inf)
+            high = max(high, value if keep[i] else -np.inf)
+            i += 1
+        if low == 0.0 or high == 0.0:
+            low, high = np.inf, -np.inf
+            for i in range(n):
+                value = z[e, i]
+                low = min(low, value if keep[i] else np.inf)
+                high = max(high, value if keep[i] else -np.inf)
+        return low, high, odd
+
+    @helper(inline=True)
+    def _block_sums_2d(a, p, e, start, n):  # pragma: no cover - compiled
+        """:func:`_block_sum` of ``a`` and :func:`_block_dot` of ``a`` with ``p[e, :, 0]`` and
+        ``p[e, :, 1]`` over one leaf of ``n >= 8`` values, in one pass: the same running sums."""
+        w0, w1, w2, w3 = a[start], a[start + 1], a[start + 2], a[start + 3]
+        w4, w5, w6, w7 = a[start + 4], a[start + 5], a[start + 6], a[start + 7]
+        x0, x1, x2, x3 = w0 * p[e, start, 0], w1 * p[e, start + 1, 0], w2 * p[e, start + 2, 0], w3 * p[e, start + 3, 0]
+        x4, x5, x6, x7 = w4 * p[e, start + 4, 0], w5 * p[e, start + 5, 0], w6 * p[e, start + 6, 0], w7 * p[e, start + 7, 0]
+        y0, y1, y2, y3 = w0 * p[e, start, 1], w1 * p[e, start + 1, 1], w2 * p[e, start + 2, 1], w3 * p[e, start + 3, 1]
+        y4, y5, y6, y7 = w4 * p[e, start + 4, 1], w5 * p[e, start + 5, 1], w6 * p[e, start + 6, 1], w7 * p[e, start + 7, 1]
+        i = start + 8
+        stop = start + n - n % 8
+        while i < stop:
+            v0, v1, v2, v3 = a[i], a[i + 1], a[i + 2], a[i + 3]
+            v4, v5, v6, v7 = a[i + 4], a[i + 5], a[i + 6], a[i + 7]
+            w0 += v0
+            w1 += v1
+            w2 += v2
+            w3 += v3
+            w4 += v4
+            w5 += v5
+            w6 += v6
+            w7 += v7
+            x0 += v0 * p[e, i, 0]
+            x1 += v1 * p[e, i + 1, 0]
+            x2 += v2 * p[e, i + 2, 0]
+            x3 += v3 * p[e, i + 3, 0]
+            x4 += v4 * p[e, i + 4, 0]
+            x5 += v5 * p[e, i + 5, 0]
+            x6 += v6 * p[e, i + 6, 0]
+            x7 += v7 * p[e, i + 7, 0]
+            y0 += v0 * p[e, i, 1]
+            y1 += v1 * p[e, i + 1, 1]
+            y2 += v2 * p[e, i + 2, 1]
+            y3 += v3 * p[e, i + 3, 1]
+            y4 += v4 * p[e, i + 4, 1]
+            y5 += v5 * p[e, i + 5, 1]
+            y6 += v6 * p[e, i + 6, 1]
+            y7 += v7 * p[e, i + 7, 1]
+            i += 8
+        total_w = ((w0 + w1) + (w2 + w3)) + ((w4 + w5) + (w6 + w7))
+        total_x = ((x0 + x1) + (x2 + x3)) + ((x4 + x5) + (x6 + x7))
+        total_y = ((y0 + y1) + (y2 + y3)) + ((y4 + y5) + (y6 + y7))
+        while i < start + n:
+            total_w += a[i]
+            total_x += a[i] * p[e, i, 0]
+            total_y += a[i] * p[e, i, 1]
+            i += 1
+        return total_w, total_x, total_y
+
     @kernel(
         "Tuple((b1, b1[:, ::1], f8[::1], f8[::1], f8[:, ::1]))(f8[:, ::1], f8[::1], f8[:, ::1], f8[:, :, ::1])",
         "Tuple((b1, b1[:, ::1], f8[::1], f8[::1], f8[:, ::1]))(f8[:, ::1], f8[::1], f8[:, :], f8[:, :, ::1])",
@@ -864,6 +983,11 @@ if HAVE_KERNELS:
         masked_w = np.empty(n)
         product = np.empty(n)
         node_start, node_n, node_open, values = _pairwise_scratch()
+        # Two latents over a perfect pairwise tree (N = 1024, say): the mass and both weighted
+        # sums of belief_reference from one pass over each leaf.
+        blocks_2d = _perfect_blocks(n, values) if d == 2 else 0
+        values_x = np.empty(values.shape[0])
+        values_y = np.empty(values.shape[0])
         for e in range(n_e):
             w = weights[e]
             outside = False  # negative, NaN or infinite weights: the NumPy path answers
@@ -880,32 +1004,38 @@ if HAVE_KERNELS:
                 else:
                     for i in range(m):
                         mask[e, order[i]] = True
-            # One pass, without a branch on the mask (retained particles are scattered through
-            # the row): the mask of a few-weight row (heavier than the threshold, or among its
-            # first ``ties`` particles), masked_interval (NaN in a retained z propagates, as
-            # np.min / np.max do) and the masked weights that belief_reference sums.
-            low, high = np.inf, -np.inf
-            retained_nan = False
-            kept = seen = 0
-            for i in range(n):
-                if few:  # loop-invariant: the compiler makes two loops
-                    tie = w[i] == threshold
-                    keep = w[i] > threshold or (tie and seen < ties)
-                    seen += tie
+            # Without a branch on the mask (retained particles are scattered through the row): the
+            # mask of a few-weight row (heavier than the threshold, or a tie up to the ``ties``-th),
+            # the masked weights that belief_reference sums, then masked_interval (NaN in a
+            # retained z propagates, as np.min / np.max do).
+            kept = 0
+            if few:
+                cut = _tie_cut(w, threshold, ties)
+                for i in range(n):
+                    keep = (w[i] > threshold) | ((w[i] == threshold) & (i <= cut))
                     mask[e, i] = keep
-                else:
+                    masked_w[i] = w[i] if keep else 0.0
+                    kept += keep
+            else:
+                for i in range(n):
                     keep = mask[e, i]
-                value = z[e, i]
-                retained_nan |= keep and value != value
-                low = min(low, value if keep else np.inf)
-                high = max(high, value if keep else -np.inf)
-                masked_w[i] = w[i] if keep else 0.0
-                kept += keep
+                    masked_w[i] = w[i] if keep else 0.0
+                    kept += keep
+            low, high, retained_nan = _kept_interval(z, e, mask[e])
             if retained_nan:
                 low = high = np.nan
             lo[e], hi[e] = low, high
             # belief_reference: weighted means over the mask, summed in NumPy's order.
-            total = _row_sum_with(masked_w, node_start, node_n, node_open, values)
+            if blocks_2d:
+                for b in range(blocks_2d):
+                    values[b], values_x[b], values_y[b] = _block_sums_2d(masked_w, particles, e, 128 * b, 128)
+                total = 0.0 + _combine_levels(values, blocks_2d)
+                if total > 0:
+                    reference[e, 0] = (0.0 + _combine_levels(values_x, blocks_2d)) / total
+                    reference[e, 1] = (0.0 + _combine_levels(values_y, blocks_2d)) / total
+                    continue
+            else:
+                total = _row_sum_with(masked_w, node_start, node_n, node_open, values)
             for j in range(d):
                 if total > 0:
                     reference[e, j] = _row_dot_with(masked_w, particles, e, j, product, node_start, node_n, node_open,
