@@ -299,8 +299,9 @@ def interval_success_counts_compiled(lo: np.ndarray, hi: np.ndarray, mask: np.nd
 #
 # NumPy's path (core.retained) sorts every row in full (a stable argsort) and takes the
 # cumulative mass in that order. The kernel gets the same bits without the full sort. A row
-# of at most ``_FEW_WEIGHTS`` distinct weights (a tap belief's) needs no order at all: the
-# cumulative sums are those of its sorted distinct values (``_few_weight_table``). Otherwise it
+# whose prefix lies among its ``_FEW_WEIGHTS`` heaviest distinct weights (a tap belief's) needs no
+# order at all: the cumulative sums are those of its distinct values from the largest down
+# (``_few_weight_prefix``; the coverage score's table of them, ``_few_weight_table``). Otherwise it
 # buckets the weights by their leading 16 bits (sign, exponent, four mantissa bits: one
 # bucket per sixteenth of an octave below the row's largest weight), finds the buckets that
 # certainly hold the prefix's mass, and sorts only those candidates. Every non-candidate
@@ -716,32 +717,109 @@ if HAVE_KERNELS:
         for i in range(totals.shape[0]):
             steps_out[i], totals_out[i] = _add_repeated(totals[i], values[i], counts[i], targets[i])
 
+    @helper(inline=True)
+    def _row_top(w):  # pragma: no cover - compiled
+        """The largest of a row of weights (finite, non-negative; which zero is kept does not
+        matter to a weight), in four running maxima: one would be a chain of dependent comparisons."""
+        n = w.shape[0]
+        m0 = m1 = m2 = m3 = -np.inf
+        i = 0
+        stop = n - n % 4
+        while i < stop:
+            m0 = w[i] if w[i] > m0 else m0
+            m1 = w[i + 1] if w[i + 1] > m1 else m1
+            m2 = w[i + 2] if w[i + 2] > m2 else m2
+            m3 = w[i + 3] if w[i + 3] > m3 else m3
+            i += 4
+        top = max(max(m0, m1), max(m2, m3))
+        while i < n:
+            top = max(top, w[i])
+            i += 1
+        return top
+
+    @helper(inline=True)
+    def _count_and_below(w, value):  # pragma: no cover - compiled
+        """How many weights equal ``value``, and the largest weight below it (-inf when none): one pass."""
+        n = w.shape[0]
+        c0 = c1 = c2 = c3 = 0
+        m0 = m1 = m2 = m3 = -np.inf
+        i = 0
+        stop = n - n % 4
+        while i < stop:
+            v0, v1, v2, v3 = w[i], w[i + 1], w[i + 2], w[i + 3]
+            c0 += v0 == value
+            c1 += v1 == value
+            c2 += v2 == value
+            c3 += v3 == value
+            a0, a1 = (v0 if v0 < value else -np.inf), (v1 if v1 < value else -np.inf)
+            a2, a3 = (v2 if v2 < value else -np.inf), (v3 if v3 < value else -np.inf)
+            m0 = a0 if a0 > m0 else m0
+            m1 = a1 if a1 > m1 else m1
+            m2 = a2 if a2 > m2 else m2
+            m3 = a3 if a3 > m3 else m3
+            i += 4
+        count = c0 + c1 + c2 + c3
+        below = max(max(m0, m1), max(m2, m3))
+        while i < n:
+            count += w[i] == value
+            below = max(below, w[i] if w[i] < value else -np.inf)
+            i += 1
+        return count, below
+
+    @helper(inline=True)
+    def _many_distinct_early(w, values):  # pragma: no cover - compiled
+        """Whether the first 64 weights of a row already hold more distinct values than ``values``
+        has room for (a continuous belief): the few-weight prefix would not finish, so it is not tried."""
+        n_values = 0
+        for i in range(min(w.shape[0], 64)):
+            value = w[i]
+            seen = False
+            for s in range(n_values):
+                seen |= values[s] == value
+            if not seen:
+                if n_values == values.shape[0]:
+                    return True
+                values[n_values] = value
+                n_values += 1
+        return False
+
     @helper()
-    def _few_weight_prefix(w, nu, values, counts):  # pragma: no cover - compiled
-        """:func:`_top_weight_prefix` for a row of few distinct weights (:func:`_few_weight_table`):
-        the prefix holds every particle heavier than some weight ``t`` and the first ``r``
+    def _few_weight_prefix(w, nu, values):  # pragma: no cover - compiled
+        """:func:`_top_weight_prefix` for a row whose prefix lies among its few heaviest distinct
+        weights: the prefix holds every particle heavier than some weight ``t`` and the first ``r``
         particles (in index order) of weight ``t``.
+
+        A belief's weights take few values (each tap multiplies a weight by one of the reading
+        levels' likelihoods; a resampling makes them equal), so the stable descending order's
+        cumulative sums are those of the distinct values, from the largest down, each repeated as
+        many times as particles carry it (:func:`_add_repeated`: the same bits), without ordering
+        particles. The distinct values are visited one pass each (count this one, find the next
+        below it), and only until the mass is reached: one to three passes for a tap belief.
 
         Returns:
             ``(m, t, r)``; ``m = n`` and ``t = -inf`` when the mass is never reached; ``m = -1``
-            when the row holds more distinct weights than ``values`` has room for.
+            when the row holds more distinct weights than ``values`` has room for before the
+            mass is reached (the caller sorts instead).
         """
         n = w.shape[0]
         if n == 0:
             return 0, -np.inf, 0
-        n_values = _few_weight_table(w, values, counts)
-        if n_values < 0:
+        if _many_distinct_early(w, values):
             return -1, 0.0, 0
         target = nu - 1e-12
         cumulative = 0.0
         taken = 0
-        for s in range(n_values):
-            value = values[s]
-            added, cumulative = _add_repeated(cumulative, value, counts[s], target)
+        value = _row_top(w)
+        for _ in range(values.shape[0]):
+            count, below = _count_and_below(w, value)
+            added, cumulative = _add_repeated(cumulative, value, count, target)
             if added > 0 and cumulative >= target:
                 return taken + added, value, added
-            taken += counts[s]
-        return n, -np.inf, 0
+            taken += count
+            if below == -np.inf:
+                return n, -np.inf, 0
+            value = below
+        return -1, 0.0, 0
 
     @kernel(
         "Tuple((b1, f8[::1], f8[::1], f8[::1]))(f8[:, ::1], f8[:, ::1], f8[::1], f8)",
@@ -995,7 +1073,7 @@ if HAVE_KERNELS:
                 outside |= not _is_weight(w[i])
             if outside:
                 return False, mask, lo, hi, reference
-            m, threshold, ties = _few_weight_prefix(w, nu[e], few_values, counts)
+            m, threshold, ties = _few_weight_prefix(w, nu[e], few_values)
             few = m >= 0
             if not few:
                 m = _top_weight_prefix(w, nu[e], order, buckets, counts, mass, starts)
