@@ -992,48 +992,41 @@ if HAVE_KERNELS:
         return low, high, odd
 
     @helper(inline=True)
+    def _eight(a, i):  # pragma: no cover - compiled
+        """``a[i:i + 8]`` as a tuple (eight registers)."""
+        return a[i], a[i + 1], a[i + 2], a[i + 3], a[i + 4], a[i + 5], a[i + 6], a[i + 7]
+
+    @helper(inline=True)
+    def _eight_products(v, p, e, i, j):  # pragma: no cover - compiled
+        """``v[k] * p[e, i + k, j]`` for the eight ``k``."""
+        return (v[0] * p[e, i, j], v[1] * p[e, i + 1, j], v[2] * p[e, i + 2, j], v[3] * p[e, i + 3, j],
+                v[4] * p[e, i + 4, j], v[5] * p[e, i + 5, j], v[6] * p[e, i + 6, j], v[7] * p[e, i + 7, j])
+
+    @helper(inline=True)
+    def _eight_sums(r, v):  # pragma: no cover - compiled
+        """Eight running sums ``r[k] + v[k]``."""
+        return r[0] + v[0], r[1] + v[1], r[2] + v[2], r[3] + v[3], r[4] + v[4], r[5] + v[5], r[6] + v[6], r[7] + v[7]
+
+    @helper(inline=True)
+    def _eight_total(r):  # pragma: no cover - compiled
+        """NumPy's combination of its eight running sums."""
+        return ((r[0] + r[1]) + (r[2] + r[3])) + ((r[4] + r[5]) + (r[6] + r[7]))
+
+    @helper(inline=True)
     def _block_sums_2d(a, p, e, start, n):  # pragma: no cover - compiled
         """:func:`_block_sum` of ``a`` and :func:`_block_dot` of ``a`` with ``p[e, :, 0]`` and
         ``p[e, :, 1]`` over one leaf of ``n >= 8`` values, in one pass: the same running sums."""
-        w0, w1, w2, w3 = a[start], a[start + 1], a[start + 2], a[start + 3]
-        w4, w5, w6, w7 = a[start + 4], a[start + 5], a[start + 6], a[start + 7]
-        x0, x1, x2, x3 = w0 * p[e, start, 0], w1 * p[e, start + 1, 0], w2 * p[e, start + 2, 0], w3 * p[e, start + 3, 0]
-        x4, x5, x6, x7 = w4 * p[e, start + 4, 0], w5 * p[e, start + 5, 0], w6 * p[e, start + 6, 0], w7 * p[e, start + 7, 0]
-        y0, y1, y2, y3 = w0 * p[e, start, 1], w1 * p[e, start + 1, 1], w2 * p[e, start + 2, 1], w3 * p[e, start + 3, 1]
-        y4, y5, y6, y7 = w4 * p[e, start + 4, 1], w5 * p[e, start + 5, 1], w6 * p[e, start + 6, 1], w7 * p[e, start + 7, 1]
+        w = _eight(a, start)
+        x, y = _eight_products(w, p, e, start, 0), _eight_products(w, p, e, start, 1)
         i = start + 8
         stop = start + n - n % 8
         while i < stop:
-            v0, v1, v2, v3 = a[i], a[i + 1], a[i + 2], a[i + 3]
-            v4, v5, v6, v7 = a[i + 4], a[i + 5], a[i + 6], a[i + 7]
-            w0 += v0
-            w1 += v1
-            w2 += v2
-            w3 += v3
-            w4 += v4
-            w5 += v5
-            w6 += v6
-            w7 += v7
-            x0 += v0 * p[e, i, 0]
-            x1 += v1 * p[e, i + 1, 0]
-            x2 += v2 * p[e, i + 2, 0]
-            x3 += v3 * p[e, i + 3, 0]
-            x4 += v4 * p[e, i + 4, 0]
-            x5 += v5 * p[e, i + 5, 0]
-            x6 += v6 * p[e, i + 6, 0]
-            x7 += v7 * p[e, i + 7, 0]
-            y0 += v0 * p[e, i, 1]
-            y1 += v1 * p[e, i + 1, 1]
-            y2 += v2 * p[e, i + 2, 1]
-            y3 += v3 * p[e, i + 3, 1]
-            y4 += v4 * p[e, i + 4, 1]
-            y5 += v5 * p[e, i + 5, 1]
-            y6 += v6 * p[e, i + 6, 1]
-            y7 += v7 * p[e, i + 7, 1]
+            v = _eight(a, i)
+            w = _eight_sums(w, v)
+            x = _eight_sums(x, _eight_products(v, p, e, i, 0))
+            y = _eight_sums(y, _eight_products(v, p, e, i, 1))
             i += 8
-        total_w = ((w0 + w1) + (w2 + w3)) + ((w4 + w5) + (w6 + w7))
-        total_x = ((x0 + x1) + (x2 + x3)) + ((x4 + x5) + (x6 + x7))
-        total_y = ((y0 + y1) + (y2 + y3)) + ((y4 + y5) + (y6 + y7))
+        total_w, total_x, total_y = _eight_total(w), _eight_total(x), _eight_total(y)
         while i < start + n:
             total_w += a[i]
             total_x += a[i] * p[e, i, 0]
