@@ -334,3 +334,23 @@ def replace_config(loaded, overrides):
     from probecommit.runner.replay import replay_config
 
     return replay_config(loaded.config, overrides)
+
+
+def test_a_chunk_that_raises_leaves_no_stored_answer_in_the_simulator(runs):
+    loaded = load_run(runs["cal"])
+    beliefs = RunBeliefs.of(loaded, chunk_instances=2)
+    calls = []
+
+    def failing(table):
+        calls.append(len(table))
+        if len(calls) == 2:
+            raise RuntimeError("a reducer failed")
+        return len(table)
+
+    with pytest.raises(RuntimeError, match="a reducer failed"):
+        beliefs.commit([{"thresholds": 0.8, "margin": None}], methods=["probe_robust"], reduce=[failing])
+    assert len(calls) == 2 and not beliefs.simulator.answered_keys()
+    # ... and the run commits again as if nothing had happened.
+    [parts] = beliefs.commit([{"thresholds": 0.8, "margin": None}], methods=["probe_robust"], reduce=[len])
+    assert sum(parts) == sum(len(t) for t in [replay_episodes(loaded, chunk_instances=None)[0].query(
+        "method == 'probe_robust'")])

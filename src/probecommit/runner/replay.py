@@ -179,8 +179,8 @@ class StoredAnswers:
         self.permanent: frozenset = frozenset()
         self._append(table)
 
-    @classmethod
-    def usable(cls, table: pa.Table, latent_names: Sequence[str], truths: np.ndarray) -> bool:
+    @staticmethod
+    def usable(table: pa.Table, latent_names: Sequence[str], truths: np.ndarray) -> bool:
         """Whether a table's answers can be told apart by instance: it has every latent column,
         and a truth has one value per latent. Otherwise every answer is given at once."""
         return set(latent_names) <= set(table.column_names) and truths.ndim == 2 and truths.shape[1] == len(latent_names)
@@ -433,28 +433,36 @@ class RunBeliefs:
         several = len(self.chunks) > 1
         for rows in self.chunks:
             taken = self._take_answers(rows)
-            if self._kept is not None:
-                trace, cache = self._kept
-            else:
-                trace, cache = self.trace(rows), {}
-                if not several and not final:
-                    self._kept = trace, cache
-            if final:
-                self._kept = None
-            # A cache that outlives this call keeps every set; otherwise each set goes after its last use.
-            cache_ends_here = several or final
-            for i, (part, request, columns, reducer) in enumerate(zip(parts, requests, keep, reduce)):
-                table = commit(trace, self.model, self.simulator, cache=cache if reuse else None,
-                               columns=columns, **common, **request)
-                part.append(table if reducer is None else reducer(table))
-                del table
-                later = requests[i + 1:]
-                if cache_ends_here and all("thresholds" in upcoming for upcoming in later):
-                    prune_retained_sets(cache, [upcoming["thresholds"] for upcoming in later])
-            del trace, cache  # let a finished chunk's beliefs go before the next is computed
-            self._put_back_answers(taken)
+            try:
+                self._commit_chunk(rows, parts, requests, keep, reduce, reuse, final, common)
+            finally:  # a chunk that raised leaves no stored answer behind in the simulator either
+                self._put_back_answers(taken)
             if several:
-                trim_heap()  # ... and their pages, so chunks do not pile up as heap fragments
+                trim_heap()  # the finished chunk's pages go back, so chunks do not pile up as heap fragments
+
+    def _commit_chunk(self, rows: slice, parts: list[list[Any]], requests: Sequence[Mapping[str, Any]],
+                      keep: list, reduce: list, reuse: bool, final: bool, common: dict[str, Any]) -> None:
+        """Every request on the chunk ``batch[rows]``: its beliefs computed (or kept) once."""
+        several = len(self.chunks) > 1
+        if self._kept is not None:
+            trace, cache = self._kept
+        else:
+            trace, cache = self.trace(rows), {}
+            if not several and not final:
+                self._kept = trace, cache
+        if final:
+            self._kept = None
+        # A cache that outlives this call keeps every set; otherwise each set goes after its last use.
+        cache_ends_here = several or final
+        for i, (part, request, columns, reducer) in enumerate(zip(parts, requests, keep, reduce)):
+            table = commit(trace, self.model, self.simulator, cache=cache if reuse else None,
+                           columns=columns, **common, **request)
+            part.append(table if reducer is None else reducer(table))
+            del table
+            later = requests[i + 1:]
+            if cache_ends_here and all("thresholds" in upcoming for upcoming in later):
+                prune_retained_sets(cache, [upcoming["thresholds"] for upcoming in later])
+        # Returning lets the chunk's beliefs go before the next chunk's are computed.
 
     def _take_answers(self, rows: slice) -> list:
         """Give the simulator the stored answers about the instances of ``batch[rows]``; their keys."""
