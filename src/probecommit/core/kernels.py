@@ -718,26 +718,6 @@ if HAVE_KERNELS:
             steps_out[i], totals_out[i] = _add_repeated(totals[i], values[i], counts[i], targets[i])
 
     @helper(inline=True)
-    def _row_top(w):  # pragma: no cover - compiled
-        """The largest of a row of weights (finite, non-negative; which zero is kept does not
-        matter to a weight), in four running maxima: one would be a chain of dependent comparisons."""
-        n = w.shape[0]
-        m0 = m1 = m2 = m3 = -np.inf
-        i = 0
-        stop = n - n % 4
-        while i < stop:
-            m0 = w[i] if w[i] > m0 else m0
-            m1 = w[i + 1] if w[i + 1] > m1 else m1
-            m2 = w[i + 2] if w[i + 2] > m2 else m2
-            m3 = w[i + 3] if w[i + 3] > m3 else m3
-            i += 4
-        top = max(max(m0, m1), max(m2, m3))
-        while i < n:
-            top = max(top, w[i])
-            i += 1
-        return top
-
-    @helper(inline=True)
     def _count_and_below(w, value):  # pragma: no cover - compiled
         """How many weights equal ``value``, and the largest weight below it (-inf when none): one pass."""
         n = w.shape[0]
@@ -809,7 +789,7 @@ if HAVE_KERNELS:
         target = nu - 1e-12
         cumulative = 0.0
         taken = 0
-        value = _row_top(w)
+        value = _row_max(w)  # finite, non-negative weights: no NaN, and either zero will do
         for _ in range(values.shape[0]):
             count, below = _count_and_below(w, value)
             added, cumulative = _add_repeated(cumulative, value, count, target)
