@@ -175,7 +175,7 @@ class StoredAnswers:
         self.latent_names = tuple(latent_names)
         #: Tables of answers with their latent columns as arrays: the run's, then the engine's.
         self._parts: list[tuple[pa.Table, list[np.ndarray]]] = []
-        #: Keys given for good (answers about no instance's truth).
+        #: Keys given for good (answers about no instance's truth: :meth:`give_unclaimed`).
         self.permanent: frozenset = frozenset()
         self._append(table)
 
@@ -192,6 +192,11 @@ class StoredAnswers:
         """Keep answers the engine gave (``cache_records`` rows), to give again with their chunk's."""
         if records:
             self._append(pa.Table.from_pandas(cache_frame(records, self.latent_names), preserve_index=False))
+
+    def give_unclaimed(self, simulator: Any, truths: np.ndarray) -> None:
+        """Give ``simulator``, for good, the run's answers about none of ``truths`` (the run's
+        instances'). A chunk's truths are some of these, so :meth:`about` never selects them."""
+        self.permanent = frozenset(simulator.load_cache(self.records([~rows for rows in self.about(truths)])))
 
     def about(self, truths: np.ndarray) -> list[np.ndarray]:
         """Per table, which rows may be about one of ``truths`` ``[M, d]`` (each latent among the
@@ -211,10 +216,10 @@ class StoredAnswers:
             if rows.any():
                 yield from cache_records(table.filter(pa.array(rows)).to_pandas(), self.latent_names)
 
-    def engine_records(self) -> Iterator[dict[str, Any]]:
-        """Every answer kept by :meth:`add`, in the order given."""
-        return self.records([np.ones(table.num_rows, dtype=bool) if n else np.zeros(table.num_rows, dtype=bool)
-                             for n, (table, _) in enumerate(self._parts)])
+    def every_record(self) -> Iterator[dict[str, Any]]:
+        """Every answer held, the run's then the engine's, in the order they came."""
+        for table, _ in self._parts:
+            yield from cache_records(table.to_pandas(), self.latent_names)
 
 
 def _chunked_simulator(loaded: LoadedRun, config: StudyConfig, latent_names: Sequence[str],
@@ -229,7 +234,7 @@ def _chunked_simulator(loaded: LoadedRun, config: StudyConfig, latent_names: Seq
         sim.load_cache(cache_records(table.to_pandas(), latent_names))
         return sim, None
     answers = StoredAnswers(table, latent_names)
-    answers.permanent = frozenset(sim.load_cache(answers.records([~rows for rows in answers.about(truths)])))
+    answers.give_unclaimed(sim, truths)
     return sim, answers
 
 
@@ -607,8 +612,7 @@ def replay_run(src: str | Path, out: str | Path, overrides: dict[str, dict[str, 
     if beliefs.answers is not None:
         # The new run's engine cache: the source's answers and those the engine gave during the
         # replay (a chunked replay gave them to the simulator a chunk at a time).
-        sim.load_cache(cache_records(loaded.table("engine_cache"), beliefs.model.latent_names))
-        sim.load_cache(beliefs.answers.engine_records())
+        sim.load_cache(beliefs.answers.every_record())
     probes = loaded.table("probes")
     run = RunDir(out)
     run.prepare(dump_config(config))
