@@ -132,7 +132,7 @@ def large_arrays_apart(threshold: int = APART_BYTES) -> Iterator[bool]:
     answers kept for later passes) sit between the freed blocks, and the next chunk's large
     arrays no longer all fit where the last chunk's were: the heap grew by a few MB over a long
     run's chunks (``benchmarks/memory.py``). It costs page faults (calibrate on 3072 episodes:
-    about 10 % longer here), so it is used around loops over several chunks only. A threshold
+    about 15 % longer here), so it is used around loops over several chunks only. A threshold
     other than the command's (a user's ``MALLOC_MMAP_THRESHOLD_``, or a program that never set
     one) is left alone.
 

@@ -452,8 +452,9 @@ class CachedSimulator:
         return taken
 
     def forget_answers(self, keys: Iterable[tuple[str, tuple[float, ...], tuple[float, ...]]]) -> None:
-        """Drop answers taken by :meth:`load_cache` that are no longer needed (a replay's finished
-        chunk of instances). The answers this simulator's engine gave stay: none is run twice."""
+        """Drop the answers of ``keys`` (a replay's finished chunk of instances: those :meth:`load_cache`
+        took, and those the engine gave once the caller has kept them elsewhere). A query of a
+        dropped key later runs the engine again unless its answer is given back first."""
         for key in keys:
             self._cache.pop(key, None)
 
