@@ -93,7 +93,7 @@ def test_reuse_freed_arrays_without_mallopt(monkeypatch):
 
 
 #: Whether a 3 MiB array gets pages of its own (glibc's mallinfo2: bytes in mmapped blocks), before,
-#: inside and after ``large_arrays_apart``.
+#: inside, inside a nested block of a 4 MiB threshold, after that block, and after ``large_arrays_apart``.
 _APART = """
 import ctypes, sys
 import numpy as np
@@ -113,7 +113,10 @@ def apart():
 outside = apart()
 with memory.large_arrays_apart() as changed:
     inside = apart()
-print(changed, outside, inside, apart())
+    with memory.large_arrays_apart(4 * 2**20):
+        nested = apart()
+    back = apart()
+print(changed, outside, inside, nested, back, apart())
 """
 
 
@@ -127,9 +130,10 @@ def test_large_arrays_apart_maps_large_arrays_only_within_and_only_under_the_com
         return subprocess.run([sys.executable, "-c", _APART, mode], capture_output=True, text=True, check=True,
                               env={**clean, **env}).stdout.split()
 
-    # changed, outside, inside, after: the command's 32 MiB threshold keeps 3 MiB in the heap but within.
-    assert run("reuse") == ["True", "False", "True", "False"]
+    # changed, outside, inside, nested, back, after: the command's 32 MiB threshold keeps 3 MiB in the heap
+    # but within; a nested block's threshold (4 MiB) holds within it only, then the enclosing one's again.
+    assert run("reuse") == ["True", "False", "True", "False", "True", "False"]
     # A threshold the user chose is theirs: left alone (here 1 MiB: every 3 MiB array is mapped).
-    assert run("reuse", MALLOC_MMAP_THRESHOLD_="1048576") == ["False", "True", "True", "True"]
+    assert run("reuse", MALLOC_MMAP_THRESHOLD_="1048576") == ["False", "True", "True", "True", "True", "True"]
     # A program that never took the command's setting keeps glibc's dynamic threshold.
     assert run("plain")[0] == "False"

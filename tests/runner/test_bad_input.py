@@ -21,7 +21,7 @@ from pydantic import BaseModel
 
 from probecommit.runner.config import ConfigError, StudyConfig, dump_config, load_config, parse_config
 from probecommit.runner.study import preflight
-from probecommit.store.probes import ProbeTableError, read_probes
+from probecommit.store.probes import ProbeTableError, read_probes, validate_probes
 
 SETTINGS = dict(deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow])
 
@@ -339,6 +339,25 @@ def test_probe_reader_messages(tmp_path):
         with pytest.raises(ProbeTableError) as err:
             read_probes(path)
         assert expected in str(err.value), (expected, str(err.value))
+
+
+@settings(max_examples=200, **SETTINGS)
+@given(ids=st.lists(st.sampled_from(["i0", "i1", " i1", "i1 ", "", "  ", "nan", "None", "7", None]), min_size=6, max_size=6))
+def test_text_instance_ids_are_checked_once_per_distinct_id_as_row_by_row(ids):
+    """A text column (Parquet, CSV) is checked per distinct id: same table or same message as the row-by-row check."""
+    table = pd.DataFrame({"instance_id": ids, "repeat": range(6), "j": 1, "u": 0.5, "y": -1.0})
+    outcomes = []
+    for dtype in ("str", object):
+        try:
+            outcomes.append(validate_probes(table.astype({"instance_id": dtype}), "log"))
+        except ProbeTableError as exc:
+            outcomes.append(str(exc))
+    text, by_row = outcomes
+    if isinstance(by_row, str):
+        assert text == by_row
+    else:
+        pd.testing.assert_frame_equal(text, by_row)
+        assert [v for v in text["instance_id"]] == [str(v).strip() for v in ids]
 
 
 # ------------------------------------------------------------------ audit reader

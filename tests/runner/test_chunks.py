@@ -7,7 +7,9 @@ import pandas as pd
 import pytest
 
 from probecommit.runner.calibration import calibrate, gates
-from probecommit.runner.replay import RunBeliefs, _chunk_slices, load_run, replay_episodes, trace_for_run
+from probecommit.runner.build import build_model
+from probecommit.runner.replay import (LoadedRun, RunBeliefs, _chunk_slices, load_run, probe_batch, replay_episodes,
+                                      trace_for_run)
 from tests.conftest import small_config
 
 
@@ -32,6 +34,26 @@ def test_chunk_slices_hold_whole_instances():
     assert _chunk_slices(ids[:0], 2) == [slice(0, 0)]
     with pytest.raises(ValueError, match="at least 1"):
         _chunk_slices(ids, 0)
+
+
+def test_probe_batch_puts_probes_in_the_runs_episode_order_whatever_the_row_order(runs):
+    """Episodes in the instances table's order, then repeat; probes by j; each id one of the instances table's strings."""
+    loaded = load_run(runs["cal"])
+    model = build_model(loaded.config)
+    probes = loaded.table("probes")
+    shuffled = probes.sample(frac=1.0, random_state=3).reset_index(drop=True)
+    batch = probe_batch(LoadedRun(loaded.path, loaded.config, loaded.instances, probes=shuffled), model)
+    order = list(loaded.instances["instance_id"])
+    expected = probes.assign(_o=probes["instance_id"].map(order.index)).sort_values(["_o", "repeat", "j"])
+    n_e, k = 7 * 3, 5
+    assert list(batch.instance_id) == list(expected["instance_id"].iloc[::k])
+    np.testing.assert_array_equal(batch.repeat, expected["repeat"].iloc[::k])
+    np.testing.assert_array_equal(batch.u[..., 0], expected["u"].to_numpy().reshape(n_e, k))
+    np.testing.assert_array_equal(batch.y[..., 0], expected["y"].to_numpy().reshape(n_e, k))
+    positions = [order.index(i) for i in batch.instance_id]
+    np.testing.assert_array_equal(batch.instance_index, loaded.instances["instance_index"].to_numpy()[positions])
+    np.testing.assert_array_equal(batch.truths[:, 0], loaded.instances["true_x_hole"].to_numpy()[positions])
+    assert len({id(i) for i in batch.instance_id}) == 7  # shared with the instances table, not a string per episode
 
 
 @pytest.mark.parametrize("chunk", [1, 3])

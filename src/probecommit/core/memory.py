@@ -142,11 +142,18 @@ def large_arrays_apart(threshold: int = APART_BYTES) -> Iterator[bool]:
     mallopt = _mallopt()
     ours = os.environ.get("MALLOC_MMAP_THRESHOLD_") == str(HEAP_REUSE_BYTES)
     changed = mallopt is not None and ours and mallopt(_M_MMAP_THRESHOLD, threshold) == 1
+    if changed:
+        _apart_thresholds.append(threshold)
     try:
         yield changed
     finally:
-        if changed:
-            mallopt(_M_MMAP_THRESHOLD, HEAP_REUSE_BYTES)
+        if changed:  # back to the enclosing block's threshold, or the command's
+            _apart_thresholds.pop()
+            mallopt(_M_MMAP_THRESHOLD, _apart_thresholds[-1] if _apart_thresholds else HEAP_REUSE_BYTES)
+
+
+#: The thresholds of the :func:`large_arrays_apart` blocks in force, innermost last.
+_apart_thresholds: list[int] = []
 
 
 def trim_heap() -> bool:

@@ -117,7 +117,23 @@ def load_run(run_dir: str | Path) -> LoadedRun:
 
 
 def probe_batch(loaded: LoadedRun, model: Any) -> ProbeBatch:
-    """Rebuild the stored probe trajectories (successful episodes) as a batch."""
+    """Rebuild the stored probe trajectories (successful episodes) as a batch.
+
+    The table is read, validated and reshaped with every array above glibc's default 128 KiB
+    threshold on pages of its own (:func:`~probecommit.core.memory.large_arrays_apart`): the
+    table's temporaries (columns of E * K rows) then go back to the system when freed, instead of
+    staying as heap fragments beside the batch, which grew what a replay of E = 3072 episodes
+    holds afterwards by about 2 MB more than one of 384 did (``benchmarks/memory.py``).
+    """
+    with large_arrays_apart(TABLE_APART_BYTES):
+        return _probe_batch(loaded, model)
+
+
+#: :func:`probe_batch`'s threshold for arrays kept apart from the heap (glibc's default).
+TABLE_APART_BYTES = 128 * 1024
+
+
+def _probe_batch(loaded: LoadedRun, model: Any) -> ProbeBatch:
     # Validate first: a malformed table is refused naming column and row, never reshaped.
     probes = loaded.table("probes")
     u_cols, y_cols = component_names("u", model.probe_dim), component_names("y", model.observation_dim)
@@ -126,24 +142,27 @@ def probe_batch(loaded: LoadedRun, model: Any) -> ProbeBatch:
                                  instance_ids=loaded.instances["instance_id"],
                                  probe_dim=model.probe_dim, observation_dim=model.observation_dim)
     # The run's own episode order: instance order of the instances table, then repeat, then j.
-    order = {iid: n for n, iid in enumerate(loaded.instances["instance_id"])}
-    probes = probes.assign(_o=probes["instance_id"].map(order))
-    probes = probes.sort_values(["_o", "repeat", "j"], kind="stable")
-    keys = probes.drop_duplicates(["_o", "repeat"])[["instance_id", "repeat"]]
-    n_e = len(keys)
-    k = int(probes["j"].max()) if n_e else 0
-    inst = loaded.instances.assign(instance_id=loaded.instances["instance_id"].astype(str)).set_index("instance_id")
-    iids = keys["instance_id"].to_numpy(object)
-    rows = inst.loc[iids]
+    # Worked on codes (an instance's position), not on each row's id string: a run holds E * K
+    # probe rows of a few hundred distinct instances.
+    inst_ids = loaded.instances["instance_id"].astype(str).to_numpy(object)
+    codes, uniques = pd.factorize(probes["instance_id"])
+    position = pd.Index(inst_ids).get_indexer(np.asarray(uniques, dtype=object))[codes]
+    repeat, j = probes["repeat"].to_numpy(np.int64), probes["j"].to_numpy(np.int64)
+    order = np.lexsort((j, repeat, position))  # every (instance, repeat, j) is given once (validated)
+    position, repeat = position[order], repeat[order]
+    first = np.flatnonzero((np.diff(position, prepend=-1) != 0) | (np.diff(repeat, prepend=-1) != 0))  # an episode's j = 1
+    n_e = len(first)
+    k = int(j.max()) if n_e else 0
+    rows = loaded.instances.iloc[position[first]]
     truths, context = instance_arrays(rows, model)
     return ProbeBatch(
         split=str(loaded.instances["split"].iloc[0]),
-        instance_id=iids,
+        instance_id=inst_ids[position[first]],
         instance_index=rows["instance_index"].to_numpy(np.int64),
-        repeat=keys["repeat"].to_numpy(np.int64),
+        repeat=repeat[first],
         truths=truths,
-        u=probes[u_cols].to_numpy(float).reshape(n_e, k, len(u_cols)),
-        y=probes[y_cols].to_numpy(float).reshape(n_e, k, len(y_cols)),
+        u=probes[u_cols].to_numpy(float)[order].reshape(n_e, k, len(u_cols)),
+        y=probes[y_cols].to_numpy(float)[order].reshape(n_e, k, len(y_cols)),
         context=context,
     )
 

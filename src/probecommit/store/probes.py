@@ -84,6 +84,36 @@ def _integers(df: pd.DataFrame, name: str, lowest: int, source: str, csv: bool) 
     return values.astype(np.int64)
 
 
+def _is_empty_id(value: object) -> bool:
+    return value is None or (isinstance(value, float) and np.isnan(value)) or str(value).strip() in ("", "nan", "None")
+
+
+def _normal_id(value: object) -> str:
+    return str(int(value)) if isinstance(value, float) and value == int(value) else str(value).strip()
+
+
+def _instance_ids(column: pd.Series, source: str, csv: bool) -> np.ndarray:
+    """The ``instance_id`` column as ``str`` objects, refused where one is empty.
+
+    A table of text ids (Parquet, CSV) is checked and normalized once per distinct id: a log
+    holds many probes of few instances, and a Python string per row would be made for nothing.
+    Other columns (a frame built by hand, of numbers or mixed objects) are checked row by row.
+    """
+    if isinstance(column.dtype, pd.StringDtype):
+        codes, uniques = pd.factorize(column)  # a missing id gets code -1
+        distinct = np.asarray(uniques, dtype=object)
+        empty = np.r_[np.array([_is_empty_id(v) for v in distinct], dtype=bool), True][codes]
+        if not empty.any():
+            return np.array([_normal_id(v) for v in distinct], dtype=object)[codes]
+    else:
+        ids = column.astype(object)
+        empty = ids.map(_is_empty_id).to_numpy(bool)
+        if not empty.any():
+            return ids.map(_normal_id).to_numpy(object)
+    row = int(np.flatnonzero(empty)[0])
+    raise ProbeTableError(f"{source}: column 'instance_id' is empty at {_where(row, csv)}")
+
+
 def validate_probes(table: pd.DataFrame, source: str = "probe table", *, csv: bool = False,
                     instance_ids: pd.Series | None = None, probe_dim: int = 1,
                     observation_dim: int = 1) -> pd.DataFrame:
@@ -105,14 +135,8 @@ def validate_probes(table: pd.DataFrame, source: str = "probe table", *, csv: bo
     """
     values = component_names("u", probe_dim) + component_names("y", observation_dim)
     df = checked_frame(table, KEY_COLUMNS + tuple(values), source, ProbeTableError, "a probe table")
-    ids = df["instance_id"].astype(object)
-    empty = ids.map(lambda v: v is None or (isinstance(v, float) and np.isnan(v))
-                    or str(v).strip() in ("", "nan", "None")).to_numpy(bool)
-    if empty.any():
-        row = int(np.flatnonzero(empty)[0])
-        raise ProbeTableError(f"{source}: column 'instance_id' is empty at {_where(row, csv)}")
     out = pd.DataFrame({
-        "instance_id": ids.map(lambda v: str(int(v)) if isinstance(v, float) and v == int(v) else str(v).strip()),
+        "instance_id": _instance_ids(df["instance_id"], source, csv),
         "repeat": _integers(df, "repeat", 0, source, csv),
         "j": _integers(df, "j", 1, source, csv),
         **{name: _numbers(df, name, source, csv) for name in values},
