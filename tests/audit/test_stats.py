@@ -14,6 +14,7 @@ from probecommit.audit.stats import (
     cluster_bootstrap_mean,
     pair_episodes,
     paired_bootstrap,
+    percentile_interval,
     rank_auc,
     resample_counts,
     sign_flip_test,
@@ -25,6 +26,20 @@ def test_resample_counts_shape_sums_and_seed():
     assert w.shape == (50, 7) and (w.sum(axis=1) == 7).all() and (w >= 0).all()
     np.testing.assert_array_equal(w, resample_counts(7, 50, seed=3))
     assert not np.array_equal(w, resample_counts(7, 50, seed=4))
+
+
+def test_bootstrap_ratio_on_float_counts_equals_the_integer_counts_product():
+    """Counts are held as float64 so ``counts @ x`` makes no float copy; the products are those of
+    integer counts (which the product casts to the same float64 values), bit for bit."""
+    w = resample_counts(600, 2000, seed=9)
+    assert w.dtype == np.float64 and np.array_equal(w, np.round(w))
+    rng = np.random.default_rng(2)
+    num, den = rng.random(600), rng.integers(1, 5, 600).astype(float)
+    integer = w.astype(np.int64)
+    np.testing.assert_array_equal(w @ num, integer @ num)
+    iv = bootstrap_ratio(num, den, resamples=2000, seed=9)
+    lo, hi = percentile_interval((integer @ num) / (integer @ den))
+    assert (iv.lo, iv.hi) == (lo, hi)
 
 
 def test_ratio_estimator_hand_example():

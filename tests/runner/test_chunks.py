@@ -340,6 +340,8 @@ def test_a_chunk_is_given_only_its_instances_engine_answers_and_none_is_asked_tw
     assert {theta for theta, _ in held} <= truths
     assert max(n for _, n in held) <= 2 * per_truth.max() + whole_sim.engine_calls["peg_depth"]
     assert max(n for _, n in held) < len(stored)
+    # The engine's answers of the pass's 4 chunks are one table after it, in the order they came.
+    assert len(beliefs.answers._parts) == 2 and beliefs.answers._parts[1][0].num_rows == whole_sim.engine_calls["peg_depth"]
     # A second pass takes the engine's answers from where the first left them: no new engine call.
     calls = dict(beliefs.simulator.engine_calls)
     beliefs.commit([{"thresholds": config.belief.nu, "margin": None}], **request)
@@ -376,3 +378,16 @@ def test_a_chunk_that_raises_leaves_no_stored_answer_in_the_simulator(runs):
     [parts] = beliefs.commit([{"thresholds": 0.8, "margin": None}], methods=["probe_robust"], reduce=[len])
     assert sum(parts) == sum(len(t) for t in [replay_episodes(loaded, chunk_instances=None)[0].query(
         "method == 'probe_robust'")])
+
+
+def test_a_table_read_with_rows_and_columns_named_equals_those_of_the_whole_table(runs):
+    """``LoadedRun.table(where=..., columns=...)`` reads only those rows and columns, from disk or held."""
+    loaded = load_run(runs["test"])
+    whole = loaded.table("episodes")
+    expected = whole.loc[whole["method"] == "blind_robust", ["instance_id", "k", "realized"]].reset_index(drop=True)
+    read = loaded.table("episodes", where=("method", ["blind_robust"]), columns=["instance_id", "k", "realized"])
+    assert list(read.columns) == ["instance_id", "k", "realized"] and len(read) > 0
+    pd.testing.assert_frame_equal(read.reset_index(drop=True), expected)
+    loaded.episodes  # now held
+    pd.testing.assert_frame_equal(loaded.table("episodes", where=("method", ["blind_robust"]),
+                                               columns=["instance_id", "k", "realized"]).reset_index(drop=True), expected)

@@ -29,7 +29,7 @@ import os
 import subprocess
 import tempfile
 from pathlib import Path
-from typing import Any, Iterator
+from typing import Any, Iterator, Sequence
 
 import pandas as pd
 import pyarrow as pa
@@ -443,15 +443,18 @@ class RunDir:
         self.manifest()
         return pd.read_parquet(self.table_path(name))
 
-    def read_verified(self, name: str, where: tuple[str, list] | None = None) -> pd.DataFrame:
+    def read_verified(self, name: str, where: tuple[str, list] | None = None,
+                      columns: Sequence[str] | None = None) -> pd.DataFrame:
         """A final table whose bytes still match the manifest's sha256, optionally only its rows
-        whose column ``where[0]`` takes one of the values ``where[1]`` (read with that filter).
+        whose column ``where[0]`` takes one of the values ``where[1]`` (read with that filter) and
+        only the ``columns`` named.
 
         Raises:
             RunDirError: The file changed since the run wrote its manifest.
         """
         filters = None if where is None else [(where[0], "in", list(where[1]))]
-        return pd.read_parquet(io.BytesIO(self._verified_bytes(name)), filters=filters)
+        return pd.read_parquet(io.BytesIO(self._verified_bytes(name)), filters=filters,
+                               columns=None if columns is None else list(columns))
 
     def read_verified_arrow(self, name: str) -> pa.Table:
         """:meth:`read_verified` as an Arrow table: columns in a few buffers, no Python object per
