@@ -149,7 +149,7 @@ def _run_once(src: Path, runs: Path, case: str, episodes: int, chunk: str) -> di
                            chunk], capture_output=True, text=True,
                           env={**os.environ, **ARROW_POOL, **HEAP, "PYTHONPATH": str(src)})
     if done.returncode:
-        raise RuntimeError(done.stderr)
+        raise RuntimeError(f"{case} at E = {episodes} ({src}) exited with {done.returncode}: {done.stderr}")
     return json.loads(done.stdout.strip().splitlines()[-1])
 
 

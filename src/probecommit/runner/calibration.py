@@ -70,8 +70,9 @@ AUDIT_COLUMNS = ("instance_id", "repeat", "k", "method", "variant", "status", "p
 
 #: Rows of margin-search tables (episodes x budgets, per margin) one pass over a run of several
 #: chunks commits at most: a pass recomputes the run's beliefs, so it commits several margins,
-#: but not so many that their tables grow with the run (E = 3072 at k = 1..8: five a pass).
-MARGIN_BLOCK_ROWS = 2**17
+#: but not so many that their tables grow with the run (16 bytes a row, :func:`_margin_rows`:
+#: 4 MB; E = 3072 at k = 1..8: ten margins a pass, E = 12288: two).
+MARGIN_BLOCK_ROWS = 2**18
 
 #: A commit request: the thresholds (mass ``nu``, ``t`` or ``{k: t_k}``) and the margin (None: the model's).
 Request = tuple[float | dict[int, float], float | None]
@@ -80,13 +81,15 @@ Reduction = Callable[[pd.DataFrame], Any]
 
 
 def _concat_parts(parts: Sequence[Any]) -> Any:
-    """The reductions of a run's parts joined: DataFrames concatenated (their index kept), tuples
-    element by element; None parts (nothing kept) skipped, and None when every part is."""
+    """The reductions of a run's parts joined: DataFrames concatenated (their index kept), arrays
+    concatenated, tuples element by element; None parts (nothing kept) skipped, and None when every part is."""
     parts = [part for part in parts if part is not None]
     if not parts:
         return None
     if isinstance(parts[0], tuple):
         return tuple(_concat_parts(column) for column in zip(*parts))
+    if isinstance(parts[0], np.ndarray):
+        return np.concatenate(parts)
     return pd.concat(parts) if len(parts) > 1 else parts[0]
 
 
@@ -102,10 +105,13 @@ def _calibration_scores(cal: "_Run") -> pd.DataFrame:
     return scores.sort_index()
 
 
-def _margin_rows(table: pd.DataFrame, budgets: list[int]) -> pd.DataFrame:
-    """The rows and columns ``audit.margin.margin_satisfied(table, budgets)`` reads, in order."""
+def _margin_rows(table: pd.DataFrame, budgets: list[int]) -> tuple[np.ndarray, np.ndarray]:
+    """The values ``audit.margin.margin_satisfied(table, budgets)`` sums, in order: predicted and
+    realized failure of the ok rows at ``budgets``, as two float arrays (16 bytes a row, against
+    32 for the rows with their budget and index)."""
     ok = ok_episodes(table)
-    return ok.loc[ok["k"].isin(budgets), ["k", "predicted", "realized"]]
+    rows = ok.loc[ok["k"].isin(budgets)]
+    return rows["predicted"].to_numpy(float), rows["realized"].to_numpy(float)
 
 
 def _scores(table: pd.DataFrame) -> pd.DataFrame | None:
@@ -249,7 +255,7 @@ class _Run:
             The margin and what :meth:`commit` returns for ``extra``.
         """
         candidates = margin_candidates(grid)
-        tables: dict[float, pd.DataFrame] = {}
+        tables: dict[float, tuple[np.ndarray, np.ndarray]] = {}
         extras: list[Any] = []
         # Margins committed in one pass: as many as MARGIN_BLOCK_ROWS rows of their tables allow,
         # so the memory held is bounded, not a whole scan's tables of every episode.
@@ -266,9 +272,11 @@ class _Run:
                                   reduce=[margin_rows] * len(block) + [reducer for _, reducer in first])
                 tables.update(zip(block, out[:len(block)]))
                 extras.extend(out[len(block):])
-            return tables.pop(gamma)  # the scan reads each margin once
+            predicted, realized = tables.pop(gamma)  # the scan reads each margin once
+            return pd.DataFrame({"predicted": predicted, "realized": realized})
 
-        return select_margin(evaluate, candidates, budgets=budgets), extras
+        # The rows are those at ``budgets`` already (_margin_rows).
+        return select_margin(evaluate, candidates, budgets=None), extras
 
     def release(self) -> None:
         """Drop the beliefs kept between commits (the run's last commit is done)."""
