@@ -639,9 +639,8 @@ def replay_run(src: str | Path, out: str | Path, overrides: dict[str, dict[str, 
     if Path(out).resolve() == Path(src).resolve():
         raise ValueError(f"replay would overwrite its source run {src}; give another --out")
     loaded = load_run(src)
-    config = replay_config(loaded.config, overrides)
     episodes, beliefs = _replayed(loaded, overrides, None, None, fixed_probes, chunk_instances)
-    sim = beliefs.simulator
+    config, sim = beliefs.config, beliefs.simulator
     if beliefs.answers is not None:
         # The new run's engine cache: the source's answers and those the engine gave during the
         # replay (a chunked replay gave them to the simulator a chunk at a time).

@@ -100,18 +100,16 @@ def _instance_ids(column: pd.Series, source: str, csv: bool) -> np.ndarray:
     Other columns (a frame built by hand, of numbers or mixed objects) are checked row by row.
     """
     if isinstance(column.dtype, pd.StringDtype):
-        codes, uniques = pd.factorize(column)  # a missing id gets code -1
-        distinct = np.asarray(uniques, dtype=object)
-        empty = np.r_[np.array([_is_empty_id(v) for v in distinct], dtype=bool), True][codes]
-        if not empty.any():
-            return np.array([_normal_id(v) for v in distinct], dtype=object)[codes]
+        codes, uniques = pd.factorize(column)
+        values = np.append(np.asarray(uniques, dtype=object), None)  # a missing id's code, -1, reads None
     else:
-        ids = column.astype(object)
-        empty = ids.map(_is_empty_id).to_numpy(bool)
-        if not empty.any():
-            return ids.map(_normal_id).to_numpy(object)
-    row = int(np.flatnonzero(empty)[0])
-    raise ProbeTableError(f"{source}: column 'instance_id' is empty at {_where(row, csv)}")
+        values = column.astype(object).to_numpy()
+        codes = np.arange(values.size)
+    empty = np.array([_is_empty_id(v) for v in values], dtype=bool)[codes]
+    if empty.any():
+        row = int(np.flatnonzero(empty)[0])
+        raise ProbeTableError(f"{source}: column 'instance_id' is empty at {_where(row, csv)}")
+    return np.array([_normal_id(v) for v in values], dtype=object)[codes]
 
 
 def validate_probes(table: pd.DataFrame, source: str = "probe table", *, csv: bool = False,
