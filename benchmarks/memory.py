@@ -14,15 +14,16 @@ per size), made once into a temporary folder. Each case runs in a fresh subproce
 resident memory (``ru_maxrss``) and wall time, so the numbers are independent, and the
 resident memory once ``load_run`` has opened its input runs (this tree reads only their
 instances there, and the other tables when a replay or calibration asks; older code read every
-table): the peak above it is what the work itself adds. A
-replay re-infers the calibration run under the corrected model; a calibration
-calibrates on one run and tests on the other. Every arm's output is compared with
-the first arm's: calibration JSON (``CalibrationResult.to_dict``) and the replayed
-episode table (pandas hash of every cell, dtypes included). Each line ends with the peak's growth
+table): the peak above it is what the work itself adds. ``replay`` writes the calibration run
+re-inferred under the corrected model to a new run directory (``replay_run``, what ``probecommit
+replay`` runs: each chunk's episodes go to disk when the chunk is done); ``replay_episodes`` is the
+same replay through the in-memory API, which returns the whole table (so its peak holds its
+output); a calibration calibrates on one run and tests on the other. Every arm's output is compared with
+the first arm's: calibration JSON (``CalibrationResult.to_dict``), the replay's episodes and
+engine cache read back, the returned table (pandas hash of every cell, dtypes included). Each line ends with the peak's growth
 from each size to the next, in per cent and per added episode (of each run); with ``--repeat N``
 each cell is the median of N processes (a peak varies by about 2 MB from one to the next). Printed
-last, per size: the table a replay returns (its chunks' parts are held until the last chunk is
-done), which is replay's output, and the input a run's chunked beliefs hold from start to end
+last, per size: the table ``replay_episodes`` returns, and the input a run's chunked beliefs hold from start to end
 (the probe arrays of every episode and the run's engine answers as Arrow columns).
 """
 
@@ -65,7 +66,7 @@ for name in sys.argv[2:]:
 """
 
 CASE = """
-import gc, hashlib, json, resource, sys, time
+import gc, hashlib, json, resource, shutil, sys, tempfile, time
 import pandas as pd
 from probecommit.runner.replay import load_run
 case, cal, test, chunk = sys.argv[1], sys.argv[2], sys.argv[3], sys.argv[4]
@@ -103,16 +104,33 @@ if case == "calibrate":
     except ImportError:
         from probecommit.audit.pipeline import calibrate
     output = json.dumps(calibrate(*runs, **kwargs).to_dict(), default=str, sort_keys=True)
-else:
+elif case == "replay":  # what `probecommit replay` runs: a new run directory
+    from probecommit.runner.replay import replay_run
+    out = tempfile.mkdtemp()
+    replay_run(cal, f"{out}/replay", {"model": {"boundary": "corrected"}}, **kwargs)
+else:  # the in-memory API: the whole table returned
     from probecommit.runner.replay import replay_episodes
     table, _ = replay_episodes(runs[0], {"model": {"boundary": "corrected"}}, **kwargs)
-    output = str(table.dtypes.to_dict()) + hashlib.sha256(pd.util.hash_pandas_object(table).to_numpy().tobytes()).hexdigest()
 seconds = time.perf_counter() - t0
-peak_mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024  # before held_input_mb adds its own
-print(json.dumps({"seconds": seconds, "peak_mb": peak_mb, "loaded_mb": loaded_mb,
-                  "digest": hashlib.sha256(output.encode()).hexdigest(), "held_input_mb": held_input_mb(),
-                  "returned_mb": table.memory_usage(deep=True).sum() / 2**20 if case == "replay" else 0.0}))
+peak_mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024  # before the output is read back
+
+
+def digest(table):
+    table = table.assign(**{c: table[c].map(tuple) for c in ("arg", "value") if c in table})
+    return str(table.dtypes.to_dict()) + hashlib.sha256(pd.util.hash_pandas_object(table).to_numpy().tobytes()).hexdigest()
+
+
+returned_mb = 0.0
+if case == "replay":
+    output = "".join(digest(pd.read_parquet(f"{out}/replay/{name}.parquet")) for name in ("episodes", "engine_cache"))
+    shutil.rmtree(out)
+elif case == "replay_episodes":
+    output, returned_mb = digest(table), table.memory_usage(deep=True).sum() / 2**20
+print(json.dumps({"seconds": seconds, "peak_mb": peak_mb, "loaded_mb": loaded_mb, "returned_mb": returned_mb,
+                  "digest": hashlib.sha256(output.encode()).hexdigest(), "held_input_mb": held_input_mb()}))
 """
+
+CASES = ("replay", "replay_episodes", "calibrate")
 
 
 def make_runs(src: Path, out: Path, sizes: list[int]) -> None:
@@ -179,7 +197,7 @@ def main() -> None:
                 tree = stack.enter_context(baseline_tree(args.against, tmp / "baseline"))
                 arms[f"git {args.against}"] = (tree / "src", "default")
             results = {(case, episodes, arm): run_case(src, runs, case, episodes, chunk, args.repeat)
-                       for case in ("replay", "calibrate") for episodes in sizes for arm, (src, chunk) in arms.items()}
+                       for case in CASES for episodes in sizes for arm, (src, chunk) in arms.items()}
     print("peak resident memory (ru_maxrss) of replay and calibrate, each case in a fresh process "
           f"(analytic insertion, 4 repeats, k = 1..8, N = 1024, {ARROW_POOL['ARROW_DEFAULT_MEMORY_POOL']} Arrow pool, "
           f"heap thresholds {int(HEAP['MALLOC_MMAP_THRESHOLD_']) / 2**20:g} MiB mmap, "
@@ -188,7 +206,7 @@ def main() -> None:
           "in brackets, the peak above the resident "
           "memory once load_run has opened the input runs (this tree reads their tables later, older code there)")
     first = next(iter(arms))
-    for case in ("replay", "calibrate"):
+    for case in CASES:
         for arm in arms:
             cells = "   ".join(f"E = {e:5d}: {results[case, e, arm]['peak_mb']:7.1f} MB "
                                f"[+{results[case, e, arm]['peak_mb'] - results[case, e, arm]['loaded_mb']:6.1f}] "
@@ -198,9 +216,9 @@ def main() -> None:
             for small, large in zip(sizes[:-1], sizes[1:]):
                 low, high = results[case, small, arm]["peak_mb"], results[case, large, arm]["peak_mb"]
                 steps.append(f"{high / low - 1:+6.1%} ({(high - low) * 1024 / (large - small):4.1f} KB per episode)")
-            print(f"  {case:9s} {arm:30s} {cells}   growth {', then '.join(steps)}   identical: {same}")
-    returned = ", ".join(f"{results['replay', e, first]['returned_mb']:.1f} MB at E = {e}" for e in sizes)
-    print(f"  (the table replay returns, part of its peak at the end: {returned})")
+            print(f"  {case:15s} {arm:30s} {cells}   growth {', then '.join(steps)}   identical: {same}")
+    returned = ", ".join(f"{results['replay_episodes', e, first]['returned_mb']:.1f} MB at E = {e}" for e in sizes)
+    print(f"  (the table replay_episodes returns, its output and part of its peak: {returned})")
     held = [results["replay", e, first]["held_input_mb"] for e in sizes]
     if None not in held:
         print("  (the input a run's chunked beliefs hold throughout, probe arrays and engine answers: "

@@ -391,3 +391,33 @@ def test_a_table_read_with_rows_and_columns_named_equals_those_of_the_whole_tabl
     loaded.episodes  # now held
     pd.testing.assert_frame_equal(loaded.table("episodes", where=("method", ["blind_robust"]),
                                                columns=["instance_id", "k", "realized"]).reset_index(drop=True), expected)
+
+
+@pytest.mark.parametrize("every_repeat", [False, True])
+def test_replay_run_writes_chunk_by_chunk_the_table_the_whole_run_gives(tmp_path, monkeypatch, every_repeat):
+    """A replay run's episodes, written a chunk at a time with the failed rollouts placed among
+    them (one instance failed in some repeats, or in every repeat so that it is in no chunk),
+    read back as the whole replayed table put in canonical order."""
+    from probecommit.runner.replay import replay_run
+    from probecommit.runner.study import run_study
+    from probecommit.store.rundir import atomic_write_parquet, canonical_tables
+    from probecommit.store.schema import EPISODE_COLUMNS
+    from tests.runner.faults import inject, pick_faults
+
+    cfg = small_config(name="faulty", instances={"count": 7}, repeats=3,
+                       methods=["blind_bayes", "blind_robust", "probe_robust"])
+    faults = pick_faults(run_study(cfg, tmp_path / "clean").run_dir)["faults"]
+    inject(monkeypatch, **{**faults, "nan_u": None} if every_repeat else faults)
+    source = run_study(cfg, tmp_path / "faulty").run_dir
+    loaded = load_run(source)
+    overrides = {"model": {"boundary": "corrected"}}
+    whole, _ = replay_episodes(loaded, overrides, chunk_instances=None)
+    assert (whole["method"] == "rollout").sum() == (3 if every_repeat else 2)
+    merged = canonical_tables({"instances": loaded.instances, "episodes": whole})["episodes"]
+    atomic_write_parquet(tmp_path / "expected.parquet", merged, EPISODE_COLUMNS)
+    expected = pd.read_parquet(tmp_path / "expected.parquet")
+    for chunk in (1, 3, None):
+        out = replay_run(source, tmp_path / f"replay-{chunk}", overrides, chunk_instances=chunk)
+        pd.testing.assert_frame_equal(load_run(out).episodes, expected, check_exact=True)
+        pd.testing.assert_frame_equal(load_run(out).probes, loaded.probes, check_exact=True)
+        assert not list(out.glob("**/*.tmp"))

@@ -106,6 +106,12 @@ def test_engine_cache_arguments_sort_as_tuples(args):
     expected = sorted(range(4), key=lambda i: tuple(args[i]))  # stable: equal arguments keep their order
     assert out["value"].map(lambda v: int(v[0])).tolist() == expected
     assert list(out.columns) == list(frame.columns)
+    # The same order from the Arrow table (a replay's answers), its arguments read from the list buffers.
+    import pyarrow as pa
+
+    from probecommit.store.rundir import engine_cache_order
+
+    assert engine_cache_order(pa.Table.from_pandas(frame, preserve_index=False)).tolist() == expected
 
 
 def test_the_merge_of_kept_shard_tables_equals_the_merge_of_the_files(tmp_path, monkeypatch, make_config):
@@ -158,3 +164,56 @@ def test_merged_shards_equal_concatenating_each_shard_read_by_pandas(tmp_path, k
             run._keep(run.shard_path(unit, "episodes"), atomic_write_parquet(run.shard_path(unit, "episodes"), shards[unit]))
     pd.testing.assert_frame_equal(run._merged("episodes", ["u0", "u1", "u2"]), same)
     pd.testing.assert_frame_equal(run._merged("episodes", ["u1"]), pd.read_parquet(run.shard_path("u1", "episodes")))
+
+
+def _episode_rows(ids_repeats, k=(1, 2)):
+    """Episode rows of (instance, repeat) trajectories at budgets ``k``, every column filled."""
+    import numpy as np
+    import pandas as pd
+
+    rows = [(i, r, kk) for i, r in ids_repeats for kk in k]
+    n = len(rows)
+    values = np.arange(n, dtype=float)
+    return pd.DataFrame({"instance_id": [r[0] for r in rows], "repeat": [r[1] for r in rows], "k": [r[2] for r in rows],
+                         "method": "probe_robust", "variant": "v", "action": values, "predicted": values / n,
+                         "realized": 0.0, "z_true": values, "retained_lo": -1.0, "retained_hi": 1.0, "hull_lo": -2.0,
+                         "hull_hi": 2.0, "covered": True, "escaped": False, "score_s": 0.5, "post_var": 1.0,
+                         "max_surprise": 2.0, "n_retained": np.arange(n), "belief_resets": 0, "status": "ok",
+                         "error": ""})
+
+
+def test_episodes_streamed_in_parts_equal_the_merged_table(tmp_path):
+    """Parts in instance order, with failed-rollout rows (fewer columns) placed among them, read
+    back as the table ``finalize`` writes of all the rows at once: same rows, order and dtypes."""
+    import pandas as pd
+
+    from probecommit.store.rundir import atomic_write_parquet, canonical_tables
+    from probecommit.store.schema import EPISODE_COLUMNS
+
+    ids = [f"s-{n}" for n in (7, 8, 9, 10, 11, 12)]
+    instances = pd.DataFrame({"instance_id": ids, "split": "s", "instance_index": [7, 8, 9, 10, 11, 12]})
+    # s-7 and s-11 failed in every repeat (in no part), s-9 in one; "zz" is in no instances table.
+    failed = pd.DataFrame({"instance_id": ["s-11", "zz", "s-9", "s-7", "s-7", "s-11"], "repeat": [0, 0, 1, 0, 1, 1],
+                           "k": 0, "method": "rollout", "variant": "v", "status": "failed",
+                           "error": ["nan", "nan", "raised", "nan", "nan", "nan"]})
+    parts = [_episode_rows([("s-8", 0), ("s-8", 1), ("s-9", 0)]), _episode_rows([("s-10", 0), ("s-10", 1)]),
+             _episode_rows([("s-12", 1), ("s-12", 0)])]
+    run = RunDir(tmp_path / "run")
+    run.shards.mkdir(parents=True)
+    stream = run.episode_stream(instances, failed)
+    for part in parts:
+        stream.add(part)
+    stream.finish()
+    merged = canonical_tables({"instances": instances, "episodes": pd.concat(parts + [failed], ignore_index=True)})
+    atomic_write_parquet(tmp_path / "merged.parquet", merged["episodes"], EPISODE_COLUMNS)
+    expected = pd.read_parquet(tmp_path / "merged.parquet")
+    got = pd.read_parquet(run.table_path("episodes"))
+    pd.testing.assert_frame_equal(got, expected, check_exact=True)
+    assert got["n_retained"].dtype == "float64" and got["instance_id"].iloc[0] == "s-7"  # promoted as by the merge
+    assert not list(run.shards.iterdir())  # the parts went
+
+    stream = run.episode_stream(instances)
+    stream.add(parts[1])
+    with pytest.raises(ValueError, match="instance order"):
+        stream.add(parts[0])
+    stream.finish()

@@ -247,10 +247,9 @@ class StoredAnswers:
             if rows.any():
                 yield from cache_records(table.filter(pa.array(rows)).to_pandas(), self.latent_names)
 
-    def every_record(self) -> Iterator[dict[str, Any]]:
-        """Every answer held, the run's then the engine's, in the order they came."""
-        for table, _ in self._parts:
-            yield from cache_records(table.to_pandas(), self.latent_names)
+    def table(self) -> pa.Table:
+        """Every answer held, the run's then the engine's, as one Arrow table (each answer once)."""
+        return pa.concat_tables([table for table, _ in self._parts], promote_options="default")
 
 
 def _chunked_simulator(loaded: LoadedRun, config: StudyConfig, latent_names: Sequence[str],
@@ -590,13 +589,19 @@ def replay_episodes(
     Returns:
         ``(episodes, simulator)``; the simulator carries the engine-call counts.
     """
-    episodes, beliefs = _replayed(loaded, overrides, thresholds, margin, fixed_probes, chunk_instances)
+    beliefs, request, common = _replay_commit(loaded, overrides, thresholds, margin, fixed_probes, chunk_instances)
+    [episodes] = beliefs.commit([request], **common)
+    failed = _failed_rows(loaded, beliefs)
+    if len(failed):
+        episodes = pd.concat([episodes, failed], ignore_index=True)
     return episodes, beliefs.simulator
 
 
-def _replayed(loaded: LoadedRun, overrides: dict[str, dict[str, Any]] | None, thresholds: float | dict[int, float] | None,
-              margin: float | None, fixed_probes: bool, chunk_instances: int | None) -> tuple[pd.DataFrame, RunBeliefs]:
-    """:func:`replay_episodes`, with the beliefs the episodes came from instead of their simulator."""
+def _replay_commit(loaded: LoadedRun, overrides: dict[str, dict[str, Any]] | None,
+                   thresholds: float | dict[int, float] | None, margin: float | None, fixed_probes: bool,
+                   chunk_instances: int | None) -> tuple[RunBeliefs, dict[str, Any], dict[str, Any]]:
+    """The checked replay of ``loaded``: its beliefs under the overrides, and the request and
+    keyword arguments of the one ``RunBeliefs.commit`` that gives its episodes."""
     overrides = overrides or {}
     bad = set(overrides) - {"model", "belief", "simulator"}
     if bad:
@@ -613,19 +618,24 @@ def _replayed(loaded: LoadedRun, overrides: dict[str, dict[str, Any]] | None, th
         )
     config = replay_config(loaded.config, overrides)
     beliefs = RunBeliefs.of(loaded, config, chunk_instances)
-    model = beliefs.model
-    blind = blind_bayes_executor(model, config.seed, config.blind_prior_samples) if "blind_bayes" in config.methods else None
+    blind = blind_bayes_executor(beliefs.model, config.seed, config.blind_prior_samples) if "blind_bayes" in config.methods else None
     request = {"thresholds": config.belief.nu if thresholds is None else thresholds, "margin": margin}
-    [episodes] = beliefs.commit([request], methods=config.methods, blind=blind)
+    return beliefs, request, {"methods": config.methods, "blind": blind}
+
+
+def _failed_rows(loaded: LoadedRun, beliefs: RunBeliefs) -> pd.DataFrame:
+    """The run's failed-rollout rows, under the replay's model variant."""
     failed = loaded.failed_rollouts()
-    if len(failed):
-        episodes = pd.concat([episodes, failed.assign(variant=model.variant)], ignore_index=True)
-    return episodes, beliefs
+    return failed.assign(variant=beliefs.model.variant) if len(failed) else failed
 
 
 def replay_run(src: str | Path, out: str | Path, overrides: dict[str, dict[str, Any]], fixed_probes: bool = False,
                chunk_instances: int | None = CHUNK_INSTANCES) -> Path:
     """Write a new run directory: the source's probes, re-inferred under ``overrides``.
+
+    The source's instances and probes are copied as they are; each chunk's episodes are
+    written when the chunk is done and the engine cache goes from Arrow tables to its file, so
+    memory does not grow with the run's episodes (``benchmarks/memory.py``).
 
     Args:
         src: A complete run directory.
@@ -639,35 +649,31 @@ def replay_run(src: str | Path, out: str | Path, overrides: dict[str, dict[str, 
     if Path(out).resolve() == Path(src).resolve():
         raise ValueError(f"replay would overwrite its source run {src}; give another --out")
     loaded = load_run(src)
-    episodes, beliefs = _replayed(loaded, overrides, None, None, fixed_probes, chunk_instances)
+    beliefs, request, common = _replay_commit(loaded, overrides, None, None, fixed_probes, chunk_instances)
     config, sim = beliefs.config, beliefs.simulator
-    if beliefs.answers is not None:
-        # The new run's engine cache: the source's answers and those the engine gave during the
-        # replay (a chunked replay gave them to the simulator a chunk at a time).
-        sim.load_cache(beliefs.answers.every_record())
-    probes = loaded.table("probes")
     run = RunDir(out)
-    run.prepare(dump_config(config))
-    unit = "replay"
-    run.write_unit(
-        unit,
-        {
-            "instances": loaded.instances,
-            "probes": probes,
-            "engine_cache": cache_frame(sim.cache_records(), beliefs.model.latent_names),
-            "episodes": episodes,
-        },
-        {"engine_calls": sim.engine_calls, "engine_s": sim.engine_seconds},
-    )
-    run.finalize(
-        [unit],
-        {
+    with run.writing(dump_config(config)):
+        source = RunDir(loaded.path)
+        for name in ("instances", "probes"):
+            run.copy_table(source, name)
+        episodes = run.episode_stream(loaded.instances, _failed_rows(loaded, beliefs))
+        beliefs.commit([request], reduce=[episodes.add], **common)
+        episodes.finish()
+        # The new run's engine cache: the source's answers and those the engine gave during the replay.
+        if beliefs.answers is not None:
+            answers = beliefs.answers.table()
+        else:
+            answers = pa.Table.from_pandas(cache_frame(sim.cache_records(), beliefs.model.latent_names),
+                                           preserve_index=False)
+        run.write_engine_cache(answers)
+        del answers
+        trajectories = loaded.table("probes", columns=["instance_id", "repeat"]).drop_duplicates()
+        run.write_manifest({
             "study": config.name,
             "replay_of": str(Path(src).resolve()),
             "engine": config.simulator.engine,
             "engine_calls": sim.engine_calls,
             "timing": {"engine_s": sim.engine_seconds, "this_invocation_wall_s": time.perf_counter() - start},
-            "episodes": int(len(probes[["instance_id", "repeat"]].drop_duplicates())),
-        },
-    )
+            "episodes": int(len(trajectories)),
+        })
     return run.path

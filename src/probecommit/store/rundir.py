@@ -17,6 +17,9 @@ incomplete by definition. Within a unit the episodes shard is renamed into place
 last, so its presence marks the unit whole; the manifest is written after every
 final table. The final tables are in a canonical row order that does not depend
 on how instances were grouped into units, on the backend or on the worker count.
+A replay (one unit, nothing to resume) writes its final tables directly instead: the
+source's instances and probes copied, its episodes a chunk at a time
+(:class:`EpisodeStream`), its engine cache from Arrow tables.
 """
 
 from __future__ import annotations
@@ -29,10 +32,12 @@ import os
 import subprocess
 import tempfile
 from pathlib import Path
-from typing import Any, Iterator, Sequence
+from typing import Any, BinaryIO, Iterator, Sequence
 
+import numpy as np
 import pandas as pd
 import pyarrow as pa
+import pyarrow.compute as pc
 import pyarrow.parquet as pq
 import yaml
 
@@ -70,15 +75,17 @@ def _read_umask() -> int:
 _UMASK = _read_umask()
 
 
-def atomic_write_bytes(path: Path, data: bytes) -> None:
-    """Write ``data`` to ``path`` via a temporary file and an atomic rename."""
+@contextlib.contextmanager
+def _atomic_file(path: Path) -> Iterator[BinaryIO]:
+    """A file to write whose content replaces ``path`` atomically (a temporary file, then a
+    rename) when the block ends; nothing is left behind when it raises."""
     path.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
     try:
         # mkstemp creates 0600; a run file gets the mode any new file would (the umask's).
         os.fchmod(fd, 0o666 & ~_UMASK)
         with os.fdopen(fd, "wb") as fh:
-            fh.write(data)
+            yield fh
             fh.flush()
             os.fsync(fh.fileno())
         os.replace(tmp, path)
@@ -87,16 +94,18 @@ def atomic_write_bytes(path: Path, data: bytes) -> None:
         raise
 
 
+def atomic_write_bytes(path: Path, data: bytes) -> None:
+    """Write ``data`` to ``path`` via a temporary file and an atomic rename."""
+    with _atomic_file(path) as fh:
+        fh.write(data)
+
+
 def _is_tmp(path: Path) -> bool:
     return path.name.startswith(".") and path.name.endswith(".tmp")
 
 
-def atomic_write_parquet(path: Path, frame: pd.DataFrame, columns: tuple[Column, ...] = ()) -> pa.Table:
-    """Write a table atomically; columns named in ``columns`` get their schema type.
-
-    Returns:
-        The Arrow table written (what reading the file back gives).
-    """
+def arrow_table(frame: pd.DataFrame, columns: tuple[Column, ...] = ()) -> pa.Table:
+    """``frame`` as the Arrow table a run file holds: columns named in ``columns`` get their schema type."""
     # One thread: for a long table pyarrow would start (and join) a thread pool per call.
     table = pa.Table.from_pandas(frame, preserve_index=False, nthreads=1)
     types = {c.name: c.type for c in columns}
@@ -107,10 +116,25 @@ def atomic_write_parquet(path: Path, frame: pd.DataFrame, columns: tuple[Column,
         target = pa.schema([pa.field(f.name, types.get(f.name, f.type)) for f in table.schema])
         if target != table.schema:
             table = table.cast(target)
+    return table
+
+
+def atomic_write_parquet(path: Path, frame: pd.DataFrame, columns: tuple[Column, ...] = ()) -> pa.Table:
+    """Write a table atomically; columns named in ``columns`` get their schema type.
+
+    Returns:
+        The Arrow table written (what reading the file back gives).
+    """
+    table = arrow_table(frame, columns)
+    atomic_write_arrow(path, table)
+    return table
+
+
+def atomic_write_arrow(path: Path, table: pa.Table) -> None:
+    """Write an Arrow table to ``path`` as Parquet, atomically."""
     sink = pa.BufferOutputStream()
     pq.write_table(table, sink)
     atomic_write_bytes(path, sink.getvalue().to_pybytes())
-    return table
 
 
 def _flatten(data: Any, prefix: str = "") -> dict[str, Any]:
@@ -417,10 +441,26 @@ class RunDir:
     def finalize(self, units: list[str], manifest_extra: dict[str, Any]) -> dict[str, Any]:
         """Merge unit shards into the final tables (canonical order), then write the manifest."""
         frames = {name: self._merged(name, units) for name in TABLES}
-        digests = {}
         for name, frame in canonical_tables(frames).items():
             atomic_write_parquet(self.table_path(name), frame, _SCHEMAS.get(name, ()))
-            digests[f"{name}.parquet"] = sha256_file(self.table_path(name))
+        return self.write_manifest(manifest_extra)
+
+    def copy_table(self, source: "RunDir", name: str) -> None:
+        """Final table ``name`` of another complete run, as it is (checked against its manifest)."""
+        atomic_write_bytes(self.table_path(name), source._verified_bytes(name))
+
+    def episode_stream(self, instances: pd.DataFrame, pending: pd.DataFrame | None = None) -> "EpisodeStream":
+        """A writer of the final episodes table a part at a time (see :class:`EpisodeStream`)."""
+        return EpisodeStream(self, instances, pending)
+
+    def write_engine_cache(self, table: pa.Table) -> None:
+        """The final engine cache from an Arrow table of answers (each once), put in canonical order."""
+        rows = engine_cache_order(table)
+        atomic_write_arrow(self.table_path("engine_cache"), table if rows is None else table.take(rows))
+
+    def write_manifest(self, manifest_extra: dict[str, Any]) -> dict[str, Any]:
+        """The manifest, written last: versions and the sha256 of every final table and the config."""
+        digests = {f"{name}.parquet": sha256_file(self.table_path(name)) for name in TABLES}
         digests[CONFIG] = sha256_file(self.path / CONFIG)  # a hand-edited config is caught on read
         manifest = {
             "probecommit_version": __version__,
@@ -480,6 +520,84 @@ class RunDir:
         return [f for f, h in manifest["sha256"].items() if not (self.path / f).is_file() or sha256_file(self.path / f) != h]
 
 
+class EpisodeStream:
+    """A run's final episodes table, written a part at a time without the whole table in memory
+    (a replay writes each chunk's episodes when the chunk is done).
+
+    Parts come in the canonical instance order: each part's instances follow the previous
+    part's, as a replay's chunks do; within a part, rows are put in canonical order. Rows known
+    beforehand (``pending``: a run's failed rollouts) each go into the first part that reaches
+    their instance's position, or after the last. Each part is written to a temporary file in
+    ``shards/``; :meth:`finish` joins them into ``episodes.parquet``, a part at a time, each with
+    the column types of all parts together (a column that one part lacks is null there), and
+    removes them. The table read back equals the one :meth:`RunDir.finalize` writes of the
+    parts' rows together (tested).
+
+    Args:
+        run: The run directory (prepared).
+        instances: Its instances table (their canonical order).
+        pending: Rows to place among the parts' (None: none).
+    """
+
+    def __init__(self, run: RunDir, instances: pd.DataFrame, pending: pd.DataFrame | None = None) -> None:
+        self.run = run
+        self._order = instance_order(instances)
+        self._pending = pending if pending is not None and len(pending) else None
+        self._pending_at = None if self._pending is None else instance_positions(self._pending, self._order)
+        self._parts: list[Path] = []
+        self._reached = -np.inf
+
+    def add(self, frame: pd.DataFrame) -> None:
+        """Write the next part (a frame of episode rows)."""
+        if len(frame) and "instance_id" in frame.columns:
+            at = instance_positions(frame, self._order)
+            if at.min() < self._reached:
+                raise ValueError("episode parts must come in instance order: this part has an instance "
+                                 "before the previous part's last")
+            self._reached = at.max()
+            if self._pending is not None:
+                take = self._pending_at <= self._reached
+                if take.any():
+                    frame = pd.concat([frame, self._pending[take]], ignore_index=True)
+                    self._pending, self._pending_at = self._pending[~take], self._pending_at[~take]
+        self._write_part(frame)
+
+    def _write_part(self, frame: pd.DataFrame) -> None:
+        frame = with_schema_columns(by_instance(frame, ["instance_id", "repeat"], self._order), EPISODE_COLUMNS)
+        # A temporary's name: a killed writer's parts go with remove_stale_temporaries.
+        path = self.run.shards / f".episodes.part{len(self._parts):06d}.parquet.tmp"
+        self.run.shards.mkdir(parents=True, exist_ok=True)
+        pq.write_table(arrow_table(frame, EPISODE_COLUMNS), path)
+        self._parts.append(path)
+
+    def finish(self) -> None:
+        """Write ``episodes.parquet`` from the parts (and the pending rows no part reached)."""
+        if self._pending is not None and len(self._pending):
+            self._write_part(self._pending)
+        self._pending = None
+        path = self.run.table_path("episodes")
+        try:
+            if not self._parts:
+                atomic_write_parquet(path, pd.DataFrame(), EPISODE_COLUMNS)
+                return
+            schema = pa.unify_schemas([pq.read_schema(part) for part in self._parts], promote_options="permissive")
+            with _atomic_file(path) as fh, pq.ParquetWriter(fh, schema) as writer:
+                for part in self._parts:
+                    writer.write_table(_conformed(pq.read_table(part), schema))
+        finally:
+            for part in self._parts:
+                part.unlink(missing_ok=True)
+            self._parts = []
+
+
+def _conformed(table: pa.Table, schema: pa.Schema) -> pa.Table:
+    """``table`` with ``schema``'s columns, in its order and of its types (null where it has none)."""
+    for field in schema:
+        if field.name not in table.column_names:
+            table = table.append_column(field.name, pa.nulls(table.num_rows, field.type))
+    return table.select(schema.names).cast(schema)
+
+
 def canonical_tables(frames: dict[str, pd.DataFrame]) -> dict[str, pd.DataFrame]:
     """The final tables in a row order that depends on their content only.
 
@@ -490,48 +608,100 @@ def canonical_tables(frames: dict[str, pd.DataFrame]) -> dict[str, pd.DataFrame]
     """
     out = dict(frames)
     instances = frames.get("instances")
-    order: dict[str, int] = {}
     if instances is not None and "instance_index" in instances.columns:
         instances = instances.sort_values(["instance_index"], kind="stable", ignore_index=True)
         out["instances"] = instances
-        order = {iid: n for n, iid in enumerate(instances["instance_id"].astype(str))}
-
-    def by_instance(frame: pd.DataFrame, keys: list[str]) -> pd.DataFrame:
-        if frame is None or not len(frame) or not set(keys) <= set(frame.columns):
-            return frame
-        pos = frame["instance_id"].astype(str).map(order).fillna(len(order)) if order else 0
-        ranked = frame.assign(_pos=pos)
-        sort_keys = ["_pos", "instance_id"] + keys[1:]
-        return ranked.sort_values(sort_keys, kind="stable", ignore_index=True).drop(columns="_pos")
-
-    out["probes"] = by_instance(frames.get("probes"), ["instance_id", "repeat", "j"])
-    out["episodes"] = by_instance(frames.get("episodes"), ["instance_id", "repeat"])
+    order = instance_order(instances)
+    out["probes"] = by_instance(frames.get("probes"), ["instance_id", "repeat", "j"], order)
+    out["episodes"] = by_instance(frames.get("episodes"), ["instance_id", "repeat"], order)
     cache = frames.get("engine_cache")
-    if cache is not None and len(cache) and {"engine", "query", "arg"} <= set(cache.columns):
-        cols = list(cache.columns)
-        latents = cols[cols.index("query") + 1: cols.index("arg")]  # the family's latent names
-        arg_keys = _arg_sort_keys(cache["arg"])
-        ranked = cache.assign(**arg_keys)
-        out["engine_cache"] = ranked.sort_values(["engine", *latents, "query", *arg_keys], kind="stable",
-                                                 ignore_index=True).drop(columns=list(arg_keys))
+    rows = engine_cache_order(cache) if cache is not None else None
+    if rows is not None:
+        out["engine_cache"] = cache.iloc[rows].reset_index(drop=True)
     for name, columns in _SCHEMAS.items():
-        frame = out.get(name)
-        if frame is not None and len(frame.columns):
-            # Every schema column, in schema order (a table of failed rows only lacks some).
-            names = [n for c in columns for n in (vector_columns(frame.columns, c.name) if c.vector else [c.name]) or [c.name]]
-            missing = {n: pd.Series([None] * len(frame), index=frame.index, dtype=object) for n in names if n not in frame}
-            if missing:
-                frame = frame.assign(**missing)
-            out[name] = frame[names + [c for c in frame.columns if c not in names]]
+        if out.get(name) is not None:
+            out[name] = with_schema_columns(out[name], columns)
     return {name: out[name] for name in frames}
 
 
-def _arg_sort_keys(args: pd.Series) -> dict[str, Any]:
+def instance_order(instances: pd.DataFrame | None) -> dict[str, int]:
+    """Each instance id's position in the canonical instance order (by ``instance_index``);
+    empty without an instances table that has one."""
+    if instances is None or "instance_index" not in instances.columns:
+        return {}
+    ids = instances.sort_values(["instance_index"], kind="stable")["instance_id"].astype(str)
+    return {iid: n for n, iid in enumerate(ids)}
+
+
+def instance_positions(frame: pd.DataFrame, order: dict[str, int]) -> np.ndarray:
+    """Each row's instance position in ``order``; ids it lacks come after every instance."""
+    return frame["instance_id"].astype(str).map(order).fillna(len(order)).to_numpy(dtype=float)
+
+
+def by_instance(frame: pd.DataFrame | None, keys: list[str], order: dict[str, int]) -> pd.DataFrame | None:
+    """``frame`` sorted (stably) by its instances' positions in ``order``, then by ``keys``."""
+    if frame is None or not len(frame) or not set(keys) <= set(frame.columns):
+        return frame
+    ranked = frame.assign(_pos=instance_positions(frame, order) if order else 0)
+    sort_keys = ["_pos", "instance_id"] + keys[1:]
+    return ranked.sort_values(sort_keys, kind="stable", ignore_index=True).drop(columns="_pos")
+
+
+def with_schema_columns(frame: pd.DataFrame, columns: tuple[Column, ...]) -> pd.DataFrame:
+    """Every schema column, in schema order, then the frame's others (a table of failed rows
+    only lacks some: they are added, empty)."""
+    if not len(frame.columns):
+        return frame
+    names = [n for c in columns for n in (vector_columns(frame.columns, c.name) if c.vector else [c.name]) or [c.name]]
+    missing = {n: pd.Series([None] * len(frame), index=frame.index, dtype=object) for n in names if n not in frame}
+    if missing:
+        frame = frame.assign(**missing)
+    return frame[names + [c for c in frame.columns if c not in names]]
+
+
+def engine_cache_order(cache: pd.DataFrame | pa.Table) -> np.ndarray | None:
+    """Row positions that put an engine cache (a frame or an Arrow table) in its canonical
+    order: by engine, the instance truth (the latent columns), query, then argument (as tuples
+    of floats compare); None for a table without those columns. The keys alone are converted,
+    not the answers."""
+    arrow = isinstance(cache, pa.Table)
+    cols = list(cache.column_names if arrow else cache.columns)
+    if not (cache.num_rows if arrow else len(cache)) or not {"engine", "query", "arg"} <= set(cols):
+        return None
+    latents = cols[cols.index("query") + 1: cols.index("arg")]  # the family's latent names
+
+    def column(name: str) -> pd.Series:
+        return cache.column(name).to_pandas() if arrow else cache[name].reset_index(drop=True)
+
+    keys = pd.DataFrame({name: column(name) for name in ("engine", *latents, "query")})
+    arg_keys = _arg_sort_keys(cache.column("arg") if arrow else cache["arg"])
+    keys = keys.assign(**arg_keys)
+    return keys.sort_values(["engine", *latents, "query", *arg_keys], kind="stable").index.to_numpy()
+
+
+def _arg_sort_keys(args: pd.Series | pa.ChunkedArray) -> dict[str, Any]:
     """Sort keys that order query arguments as tuples of floats do: one column per component
     when every argument has the same length (one conversion for the whole column), else the
     tuples themselves."""
-    values = args.tolist()
-    matrix = float_matrix(values)
+    if isinstance(args, pa.ChunkedArray):
+        matrix = _arrow_float_matrix(args)
+        values = args.to_pylist() if matrix is None else None
+    else:
+        values = args.tolist()
+        matrix = float_matrix(values)
     if matrix is None:  # arguments of different lengths
-        return {"_arg": pd.Series([tuple(float(v) for v in a) for a in values], index=args.index, dtype=object)}
+        return {"_arg": pd.Series([tuple(float(v) for v in a) for a in values], dtype=object)}
     return {f"_arg{i}": matrix[:, i] for i in range(matrix.shape[1])}
+
+
+def _arrow_float_matrix(column: pa.ChunkedArray) -> np.ndarray | None:
+    """A list column of float vectors of one length as a ``[rows, length]`` array (None when
+    their lengths differ or one is missing), read from its values buffer."""
+    column = column.combine_chunks() if column.num_chunks != 1 else column.chunk(0)
+    if column.null_count:
+        return None
+    lengths = pc.list_value_length(column).to_numpy(zero_copy_only=False)
+    if len(lengths) and (lengths != lengths[0]).any():
+        return None
+    flat = pc.list_flatten(column).to_numpy(zero_copy_only=False).astype(float, copy=False)
+    return flat.reshape(len(column), -1)
