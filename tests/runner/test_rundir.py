@@ -212,8 +212,9 @@ def test_episodes_streamed_in_parts_equal_the_merged_table(tmp_path):
     assert got["n_retained"].dtype == "float64" and got["instance_id"].iloc[0] == "s-7"  # promoted as by the merge
     assert not list(run.shards.iterdir())  # the parts went
 
-    stream = run.episode_stream(instances)
-    stream.add(parts[1])
-    with pytest.raises(ValueError, match="instance order"):
+    # A part out of order is refused, and a block that raises leaves no part behind (nor a table).
+    run.table_path("episodes").unlink()
+    with pytest.raises(ValueError, match="instance order"), run.episode_stream(instances) as stream:
+        stream.add(parts[1])
         stream.add(parts[0])
-    stream.finish()
+    assert not list(run.shards.iterdir()) and not run.table_path("episodes").exists()

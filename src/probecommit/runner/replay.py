@@ -656,9 +656,8 @@ def replay_run(src: str | Path, out: str | Path, overrides: dict[str, dict[str, 
         source = RunDir(loaded.path)
         for name in ("instances", "probes"):
             run.copy_table(source, name)
-        episodes = run.episode_stream(loaded.instances, _failed_rows(loaded, beliefs))
-        beliefs.commit([request], reduce=[episodes.add], **common)
-        episodes.finish()
+        with run.episode_stream(loaded.instances, _failed_rows(loaded, beliefs)) as episodes:
+            beliefs.commit([request], reduce=[episodes.add], **common)
         # The new run's engine cache: the source's answers and those the engine gave during the replay.
         if beliefs.answers is not None:
             answers = beliefs.answers.table()

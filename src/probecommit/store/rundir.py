@@ -450,7 +450,8 @@ class RunDir:
         atomic_write_bytes(self.table_path(name), source._verified_bytes(name))
 
     def episode_stream(self, instances: pd.DataFrame, pending: pd.DataFrame | None = None) -> "EpisodeStream":
-        """A writer of the final episodes table a part at a time (see :class:`EpisodeStream`)."""
+        """A writer of the final episodes table a part at a time (see :class:`EpisodeStream`); as a
+        context manager, it finishes the table when its block ends, or drops the parts if it raised."""
         return EpisodeStream(self, instances, pending)
 
     def write_engine_cache(self, table: pa.Table) -> None:
@@ -530,7 +531,7 @@ class EpisodeStream:
     their instance's position, or after the last. Each part is written to a temporary file in
     ``shards/``; :meth:`finish` joins them into ``episodes.parquet``, a part at a time, each with
     the column types of all parts together (a column that one part lacks is null there), and
-    removes them. The table read back equals the one :meth:`RunDir.finalize` writes of the
+    removes them (as does a ``with`` block that raises). The table read back equals the one :meth:`RunDir.finalize` writes of the
     parts' rows together (tested).
 
     Args:
@@ -570,6 +571,16 @@ class EpisodeStream:
         pq.write_table(arrow_table(frame, EPISODE_COLUMNS), path)
         self._parts.append(path)
 
+    def __enter__(self) -> "EpisodeStream":
+        return self
+
+    def __exit__(self, kind, value, traceback) -> None:
+        """:meth:`finish` when the block ends without error; otherwise only the parts go."""
+        if kind is None:
+            self.finish()
+        else:
+            self._discard()
+
     def finish(self) -> None:
         """Write ``episodes.parquet`` from the parts (and the pending rows no part reached)."""
         if self._pending is not None and len(self._pending):
@@ -585,9 +596,12 @@ class EpisodeStream:
                 for part in self._parts:
                     writer.write_table(_conformed(pq.read_table(part), schema))
         finally:
-            for part in self._parts:
-                part.unlink(missing_ok=True)
-            self._parts = []
+            self._discard()
+
+    def _discard(self) -> None:
+        for part in self._parts:
+            part.unlink(missing_ok=True)
+        self._parts = []
 
 
 def _conformed(table: pa.Table, schema: pa.Schema) -> pa.Table:
