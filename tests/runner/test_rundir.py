@@ -166,25 +166,29 @@ def test_merged_shards_equal_concatenating_each_shard_read_by_pandas(tmp_path, k
     pd.testing.assert_frame_equal(run._merged("episodes", ["u1"]), pd.read_parquet(run.shard_path("u1", "episodes")))
 
 
-def _episode_rows(ids_repeats, k=(1, 2)):
-    """Episode rows of (instance, repeat) trajectories at budgets ``k``, every column filled."""
+def _episode_rows(ids_repeats, vector, k=(1, 2)):
+    """Episode rows of (instance, repeat) trajectories at budgets ``k``, every column filled; a
+    ``vector`` action is two columns, action_0 and action_1."""
     import numpy as np
     import pandas as pd
 
     rows = [(i, r, kk) for i, r in ids_repeats for kk in k]
     n = len(rows)
     values = np.arange(n, dtype=float)
+    actions = {"action_0": values, "action_1": -values} if vector else {"action": values}
     return pd.DataFrame({"instance_id": [r[0] for r in rows], "repeat": [r[1] for r in rows], "k": [r[2] for r in rows],
-                         "method": "probe_robust", "variant": "v", "action": values, "predicted": values / n,
+                         "method": "probe_robust", "variant": "v", **actions, "predicted": values / n,
                          "realized": 0.0, "z_true": values, "retained_lo": -1.0, "retained_hi": 1.0, "hull_lo": -2.0,
                          "hull_hi": 2.0, "covered": True, "escaped": False, "score_s": 0.5, "post_var": 1.0,
                          "max_surprise": 2.0, "n_retained": np.arange(n), "belief_resets": 0, "status": "ok",
                          "error": ""})
 
 
-def test_episodes_streamed_in_parts_equal_the_merged_table(tmp_path):
+@pytest.mark.parametrize("vector", [False, True])
+def test_episodes_streamed_in_parts_equal_the_merged_table(tmp_path, vector):
     """Parts in instance order, with failed-rollout rows (fewer columns) placed among them, read
-    back as the table ``finalize`` writes of all the rows at once: same rows, order and dtypes."""
+    back as the table ``finalize`` writes of all the rows at once: same rows, order, columns
+    (the components of a vector action, not an empty ``action``) and dtypes."""
     import pandas as pd
 
     from probecommit.store.rundir import atomic_write_parquet, canonical_tables
@@ -196,8 +200,8 @@ def test_episodes_streamed_in_parts_equal_the_merged_table(tmp_path):
     failed = pd.DataFrame({"instance_id": ["s-11", "zz", "s-9", "s-7", "s-7", "s-11"], "repeat": [0, 0, 1, 0, 1, 1],
                            "k": 0, "method": "rollout", "variant": "v", "status": "failed",
                            "error": ["nan", "nan", "raised", "nan", "nan", "nan"]})
-    parts = [_episode_rows([("s-8", 0), ("s-8", 1), ("s-9", 0)]), _episode_rows([("s-10", 0), ("s-10", 1)]),
-             _episode_rows([("s-12", 1), ("s-12", 0)])]
+    parts = [_episode_rows([("s-8", 0), ("s-8", 1), ("s-9", 0)], vector), _episode_rows([("s-10", 0), ("s-10", 1)], vector),
+             _episode_rows([("s-12", 1), ("s-12", 0)], vector)]
     run = RunDir(tmp_path / "run")
     run.shards.mkdir(parents=True)
     stream = run.episode_stream(instances, failed)
