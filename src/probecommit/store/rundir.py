@@ -529,7 +529,7 @@ class EpisodeStream:
     part's, as a replay's chunks do; within a part, rows are put in canonical order. Rows known
     beforehand (``pending``: a run's failed rollouts) each go into the first part that reaches
     their instance's position, or into the last. Each part is written to a temporary file in
-    ``shards/`` (when the next comes: the last is held, at most one part); :meth:`finish` joins them into ``episodes.parquet``, a part at a time, each with
+    ``shards/``; :meth:`finish` joins them into ``episodes.parquet``, a part at a time, each with
     the column types of all parts together (a column that one part lacks is null there), and
     removes them (as does a ``with`` block that raises). The table read back equals the one :meth:`RunDir.finalize` writes of the
     parts' rows together (tested).
@@ -546,7 +546,6 @@ class EpisodeStream:
         self._pending = pending if pending is not None and len(pending) else None
         self._pending_at = None if self._pending is None else instance_positions(self._pending, self._order)
         self._parts: list[Path] = []
-        self._last: pd.DataFrame | None = None
         self._reached = -np.inf
 
     def add(self, frame: pd.DataFrame) -> None:
@@ -562,11 +561,7 @@ class EpisodeStream:
                 if take.any():
                     frame = pd.concat([frame, self._pending[take]], ignore_index=True)
                     self._pending, self._pending_at = self._pending[~take], self._pending_at[~take]
-        # The latest part waits for the next: pending rows no part reaches join it, not a part of
-        # their own, which would lack the columns only episode rows have (a vector action's components).
-        if self._last is not None:
-            self._write_part(self._last)
-        self._last = frame
+        self._write_part(frame)
 
     def _write_part(self, frame: pd.DataFrame) -> None:
         frame = with_schema_columns(by_instance(frame, ["instance_id", "repeat"], self._order), EPISODE_COLUMNS)
@@ -588,10 +583,12 @@ class EpisodeStream:
 
     def finish(self) -> None:
         """Write ``episodes.parquet`` from the parts (and the pending rows no part reached)."""
-        last = [frame for frame in (self._last, self._pending) if frame is not None and len(frame.columns)]
-        if last:
-            self._write_part(pd.concat(last, ignore_index=True) if len(last) > 1 else last[0])
-        self._last = self._pending = None
+        if self._pending is not None and len(self._pending):
+            # Rows no part reached join the last part (read back), not a part of their own, which
+            # would lack the columns only episode rows have (a vector action's components).
+            last = [pd.read_parquet(self._parts.pop())] if self._parts else []
+            self._write_part(pd.concat([*last, self._pending], ignore_index=True))
+        self._pending = None
         path = self.run.table_path("episodes")
         try:
             if not self._parts:
@@ -607,7 +604,7 @@ class EpisodeStream:
     def _discard(self) -> None:
         for part in self._parts:
             part.unlink(missing_ok=True)
-        self._parts, self._last = [], None
+        self._parts = []
 
 
 def _conformed(table: pa.Table, schema: pa.Schema) -> pa.Table:
