@@ -298,34 +298,29 @@ def _load(run, reuse: bool = True, plateau: str | None = None, chunk_instances: 
           budgets: Iterable[int] | None = None) -> _Run:
     """A run ready for re-execution; with ``budgets``, only those budgets' beliefs are kept and
     committed (the results read no other budget, so they are the same, in a fraction of the work)."""
-    loaded = _loaded(run)
+    loaded = run if isinstance(run, LoadedRun) else load_run(run)
     beliefs = loaded.beliefs or RunBeliefs.of(loaded, chunk_instances=chunk_instances, budgets=budgets)
     return _Run(loaded, beliefs, reuse, plateau)
 
 
-def _loaded(run) -> LoadedRun:
-    """A run directory opened (its config and instances), or the ``LoadedRun`` given."""
-    return run if isinstance(run, LoadedRun) else load_run(run)
-
-
-def _check_pair(cal: LoadedRun, test: LoadedRun) -> None:
+def _check_pair(cal: _Run, test: _Run) -> None:
     """Calibration transfers only between runs of one model, belief and probe schedule."""
-    a, b = cal.config, test.config
+    a, b = cal.loaded.config, test.loaded.config
     for section in ("family", "model", "belief", "probes"):
         if getattr(a, section) != getattr(b, section):
             raise ValueError(f"calibration and test runs differ in their '{section}' settings; "
                              "calibrate on a run of the same model, belief and probe schedule")
-    ids_a = set(cal.instances["instance_id"])
-    ids_b = set(test.instances["instance_id"])
-    if ids_a & ids_b and cal.path.resolve() == test.path.resolve():
+    ids_a = set(cal.loaded.instances["instance_id"])
+    ids_b = set(test.loaded.instances["instance_id"])
+    if ids_a & ids_b and cal.loaded.path.resolve() == test.loaded.path.resolve():
         # Disjoint instance subsets of one run (re-splits of a pool) are fine; the same instances are not.
-        raise ValueError(f"calibration and test are the same run ({cal.path}); in-sample calibration has no "
+        raise ValueError(f"calibration and test are the same run ({cal.loaded.path}); in-sample calibration has no "
                          "coverage guarantee: calibrate on a run of other instances")
     if ids_a & ids_b:
         shared = sorted(ids_a & ids_b)
         # Same ids in different splits would be a leak only if they were the same truths.
-        ia = cal.instances.set_index("instance_id").loc[shared]
-        ib = test.instances.set_index("instance_id").loc[shared]
+        ia = cal.loaded.instances.set_index("instance_id").loc[shared]
+        ib = test.loaded.instances.set_index("instance_id").loc[shared]
         truth_cols = [c for c in ia.columns if c.startswith("true_")]
         if np.allclose(ia[truth_cols].to_numpy(float), ib[truth_cols].to_numpy(float)):
             raise ValueError(f"calibration and test runs share {len(shared)} instance(s) (e.g. {shared[0]!r}); "
@@ -453,11 +448,11 @@ def calibrate(cal_run, test_run, alpha: float = DEFAULT_ALPHA, budgets: Sequence
     Returns:
         The calibration result.
     """
-    requested = budgets
-    cal = _load(cal_run, reuse, plateau, chunk_instances, requested)
-    test_loaded = _loaded(test_run)
-    _check_pair(cal.loaded, test_loaded)
+    cal = _load(cal_run, reuse, plateau, chunk_instances, budgets)
+    test = _load(test_run, reuse, plateau, chunk_instances, budgets)
+    _check_pair(cal, test)
     budgets = _budgets(cal, budgets)
+    _budgets(test, budgets)
     cost_budget = max(budgets) if cost_budget is None else int(cost_budget)
     if cost_budget not in budgets:
         raise ValueError(f"cost budget {cost_budget} is not among the calibrated budgets {budgets}")
@@ -474,9 +469,6 @@ def calibrate(cal_run, test_run, alpha: float = DEFAULT_ALPHA, budgets: Sequence
     # The calibration run is done: its tables, beliefs and engine cache go before the test run's commits.
     cal.release()
     del cal, scores, optimism
-    # The test run's probes are read only now, so the two runs' inputs are never held together.
-    test = _load(test_loaded, reuse, plateau, chunk_instances, requested)
-    _budgets(test, budgets)
 
     # Every test commit in one pass over the test run's chunks.
     audited = functools.partial(_audited, k=cost_budget)
@@ -569,17 +561,15 @@ def gates(cal_run, test_run, alpha: float = DEFAULT_ALPHA, budgets: Sequence[int
         Curves, areas and the committed pools; ``info`` holds ``t``, ``gamma``
         and the surprise AUC table of the raw test episodes.
     """
-    requested = budgets
-    cal = _load(cal_run, reuse, plateau, chunk_instances, requested)
-    test_loaded = _loaded(test_run)
-    _check_pair(cal.loaded, test_loaded)
+    cal = _load(cal_run, reuse, plateau, chunk_instances, budgets)
+    test = _load(test_run, reuse, plateau, chunk_instances, budgets)
+    _check_pair(cal, test)
     budgets = _budgets(cal, budgets)
+    _budgets(test, budgets)
     t_sim = conformal_quantile(worst_budget_scores(_calibration_scores(cal), budgets).to_numpy(), alpha)
     margin, _ = cal.search_margin(t_sim, margin_grid, budgets)
     cal.release()
-    del cal  # the calibration run is done before the test run's probes are read
-    test = _load(test_loaded, reuse, plateau, chunk_instances, requested)
-    _budgets(test, budgets)
+    del cal  # the calibration run is done before the test run's commits
     raw, adjusted = test.commit((test.nu, None), (t_sim, margin.gamma), final=True)
     result = gates_from_tables(raw, adjusted, budgets=budgets, target_rate=target_rate,
                                post_var_executor=post_var_executor)

@@ -542,16 +542,16 @@ class EpisodeStream:
 
     def __init__(self, run: RunDir, instances: pd.DataFrame, pending: pd.DataFrame | None = None) -> None:
         self.run = run
-        self._order = instance_order(instances)
+        self._order = _instance_order(instances)
         self._pending = pending if pending is not None and len(pending) else None
-        self._pending_at = None if self._pending is None else instance_positions(self._pending, self._order)
+        self._pending_at = None if self._pending is None else _instance_positions(self._pending, self._order)
         self._parts: list[Path] = []
         self._reached = -np.inf
 
     def add(self, frame: pd.DataFrame) -> None:
         """Write the next part (a frame of episode rows)."""
         if len(frame) and "instance_id" in frame.columns:
-            at = instance_positions(frame, self._order)
+            at = _instance_positions(frame, self._order)
             if at.min() < self._reached:
                 raise ValueError("episode parts must come in instance order: this part has an instance "
                                  "before the previous part's last")
@@ -564,7 +564,7 @@ class EpisodeStream:
         self._write_part(frame)
 
     def _write_part(self, frame: pd.DataFrame) -> None:
-        frame = with_schema_columns(by_instance(frame, ["instance_id", "repeat"], self._order), EPISODE_COLUMNS)
+        frame = _with_schema_columns(_by_instance(frame, ["instance_id", "repeat"], self._order), EPISODE_COLUMNS)
         # A temporary's name: a killed writer's parts go with remove_stale_temporaries.
         path = self.run.shards / f".episodes.part{len(self._parts):06d}.parquet.tmp"
         self.run.shards.mkdir(parents=True, exist_ok=True)
@@ -628,20 +628,20 @@ def canonical_tables(frames: dict[str, pd.DataFrame]) -> dict[str, pd.DataFrame]
     if instances is not None and "instance_index" in instances.columns:
         instances = instances.sort_values(["instance_index"], kind="stable", ignore_index=True)
         out["instances"] = instances
-    order = instance_order(instances)
-    out["probes"] = by_instance(frames.get("probes"), ["instance_id", "repeat", "j"], order)
-    out["episodes"] = by_instance(frames.get("episodes"), ["instance_id", "repeat"], order)
+    order = _instance_order(instances)
+    out["probes"] = _by_instance(frames.get("probes"), ["instance_id", "repeat", "j"], order)
+    out["episodes"] = _by_instance(frames.get("episodes"), ["instance_id", "repeat"], order)
     cache = frames.get("engine_cache")
     rows = engine_cache_order(cache) if cache is not None else None
     if rows is not None:
         out["engine_cache"] = cache.iloc[rows].reset_index(drop=True)
     for name, columns in _SCHEMAS.items():
         if out.get(name) is not None:
-            out[name] = with_schema_columns(out[name], columns)
+            out[name] = _with_schema_columns(out[name], columns)
     return {name: out[name] for name in frames}
 
 
-def instance_order(instances: pd.DataFrame | None) -> dict[str, int]:
+def _instance_order(instances: pd.DataFrame | None) -> dict[str, int]:
     """Each instance id's position in the canonical instance order (by ``instance_index``);
     empty without an instances table that has one."""
     if instances is None or "instance_index" not in instances.columns:
@@ -650,21 +650,21 @@ def instance_order(instances: pd.DataFrame | None) -> dict[str, int]:
     return {iid: n for n, iid in enumerate(ids)}
 
 
-def instance_positions(frame: pd.DataFrame, order: dict[str, int]) -> np.ndarray:
+def _instance_positions(frame: pd.DataFrame, order: dict[str, int]) -> np.ndarray:
     """Each row's instance position in ``order``; ids it lacks come after every instance."""
     return frame["instance_id"].astype(str).map(order).fillna(len(order)).to_numpy(dtype=float)
 
 
-def by_instance(frame: pd.DataFrame | None, keys: list[str], order: dict[str, int]) -> pd.DataFrame | None:
+def _by_instance(frame: pd.DataFrame | None, keys: list[str], order: dict[str, int]) -> pd.DataFrame | None:
     """``frame`` sorted (stably) by its instances' positions in ``order``, then by ``keys``."""
     if frame is None or not len(frame) or not set(keys) <= set(frame.columns):
         return frame
-    ranked = frame.assign(_pos=instance_positions(frame, order) if order else 0)
+    ranked = frame.assign(_pos=_instance_positions(frame, order) if order else 0)
     sort_keys = ["_pos", "instance_id"] + keys[1:]
     return ranked.sort_values(sort_keys, kind="stable", ignore_index=True).drop(columns="_pos")
 
 
-def with_schema_columns(frame: pd.DataFrame, columns: tuple[Column, ...]) -> pd.DataFrame:
+def _with_schema_columns(frame: pd.DataFrame, columns: tuple[Column, ...]) -> pd.DataFrame:
     """Every schema column, in schema order, then the frame's others (a table of failed rows
     only lacks some: they are added, empty)."""
     if not len(frame.columns):
