@@ -635,7 +635,8 @@ def replay_run(src: str | Path, out: str | Path, overrides: dict[str, dict[str, 
 
     The source's instances and probes are copied as they are; each chunk's episodes are
     written when the chunk is done and the engine cache goes from Arrow tables to its file, so
-    memory does not grow with the run's episodes (``benchmarks/memory.py``).
+    what a replay holds is one chunk's work and the run's input (probe arrays and engine
+    answers, about 0.55 KB an episode), not its output (``benchmarks/memory.py``).
 
     Args:
         src: A complete run directory.

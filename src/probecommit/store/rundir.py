@@ -531,8 +531,8 @@ class EpisodeStream:
     their instance's position, or into the last. Each part is written to a temporary file in
     ``shards/``; :meth:`finish` joins them into ``episodes.parquet``, a part at a time, each with
     the column types of all parts together (a column that one part lacks is null there), and
-    removes them (as does a ``with`` block that raises). The table read back equals the one :meth:`RunDir.finalize` writes of the
-    parts' rows together (tested).
+    removes them (as does a ``with`` block that raises). The table read back equals the one
+    :meth:`RunDir.finalize` writes of the parts' rows together (tested).
 
     Args:
         run: The run directory (prepared).
