@@ -33,4 +33,8 @@ def __getattr__(name: str):
 
         # By name, so the package root stays below every layer (import-linter).
         return importlib.import_module("probecommit.robot.session").Session
+    if name in ("check_family", "FamilyCheckError"):
+        import importlib
+
+        return getattr(importlib.import_module("probecommit.runner.family_check"), name)
     raise AttributeError(f"module 'probecommit' has no attribute {name!r}")

@@ -174,13 +174,16 @@ def replay(
     if model is not None or delta is not None or not overrides:
         from probecommit.runner.replay import load_run as _load
 
+        from probecommit.tasks.registry import get as get_family
+
         family = _load(run_dir).config.family
-        if family == "insertion":
-            overrides.setdefault("model", {})["boundary"] = model or "corrected"
+        short = get_family(family).replay_shorthands  # the family names its --model/--delta fields
+        if short:
+            overrides.setdefault("model", {})[short["model"]] = model or short["model_default"]
             if delta is not None:
-                overrides["model"]["delta"] = delta
+                overrides["model"][short["delta"]] = delta
         elif model is not None or delta is not None:
-            raise ValueError(f"--model and --delta are insertion shorthands; {run_dir} is a {family!r} run: use "
+            raise ValueError(f"--model and --delta are shorthands the {family!r} family does not declare; use "
                              "--set model.FIELD=VALUE")
         # Another family with no option: replayed as deployed (its episodes must come back identical).
     label = overrides.get("model", {}).get("boundary", "replay")
@@ -192,9 +195,18 @@ def replay(
 
 @app.command()
 @user_errors
-def tasks() -> None:
+def tasks(
+    check: Optional[str] = typer.Option(None, "--check", metavar="NAME",
+                                        help="Run check_family on family NAME (each failure names the declaration to fix)."),
+) -> None:
     """List every registered task family: engines, latents, probe, action, sigma, budgets (Table II)."""
     import importlib.util
+
+    if check is not None:
+        from probecommit.cli.check_command import check_command
+
+        check_command(check)
+        return
 
     from probecommit.tasks.registry import families
 

@@ -65,6 +65,8 @@ def audit_session_log(path: Path, out: Optional[Path], resamples: int, seed: int
     target = _out_dir(path, out, "audit")
     write_csv(table, target / "robot_table.csv")
     write_csv(result.rows, target / "episodes.csv")
+    from probecommit.tasks.registry import get as get_family
+
     config, *_ = load_session(path)
     model = build_model(config)
     window = half = None
@@ -72,10 +74,9 @@ def audit_session_log(path: Path, out: Optional[Path], resamples: int, seed: int
         nominal = (np.asarray(model.prior_low, float) + np.asarray(model.prior_high, float)) / 2
         lo, hi = model.with_margin(1.0).success_interval(nominal[None, :])
         window = float((hi - lo)[0] / 2)
-    if config.family == "rig":
-        from probecommit.tasks.rig.model import rig_half_gap
-
-        half = float(rig_half_gap(1.0))
+    guides = get_family(config.family).figure_guides
+    if guides is not None:
+        half = guides(model).get("half_gap")
     png = save_figure(aim_error_figure(result.rows, window, half), target / "aim_error.png")
     console.print(f"table: [bold]{safe(target / 'robot_table.csv')}[/bold]; figure: [bold]{safe(png)}[/bold]")
 

@@ -333,7 +333,7 @@ class Session:
         if y_arr.shape[0] != self.model.observation_dim or not np.all(np.isfinite(y_arr)):
             raise self._reject("observe", f"reading {y_arr.tolist()} is not {self.model.observation_dim} finite "
                                "number(s)", **fields)
-        low, high = getattr(self.model, "observation_range", (-np.inf, np.inf))
+        low, high = self.model.observation_range
         if np.any(y_arr < low) or np.any(y_arr > high):
             raise self._reject("observe", f"reading {y_arr.tolist()} is outside the physical range [{low:g}, {high:g}]",
                                **fields)

@@ -11,11 +11,9 @@ import yaml
 from pydantic import Field, StrictBool, ValidationError, field_validator, model_validator
 
 from probecommit.tasks.config import ConfigError, FieldError as _FieldError, StrictModel as _Strict
-from probecommit.tasks.registry import UnknownTaskError, families
+from probecommit.tasks.registry import UnknownTaskError, default_family, families
 
 METHODS = ("blind_bayes", "blind_robust", "probe_robust")
-#: Family used when a config names none (the paper's primary testbed).
-DEFAULT_FAMILY = "insertion"
 #: Sections of the flat YAML form that belong to the family's config.
 TASK_SECTIONS = ("model", "simulator")
 
@@ -124,8 +122,9 @@ def _task_union() -> Any:
 
 #: Every registered family's config, a discriminated union on ``family``. Built when this
 #: module is imported, after the built-in families and the ``probecommit.tasks`` entry
-#: points have registered.
+#: points have registered; rebuilt by :func:`parse_config` when a family registers later.
 TaskConfig = _task_union()
+_UNION_OF: tuple[type, ...] = tuple(spec.config for spec in families().values())
 
 
 class CalibrationConfig(_Strict):
@@ -180,7 +179,7 @@ class StudyConfig(_Strict):
         if not isinstance(data, dict):
             return data
         data = dict(data)
-        task = data.get("task", DEFAULT_FAMILY)
+        task = data["task"] if "task" in data else default_family()
         if isinstance(task, str):
             task = {"family": task}
             for section in TASK_SECTIONS:
@@ -282,6 +281,18 @@ def _format_error(exc: ValidationError) -> str:
     return _one_line(f"invalid config field '{field}': {msg}{extra}")
 
 
+def _refresh_task_union() -> None:
+    """Rebuild :class:`StudyConfig`'s task union if a family registered after this module was
+    imported (``register()`` in a user's script), so configs naming it validate."""
+    global TaskConfig, _UNION_OF
+    members = tuple(spec.config for spec in families().values())
+    if members == _UNION_OF:
+        return
+    TaskConfig, _UNION_OF = _task_union(), members
+    StudyConfig.model_fields["task"].annotation = TaskConfig
+    StudyConfig.model_rebuild(force=True)
+
+
 def parse_config(data: dict) -> StudyConfig:
     """Validate a config mapping.
 
@@ -291,6 +302,7 @@ def parse_config(data: dict) -> StudyConfig:
     """
     if not isinstance(data, dict):
         raise ConfigError(f"config must be a mapping of fields, got {type(data).__name__}")
+    _refresh_task_union()
     try:
         return StudyConfig.model_validate(data)
     except ValidationError as exc:

@@ -131,6 +131,12 @@ class TaskModelBase:
 
     context_names: tuple[str, ...] = ()
     variant: str = "deployed"
+    #: Physical range ``(low, high)`` of every reading component: a Session refuses a reading
+    #: outside it (a sensor fault), and check_family reads it. Unbounded by default.
+    observation_range: tuple[float, float] = (-np.inf, np.inf)
+    #: The few distinct noise-free readings ``predict`` can return (a tap reads the floor or the
+    #: top), or None: a filter then tabulates the likelihood per level instead of per particle.
+    reading_levels: tuple[float, ...] | None = None
 
     @property
     def probe_dim(self) -> int:
@@ -524,6 +530,16 @@ class TaskSpec:
         example: Study-config fields for a small example study of this family (what a
             family needs beyond defaults, e.g. ``instances.contexts``); the conformance
             suite runs it in every engine.
+        default: The family a config naming no ``task`` runs (one family only: the paper's
+            primary testbed); generic code never names a family.
+        replay_shorthands: ``probecommit replay``'s ``--model``/``--delta`` as model-section
+            fields of this family (``{"model": "boundary", "delta": "delta"}``) and the
+            ``--model`` value used when none is given (``"model_default"``); empty: the family
+            takes ``--set model.FIELD=VALUE`` only.
+        figure_guides: ``figure_guides(model) -> {name: value}``: reference lines of the robot
+            audit's aim-error figure (``window``, ``half_gap``); None: the generic window only.
+        declaration: The :class:`~probecommit.tasks.declare.Declaration` the spec was derived
+            from (None for a family written by hand).
     """
 
     name: str
@@ -532,6 +548,10 @@ class TaskSpec:
     simulators: dict[str, str]
     summary: dict[str, str] = field(default_factory=dict)
     example: dict[str, Any] = field(default_factory=dict)
+    default: bool = False
+    replay_shorthands: dict[str, str] = field(default_factory=dict)
+    figure_guides: Callable[[Any], dict[str, float]] | None = None
+    declaration: Any = None
 
     @property
     def engines(self) -> tuple[str, ...]:

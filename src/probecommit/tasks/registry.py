@@ -1,7 +1,9 @@
 """The task registry: families register a :class:`~probecommit.tasks.base.TaskSpec` by name.
 
-Built-in families live in ``probecommit.tasks.<family>`` and register on import;
-third-party families register through the ``probecommit.tasks`` entry-point group,
+Built-in families live in ``probecommit.tasks.<family>`` and register on import: every
+subpackage of :mod:`probecommit.tasks` is imported on first use of the registry (a new
+family is a new folder, no list to edit). Third-party families register through the
+``probecommit.tasks`` entry-point group,
 whose entry points name a module (imported, so it registers itself) or a callable
 returning a ``TaskSpec``. Simulators are lazy ``"module:Class"`` entry points: an
 engine is imported only when a study asks for it.
@@ -10,13 +12,12 @@ engine is imported only when a study asks for it.
 from __future__ import annotations
 
 import importlib
+import pkgutil
 from importlib.metadata import entry_points
 from typing import Any
 
 from probecommit.tasks.base import TaskSpec, answer_store
 
-#: Built-in family packages, imported on first use of the registry.
-BUILTIN_FAMILIES = ("insertion", "planar_slide", "push1d", "push2d", "darts", "hinge", "shuffleboard", "grasp", "rig")
 ENTRY_POINT_GROUP = "probecommit.tasks"
 
 _REGISTRY: dict[str, TaskSpec] = {}
@@ -39,13 +40,35 @@ def register(spec: TaskSpec) -> TaskSpec:
     return spec
 
 
+def builtin_packages() -> list[str]:
+    """The subpackages of :mod:`probecommit.tasks` (each family's folder, plus helpers such as
+    ``adapters`` that register nothing), sorted: discovered, never listed by hand."""
+    import probecommit.tasks as package
+
+    return sorted(m.name for m in pkgutil.iter_modules(package.__path__) if m.ispkg)
+
+
+def default_family() -> str:
+    """The family a config that names none runs: the one registered family whose spec says
+    ``default=True`` (the paper's primary testbed); generic code never names it.
+
+    Raises:
+        UnknownTaskError: no family, or more than one, claims to be the default.
+    """
+    defaults = sorted(name for name, spec in families().items() if spec.default)
+    if len(defaults) != 1:
+        raise UnknownTaskError(f"a config must name its task family (task: NAME); default families registered: "
+                               f"{', '.join(defaults) or 'none'}")
+    return defaults[0]
+
+
 def _load() -> None:
     global _loaded
     if _loaded:
         return
     _loaded = True
-    for family in BUILTIN_FAMILIES:
-        importlib.import_module(f"probecommit.tasks.{family}")
+    for package in builtin_packages():
+        importlib.import_module(f"probecommit.tasks.{package}")
     for ep in entry_points(group=ENTRY_POINT_GROUP):
         # An entry point names a module (importing it registers), a TaskSpec, or a
         # callable returning one.

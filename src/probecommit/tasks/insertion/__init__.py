@@ -49,6 +49,8 @@ SPEC = register(
             "metric": "failure",
             "n": "96 x 4",
         },
+        default=True,
+        replay_shorthands={"model": "boundary", "delta": "delta", "model_default": "corrected"},
     )
 )
 

@@ -13,7 +13,7 @@ import numpy as np
 from probecommit.tasks.base import TaskSpec
 from probecommit.tasks.registry import register
 from probecommit.tasks.rig.config import RigConfig
-from probecommit.tasks.rig.model import TOOL_RADIUS_MM, RigModel
+from probecommit.tasks.rig.model import TOOL_RADIUS_MM, RigModel, rig_half_gap
 
 
 def build_model(config: RigConfig) -> RigModel:
@@ -49,5 +49,6 @@ SPEC = register(
             "n": "12 x 10",
         },
         example={"belief": {"likelihood": "mixture", "epsilon": 0.03, "mixture_low": -12.0, "mixture_high": 2.0}},
+        figure_guides=lambda model: {"half_gap": float(rig_half_gap(1.0))},
     )
 )

@@ -1,0 +1,24 @@
+"""``probecommit tasks --check NAME``: run :func:`probecommit.check_family` and print what it found."""
+
+from __future__ import annotations
+
+import typer
+from rich.markup import escape
+
+from probecommit.cli.common import console, print_error
+
+
+def check_command(name: str) -> None:
+    """Check family ``name`` in every installed engine; exit 1 listing each failure and its declaration."""
+    from probecommit.runner.family_check import check_family
+
+    report = check_family(name, raise_errors=False)
+    for check in report.passed:
+        console.print(f"[green]ok[/green]   {escape(check)}")
+    for check, why in report.skipped:
+        console.print(f"[yellow]skip[/yellow] {escape(check)}: {escape(why)}")
+    for line in report.lines():
+        print_error(f"FAIL {line}")
+    if not report.ok:
+        raise typer.Exit(1)
+    console.print(f"family {escape(name)!s}: all {len(report.passed)} checks passed")
