@@ -36,3 +36,79 @@ def test_a_planted_upward_import_is_caught(tmp_path):
     result = lint(tmp_path, copy)
     assert result.returncode != 0
     assert "probecommit.core is not allowed to import probecommit.runner" in result.stdout
+
+
+# ---------------------------------------------------------------------------------- nothing generic names a family
+#: Generic packages: they serve every family, so none may import a family's package or name one in a
+#: string (the family supplies what they need through its spec and model: the default family, replay
+#: shorthands, figure guides, observation range).
+GENERIC = ("core", "engines", "store", "audit", "runner", "robot", "cli")
+#: Files of generic packages that drive the paper's own studies (reproduce, scan), which name their
+#: families by design, like everything in studies/ and report/.
+PAPER_DRIVERS = {"cli/study_commands.py"}
+#: Modules of probecommit.tasks that are contract, not a family.
+CONTRACT = {"base", "config", "registry", "declare", "adapters"}
+
+
+def family_names(src: Path) -> set[str]:
+    """The built-in families: every package folder under tasks/ (the registry discovers the same)."""
+    tasks = src / "probecommit" / "tasks"
+    return {p.name for p in tasks.iterdir() if (p / "__init__.py").is_file() and p.name not in CONTRACT}
+
+
+def family_mentions(src: Path) -> list[str]:
+    """``file:line: what`` for every import of a family package and every string equal to a family's name
+    in generic code (docstrings and help text may mention a family in prose; an exact name may not)."""
+    import ast
+
+    names, found = family_names(src), []
+    root = src / "probecommit"
+    for package in GENERIC:
+        for path in sorted((root / package).rglob("*.py")):
+            rel = path.relative_to(root).as_posix()
+            if rel in PAPER_DRIVERS:
+                continue
+            for node in ast.walk(ast.parse(path.read_text(), rel)):
+                modules = []
+                if isinstance(node, ast.ImportFrom) and node.module:
+                    modules = [node.module] + [f"{node.module}.{a.name}" for a in node.names]
+                elif isinstance(node, ast.Import):
+                    modules = [a.name for a in node.names]
+                for module in modules:
+                    parts = module.split(".")
+                    if parts[:2] == ["probecommit", "tasks"] and len(parts) > 2 and parts[2] in names:
+                        found.append(f"{rel}:{node.lineno}: imports {module}")
+                        break
+                if isinstance(node, ast.Constant) and isinstance(node.value, str) and node.value in names:
+                    found.append(f"{rel}:{node.lineno}: names the family {node.value!r}")
+    return sorted(set(found))
+
+
+def test_nothing_generic_names_a_family():
+    assert family_mentions(ROOT / "src") == []
+
+
+def _planted_copy(tmp_path: Path) -> Path:
+    copy = tmp_path / "src"
+    shutil.copytree(ROOT / "src" / "probecommit", copy / "probecommit", ignore=shutil.ignore_patterns("__pycache__"))
+    return copy
+
+
+import pytest  # noqa: E402
+
+
+@pytest.mark.parametrize("target,line", [
+    ("runner/study.py", "from probecommit.tasks.insertion.model import InsertionModel"),
+    ("audit/metrics.py", "import probecommit.tasks.push1d"),
+    ("store/schema.py", "from probecommit.tasks import rig"),
+    ("robot/session.py", "from probecommit.tasks.rig.model import rig_half_gap"),
+    ("cli/app.py", "from probecommit.tasks.insertion import make_simulator"),
+    ("runner/config.py", 'DEFAULT_FAMILY = "insertion"'),
+    ("cli/robot_commands.py", 'IS_RIG = lambda c: c.family == "rig"'),
+])
+def test_a_planted_family_mention_is_caught(tmp_path, target, line):
+    copy = _planted_copy(tmp_path)
+    path = copy / "probecommit" / target
+    path.write_text(path.read_text() + f"\n{line}  # planted\n")
+    found = family_mentions(copy)
+    assert len(found) == 1 and found[0].startswith(f"{target}:"), found

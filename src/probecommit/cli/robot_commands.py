@@ -151,12 +151,12 @@ def simulate(
 
     Then: 'probecommit audit OUT' (Table IX) and 'probecommit replay OUT --fault boundary'.
     """
-    from probecommit import paper_config
     from probecommit.robot.simulated import simulate_session
+    from probecommit.studies.robot import rig_config  # the paper's rig protocol: a study names its family
 
     bar, update = progress_bar("simulated rig: episodes")
     with bar:
-        log = simulate_session(out, config or paper_config("rig"), progress=update, stop_after=stop_after)
+        log = simulate_session(out, config or rig_config(), progress=update, stop_after=stop_after)
     console.print(f"session log: [bold]{safe(log)}[/bold]")
     console.print(f"next: probecommit audit {safe(out)}   |   probecommit replay {safe(out)} --fault boundary")
 
