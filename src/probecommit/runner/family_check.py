@@ -138,12 +138,13 @@ def _latents(spec: TaskSpec, config: Any, model: Any) -> None:
 def _positivity(spec: TaskSpec, config: Any, model: Any) -> None:
     from probecommit.tasks.config import FieldError
 
-    if not type(config).positive_latents:
+    mask = np.asarray(type(config).positive_mask(), dtype=bool)
+    if not mask.any():
         return
     low = np.asarray(model.prior_low, float)
-    _expect(bool(np.all(low > 0)), "the prior box or the declared positivity",
-            f"latents are declared positive but the prior reaches {low.tolist()}")
-    negative = tuple(-abs(v) for v in config.model.prior_low)
+    _expect(bool(np.all(low[mask] > 0)), "the prior box or the declared positivity",
+            f"latents declared positive but the prior reaches {low.tolist()}")
+    negative = tuple(-abs(v) if m else v for v, m in zip(config.model.prior_low, mask))
     try:
         config.check_truth_box(negative, tuple(config.model.prior_high), "instances")
     except FieldError:

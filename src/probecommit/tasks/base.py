@@ -523,7 +523,7 @@ class TaskSpec:
         config: Pydantic model of the family's config (a ``family`` literal, ``model`` and
             ``simulator`` sections); one branch of the study config's discriminated union.
         build_model: ``build_model(task_config) -> TaskModel``.
-        simulators: Engine name -> lazy ``"module:Class"`` entry point; the class is
+        simulators: Engine name -> lazy ``"module:Class"`` entry point (or the class itself); the class is
             constructed as ``Class(**task_config.simulator_kwargs())``.
         summary: One row of the paper's Table II as the code has it: ``latents``,
             ``probe``, ``action``, ``sigma``, ``budgets``, ``metric``.
@@ -545,7 +545,7 @@ class TaskSpec:
     name: str
     config: type
     build_model: Callable[[Any], Any]
-    simulators: dict[str, str]
+    simulators: dict[str, Any]
     summary: dict[str, str] = field(default_factory=dict)
     example: dict[str, Any] = field(default_factory=dict)
     default: bool = False

@@ -110,6 +110,13 @@ class TaskConfigBase(BaseModel):
     probe_dim: ClassVar[int] = 1
     #: Every latent is a physical magnitude that must be > 0 (friction, mass, damping, ...).
     positive_latents: ClassVar[bool] = False
+    #: Per latent, whether it must be > 0 (a declared family's; empty: ``positive_latents`` for all).
+    latent_positive: ClassVar[tuple[bool, ...]] = ()
+
+    @classmethod
+    def positive_mask(cls) -> tuple[bool, ...]:
+        """Per latent, whether it is declared positive."""
+        return tuple(cls.latent_positive) or (cls.positive_latents,) * len(cls.latent_names)
 
     @model_validator(mode="after")
     def _check_engine(self) -> "TaskConfigBase":

@@ -31,10 +31,17 @@ class UnknownTaskError(KeyError):
         return str(self.args[0])
 
 
-def register(spec: TaskSpec) -> TaskSpec:
-    """Register a family (idempotent for the same spec object; a different one is refused)."""
+def registered(name: str, *, declared: bool = False) -> bool:
+    """Whether ``name`` is registered now (without loading the built-ins); ``declared``: and was
+    derived from a :class:`~probecommit.tasks.declare.Declaration`."""
+    spec = _REGISTRY.get(name)
+    return spec is not None and (not declared or spec.declaration is not None)
+
+
+def register(spec: TaskSpec, *, replace: bool = False) -> TaskSpec:
+    """Register a family (idempotent for the same spec object; a different one is refused unless ``replace``)."""
     existing = _REGISTRY.get(spec.name)
-    if existing is not None and existing is not spec and existing != spec:
+    if existing is not None and not replace and existing is not spec and existing != spec:
         raise ValueError(f"task family {spec.name!r} is already registered")
     _REGISTRY[spec.name] = spec
     return spec
@@ -109,7 +116,10 @@ def simulator_class(family: str, engine: str) -> type:
         raise UnknownTaskError(
             f"task family {family!r} has no {engine!r} simulator; it has: {', '.join(spec.engines)}"
         )
-    module_name, _, attr = spec.simulators[engine].partition(":")
+    entry = spec.simulators[engine]
+    if isinstance(entry, type):  # a declared family's own analytic simulator, already a class
+        return entry
+    module_name, _, attr = entry.partition(":")
     module = importlib.import_module(module_name)
     return getattr(module, attr)
 

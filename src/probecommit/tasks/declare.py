@@ -1,0 +1,334 @@
+"""A family is one declaration: latents, grids, decision coordinate, loss kind, margin, engines.
+
+:func:`family` turns a :class:`Declaration` and a model class (a :class:`DeclaredModel`
+subclass that writes only ``predict`` and ``loss``) into everything the rest of the package
+reads: the pydantic config (``family`` tag, ``model`` and ``simulator`` sections with the
+declared defaults and the latent checks), the :class:`~probecommit.tasks.base.TaskSpec` and
+its registry entry, and, unless the declaration names its own, an ``analytic`` simulator
+that reads the model's own prediction at the truth plus noise. Names, latents, units, the
+prior box and positivity are written once; :func:`probecommit.check_family` checks that what
+was derived agrees.
+
+Put the declaration in ``tasks/<family>/__init__.py`` (a built-in family: the registry
+imports every folder under ``tasks/``) or in your own package named by an entry point of
+the ``probecommit.tasks`` group; ``family()`` registers it. See ``docs/adding-a-task.md``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any, ClassVar, Literal, Mapping, Sequence
+
+import numpy as np
+from pydantic import Field, create_model
+
+from probecommit.tasks.base import NoisySimulator, TaskModelBase, TaskSpec, as_rows
+from probecommit.tasks.config import FieldError, ModelConfigBase, SimulatorConfigBase, TaskConfigBase
+
+
+@dataclass(frozen=True)
+class Latent:
+    """One latent coordinate.
+
+    Attributes:
+        name: Column name (``true_<name>`` in instance tables).
+        unit: Unit, for people (``"kg"``, ``"mm"``, ``""``).
+        low, high: The prior box along this coordinate (uniform prior).
+        positive: A physical magnitude that must be > 0: truths and the prior are refused at or below zero.
+        jitter: Post-resampling jitter standard deviation (default 2.5 % of the width).
+    """
+
+    name: str
+    unit: str
+    low: float
+    high: float
+    positive: bool = False
+    jitter: float | None = None
+
+
+@dataclass(frozen=True)
+class Context:
+    """One observed per-episode context component (a target distance): name, unit and the range
+    an example study draws from (``low`` and ``high`` are its two example rows)."""
+
+    name: str
+    unit: str
+    low: float
+    high: float
+
+
+@dataclass(frozen=True, eq=False)
+class Declaration:
+    """Everything about a family that generic code reads, written once.
+
+    Attributes:
+        name: Family name (the config's ``task``); a Python identifier.
+        latents: The latent coordinates, in column order.
+        probe_grid: Admissible probes ``[P]`` or ``[P, p]``.
+        action_grid: Admissible commit actions ``[A]`` or ``[A, a]``.
+        loss: ``"binary"`` (failure 0/1) or ``"continuous"`` (a miss, >= 0).
+        sigma: The likelihood's reading noise (the model section's default).
+        decision: Name of the decision-coordinate latent (default: the first).
+        contexts: Observed per-episode context components (a target), or none.
+        margin: The execution margin's default (``model.margin``, in (0, 1.5]; 1 = none).
+        noise_sigma: The simulator's reading noise default (default: ``sigma``).
+        simulators: Engine -> ``"module:Class"`` (constructed as ``Class(noise_sigma=...)``);
+            ``analytic`` is added from the model unless given.
+        summary: Table II row (``probe``, ``action``, ``metric``, ...), for ``probecommit tasks``.
+        example: Extra study-config fields of a small example study (contexts are added).
+        default: The family a config naming no task runs (one family only).
+    """
+
+    name: str
+    latents: tuple[Latent, ...]
+    probe_grid: Any
+    action_grid: Any
+    loss: Literal["binary", "continuous"]
+    sigma: float
+    decision: str | None = None
+    contexts: tuple[Context, ...] = ()
+    margin: float = 1.0
+    noise_sigma: float | None = None
+    simulators: Mapping[str, str] = field(default_factory=dict)
+    summary: Mapping[str, str] = field(default_factory=dict)
+    example: Mapping[str, Any] = field(default_factory=dict)
+    default: bool = False
+
+    def __post_init__(self) -> None:
+        problems = []
+        if not self.name.isidentifier():
+            problems.append(f"name {self.name!r} must be a Python identifier")
+        if not self.latents:
+            problems.append("declares no latents")
+        names = [lat.name for lat in self.latents]
+        if len(set(names)) != len(names):
+            problems.append(f"latent names repeat: {names}")
+        for lat in self.latents:
+            if not lat.high > lat.low:
+                problems.append(f"latent {lat.name!r} needs high > low, got {lat.low} .. {lat.high}")
+            if lat.positive and lat.low <= 0:
+                problems.append(f"latent {lat.name!r} is declared positive but its prior starts at {lat.low}")
+        if self.decision is not None and self.decision not in names:
+            problems.append(f"decision {self.decision!r} is not a latent ({', '.join(names)})")
+        if self.loss not in ("binary", "continuous"):
+            problems.append(f"loss must be 'binary' or 'continuous', got {self.loss!r}")
+        if not 0 < self.margin <= 1.5:
+            problems.append(f"margin must be in (0, 1.5], got {self.margin}")
+        if problems:
+            raise ValueError(f"declaration of family {self.name!r}: " + "; ".join(problems))
+
+    # -------------------------------------------------------------------------------- derived
+    @property
+    def latent_names(self) -> tuple[str, ...]:
+        return tuple(lat.name for lat in self.latents)
+
+    @property
+    def context_names(self) -> tuple[str, ...]:
+        return tuple(c.name for c in self.contexts)
+
+    @property
+    def decision_index(self) -> int:
+        return self.latent_names.index(self.decision) if self.decision is not None else 0
+
+    @property
+    def prior_low(self) -> tuple[float, ...]:
+        return tuple(float(lat.low) for lat in self.latents)
+
+    @property
+    def prior_high(self) -> tuple[float, ...]:
+        return tuple(float(lat.high) for lat in self.latents)
+
+    def probes(self) -> np.ndarray:
+        grid = np.asarray(self.probe_grid, dtype=float)
+        return as_rows(grid, 1 if grid.ndim == 1 else grid.shape[1], f"{self.name} probe_grid")
+
+    def actions(self) -> np.ndarray:
+        grid = np.asarray(self.action_grid, dtype=float)
+        return as_rows(grid, 1 if grid.ndim == 1 else grid.shape[1], f"{self.name} action_grid")
+
+
+class DeclaredModel(TaskModelBase):
+    """Base of a declared family's model: everything but ``predict`` and ``loss`` comes from the declaration.
+
+    A subclass writes ``predict(u[E, p], theta[E, N, d]) -> [E, N, m]`` and
+    ``loss(actions[A, a], theta[E, N, d], context[E, c] | None) -> [E, A, N]`` (boolean failures
+    for a binary loss; a miss divided by ``self.margin`` for a continuous one), reading
+    ``self.margin``. Built by :func:`family` from the config's model section.
+    """
+
+    declaration: ClassVar[Declaration]
+
+    def __init_subclass__(cls, **kwargs: Any) -> None:
+        super().__init_subclass__(**kwargs)
+        if "loss" in cls.__dict__:
+            cls.loss = _batched(cls.__dict__["loss"])
+
+    def __init__(self, sigma: float, margin: float, prior_low: Any, prior_high: Any, variant: str = "deployed",
+                 **fields: Any) -> None:
+        decl = self.declaration
+        self.name = decl.name
+        self.variant = variant
+        self.latent_names = decl.latent_names
+        self.context_names = decl.context_names
+        self.sigma, self.margin = float(sigma), float(margin)
+        self.prior_low, self.prior_high = np.asarray(prior_low, float), np.asarray(prior_high, float)
+        widths = self.prior_high - self.prior_low
+        self.jitter_scale = np.array([lat.jitter if lat.jitter is not None else 0.025 * w
+                                      for lat, w in zip(decl.latents, widths)])
+        self.probe_grid, self.action_grid = decl.probes(), decl.actions()
+        self.binary_loss = decl.loss == "binary"
+        self.decision_domain_width = float(widths[decl.decision_index])
+        self.extra = dict(fields)
+        self.check_sigma_and_margin()
+
+    def with_margin(self, gamma: float) -> "DeclaredModel":
+        model = type(self).__new__(type(self))
+        model.__dict__.update(self.__dict__)
+        model.margin = float(gamma)
+        return model
+
+    def decision(self, theta: np.ndarray) -> np.ndarray:
+        return np.asarray(theta)[..., self.declaration.decision_index]
+
+    def grown_scenarios(self, particles: np.ndarray, z_points: np.ndarray) -> np.ndarray:
+        """Each point at the particles' per-coordinate median, its decision coordinate set."""
+        particles = np.asarray(particles)
+        centre = np.median(particles, axis=1)
+        extra = np.repeat(centre[:, None, :], z_points.shape[1], axis=1)
+        extra[..., self.declaration.decision_index] = z_points
+        return extra
+
+
+class ModelSimulator(NoisySimulator):
+    """The ``analytic`` simulator of a declared family: the model's own reading at the truth plus
+    ``noise_sigma`` noise, and its loss at margin one as the realized outcome (named queries
+    ``reading`` and ``outcome``, cached like any engine's)."""
+
+    engine = "analytic"
+    thread_safe = True
+    family = "?"
+    model_class: ClassVar[type]
+
+    def __init__(self, noise_sigma: float) -> None:
+        super().__init__(noise_sigma)
+        decl = self.model_class.declaration
+        self._truth = self.model_class(decl.sigma, 1.0, decl.prior_low, decl.prior_high)
+        self._d = len(decl.latents)
+
+    def reading(self, *values: float) -> np.ndarray:
+        theta, u = np.asarray(values[:self._d]), np.asarray(values[self._d:])
+        return np.asarray(self._truth.predict(u[None, :], theta[None, None, :]), float).reshape(-1)
+
+    def outcome(self, *values: float) -> float:
+        a = self._truth.action_dim
+        theta, action, context = (np.asarray(values[:self._d]), np.asarray(values[self._d:self._d + a]),
+                                  np.asarray(values[self._d + a:]))
+        ctx = context[None, :] if context.size else None
+        return float(np.asarray(self._truth.loss(action[None, :], theta[None, None, :], ctx), float).reshape(-1)[0])
+
+    def probe(self, theta: np.ndarray, u: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+        clean = self.cached("reading", theta, np.ravel(u))
+        return clean + self.noise_sigma * rng.standard_normal(clean.shape[0])
+
+    def execute(self, theta: np.ndarray, action: np.ndarray, context: np.ndarray | None = None) -> dict[str, Any]:
+        if self._truth.context_names and context is None:
+            raise ValueError(f"the {self.family} outcome needs the context ({', '.join(self._truth.context_names)})")
+        arg = np.concatenate([np.ravel(action), np.ravel(context) if context is not None else []])
+        return {"realized": float(self.cached("outcome", theta, arg)[0])}
+
+
+def _batched(loss: Any) -> Any:
+    """Let a family's ``loss(actions, theta[E, N, d], context[E, c])`` also take the prior-sample form
+    the blind executor uses, ``theta[S, d]`` with one ``context[c]``, returning ``[A, S]``."""
+    import functools
+
+    @functools.wraps(loss)
+    def wrapper(self, actions, theta, context=None):  # noqa: ANN001
+        theta = np.asarray(theta, dtype=float)
+        if theta.ndim == 2:
+            ctx = None if context is None else np.asarray(context, dtype=float).reshape(1, -1)
+            return loss(self, actions, theta[None], ctx)[0]
+        return loss(self, actions, theta, None if context is None else np.asarray(context, dtype=float).reshape(theta.shape[0], -1))
+
+    return wrapper
+
+
+def _config_class(decl: Declaration) -> type:
+    """The family's pydantic config, from the declaration (defaults, shapes, positivity)."""
+    d = len(decl.latents)
+    box = tuple[(float,) * d]  # type: ignore[misc]
+    model_section = create_model(
+        f"{decl.name}_model", __base__=ModelConfigBase,
+        sigma=(float, Field(decl.sigma, gt=0, le=1e6)), margin=(float, Field(decl.margin, gt=0, le=1.5)),
+        prior_low=(box, decl.prior_low), prior_high=(box, decl.prior_high),
+    )
+    engines = tuple(dict.fromkeys(["analytic", *decl.simulators]) if "analytic" not in decl.simulators
+                    else decl.simulators)
+    noise = decl.sigma if decl.noise_sigma is None else decl.noise_sigma
+    simulator_section = create_model(
+        f"{decl.name}_simulator", __base__=SimulatorConfigBase,
+        engine=(Literal[engines], engines[0]), noise_sigma=(float, Field(noise, ge=0, le=1e6)),  # type: ignore[valid-type]
+    )
+    positive = tuple(lat.positive for lat in decl.latents)
+
+    def check_truth_box(self, low, high, field):  # noqa: ANN001 - the TaskConfigBase hook
+        TaskConfigBase.check_truth_box(self, low, high, field)
+        bad = [lat.name for lat, v in zip(decl.latents, low) if lat.positive and v <= 0]
+        if bad:
+            raise FieldError(f"{field}.truth_low", f"{', '.join(bad)} must be positive, got {list(low)}")
+
+    config = create_model(
+        f"{decl.name}_config", __base__=TaskConfigBase,
+        family=(Literal[decl.name], decl.name),  # type: ignore[valid-type]
+        model=(model_section, model_section()), simulator=(simulator_section, simulator_section()),
+    )
+    config.latent_names = decl.latent_names
+    config.context_names = decl.context_names
+    config.probe_dim = decl.probes().shape[1]
+    config.positive_latents = all(positive)
+    config.latent_positive = positive
+    config.check_truth_box = check_truth_box
+    config.__doc__ = f"Config of the declared family {decl.name!r}."
+    return config
+
+
+def family(decl: Declaration, model: type[DeclaredModel], *, register: bool = True) -> TaskSpec:
+    """The :class:`TaskSpec` of a declaration and its model class, registered (unless ``register=False``).
+
+    Args:
+        decl: The family's declaration.
+        model: A :class:`DeclaredModel` subclass writing ``predict`` and ``loss``.
+        register: Add it to the registry (idempotent for the same family module).
+    """
+    from probecommit.tasks import registry
+
+    if not (isinstance(model, type) and issubclass(model, DeclaredModel)):
+        raise TypeError(f"family {decl.name!r}: the model must be a DeclaredModel subclass, got {model!r}")
+    model.declaration = decl
+    config = _config_class(decl)
+    simulators = dict(decl.simulators)
+    if "analytic" not in simulators:
+        simulator = type(f"{decl.name}_analytic", (ModelSimulator,), {"model_class": model, "family": decl.name,
+                                                                      "__module__": model.__module__})
+        simulators = {"analytic": simulator, **simulators}
+
+    def build_model(task_config: Any) -> DeclaredModel:
+        return model(**task_config.model.model_kwargs())
+
+    example = dict(decl.example)
+    if decl.contexts and "contexts" not in example.get("instances", {}):
+        rows = [[c.low for c in decl.contexts], [c.high for c in decl.contexts]]
+        example["instances"] = {**example.get("instances", {}), "contexts": rows}
+    summary = {"latents": ", ".join(decl.latent_names), "metric": "failure" if decl.loss == "binary" else "miss",
+               "sigma": f"{decl.sigma:g}", **decl.summary}
+    spec = TaskSpec(name=decl.name, config=config, build_model=build_model, simulators=simulators, summary=summary,
+                    example=example, default=decl.default, declaration=decl)
+    if register:
+        # A declared family registered again (its module re-imported, a notebook cell re-run) replaces itself.
+        registry.register(spec, replace=registry.registered(decl.name, declared=True))
+    return spec
+
+
+def as_grid(values: Sequence[Any]) -> tuple:
+    """A grid as nested tuples (a frozen declaration holds no arrays)."""
+    return tuple(tuple(map(float, np.atleast_1d(v))) for v in values)
