@@ -70,10 +70,10 @@ def audit_session_log(path: Path, out: Optional[Path], resamples: int, seed: int
     config, *_ = load_session(path)
     model = build_model(config)
     window = half = None
-    if hasattr(model, "success_interval"):
-        nominal = (np.asarray(model.prior_low, float) + np.asarray(model.prior_high, float)) / 2
-        lo, hi = model.with_margin(1.0).success_interval(nominal[None, :])
-        window = float((hi - lo)[0] / 2)
+    nominal = (np.asarray(model.prior_low, float) + np.asarray(model.prior_high, float)) / 2
+    interval = model.with_margin(1.0).success_interval(nominal[None, :])  # None: no 1-D success window
+    if interval is not None:
+        window = float((interval[1] - interval[0])[0] / 2)
     guides = get_family(config.family).figure_guides
     if guides is not None:
         half = guides(model).get("half_gap")

@@ -79,7 +79,7 @@ def replay_session(path: str | Path, overrides: dict[str, dict[str, Any]] | None
         if ep.decision is None:
             continue
         state, _ = episode_belief(pfilter, replay_config, number, ep.probes, ep.readings)
-        decisions[number] = decide_belief(model, replay_config, state)
+        decisions[number] = decide_belief(model, replay_config, state, ep.context)
         same.append(decisions[number]["action"] == ep.decision["action"])
     # Realized outcomes are always scored by the deployed model's window at the truth.
     result = rows_from_decisions(build_model(config), episodes, truths, decisions,

@@ -78,6 +78,8 @@ class EpisodeRecord:
     position: str
     taps: int
     probes: list[list[float]] = field(default_factory=list)
+    #: The episode's observed context (a target), for a family that has one; None otherwise.
+    context: list[float] | None = None
     readings: list[list[float]] = field(default_factory=list)
     decision: dict[str, Any] | None = None
     outcome: dict[str, Any] | None = None
@@ -131,10 +133,13 @@ def episode_belief(pfilter: ParticleFilter, config: StudyConfig, episode: int,
     return state, rng
 
 
-def decide_belief(model: Any, config: StudyConfig, state: BeliefState) -> dict[str, Any]:
-    """Probe-Robust's commitment on a one-episode belief, as a decide record's fields."""
+def decide_belief(model: Any, config: StudyConfig, state: BeliefState,
+                  context: Sequence[float] | None = None) -> dict[str, Any]:
+    """Probe-Robust's commitment on a one-episode belief (with its context, if the family has one),
+    as a decide record's fields."""
     executor = ProbeRobust(model, plateau=config.calibration.plateau)
-    commit = executor.act(state.particles, state.weights, config.belief.nu)
+    ctx = None if context is None else np.asarray(context, dtype=float).reshape(1, -1)
+    commit = executor.act(state.particles, state.weights, config.belief.nu, ctx)
     index = int(commit.index[0])
     action = np.asarray(model.action_grid, dtype=float)[index]
     hull_lo, hull_hi = masked_interval(model.decision(state.particles), np.ones_like(state.log_weights, dtype=bool))
@@ -178,7 +183,8 @@ class Session:
         # The first commit in a process loads the compiled kernels (a few hundred ms); pay it
         # here, on a throwaway prior belief with its own generator, not at the robot's commit.
         state = self.filter.initial([np.random.default_rng(0)])
-        decide_belief(self.model, self.config, state)
+        context = [1.0] * len(self.model.context_names) or None  # any finite context loads the same kernels
+        decide_belief(self.model, self.config, state, context)
 
     # ------------------------------------------------------------------ opening
     @classmethod
@@ -248,8 +254,10 @@ class Session:
         kind = record["type"]
         where = f"{self.path}: line {record.get('_line', '?')}"
         if kind == "episode":
+            context = record.get("context")
             self.episodes[int(record["episode"])] = EpisodeRecord(int(record["episode"]), str(record["position"]),
-                                                                  int(record["taps"]))
+                                                                  int(record["taps"]),
+                                                                  context=None if context is None else list(context))
         elif kind in ("observe", "decide", "outcome"):
             ep = self.episodes.get(int(record.get("episode", -1)))
             if ep is None:
@@ -276,8 +284,27 @@ class Session:
         return SessionError(f"{reason} (recorded in {self.path.name} as rejected; nothing was assimilated)")
 
     # ------------------------------------------------------------------ the loop
-    def start_episode(self, position: str, taps: int) -> int:
-        """Begin an episode at a block position with a tap budget; returns its number."""
+    def _check_context(self, context: Sequence[float] | float | None) -> list[float] | None:
+        names = self.model.context_names
+        if not names:
+            if context is not None:
+                raise SessionError(f"the {self.model.name} family has no context; start_episode takes none")
+            return None
+        values = None if context is None else np.atleast_1d(np.asarray(context, dtype=float)).reshape(-1)
+        if values is None or values.shape[0] != len(names) or not np.all(np.isfinite(values)):
+            raise SessionError(f"the {self.model.name} family needs a context of {len(names)} finite number(s) "
+                               f"({', '.join(names)}) per episode: start_episode(..., context=...)")
+        return values.tolist()
+
+    def start_episode(self, position: str, taps: int, context: Sequence[float] | float | None = None) -> int:
+        """Begin an episode at a block position with a tap budget; returns its number.
+
+        Args:
+            position: Label of the placement (episodes at one position share a truth).
+            taps: Probe budget of the episode.
+            context: The episode's observed context (a target distance) for a family that has
+                one (``model.context_names``); None for a family without.
+        """
         if self.current is not None:
             ep = self.current
             state = "decided, no outcome recorded" if ep.decision else f"{len(ep.probes)} of {ep.taps} taps"
@@ -287,9 +314,13 @@ class Session:
         position = str(position).strip()
         if not position:
             raise SessionError("position must be a non-empty label of the block's placement")
+        ctx = self._check_context(context)
         number = max(self.episodes) + 1 if self.episodes else 0
-        self._log.append({"type": "episode", "episode": number, "position": position, "taps": int(taps), "t": time.time()})
-        ep = EpisodeRecord(number, position, int(taps))
+        record = {"type": "episode", "episode": number, "position": position, "taps": int(taps), "t": time.time()}
+        if ctx is not None:
+            record["context"] = ctx
+        self._log.append(record)
+        ep = EpisodeRecord(number, position, int(taps), context=ctx)
         self.episodes[number] = ep
         self._rebuild(ep)
         return number
@@ -354,7 +385,7 @@ class Session:
         if len(ep.probes) < ep.taps:
             raise SessionError(f"episode {ep.episode} has {len(ep.probes)} of its {ep.taps} taps; observe the rest first")
         start = time.perf_counter()
-        fields = decide_belief(self.model, self.config, self._state)
+        fields = decide_belief(self.model, self.config, self._state, ep.context)
         seconds = time.perf_counter() - start
         record = {"type": "decide", "episode": ep.episode, "k": len(ep.probes), **fields, "decide_s": seconds,
                   "t": time.time()}

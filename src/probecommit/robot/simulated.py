@@ -32,7 +32,8 @@ def simulate_session(path: str | Path, config: Any, *, progress: Callable[[int, 
 
     Args:
         path: Log file or directory.
-        config: Study config (object, mapping or YAML path) of a rig-like family.
+        config: Study config (object, mapping or YAML path) of any family (one with a context
+            takes each instance's context, ``instances.contexts``).
         progress: Called as ``progress(done, total)`` after each episode.
         stop_after: Stop after this many episodes in this call (a deliberate interruption,
             for tests and demos of resuming).
@@ -46,6 +47,7 @@ def simulate_session(path: str | Path, config: Any, *, progress: Callable[[int, 
     simulator = build_simulator(config)
     instances = draw_instances(config, model)
     truths = instances[[f"true_{n}" for n in model.latent_names]].to_numpy()
+    contexts = instances[[f"ctx_{n}" for n in model.context_names]].to_numpy() if model.context_names else None
     budgets = config.probes.budgets or [config.probes.budget]
     plan = [(i, r, k) for i in range(len(instances)) for r in range(config.repeats) for k in budgets]
     done_now = 0
@@ -58,7 +60,7 @@ def simulate_session(path: str | Path, config: Any, *, progress: Callable[[int, 
             i, _, k = plan[number]
             position = str(instances["instance_id"].iloc[i])
             if number >= started:
-                session.start_episode(position, taps=k)
+                session.start_episode(position, taps=k, context=None if contexts is None else contexts[i].tolist())
             ep = session.episodes[number]
             theta = truths[i]
             last_of_position = number + 1 == len(plan) or plan[number + 1][0] != i
@@ -73,8 +75,11 @@ def simulate_session(path: str | Path, config: Any, *, progress: Callable[[int, 
                 session.observe(u, simulator.probe(theta, np.atleast_1d(u), rng))
             decision = session.decide() if ep.decision is None else None
             action = decision.action if decision is not None else ep.decision["action"]
-            outcome = simulator.execute(theta, np.atleast_1d(action))
-            session.record_outcome(entered=outcome.get("entered"), depth=outcome.get("depth"))
+            outcome = simulator.execute(theta, np.atleast_1d(action), None if contexts is None else contexts[i])
+            if "entered" in outcome:  # an insertion-like rig: did the tool enter, and how deep
+                session.record_outcome(entered=outcome["entered"], depth=outcome.get("depth"))
+            else:  # any other family: what its simulator realized (a miss, a failure)
+                session.record_outcome(realized=float(outcome["realized"]))
             if last_of_position:  # the touch sweep after the position's episodes gives its truth
                 session.record_truth(position, theta)
             done_now += 1

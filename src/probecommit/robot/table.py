@@ -47,10 +47,12 @@ class SessionEpisodes:
         return out
 
 
-def realized_outcome(model: Any, action: Any, truth: np.ndarray) -> float:
-    """The deployed model's loss of ``action`` at the truth, margin one (failure 0/1 or miss)."""
-    scorer = model.with_margin(1.0) if hasattr(model, "margin") else model
-    loss = scorer.loss(np.atleast_2d(np.asarray(action, dtype=float)), np.asarray(truth, dtype=float)[None, :])
+def realized_outcome(model: Any, action: Any, truth: np.ndarray, context: Any = None) -> float:
+    """The deployed model's loss of ``action`` at the truth (and the episode's context), margin one
+    (failure 0/1 or miss)."""
+    scorer = model.with_margin(1.0)
+    ctx = None if context is None else np.asarray(context, dtype=float).reshape(1, -1)
+    loss = scorer.loss(np.atleast_2d(np.asarray(action, dtype=float)), np.asarray(truth, dtype=float)[None, None, :], ctx)
     return float(np.asarray(loss).reshape(-1)[0])
 
 
@@ -78,7 +80,7 @@ def rows_from_decisions(model: Any, episodes: dict[int, EpisodeRecord], truths: 
         entered = (ep.outcome or {}).get("entered")
         rows.append(episode_row(
             instance_id=ep.position, repeat=repeat, k=k, z_true=z_true, action=action,
-            predicted=decision["predicted"], realized=realized_outcome(model, action, theta),
+            predicted=decision["predicted"], realized=realized_outcome(model, action, theta, ep.context),
             retained=(decision["retained_lo"], decision["retained_hi"]), hull=(decision["hull_lo"], decision["hull_hi"]),
             method="probe_robust" if k else "blind_robust", variant=variant, episode=number,
             entered=np.nan if entered is None else float(entered),
