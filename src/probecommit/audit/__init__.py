@@ -15,6 +15,7 @@ from probecommit.audit.conformal import (
     simultaneous_scores,
     simultaneous_threshold,
 )
+from probecommit.audit.gaussian import belief_intervals, gaussian_row, mixture_row
 from probecommit.audit.gates import evaluate_gates, first_passage, gate_curve, gates_from_tables
 from probecommit.audit.io import EpisodeTableError, read_episodes, validate_episodes
 from probecommit.audit.margin import GAMMA_GRID, distribution_free_margin, select_margin
@@ -37,6 +38,9 @@ from probecommit.audit.rows import episode_row
 __all__ = [
     "AuditResult", "audit", "EpisodeTableError", "GAMMA_GRID", "Interval", "audit_table", "cluster_bootstrap_auc",
     "cluster_bootstrap_mean", "conformal_quantile", "coverage_score", "distribution_free_margin", "episode_row",
+    "gaussian_row",
+    "mixture_row",
+    "belief_intervals",
     "evaluate_gates", "first_passage", "fixed_budget_thresholds", "gate_curve", "gates_from_tables",
     "instance_scores", "max_surprise", "paired_bootstrap", "rank_auc", "read_episodes", "select_margin",
     "sign_flip_test", "simultaneous_scores", "simultaneous_threshold", "surprise_auc", "validate_episodes",
