@@ -77,6 +77,8 @@ class Declaration:
         summary: Table II row (``probe``, ``action``, ``metric``, ...), for ``probecommit tasks``.
         example: Extra study-config fields of a small example study (contexts are added).
         default: The family a config naming no task runs (one family only).
+        analytic: Add the ``analytic`` simulator that reads the model itself at the truth (a family
+            whose model is its own ground truth); False for a family whose model is a surrogate.
     """
 
     name: str
@@ -93,6 +95,7 @@ class Declaration:
     summary: Mapping[str, str] = field(default_factory=dict)
     example: Mapping[str, Any] = field(default_factory=dict)
     default: bool = False
+    analytic: bool = True
 
     def __post_init__(self) -> None:
         problems = []
@@ -262,8 +265,9 @@ def _config_class(decl: Declaration) -> type:
         sigma=(float, Field(decl.sigma, gt=0, le=1e6)), margin=(float, Field(decl.margin, gt=0, le=1.5)),
         prior_low=(box, decl.prior_low), prior_high=(box, decl.prior_high),
     )
-    engines = tuple(dict.fromkeys(["analytic", *decl.simulators]) if "analytic" not in decl.simulators
-                    else decl.simulators)
+    engines = tuple(dict.fromkeys((["analytic"] if decl.analytic else []) + list(decl.simulators)))
+    if not engines:
+        raise ValueError(f"declaration of family {decl.name!r}: no simulators and analytic=False")
     noise = decl.sigma if decl.noise_sigma is None else decl.noise_sigma
     simulator_section = create_model(
         f"{decl.name}_simulator", __base__=SimulatorConfigBase,
@@ -307,7 +311,7 @@ def family(decl: Declaration, model: type[DeclaredModel], *, register: bool = Tr
     model.declaration = decl
     config = _config_class(decl)
     simulators = dict(decl.simulators)
-    if "analytic" not in simulators:
+    if decl.analytic and "analytic" not in simulators:
         simulator = type(f"{decl.name}_analytic", (ModelSimulator,), {"model_class": model, "family": decl.name,
                                                                       "__module__": model.__module__})
         simulators = {"analytic": simulator, **simulators}
