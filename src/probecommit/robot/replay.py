@@ -83,7 +83,7 @@ def replay_session(path: str | Path, overrides: dict[str, dict[str, Any]] | None
         same.append(decisions[number]["action"] == ep.decision["action"])
     # Realized outcomes are always scored by the deployed model's window at the truth.
     result = rows_from_decisions(build_model(config), episodes, truths, decisions,
-                                 variant=variant or getattr(model, "variant", "replay"))
+                                 variant=variant or model.variant)
     result.path = log
     if result.rows.empty:
         raise SessionLogError(f"{log}: no episode can be replayed ({'; '.join(result.notes) or 'no episodes'})")
