@@ -59,3 +59,24 @@ def test_the_push_example_loop_runs_and_resumes(tmp_path, monkeypatch, capsys):
     runpy.run_path(EXAMPLE, run_name="__main__")  # resumed: nothing left to do
     assert "probe push(es)" not in capsys.readouterr().out
     assert len(session_episodes(tmp_path / "loop").rows) == 6
+
+
+ANALYTIC = sorted(name for name, spec in __import__("probecommit.tasks.registry", fromlist=["families"]).families().items()
+                  if "analytic" in spec.engines and spec.declaration is None)
+
+
+@pytest.mark.parametrize("family", ANALYTIC)
+def test_every_family_runs_a_session_that_audits_and_replays_exactly(family, tmp_path):
+    from probecommit.runner.family_check import _deep_merge
+    from probecommit.tasks.registry import families
+
+    spec = families()[family]
+    data = _deep_merge({"name": "s", "task": family, "seed": 5, "repeats": 1, "instances": {"count": 2},
+                        "probes": {"schedule": "random", "budget": 2, "budgets": [1, 2]}, "belief": {"particles": 128},
+                        "simulator": {"engine": "analytic"}}, spec.example)
+    log = simulate_session(tmp_path / "s", data)
+    rows = session_episodes(log).rows
+    n_contexts = len(data["instances"].get("contexts", [[]]))
+    assert len(rows) == 2 * n_contexts * 2
+    _, reproduced = replay_session(log)
+    assert reproduced == 1.0

@@ -17,6 +17,7 @@ from probecommit.runner.study import run_study
 from probecommit.tasks.adapters.functions import function_family
 from probecommit.tasks.adapters.gym import interpolate
 from probecommit.tasks.declare import Context, Latent
+from probecommit.tasks.registry import unregister
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 G = 9.81
@@ -29,12 +30,13 @@ def slide(th, impulse):
 
 @pytest.fixture(scope="module")
 def function_spec():
-    return function_family(
+    yield function_family(
         "fn_slide", latents=[Latent("mu", "", 0.2, 0.6, positive=True), Latent("m", "kg", 0.5, 1.5, positive=True)],
         predict=lambda th, u: slide(th, u[..., 0]),
         loss=lambda th, a, target: np.abs(slide(th, a[..., 0]) - target[..., 0]),
         probe_grid=[1.0, 2.0], action_grid=np.round(np.linspace(0.5, 5.0, 91), 6), sigma=0.05,
         contexts=[Context("target", "m", 0.5, 1.5)])
+    unregister("fn_slide")  # later tests see only the built-in families
 
 
 def small_study(tmp_path, family: str, contexts) -> Path:
@@ -85,10 +87,14 @@ def test_a_gymnasium_mujoco_family_passes_the_checker_runs_and_is_audited(tmp_pa
         import gym_reacher_family  # noqa: F401 - registers gym_reacher
     finally:
         sys.path.remove(str(EXAMPLES))
-    report = check_family("gym_reacher")
-    assert report.ok and "study gymnasium" in report.passed
-    run = small_study(tmp_path, "gym_reacher", [[0.5], [1.0]])
-    table = audit(run, resamples=100).table
+    try:
+        report = check_family("gym_reacher")
+        assert report.ok and "study gymnasium" in report.passed
+        run = small_study(tmp_path, "gym_reacher", [[0.5], [1.0]])
+        table = audit(run, resamples=100).table
+    finally:
+        unregister("gym_reacher")
+        sys.modules.pop("gym_reacher_family", None)
     probed = table.loc[table["method"] == "probe_robust"]
     assert len(probed) == 2 and (probed["n_episodes"] == 16).all()
     # The probes identify the damping: the committed torque misses less after two probes than blind.

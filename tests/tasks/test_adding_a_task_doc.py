@@ -54,13 +54,19 @@ def test_the_docs_example_family_checks_runs_audits_and_drives_a_session(tmp_pat
     monkeypatch.chdir(tmp_path)
     import importlib
 
+    from probecommit.tasks.registry import unregister
+
     importlib.import_module("glide")
-    assert families()["glide"].declaration.latent_names == ("mu", "m")
-    exec(compile(block("check"), "adding-a-task.md#check", "exec"), {})
-    result = run_study(load_config("glide-test.yaml"), tmp_path / "runs" / "glide-test")
-    table = audit(result.run_dir, resamples=100).table
-    assert set(table["k"]) == {0, 1, 3} and table["coverage"].between(0, 1).all()
-    exec(compile(block("session"), "adding-a-task.md#session", "exec"), {})
+    try:
+        assert families()["glide"].declaration.latent_names == ("mu", "m")
+        exec(compile(block("check"), "adding-a-task.md#check", "exec"), {})
+        result = run_study(load_config("glide-test.yaml"), tmp_path / "runs" / "glide-test")
+        table = audit(result.run_dir, resamples=100).table
+        assert set(table["k"]) == {0, 1, 3} and table["coverage"].between(0, 1).all()
+        exec(compile(block("session"), "adding-a-task.md#session", "exec"), {})
+    finally:
+        unregister("glide")
+        sys.modules.pop("glide", None)
 
 
 @pytest.mark.slow

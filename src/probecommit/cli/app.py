@@ -174,16 +174,17 @@ def replay(
     if model is not None or delta is not None or not overrides:
         from probecommit.runner.replay import load_run as _load
 
-        from probecommit.tasks.registry import get as get_family
+        from probecommit.tasks.registry import families
 
         family = _load(run_dir).config.family
-        short = get_family(family).replay_shorthands  # the family names its --model/--delta fields
+        short = families()[family].replay_shorthands  # the family names its --model/--delta fields
         if short:
             overrides.setdefault("model", {})[short["model"]] = model or short["model_default"]
             if delta is not None:
                 overrides["model"][short["delta"]] = delta
         elif model is not None or delta is not None:
-            raise ValueError(f"--model and --delta are shorthands the {family!r} family does not declare; use "
+            owners = ", ".join(sorted(n for n, spec in families().items() if spec.replay_shorthands)) or "no family's"
+            raise ValueError(f"--model and --delta are {owners} shorthands; {run_dir} is a {family!r} run: use "
                              "--set model.FIELD=VALUE")
         # Another family with no option: replayed as deployed (its episodes must come back identical).
     label = overrides.get("model", {}).get("boundary", "replay")

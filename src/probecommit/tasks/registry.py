@@ -69,6 +69,11 @@ def default_family() -> str:
     return defaults[0]
 
 
+def unregister(name: str) -> None:
+    """Remove a family registered at run time (a test's, a notebook's); a no-op if absent."""
+    _REGISTRY.pop(name, None)
+
+
 def _load() -> None:
     global _loaded
     if _loaded:
