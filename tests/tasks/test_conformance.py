@@ -71,3 +71,21 @@ def test_a_failure_raises_one_line_per_check():
     spec = dataclasses.replace(families()["push1d"], name="push_one")
     with pytest.raises(probecommit.FamilyCheckError, match=r"names: fix the config class's `family` default"):
         check_family(spec, study=False)
+
+
+def test_a_declared_family_is_told_to_fix_its_declaration():
+    import numpy as np
+
+    from probecommit.tasks.adapters.functions import function_family
+    from probecommit.tasks.declare import Latent
+    from probecommit.tasks.registry import unregister
+
+    spec = function_family("bad_name", latents=[Latent("k", "", 1.0, 2.0)], predict=lambda th, u: th[..., 0] * u[..., 0],
+                           loss=lambda th, a, c: np.abs(th[..., 0] - a[..., 0]), probe_grid=[1.0], action_grid=[1.0, 2.0],
+                           sigma=0.1)
+    try:
+        assert check_family("bad_name", study=False).ok
+        report = check_family(dataclasses.replace(spec, name="bad_name_2"), study=False, raise_errors=False)
+    finally:
+        unregister("bad_name")
+    assert report.failures[0][:2] == ("names", "the Declaration's `name` (and the model's base class: DeclaredModel)")

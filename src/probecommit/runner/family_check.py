@@ -297,6 +297,16 @@ MODEL_CHECKS: tuple[tuple[str, Callable[..., None]], ...] = (
 )
 
 
+#: Where a declared family fixes a failed check (its config, spec and defaults are derived).
+DECLARED_FIXES = {
+    "names": "the Declaration's `name` (and the model's base class: DeclaredModel)",
+    "latents": "the Declaration's `latents`/`contexts`/`probe_grid`",
+    "positivity": "the Declaration's `latents` (`positive=`, `low`)",
+    "margin": "the Declaration's `margin` (and `loss` dividing by `self.margin`)",
+    "build": "the Declaration or the model's constructor",
+}
+
+
 def check_family(family: str | TaskSpec, *, engines: Sequence[str] | None = None, study: bool = True,
                  raise_errors: bool = True) -> FamilyReport:
     """Check a family against the task contract.
@@ -353,6 +363,8 @@ def check_family(family: str | TaskSpec, *, engines: Sequence[str] | None = None
                     continue
                 if run(f"simulator {engine}", _simulator, spec, engine, model) and study:
                     run(f"study {engine}", _study, spec, engine)
+    if spec.declaration is not None:  # a declared family fixes these in its Declaration, not in derived code
+        report.failures = [(check, DECLARED_FIXES.get(check, where), why) for check, where, why in report.failures]
     if raise_errors and report.failures:
         raise FamilyCheckError(f"family {spec.name!r} fails {len(report.failures)} check(s):\n  " + "\n  ".join(report.lines()))
     return report
