@@ -1,0 +1,34 @@
+"""``probecommit tasks --check NAME`` runs check_family: every check listed, a failure exits 1 naming
+the declaration to fix, an unknown family exits 2 in one line."""
+
+from __future__ import annotations
+
+import dataclasses
+
+from typer.testing import CliRunner
+
+from probecommit.cli.app import app
+from probecommit.tasks import registry
+
+
+def test_a_family_that_passes_lists_its_checks():
+    result = CliRunner().invoke(app, ["tasks", "--check", "planar_slide"])
+    assert result.exit_code == 0, result.output
+    assert "ok   latents" in result.output and "family planar_slide: all 11 checks passed" in result.output
+
+
+def test_a_failing_family_exits_1_naming_the_declaration(monkeypatch):
+    from probecommit.tasks.push1d.config import Push1DConfig
+
+    class Planted(Push1DConfig):
+        latent_names = ("mu", "mass", "k_d")
+
+    monkeypatch.setitem(registry._REGISTRY, "push1d", dataclasses.replace(registry.families()["push1d"], config=Planted))
+    result = CliRunner().invoke(app, ["tasks", "--check", "push1d"])
+    assert result.exit_code == 1
+    assert "FAIL latents: fix the model's `latent_names` or the config's `latent_names`" in result.output
+
+
+def test_an_unknown_family_is_one_line():
+    result = CliRunner().invoke(app, ["tasks", "--check", "juggling"])
+    assert result.exit_code == 2 and result.output.startswith("error: unknown task family 'juggling'")
