@@ -45,11 +45,12 @@ def block(tag: str) -> str:
 def test_the_docs_example_family_checks_runs_audits_and_drives_a_session(tmp_path, monkeypatch):
     from probecommit.audit.pipeline import audit
     from probecommit.runner.config import load_config
+    from probecommit.runner.family_check import check_family
     from probecommit.runner.study import run_study
     from probecommit.tasks.registry import families
 
     files = write_files(tmp_path)
-    assert {"__init__.py", "glide-cal.yaml", "glide-test.yaml"} <= set(files)
+    assert {"__init__.py", "sim_closed_form.py", "glide-cal.yaml", "glide-test.yaml"} <= set(files)
     monkeypatch.syspath_prepend(str(tmp_path))
     monkeypatch.chdir(tmp_path)
     import importlib
@@ -59,7 +60,9 @@ def test_the_docs_example_family_checks_runs_audits_and_drives_a_session(tmp_pat
     importlib.import_module("glide")
     try:
         assert families()["glide"].declaration.latent_names == ("mu", "m")
+        assert families()["glide"].engines == ("analytic", "closed_form")
         exec(compile(block("check"), "adding-a-task.md#check", "exec"), {})
+        assert "study closed_form" in check_family("glide").passed
         result = run_study(load_config("glide-test.yaml"), tmp_path / "runs" / "glide-test")
         table = audit(result.run_dir, resamples=100).table
         assert set(table["k"]) == {0, 1, 3} and table["coverage"].between(0, 1).all()

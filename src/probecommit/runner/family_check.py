@@ -285,9 +285,14 @@ def _study(spec: TaskSpec, engine: str) -> None:
                           "a replay under the same model does not reproduce the episodes") from None
 
 
+#: Engines that are packages to install; any other engine name is a family's own code (always runs).
+ENGINE_PACKAGES = ("mujoco", "pybullet", "sapien", "gymnasium")
+
+
 def installed(engine: str) -> bool:
-    """Whether an engine can run here (the analytic engine always can)."""
-    return engine == "analytic" or importlib.util.find_spec(engine) is not None
+    """Whether an engine can run here: its package is importable (an engine of a family's own, such
+    as ``analytic``, always can)."""
+    return engine not in ENGINE_PACKAGES or importlib.util.find_spec(engine) is not None
 
 
 MODEL_CHECKS: tuple[tuple[str, Callable[..., None]], ...] = (
