@@ -80,3 +80,16 @@ def test_every_family_runs_a_session_that_audits_and_replays_exactly(family, tmp
     assert len(rows) == 2 * n_contexts * 2
     _, reproduced = replay_session(log)
     assert reproduced == 1.0
+
+
+def test_the_cli_audits_and_replays_a_push_session_log(tmp_path):
+    from typer.testing import CliRunner
+
+    from probecommit.cli.app import app
+
+    log = simulate_session(tmp_path / "s", PUSH)
+    audited = CliRunner().invoke(app, ["audit", str(log.parent)])
+    assert audited.exit_code == 0, audited.output
+    assert "coverage" in audited.output and (log.parent / "audit" / "robot_table.csv").is_file()
+    replayed = CliRunner().invoke(app, ["replay", str(log.parent)])
+    assert replayed.exit_code == 0 and "recorded decisions reproduced: 1.000" in replayed.output
