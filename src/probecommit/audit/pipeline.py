@@ -44,6 +44,13 @@ class AuditResult:
     n_failed: int
     notes: list[str] = field(default_factory=list)
 
+    def to_frame(self) -> pd.DataFrame:
+        """The audit table in tidy form: one row per (method, variant, k, metric) with ``value``, ``lo``,
+        ``hi`` (:func:`probecommit.audit.result.tidy`)."""
+        from probecommit.audit.result import tidy
+
+        return tidy(self.table)
+
 
 def audit(path_or_table: str | Path | pd.DataFrame, *, resamples: int = DEFAULT_RESAMPLES, seed: int = DEFAULT_SEED,
           level: float = DEFAULT_LEVEL) -> AuditResult:

@@ -14,6 +14,7 @@ from importlib.metadata import entry_points
 from typing import Any
 
 from probecommit.tasks.base import TaskSpec, answer_store
+from probecommit.errors import UserError
 
 #: Built-in family packages, imported on first use of the registry.
 BUILTIN_FAMILIES = ("insertion", "planar_slide", "push1d", "push2d", "darts", "hinge", "shuffleboard", "grasp", "rig")
@@ -23,7 +24,7 @@ _REGISTRY: dict[str, TaskSpec] = {}
 _loaded = False
 
 
-class UnknownTaskError(KeyError):
+class UnknownTaskError(UserError, KeyError):
     """An unknown family, or an engine a family lacks; the message lists what exists."""
 
     def __str__(self) -> str:  # KeyError would quote the message
