@@ -33,3 +33,7 @@ def report_to() -> str:
 
 class UsageError(UserError, ValueError):
     """A command's options or arguments do not fit together (the message names them)."""
+
+
+class UnavailableError(UserError, RuntimeError):
+    """Something the command needs is not there or not reachable (a Ray cluster's address)."""

@@ -34,6 +34,7 @@ from probecommit.runner.inference import (
 from probecommit.runner.instances import draw_instances
 from probecommit.store.rundir import RunDir
 from probecommit.store.schema import cache_frame
+from probecommit.errors import UnavailableError, UsageError
 
 
 @dataclass
@@ -154,7 +155,7 @@ def unit_threads(config: StudyConfig, threads: int | None = None) -> int:
 
     wanted = engine_threads() if threads is None else int(threads)
     if wanted < 1:
-        raise ValueError(f"threads must be >= 1, got {threads!r}")
+        raise UsageError(f"threads must be >= 1, got {threads!r}")
     if wanted == 1 or not getattr(build.simulator_class(config), "thread_safe", False):
         return 1
     return wanted
@@ -236,12 +237,12 @@ def check_reachable(address: str, timeout_s: float = 3.0) -> None:
 
     host, _, port = address.rpartition(":")
     if not host or not port.isdigit():
-        raise RuntimeError(f"--ray expects 'local', 'auto' or host:port, got {address!r}")
+        raise UnavailableError(f"--ray expects 'local', 'auto' or host:port, got {address!r}")
     try:
         with socket.create_connection((host, int(port)), timeout=timeout_s):
             return
     except OSError as exc:
-        raise RuntimeError(f"cannot reach the Ray cluster at {address}: {exc.strerror or exc}") from None
+        raise UnavailableError(f"cannot reach the Ray cluster at {address}: {exc.strerror or exc}") from None
 
 
 @contextlib.contextmanager
@@ -262,7 +263,7 @@ def ray_session(address: str, workers: int, timing: dict[str, float]) -> Iterato
         try:
             ray.init(**ray_init_kwargs(address, workers))
         except (ConnectionError, TimeoutError) as exc:
-            raise RuntimeError(f"cannot reach the Ray cluster at {address!r}: {str(exc).splitlines()[0]}") from None
+            raise UnavailableError(f"cannot reach the Ray cluster at {address!r}: {str(exc).splitlines()[0]}") from None
     timing["backend_start_s"] = time.perf_counter() - t0
     try:
         yield ray
