@@ -25,6 +25,19 @@ def debugging() -> bool:
     return _state["debug"] or os.environ.get(DEBUG_ENV, "") not in ("", "0")
 
 
+class _StderrHandler(logging.StreamHandler):
+    """A handler that writes to whatever ``sys.stderr`` is when a record comes (a test runner or a
+    notebook may swap it), never to a stream captured once and closed since."""
+
+    @property
+    def stream(self):  # type: ignore[override]
+        return sys.stderr
+
+    @stream.setter
+    def stream(self, value) -> None:  # StreamHandler.__init__ sets it; the property wins
+        pass
+
+
 def configure_logging(verbose: int = 0, debug: bool = False) -> None:
     """Send the ``probecommit`` logger to stderr: warnings by default, INFO with ``-v``, DEBUG with
     ``-vv`` or ``--debug``. Only the command line does this; a library user keeps the package's
@@ -35,7 +48,7 @@ def configure_logging(verbose: int = 0, debug: bool = False) -> None:
     for handler in list(logger.handlers):
         if getattr(handler, "_probecommit_cli", False):
             logger.removeHandler(handler)
-    handler = logging.StreamHandler(sys.stderr)
+    handler = _StderrHandler()
     handler.setFormatter(logging.Formatter("%(levelname)s %(name)s: %(message)s"))
     handler._probecommit_cli = True  # type: ignore[attr-defined]
     logger.addHandler(handler)

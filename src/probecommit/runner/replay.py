@@ -8,6 +8,7 @@ needs the engine installed).
 from __future__ import annotations
 
 import contextlib
+import logging
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -36,6 +37,8 @@ from probecommit.store.schema import cache_frame, cache_records, component_names
 
 import yaml
 from probecommit.errors import UsageError
+
+logger = logging.getLogger(__name__)
 
 
 class LoadedRun:
@@ -647,6 +650,7 @@ def replay_run(src: str | Path, out: str | Path, overrides: dict[str, dict[str, 
         fixed_probes: See ``replay_episodes``.
         chunk_instances: Instances whose beliefs are held at once (see ``replay_episodes``).
     """
+    logger.info("replaying %s into %s with %s", src, out, overrides or "no override")
     start = time.perf_counter()
     if Path(out).resolve() == Path(src).resolve():
         raise UsageError(f"replay would overwrite its source run {src}; give another --out")

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import contextlib
 import itertools
+import logging
 import os
 import time
 from dataclasses import dataclass
@@ -35,6 +36,8 @@ from probecommit.runner.instances import draw_instances
 from probecommit.store.rundir import RunDir
 from probecommit.store.schema import cache_frame
 from probecommit.errors import UnavailableError, UsageError
+
+logger = logging.getLogger(__name__)
 
 
 @dataclass
@@ -345,6 +348,7 @@ def run_study(
         return None
 
     if (done := complete()) is not None:
+        logger.info("%s is complete and unaltered: nothing to run", run.path)
         return done
     timing: dict[str, float] = {"backend_start_s": 0.0}
     with contextlib.ExitStack() as stack:
@@ -376,9 +380,12 @@ def _run_units(config, run: RunDir, instances, workers, ray, ray_address, timing
     else:
         results = _run_serial(jobs)
         backend = "serial"
+    logger.info("%s: %d of %d units to run (%d done before), backend %s, engine %s", run.path, len(jobs), len(units),
+                done, backend, config.simulator.engine)
     t_units = time.perf_counter()
     for unit, tables, stats in results:
         run.write_unit(unit, tables, stats)  # only the driver writes: one writer per file
+        logger.debug("unit %s written (%d rows of episodes)", unit, len(tables.get("episodes", ())))
         done += 1
         if progress:
             progress(done, len(units))
