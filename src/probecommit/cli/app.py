@@ -158,6 +158,9 @@ def demo(
     print_budget_table(result.episodes, "demo: insertion, random taps, deployed tap model")
     warn_failed(result)
     report = write_demo_report(result.run_dir)
+    from probecommit.cli.runs_commands import print_demo_reading
+
+    print_demo_reading(result.episodes, out, cfg.model.boundary)
     console.print(f"run directory: [bold]{safe(result.run_dir)}[/bold]")
     console.print(f"report: [bold]{safe(report)}[/bold]")
 
@@ -224,6 +227,8 @@ def replay(
     path = replay_run(run_dir, target, overrides, fixed_probes=fixed_probes)
     print_budget_table(load_run(path).episodes, f"replay of {run_dir.name} ({', '.join(f'{s}.{k}' for s, v in overrides.items() for k in v)})")
     console.print(f"run directory: [bold]{safe(path)}[/bold]")
+    console.print(f"compare: [bold]probecommit runs compare {safe(run_dir.as_posix())} {safe(Path(path).as_posix())}[/bold]",
+                  highlight=False)
 
 
 @app.command()

@@ -106,6 +106,19 @@ def print_sweep_summary(rows: list[dict], root: Path) -> None:
     console.print(f"sweep summary: [bold]{safe(root / 'sweep.csv')}[/bold]")
 
 
+def print_demo_reading(episodes, run_dir: Path, boundary: str) -> None:
+    """Below the demo's table: three lines that read it, and the command to run next."""
+    from probecommit.report.demo import explain_budget_table, next_command
+    from probecommit.report.tables import budget_summary
+
+    for line in explain_budget_table(budget_summary(episodes)):
+        console.print(safe(line), highlight=False)
+    command = next_command(run_dir, boundary)
+    if command:
+        console.print(f"next: [bold]{safe(command)}[/bold]  (the same taps under the {'corrected' if boundary == 'deployed' else 'deployed'} "
+                      "tap model)", highlight=False)
+
+
 # ----------------------------------------------------------------------------- runs
 
 
