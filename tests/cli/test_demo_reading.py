@@ -60,3 +60,16 @@ def test_the_demo_prints_its_reading_and_a_next_command_that_works(tmp_path, mon
     assert replay.exit_code == 0, replay.output
     assert (tmp_path / "runs/demo-corrected/manifest.json").is_file()
     assert "probecommit runs compare runs/demo runs/demo-corrected" in replay.stdout
+
+
+def test_the_readme_quickstart_is_the_two_commands_and_names_the_real_next_command():
+    from pathlib import Path
+
+    readme = (Path(__file__).resolve().parents[2] / "README.md").read_text()
+    quick = readme.split("## Quickstart", 1)[1].split("\n## ", 1)[0]
+    block = quick.split("```bash\n", 1)[1].split("```", 1)[0]
+    assert block.splitlines() == ["make demo", "make test"]
+    assert f"`{next_command('runs/demo', 'deployed')}`" in quick
+    # Internals live in docs/internals.md, not in the first thing a user reads.
+    for internal in ("glibc", "MALLOC_", "mimalloc", "PROBECOMMIT_KERNELS", "about 15 s"):
+        assert internal not in quick, internal
