@@ -62,6 +62,8 @@ def test_version_names_the_package_the_code_and_every_engine():
 def test_shell_completion_is_offered():
     result = runner.invoke(app, ["--help"])
     assert "--install-completion" in result.stdout and "--show-completion" in result.stdout
+    script = runner.invoke(app, ["--show-completion", "bash"], prog_name="probecommit")
+    assert script.exit_code == 0 and "complete -o default -F _probecommit_completion probecommit" in script.stdout
 
 
 def _commands(group, prefix=()):
