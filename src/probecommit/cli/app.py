@@ -100,7 +100,7 @@ def warn_failed(result) -> None:
 def run(
     config: Path = typer.Argument(..., help="Study config (YAML)."),
     overrides: Optional[list[str]] = typer.Argument(
-        None, metavar="[KEY=VALUE]...",
+        None, metavar="KEY=VALUE",
         help="Override config fields (dotted keys, YAML values), e.g. model.sigma=0.4 instances.count=8; validated as the file is."),
     sweep: list[str] = typer.Option(
         [], "--sweep", "-m",

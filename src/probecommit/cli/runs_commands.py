@@ -124,7 +124,7 @@ def print_demo_reading(episodes, run_dir: Path, boundary: str) -> None:
 
 def runs_command(
     args: Optional[list[str]] = typer.Argument(
-        None, metavar="[DIR] | compare A B",
+        None, metavar="DIR | compare A B",
         help="A folder to list the runs under (default: runs), or 'compare' and two run directories."),
     resamples: int = typer.Option(2000, min=100, help="compare: paired cluster-bootstrap resamples."),
     seed: int = typer.Option(0, help="compare: bootstrap seed."),
@@ -132,10 +132,10 @@ def runs_command(
 ) -> None:
     """List earlier runs (name, task, engine, episodes, headline numbers, code, status), or compare two.
 
-    'probecommit runs [DIR]' lists every run directory under DIR (default runs/);
-    'probecommit runs compare A B' shows the config fields that differ and, per method
-    and budget, both runs' failure, optimism and coverage with B - A: a paired
-    cluster-bootstrap interval when both hold the same instances.
+    'probecommit runs [DIR]' lists every run directory under DIR (default runs/).
+    'probecommit runs compare A B' shows the config fields that differ and, per
+    method and budget, both runs' failure, optimism and coverage with B - A and
+    a paired cluster-bootstrap interval when both hold the same instances.
     """
     args = list(args or [])
     if args and args[0] == "compare":
