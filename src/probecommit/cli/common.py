@@ -20,6 +20,8 @@ err_console = Console(stderr=True)
 # Errors a user can cause and fix (bad config, bad log, wrong directory, a missing file or
 # extra, a full disk): one line, exit 2. Any other exception is a bug: exit 1 (see diagnostics).
 USER_ERRORS: tuple[type[BaseException], ...] = (UserError, OSError, ImportError, MemoryError)
+#: click's base of usage errors (typer vendors click; found through a class typer exports).
+_CLICK_EXCEPTION = next(c for c in typer.BadParameter.__mro__ if c.__name__ == "ClickException")
 
 
 _CONTROL = re.compile(r"[\x00-\x08\x0b-\x1f\x7f-\x9f]")
@@ -64,7 +66,7 @@ def user_errors(fn: Callable) -> Callable:
     def wrapper(*args, **kwargs):
         try:
             return fn(*args, **kwargs)
-        except typer.Exit:
+        except (typer.Exit, typer.Abort, _CLICK_EXCEPTION):  # typer's own: exit, abort, a usage error
             raise
         except KeyboardInterrupt:
             print_warning("interrupted; finished work is kept: rerun the same command to resume")
