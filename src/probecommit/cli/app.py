@@ -12,10 +12,9 @@ from rich import box
 from rich.markup import escape
 from rich.table import Table
 
+from probecommit.cli import help_format  # noqa: F401 - flags shown as flags in --help
 from probecommit.cli.common import console, err_console, print_warning, progress_bar, safe, user_errors
 from probecommit.errors import UsageError
-
-from probecommit.cli import help_format  # noqa: F401,E402 - flags shown as flags in --help
 
 app = typer.Typer(
     no_args_is_help=True,
