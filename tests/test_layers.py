@@ -1,4 +1,4 @@
-"""The layer contract of DESIGN.md holds (import-linter, configured in pyproject.toml).
+"""The layer contract of docs/contributing.md holds (import-linter, configured in pyproject.toml).
 
 Dependencies point one way: cli > report > studies > runner > audit > store > tasks >
 engines > core; core, audit, store and every task model import no engine, Ray or

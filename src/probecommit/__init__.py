@@ -1,7 +1,23 @@
-"""probecommit: probe a few times, commit once, audit offline."""
+"""probecommit: probe a few times, commit once, audit offline.
 
-from __future__ import annotations
+The public Python API (``dir(probecommit)``)::
 
+    import probecommit
+    result = probecommit.audit_run("runs/demo")   # or audit_log("my_robot_log.csv")
+    result.to_frame()                             # tidy pandas: one row per method, budget, metric
+    result.plot()                                 # the report's figure (a matplotlib Figure)
+    result                                        # in a notebook: the table and the figure
+
+    session = probecommit.Session(...)            # the online robot loop (docs/robot.md)
+    probecommit.paper_config("insertion")         # a frozen paper config
+
+Every module logs under the ``probecommit`` logger. The package adds only a
+``NullHandler``: a program that imports it decides where the messages go
+(``logging.getLogger("probecommit").setLevel(logging.WARNING)`` silences the rest).
+The attributes load on first use, so ``import probecommit`` stays light.
+"""
+
+import logging as _logging
 from importlib import metadata as _metadata
 from importlib import resources as _resources
 from pathlib import Path as _Path
@@ -10,6 +26,22 @@ try:  # one source for the version: the installed distribution's metadata (pypro
     __version__ = _metadata.version("probecommit")
 except _metadata.PackageNotFoundError:  # pragma: no cover - running from a source tree without install
     __version__ = "0.0.0+unknown"
+
+_logging.getLogger(__name__).addHandler(_logging.NullHandler())
+
+#: Lazy public attributes: name -> (module, attribute). Imported by name, so the package root
+#: stays below every layer (import-linter) and ``import probecommit`` imports none of them.
+_LAZY = {
+    "Session": ("probecommit.robot.session", "Session"),
+    "audit_run": ("probecommit.report.notebook", "audit_run"),
+    "audit_log": ("probecommit.report.notebook", "audit_log"),
+    "AuditReport": ("probecommit.report.notebook", "AuditReport"),
+    "UserError": ("probecommit.errors", "UserError"),
+    "check_family": ("probecommit.runner.family_check", "check_family"),
+    "FamilyCheckError": ("probecommit.runner.family_check", "FamilyCheckError"),
+}
+
+__all__ = ["__version__", "paper_config", *_LAZY]
 
 
 def paper_config(name: str) -> _Path:
@@ -27,14 +59,13 @@ def paper_config(name: str) -> _Path:
 
 
 def __getattr__(name: str):
-    # Lazy: ``import probecommit`` stays light; ``probecommit.Session`` imports the robot API on first use.
-    if name == "Session":
+    if name in _LAZY:
         import importlib
 
-        # By name, so the package root stays below every layer (import-linter).
-        return importlib.import_module("probecommit.robot.session").Session
-    if name in ("check_family", "FamilyCheckError"):
-        import importlib
-
-        return getattr(importlib.import_module("probecommit.runner.family_check"), name)
+        module, attribute = _LAZY[name]
+        return getattr(importlib.import_module(module), attribute)
     raise AttributeError(f"module 'probecommit' has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted(__all__)

@@ -17,6 +17,7 @@ import pandas as pd
 import pyarrow as pa
 
 from probecommit.store.schema import AUDIT_REQUIRED, EPISODE_COLUMNS, checked_frame
+from probecommit.errors import UserError
 
 #: Columns that identify one episode within a (method, variant) group.
 KEY_COLUMNS = ("instance_id", "repeat", "k")
@@ -29,7 +30,7 @@ _TYPES = {c.name: c.type for c in EPISODE_COLUMNS}
 _OK_STATUS = ("ok", "failed")
 
 
-class EpisodeTableError(ValueError):
+class EpisodeTableError(UserError, ValueError):
     """An episode table that the audit cannot use; the message names the problem."""
 
 

@@ -7,6 +7,7 @@ which re-commit episodes under new thresholds and margins, live on the runner si
 
 from __future__ import annotations
 
+import logging
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -16,6 +17,8 @@ from probecommit.audit.io import group_columns, ok_episodes, read_episodes, vali
 from probecommit.audit.metrics import audit_table
 from probecommit.audit.stats import DEFAULT_LEVEL, DEFAULT_RESAMPLES, DEFAULT_SEED
 from probecommit.audit.surprise import surprise_auc
+
+logger = logging.getLogger(__name__)
 
 #: The executor's method whose episodes the surprise AUC reads.
 PROBE_METHOD = "probe_robust"
@@ -43,6 +46,13 @@ class AuditResult:
     n_total: int
     n_failed: int
     notes: list[str] = field(default_factory=list)
+
+    def to_frame(self) -> pd.DataFrame:
+        """The audit table in tidy form: one row per (method, variant, k, metric) with ``value``, ``lo``,
+        ``hi`` (:func:`probecommit.audit.result.tidy`)."""
+        from probecommit.audit.result import tidy
+
+        return tidy(self.table)
 
 
 def audit(path_or_table: str | Path | pd.DataFrame, *, resamples: int = DEFAULT_RESAMPLES, seed: int = DEFAULT_SEED,
@@ -81,5 +91,7 @@ def audit(path_or_table: str | Path | pd.DataFrame, *, resamples: int = DEFAULT_
                 part.insert(0, name, value)
             parts.append(part)
         surprise = pd.concat(parts, ignore_index=True) if parts else None
+    logger.info("audited %s: %d rows (%d failed, excluded), %d resamples", df.attrs.get("source", "a table"),
+                df.attrs.get("n_total", len(df)), df.attrs.get("n_failed", 0), resamples)
     return AuditResult(table, surprise, df.attrs.get("source", "table"), df.attrs.get("n_total", len(df)),
                        df.attrs.get("n_failed", 0), list(df.attrs.get("notes", [])))

@@ -12,13 +12,35 @@ from rich import box
 from rich.markup import escape
 from rich.table import Table
 
+from probecommit.cli import help_format  # noqa: F401 - flags shown as flags in --help
 from probecommit.cli.common import console, err_console, print_warning, progress_bar, safe, user_errors
+from probecommit.errors import UsageError
 
 app = typer.Typer(
-    add_completion=False,
     no_args_is_help=True,
     help="Probe a few times, commit once, audit offline. Run 'probecommit COMMAND --help' for each command.",
 )
+
+
+def _print_version(value: bool) -> None:
+    if value:
+        from probecommit.cli.diagnostics import version_text
+
+        console.print(safe(version_text()), highlight=False)
+        raise typer.Exit()
+
+
+@app.callback()
+def main_options(
+    version: bool = typer.Option(False, "--version", is_eager=True, callback=_print_version,
+                                 help="Print the version, the code's identity (git commit) and the engines found."),
+    verbose: int = typer.Option(0, "--verbose", "-v", count=True, show_default=False, help="Log progress to stderr (-v: info, -vv: debug)."),
+    debug: bool = typer.Option(False, "--debug", help="Debug logging, and the traceback of an internal error."),
+) -> None:
+    """Probe a few times, commit once, audit offline."""
+    from probecommit.cli.diagnostics import configure_logging
+
+    configure_logging(verbose, debug)
 
 
 def print_budget_table(episodes, title: str) -> None:
@@ -76,6 +98,12 @@ def warn_failed(result) -> None:
 @user_errors
 def run(
     config: Path = typer.Argument(..., help="Study config (YAML)."),
+    overrides: Optional[list[str]] = typer.Argument(
+        None, metavar="KEY=VALUE",
+        help="Override config fields (dotted keys, YAML values), e.g. model.sigma=0.4 instances.count=8; validated as the file is."),
+    sweep: list[str] = typer.Option(
+        [], "--sweep", "-m",
+        help="KEY=A,B,C: one run per value (repeat for a grid), each in its own directory under runs/<name>-sweep/ (or --out)."),
     out: Optional[Path] = typer.Option(None, "--out", "-o", help="Run directory (default runs/<name>)."),
     workers: int = typer.Option(1, "--workers", "-w", min=1, help="Local worker processes (with --ray local: Ray CPUs)."),
     ray: Optional[str] = typer.Option(
@@ -92,14 +120,21 @@ def run(
     Rerunning the same command after an interruption (Ctrl-C, a crash, SIGKILL)
     keeps the finished units and redoes the rest; results are identical to an
     uninterrupted run, whatever --workers, --threads or --ray.
-    """
-    from probecommit.runner.config import load_config
 
-    cfg = load_config(config)
-    result = _run(cfg, out or Path("runs") / cfg.name, workers, ray, threads)
-    print_budget_table(result.episodes, f"{cfg.name}: per-budget summary")
-    warn_failed(result)
-    console.print(f"run directory: [bold]{safe(result.run_dir)}[/bold]")
+    KEY=VALUE arguments override fields of the file: config.yaml in the run
+    directory is the result, overrides.yaml lists the overrides. --sweep runs
+    a grid, one run directory per point, and prints a summary table.
+    """
+    from probecommit.cli.runs_commands import run_config_with_overrides
+
+    def one_run(cfg, run_dir: Path, title: str):
+        result = _run(cfg, run_dir, workers, ray, threads)
+        print_budget_table(result.episodes, title)
+        warn_failed(result)
+        console.print(f"run directory: [bold]{safe(result.run_dir)}[/bold]")
+        return result
+
+    run_config_with_overrides(config, list(overrides or []), sweep, out, one_run)
 
 
 @app.command()
@@ -122,6 +157,9 @@ def demo(
     print_budget_table(result.episodes, "demo: insertion, random taps, deployed tap model")
     warn_failed(result)
     report = write_demo_report(result.run_dir)
+    from probecommit.cli.runs_commands import print_demo_reading
+
+    print_demo_reading(result.episodes, out, cfg.model.boundary)
     console.print(f"run directory: [bold]{safe(result.run_dir)}[/bold]")
     console.print(f"report: [bold]{safe(report)}[/bold]")
 
@@ -154,12 +192,12 @@ def replay(
 
     if is_session_log(run_dir):
         if model is not None or delta is not None or set_ or fixed_probes:
-            raise ValueError("a session log takes --fault/--sweep/--half-width; --model, --delta, --set and "
+            raise UsageError("a session log takes --fault/--sweep/--half-width; --model, --delta, --set and "
                              "--fixed-probes are for run directories")
         replay_session_log(run_dir, fault, sweep, half_width, out, resamples, 0)
         return
     if fault is not None or sweep is not None or half_width is not None:
-        raise ValueError(f"--fault, --sweep and --half-width replay robot session logs; {run_dir} is not one "
+        raise UsageError(f"--fault, --sweep and --half-width replay robot session logs; {run_dir} is not one "
                          "(for a run directory use --set model.FIELD=VALUE)")
 
     from probecommit.runner.replay import load_run, replay_run
@@ -169,7 +207,7 @@ def replay(
         key, eq, value = item.partition("=")
         section, dot, field = key.strip().partition(".")
         if not (eq and dot and section and field):
-            raise ValueError(f"--set expects SECTION.FIELD=VALUE (e.g. model.sigma=0.4), got {item!r}")
+            raise UsageError(f"--set expects SECTION.FIELD=VALUE (e.g. model.sigma=0.4), got {item!r}")
         overrides.setdefault(section, {})[field] = yaml.safe_load(value)
     if model is not None or delta is not None or not overrides:
         from probecommit.runner.replay import load_run as _load
@@ -184,7 +222,7 @@ def replay(
                 overrides["model"][short["delta"]] = delta
         elif model is not None or delta is not None:
             owners = ", ".join(sorted(n for n, spec in families().items() if spec.replay_shorthands)) or "no family's"
-            raise ValueError(f"--model and --delta are {owners} shorthands; {run_dir} is a {family!r} run: use "
+            raise UsageError(f"--model and --delta are {owners} shorthands; {run_dir} is a {family!r} run: use "
                              "--set model.FIELD=VALUE")
         # Another family with no option: replayed as deployed (its episodes must come back identical).
     label = overrides.get("model", {}).get("boundary", "replay")
@@ -192,6 +230,8 @@ def replay(
     path = replay_run(run_dir, target, overrides, fixed_probes=fixed_probes)
     print_budget_table(load_run(path).episodes, f"replay of {run_dir.name} ({', '.join(f'{s}.{k}' for s, v in overrides.items() for k in v)})")
     console.print(f"run directory: [bold]{safe(path)}[/bold]")
+    console.print(f"compare: [bold]probecommit runs compare {safe(run_dir.as_posix())} {safe(Path(path).as_posix())}[/bold]",
+                  highlight=False)
 
 
 @app.command()
@@ -241,6 +281,9 @@ def register_optional_commands() -> None:
     from probecommit.cli import robot_commands
 
     robot_commands.register(app)
+    from probecommit.cli import runs_commands
+
+    runs_commands.register(app)
     try:
         from probecommit.cli import audit_commands
     except ImportError:

@@ -15,6 +15,7 @@ import typer
 from rich.table import Table
 
 from probecommit.cli.common import console, err_console, safe, user_errors
+from probecommit.errors import UsageError
 
 def _f(v, signed: bool = False) -> str:
     try:
@@ -43,7 +44,7 @@ def _parse_budgets(text: Optional[str]) -> Optional[list[int]]:
     try:
         return sorted({int(x) for x in text.replace(" ", "").split(",") if x})
     except ValueError:
-        raise ValueError(f"--budgets must be comma-separated integers, got {text!r}") from None
+        raise UsageError(f"--budgets must be comma-separated integers, got {text!r}") from None
 
 
 def print_audit_table(table, title: str) -> None:
@@ -170,7 +171,7 @@ def calibrate_command(
     from probecommit.report.figures import save_figure
 
     if plateau is not None and plateau not in ("prefix", "hull"):
-        raise ValueError(f"--plateau must be 'prefix' or 'hull', got {plateau!r}")
+        raise UsageError(f"--plateau must be 'prefix' or 'hull', got {plateau!r}")
     res = calibrate(cal, test, alpha, _parse_budgets(budgets), cost_budget=cost_budget, resamples=resamples, seed=seed,
                     plateau=plateau)
     out = out or test / "calibration"

@@ -12,11 +12,16 @@ from rich.console import Console
 from rich.markup import escape
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
 
+from probecommit.errors import UserError
+
 console = Console()
 err_console = Console(stderr=True)
 
-# Errors a user can cause (bad config, bad log, wrong directory): one line, exit 2.
-USER_ERRORS: tuple[type[BaseException], ...] = (ValueError, OSError, RuntimeError, ImportError, MemoryError)
+# Errors a user can cause and fix (bad config, bad log, wrong directory, a missing file or
+# extra, a full disk): one line, exit 2. Any other exception is a bug: exit 1 (see diagnostics).
+USER_ERRORS: tuple[type[BaseException], ...] = (UserError, OSError, ImportError, MemoryError)
+#: click's base of usage errors (typer vendors click; found through a class typer exports).
+_CLICK_EXCEPTION = next(c for c in typer.BadParameter.__mro__ if c.__name__ == "ClickException")
 
 
 _CONTROL = re.compile(r"[\x00-\x08\x0b-\x1f\x7f-\x9f]")
@@ -54,20 +59,33 @@ def print_warning(message: str) -> None:
 
 
 def user_errors(fn: Callable) -> Callable:
-    """Turn user-caused errors into one red line and exit code 2, never a traceback."""
+    """Turn user-caused errors into one red line and exit code 2, never a traceback; any other
+    exception into one line naming it as a bug, exit code 1 (the traceback with ``--debug``)."""
 
     @functools.wraps(fn)
     def wrapper(*args, **kwargs):
         try:
             return fn(*args, **kwargs)
-        except typer.Exit:
+        except (typer.Exit, typer.Abort, _CLICK_EXCEPTION):  # typer's own: exit, abort, a usage error
             raise
         except KeyboardInterrupt:
             print_warning("interrupted; finished work is kept: rerun the same command to resume")
             raise typer.Exit(130) from None
         except USER_ERRORS as exc:
+            from probecommit.cli.diagnostics import debugging
+
+            if debugging():
+                import traceback
+
+                err_console.file.write("".join(traceback.format_exception(exc)))
             print_error(exc)
             raise typer.Exit(2) from None
+        except Exception as exc:  # noqa: BLE001 - a bug: say so, exit 1
+            from probecommit.cli.diagnostics import report_internal_error
+
+            report_internal_error(exc, lambda text: err_console.print(f"[red]error:[/red] {safe(one_line(text))}",
+                                                                      soft_wrap=True, highlight=False))
+            raise typer.Exit(1) from None
 
     return wrapper
 

@@ -11,6 +11,7 @@ from rich.table import Table
 
 from probecommit.cli.audit_commands import print_table
 from probecommit.cli.common import console, print_warning, progress_bar, safe, user_errors
+from probecommit.errors import UsageError
 
 robot_app = typer.Typer(no_args_is_help=True, help="Robot sessions: run the simulated rig, inspect a session log.")
 
@@ -92,7 +93,7 @@ def replay_session_log(path: Path, fault: Optional[str], sweep: Optional[str], h
 
     if fault is None:
         if sweep is not None or half_width is not None:
-            raise ValueError("--sweep and --half-width need --fault boundary or --fault prior")
+            raise UsageError("--sweep and --half-width need --fault boundary or --fault prior")
         result, reproduced = replay_session(path)
         print_robot_table(robot_table(result.rows, resamples=resamples, seed=seed), f"replay of {result.path} as deployed")
         console.print(f"recorded decisions reproduced: {reproduced:.3f} of episodes")
@@ -102,16 +103,16 @@ def replay_session_log(path: Path, fault: Optional[str], sweep: Optional[str], h
         return
     if fault == "boundary":
         if half_width is not None:
-            raise ValueError("--half-width is for --fault prior; the boundary fault takes --sweep START:STOP:STEP")
+            raise UsageError("--half-width is for --fault prior; the boundary fault takes --sweep START:STOP:STEP")
         sizes = parse_sweep(sweep or "0:14:1")
         xlabel, reference, ref_label = "boundary pulled inward (mm)", 2.1 * 3.86, "sim. 2.1 mm error at rig scale"
     elif fault == "prior":
         if half_width is not None and sweep is not None:
-            raise ValueError("give --half-width or --sweep for the prior fault, not both")
+            raise UsageError("give --half-width or --sweep for the prior fault, not both")
         sizes = [half_width] if half_width is not None else parse_sweep(sweep or "38.6,30,24,18,12,8")
         xlabel, reference, ref_label = "prior half-width (mm)", None, ""
     else:
-        raise ValueError(f"unknown fault {fault!r}; faults: boundary, prior")
+        raise UsageError(f"unknown fault {fault!r}; faults: boundary, prior")
     bar, update = progress_bar(f"replay under {fault} fault")
     done = {"n": 0}
 

@@ -9,6 +9,7 @@ from typing import Optional
 import typer
 
 from probecommit.cli.common import console, err_console, progress_bar, safe, user_errors
+from probecommit.errors import UsageError
 from probecommit.tasks.insertion.model import PAPER_DELTA_MM
 
 REPO_ROOT = Path(__file__).resolve().parents[3]
@@ -90,7 +91,7 @@ def scan(
 
     engines = get("insertion").engines
     if engine not in engines:
-        raise ValueError(f"scan --engine must be one of {', '.join(engines)}, got {engine!r}")
+        raise UsageError(f"scan --engine must be one of {', '.join(engines)}, got {engine!r}")
     p = load_protocol(protocol)
     from probecommit.tasks.insertion import make_simulator
 

@@ -5,10 +5,12 @@ from __future__ import annotations
 import importlib
 from types import ModuleType
 
+from probecommit.errors import UserError
+
 ENGINE_EXTRAS = {"mujoco": "mujoco", "pybullet": "pybullet", "sapien": "sapien", "ray": "ray"}
 
 
-class EngineUnavailableError(ImportError):
+class EngineUnavailableError(UserError, ImportError):
     """Raised when an optional physics engine (or Ray) is not installed."""
 
 

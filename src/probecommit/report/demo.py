@@ -37,6 +37,51 @@ def belief_figure(run_dir: str | Path, out: str | Path | None = None) -> Path:
     return belief_snapshots(trace, model, loaded.episodes, row, budgets, Path(out or run_dir) / "belief.png")
 
 
+def _trend(first: float, last: float, signed: bool = False) -> str:
+    """``rises from +0.008 to +0.283`` (or ``falls``, or ``stays near``), the numbers as the table prints them."""
+    fmt = "{:+.3f}" if signed else "{:.3f}"
+    a, b = fmt.format(first), fmt.format(last)
+    if a == b:
+        return f"stays at {a}"
+    return f"{'rises' if last > first else 'falls'} from {a} to {b}"
+
+
+def explain_budget_table(table) -> list[str]:
+    """Three sentences that read the per-budget table (:func:`budget_summary`) to its reader, every
+    number taken from it: how optimism and the two failure curves move with the budget, how coverage
+    and escape move, and how the probing executor compares with the blind ones."""
+    probing = table[table["k"] >= 1]
+    if probing.empty:
+        return []
+    method = "probe_robust" if (probing["method"] == "probe_robust").any() else str(probing["method"].iloc[0])
+    rows = probing[probing["method"] == method].sort_values("k")
+    lo, hi = rows.iloc[0], rows.iloc[-1]
+    name = {"probe_robust": "Probe-Robust"}.get(method, method)
+    k = f"k = {int(lo['k'])} to {int(hi['k'])}"
+    lines = [
+        f"Optimism e_k (realized - predicted) {_trend(lo['optimism'], hi['optimism'], True)} over {k}: "
+        f"{name}'s predicted failure {_trend(lo['predicted'], hi['predicted'])}, its realized failure "
+        f"{_trend(lo['failure'], hi['failure'])}.",
+        f"Coverage (the truth inside the retained set) {_trend(lo['coverage'], hi['coverage'])}, support escape "
+        f"(the truth outside every particle) {_trend(lo['escape'], hi['escape'])}"
+        + (": more taps make the belief surer without keeping the truth in it."
+           if hi["coverage"] < lo["coverage"] and hi["optimism"] > lo["optimism"] else "."),
+    ]
+    blind = table[table["k"] == 0]
+    if not blind.empty:
+        labels = {"blind_bayes": "Blind-Bayes", "blind_robust": "Blind-Robust"}
+        parts = ", ".join(f"{labels.get(str(r['method']), r['method'])} {r['failure']:.3f}" for _, r in blind.iterrows())
+        lines.append(f"With no taps the blind executors fail {parts}; {name} at k = {int(hi['k'])} fails "
+                     f"{hi['failure']:.3f}.")
+    return lines
+
+
+def next_command(run_dir: str | Path, boundary: str) -> str | None:
+    """The command that replays an insertion run's taps under the other tap model (None otherwise)."""
+    other = {"deployed": "corrected", "corrected": "deployed"}.get(boundary)
+    return f"probecommit replay {Path(run_dir).as_posix()} --model {other}" if other else None
+
+
 def write_demo_report(run_dir: str | Path) -> Path:
     """Write ``report.md`` and ``belief.png`` into the run directory; returns the report path."""
     loaded = load_run(run_dir)
@@ -58,6 +103,10 @@ def write_demo_report(run_dir: str | Path) -> Path:
         "",
         to_markdown(table),
         "",
+        *[f"- {line}" for line in explain_budget_table(table)],
+        "",
+        *([f"Next: `{cmd}` replays the same taps under the other tap model.", ""]
+          if (cmd := next_command(run_dir, str(getattr(loaded.config.model, "boundary", "")))) else []),
         f"Engine calls: {manifest.get('engine_calls')}; engine time {manifest.get('timing', {}).get('engine_s', float('nan')):.1f} s.",
         "",
         f"![belief after taps {', '.join(map(str, FIGURE_BUDGETS))}]({figure.name})",

@@ -21,6 +21,7 @@ from typing import Any, Callable
 import numpy as np
 
 from probecommit.tasks.base import shared_engine_answers
+from probecommit.errors import UsageError
 
 Progress = Callable[[str, int, int], None]
 
@@ -121,7 +122,7 @@ def _breadth(root: Path, quick: bool, progress: Progress, workers: int) -> Path:
     families = tuple(OPTIONS.get("families") or BREADTH_FAMILIES)
     unknown = [f for f in families if f not in BREADTH_FAMILIES]
     if unknown:
-        raise ValueError(f"unknown breadth famil{'y' if len(unknown) == 1 else 'ies'} {', '.join(unknown)}; "
+        raise UsageError(f"unknown breadth famil{'y' if len(unknown) == 1 else 'ies'} {', '.join(unknown)}; "
                          f"available: {', '.join(BREADTH_FAMILIES)}")
     folder = root / "breadth"
     results = folder / "results"
@@ -203,7 +204,7 @@ def resolve(names: list[str]) -> list[str]:
         elif name in ALIASES:
             wanted.append(ALIASES[name])
         else:
-            raise ValueError(f"unknown reproduce target {name!r}; targets: {', '.join(TARGETS)}, all; "
+            raise UsageError(f"unknown reproduce target {name!r}; targets: {', '.join(TARGETS)}, all; "
                              f"paper items: {', '.join(sorted(ALIASES))}")
     order: list[str] = []
 

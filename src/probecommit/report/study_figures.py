@@ -6,7 +6,9 @@ from pathlib import Path
 
 import matplotlib
 
-matplotlib.use("Agg")
+from probecommit.report.backend import use_agg_unless_chosen  # noqa: E402
+
+use_agg_unless_chosen()
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402

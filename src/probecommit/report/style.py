@@ -9,7 +9,9 @@ from __future__ import annotations
 
 import matplotlib
 
-matplotlib.use("Agg")
+from probecommit.report.backend import use_agg_unless_chosen  # noqa: E402
+
+use_agg_unless_chosen()
 
 #: One IEEE column and the full text width (inches).
 COLUMN = 3.5

@@ -14,7 +14,6 @@ to ``<log>.partial`` before appending again, so nothing is dropped silently.
 
 from __future__ import annotations
 
-import fcntl
 import json
 import math
 import os
@@ -22,6 +21,7 @@ import socket
 import time
 from pathlib import Path
 from typing import Any, Iterator
+from probecommit.errors import UserError
 
 #: Format tag of the header record; bumped on an incompatible change.
 LOG_FORMAT = "probecommit-session/1"
@@ -30,11 +30,43 @@ RECORD_TYPES = ("header", "episode", "observe", "decide", "outcome", "truth", "r
 LOG_NAME = "session.jsonl"
 
 
-class SessionLogError(ValueError):
+def _lock_exclusive(fd: int) -> None:
+    """An advisory exclusive lock on ``fd`` without waiting (BlockingIOError if held).
+
+    ``fcntl`` is imported here, not at the top: it is POSIX only, and ``import
+    probecommit.robot.session`` must work on Windows (where ``msvcrt`` locks a byte).
+    """
+    try:
+        import fcntl
+    except ImportError:  # Windows
+        import msvcrt
+
+        try:
+            os.lseek(fd, 0, os.SEEK_SET)
+            msvcrt.locking(fd, msvcrt.LK_NBLCK, 1)
+        except OSError:
+            raise BlockingIOError("locked") from None
+        return
+    fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+
+
+def _unlock(fd: int) -> None:
+    try:
+        import fcntl
+    except ImportError:  # Windows
+        import msvcrt
+
+        os.lseek(fd, 0, os.SEEK_SET)
+        msvcrt.locking(fd, msvcrt.LK_UNLCK, 1)
+        return
+    fcntl.flock(fd, fcntl.LOCK_UN)
+
+
+class SessionLogError(UserError, ValueError):
     """A session log is malformed; the message names the file and line."""
 
 
-class SessionLocked(RuntimeError):
+class SessionLocked(UserError, RuntimeError):
     """Another process holds the session log for writing; the message names it."""
 
 
@@ -115,7 +147,7 @@ class SessionLog:
         lock_path = self.path.with_name(self.path.name + ".lock")
         handle = open(lock_path, "a+")
         try:
-            fcntl.flock(handle.fileno(), fcntl.LOCK_EX | fcntl.LOCK_NB)
+            _lock_exclusive(handle.fileno())
         except BlockingIOError:
             handle.seek(0)
             holder = handle.read().strip() or "another process"
@@ -133,7 +165,7 @@ class SessionLog:
             self._file.close()
             self._file = None
         if self._lock_file is not None:
-            fcntl.flock(self._lock_file.fileno(), fcntl.LOCK_UN)
+            _unlock(self._lock_file.fileno())
             self._lock_file.close()
             self._lock_file = None
 

@@ -25,6 +25,7 @@ from probecommit.robot.session import decide_belief, episode_belief, load_sessio
 from probecommit.robot.table import SessionEpisodes, rows_from_decisions
 from probecommit.runner.build import build_filter, build_model
 from probecommit.runner.config import StudyConfig, config_data, parse_config
+from probecommit.errors import UsageError
 
 #: Faults a log can be replayed under.
 FAULTS = ("boundary", "prior")
@@ -34,7 +35,7 @@ def with_overrides(config: StudyConfig, overrides: dict[str, dict[str, Any]]) ->
     """The config with some sections changed (``model`` and ``belief`` only: the readings are fixed)."""
     bad = set(overrides) - {"model", "belief"}
     if bad:
-        raise ValueError(f"a replay of recorded probes can change only the model and belief, not {sorted(bad)}")
+        raise UsageError(f"a replay of recorded probes can change only the model and belief, not {sorted(bad)}")
     data = config_data(config)
     for section, values in overrides.items():
         data[section] = {**data[section], **values}
@@ -50,16 +51,16 @@ def fault_overrides(config: StudyConfig, fault: str, size: float) -> dict[str, d
     """
     if fault == "boundary":
         if "boundary_pull_in" not in type(config.model).model_fields:
-            raise ValueError(f"the boundary fault needs a model with boundary_pull_in (the rig family), "
+            raise UsageError(f"the boundary fault needs a model with boundary_pull_in (the rig family), "
                              f"not {config.family!r}")
         return {"model": {"boundary_pull_in": float(size)}}
     if fault == "prior":
         if not size > 0:
-            raise ValueError(f"the prior half-width must be > 0, got {size!r}")
+            raise UsageError(f"the prior half-width must be > 0, got {size!r}")
         low, high = list(config.model.prior_low), list(config.model.prior_high)
         low[0], high[0] = -float(size), float(size)
         return {"model": {"prior_low": low, "prior_high": high}}
-    raise ValueError(f"unknown fault {fault!r}; faults: {', '.join(FAULTS)}")
+    raise UsageError(f"unknown fault {fault!r}; faults: {', '.join(FAULTS)}")
 
 
 def replay_session(path: str | Path, overrides: dict[str, dict[str, Any]] | None = None,
@@ -108,10 +109,10 @@ def parse_sweep(text: str) -> list[float]:
             return [round(parts[0] + i * parts[2], 10) for i in range(n)]
         values = [float(p) for p in text.split(",") if p.strip()]
     except ValueError:
-        raise ValueError(f"--sweep must be START:STOP:STEP (STEP > 0, STOP >= START, at most 1000 points) or a comma "
+        raise UsageError(f"--sweep must be START:STOP:STEP (STEP > 0, STOP >= START, at most 1000 points) or a comma "
                          f"list, got {text!r}") from None
     if not values or not all(np.isfinite(values)):
-        raise ValueError(f"--sweep has no finite values: {text!r}")
+        raise UsageError(f"--sweep has no finite values: {text!r}")
     return values
 
 

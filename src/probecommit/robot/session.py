@@ -34,12 +34,13 @@ from probecommit.core.retained import masked_interval
 from probecommit.robot.log import LOG_FORMAT, SessionLog, SessionLogError, log_path, read_records
 from probecommit.runner.build import build_filter, build_model
 from probecommit.runner.config import StudyConfig, config_data, load_config, parse_config
+from probecommit.errors import UserError
 
 #: Grid matching tolerance for a probe or an action (in the probe's units).
 GRID_TOLERANCE = 1e-6
 
 
-class SessionError(ValueError):
+class SessionError(UserError, ValueError):
     """A call out of order or with bad input; the message says what and what was recorded."""
 
 

@@ -51,6 +51,7 @@ from probecommit.audit.stats import (
 )
 from probecommit.audit.surprise import surprise_auc
 from probecommit.runner.replay import CHUNK_INSTANCES, LoadedRun, RunBeliefs, load_run, require_budgets
+from probecommit.errors import UsageError
 
 #: The executor's method whose commits are calibrated.
 PROBE_METHOD = "probe_robust"
@@ -101,7 +102,7 @@ def _calibration_scores(cal: "_Run") -> pd.DataFrame:
     """
     [scores] = cal.commit((cal.nu, None), reduce=[_scores])
     if scores is None:
-        raise ValueError(f"{cal.loaded.path}: no episode of the calibration run committed (every one failed)")
+        raise UsageError(f"{cal.loaded.path}: no episode of the calibration run committed (every one failed)")
     return scores.sort_index()
 
 
@@ -308,13 +309,13 @@ def _check_pair(cal: _Run, test: _Run) -> None:
     a, b = cal.loaded.config, test.loaded.config
     for section in ("family", "model", "belief", "probes"):
         if getattr(a, section) != getattr(b, section):
-            raise ValueError(f"calibration and test runs differ in their '{section}' settings; "
+            raise UsageError(f"calibration and test runs differ in their '{section}' settings; "
                              "calibrate on a run of the same model, belief and probe schedule")
     ids_a = set(cal.loaded.instances["instance_id"])
     ids_b = set(test.loaded.instances["instance_id"])
     if ids_a & ids_b and cal.loaded.path.resolve() == test.loaded.path.resolve():
         # Disjoint instance subsets of one run (re-splits of a pool) are fine; the same instances are not.
-        raise ValueError(f"calibration and test are the same run ({cal.loaded.path}); in-sample calibration has no "
+        raise UsageError(f"calibration and test are the same run ({cal.loaded.path}); in-sample calibration has no "
                          "coverage guarantee: calibrate on a run of other instances")
     if ids_a & ids_b:
         shared = sorted(ids_a & ids_b)
@@ -323,7 +324,7 @@ def _check_pair(cal: _Run, test: _Run) -> None:
         ib = test.loaded.instances.set_index("instance_id").loc[shared]
         truth_cols = [c for c in ia.columns if c.startswith("true_")]
         if np.allclose(ia[truth_cols].to_numpy(float), ib[truth_cols].to_numpy(float)):
-            raise ValueError(f"calibration and test runs share {len(shared)} instance(s) (e.g. {shared[0]!r}); "
+            raise UsageError(f"calibration and test runs share {len(shared)} instance(s) (e.g. {shared[0]!r}); "
                              "conformal calibration needs disjoint instances")
 
 
@@ -455,7 +456,7 @@ def calibrate(cal_run, test_run, alpha: float = DEFAULT_ALPHA, budgets: Sequence
     _budgets(test, budgets)
     cost_budget = max(budgets) if cost_budget is None else int(cost_budget)
     if cost_budget not in budgets:
-        raise ValueError(f"cost budget {cost_budget} is not among the calibrated budgets {budgets}")
+        raise UsageError(f"cost budget {cost_budget} is not among the calibrated budgets {budgets}")
 
     # Of each table, only what the results read is kept, chunk by chunk: per-instance scores, sums and
     # optimism, the rows at the cost budget and the margin rows, so memory does not grow with the runs.

@@ -8,6 +8,7 @@ needs the engine installed).
 from __future__ import annotations
 
 import contextlib
+import logging
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -35,6 +36,9 @@ from probecommit.store.rundir import RunDir
 from probecommit.store.schema import cache_frame, cache_records, component_names
 
 import yaml
+from probecommit.errors import UsageError
+
+logger = logging.getLogger(__name__)
 
 
 class LoadedRun:
@@ -348,7 +352,7 @@ class RunBeliefs:
         if budgets is not None:
             kept = tuple(dict.fromkeys(require_budgets(budgets, committed_budgets(config))))
             if not kept:
-                raise ValueError(f"budget(s) [] not in the run (it commits at {committed_budgets(config)})")
+                raise UsageError(f"budget(s) [] not in the run (it commits at {committed_budgets(config)})")
         model = build_model(config)
         batch = probe_batch(loaded, model)
         chunks = _chunk_slices(batch.instance_id, chunk_instances)
@@ -539,7 +543,7 @@ def require_budgets(requested: Iterable[int], have: Sequence[int]) -> list[int]:
     budgets = sorted(int(b) for b in requested)
     missing = [b for b in budgets if b not in have]
     if missing:
-        raise ValueError(f"budget(s) {missing} not in the run (it commits at {list(have)})")
+        raise UsageError(f"budget(s) {missing} not in the run (it commits at {list(have)})")
     return budgets
 
 
@@ -605,13 +609,13 @@ def _replay_commit(loaded: LoadedRun, overrides: dict[str, dict[str, Any]] | Non
     overrides = overrides or {}
     bad = set(overrides) - {"model", "belief", "simulator"}
     if bad:
-        raise ValueError(f"a replay can change only the model, belief and simulator sections, not {sorted(bad)}")
+        raise UsageError(f"a replay can change only the model, belief and simulator sections, not {sorted(bad)}")
     sim_bad = set(overrides.get("simulator", {})) - {"aim_offset"}
     if sim_bad:
-        raise ValueError(f"stored probes fix the readings; a replay cannot change simulator {sorted(sim_bad)}")
+        raise UsageError(f"stored probes fix the readings; a replay cannot change simulator {sorted(sim_bad)}")
     changes_inference = any(overrides.get(section) for section in ("model", "belief"))
     if loaded.config.probes.schedule == "adaptive" and changes_inference and not fixed_probes:
-        raise ValueError(
+        raise UsageError(
             f"{loaded.path}: its probes were chosen adaptively by the run's own belief, so another model or belief "
             "would have probed elsewhere; replaying them is not a paired (identical-probes) comparison. "
             "Pass fixed_probes=True (CLI: --fixed-probes) to replay the recorded probes anyway."
@@ -646,9 +650,10 @@ def replay_run(src: str | Path, out: str | Path, overrides: dict[str, dict[str, 
         fixed_probes: See ``replay_episodes``.
         chunk_instances: Instances whose beliefs are held at once (see ``replay_episodes``).
     """
+    logger.info("replaying %s into %s with %s", src, out, overrides or "no override")
     start = time.perf_counter()
     if Path(out).resolve() == Path(src).resolve():
-        raise ValueError(f"replay would overwrite its source run {src}; give another --out")
+        raise UsageError(f"replay would overwrite its source run {src}; give another --out")
     loaded = load_run(src)
     beliefs, request, common = _replay_commit(loaded, overrides, None, None, fixed_probes, chunk_instances)
     config, sim = beliefs.config, beliefs.simulator

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import contextlib
 import itertools
+import logging
 import os
 import time
 from dataclasses import dataclass
@@ -34,6 +35,9 @@ from probecommit.runner.inference import (
 from probecommit.runner.instances import draw_instances
 from probecommit.store.rundir import RunDir
 from probecommit.store.schema import cache_frame
+from probecommit.errors import UnavailableError, UsageError
+
+logger = logging.getLogger(__name__)
 
 
 @dataclass
@@ -154,7 +158,7 @@ def unit_threads(config: StudyConfig, threads: int | None = None) -> int:
 
     wanted = engine_threads() if threads is None else int(threads)
     if wanted < 1:
-        raise ValueError(f"threads must be >= 1, got {threads!r}")
+        raise UsageError(f"threads must be >= 1, got {threads!r}")
     if wanted == 1 or not getattr(build.simulator_class(config), "thread_safe", False):
         return 1
     return wanted
@@ -236,12 +240,12 @@ def check_reachable(address: str, timeout_s: float = 3.0) -> None:
 
     host, _, port = address.rpartition(":")
     if not host or not port.isdigit():
-        raise RuntimeError(f"--ray expects 'local', 'auto' or host:port, got {address!r}")
+        raise UnavailableError(f"--ray expects 'local', 'auto' or host:port, got {address!r}")
     try:
         with socket.create_connection((host, int(port)), timeout=timeout_s):
             return
     except OSError as exc:
-        raise RuntimeError(f"cannot reach the Ray cluster at {address}: {exc.strerror or exc}") from None
+        raise UnavailableError(f"cannot reach the Ray cluster at {address}: {exc.strerror or exc}") from None
 
 
 @contextlib.contextmanager
@@ -262,7 +266,7 @@ def ray_session(address: str, workers: int, timing: dict[str, float]) -> Iterato
         try:
             ray.init(**ray_init_kwargs(address, workers))
         except (ConnectionError, TimeoutError) as exc:
-            raise RuntimeError(f"cannot reach the Ray cluster at {address!r}: {str(exc).splitlines()[0]}") from None
+            raise UnavailableError(f"cannot reach the Ray cluster at {address!r}: {str(exc).splitlines()[0]}") from None
     timing["backend_start_s"] = time.perf_counter() - t0
     try:
         yield ray
@@ -344,6 +348,7 @@ def run_study(
         return None
 
     if (done := complete()) is not None:
+        logger.info("%s is complete and unaltered: nothing to run", run.path)
         return done
     timing: dict[str, float] = {"backend_start_s": 0.0}
     with contextlib.ExitStack() as stack:
@@ -375,9 +380,12 @@ def _run_units(config, run: RunDir, instances, workers, ray, ray_address, timing
     else:
         results = _run_serial(jobs)
         backend = "serial"
+    logger.info("%s: %d of %d units to run (%d done before), backend %s, engine %s", run.path, len(jobs), len(units),
+                done, backend, config.simulator.engine)
     t_units = time.perf_counter()
     for unit, tables, stats in results:
         run.write_unit(unit, tables, stats)  # only the driver writes: one writer per file
+        logger.debug("unit %s written (%d rows of episodes)", unit, len(tables.get("episodes", ())))
         done += 1
         if progress:
             progress(done, len(units))

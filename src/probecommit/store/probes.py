@@ -16,6 +16,7 @@ import pandas as pd
 import pyarrow as pa
 
 from probecommit.store.schema import PROBE_COLUMNS, checked_frame, component_names
+from probecommit.errors import UserError
 
 #: Required columns of a scalar-probe, scalar-observation table (insertion).
 REQUIRED = tuple(c.name for c in PROBE_COLUMNS)
@@ -23,7 +24,7 @@ KEY_COLUMNS = ("instance_id", "repeat", "j")
 _NA_TEXT = {"", "nan", "NaN", "NA", "N/A", "null", "None", "none"}
 
 
-class ProbeTableError(ValueError):
+class ProbeTableError(UserError, ValueError):
     """A probe table that cannot be replayed; the message names the column and row."""
 
 

@@ -44,6 +44,7 @@ import yaml
 from probecommit import __version__
 from probecommit.store.schema import (EPISODE_COLUMNS, INSTANCE_COLUMNS, PROBE_COLUMNS, Column, float_matrix,
                                       vector_columns)
+from probecommit.errors import UserError
 
 MANIFEST = "manifest.json"
 CONFIG = "config.yaml"
@@ -61,7 +62,7 @@ _SCHEMAS: dict[str, tuple[Column, ...]] = {
 }
 
 
-class RunDirError(RuntimeError):
+class RunDirError(UserError, RuntimeError):
     """A run directory is incomplete, incompatible or corrupt."""
 
 

@@ -17,6 +17,7 @@ from importlib.metadata import entry_points
 from typing import Any
 
 from probecommit.tasks.base import TaskSpec, answer_store
+from probecommit.errors import UserError
 
 ENTRY_POINT_GROUP = "probecommit.tasks"
 
@@ -24,7 +25,7 @@ _REGISTRY: dict[str, TaskSpec] = {}
 _loaded = False
 
 
-class UnknownTaskError(KeyError):
+class UnknownTaskError(UserError, KeyError):
     """An unknown family, or an engine a family lacks; the message lists what exists."""
 
     def __str__(self) -> str:  # KeyError would quote the message

@@ -59,6 +59,7 @@ def make_simulator(engine: str = "mujoco", **fields):
     """An insertion simulator of ``engine`` with simulator-section ``fields`` (validated)."""
     from pydantic import ValidationError
 
+    from probecommit.tasks.config import ConfigError
     from probecommit.tasks.insertion.config import InsertionSimulatorConfig
     from probecommit.tasks.registry import build_simulator
 
@@ -67,5 +68,5 @@ def make_simulator(engine: str = "mujoco", **fields):
     except ValidationError as exc:
         first = exc.errors()[0]
         field = ".".join(str(p) for p in first["loc"])
-        raise ValueError(f"invalid simulator setting '{field}': {first['msg'].removeprefix('Value error, ')}") from None
+        raise ConfigError(f"invalid simulator setting '{field}': {first['msg'].removeprefix('Value error, ')}") from None
     return build_simulator("insertion", config)
