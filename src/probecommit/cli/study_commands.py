@@ -65,7 +65,7 @@ def reproduce(
         done = paper.reproduce(names, root, quick=quick, progress=update, workers=workers, options=options)
     for name, folder in done["targets"].items():
         console.print(f"{escape(name)}: [bold]{escape(str(folder))}[/bold]  (wall {done['wall_s'][name] / 60:.1f} min)")
-    # A family subset would replace the frozen Table V with a partial one: published only on request.
+    # A family subset would replace the frozen Table II with a partial one: published only on request.
     if publish if publish is not None else not (quick or families):
         from probecommit.report.publish import publish as publish_results
 

@@ -15,6 +15,8 @@ Keys name a value in a publication's results tree:
     ``results/paper/claims.json`` (the claims registry's computed entries).
 ``"paper:<item>"``
     the paper-values table (``probecommit.studies.paper_values``).
+``"reproduction:<dotted.path>"``
+    ``results/paper/reproduction.json`` (wall times, engine calls, the machine).
 
 The ledger file is ``published_numbers.json`` at the publication root::
 
@@ -120,6 +122,8 @@ def resolve(key: str, root: str | Path, extra: dict[str, Any] | None = None) -> 
         node: Any = extra[prefix]
     elif prefix == "claims":
         node = json.loads((Path(root) / "claims.json").read_text())
+    elif prefix == "reproduction":
+        node = json.loads((Path(root) / "reproduction.json").read_text())
     else:
         node = json.loads((Path(root) / prefix / "results.json").read_text())
     return _walk_dotted(node, path.split(".") if path else [])
