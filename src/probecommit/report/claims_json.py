@@ -33,7 +33,10 @@ def compute(root: str | Path) -> dict[str, Any]:
     loaded = trees(root)
 
     def lookup(key: str) -> Any:
-        return resolve(key, root, loaded)
+        try:
+            return resolve(key, root, loaded)
+        except FileNotFoundError as exc:  # a study not published here: the key names nothing
+            raise KeyError(key) from exc
 
     def exists(pattern: str) -> bool:
         return any(root.rglob(pattern))
@@ -47,7 +50,7 @@ def compute(root: str | Path) -> dict[str, Any]:
             "passed": o.passed, "total": o.total, "failed": o.failed, "unresolved": o.unresolved,
             "experiment": o.experiment, "experiment_title": EXPERIMENTS[o.experiment].title if o.experiment else None,
             "simulated_rig": claim.simulated_rig, "physical": claim.physical, "note": claim.note,
-            "paper": {k: paper_values.PAPER[k] for k in claim.paper_keys()},
+            "paper": {k: paper_values.PRINTED[k] for k in claim.paper_keys()},
             "comparisons": [{"label": c.label, "rule": c.rule, "ours": list(c.keys()) or getattr(c, "pattern", None)}
                             for c in claim.comparisons],
             "explain_candidates": list(claim.explain),

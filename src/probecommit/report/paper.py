@@ -312,7 +312,7 @@ def publish(results: dict[str, str | Path], repo_root: str | Path) -> Path:
 
 def engines_markdown(table: Any) -> str:
     """Table VI: ours per engine and variant, the paper's row under each of ours (labelled)."""
-    from probecommit.studies.paper_values import PAPER
+    from probecommit.studies.paper_values import PRINTED as PAPER
 
     header = "| quantity | " + " | ".join(f"{e} {v}" for e, v in table.columns) + " |"
     lines = [header, "|---" * (len(table.columns) + 1) + "|"]
@@ -326,7 +326,7 @@ def engines_markdown(table: Any) -> str:
 
 def engine_scans_markdown(scans: dict[str, Any]) -> str:
     """Each engine's scanned boundary offset and capture window, beside the paper's (Sec. V-C)."""
-    from probecommit.studies.paper_values import PAPER
+    from probecommit.studies.paper_values import PRINTED as PAPER
 
     lines = ["| engine | boundary offset (mm, hg + delta) | SD | capture window / w(c) | SD over truths | paper offset | "
              "paper ratio |", "|---|---|---|---|---|---|---|"]

@@ -14,6 +14,7 @@ study. A key that does not resolve prints ``--`` (the claims table then says ``m
 from __future__ import annotations
 
 import json
+import re
 import string
 from collections.abc import Iterable, Sequence
 from pathlib import Path
@@ -26,6 +27,7 @@ from probecommit.studies.claims import CLAIMS, EXPERIMENTS, STATUSES
 #: Where REPRODUCTION.md sits, relative to the publication root ``results/paper``.
 MD_FILE = "../../REPRODUCTION.md"
 DASH = "--"
+_PLACEHOLDER = re.compile("\x00(\\d+)\x00")
 
 
 class Doc:
@@ -36,6 +38,7 @@ class Doc:
         self.ledger = ledger
         self.file = file
         self.lines: list[str] = []
+        self.pending: list[tuple[str, Any, str]] = []
         self.trees: dict[str, Any] = {"paper": paper_values.tree()}
         for path in sorted(self.root.glob("*/results.json")):
             self.trees[path.parent.name] = json.loads(path.read_text())
@@ -56,10 +59,15 @@ class Doc:
         return v is not None and not (isinstance(v, float) and v != v)
 
     def n(self, key: str, fmt: str = ".3f") -> str:
-        """The text of the number under ``key`` (recorded in the ledger), or ``--``."""
+        """A placeholder for the number under ``key`` (or ``--``); :meth:`text` fills it in reading order.
+
+        Placeholders let a caller compute cells in any order while the ledger records them
+        in the order they are printed, which is what ``ledger.check`` relies on.
+        """
         if not self.has(key):
             return DASH
-        return self.ledger.num(self.file, key, self.value(key), fmt)
+        self.pending.append((key, self.value(key), fmt))
+        return f"\x00{len(self.pending) - 1}\x00"
 
     def ci(self, keys: str | Sequence[str], fmt: str = ".3f") -> str:
         """``estimate [lo, hi]`` from a triple key or three keys."""
@@ -77,11 +85,12 @@ class Doc:
 
     def pv(self, key: str) -> str:
         """A paper value, printed exactly as the paper prints it (``"paper:<key>"``)."""
-        if key not in paper_values.PAPER:
+        if key not in paper_values.PRINTED:
             return DASH
         if not paper_values.is_number(key):
-            return paper_values.PAPER[key]
-        return self.ledger.num(self.file, f"paper:{key}", paper_values.value(key), paper_values.fmt(key))
+            return paper_values.PRINTED[key]
+        self.pending.append((f"paper:{key}", paper_values.value(key), paper_values.fmt(key)))
+        return f"\x00{len(self.pending) - 1}\x00"
 
     def fill(self, template: str, keys: dict[str, str]) -> str:
         """``template``'s fields (``{name:fmt}``) filled from ``keys`` through the ledger."""
@@ -102,7 +111,13 @@ class Doc:
         self.add("")
 
     def text(self) -> str:
-        return "\n".join(self.lines).rstrip() + "\n"
+        """The document, each placeholder replaced by its number, recorded in reading order."""
+
+        def fill(match: re.Match[str]) -> str:
+            key, value, fmt = self.pending[int(match.group(1))]
+            return self.ledger.num(self.file, key, value, fmt)
+
+        return _PLACEHOLDER.sub(fill, "\n".join(self.lines).rstrip() + "\n")
 
 
 # ----------------------------------------------------------------------------- the claims
@@ -181,10 +196,11 @@ def machine_section(doc: Doc) -> None:
 # ----------------------------------------------------------------------------- per-study sections
 
 
-def _pair_rows(doc: Doc, rows: Iterable[tuple[str, str | None, Any]]) -> list[list[str]]:
+def _pair_rows(doc: Doc, rows: Iterable[tuple[Any, ...]]) -> list[list[str]]:
+    """``[label, paper, ours]`` rows from ``(label, paper key, our key[, format])``."""
     out = []
-    for label, paper_key, ours in rows:
-        out.append([label, doc.pv(paper_key) if paper_key else DASH, doc.ci(ours)])
+    for label, paper_key, ours, *fmt in rows:
+        out.append([label, doc.pv(paper_key) if paper_key else DASH, doc.ci(ours, *fmt)])
     return out
 
 
@@ -200,12 +216,12 @@ def insertion_section(doc: Doc) -> None:
     doc.add("### Boundary scan and cover schedule (development instances)", "")
     doc.table(head, _pair_rows(doc, [("fitted delta (mm)", "T15-scan.delta", f"{i}scan.delta"),
                                      ("boundary shift vs deployed (mm)", "T15-scan.shift", f"{i}scan.shift_vs_deployed_mm"),
-                                     ("SD over scans (mm)", None, f"{i}scan.sd"),
-                                     ("scans", "T15-scan.scans", f"{i}scan.scans")]))
+                                     ("SD over scans (mm)", None, f"{i}scan.sd", ".4f"),
+                                     ("scans", "T15-scan.scans", f"{i}scan.scans", "d")]))
     if doc.has(f"{i}cover.winner"):
         winner = ", ".join(doc.n(f"{i}cover.winner.{j}", "g") for j in range(len(doc.value(f"{i}cover.winner"))))
         frozen = ", ".join(doc.n(f"{i}cover.frozen.{j}", "g") for j in range(len(doc.value(f"{i}cover.frozen"))))
-        doc.add(f"Cover schedule: paper {paper_values.PAPER['T07-cover-schedule.schedule']} mm; our search's winner "
+        doc.add(f"Cover schedule: paper {paper_values.PRINTED['T07-cover-schedule.schedule']} mm; our search's winner "
                 f"[{winner}] mm over {doc.n(i + 'cover.candidates', 'd')} subsets (failure "
                 f"{doc.n(i + 'cover.winner_failure')}); frozen in the protocol: [{frozen}] mm.", "")
     doc.add("### Insertion failure by split and calibration setting (Table IV)", "")
@@ -310,9 +326,9 @@ def gates_table(doc: Doc, i: str) -> None:
              doc.n(f"{i}table_insertion.simultaneous_random")]]
     for j, record in enumerate(doc.value(f"{i}gates.summary")):
         sig = record["signal"]
-        if f"T31-gate-areas.{sig}" in paper_values.PAPER or sig == "oracle":
+        if f"T31-gate-areas.{sig}" in paper_values.PRINTED or sig == "oracle":
             rows.append([f"gate area, {sig}", doc.pv(f"T31-gate-areas.{sig}"), doc.n(f"{g}{j}.area")])
-        if f"T33-committed-pool.{sig}.n_committed" in paper_values.PAPER:
+        if f"T33-committed-pool.{sig}.n_committed" in paper_values.PRINTED:
             p = f"T33-committed-pool.{sig}."
             rows.append([f"escaped in committed / rejected pool, {sig}",
                          f"{doc.pv(p + 'escaped_committed')}/{doc.pv(p + 'n_committed')} vs "
@@ -320,7 +336,7 @@ def gates_table(doc: Doc, i: str) -> None:
                          f"{doc.n(f'{g}{j}.escaped_committed', 'd')}/{doc.n(f'{g}{j}.n_committed', 'd')} vs "
                          f"{doc.n(f'{g}{j}.escaped_rejected', 'd')}/{doc.n(f'{g}{j}.n_rejected', 'd')} "
                          f"(commit rate {doc.n(f'{g}{j}.commit_rate')})"])
-        if f"T34-claimed-realized.{sig}_claimed" in paper_values.PAPER:
+        if f"T34-claimed-realized.{sig}_claimed" in paper_values.PRINTED:
             rows.append([f"claimed / realized at commit, {sig}",
                          f"{doc.pv(f'T34-claimed-realized.{sig}_claimed')} / {doc.pv(f'T34-claimed-realized.{sig}_realized')}",
                          f"{doc.n(f'{g}{j}.claimed')} / {doc.n(f'{g}{j}.realized')}"])
@@ -353,9 +369,9 @@ def breadth_section(doc: Doc) -> None:
                      doc.ci([f"{r}paired", f"{r}paired_lo", f"{r}paired_hi"]),
                      doc.ci([f"{r}paired_robust", f"{r}paired_robust_lo", f"{r}paired_robust_hi"])])
         delta = (f"{doc.pv(p + 'delta')} [{doc.pv(p + 'delta_lo')}, {doc.pv(p + 'delta_hi')}]"
-                 if p + "delta" in paper_values.PAPER else doc.pv(p + "change_percent"))
+                 if p + "delta" in paper_values.PRINTED else doc.pv(p + "change_percent"))
         rows.append([f"{family} (paper)", doc.pv(p + "blind_bayes"), doc.pv(p + "blind_robust"),
-                     doc.pv(p + "probe_robust"), delta + (" %" if p + "change_percent" in paper_values.PAPER else ""),
+                     doc.pv(p + "probe_robust"), delta + (" %" if p + "change_percent" in paper_values.PRINTED else ""),
                      DASH])
     doc.table(["family", "Blind-Bayes", "Blind-Robust", "Probe-Robust(k)", "Delta = Blind-Bayes - Probe-Robust [95%]",
                "Blind-Robust - Probe-Robust [95%]"], rows)

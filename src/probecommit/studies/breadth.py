@@ -202,7 +202,7 @@ def _paired_cell(r: Mapping[str, Any], name: str) -> str:
 
 
 def _paper_row(family: str) -> dict[str, Any] | None:
-    from probecommit.studies.paper_values import PAPER
+    from probecommit.studies.paper_values import PRINTED as PAPER
 
     cells = {k.rsplit(".", 1)[1]: v for k, v in PAPER.items() if k.startswith(f"tab:breadth.{family}.")}
     return cells or None

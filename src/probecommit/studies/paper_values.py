@@ -7,7 +7,8 @@ that prints it back unchanged, so a paper value reaches published prose through 
 ledger (``"paper:<key>"``) like any computed number. Nothing in the package reads these to
 set a parameter.
 
-Keys are ``<claim id>.<name>``: the claims registry (:mod:`probecommit.studies.claims`)
+:data:`PRINTED` is the table; :data:`PAPER` keeps a few earlier keys as floats for code written
+against them. Keys of :data:`PRINTED` are ``<claim id>.<name>``: the claims registry (:mod:`probecommit.studies.claims`)
 names its paper values by these keys. Claim ids use the paper's own labels
 (``tab:breadth``, ``fig:decision``) or ``T<nn>-<slug>`` for the numbered claims in the text.
 """
@@ -25,7 +26,7 @@ def _rows(prefix: str, names: tuple[str, ...], cells: dict[str, tuple[str, ...]]
     return {f"{prefix}.{row}.{name}": text for row, values in cells.items() for name, text in zip(names, values)}
 
 
-PAPER: dict[str, str] = {
+PRINTED: dict[str, str] = {
     # ---------------------------------------------------------------- Table I (tab:setup): n per family
     **{f"tab:setup.{fam}.n": n for fam, n in (("insertion", "96{\\times}4"), ("push1d", "81{\\times}6"),
                                                ("push2d", "18{\\times}6"), ("darts", "18{\\times}8"),
@@ -261,19 +262,19 @@ PAPER: dict[str, str] = {
     "fig:signatures.n": "384",
 }
 # Empty strings mark cells the paper leaves blank ("--"); they are not values.
-PAPER = {key: text for key, text in PAPER.items() if text != ""}
+PRINTED = {key: text for key, text in PRINTED.items() if text != ""}
 
 _NUMBER = re.compile(r"^[+-]?\d+(\.\d+)?$")
 
 
 def is_number(key: str) -> bool:
     """Whether the paper value under ``key`` is a single printed number."""
-    return bool(_NUMBER.match(PAPER[key]))
+    return bool(_NUMBER.match(PRINTED[key]))
 
 
 def value(key: str) -> float:
     """The paper value under ``key`` as a float (KeyError for an unknown key)."""
-    text = PAPER[key]
+    text = PRINTED[key]
     if not _NUMBER.match(text):
         raise ValueError(f"paper value {key} = {text!r} is not a single number")
     return float(text)
@@ -281,7 +282,7 @@ def value(key: str) -> float:
 
 def fmt(key: str) -> str:
     """The format spec that prints ``value(key)`` back exactly as the paper does."""
-    text = PAPER[key]
+    text = PRINTED[key]
     sign = "+" if text.startswith("+") else ""
     if "." not in text:
         return "d" if not sign else "+d"
@@ -290,9 +291,20 @@ def fmt(key: str) -> str:
 
 def tree() -> dict[str, Any]:
     """The numeric paper values as the ledger's ``"paper"`` source (``"paper:<key>"``)."""
-    return {key: value(key) for key in PAPER if is_number(key)}
+    return {key: value(key) for key in PRINTED if is_number(key)}
 
 
 def seed_form(key: str) -> str:
     """The text as it stands in the paper's LaTeX source (for the test against the seed)."""
-    return PAPER[key]
+    return PRINTED[key]
+
+
+#: Earlier keys, as floats (and the cover schedule as a list), for code written against them.
+LEGACY_KEYS = {"calibration.t5_cover": "T02-t5-cover.t5", "calibration.margin_cover": "T03-margin.cover",
+               "calibration.margin_random": "T03-margin.random",
+               "calibration.distribution_free_margin_cover": "T04-distribution-free-margin.cover",
+               "scan.delta": "T15-scan.delta", "scan.shift_vs_deployed_mm": "T15-scan.shift",
+               "text.escape_k8": "T05-escape-realizations.audit", "gates.oracle_commit_rate": "T35-oracle.commit_rate_percent"}
+PAPER: dict[str, Any] = {old: value(new) for old, new in LEGACY_KEYS.items()}
+PAPER["gates.oracle_commit_rate"] /= 100
+PAPER["cover.schedule"] = [int(u) for u in PRINTED["T07-cover-schedule.schedule"].strip("[]").split(",")]

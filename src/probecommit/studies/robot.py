@@ -56,7 +56,7 @@ def rig_config(quick: bool = False) -> StudyConfig:
 
 def table_markdown(table: pd.DataFrame) -> str:
     """Table VII on the simulated rig, the physical arm's values in a column that says so."""
-    from probecommit.studies.paper_values import PAPER
+    from probecommit.studies.paper_values import PRINTED as PAPER
 
     lines = ["| taps | episodes (sim. rig) | in window (sim. rig) | entered (sim. rig) | predicted (sim. rig) | "
              "realized (sim. rig) | optimism [95% CI] (sim. rig) | coverage (sim. rig) | aim error mm [95% CI] "
