@@ -505,7 +505,7 @@ def robot_section(doc: Doc) -> None:
     doc.add("### Recorded taps under a boundary pulled inward (Fig. 5c, simulated rig)", "",
             (f"Optimism of the faulted model minus the deployed one, paired over positions; first resolved at "
              f"{doc.n(first, 'g')} mm (paper, physical arm: {doc.pv('T28-replay-boundary.first_mm')} mm); no coverage "
-             f"change resolved up to {doc.n(r + 'boundary_coverage_holds_to_mm', 'g')} mm (paper: "
+             f"change resolved up to {doc.n(r + 'boundary_holds_to_mm', 'g')} mm (paper: "
              f"{doc.pv('T28-replay-boundary.coverage_holds_mm')} mm).") if doc.has(first)
             else "No boundary fault size resolves the optimism condition on this log.", "")
     _sweep(doc, "boundary_by_mm", "boundary pulled in (mm)")

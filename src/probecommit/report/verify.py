@@ -371,5 +371,26 @@ def verify(results_root: str | Path, reproduction_md: str | Path | None = None) 
         reproduction_md = next((p / "REPRODUCTION.md" for p in [root, *root.resolve().parents]
                                 if (p / "REPRODUCTION.md").is_file()), None)
     if reproduction_md is not None:
-        check_reproduction(Path(reproduction_md), numbers, report)
+        if not _check_ledger(root, report):
+            check_reproduction(Path(reproduction_md), numbers, report)
     return report
+
+
+def _check_ledger(root: Path, report: Report) -> bool:
+    """Re-resolve every number of the published-numbers ledger, when the publication has one.
+
+    Returns whether a ledger was found (then it replaces the heuristic trace of REPRODUCTION.md).
+    """
+    from probecommit.report import ledger
+    from probecommit.studies.paper_values import tree
+
+    publication = next((p for p in (root, root / "paper") if (p / ledger.LEDGER_NAME).is_file()), None)
+    if publication is None:
+        return False
+    entries = ledger.read(publication)
+    problems = list(ledger.check(entries, publication, {"paper": tree()}))
+    report.checked += len(entries) - len(problems)
+    for problem in problems:
+        report.check(False, problem)
+    report.traces += [f"{e.file}: {e.text} <- {e.key}" for e in entries]
+    return True

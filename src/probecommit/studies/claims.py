@@ -579,7 +579,7 @@ def _text_claims() -> list[Claim]:  # noqa: PLR0915 - one entry per claim, in th
               "8 mm; coverage holds to 14 mm",
               (Near("first resolved (mm)", "T28-replay-boundary.first_mm", f"{R}boundary_first_resolved_mm", 1.0),
                Holds("coverage holds", "no boundary size up to 14 mm resolves a coverage change",
-                     {"mm": f"{R}boundary_coverage_holds_to_mm"},
+                     {"mm": f"{R}boundary_holds_to_mm"},
                      lambda v: v["mm"] >= paper_values.value("T28-replay-boundary.coverage_holds_mm"))),
               simulated_rig=True))
     add(Claim("T29-replay-prior", "Sec. V-D, Fault injection", "Prior narrowed to +-12 mm: both conditions fire",

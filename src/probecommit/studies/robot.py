@@ -107,7 +107,7 @@ class RobotStudy:
                 "boundary_fault": json.loads(self.boundary.to_json(orient="records")),
                 "prior_fault": json.loads(self.prior.to_json(orient="records")),
                 "boundary_first_resolved_mm": float(resolved["size"].min()) if len(resolved) else None,
-                "boundary_coverage_holds_to_mm": _holds_to(self.boundary),
+                "boundary_holds_to_mm": _holds_to(self.boundary),
                 "optimism_pooled": float((rows["realized"] - rows["predicted"]).mean()),
                 "boundary_by_mm": _by_size(self.boundary), "prior_by_mm": _by_size(self.prior),
                 "unscored": self.episodes.unscored,
