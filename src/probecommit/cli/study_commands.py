@@ -31,7 +31,7 @@ def _stepper():
 
 
 def reproduce(
-    targets: Optional[list[str]] = typer.Argument(None, help="Targets: insertion, breadth, beyond, all, or a paper item such as table-7 (see --list)."),
+    targets: Optional[list[str]] = typer.Argument(None, help="Targets: insertion, breadth, beyond, all, or a paper item in the paper's numbering such as table-5 or tab:testc (see --list)."),
     list_targets: bool = typer.Option(False, "--list", help="List every target and the tables and figures it makes."),
     quick: bool = typer.Option(False, "--quick", help="The same pipelines on a few instances (minutes; for CI)."),
     out: Optional[Path] = typer.Option(None, "--out", "-o", help="Root for run directories and results (default runs/paper[-quick])."),
