@@ -98,7 +98,9 @@ class Doc:
         for literal, name, spec, _ in string.Formatter().parse(template):
             out.append(literal)
             if name is not None:
-                out.append(self.n(keys[name], spec or ".3f"))
+                value = self.value(keys[name]) if self.has(keys[name]) else None
+                triple = isinstance(value, list) and len(value) == 3
+                out.append(self.ci(keys[name], spec or ".3f") if triple else self.n(keys[name], spec or ".3f"))
         return "".join(out)
 
     # ---------------------------------------------------------------- text
