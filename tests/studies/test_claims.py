@@ -52,8 +52,11 @@ def test_registry_has_the_papers_59_items_in_its_numbering():
         assert "." not in claim.id  # ids are one part of a dotted ledger key
         for key in claim.paper_keys():
             assert key in P.PRINTED, (claim.id, key)
-        for number in claim.explain:
-            assert number in C.EXPERIMENTS or number.startswith("E"), (claim.id, number)
+        labels = [c.label for c in claim.comparisons]
+        for number, covers in C.explanations(claim):
+            assert number in C.EXPERIMENTS, (claim.id, number)
+            for prefix in covers or ():  # a cover names comparisons the claim has
+                assert any(label.startswith(prefix) for label in labels), (claim.id, prefix)
 
 
 def _lookup(values):

@@ -13,7 +13,7 @@ from typing import Any
 
 from probecommit.report.ledger import resolve
 from probecommit.studies import paper_values
-from probecommit.studies.claims import CLAIMS, EXPERIMENTS, Outcome, counts, evaluate
+from probecommit.studies.claims import CLAIMS, EXPERIMENTS, Outcome, counts, evaluate, explanations
 
 CLAIMS_NAME = "claims.json"
 CLAIMS_VERSION = 1
@@ -48,12 +48,13 @@ def compute(root: str | Path) -> dict[str, Any]:
         entries[claim.id] = {
             "location": claim.location, "kind": claim.kind, "what": claim.what, "status": o.status,
             "passed": o.passed, "total": o.total, "failed": o.failed, "unresolved": o.unresolved,
-            "experiment": o.experiment, "experiment_title": EXPERIMENTS[o.experiment].title if o.experiment else None,
+            "experiment": o.experiment,
+            "experiment_titles": [EXPERIMENTS[e].title for e in (o.experiment or "").split(", ") if e in EXPERIMENTS],
             "simulated_rig": claim.simulated_rig, "physical": claim.physical, "note": claim.note,
             "paper": {k: paper_values.PRINTED[k] for k in claim.paper_keys()},
             "comparisons": [{"label": c.label, "rule": c.rule, "ours": list(c.keys()) or getattr(c, "pattern", None)}
                             for c in claim.comparisons],
-            "explain_candidates": list(claim.explain),
+            "explain_candidates": [number for number, _ in explanations(claim)],
         }
     return {"version": CLAIMS_VERSION, "counts": counts(outcomes), "claims": entries}
 

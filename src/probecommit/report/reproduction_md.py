@@ -159,10 +159,13 @@ def claims_section(doc: Doc) -> None:
             doc.add(f"{head}: not computed here ({'; '.join(map(str, why))}).")
             continue
         line = f"{head}: {', '.join(failed)} differ{'s' if len(failed) == 1 else ''}."
-        number = doc.value(f"{base}.experiment") if doc.has(f"{base}.experiment") else None
-        if number in EXPERIMENTS:
-            e = EXPERIMENTS[number]
-            line += f" **{e.number}, {e.title}:** {doc.fill(e.template, dict(e.keys))}"
+        numbers = doc.value(f"{base}.experiment") if doc.has(f"{base}.experiment") else None
+        for number in (numbers or "").split(", "):
+            if number in EXPERIMENTS:
+                e = EXPERIMENTS[number]
+                line += f" **{e.number}, {e.title}:** {doc.fill(e.template, dict(e.keys))}"
+        if numbers and status == "differs, unexplained":
+            line += " The experiments above speak to part of the difference only; the rest is unexplained."
         doc.add(line)
     doc.add("")
 
