@@ -3,10 +3,10 @@
 We have no arm, so this runs the frozen rig protocol (``configs/paper/rig.yaml``) as a
 robot session against the simulated rig (MuJoCo, touch-switch descent) through the same
 :class:`~probecommit.robot.session.Session` a physical rig uses, then audits the log
-(Table IX: by number of taps, episodes, in window, entered, predicted, realized,
+(Table VII: by number of taps, episodes, in window, entered, predicted, realized,
 optimism; coverage; aim error against taps with a cluster bootstrap over positions,
-Fig. 7b) and replays its recorded taps under the two injected faults: the tap boundary
-pulled inward by 0..14 mm (Fig. 7c) and the prior narrowed (Fig. 7d). A real rig's log
+Fig. 5b) and replays its recorded taps under the two injected faults: the tap boundary
+pulled inward by 0..14 mm (Fig. 5c) and the prior narrowed (Fig. 5d). A real rig's log
 goes through the same functions (``probecommit audit LOG``, ``probecommit replay LOG``).
 The paper's Table VII (the physical arm) is quoted beside ours for comparison only, in columns
 labelled as the physical arm's; every artifact of this study says it comes from the simulated rig
@@ -35,7 +35,7 @@ PAPER_COLUMNS = ("episodes", "in_window", "entered", "predicted", "realized", "o
 #: Fault sizes (mm): boundary pull-in 0..14 mm; prior half-widths from the deployed 38.6 mm down.
 BOUNDARY_SWEEP = [float(v) for v in range(15)]
 PRIOR_SWEEP = [38.6, 30.0, 24.0, 18.0, 12.0, 8.0]
-#: The simulation's 2.1 mm boundary error at rig scale (Fig. 7c's dotted line).
+#: The simulation's 2.1 mm boundary error at rig scale (Fig. 5c's dotted line).
 SIM_ERROR_AT_RIG_SCALE_MM = 2.1 * 3.86
 
 
