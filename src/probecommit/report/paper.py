@@ -430,9 +430,20 @@ ALIASES["fig-5"] = ALIASES["fig:hardware"] = "robot"
 #: Table I's row order (the paper's), then the transfer and the rig.
 SETUP_ORDER = ("insertion", "push1d", "push2d", "darts", "hinge", "shuffleboard", "grasp", "rig")
 #: The paper's Table I engines and n, for the side-by-side.
-PAPER_TABLE_II = {"insertion": ("all three", "96 x 4"), "push1d": ("analytic", "81 x 6"), "push2d": ("MuJoCo", "18 x 6"),
-                  "darts": ("MuJoCo", "18 x 8"), "hinge": ("MuJoCo", "18 x 16"), "shuffleboard": ("SAPIEN", "18 x 6"),
-                  "grasp": ("MuJoCo", "16 x 80")}
+#: The paper's Table I engines (text); its n come from the paper-values table.
+PAPER_TABLE_I_ENGINES = {"insertion": "all three", "push1d": "analytic", "push2d": "MuJoCo", "darts": "MuJoCo",
+                         "hinge": "MuJoCo", "shuffleboard": "SAPIEN", "grasp": "MuJoCo"}
+
+
+def paper_setup_cell(family: str) -> str:
+    """``engine, n`` of Table I for ``family`` (``--`` for a family the paper does not have)."""
+    from probecommit.studies.paper_values import PRINTED
+
+    n = PRINTED.get(f"tab:setup.{family}.n")
+    if n is None:
+        return "--, --"
+    times = "{\\times}"
+    return f"{PAPER_TABLE_I_ENGINES[family]}, {n.replace(times, ' x ')}"
 
 
 def _setup(root: Path, quick: bool, progress: Progress, workers: int) -> Path:
@@ -456,10 +467,9 @@ def _setup(root: Path, quick: bool, progress: Progress, workers: int) -> Path:
         spec = specs[name]
         s = spec.summary
         engines = ", ".join(e for e in spec.engines if e != "analytic") or "analytic"
-        paper = PAPER_TABLE_II.get(name, ("--", "--"))
         lines.append(f"| {name} | {engines} | {s.get('latents', '')} | {s.get('probe', '')} / {s.get('action', '')} | "
                      f"{s.get('sigma', '')} | {s.get('budgets', '')} | {s.get('n', '')}; {s.get('metric', '')} | "
-                     f"{paper[0]}, {paper[1]} |")
+                     f"{paper_setup_cell(name)} |")
         rows.append({"family": name, "engines": list(spec.engines), **s})
     write_table(results, "table_I_setup", "\n".join(lines))
     data = yaml.safe_load(resources.files("probecommit").joinpath("configs/demo.yaml").read_text())
