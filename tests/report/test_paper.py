@@ -59,3 +59,15 @@ def test_setup_target_writes_table_1_and_fig_1b(tmp_path):
         assert f"| {family} |" in table
     assert (results / "fig_1b_overview_belief.png").is_file() and (results / "fig_1b_overview_belief.pdf").is_file()
     assert done["machine"]["cores"] >= 1 and done["machine"]["cpu"]
+
+
+def test_publishing_a_target_again_drops_files_it_no_longer_makes(tmp_path):
+    first, second = tmp_path / "first", tmp_path / "second"
+    for folder, name in ((first, "table_9.md"), (second, "table_VII_hardware_simulated_rig.md")):
+        folder.mkdir()
+        (folder / name).write_text("| a |\n|---|\n| 1 |\n")
+        (folder / "results.json").write_text('{"results": {}}')
+    paper.publish({"robot": first}, tmp_path / "repo")
+    dest = paper.publish({"robot": second}, tmp_path / "repo") / "robot"
+    assert sorted(p.name for p in dest.iterdir()) == ["MANIFEST.json", "results.json",
+                                                      "table_VII_hardware_simulated_rig.md"]

@@ -303,6 +303,10 @@ def publish(results: dict[str, str | Path], repo_root: str | Path) -> Path:
     for name, folder in results.items():
         dest = target_root / name
         dest.mkdir(parents=True, exist_ok=True)
+        fresh = {p.name for p in Path(folder).iterdir() if p.is_file()}
+        for stale in sorted(dest.iterdir()):  # a renamed or dropped file must not linger in the publication
+            if stale.is_file() and stale.suffix in PUBLISHED_SUFFIXES and stale.name not in fresh:
+                stale.unlink()
         for path in sorted(Path(folder).iterdir()):
             if path.is_file() and path.suffix in PUBLISHED_SUFFIXES and path.name not in UNPUBLISHED:
                 shutil.copy2(path, dest / path.name)
