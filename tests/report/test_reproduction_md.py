@@ -43,6 +43,14 @@ def check_publication(repo: Path) -> dict:
     text = (repo / "REPRODUCTION.md").read_text()
     mine = [e for e in entries if e.file == MD_FILE]
     assert not unrecorded_decimals(text, mine), unrecorded_decimals(text, mine)[:5]
+    header_cells = None
+    for line in text.splitlines():  # every table row has its header's number of cells
+        if not line.startswith("|"):
+            header_cells = None
+            continue
+        cells = line.count("|") - 1
+        header_cells = header_cells or cells
+        assert cells == header_cells, line
     claims = json.loads((root / "claims.json").read_text())
     counts = claims["counts"]
     assert counts["total"] == 59 == len(claims["claims"]) == sum(counts[s] for s in STATUSES)
@@ -85,6 +93,13 @@ def test_a_partial_publication_counts_every_item_and_says_what_is_missing(tmp_pa
     assert claims["claims"]["T10-gru"]["failed"] == ["equivalent"]  # the paper's -0.004 lies inside ours
     assert claims["claims"]["tab:audit"]["status"] == "missing"
     assert claims["counts"]["missing"] == 58
+    from probecommit.report.verify import verify
+
+    assert not [f for f in verify(tmp_path / "results").failures if "claims.json" in f]  # (no manifests here)
+    stored = json.loads((root / "claims.json").read_text())
+    stored["claims"]["T10-gru"]["status"] = "reproduced"
+    (root / "claims.json").write_text(json.dumps(stored))
+    assert any("T10-gru" in f for f in verify(tmp_path / "results").failures)
 
 
 @pytest.mark.slow

@@ -257,12 +257,12 @@ def insertion_section(doc: Doc) -> None:
                 rows.append((f"{col.replace('_', ' ')} k={k}, {arm}", f"tab:audit.{col}_{arm}.{k}",
                              [f"{rec}{col}_{arm}", f"{rec}{col}_lo_{arm}", f"{rec}{col}_hi_{arm}"]))
     s = f"{i}table_audit.summary."
-    rows += [("mean |coverage - nominal|, original", "tab:audit.mean_abs_coverage_gap.original",
+    rows += [("mean abs(coverage - nominal), original", "tab:audit.mean_abs_coverage_gap.original",
               f"{s}mean_abs_cluster_coverage_gap_original"),
-             ("mean |coverage - nominal|, calibrated", "tab:audit.mean_abs_coverage_gap.calibrated",
+             ("mean abs(coverage - nominal), calibrated", "tab:audit.mean_abs_coverage_gap.calibrated",
               f"{s}mean_abs_cluster_coverage_gap_calibrated"),
-             ("mean |e_k|, original", "tab:audit.mean_abs_optimism.original", f"{s}mean_abs_optimism_original"),
-             ("mean |e_k|, calibrated", "tab:audit.mean_abs_optimism.calibrated", f"{s}mean_abs_optimism_calibrated"),
+             ("mean abs(e_k), original", "tab:audit.mean_abs_optimism.original", f"{s}mean_abs_optimism_original"),
+             ("mean abs(e_k), calibrated", "tab:audit.mean_abs_optimism.calibrated", f"{s}mean_abs_optimism_calibrated"),
              ("episode coverage k=1", "T11-audit-trend.coverage_k1", f"{i}text.episode_coverage_k1"),
              ("episode coverage k=8", "T11-audit-trend.coverage_k8", f"{i}text.episode_coverage_k8"),
              ("support escape k=1 (paper in %)", "T11-audit-trend.escape_k1", f"{i}text.escape_k1"),

@@ -393,4 +393,22 @@ def _check_ledger(root: Path, report: Report) -> bool:
     for problem in problems:
         report.check(False, problem)
     report.traces += [f"{e.file}: {e.text} <- {e.key}" for e in entries]
+    _check_claims(publication, report)
     return True
+
+
+def _check_claims(publication: Path, report: Report) -> None:
+    """claims.json's statuses recomputed from the registry and the results tree."""
+    from probecommit.report import claims_json
+
+    path = publication / claims_json.CLAIMS_NAME
+    report.check(path.is_file(), f"{path}: missing (publishing writes the claims' statuses)")
+    if not path.is_file():
+        return
+    stored, again = json.loads(path.read_text()), claims_json.compute(publication)
+    report.check(stored.get("counts") == again["counts"],
+                 f"{path}: counts {stored.get('counts')} but the registry recomputes {again['counts']}")
+    for cid, entry in again["claims"].items():
+        old = stored.get("claims", {}).get(cid, {})
+        report.check((old.get("status"), old.get("experiment")) == (entry["status"], entry["experiment"]),
+                     f"{path}: {cid} is {old.get('status')!r} but recomputes as {entry['status']!r}")

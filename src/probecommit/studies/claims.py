@@ -503,7 +503,7 @@ def _text_claims() -> list[Claim]:  # noqa: PLR0915 - one entry per claim, in th
                Inside("escape k=8", "T11-audit-trend.escape_k8", f"{I}text.escape_k8", scale=0.01),
                Inside("e_8", "T11-audit-trend.e8", _ci_suffix(f"{I}table_audit.table.4.optimism", "original"))),
               explain=("E2",)))
-    add(Claim("T12-calibrated-audit", "Sec. V-B", "Calibration: mean |optimism| over budgets falls",
+    add(Claim("T12-calibrated-audit", "Sec. V-B", "Calibration: mean absolute optimism over budgets falls",
               (Near("original", "T12-calibrated-audit.optimism_original",
                     f"{I}table_audit.summary.mean_abs_optimism_original", POINT_TOL * 2.5),
                Near("calibrated", "T12-calibrated-audit.optimism_calibrated",
