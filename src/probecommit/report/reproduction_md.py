@@ -20,13 +20,17 @@ from collections.abc import Iterable, Sequence
 from pathlib import Path
 from typing import Any
 
-from probecommit.report.ledger import Ledger, resolve
+from probecommit.report.ledger import NUMBER, Ledger, resolve
 from probecommit.studies import paper_values
 from probecommit.studies.claims import CLAIMS, EXPERIMENTS, STATUSES
 
 #: Where REPRODUCTION.md sits, relative to the publication root ``results/paper``.
 MD_FILE = "../../REPRODUCTION.md"
 DASH = "--"
+#: Why a number in the report's own wording is printed as it stands (a literal, not a result).
+PROSE = "the report's own wording (headings, budgets, table numerals, labels)"
+#: Why Table I's cells and the machine record are printed as they stand.
+CONFIGURATION = "configuration text (the task registry's Table I, the machine record)"
 _PLACEHOLDER = re.compile("\x00(\\d+)\x00")
 
 
@@ -37,7 +41,7 @@ class Doc:
         self.root = Path(root)
         self.ledger = ledger
         self.file = file
-        self.lines: list[str] = []
+        self.lines: list[tuple[str, str]] = []
         self.pending: list[tuple[str, Any, str]] = []
         self.trees: dict[str, Any] = {"paper": paper_values.tree()}
         for path in sorted(self.root.glob("*/results.json")):
@@ -104,8 +108,10 @@ class Doc:
         return "".join(out)
 
     # ---------------------------------------------------------------- text
-    def add(self, *lines: str) -> None:
-        self.lines.extend(lines)
+    def add(self, *lines: str, why: str = "") -> None:
+        """Append lines. A number in them that is not a placeholder is declared a literal in the
+        ledger for ``why`` (default: the report's own wording, headings, budgets and labels)."""
+        self.lines.extend((line, why or PROSE) for line in lines)
 
     def table(self, header: Sequence[str], rows: Iterable[Sequence[str]]) -> None:
         self.add("| " + " | ".join(header) + " |", "|" + "---|" * len(header))
@@ -113,13 +119,35 @@ class Doc:
         self.add("")
 
     def text(self) -> str:
-        """The document, each placeholder replaced by its number, recorded in reading order."""
+        """The document, each placeholder replaced by its number, every number recorded in reading order.
 
-        def fill(match: re.Match[str]) -> str:
-            key, value, fmt = self.pending[int(match.group(1))]
-            return self.ledger.num(self.file, key, value, fmt)
+        A number from a key is recorded with its key; any other number (a budget in a heading,
+        a table's numeral, configuration text) is declared a literal with the text that leads up
+        to it, so ``ledger.check`` finds it in place and ``ledger.uncovered`` accounts for it.
+        """
+        out: list[str] = []
+        for n, (line, why) in enumerate(self.lines):
+            text = line + ("\n" if n < len(self.lines) - 1 else "")
+            start = 0
+            for match in _PLACEHOLDER.finditer(text):
+                out.append(self._literals(text[start:match.start()], why))
+                key, value, fmt = self.pending[int(match.group(1))]
+                out.append(self.ledger.num(self.file, key, value, fmt))
+                start = match.end()
+            out.append(self._literals(text[start:], why))
+        return "".join(out).rstrip() + "\n"
 
-        return _PLACEHOLDER.sub(fill, "\n".join(self.lines).rstrip() + "\n")
+    def _literals(self, chunk: str, why: str) -> str:
+        start = 0
+        for match in NUMBER.finditer(chunk):
+            self.ledger.literal(self.file, chunk[start:match.end()], why)
+            start = match.end()
+        # Digits inside words ("T06-...", "push2d") are no numbers, but a short number looked up after
+        # them could match there: declare the text up to the last such digit so lookups start past it.
+        last = max((i for i, c in enumerate(chunk) if c.isdigit() and i >= start), default=-1)
+        if last >= 0:
+            self.ledger.literal(self.file, chunk[start:last + 1], why)
+        return chunk
 
 
 # ----------------------------------------------------------------------------- the claims
@@ -191,7 +219,7 @@ def machine_section(doc: Doc) -> None:
         doc.add(f"These results were produced on `{m.get('cpu', '?')}` ({doc.n(r + 'machine.cores', 'd')} logical "
                 f"cores, `{m.get('platform', '?')}`, Python `{m.get('python', '?')}`, NumPy `{m.get('numpy', '?')}`). "
                 "NumPy picks its vector routines by CPU, so on another CPU a few values can differ in the last "
-                "binary digit.")
+                "binary digit.", why=CONFIGURATION)
     else:
         doc.add("The machine that produced these results was not recorded (their `reproduction.json` predates the "
                 "record); a reproduction now records it.")
