@@ -184,7 +184,12 @@ def claims_section(doc: Doc) -> None:
         head = f"- `{claim.id}` ({claim.location}), {status}"
         if status == "missing":
             why = doc.value(f"{base}.unresolved") if doc.has(f"{base}.unresolved") else []
-            doc.add(f"{head}: not computed here ({'; '.join(map(str, why))}).")
+            if claim.physical:
+                doc.add(f"{head}: it exists only on the paper's physical arm"
+                        + (" (the simulated rig's counterpart is in its section, labelled so)." if claim.simulated_rig
+                           else "."))
+            else:
+                doc.add(f"{head}: not computed here ({'; '.join(map(str, why))}).")
             continue
         line = f"{head}: {', '.join(failed)} differ{'s' if len(failed) == 1 else ''}."
         numbers = doc.value(f"{base}.experiment") if doc.has(f"{base}.experiment") else None
