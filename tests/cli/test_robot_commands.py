@@ -1,4 +1,4 @@
-"""The robot workflow as a user runs it: simulate, show, audit (Table IX), replay under faults."""
+"""The robot workflow as a user runs it: simulate, show, audit (Table VII), replay under faults."""
 
 from __future__ import annotations
 

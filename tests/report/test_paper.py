@@ -13,7 +13,11 @@ from probecommit.report.verify import verify
 
 def test_targets_resolve_with_dependencies_and_aliases():
     assert paper.resolve(["beyond"]) == ["insertion", "breadth", "beyond"]
-    assert paper.resolve(["table-7", "table-5"]) == ["insertion", "breadth"]
+    assert paper.resolve(["table-5", "table-2"]) == ["insertion", "breadth"]
+    # The paper's own numbering and labels: Table VI engines, Table VII the (simulated) arm, Fig. 5 too.
+    assert paper.resolve(["table-6", "tab:hardware", "fig-5", "tab:setup"]) == ["engines", "robot", "setup"]
+    with pytest.raises(ValueError, match="unknown reproduce target 'table-9'"):
+        paper.resolve(["table-9"])
     assert paper.resolve(["all"])[0] == "insertion"
     with pytest.raises(ValueError, match="unknown reproduce target 'table-99'"):
         paper.resolve(["table-99"])
@@ -31,12 +35,12 @@ def test_reproduce_all_quick_then_publish_and_verify(tmp_path):
     folders = {name: tmp_path / "runs" / name / "results" for name in ("insertion", "breadth", "beyond")}
     for folder in folders.values():
         assert (folder / "results.json").is_file()
-    assert (folders["breadth"] / "table_5.tex").is_file() and (folders["breadth"] / "fig_breadth_budget.pdf").is_file()
-    assert (folders["insertion"] / "table_testc.tex").is_file()
+    assert (folders["breadth"] / "table_II_breadth.tex").is_file() and (folders["breadth"] / "fig_breadth_budget.pdf").is_file()
+    assert (folders["insertion"] / "table_V_testc.tex").is_file()
     repo = tmp_path / "repo"
     publish({k: str(v) for k, v in folders.items()}, repo, timing={"wall_s": {"insertion": 1.0}})
     text = (repo / "REPRODUCTION.md").read_text()
-    assert "Table V" in text and "Beyond the paper" in text
+    assert "Table II" in text and "Beyond the paper" in text
     page = (repo / "results" / "paper" / "report.html").read_text()
     assert "data:image/png;base64," in page and "<table>" in page and "http" not in page.split("<body>")[1][:500]
     report = verify(repo / "results")
@@ -44,13 +48,26 @@ def test_reproduce_all_quick_then_publish_and_verify(tmp_path):
     assert report.checked > 788
 
 
-def test_setup_target_writes_table_2_and_fig_1b(tmp_path):
+def test_setup_target_writes_table_1_and_fig_1b(tmp_path):
     from probecommit.report import paper
 
-    done = paper.reproduce(["table-2"], tmp_path, quick=True)
+    done = paper.reproduce(["table-1"], tmp_path, quick=True)
     results = tmp_path / "setup" / "results"
     assert done["targets"] == {"setup": str(results)}
-    table = (results / "table_2.md").read_text()
+    table = (results / "table_I_setup.md").read_text()
     for family in paper.SETUP_ORDER:
         assert f"| {family} |" in table
-    assert (results / "fig_1b_belief.png").is_file() and (results / "fig_1b_belief.pdf").is_file()
+    assert (results / "fig_1b_overview_belief.png").is_file() and (results / "fig_1b_overview_belief.pdf").is_file()
+    assert done["machine"]["cores"] >= 1 and done["machine"]["cpu"]
+
+
+def test_publishing_a_target_again_drops_files_it_no_longer_makes(tmp_path):
+    first, second = tmp_path / "first", tmp_path / "second"
+    for folder, name in ((first, "table_9.md"), (second, "table_VII_hardware_simulated_rig.md")):
+        folder.mkdir()
+        (folder / name).write_text("| a |\n|---|\n| 1 |\n")
+        (folder / "results.json").write_text('{"results": {}}')
+    paper.publish({"robot": first}, tmp_path / "repo")
+    dest = paper.publish({"robot": second}, tmp_path / "repo") / "robot"
+    assert sorted(p.name for p in dest.iterdir()) == ["MANIFEST.json", "results.json",
+                                                      "table_VII_hardware_simulated_rig.md"]

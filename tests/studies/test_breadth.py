@@ -1,4 +1,4 @@
-"""Breadth study (Table V rows): hand-made tables with known answers, the figure, quick runs."""
+"""Breadth study (Table II rows): hand-made tables with known answers, the figure, quick runs."""
 
 from __future__ import annotations
 
@@ -9,7 +9,6 @@ import pytest
 from probecommit.studies.breadth import (
     as_success,
     truth_sign_flip,
-    PAPER_TABLE_V,
     breadth_markdown,
     breadth_row,
     breadth_table,
@@ -31,21 +30,25 @@ def table(values: dict[tuple[str, int], list[list[float]]]) -> pd.DataFrame:
 
 def test_row_means_and_paired_reduction_known_answer():
     ep = table({
-        ("blind_bayes", 0): [[0.7, 0.7], [0.7, 0.7], [0.7, 0.7]],
+        ("blind_bayes", 0): [[0.9, 0.9], [0.9, 0.9], [0.9, 0.9]],
         ("blind_robust", 0): [[1.0, 0.8], [0.6, 0.6], [0.9, 0.3]],
         ("probe_robust", 2): [[0.5, 0.5], [0.5, 0.5], [0.5, 0.5]],
         ("probe_robust", 5): [[0.2, 0.4], [0.5, 0.3], [0.1, 0.1]],
     })
     row = breadth_row(ep, "toy", k=5, resamples=500)
-    assert row["blind_bayes"] == pytest.approx(0.7)
+    assert row["blind_bayes"] == pytest.approx(0.9)
     assert row["blind_robust"] == pytest.approx(0.7)
     assert row["probe_robust"] == pytest.approx(1.6 / 6)
-    # Per-instance mean reductions: 0.6, 0.2, 0.5 -> overall 1.3 / 3.
-    assert row["paired"] == pytest.approx(1.3 / 3)
+    # The paper's Delta, Blind-Bayes - Probe-Robust: per-instance reductions 0.6, 0.5, 0.8.
+    assert row["paired"] == pytest.approx(1.9 / 3)
     assert row["n_pairs"] == 6 and row["n_instances"] == 3
-    assert 0.2 - 1e-12 <= row["paired_lo"] <= row["paired"] <= row["paired_hi"] <= 0.6 + 1e-12
-    assert row["blind_bayes_lo"] == pytest.approx(0.7) and row["blind_bayes_hi"] == pytest.approx(0.7)
-    assert breadth_row(ep, "toy", k=2, resamples=200)["paired"] == pytest.approx(0.2)
+    assert 0.5 - 1e-12 <= row["paired_lo"] <= row["paired"] <= row["paired_hi"] <= 0.8 + 1e-12
+    # The extra column, Blind-Robust - Probe-Robust: per-instance reductions 0.6, 0.2, 0.5.
+    assert row["paired_robust"] == pytest.approx(1.3 / 3)
+    assert 0.2 - 1e-12 <= row["paired_robust_lo"] <= row["paired_robust_hi"] <= 0.6 + 1e-12
+    assert row["blind_bayes_lo"] == pytest.approx(0.9) and row["blind_bayes_hi"] == pytest.approx(0.9)
+    k2 = breadth_row(ep, "toy", k=2, resamples=200)
+    assert (k2["paired"], k2["paired_robust"]) == pytest.approx((0.4, 0.2))
 
 
 def test_constant_reduction_has_a_degenerate_interval_and_failed_rows_are_ignored():
@@ -53,8 +56,8 @@ def test_constant_reduction_has_a_degenerate_interval_and_failed_rows_are_ignore
     ep = pd.concat([ep, pd.DataFrame([{"instance_id": "i0", "repeat": 9, "k": 0, "method": "rollout",
                                        "realized": np.nan, "status": "failed"}])], ignore_index=True)
     row = breadth_row(ep, "flat", resamples=200)
-    assert (row["paired"], row["paired_lo"], row["paired_hi"]) == pytest.approx((0.6, 0.6, 0.6))
-    assert np.isnan(row["blind_bayes"])  # no Blind-Bayes rows: reported as missing, not zero
+    assert (row["paired_robust"], row["paired_robust_lo"], row["paired_robust_hi"]) == pytest.approx((0.6, 0.6, 0.6))
+    assert np.isnan(row["blind_bayes"]) and np.isnan(row["paired"])  # no Blind-Bayes rows: missing, not zero
 
 
 def test_budget_curve_table_markdown_and_figure(tmp_path):
@@ -65,10 +68,8 @@ def test_budget_curve_table_markdown_and_figure(tmp_path):
     assert curve["mean"].tolist() == pytest.approx([0.5, 0.6, 0.3, 0.1])
     tab = breadth_table({"push2d": ep}, resamples=100)
     md = breadth_markdown(tab)
-    assert "push2d (ours, k=5) | m | 0.500 | 0.600 | 0.100 | 0.500 [0.500, 0.500]" in md
-    assert "push2d (paper, k=5) | m | 0.252 | 0.307 | 0.221 | 0.031 [0.007, 0.054]" in md
-    assert set(PAPER_TABLE_V) == {"push1d", "push2d", "push2d_pybullet", "darts", "hinge", "shuffleboard", "grasp",
-                                  "insertion_A"}
+    assert "push2d (ours, k=5) | m | 0.500 | 0.600 | 0.100 | 0.400 [0.400, 0.400] | 0.500 [0.500, 0.500] |" in md
+    assert "push2d (paper, k=5) | m | 0.252 | 0.307 | 0.221 | 0.031 [0.007, 0.054] | -- |" in md
     # Shuffleboard's cells are mean / P90 and its column is Probe-Robust(2).
     md = breadth_markdown(breadth_table({"shuffleboard": ep}, resamples=100))
     assert "shuffleboard (ours, k=2) | m (mean / P90) | 0.500 / 0.500 | 0.600 / 0.600 | 0.300 / 0.300 |" in md

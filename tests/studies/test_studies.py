@@ -156,7 +156,8 @@ def test_replay_refuses_to_change_readings(base_run):
 def test_reproduce_insertion_quick_end_to_end(tmp_path):
     pytest.importorskip("mujoco")
     from probecommit.report.reproduce import reproduce_insertion
-    from probecommit.report.reproduction_md import render
+    from probecommit.report.ledger import Ledger
+    from probecommit.report.reproduction_md import Doc, insertion_section
 
     rep = reproduce_insertion(tmp_path / "q", quick=True)
     payload = json.loads((tmp_path / "q" / "results" / "results.json").read_text())
@@ -165,5 +166,11 @@ def test_reproduce_insertion_quick_end_to_end(tmp_path):
     assert set(r["table_faults"]) == {"none", "noise", "boundary", "prior", "particles", "frame"}
     assert {"table_insertion", "table_audit", "table_testc", "robust", "resplits"} <= set(r)
     assert rep.engine_calls["tap_reading"] > 0
-    text = render(tmp_path / "q" / "results" / "results.json")
-    assert "Test C" in text and "| quantity | paper |" in text
+    assert set(r["fault_signatures"]["boundary"]) >= {"1", "8"}  # the figure's data, by fault and budget
+    publication = tmp_path / "pub"
+    (publication / "insertion").mkdir(parents=True)
+    (publication / "insertion" / "results.json").write_text(json.dumps(payload))
+    doc = Doc(publication, Ledger())
+    insertion_section(doc)
+    text = doc.text()
+    assert "Test C" in text and "| quantity | paper |" in text and "Table VIII" in text

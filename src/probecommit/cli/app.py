@@ -184,7 +184,7 @@ def replay(
     option, an insertion run is replayed under the corrected tap model, and a run of
     another family as deployed (it must reproduce its episodes). A robot
     session log is replayed as deployed (it must reproduce its own decisions), or
-    under an injected fault with --fault (paper Fig. 7c, 7d).
+    under an injected fault with --fault (paper Fig. 5c, 5d).
     """
     import yaml
 
@@ -240,7 +240,7 @@ def tasks(
     check: Optional[str] = typer.Option(None, "--check", metavar="NAME",
                                         help="Run check_family on family NAME (each failure names the declaration to fix)."),
 ) -> None:
-    """List every registered task family: engines, latents, probe, action, sigma, budgets (Table II)."""
+    """List every registered task family: engines, latents, probe, action, sigma, budgets (Table I)."""
     import importlib.util
 
     if check is not None:

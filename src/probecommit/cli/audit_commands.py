@@ -92,7 +92,7 @@ def write_csv(frame, path: Path) -> None:
 
 @user_errors
 def audit_command(
-    path: Path = typer.Argument(..., help="Run directory, a Parquet/CSV episode log, or a robot session log (.jsonl or its directory: Table IX)."),
+    path: Path = typer.Argument(..., help="Run directory, a Parquet/CSV episode log, or a robot session log (.jsonl or its directory: Table VII)."),
     out: Optional[Path] = typer.Option(None, "--out", "-o", help="Output folder (default: the run directory, "
                                        "or <log>-audit next to a log file)."),
     resamples: int = typer.Option(2000, min=100, help="Cluster-bootstrap resamples."),

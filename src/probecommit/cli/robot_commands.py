@@ -1,4 +1,4 @@
-"""Robot sessions on the command line: the stand-in robot, a log's audit (Table IX) and its fault replays."""
+"""Robot sessions on the command line: the stand-in robot, a log's audit (Table VII) and its fault replays."""
 
 from __future__ import annotations
 
@@ -33,7 +33,7 @@ def _ci(lo: float, hi: float) -> str:
 
 
 def print_robot_table(table, title: str) -> None:
-    """Table IX in 80 columns."""
+    """Table VII in 80 columns."""
     t = Table(title=title, title_style="bold", box=box.SIMPLE_HEAD, padding=(0, 1), pad_edge=False)
     for col in ("taps", "n", "in win", "entered", "pred", "real", "optim", "95% CI", "cover", "aim mm"):
         t.add_column(col, justify="right", no_wrap=True)
@@ -46,7 +46,7 @@ def print_robot_table(table, title: str) -> None:
 
 
 def audit_session_log(path: Path, out: Optional[Path], resamples: int, seed: int) -> None:
-    """``probecommit audit LOG`` for a session log: Table IX, Fig. 7b, CSVs."""
+    """``probecommit audit LOG`` for a session log: Table VII, Fig. 5b, CSVs."""
     from probecommit.cli.audit_commands import write_csv
     from probecommit.report.figures import save_figure
     from probecommit.report.robot_figures import aim_error_figure
@@ -84,7 +84,7 @@ def audit_session_log(path: Path, out: Optional[Path], resamples: int, seed: int
 
 def replay_session_log(path: Path, fault: Optional[str], sweep: Optional[str], half_width: Optional[float],
                        out: Optional[Path], resamples: int, seed: int) -> None:
-    """``probecommit replay LOG [--fault ...]``: as deployed, or a fault sweep (Fig. 7c/7d)."""
+    """``probecommit replay LOG [--fault ...]``: as deployed, or a fault sweep (Fig. 5c/5d)."""
     from probecommit.cli.audit_commands import write_csv
     from probecommit.report.figures import save_figure
     from probecommit.report.robot_figures import fault_sweep_figure
@@ -150,7 +150,7 @@ def simulate(
 ) -> None:
     """Run the simulated rig (the stand-in robot) through a Session, writing a session log.
 
-    Then: 'probecommit audit OUT' (Table IX) and 'probecommit replay OUT --fault boundary'.
+    Then: 'probecommit audit OUT' (Table VII) and 'probecommit replay OUT --fault boundary'.
     """
     from probecommit.robot.simulated import simulate_session
     from probecommit.studies.robot import rig_config  # the paper's rig protocol: a study names its family

@@ -32,7 +32,7 @@ def _stepper():
 
 
 def reproduce(
-    targets: Optional[list[str]] = typer.Argument(None, help="Targets: insertion, breadth, beyond, all, or a paper item such as table-7 (see --list)."),
+    targets: Optional[list[str]] = typer.Argument(None, help="Targets: insertion, breadth, beyond, all, or a paper item in the paper's numbering such as table-5 or tab:testc (see --list)."),
     list_targets: bool = typer.Option(False, "--list", help="List every target and the tables and figures it makes."),
     quick: bool = typer.Option(False, "--quick", help="The same pipelines on a few instances (minutes; for CI)."),
     out: Optional[Path] = typer.Option(None, "--out", "-o", help="Root for run directories and results (default runs/paper[-quick])."),
@@ -66,7 +66,7 @@ def reproduce(
         done = paper.reproduce(names, root, quick=quick, progress=update, workers=workers, options=options)
     for name, folder in done["targets"].items():
         console.print(f"{escape(name)}: [bold]{escape(str(folder))}[/bold]  (wall {done['wall_s'][name] / 60:.1f} min)")
-    # A family subset would replace the frozen Table V with a partial one: published only on request.
+    # A family subset would replace the frozen Table II with a partial one: published only on request.
     if publish if publish is not None else not (quick or families):
         from probecommit.report.publish import publish as publish_results
 

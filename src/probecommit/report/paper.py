@@ -98,7 +98,7 @@ OPTIONS: dict[str, Any] = {}
 
 
 def insertion_row(root: Path) -> dict[str, Any] | None:
-    """Table V's insertion row (failure on Split A, cover k = 5) from this reproduction's insertion
+    """Table II's insertion row (failure on Split A, cover k = 5) from this reproduction's insertion
     results, or None when ``reproduce insertion`` has not run under ``root``."""
     path = root / "insertion" / "results" / "results.json"
     if not path.is_file():
@@ -109,7 +109,8 @@ def insertion_row(root: Path) -> dict[str, Any] | None:
     return {"family": "insertion_A", "k": 5, "blind_bayes": bb[0], "blind_bayes_lo": bb[1], "blind_bayes_hi": bb[2],
             "blind_robust": float("nan"), "blind_robust_lo": float("nan"), "blind_robust_hi": float("nan"),
             "probe_robust": pr[0], "probe_robust_lo": pr[1], "probe_robust_hi": pr[2],
-            "paired": paired[0], "paired_lo": paired[1], "paired_hi": paired[2]}
+            "paired": paired[0], "paired_lo": paired[1], "paired_hi": paired[2],
+            "paired_robust": float("nan"), "paired_robust_lo": float("nan"), "paired_robust_hi": float("nan")}
 
 
 def _breadth(root: Path, quick: bool, progress: Progress, workers: int) -> Path:
@@ -148,11 +149,12 @@ def _breadth(root: Path, quick: bool, progress: Progress, workers: int) -> Path:
     row = insertion_row(root)
     if row is not None:
         table = pd.concat([pd.DataFrame([row]), table], ignore_index=True)
-    table.to_parquet(results / "table_5.parquet")
+    table.to_parquet(results / "table_II_breadth.parquet")
     curves.to_parquet(results / "budget_curves.parquet")
-    write_table(results, "table_5", breadth_markdown(table))
+    write_table(results, "table_II_breadth", breadth_markdown(table))
     plot_budget_curves(curves, results / "fig_breadth_budget.png")
-    payload = {"results": {"table_5": json.loads(table.to_json(orient="records")),
+    rows = json.loads(table.to_json(orient="records"))
+    payload = {"results": {"table_II": {row["family"]: row for row in rows},
                            "curves": json.loads(curves.to_json(orient="records")),
                            "sign_flip_over_truths": sign_flips}}
     (results / "results.json").write_text(json.dumps(payload, indent=1))
@@ -170,22 +172,26 @@ def _beyond(root: Path, quick: bool, progress: Progress, workers: int) -> Path:
 
 
 TARGETS: dict[str, Target] = {
-    "insertion": Target("insertion", ("Table III (audit)", "Table IV (failure by split)", "Table VI (faults)",
-                                      "Table VII (Test C)", "Fig. 4", "Fig. 5", "Fig. 6", "scan and cover search",
-                                      "re-splits, robust filters"), (), _insertion),
-    "breadth": Target("breadth", ("Table V (every family: insertion A, 1-D push, 2-D push MuJoCo and PyBullet, darts, "
+    "insertion": Target("insertion", ("Table III (tab:audit)", "Table IV (tab:insertion)", "Table V (tab:testc)",
+                                      "Table VIII (tab:faults)", "Fig. 4 (fig:teaser)", "Fig. 6 (fig:decision)",
+                                      "Fig. 7 (fig:signatures)", "scan and cover search", "re-splits, robust filters"),
+                        (), _insertion),
+    "breadth": Target("breadth", ("Table II (tab:breadth: insertion A, 1-D push, 2-D push MuJoCo and PyBullet, darts, "
                                   "hinge, shuffleboard, grasp)", "miss-vs-budget figure", "grasp's sign-flip over truths"),
                       (), _breadth),
     "beyond": Target("beyond", ("hull set at t = 1", "resample-move belief", "adaptive probes"),
                      ("insertion", "breadth"), _beyond),
 }
 
-#: Paper item -> target that makes it (table numbers as the project's issues number them:
-#: II setup, III audit, IV failure by split, V every family, VI faults, VII Test C,
-#: VIII engines, IX physical arm).
+#: Paper item -> target that makes it, in the paper's own numbering (LaTeX numbers tables and
+#: figures in source order: Table I setup, II breadth, III audit, IV insertion by split, V Test C,
+#: VI engines, VII hardware, VIII faults; Fig. 1 overview, 2 pipeline, 3 testbeds, 4 the failure the
+#: audit found, 5 hardware, 6 commit decision, 7 fault signatures), and by the paper's labels.
 ALIASES = {
-    "table-3": "insertion", "table-4": "insertion", "table-6": "insertion", "table-7": "insertion",
-    "fig-4": "insertion", "fig-5": "insertion", "fig-6": "insertion", "table-5": "breadth",
+    "table-3": "insertion", "table-4": "insertion", "table-5": "insertion", "table-8": "insertion",
+    "fig-4": "insertion", "fig-6": "insertion", "fig-7": "insertion", "table-2": "breadth",
+    "tab:audit": "insertion", "tab:insertion": "insertion", "tab:testc": "insertion", "tab:faults": "insertion",
+    "fig:teaser": "insertion", "fig:decision": "insertion", "fig:signatures": "insertion", "tab:breadth": "breadth",
 }
 
 
@@ -240,6 +246,23 @@ def engine_calls_under(folder: str | Path) -> dict[str, int]:
     return totals
 
 
+def machine() -> dict[str, Any]:
+    """The machine a reproduction runs on (REPRODUCTION.md describes it from this record)."""
+    import os
+    import platform
+
+    cpu = platform.processor() or platform.machine()
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                cpu = line.split(":", 1)[1].strip()
+                break
+    except OSError:
+        pass
+    return {"cpu": cpu, "cores": os.cpu_count() or 0, "platform": platform.platform(),
+            "python": platform.python_version(), "numpy": np.__version__}
+
+
 def reproduce(names: list[str], root: str | Path, quick: bool = False, progress: Progress = _noop,
               workers: int = 1, options: dict[str, Any] | None = None) -> dict[str, Any]:
     """Run the named targets (dependencies first) into ``root``.
@@ -253,7 +276,7 @@ def reproduce(names: list[str], root: str | Path, quick: bool = False, progress:
     root = Path(root)
     OPTIONS.clear()
     OPTIONS.update(options or {})
-    out: dict[str, Any] = {"targets": {}, "wall_s": {}, "engine_calls": {}}
+    out: dict[str, Any] = {"targets": {}, "wall_s": {}, "engine_calls": {}, "machine": machine()}
     with shared_engine_answers():  # one engine cache for every run and replay: no query twice
         for name in resolve(names):
             start = time.perf_counter()
@@ -281,11 +304,46 @@ def publish(results: dict[str, str | Path], repo_root: str | Path) -> Path:
     for name, folder in results.items():
         dest = target_root / name
         dest.mkdir(parents=True, exist_ok=True)
+        fresh = {p.name for p in Path(folder).iterdir() if p.is_file()}
+        for stale in sorted(dest.iterdir()):  # a renamed or dropped file must not linger in the publication
+            if stale.is_file() and stale.suffix in PUBLISHED_SUFFIXES and stale.name not in fresh:
+                stale.unlink()
         for path in sorted(Path(folder).iterdir()):
             if path.is_file() and path.suffix in PUBLISHED_SUFFIXES and path.name not in UNPUBLISHED:
                 shutil.copy2(path, dest / path.name)
         write_manifest(dest)
     return target_root
+
+
+def engines_markdown(table: Any) -> str:
+    """Table VI: ours per engine and variant, the paper's row under each of ours (labelled)."""
+    from probecommit.studies.paper_values import PRINTED as PAPER
+
+    header = "| quantity | " + " | ".join(f"{e} {v}" for e, v in table.columns) + " |"
+    lines = [header, "|---" * (len(table.columns) + 1) + "|"]
+    for label, values in table.iterrows():
+        metric = label.replace(" ", "_")
+        lines.append(f"| {label} (ours) | " + " | ".join(f"{v:.3f}" for v in values) + " |")
+        lines.append(f"| {label} (paper) | " + " | ".join(PAPER.get(f"tab:engines.{e}/{v}.{metric}", "--")
+                                                      for e, v in table.columns) + " |")
+    return "\n".join(lines)
+
+
+def engine_scans_markdown(scans: dict[str, Any]) -> str:
+    """Each engine's scanned boundary offset and capture window, beside the paper's (Sec. V-C)."""
+    from probecommit.studies.paper_values import PRINTED as PAPER
+
+    lines = ["| engine | boundary offset (mm, hg + delta) | SD | capture window / w(c) | SD over truths | paper offset | "
+             "paper ratio |", "|---|---|---|---|---|---|---|"]
+    for engine, s in scans.items():
+        b, c = s["boundary"], s["capture"]
+        offset = PAPER.get(f"T18-engine-scans.{engine}_offset", "--")
+        ratio = PAPER.get(f"T18-engine-scans.{engine}_ratio", "--")
+        if f"T18-engine-scans.{engine}_ratio_sd" in PAPER:
+            ratio += f" (SD {PAPER[f'T18-engine-scans.{engine}_ratio_sd']})"
+        lines.append(f"| {engine} | {b['delta']:+.3f} | {b['sd']:.3f} | {c['ratio_mean']:.3f} | {c['ratio_sd']:.3f} | "
+                     f"{offset} | {ratio} |")
+    return "\n".join(lines)
 
 
 def _engines(root: Path, quick: bool, progress: Progress, workers: int) -> Path:
@@ -300,41 +358,29 @@ def _engines(root: Path, quick: bool, progress: Progress, workers: int) -> Path:
     results.mkdir(parents=True, exist_ok=True)
     study = run_engine_study(protocol, folder / "runs", workers=workers, progress=progress)
     table, escape = study["table"], study["escape"]
-    paper_values = {("pybullet", "deployed"): (0.167, 0.763, 0.232, 0.307), ("pybullet", "mj_offset"): (0.023, 0.951, 0.002, 0.109),
-                    ("pybullet", "own_scan"): (0.031, 0.948, -0.002, 0.107), ("sapien", "deployed"): (0.039, 0.914, 0.369, 0.474),
-                    ("sapien", "mj_offset"): (0.065, 0.872, 0.419, 0.534), ("sapien", "own_scan"): (0.000, 0.995, 0.338, 0.469)}
-    header = "| quantity | " + " | ".join(f"{e} {v}" for e, v in table.columns) + " |"
-    lines = [header, "|---" * (len(table.columns) + 1) + "|"]
-    for i, (label, values) in enumerate(table.iterrows()):
-        lines.append(f"| {label} (ours) | " + " | ".join(f"{v:.3f}" for v in values) + " |")
-        lines.append(f"| {label} (paper) | " + " | ".join(
-            f"{paper_values[c][i]:.3f}" if c in paper_values else "--" for c in table.columns) + " |")
-    write_table(results, "table_engines", "\n".join(lines))
-    scan_lines = ["| engine | boundary offset (mm, hg + delta) | SD | capture window / w(c) | SD over truths | paper offset | paper ratio |",
-                  "|---|---|---|---|---|---|---|"]
-    paper_scan = {"pybullet": ("+0.929", "1.21 (SD 0.69)"), "sapien": ("-0.209", "0.55")}
-    for engine, s in study["scans"].items():
-        b, c = s["boundary"], s["capture"]
-        scan_lines.append(f"| {engine} | {b['delta']:+.3f} | {b['sd']:.3f} | {c['ratio_mean']:.3f} | {c['ratio_sd']:.3f} | "
-                          f"{paper_scan.get(engine, ('--', '--'))[0]} | {paper_scan.get(engine, ('--', '--'))[1]} |")
-    write_table(results, "engine_scans", "\n".join(scan_lines))
+    write_table(results, "table_VI_engines", engines_markdown(table))
+    write_table(results, "engine_scans", engine_scans_markdown(study["scans"]))
     flat = table.copy()
     flat.columns = [f"{e}/{v}" for e, v in flat.columns]
-    flat.to_parquet(results / "table_engines.parquet")
+    flat.to_parquet(results / "table_VI_engines.parquet")
     escape.to_parquet(results / "escape_by_budget.parquet")
     payload = {"results": {
         "table": {f"{e}/{v}": dict(zip([r.replace(" ", "_") for r in table.index], map(float, table[(e, v)])))
                   for e, v in table.columns},
         "paired_failure": study["paired"], "scans": study["scans"],
         "escape_by_budget": json.loads(escape.to_json(orient="records")),
+        # The same numbers by name, so a claim can cite one (``paired.pybullet/mj_offset``, ``escape.sapien/deployed.8``).
+        "paired": {f"{p['engine']}/{p['variant']}": p["failure_difference"] for p in study["paired"]},
+        "escape": {f"{e}/{v}": {str(int(r["k"])): float(r["escape"]) for _, r in part.iterrows()}
+                   for (e, v), part in escape.groupby(["engine", "variant"], sort=False)},
     }}
     (results / "results.json").write_text(json.dumps(payload, indent=1, default=float))
     return results
 
 
-TARGETS["engines"] = Target("engines", ("Table VIII (PyBullet and PhysX)", "scanned boundary offsets and capture windows per engine",
+TARGETS["engines"] = Target("engines", ("Table VI (tab:engines: PyBullet and PhysX)", "scanned boundary offsets and capture windows per engine",
                                         "escape against k per engine"), (), _engines)
-ALIASES["table-8"] = "engines"
+ALIASES["table-6"] = ALIASES["tab:engines"] = "engines"
 
 
 def _gru(root: Path, quick: bool, progress: Progress, workers: int) -> Path:
@@ -354,7 +400,8 @@ TARGETS["gru"] = Target("gru", ("the GRU baseline on MuJoCo 2-D pushing, with th
 def _robot(root: Path, quick: bool, progress: Progress, workers: int) -> Path:
     from probecommit.report.figures import save_figure
     from probecommit.report.robot_figures import aim_error_figure, fault_sweep_figure
-    from probecommit.studies.robot import SIM_ERROR_AT_RIG_SCALE_MM, run_robot_study, sweep_markdown, table_markdown
+    from probecommit.studies.robot import (RIG_LABEL, SIM_ERROR_AT_RIG_SCALE_MM, run_robot_study, sweep_markdown,
+                                           table_markdown)
     from probecommit.tasks.rig.model import rig_half_gap, rig_window
 
     results = root / "robot" / "results"
@@ -364,36 +411,48 @@ def _robot(root: Path, quick: bool, progress: Progress, workers: int) -> Path:
     study.table.to_parquet(results / "table_robot.parquet")
     study.boundary.to_parquet(results / "fault_boundary.parquet")
     study.prior.to_parquet(results / "fault_prior.parquet")
-    write_table(results, "table_9", table_markdown(study.table))
-    write_table(results, "fault_boundary", sweep_markdown(study.boundary, "boundary pulled in (mm)"))
-    write_table(results, "fault_prior", sweep_markdown(study.prior, "prior half-width (mm)"))
-    save_figure(aim_error_figure(study.episodes.rows, float(rig_window(1.0)), float(rig_half_gap(1.0))),
-                results / "fig_7b_aim_error.png")
+    write_table(results, "table_VII_hardware_simulated_rig", table_markdown(study.table))
+    write_table(results, "fault_boundary_simulated_rig", sweep_markdown(study.boundary, "boundary pulled in (mm)"))
+    write_table(results, "fault_prior_simulated_rig", sweep_markdown(study.prior, "prior half-width (mm)"))
+    save_figure(aim_error_figure(study.episodes.rows, float(rig_window(1.0)), float(rig_half_gap(1.0)), title=RIG_LABEL),
+                results / "fig_5b_hardware_simulated_rig_aim_error.png")
     save_figure(fault_sweep_figure(study.boundary, "boundary pulled inward (mm)", SIM_ERROR_AT_RIG_SCALE_MM,
-                                   "sim. 2.1 mm error at rig scale"), results / "fig_7c_boundary_fault.png")
-    save_figure(fault_sweep_figure(study.prior.sort_values("size"), "prior half-width (mm)"),
-                results / "fig_7d_prior_fault.png")
+                                   "sim. error at rig scale", title=RIG_LABEL),
+                results / "fig_5c_hardware_simulated_rig_boundary_fault.png")
+    save_figure(fault_sweep_figure(study.prior.sort_values("size"), "prior half-width (mm)", title=RIG_LABEL),
+                results / "fig_5d_hardware_simulated_rig_prior_fault.png")
     (results / "results.json").write_text(json.dumps(study.payload(), indent=1, default=float))
     return results
 
 
-TARGETS["robot"] = Target("robot", ("Table IX (the simulated rig run as a robot session)",
-                                    "Fig. 7b-d: aim error against taps, replays under boundary and prior faults"),
+TARGETS["robot"] = Target("robot", ("Table VII (tab:hardware) on the simulated rig, run as a robot session",
+                                    "Fig. 5b-d (fig:hardware) on the simulated rig: aim error against taps, replays under boundary and prior faults"),
                           (), _robot)
-ALIASES["table-9"] = "robot"
-ALIASES["fig-7"] = "robot"
+ALIASES["table-7"] = ALIASES["tab:hardware"] = "robot"
+ALIASES["fig-5"] = ALIASES["fig:hardware"] = "robot"
 
 
-#: Table II's row order (the paper's), then the transfer and the rig.
+#: Table I's row order (the paper's), then the transfer and the rig.
 SETUP_ORDER = ("insertion", "push1d", "push2d", "darts", "hinge", "shuffleboard", "grasp", "rig")
-#: The paper's Table II engines and n, for the side-by-side.
-PAPER_TABLE_II = {"insertion": ("all three", "96 x 4"), "push1d": ("analytic", "81 x 6"), "push2d": ("MuJoCo", "18 x 6"),
-                  "darts": ("MuJoCo", "18 x 8"), "hinge": ("MuJoCo", "18 x 16"), "shuffleboard": ("SAPIEN", "18 x 6"),
-                  "grasp": ("MuJoCo", "16 x 80")}
+#: The paper's Table I engines and n, for the side-by-side.
+#: The paper's Table I engines (text); its n come from the paper-values table.
+PAPER_TABLE_I_ENGINES = {"insertion": "all three", "push1d": "analytic", "push2d": "MuJoCo", "darts": "MuJoCo",
+                         "hinge": "MuJoCo", "shuffleboard": "SAPIEN", "grasp": "MuJoCo"}
+
+
+def paper_setup_cell(family: str) -> str:
+    """``engine, n`` of Table I for ``family`` (``--`` for a family the paper does not have)."""
+    from probecommit.studies.paper_values import PRINTED
+
+    n = PRINTED.get(f"tab:setup.{family}.n")
+    if n is None:
+        return "--, --"
+    times = "{\\times}"
+    return f"{PAPER_TABLE_I_ENGINES[family]}, {n.replace(times, ' x ')}"
 
 
 def _setup(root: Path, quick: bool, progress: Progress, workers: int) -> Path:
-    """Table II from the task registry, and Fig. 1b (an insertion belief after taps 1, 3, 5)."""
+    """Table I from the task registry, and Fig. 1b (an insertion belief after taps 1, 3, 5)."""
     from importlib import resources
 
     import yaml
@@ -413,29 +472,29 @@ def _setup(root: Path, quick: bool, progress: Progress, workers: int) -> Path:
         spec = specs[name]
         s = spec.summary
         engines = ", ".join(e for e in spec.engines if e != "analytic") or "analytic"
-        paper = PAPER_TABLE_II.get(name, ("--", "--"))
         lines.append(f"| {name} | {engines} | {s.get('latents', '')} | {s.get('probe', '')} / {s.get('action', '')} | "
                      f"{s.get('sigma', '')} | {s.get('budgets', '')} | {s.get('n', '')}; {s.get('metric', '')} | "
-                     f"{paper[0]}, {paper[1]} |")
+                     f"{paper_setup_cell(name)} |")
         rows.append({"family": name, "engines": list(spec.engines), **s})
-    write_table(results, "table_2", "\n".join(lines))
+    write_table(results, "table_I_setup", "\n".join(lines))
     data = yaml.safe_load(resources.files("probecommit").joinpath("configs/demo.yaml").read_text())
     if quick:
         data["instances"]["count"] = 2
     run = run_study(parse_config(data), root / "setup" / "runs" / ("demo-quick" if quick else "demo"), workers=workers)
     figure = belief_figure(run.run_dir, results)
-    figure.rename(results / "fig_1b_belief.png")
+    figure.rename(results / "fig_1b_overview_belief.png")
     pdf = figure.with_suffix(".pdf")
     if pdf.is_file():
-        pdf.rename(results / "fig_1b_belief.pdf")
-    (results / "results.json").write_text(json.dumps({"results": {"families": rows}}, indent=1))
+        pdf.rename(results / "fig_1b_overview_belief.pdf")
+    (results / "results.json").write_text(json.dumps(
+        {"results": {"families": rows, "families_by_name": {row["family"]: row for row in rows}}}, indent=1))
     return results
 
 
-TARGETS["setup"] = Target("setup", ("Table II (the task families, from the registry)",
-                                    "Fig. 1b (an insertion belief after taps 1, 3 and 5)"), (), _setup)
-ALIASES["table-2"] = "setup"
-ALIASES["fig-1"] = "setup"
+TARGETS["setup"] = Target("setup", ("Table I (tab:setup: the task families, from the registry)",
+                                    "Fig. 1b (fig:overview: an insertion belief after taps 1, 3 and 5)"), (), _setup)
+ALIASES["table-1"] = ALIASES["tab:setup"] = "setup"
+ALIASES["fig-1"] = ALIASES["fig:overview"] = "setup"
 
 
 def plot_pricing(table: Any, path: str | Path) -> Path:
@@ -476,8 +535,9 @@ def _cost(root: Path, quick: bool, progress: Progress, workers: int) -> Path:
     table.to_parquet(results / "pricing.parquet")
     write_table(results, "table_pricing", pricing_markdown(table))
     plot_pricing(table, results / "fig_pricing.png")
-    (results / "results.json").write_text(json.dumps({"results": {"pricing": json.loads(table.to_json(orient="records"))}},
-                                                     indent=1))
+    records = json.loads(table.to_json(orient="records"))
+    (results / "results.json").write_text(json.dumps(
+        {"results": {"pricing": records, "prices": {r["family"]: r for r in records}}}, indent=1))
     return results
 
 

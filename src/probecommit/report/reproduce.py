@@ -187,7 +187,7 @@ class InsertionReproduction:
         summary["frozen_delta"] = p.delta
         self.rep.results["scan"] = summary
         first = str(result.scans["instance_id"].iloc[0])
-        self.rep.figures["scan"] = str(scan_figure(result.grid, result.scans, first, summary["delta"], self.out / "fig_scan_section.png"))
+        self.rep.figures["scan"] = str(scan_figure(result.grid, result.scans, first, summary["delta"], self.out / "fig_4a_teaser_scan_section.png"))
         self.write_table(
             "scan", "Boundary scan on the development truths",
             md_table(["scans", "delta mean (mm)", "SD", "min", "max", "shift vs deployed hg - r (mm)", "frozen delta"],
@@ -247,7 +247,7 @@ class InsertionReproduction:
         blind_a = a[(a.method == "blind_bayes") & (a.status == "ok")]
         a_no = cluster_bootstrap_mean(blind_a["realized"].to_numpy(float), blind_a["instance_id"].to_numpy(), **b)
         a_k5 = episode_metrics(a, 5, **b)["failure"]
-        # Table V's insertion row: Blind-Bayes minus cover k = 5, paired on (instance, repeat).
+        # Table II's insertion row: Blind-Bayes minus cover k = 5, paired on (instance, repeat).
         cover_a = a[(a.method == "probe_robust") & (a.k == 5) & (a.status == "ok")]
         a_paired = paired_bootstrap(cover_a, blind_a, "realized", keys=("instance_id", "repeat"), **b)
         self.cal_cover = calibrate(L["B_cal_cover"], L["B_test_cover"], alpha=self.p.alpha, budgets=[1, 2, 3, 4, 5], **b, **self.chunk)
@@ -271,7 +271,7 @@ class InsertionReproduction:
                 ["A", "cover, k=5", "no", "no", fmt(a_k5)]]
         for _, r in self.cal_cover.cost.iterrows():
             rows.append(["B", *self._cost_row(r)])
-        self.write_table("table_insertion", "Insertion failure by split and calibration setting (MuJoCo)",
+        self.write_table("table_IV_insertion", "Insertion failure by split and calibration setting (MuJoCo)",
                          md_table(["split", "method", "set cal.", "margin", "failure [95% CI]"], rows),
                          note=f"Margin gamma (cover) = {res['margin_cover']}; conformal t_k (cover) = "
                               f"{ {k: round(v, 3) for k, v in res['thresholds_cover'].items()} }; distribution-free margin = "
@@ -295,7 +295,7 @@ class InsertionReproduction:
         cols = [c for c in t3.columns if not c.endswith(("_lo", "_hi"))]
         rows = [[fmt(v) if isinstance(v, float) else v for v in r] for r in t3[cols].itertuples(index=False)]
         s = self.cal_random.summary
-        self.write_table("table_audit", "Insertion audit, Split B, random probes (MuJoCo)", md_table(cols, rows),
+        self.write_table("table_III_audit", "Insertion audit, Split B, random probes (MuJoCo)", md_table(cols, rows),
                          note=f"Summary: {json.dumps({k: round(float(v), 3) for k, v in s.items()})}. "
                               f"Escape k=1: {fmt(esc[1]['escape'])}, k=8: {fmt(esc[8]['escape'])}; "
                               f"episode coverage k=1: {fmt(esc[1]['episode_coverage'])}, k=8: {fmt(esc[8]['episode_coverage'])}.")
@@ -321,7 +321,7 @@ class InsertionReproduction:
                                                  "simultaneous_threshold": {"old": cal_old.simultaneous_threshold, "corrected": cal_new.simultaneous_threshold}}
         rows.append(["failure_cover_k5_setcal_margin", fmt(fo), fmt(fn), f"{fo - fn:+.3f}" if isinstance(fo, float) else "--"])
         self.rep.results["table_testc"] = res
-        self.write_table("table_testc", "Confirmation on untouched instances (Test C), MuJoCo",
+        self.write_table("table_V_testc", "Confirmation on untouched instances (Test C), MuJoCo",
                          md_table(["row", "old", "corrected", "old - corrected [95% CI]"], rows),
                          note="Both models see identical taps; paired cluster bootstrap over instances.")
 
@@ -359,9 +359,13 @@ class InsertionReproduction:
                           fmt(row["paired_fix"], signed=True) if "paired_fix" in row else "--"])
         signatures = signature_table(episodes)
         signatures.to_parquet(self.out / "fault_signatures.parquet")
-        self.rep.figures["signatures"] = str(fault_signatures(signatures, self.out / "fig_fault_signatures.png"))
+        # The figure's data by fault and budget, so a claim can name one point (``fault_signatures.prior.1``).
+        self.rep.results["fault_signatures"] = {
+            str(fault): {str(int(r["k"])): {c: float(r[c]) for c in ("escape", "coverage", "optimism", "failure")}
+                         for _, r in part.iterrows()} for fault, part in signatures.groupby("fault", sort=False)}
+        self.rep.figures["signatures"] = str(fault_signatures(signatures, self.out / "fig_7_signatures.png"))
         self.rep.results["table_faults"] = res
-        self.write_table("table_faults", f"Controlled mismatch tests, random probes, k = {kmax} (MuJoCo)",
+        self.write_table("table_VIII_faults", f"Controlled mismatch tests, random probes, k = {kmax} (MuJoCo)",
                          md_table(["fault", "fail [95% CI]", "surprise AUC", f"tempered T={f.temperature:g}", "known fix", "fix - fault (paired)"], table))
 
     def robust(self) -> None:
@@ -445,7 +449,7 @@ class InsertionReproduction:
         k = self.p.budgets["random"]
         coverage = coverage_vs_nominal(L["B_cal_random"].episodes, L["B_test_random"].episodes, k)
         coverage.to_parquet(self.out / "coverage_vs_nominal.parquet")
-        path = decision_figure(coverage, result, self.out / "fig_commit_gates.png")
+        path = decision_figure(coverage, result, self.out / "fig_6_decision.png")
         self.rep.figures["commit_gates"] = str(path)
         summary = result.summary
         self.rep.results["gates"] = {"summary": summary.to_dict("records"), "info": result.info}
@@ -459,7 +463,7 @@ class InsertionReproduction:
         """Table I, the insertion row, from the protocol."""
         p = self.p
         n = f"{p.instances['B'].count}x{p.repeats}"
-        self.write_table("table_setup", "Experimental setup, insertion (MuJoCo)", md_table(
+        self.write_table("table_I_setup_insertion", "Experimental setup, insertion (MuJoCo)", md_table(
             ["family", "engine", "latents", "probe / action", "sigma", "budgets k", "n; metric"],
             [["insertion", p.engine, "x_hole, c", "tap / aim", f"{p.sigma} mm", f"1-{p.budgets['random']}, cover {p.cover_schedule}",
               f"{n}; failure"]]))
@@ -491,7 +495,7 @@ class InsertionReproduction:
                 path = decisive_tap_figure(
                     z[e], now.weights[e], kept_new[e], trace_new.states[k].weights[e], float(z_true[e]),
                     float(batch.u[e, k - 1]), float(batch.y[e, k - 1, 0]),
-                    f"{batch.instance_id[e]} repeat {batch.repeat[e]}, after tap {k}", self.out / "fig_decisive_tap.png")
+                    f"{batch.instance_id[e]} repeat {batch.repeat[e]}, after tap {k}", self.out / "fig_4b_teaser_decisive_tap.png")
                 self.rep.figures["decisive_tap"] = str(path)
                 return
 

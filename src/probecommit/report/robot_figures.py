@@ -1,4 +1,4 @@
-"""Fig. 7 (b-d): the robot run and its replays under injected faults.
+"""Fig. 5 (b-d): the robot run and its replays under injected faults.
 
 (b) aim error against taps, one point per episode (filled: the tool entered; open: it
 did not), medians joined, the model's window as a band and the opening's half-width
@@ -16,8 +16,9 @@ import pandas as pd
 from probecommit.report.style import COLUMN
 
 
-def aim_error_figure(rows: pd.DataFrame, window: float | None = None, half_opening: float | None = None):
-    """Fig. 7b: aim error (mm) against taps."""
+def aim_error_figure(rows: pd.DataFrame, window: float | None = None, half_opening: float | None = None,
+                     title: str | None = None):
+    """Fig. 5b: aim error (mm) against taps. ``title`` labels the source (the simulated rig)."""
     fig, ax = plt.subplots(figsize=(COLUMN, 2.6))
     rng = np.random.default_rng(0)  # horizontal jitter only, for legibility
     entered = rows["entered"].fillna(0).astype(bool).to_numpy() if "entered" in rows else np.zeros(len(rows), bool)
@@ -36,11 +37,15 @@ def aim_error_figure(rows: pd.DataFrame, window: float | None = None, half_openi
     ax.set_xticks(sorted(rows["k"].unique()))
     ax.set_ylim(bottom=0)
     ax.legend(frameon=False, ncol=3, fontsize=6.5, loc="lower center", bbox_to_anchor=(0.5, 1.0))
+    if title:
+        fig.suptitle(title, fontsize=7, y=0.02, va="bottom")
+        fig.subplots_adjust(bottom=0.25)
     return fig
 
 
-def fault_sweep_figure(sweep: pd.DataFrame, xlabel: str, reference: float | None = None, reference_label: str = ""):
-    """Fig. 7c/7d: faulted minus deployed optimism and coverage against fault size, 95 % bands."""
+def fault_sweep_figure(sweep: pd.DataFrame, xlabel: str, reference: float | None = None, reference_label: str = "",
+                       title: str | None = None):
+    """Fig. 5c/5d: faulted minus deployed optimism and coverage against fault size, 95 % bands."""
     fig, axes = plt.subplots(1, 2, figsize=(COLUMN * 2, 2.1))
     for ax, metric, label in ((axes[0], "optimism", "optimism, faulted - deployed"),
                               (axes[1], "coverage", "coverage, faulted - deployed")):
@@ -57,5 +62,7 @@ def fault_sweep_figure(sweep: pd.DataFrame, xlabel: str, reference: float | None
         ax.set_xlabel(xlabel)
         ax.set_ylabel(label)
     axes[0].legend(frameon=False, fontsize=6.5)
+    if title:
+        fig.suptitle(title, fontsize=7)
     fig.tight_layout()
     return fig

@@ -371,5 +371,44 @@ def verify(results_root: str | Path, reproduction_md: str | Path | None = None) 
         reproduction_md = next((p / "REPRODUCTION.md" for p in [root, *root.resolve().parents]
                                 if (p / "REPRODUCTION.md").is_file()), None)
     if reproduction_md is not None:
-        check_reproduction(Path(reproduction_md), numbers, report)
+        if not _check_ledger(root, report):
+            check_reproduction(Path(reproduction_md), numbers, report)
     return report
+
+
+def _check_ledger(root: Path, report: Report) -> bool:
+    """Re-resolve every number of the published-numbers ledger, when the publication has one.
+
+    Returns whether a ledger was found (then it replaces the heuristic trace of REPRODUCTION.md).
+    """
+    from probecommit.report import ledger
+    from probecommit.studies.paper_values import tree
+
+    publication = next((p for p in (root, root / "paper") if (p / ledger.LEDGER_NAME).is_file()), None)
+    if publication is None:
+        return False
+    entries = ledger.read(publication)
+    problems = list(ledger.check(entries, publication, {"paper": tree()}))
+    report.checked += len(entries) - len(problems)
+    for problem in problems:
+        report.check(False, problem)
+    report.traces += [f"{e.file}: {e.text} <- {e.key}" for e in entries]
+    _check_claims(publication, report)
+    return True
+
+
+def _check_claims(publication: Path, report: Report) -> None:
+    """claims.json's statuses recomputed from the registry and the results tree."""
+    from probecommit.report import claims_json
+
+    path = publication / claims_json.CLAIMS_NAME
+    report.check(path.is_file(), f"{path}: missing (publishing writes the claims' statuses)")
+    if not path.is_file():
+        return
+    stored, again = json.loads(path.read_text()), claims_json.compute(publication)
+    report.check(stored.get("counts") == again["counts"],
+                 f"{path}: counts {stored.get('counts')} but the registry recomputes {again['counts']}")
+    for cid, entry in again["claims"].items():
+        old = stored.get("claims", {}).get(cid, {})
+        report.check((old.get("status"), old.get("experiment")) == (entry["status"], entry["experiment"]),
+                     f"{path}: {cid} is {old.get('status')!r} but recomputes as {entry['status']!r}")

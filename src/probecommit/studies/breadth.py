@@ -1,18 +1,19 @@
-"""Table V (every family, blind against probed) for the continuous-loss families.
+"""Table II (``tab:breadth``: every family, blind against probed) for the continuous-loss families.
 
 For each family's run directory (or frozen config, run here) this computes
 
 * the mean miss of Blind-Bayes (k = 0), Blind-Robust (k = 0) and Probe-Robust(k), each
   with a cluster-bootstrap interval over instances (repeats kept together);
-* the paired reduction ``Blind-Robust - Probe-Robust(k)`` on identical episodes
-  (same instance and seed: the only change is the information; the risk functional is
-  the same), with a paired cluster bootstrap over instances and a sign-flip p-value.
-  Positive = probing reduced the miss;
+* the paired reduction ``Blind-Bayes - Probe-Robust(k)`` on identical episodes (same
+  instance and seed), the paper's Delta column in every row (0.820 - 0.234 = 0.586 for
+  insertion), with a paired cluster bootstrap over instances and a sign-flip p-value;
+  positive = probing reduced the miss. ``Blind-Robust - Probe-Robust(k)`` (only the
+  information changes) is kept as the extra column ``paired_robust``;
 * the miss-versus-budget curve as a table, and a figure (3.5 in wide, PNG + PDF).
 
 Frozen configs live in ``configs/paper/<family>.yaml``; :func:`run_breadth` runs them
-through :func:`probecommit.runner.study.run_study`. The paper's own values are kept in
-:data:`PAPER_TABLE_V` for side-by-side reporting only; nothing reads them to set a value.
+through :func:`probecommit.runner.study.run_study`. The paper's own values are in
+:mod:`probecommit.studies.paper_values` (``tab:breadth.*``), for side-by-side reporting only.
 """
 
 from __future__ import annotations
@@ -27,31 +28,18 @@ from probecommit.audit.stats import DEFAULT_RESAMPLES, cluster_bootstrap_mean, p
 
 #: Families this study covers, in table order.
 BREADTH_FAMILIES = ("push1d", "push2d", "push2d_pybullet", "darts", "hinge", "shuffleboard", "grasp")
-#: Probe-Robust budget of each family's Table V column (paper: five probes, two for
+#: Probe-Robust budget of each family's Table II column (paper: five probes, two for
 #: shuffleboard, eight for grasp).
 FAMILY_K = {"shuffleboard": 2, "grasp": 8}
 #: Unit of a family's miss (m unless listed); grasp reports success on its feasible subset.
 FAMILY_UNIT = {"hinge": "rad", "grasp": "success"}
-#: Families whose Table V cell is "mean / P90".
+#: Families whose Table II cell is "mean / P90".
 P90_FAMILIES = ("shuffleboard",)
 #: Families reported as success on the feasible subset (binary loss; higher is better).
 SUCCESS_FAMILIES = ("grasp",)
 #: Frozen paper configs.
 #: The frozen paper configs shipped with the package (``configs/paper`` in the repository).
 PAPER_CONFIG_DIR = Path(__file__).resolve().parents[1] / "configs" / "paper"
-#: The paper's Table V rows (mean miss, m): Blind-Bayes, Blind-Robust, Probe-Robust(5), paired
-#: reduction [95% CI]; None where the paper reports none. Quoted for comparison only.
-PAPER_TABLE_V: dict[str, dict[str, Any]] = {
-    "push1d": {"blind_bayes": 0.491, "blind_robust": None, "probe_robust": 0.062, "paired": None},
-    "push2d": {"blind_bayes": 0.252, "blind_robust": 0.307, "probe_robust": 0.221, "paired": (0.031, 0.007, 0.054)},
-    "push2d_pybullet": {"blind_bayes": 0.243, "blind_robust": None, "probe_robust": 0.141, "paired": None},
-    "darts": {"blind_bayes": 0.026, "blind_robust": 0.035, "probe_robust": 0.010, "paired": (0.016, 0.009, 0.024)},
-    "hinge": {"blind_bayes": 0.334, "blind_robust": None, "probe_robust": 0.031, "paired": None, "note": "-91%"},
-    "shuffleboard": {"blind_bayes": 0.083, "blind_robust": None, "probe_robust": 0.050, "paired": None,
-                     "blind_bayes_p90": 0.199, "probe_robust_p90": 0.123},
-    "grasp": {"blind_bayes": 0.333, "blind_robust": None, "probe_robust": 0.692, "paired": None},
-    "insertion_A": {"blind_bayes": 0.820, "blind_robust": None, "probe_robust": 0.234, "paired": (0.586, 0.492, 0.674)},
-}
 #: Quick mode (CI): instances kept per family and particles.
 QUICK = {"instances": 2, "repeats": 2, "particles": 128, "blind_prior_samples": 500}
 
@@ -80,7 +68,7 @@ def _mean(rows: pd.DataFrame, resamples: int, seed: int) -> dict[str, float]:
 
 def breadth_row(episodes: pd.DataFrame, family: str = "", k: int = 5, *, resamples: int = DEFAULT_RESAMPLES,
                 seed: int = 0) -> dict[str, Any]:
-    """One Table V row from an episode table.
+    """One Table II row from an episode table.
 
     Args:
         episodes: Episode table with ``instance_id, repeat, k, method, realized`` (and
@@ -91,9 +79,10 @@ def breadth_row(episodes: pd.DataFrame, family: str = "", k: int = 5, *, resampl
 
     Returns:
         ``family, k, n_instances``; ``blind_bayes``, ``blind_robust``, ``probe_robust``
-        mean miss (with ``_lo``/``_hi``); ``paired`` = mean of Blind-Robust minus
+        mean miss (with ``_lo``/``_hi``); ``paired`` = mean of Blind-Bayes minus
         Probe-Robust(k) over paired (instance, repeat) episodes with ``paired_lo``,
-        ``paired_hi``, ``paired_p`` (sign-flip) and ``n_pairs`` (NaN when an arm is missing).
+        ``paired_hi``, ``paired_p`` (sign-flip) and ``n_pairs``; ``paired_robust`` the same for
+        Blind-Robust minus Probe-Robust(k) (NaN when an arm is missing).
     """
     row: dict[str, Any] = {"family": family, "k": int(k)}
     arms = {"blind_bayes": arm(episodes, "blind_bayes", 0), "blind_robust": arm(episodes, "blind_robust", 0),
@@ -104,13 +93,16 @@ def breadth_row(episodes: pd.DataFrame, family: str = "", k: int = 5, *, resampl
         row[name], row[f"{name}_lo"], row[f"{name}_hi"] = stat["mean"], stat["lo"], stat["hi"]
         row[f"{name}_p90"] = stat["p90"]
         row[f"n_{name}"] = stat["n"]
-    base, treat = arms["blind_robust"], arms["probe_robust"]
-    row.update(paired=float("nan"), paired_lo=float("nan"), paired_hi=float("nan"), paired_p=float("nan"), n_pairs=0)
-    if len(base) and len(treat):
-        # treatment = Blind-Robust, baseline = Probe-Robust(k): the difference is the reduction.
-        res = paired_bootstrap(treat, base, "realized", keys=PAIR_KEYS, resamples=resamples, seed=seed)
-        row.update(paired=res.difference.estimate, paired_lo=res.difference.lo, paired_hi=res.difference.hi,
-                   paired_p=res.p_sign_flip, n_pairs=res.n_pairs)
+    for name, base_arm in (("paired", "blind_bayes"), ("paired_robust", "blind_robust")):
+        row.update({name: float("nan"), f"{name}_lo": float("nan"), f"{name}_hi": float("nan"),
+                    f"{name}_p": float("nan"), f"n_pairs_{name}": 0})
+        base, treat = arms[base_arm], arms["probe_robust"]
+        if len(base) and len(treat):
+            # treatment = the blind arm, baseline = Probe-Robust(k): the difference is the reduction.
+            res = paired_bootstrap(treat, base, "realized", keys=PAIR_KEYS, resamples=resamples, seed=seed)
+            row.update({name: res.difference.estimate, f"{name}_lo": res.difference.lo,
+                        f"{name}_hi": res.difference.hi, f"{name}_p": res.p_sign_flip, f"n_pairs_{name}": res.n_pairs})
+    row["paired_p"], row["n_pairs"] = row.pop("paired_p"), row.pop("n_pairs_paired")
     return row
 
 
@@ -173,7 +165,7 @@ def truth_sign_flip(episodes: pd.DataFrame, truth_of: Mapping[str, str], k: int)
 
 def breadth_table(runs: Mapping[str, str | Path | pd.DataFrame], k: int = 5, *, resamples: int = DEFAULT_RESAMPLES,
                   seed: int = 0) -> pd.DataFrame:
-    """Table V rows for ``{family: run directory or episode table}``, in the given order."""
+    """Table II rows for ``{family: run directory or episode table}``, in the given order."""
     rows = []
     for family, src in runs.items():
         episodes = src if isinstance(src, pd.DataFrame) else read_episodes(src)
@@ -202,26 +194,41 @@ def _cell(r: Mapping[str, Any], name: str, p90: bool) -> str:
     return value
 
 
-def breadth_markdown(table: pd.DataFrame, paper: Mapping[str, Mapping[str, Any]] | None = PAPER_TABLE_V) -> str:
-    """Markdown Table V, ours next to the paper's where ``paper`` is given."""
-    head = "| family | unit | Blind-Bayes | Blind-Robust | Probe-Robust(k) | paired reduction [95%] |"
-    lines = [head, "|---|---|---|---|---|---|"]
+def _paired_cell(r: Mapping[str, Any], name: str) -> str:
+    v = r.get(name)
+    if v is None or not np.isfinite(v):
+        return "--"
+    return f"{v:.3f} [{r[f'{name}_lo']:.3f}, {r[f'{name}_hi']:.3f}]"
+
+
+def _paper_row(family: str) -> dict[str, Any] | None:
+    from probecommit.studies.paper_values import PRINTED as PAPER
+
+    cells = {k.rsplit(".", 1)[1]: v for k, v in PAPER.items() if k.startswith(f"tab:breadth.{family}.")}
+    return cells or None
+
+
+def breadth_markdown(table: pd.DataFrame, paper: bool = True) -> str:
+    """Markdown Table II, ours next to the paper's (``paper``); Delta = Blind-Bayes - Probe-Robust(k)."""
+    head = ("| family | unit | Blind-Bayes | Blind-Robust | Probe-Robust(k) | paired Delta = Blind-Bayes - Probe-Robust "
+            "[95%] | Blind-Robust - Probe-Robust [95%] |")
+    lines = [head, "|---|---|---|---|---|---|---|"]
     for _, r in table.iterrows():
         family = r["family"]
         p90 = family in P90_FAMILIES
         unit = FAMILY_UNIT.get(family, "m") + (" (mean / P90)" if p90 else "")
         if family == "insertion_A":
             unit = "failure"
-        paired = "--" if not np.isfinite(r["paired"]) else f"{r['paired']:.3f} [{r['paired_lo']:.3f}, {r['paired_hi']:.3f}]"
         lines.append(f"| {family} (ours, k={r['k']}) | {unit} | {_cell(r, 'blind_bayes', p90)} | "
-                     f"{_cell(r, 'blind_robust', p90)} | {_cell(r, 'probe_robust', p90)} | {paired} |")
-        p = (paper or {}).get(family)
+                     f"{_cell(r, 'blind_robust', p90)} | {_cell(r, 'probe_robust', p90)} | {_paired_cell(r, 'paired')} | "
+                     f"{_paired_cell(r, 'paired_robust')} |")
+        p = _paper_row(family) if paper else None
         if p:
-            pp = "--" if p["paired"] is None else f"{p['paired'][0]:.3f} [{p['paired'][1]:.3f}, {p['paired'][2]:.3f}]"
-            pp = p.get("note", pp) if p["paired"] is None and p.get("note") else pp
-            k_paper = FAMILY_K.get(family, 5)
-            lines.append(f"| {family} (paper, k={k_paper}) | {unit} | {_cell(p, 'blind_bayes', p90)} | "
-                         f"{_cell(p, 'blind_robust', p90)} | {_cell(p, 'probe_robust', p90)} | {pp} |")
+            delta = f"{p['delta']} [{p['delta_lo']}, {p['delta_hi']}]" if "delta" in p else p.get("change_percent", "--")
+            delta = f"{delta} %" if "delta" not in p and delta != "--" else delta
+            cell = lambda n: p.get(n, "--") + (f" / {p[n + '_p90']}" if p90 and n + "_p90" in p else "")  # noqa: E731
+            lines.append(f"| {family} (paper, k={FAMILY_K.get(family, 5)}) | {unit} | {cell('blind_bayes')} | "
+                         f"{cell('blind_robust')} | {cell('probe_robust')} | {delta} | -- |")
     return "\n".join(lines) + "\n"
 
 
@@ -309,7 +316,7 @@ def paper_config(family: str, config_dir: str | Path = PAPER_CONFIG_DIR) -> Any:
 def run_breadth(families: Iterable[str] = BREADTH_FAMILIES, out_dir: str | Path = "runs/breadth", quick: bool = False,
                 *, k: int = 5, workers: int = 1, resamples: int = DEFAULT_RESAMPLES, seed: int = 0,
                 config_dir: str | Path = PAPER_CONFIG_DIR) -> pd.DataFrame:
-    """Run each family's frozen config (resuming finished runs) and return its Table V rows.
+    """Run each family's frozen config (resuming finished runs) and return its Table II rows.
 
     Args:
         families: Family names with a ``configs/paper/<family>.yaml``.
@@ -349,7 +356,7 @@ def feasible_instances(config: Any, run_dir: str | Path) -> dict[str, bool]:
 
 
 def feasible_episodes(config: Any, run_dir: str | Path, episodes: pd.DataFrame) -> pd.DataFrame:
-    """The episodes of feasible instances only (grasp's Table V reports success on them)."""
+    """The episodes of feasible instances only (grasp's Table II reports success on them)."""
     feasible = feasible_instances(config, run_dir)
     out = episodes[episodes["instance_id"].map(feasible).fillna(False).astype(bool)]
     out.attrs["feasible"] = feasible

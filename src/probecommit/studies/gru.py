@@ -25,6 +25,7 @@ from probecommit.baselines.gru import TrainingConfig, act, encode_history, equiv
 from probecommit.runner.build import build_model
 from probecommit.runner.inference import instance_arrays
 from probecommit.runner.replay import load_run, probe_batch, simulator_for_run
+from probecommit.studies.paper_values import PRINTED as PAPER_GRU
 
 CONFIG_DIR = Path(__file__).resolve().parents[1] / "configs" / "paper"
 
@@ -88,9 +89,9 @@ def reproduce_gru(out: str | Path, pipeline_run: str | Path, quick: bool = False
     out.mkdir(parents=True, exist_ok=True)
     (out / "results.json").write_text(json.dumps({"results": results}, indent=1))
     table = ("| quantity | paper | ours [95% CI] |\n|---|---|---|\n"
-             f"| pipeline mean miss, Probe-Robust({k}) (m) | 0.157 | {results['pipeline_miss']:.3f} |\n"
-             f"| GRU mean miss over {seeds} seeds (m) | 0.153 | {results['gru_miss']:.3f} |\n"
-             f"| GRU - pipeline (m) | -0.004 [-0.008, +0.000] | {difference[0]:+.3f} [{difference[1]:+.3f}, {difference[2]:+.3f}] |\n"
+             f"| pipeline mean miss, Probe-Robust({k}) (m) | {PAPER_GRU['T10-gru.pipeline']} | {results['pipeline_miss']:.3f} |\n"
+             f"| GRU mean miss over {seeds} seeds (m) | {PAPER_GRU['T10-gru.gru']} | {results['gru_miss']:.3f} |\n"
+             f"| GRU - pipeline (m) | {PAPER_GRU['T10-gru.diff']} [{PAPER_GRU['T10-gru.diff_lo']}, {PAPER_GRU['T10-gru.diff_hi']}] | {difference[0]:+.3f} [{difference[1]:+.3f}, {difference[2]:+.3f}] |\n"
              f"| inside the +-{cfg['equivalence_margin']:.3f} m margin | yes | {'yes' if results['equivalent'] else 'no'} |\n")
     (out / "table_gru.md").write_text(table)
     return results

@@ -64,8 +64,17 @@ def pricing_table(curves: pd.DataFrame) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
+def _paper_prices() -> dict[str, tuple[float, float]]:
+    """The paper's prices (Sec. III) in the family's miss units (cm -> m; the hinge in rad)."""
+    from probecommit.studies.paper_values import value
+
+    scale = {"hinge": 1.0}
+    return {f: tuple(value(f"T01-pricing.{kind}.{f}") * scale.get(f, 0.01) for kind in ("blind_above", "five_below"))
+            for f in ("darts", "push2d", "hinge", "push1d")}
+
+
 #: The paper's prices (same units as the family's miss): blind above, five below.
-PAPER_PRICES = {"darts": (0.012, 0.0006), "push2d": (0.017, 0.017), "hinge": (0.17, 0.012), "push1d": (0.35, 0.019)}
+PAPER_PRICES = _paper_prices()
 
 
 def pricing_markdown(table: pd.DataFrame) -> str:
