@@ -168,3 +168,11 @@ def check(entries: list[Entry], root: str | Path, extra: dict[str, Any] | None =
             yield f"{e.file}: does not contain {e.text} ({e.key}) where the ledger places it"
         else:
             cursor[e.file] = at + len(e.text)
+
+
+def walk_dotted(node: Any, parts: list[str]) -> Any:
+    """The value at dotted ``parts`` under ``node`` (dict keys may hold dots; list elements by index).
+
+    Public for ``verify``, which compares recomputed values with the results tree by the same keys.
+    """
+    return _walk_dotted(node, parts)

@@ -114,6 +114,7 @@ def insertion_row(root: Path) -> dict[str, Any] | None:
 def _breadth(root: Path, quick: bool, progress: Progress, workers: int) -> Path:
     import pandas as pd
 
+    from probecommit.audit.stats import DEFAULT_RESAMPLES
     from probecommit.studies.breadth import (BREADTH_FAMILIES, FAMILY_K, SUCCESS_FAMILIES, breadth_markdown,
                                              budget_curves, feasible_instances, paper_config, plot_budget_curves,
                                              quick_config, run_breadth, truth_sign_flip)
@@ -133,6 +134,7 @@ def _breadth(root: Path, quick: bool, progress: Progress, workers: int) -> Path:
     curves = budget_curves(runs)
     progress("breadth: families", len(families), len(families))
     sign_flips = {}
+    store_breadth_episodes(families, runs, quick, results / "breadth_episodes.parquet")
     for family in (f for f in families if f in SUCCESS_FAMILIES):
         config = paper_config(family)
         config = quick_config(config) if quick else config
@@ -151,11 +153,30 @@ def _breadth(root: Path, quick: bool, progress: Progress, workers: int) -> Path:
     curves.to_parquet(results / "budget_curves.parquet")
     write_table(results, "table_5", breadth_markdown(table))
     plot_budget_curves(curves, results / "fig_breadth_budget.png")
-    payload = {"results": {"table_5": json.loads(table.to_json(orient="records")),
+    payload = {"results": {"settings": {"k": 5, "resamples": DEFAULT_RESAMPLES, "seed": 0},
+                           "table_5": json.loads(table.to_json(orient="records")),
                            "curves": json.loads(curves.to_json(orient="records")),
                            "sign_flip_over_truths": sign_flips}}
     (results / "results.json").write_text(json.dumps(payload, indent=1))
     return results
+
+
+def store_breadth_episodes(families: tuple[str, ...], runs: dict[str, Path], quick: bool, path: Path) -> None:
+    """Every family's episodes as Table V reads them (grasp: its feasible truths), one compact file:
+    verify recomputes Table V and the budget curves from it."""
+    import pandas as pd
+
+    from probecommit.studies.breadth import (SUCCESS_FAMILIES, feasible_episodes, paper_config, quick_config,
+                                             read_episodes)
+
+    frames = []
+    for family in families:
+        episodes = read_episodes(runs[family])
+        if family in SUCCESS_FAMILIES:
+            config = paper_config(family)
+            episodes = feasible_episodes(quick_config(config) if quick else config, runs[family], episodes)
+        frames.append(episodes.assign(family=family))
+    pd.concat(frames, ignore_index=True).to_parquet(path, compression="zstd", index=False)
 
 
 def _beyond(root: Path, quick: bool, progress: Progress, workers: int) -> Path:
@@ -266,25 +287,55 @@ def reproduce(names: list[str], root: str | Path, quick: bool = False, progress:
 
 # ----------------------------------------------------------------------------- publish
 
-#: Files small enough to version.
+#: Files small enough to version (episode tables are stored compactly: verify recomputes from them).
 PUBLISHED_SUFFIXES = (".md", ".tex", ".json", ".png", ".pdf", ".parquet")
-#: Per-episode tables that stay in the run root.
-UNPUBLISHED = ("faults_episodes.parquet",)
 
 
 def publish(results: dict[str, str | Path], repo_root: str | Path) -> Path:
     """Copy each target's results into ``results/paper/<target>/`` with a hash manifest."""
-    from probecommit.report.verify import write_manifest
+    from probecommit.report.manifest import write_manifest
 
     target_root = Path(repo_root) / "results" / "paper"
     for name, folder in results.items():
         dest = target_root / name
         dest.mkdir(parents=True, exist_ok=True)
         for path in sorted(Path(folder).iterdir()):
-            if path.is_file() and path.suffix in PUBLISHED_SUFFIXES and path.name not in UNPUBLISHED:
+            if path.is_file() and path.suffix in PUBLISHED_SUFFIXES:
                 shutil.copy2(path, dest / path.name)
         write_manifest(dest)
     return target_root
+
+
+#: The paper's Table VIII (escape, coverage, optimism, failure per engine and model), for the side-by-side.
+PAPER_TABLE_VIII = {("pybullet", "deployed"): (0.167, 0.763, 0.232, 0.307), ("pybullet", "mj_offset"): (0.023, 0.951, 0.002, 0.109),
+                    ("pybullet", "own_scan"): (0.031, 0.948, -0.002, 0.107), ("sapien", "deployed"): (0.039, 0.914, 0.369, 0.474),
+                    ("sapien", "mj_offset"): (0.065, 0.872, 0.419, 0.534), ("sapien", "own_scan"): (0.000, 0.995, 0.338, 0.469)}
+#: The paper's scanned boundary offset and capture ratio per engine.
+PAPER_ENGINE_SCANS = {"pybullet": ("+0.929", "1.21 (SD 0.69)"), "sapien": ("-0.209", "0.55")}
+
+
+def engines_markdown(table: Any) -> str:
+    """Table VIII from the engine table (columns ``(engine, variant)``, or flat ``engine/variant``)."""
+    columns = [tuple(c.split("/", 1)) if isinstance(c, str) else tuple(c) for c in table.columns]
+    header = "| quantity | " + " | ".join(f"{e} {v}" for e, v in columns) + " |"
+    lines = [header, "|---" * (len(columns) + 1) + "|"]
+    for i, (label, values) in enumerate(table.iterrows()):
+        lines.append(f"| {label} (ours) | " + " | ".join(f"{v:.3f}" for v in values) + " |")
+        lines.append(f"| {label} (paper) | " + " | ".join(
+            f"{PAPER_TABLE_VIII[c][i]:.3f}" if c in PAPER_TABLE_VIII else "--" for c in columns) + " |")
+    return "\n".join(lines)
+
+
+def engine_scans_markdown(scans: dict[str, Any]) -> str:
+    """The scanned boundary offset and capture window per engine, beside the paper's."""
+    lines = ["| engine | boundary offset (mm, hg + delta) | SD | capture window / w(c) | SD over truths | paper offset | paper ratio |",
+             "|---|---|---|---|---|---|---|"]
+    for engine, s in scans.items():
+        b, c = s["boundary"], s["capture"]
+        paper = PAPER_ENGINE_SCANS.get(engine, ("--", "--"))
+        lines.append(f"| {engine} | {b['delta']:+.3f} | {b['sd']:.3f} | {c['ratio_mean']:.3f} | {c['ratio_sd']:.3f} | "
+                     f"{paper[0]} | {paper[1]} |")
+    return "\n".join(lines)
 
 
 def _engines(root: Path, quick: bool, progress: Progress, workers: int) -> Path:
@@ -299,24 +350,8 @@ def _engines(root: Path, quick: bool, progress: Progress, workers: int) -> Path:
     results.mkdir(parents=True, exist_ok=True)
     study = run_engine_study(protocol, folder / "runs", workers=workers, progress=progress)
     table, escape = study["table"], study["escape"]
-    paper_values = {("pybullet", "deployed"): (0.167, 0.763, 0.232, 0.307), ("pybullet", "mj_offset"): (0.023, 0.951, 0.002, 0.109),
-                    ("pybullet", "own_scan"): (0.031, 0.948, -0.002, 0.107), ("sapien", "deployed"): (0.039, 0.914, 0.369, 0.474),
-                    ("sapien", "mj_offset"): (0.065, 0.872, 0.419, 0.534), ("sapien", "own_scan"): (0.000, 0.995, 0.338, 0.469)}
-    header = "| quantity | " + " | ".join(f"{e} {v}" for e, v in table.columns) + " |"
-    lines = [header, "|---" * (len(table.columns) + 1) + "|"]
-    for i, (label, values) in enumerate(table.iterrows()):
-        lines.append(f"| {label} (ours) | " + " | ".join(f"{v:.3f}" for v in values) + " |")
-        lines.append(f"| {label} (paper) | " + " | ".join(
-            f"{paper_values[c][i]:.3f}" if c in paper_values else "--" for c in table.columns) + " |")
-    write_table(results, "table_engines", "\n".join(lines))
-    scan_lines = ["| engine | boundary offset (mm, hg + delta) | SD | capture window / w(c) | SD over truths | paper offset | paper ratio |",
-                  "|---|---|---|---|---|---|---|"]
-    paper_scan = {"pybullet": ("+0.929", "1.21 (SD 0.69)"), "sapien": ("-0.209", "0.55")}
-    for engine, s in study["scans"].items():
-        b, c = s["boundary"], s["capture"]
-        scan_lines.append(f"| {engine} | {b['delta']:+.3f} | {b['sd']:.3f} | {c['ratio_mean']:.3f} | {c['ratio_sd']:.3f} | "
-                          f"{paper_scan.get(engine, ('--', '--'))[0]} | {paper_scan.get(engine, ('--', '--'))[1]} |")
-    write_table(results, "engine_scans", "\n".join(scan_lines))
+    write_table(results, "table_engines", engines_markdown(table))
+    write_table(results, "engine_scans", engine_scans_markdown(study["scans"]))
     flat = table.copy()
     flat.columns = [f"{e}/{v}" for e, v in flat.columns]
     flat.to_parquet(results / "table_engines.parquet")
@@ -391,19 +426,10 @@ PAPER_TABLE_II = {"insertion": ("all three", "96 x 4"), "push1d": ("analytic", "
                   "grasp": ("MuJoCo", "16 x 80")}
 
 
-def _setup(root: Path, quick: bool, progress: Progress, workers: int) -> Path:
-    """Table II from the task registry, and Fig. 1b (an insertion belief after taps 1, 3, 5)."""
-    from importlib import resources
-
-    import yaml
-
-    from probecommit.report.demo import belief_figure
-    from probecommit.runner.config import parse_config
-    from probecommit.runner.study import run_study
+def table_2() -> tuple[list[str], list[dict[str, Any]]]:
+    """Table II's Markdown lines and records, from the task registry (verify renders it again)."""
     from probecommit.tasks.registry import families
 
-    results = root / "setup" / "results"
-    results.mkdir(parents=True, exist_ok=True)
     specs = families()
     lines = ["| family | engines (ours) | latents | probe / action | sigma | budgets k | n; metric | paper: engine, n |",
              "|---|---|---|---|---|---|---|---|"]
@@ -417,6 +443,22 @@ def _setup(root: Path, quick: bool, progress: Progress, workers: int) -> Path:
                      f"{s.get('sigma', '')} | {s.get('budgets', '')} | {s.get('n', '')}; {s.get('metric', '')} | "
                      f"{paper[0]}, {paper[1]} |")
         rows.append({"family": name, "engines": list(spec.engines), **s})
+    return lines, rows
+
+
+def _setup(root: Path, quick: bool, progress: Progress, workers: int) -> Path:
+    """Table II from the task registry, and Fig. 1b (an insertion belief after taps 1, 3, 5)."""
+    from importlib import resources
+
+    import yaml
+
+    from probecommit.report.demo import belief_figure
+    from probecommit.runner.config import parse_config
+    from probecommit.runner.study import run_study
+
+    results = root / "setup" / "results"
+    results.mkdir(parents=True, exist_ok=True)
+    lines, rows = table_2()
     write_table(results, "table_2", "\n".join(lines))
     data = yaml.safe_load(resources.files("probecommit").joinpath("configs/demo.yaml").read_text())
     if quick:

@@ -11,6 +11,7 @@ import json
 from pathlib import Path
 from typing import Any
 
+from probecommit.report.manifest import write_root_manifest
 from probecommit.report.paper import publish as publish_folders
 from probecommit.report.reproduction_md import render
 from probecommit.studies.explanations import EXPLANATIONS
@@ -20,8 +21,8 @@ HEADER = """# Reproduction
 Every number below was produced by this repository's code from a config in it:
 `probecommit reproduce all` reruns every study from `configs/paper/` (or one target:
 `probecommit reproduce --list`), rewrites `results/paper/` and this file, and
-`probecommit verify` checks the frozen numbers (hashes, intervals, identities, and that
-every number here traces to a `results.json`). "paper" is the value the paper reports;
+`probecommit verify` recomputes the summary numbers from the stored episode tables and
+renders every table and this file again from the stored data (`docs/verify.md`). "paper" is the value the paper reports;
 "ours" is our frozen result with its truth-cluster bootstrap interval where one applies.
 The note under each table says where and why we differ. Nothing was tuned to move a
 downstream number toward the paper's; the scene parameters we chose, and why, are in
@@ -272,6 +273,7 @@ def publish(results: dict[str, str | Path], repo_root: str | Path, timing: dict[
         (root / "reproduction.json").write_text(
             json.dumps({"wall_s": merged["wall_s"], "engine_calls": merged["engine_calls"]}, indent=1) + "\n")
     write_reproduction_md(repo_root)
+    write_root_manifest(root)  # last: it hashes reproduction.json, report.html and REPRODUCTION.md
     return root
 
 

@@ -84,13 +84,19 @@ def reproduce_gru(out: str | Path, pipeline_run: str | Path, quick: bool = False
         "seed_miss_min": float(seed_means.min()), "seed_miss_max": float(seed_means.max()),
         "episodes": int(batch.n_episodes),
         "training_loss_last_mean": float(np.mean([m["loss_last"] for m in meta])),
+        "k": int(k),
     }
     out.mkdir(parents=True, exist_ok=True)
     (out / "results.json").write_text(json.dumps({"results": results}, indent=1))
-    table = ("| quantity | paper | ours [95% CI] |\n|---|---|---|\n"
-             f"| pipeline mean miss, Probe-Robust({k}) (m) | 0.157 | {results['pipeline_miss']:.3f} |\n"
-             f"| GRU mean miss over {seeds} seeds (m) | 0.153 | {results['gru_miss']:.3f} |\n"
-             f"| GRU - pipeline (m) | -0.004 [-0.008, +0.000] | {difference[0]:+.3f} [{difference[1]:+.3f}, {difference[2]:+.3f}] |\n"
-             f"| inside the +-{cfg['equivalence_margin']:.3f} m margin | yes | {'yes' if results['equivalent'] else 'no'} |\n")
-    (out / "table_gru.md").write_text(table)
+    (out / "table_gru.md").write_text(gru_markdown(results))
     return results
+
+
+def gru_markdown(results: dict) -> str:
+    """The GRU table from its results (verify renders it again from the stored results.json)."""
+    k, seeds, difference, margin = results["k"], results["seeds"], results["gru_minus_pipeline"], results["equivalence_margin"]
+    return ("| quantity | paper | ours [95% CI] |\n|---|---|---|\n"
+            f"| pipeline mean miss, Probe-Robust({k}) (m) | 0.157 | {results['pipeline_miss']:.3f} |\n"
+            f"| GRU mean miss over {seeds} seeds (m) | 0.153 | {results['gru_miss']:.3f} |\n"
+            f"| GRU - pipeline (m) | -0.004 [-0.008, +0.000] | {difference[0]:+.3f} [{difference[1]:+.3f}, {difference[2]:+.3f}] |\n"
+            f"| inside the +-{margin:.3f} m margin | yes | {'yes' if results['equivalent'] else 'no'} |\n")

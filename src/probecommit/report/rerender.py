@@ -1,0 +1,119 @@
+"""Render every published text file again from the stored data, for ``verify`` to compare.
+
+Why: a table cell, a rounding, a row order, a prose number or a paper value edited in a
+published file (and the manifest re-hashed) is caught only by deriving the text again: each
+study's tables come from its ``results.json`` and Parquet tables through the same functions
+that wrote them; each ``.tex`` from its ``.md``; REPRODUCTION.md and report.html from the
+whole publication (``report.publish.write_reproduction_md`` run on a copy).
+
+``RENDERERS[study][file](folder, results) -> text``. A published text file with no renderer is
+reported as traced only (its bytes hashed, its numbers not derived).
+"""
+
+from __future__ import annotations
+
+import json
+import shutil
+import tempfile
+from pathlib import Path
+from typing import Any, Callable
+
+import pandas as pd
+
+Renderer = Callable[[Path, dict[str, Any]], str]
+
+
+def _insertion() -> dict[str, Renderer]:
+    from probecommit.report.insertion_tables import RENDERERS as TABLES
+
+    return {f"{name}.md": (lambda fn: lambda folder, r: fn(r, folder))(fn) for name, fn in TABLES.items()}
+
+
+def _breadth() -> dict[str, Renderer]:
+    from probecommit.studies.breadth import breadth_markdown
+
+    return {"table_5.md": lambda folder, r: breadth_markdown(pd.read_parquet(folder / "table_5.parquet"))}
+
+
+def _cost() -> dict[str, Renderer]:
+    from probecommit.studies.pricing import pricing_markdown
+
+    return {"table_pricing.md": lambda folder, r: pricing_markdown(pd.read_parquet(folder / "pricing.parquet"))}
+
+
+def _robot() -> dict[str, Renderer]:
+    from probecommit.studies.robot import sweep_markdown, table_markdown
+
+    return {"table_9.md": lambda folder, r: table_markdown(pd.read_parquet(folder / "table_robot.parquet")),
+            "fault_boundary.md": lambda folder, r: sweep_markdown(pd.read_parquet(folder / "fault_boundary.parquet"),
+                                                                  "boundary pulled in (mm)"),
+            "fault_prior.md": lambda folder, r: sweep_markdown(pd.read_parquet(folder / "fault_prior.parquet"),
+                                                               "prior half-width (mm)")}
+
+
+def _engines() -> dict[str, Renderer]:
+    from probecommit.report.paper import engine_scans_markdown, engines_markdown
+
+    return {"table_engines.md": lambda folder, r: engines_markdown(pd.read_parquet(folder / "table_engines.parquet")) + "\n",
+            "engine_scans.md": lambda folder, r: engine_scans_markdown(r["scans"]) + "\n"}
+
+
+def _gru() -> dict[str, Renderer]:
+    from probecommit.studies.gru import gru_markdown
+
+    return {"table_gru.md": lambda folder, r: gru_markdown(r)}
+
+
+def _setup() -> dict[str, Renderer]:
+    from probecommit.report.paper import table_2
+
+    return {"table_2.md": lambda folder, r: "\n".join(table_2()[0]) + "\n"}
+
+
+RENDERERS: dict[str, Callable[[], dict[str, Renderer]]] = {
+    "insertion": _insertion, "breadth": _breadth, "cost": _cost, "robot": _robot, "engines": _engines, "gru": _gru,
+    "setup": _setup}
+
+
+def study_texts(folder: Path) -> dict[str, str]:
+    """Every text file of a study folder rendered again: its tables and each table's ``.tex``."""
+    from probecommit.report.paper import markdown_to_latex
+
+    results = json.loads((folder / "results.json").read_text()).get("results", {})
+    out: dict[str, str] = {}
+    for name, render in RENDERERS.get(folder.name, lambda: {})().items():
+        if (folder / name).is_file():
+            out[name] = render(folder, results)
+            tex = Path(name).with_suffix(".tex").name
+            if (folder / tex).is_file():
+                out[tex] = markdown_to_latex(out[name])
+    return out
+
+
+def publication_texts(root: Path) -> dict[str, bytes]:
+    """REPRODUCTION.md and report.html rendered again from a copy of the publication ``root``."""
+    from probecommit.report.publish import write_reproduction_md
+
+    with tempfile.TemporaryDirectory() as tmp:
+        copy = Path(tmp) / "results" / "paper"
+        shutil.copytree(root, copy, ignore=shutil.ignore_patterns("report.html", "MANIFEST.json"))
+        md = write_reproduction_md(Path(tmp))
+        return {"../../REPRODUCTION.md": md.read_bytes(), "report.html": (copy / "report.html").read_bytes()}
+
+
+def first_difference(published: str, expected: str) -> str:
+    """Where two texts first differ: line number and the two lines (the number a reader sees)."""
+    a, b = published.splitlines(), expected.splitlines()
+    for i, (x, y) in enumerate(zip(a, b), start=1):
+        if x != y:
+            return f"line {i} reads {_excerpt(x, y)!r}, the stored data give {_excerpt(y, x)!r}"
+    if len(a) != len(b):
+        return f"{len(a)} lines where the stored data give {len(b)}"
+    return "the bytes differ (line endings or trailing text)"
+
+
+def _excerpt(line: str, other: str, width: int = 60) -> str:
+    """The part of ``line`` around its first difference with ``other``."""
+    at = next((i for i, (x, y) in enumerate(zip(line, other)) if x != y), min(len(line), len(other)))
+    start = max(0, at - width // 2)
+    return ("..." if start else "") + line[start:start + width] + ("..." if start + width < len(line) else "")
