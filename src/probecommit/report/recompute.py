@@ -27,6 +27,14 @@ class Recomputed:
 
     values: dict[str, Any] = field(default_factory=dict)
     tables: dict[str, pd.DataFrame] = field(default_factory=dict)
+    #: The stored table each value was recomputed from, by the key's first part (for messages).
+    sources: dict[str, str] = field(default_factory=dict)
+
+    #: The stored table each rebuilt table was derived from (for messages).
+    table_sources: dict[str, str] = field(default_factory=dict)
+
+    def source(self, key: str) -> str:
+        return self.sources.get(key.split(".")[0], "the stored episode tables")
 
 
 def _triple(iv: Any) -> list[float]:
@@ -86,6 +94,9 @@ def insertion(folder: Path, results: dict[str, Any]) -> Recomputed:
 
     _faults(folder, setup, boot, out)
     _small_tables(folder, out)
+    out.sources = {"table_insertion": "episodes.parquet", "text": "episodes.parquet", "table_testc": "episodes.parquet",
+                   "table_faults": "faults_episodes.parquet", "scan": "scan.parquet", "cover": "cover_search.parquet",
+                   "resplits": "resplits.parquet"}
     return out
 
 
@@ -113,6 +124,7 @@ def _faults(folder: Path, setup: dict[str, Any], boot: dict[str, int], out: Reco
         if len(fix):
             out.values[f"table_faults.{fault}.paired_fix"] = paired(fa, fix, kmax, "realized", **boot)
     out.tables["fault_signatures.parquet"] = signature_table(episodes)
+    out.table_sources["fault_signatures.parquet"] = "faults_episodes.parquet"
 
 
 def _small_tables(folder: Path, out: Recomputed) -> None:
@@ -151,6 +163,7 @@ def breadth(folder: Path, results: dict[str, Any]) -> Recomputed:
     insertion_rows = stored[stored["family"] == "insertion_A"]
     out.tables["table_5.parquet"] = pd.concat([insertion_rows, pd.DataFrame(rows)], ignore_index=True)
     out.tables["budget_curves.parquet"] = budget_curves(runs)
+    out.table_sources = {"table_5.parquet": "breadth_episodes.parquet", "budget_curves.parquet": "breadth_episodes.parquet"}
     return out
 
 
@@ -162,6 +175,7 @@ def cost(folder: Path, results: dict[str, Any]) -> Recomputed:
     curves = pd.read_parquet(folder.parent / "breadth" / "budget_curves.parquet")
     out = Recomputed()
     out.tables["pricing.parquet"] = pricing_table(curves[~curves["family"].isin(SUCCESS_FAMILIES)])
+    out.table_sources["pricing.parquet"] = "breadth/budget_curves.parquet"
     return out
 
 

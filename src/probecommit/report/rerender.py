@@ -75,6 +75,11 @@ RENDERERS: dict[str, Callable[[], dict[str, Renderer]]] = {
     "setup": _setup}
 
 
+def expected_texts(study: str) -> list[str]:
+    """The tables a study always publishes (its renderers' files)."""
+    return sorted(RENDERERS[study]()) if study in RENDERERS else []
+
+
 def study_texts(folder: Path) -> dict[str, str]:
     """Every text file of a study folder rendered again: its tables and each table's ``.tex``."""
     from probecommit.report.paper import markdown_to_latex

@@ -200,13 +200,13 @@ def check_recomputed(study: Path, results: dict[str, Any], report: Report) -> se
             continue
         report.counts["recomputed"] += _leaves(value) - 1
         report.check("recomputed", _equal(published, value),
-                     f"{study.name}/results.json: {key} = {published} but the stored episode tables give {value}")
+                     f"{study.name}/results.json: {key} = {published} but {again.source(key)} gives {value}")
     for name, table in again.tables.items():
-        _compare_table(study, name, table, report)
+        _compare_table(study, name, table, again.table_sources.get(name, "the stored episode tables"), report)
     return set(again.values)
 
 
-def _compare_table(study: Path, name: str, expected: pd.DataFrame, report: Report) -> None:
+def _compare_table(study: Path, name: str, expected: pd.DataFrame, source: str, report: Report) -> None:
     path = study / name
     if not path.is_file():
         report.check("recomputed", False, f"{path}: missing (it is derived from the stored episodes)")
@@ -214,15 +214,14 @@ def _compare_table(study: Path, name: str, expected: pd.DataFrame, report: Repor
     stored = pd.read_parquet(path).reset_index(drop=True)
     expected = expected.reset_index(drop=True)
     if list(stored.columns) != list(expected.columns) or len(stored) != len(expected):
-        report.check("recomputed", False, f"{study.name}/{name}: {len(stored)} rows x {list(stored.columns)}, the stored "
-                                          f"episodes give {len(expected)} rows x {list(expected.columns)}")
+        report.check("recomputed", False, f"{study.name}/{name}: {len(stored)} rows x {list(stored.columns)}, {source} "
+                                          f"gives {len(expected)} rows x {list(expected.columns)}")
         return
     for column in stored.columns:
         for row, (a, b) in enumerate(zip(stored[column].tolist(), expected[column].tolist())):
             report.counts["recomputed"] += 1
             if not _equal(a, b):
-                report.check("recomputed", False, f"{study.name}/{name}: row {row} {column} = {a}, the stored episodes "
-                                                  f"give {b}")
+                report.check("recomputed", False, f"{study.name}/{name}: row {row} {column} = {a}, {source} gives {b}")
                 break
 
 
@@ -250,13 +249,15 @@ def _plain(v: Any) -> Any:
 
 def check_texts(study: Path, report: Report) -> None:
     """Every table of the study rendered again from the stored data, compared with the published file."""
-    from probecommit.report.rerender import first_difference, study_texts
+    from probecommit.report.rerender import expected_texts, first_difference, study_texts
 
     try:
         texts = study_texts(study)
     except (OSError, KeyError, ValueError, TypeError, IndexError) as exc:
         report.check("traced", False, f"{study}: cannot render its tables from the stored data ({type(exc).__name__}: {exc})")
         return
+    for name in expected_texts(study.name):
+        report.check("file", (study / name).is_file(), f"{study.name}/{name}: missing (the study publishes it)")
     for name in sorted(p.name for p in study.iterdir() if p.suffix in (".md", ".tex")):
         if name not in texts:
             report.notes.append(f"{study.name}/{name}: not rendered again (traced by its hash only)")
