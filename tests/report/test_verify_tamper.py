@@ -26,18 +26,6 @@ pytestmark = pytest.mark.slow
 Edit = Callable[[Path], list[str]]
 
 
-@pytest.fixture(scope="session")
-def publication(tmp_path_factory) -> Path:
-    """``reproduce insertion breadth cost --quick --publish-to`` once per session."""
-    from probecommit.report import paper
-    from probecommit.report.publish import publish
-
-    base = tmp_path_factory.mktemp("scratch")
-    done = paper.reproduce(["insertion", "breadth", "cost"], base / "runs", quick=True)
-    publish(done["targets"], base / "pub", timing=done)
-    return base / "pub"
-
-
 @pytest.fixture
 def pub(publication, tmp_path) -> Path:
     shutil.copytree(publication, tmp_path / "pub")
