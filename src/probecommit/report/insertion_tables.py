@@ -155,7 +155,7 @@ def table_setup(r: dict[str, Any], folder: Path) -> str:
     return page(TITLES["table_setup"], md_table(
         ["family", "engine", "latents", "probe / action", "sigma", "budgets k", "n; metric"],
         [["insertion", s["engine"], "x_hole, c", "tap / aim", f"{s['sigma']} mm",
-          f"1-{s['k_random']}, cover {tuple(s['cover_schedule'])}", f"{s['n']}; failure"]]))
+          f"1-{s['k_random']}, cover {list(s['cover_schedule'])}", f"{s['n']}; failure"]]))
 
 
 #: Table file (without suffix) -> its renderer.
