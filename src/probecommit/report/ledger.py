@@ -31,6 +31,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -38,6 +39,11 @@ from typing import Any
 
 LEDGER_NAME = "published_numbers.json"
 LEDGER_VERSION = 1
+#: ``fmt`` of a declared literal: a number printed as text that comes from no result (a table's
+#: number "Table V", a section "Sec. V-D", a budget in a heading), with its reason as the key.
+LITERAL = "literal"
+#: A number as ``uncovered`` reads it in a ledgered file.
+NUMBER = re.compile(r"(?<![\w.])[+-]?(?:\d+\.\d+|\d+)(?![\w])")
 
 
 def format_value(value: Any, fmt: str) -> str:
@@ -71,6 +77,11 @@ class Ledger:
         """The text for ``value`` under ``fmt``, recorded against ``key`` in ``file``."""
         text = format_value(value, fmt)
         self.entries.append(Entry(file=file, key=key, fmt=fmt, text=text))
+        return text
+
+    def literal(self, file: str, text: str, why: str) -> str:
+        """Declare ``text`` (which holds a number) as printed literally in ``file``, for ``why``."""
+        self.entries.append(Entry(file=file, key=f"{LITERAL}:{why}", fmt=LITERAL, text=text))
         return text
 
     def for_file(self, file: str) -> Callable[..., str]:
@@ -147,6 +158,9 @@ def check(entries: list[Entry], root: str | Path, extra: dict[str, Any] | None =
     texts: dict[str, str] = {}
     cursor: dict[str, int] = {}
     for e in entries:
+        if e.fmt == LITERAL:
+            yield from _find(e, root, texts, cursor)
+            continue
         try:
             value = resolve(e.key, root, extra)
             again = format_value(value, e.fmt)
@@ -176,3 +190,45 @@ def walk_dotted(node: Any, parts: list[str]) -> Any:
     Public for ``verify``, which compares recomputed values with the results tree by the same keys.
     """
     return _walk_dotted(node, parts)
+
+
+def _find(e: Entry, root: str | Path, texts: dict[str, str], cursor: dict[str, int]) -> Iterator[str]:
+    """Find a literal entry's text after the previous entry of its file."""
+    if e.file not in texts:
+        path = Path(root) / e.file
+        texts[e.file] = path.read_text() if path.is_file() else ""
+    at = texts[e.file].find(e.text, cursor.get(e.file, 0))
+    if at < 0:
+        yield f"{e.file}: does not contain the declared literal {e.text!r} ({e.key}) where the ledger places it"
+    else:
+        cursor[e.file] = at + len(e.text)
+
+
+def uncovered(entries: list[Entry], root: str | Path) -> Iterator[str]:
+    """Numbers printed in a ledgered file that no entry (or declared literal) accounts for.
+
+    Entries are matched in reading order, as ``check`` does; every number outside the spans they
+    match is one problem, named by file, line and text, so a number typed into prose fails.
+    """
+    by_file: dict[str, list[Entry]] = {}
+    for e in entries:
+        by_file.setdefault(e.file, []).append(e)
+    for file, mine in by_file.items():
+        path = Path(root) / file
+        if not path.is_file():
+            continue
+        text = path.read_text()
+        spans, at = [], 0
+        for e in mine:
+            found = text.find(e.text, at)
+            if found >= 0:
+                spans.append((found, found + len(e.text)))
+                at = found + len(e.text)
+        covered = iter(sorted(spans))
+        span = next(covered, None)
+        for m in NUMBER.finditer(text):
+            while span is not None and span[1] <= m.start():
+                span = next(covered, None)
+            if span is None or not (span[0] <= m.start() and m.end() <= span[1]):
+                line = text.count("\n", 0, m.start()) + 1
+                yield f"{file}: prints {m.group(0)} at line {line}, which no ledger entry or declared literal accounts for"

@@ -307,7 +307,7 @@ def check_ledger(root: Path, report: Report) -> None:
     except (ValueError, TypeError, KeyError) as exc:
         report.check("traced", False, f"{ledger.LEDGER_NAME}: {exc}")
         return
-    problems = list(ledger.check(entries, root, extra={"paper": PAPER}))
+    problems = list(ledger.check(entries, root, extra={"paper": PAPER})) + list(ledger.uncovered(entries, root))
     report.counts["traced"] += max(len(entries) - len(problems), 0)
     for problem in problems:
         report.check("traced", False, problem)
