@@ -76,6 +76,7 @@ def insertion(folder: Path, results: dict[str, Any]) -> Recomputed:
             v[f"table_insertion.thresholds_{kind}"] = {str(k): float(t) for k, t in t_k.items()}
 
     test = runs["B_test_random"]
+    _audit_original(test, results, out)
     for k in (1, 8):
         m = episode_metrics(test, k, **boot)
         v[f"text.escape_k{k}"], v[f"text.episode_coverage_k{k}"] = m["escape"], m["episode_coverage"]
@@ -94,10 +95,29 @@ def insertion(folder: Path, results: dict[str, Any]) -> Recomputed:
 
     _faults(folder, setup, boot, out)
     _small_tables(folder, out)
-    out.sources = {"table_insertion": "episodes.parquet", "text": "episodes.parquet", "table_testc": "episodes.parquet",
+    out.sources = {"table_insertion": "episodes.parquet", "table_audit": "episodes.parquet", "text": "episodes.parquet", "table_testc": "episodes.parquet",
                    "table_faults": "faults_episodes.parquet", "scan": "scan.parquet", "cover": "cover_search.parquet",
                    "resplits": "resplits.parquet"}
     return out
+
+
+def _audit_original(test: pd.DataFrame, results: dict[str, Any], out: Recomputed) -> None:
+    """Table III's uncalibrated columns (point estimates) and their summary, from the stored test episodes.
+
+    The intervals are traced only: calibration bootstraps the re-committed episodes' per-instance
+    sums in its own instance order, which the stored table does not record.
+    """
+    from probecommit.audit.metrics import audit_table, summary_row
+
+    records = results["table_audit"]["table"]
+    budgets = [int(r["k"]) for r in records]
+    audit = audit_table(test[test.method == "probe_robust"], budgets=budgets)
+    nominal = 1.0 - float(results["setup"]["alpha"])
+    for i, row in enumerate(audit.itertuples(index=False)):
+        for metric in ("cluster_coverage", "coverage", "optimism"):
+            out.values[f"table_audit.table.{i}.{metric}_original"] = float(getattr(row, metric))
+    for key, value in summary_row(audit, nominal).items():
+        out.values[f"table_audit.summary.{key}_original"] = value
 
 
 def _faults(folder: Path, setup: dict[str, Any], boot: dict[str, int], out: Recomputed) -> None:
@@ -186,7 +206,7 @@ STUDIES: dict[str, Callable[[Path, dict[str, Any]], Recomputed]] = {
 #: What each study's recomputation covers, and what is traced only (for the report and the docs).
 RECOMPUTED = {
     "insertion": "Table IV Split A rows and paired reduction; conformal t_k (cover and random); Table III's "
-                 "escape and episode coverage at k = 1, 8; Table VII (Test C) but its set+margin row; Table VI "
+                 "uncalibrated columns (points) and their summary; escape and episode coverage at k = 1, 8; Table VII (Test C) but its set+margin row; Table VI "
                  "(failure, surprise AUC, tempered, fix, paired fix); the fault signatures; scan; cover search; "
                  "re-split summary",
     "breadth": "Table V (every family but insertion's row, which is the insertion study's); the budget curves",
