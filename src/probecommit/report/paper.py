@@ -356,7 +356,9 @@ def _engines(root: Path, quick: bool, progress: Progress, workers: int) -> Path:
     flat.columns = [f"{e}/{v}" for e, v in flat.columns]
     flat.to_parquet(results / "table_engines.parquet")
     escape.to_parquet(results / "escape_by_budget.parquet")
+    study["episodes"].to_parquet(results / "engine_episodes.parquet", compression="zstd", index=False)
     payload = {"results": {
+        "settings": study["bootstrap"],
         "table": {f"{e}/{v}": dict(zip([r.replace(" ", "_") for r in table.index], map(float, table[(e, v)])))
                   for e, v in table.columns},
         "paired_failure": study["paired"], "scans": study["scans"],
