@@ -134,7 +134,10 @@ def check_study_files(study: Path, report: Report) -> None:
     path = study / MANIFEST
     report.check("file", path.is_file(), f"{path}: no study manifest")
     listed = _json(path, {}) or {}
-    _hashes(study, listed.get("sha256", {}), sorted(p.name for p in study.iterdir() if p.name != MANIFEST), report)
+    _hashes(study, listed.get("sha256", {}), sorted(p.name for p in study.iterdir() if p.is_file() and p.name != MANIFEST),
+            report)
+    for sub in sorted(p for p in study.iterdir() if p.is_dir()):
+        report.check("file", False, f"{sub}: a folder inside a study folder (a publication holds files only)")
     for fig in sorted(study.glob("*.png")):
         binding = listed.get("figures", {}).get(fig.name)
         declared = manifest.FIGURE_DATA.get(study.name, {}).get(fig.stem, ())
