@@ -112,9 +112,10 @@ def check_root(root: Path, report: Report) -> list[Path]:
     studies = sorted(p for p in root.iterdir() if p.is_dir())
     listed = _json(path, {}) or {}
     _hashes(root, listed.get("sha256", {}), manifest.root_files(root), report)
-    for name in sorted(set(listed.get("studies", [])) ^ {p.name for p in studies}):
-        report.check("file", False, f"{root / name}: study folder {'missing' if name in listed.get('studies', []) else 'not in'} "
-                                    f"{MANIFEST}")
+    named = set(listed.get("studies", []))
+    for name in sorted(named ^ {p.name for p in studies}):
+        state = "listed in" if name in named else "not in"
+        report.check("file", False, f"{root / name}: study folder {state} {MANIFEST}{' but missing' if name in named else ''}")
     return studies
 
 
@@ -281,7 +282,8 @@ def check_publication_texts(root: Path, report: Report) -> None:
     try:
         texts = publication_texts(root)
     except (OSError, KeyError, ValueError, TypeError, IndexError, AttributeError) as exc:
-        report.check("traced", False, f"REPRODUCTION.md: cannot render it from the publication ({type(exc).__name__}: {exc})")
+        report.check("traced", False,
+                     f"REPRODUCTION.md: cannot render it from the publication ({type(exc).__name__}: {exc})")
         return
     for rel, expected in texts.items():
         path = root / rel
@@ -291,8 +293,8 @@ def check_publication_texts(root: Path, report: Report) -> None:
             continue
         published = path.read_bytes()
         ok = published == expected
-        report.check("traced", ok, f"{name}: {first_difference(published.decode(errors='replace'), expected.decode(errors='replace'))} "
-                                   "(rendered from the studies' results, tables and reproduction.json)")
+        where = first_difference(published.decode(errors="replace"), expected.decode(errors="replace"))
+        report.check("traced", ok, f"{name}: {where} (rendered from the studies' results, tables and reproduction.json)")
         if ok and name.endswith(".md"):
             report.verified_numbers += _count_numbers(published.decode())
 
