@@ -85,6 +85,15 @@ def png_data_digest(path: Path) -> str | None:
     return None
 
 
+def strip_stamp(data: bytes) -> bytes:
+    """A PNG's bytes without the data-digest chunk (how the figure was drawn, before publishing)."""
+    out = bytearray(data[:8])
+    for kind, payload in _chunks(data):
+        if not (kind == b"tEXt" and payload.startswith(PNG_KEY + b"\0")):
+            out += struct.pack(">I", len(payload)) + kind + payload + struct.pack(">I", zlib.crc32(kind + payload))
+    return bytes(out)
+
+
 def stamp_png(path: Path, digest: str) -> None:
     """Write ``digest`` into the PNG's text chunk (replacing an earlier one), pixels untouched."""
     data = path.read_bytes()

@@ -20,6 +20,7 @@ from typing import Any, Callable
 
 import numpy as np
 
+import probecommit.report.style  # noqa: F401  (every target's figures in one style, whichever ran first)
 from probecommit.tasks.base import shared_engine_answers
 
 Progress = Callable[[str, int, int], None]

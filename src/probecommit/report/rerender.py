@@ -122,3 +122,68 @@ def _excerpt(line: str, other: str, width: int = 60) -> str:
     at = next((i for i, (x, y) in enumerate(zip(line, other)) if x != y), min(len(line), len(other)))
     start = max(0, at - width // 2)
     return ("..." if start else "") + line[start:start + width] + ("..." if start + width < len(line) else "")
+
+
+# ----------------------------------------------------------------------------- figures
+
+
+def _robot_figures() -> dict[str, Callable[[Path, Path], Any]]:
+    from probecommit.report.figures import save_figure
+    from probecommit.report.robot_figures import aim_error_figure, fault_sweep_figure
+    from probecommit.studies.robot import SIM_ERROR_AT_RIG_SCALE_MM
+    from probecommit.tasks.rig.model import rig_half_gap, rig_window
+
+    def aim(folder: Path, out: Path) -> Any:
+        rows = pd.read_parquet(folder / "robot_episodes.parquet")
+        return save_figure(aim_error_figure(rows, float(rig_window(1.0)), float(rig_half_gap(1.0))), out)
+
+    def boundary(folder: Path, out: Path) -> Any:
+        sweep = pd.read_parquet(folder / "fault_boundary.parquet")
+        return save_figure(fault_sweep_figure(sweep, "boundary pulled inward (mm)", SIM_ERROR_AT_RIG_SCALE_MM,
+                                              "sim. 2.1 mm error at rig scale"), out)
+
+    def prior(folder: Path, out: Path) -> Any:
+        sweep = pd.read_parquet(folder / "fault_prior.parquet")
+        return save_figure(fault_sweep_figure(sweep.sort_values("size"), "prior half-width (mm)"), out)
+
+    return {"fig_7b_aim_error": aim, "fig_7c_boundary_fault": boundary, "fig_7d_prior_fault": prior}
+
+
+def _figure_recipes() -> dict[str, dict[str, Callable[[Path, Path], Any]]]:
+    """Study -> figure stem -> ``draw(folder, out_png)``: the same call that drew the figure, on the stored data.
+
+    Figures drawn from data the publication does not hold (the scan section needs the scan grid,
+    the commit gates the calibration result, Fig. 1b and the decisive tap the run directories) are
+    bound to their data by digest only.
+    """
+    from probecommit.report.paper import plot_pricing
+    from probecommit.report.study_figures import fault_signatures
+    from probecommit.studies.breadth import plot_budget_curves
+
+    return {
+        "insertion": {"fig_fault_signatures": lambda folder, out: fault_signatures(
+            pd.read_parquet(folder / "fault_signatures.parquet"), out)},
+        "breadth": {"fig_breadth_budget": lambda folder, out: plot_budget_curves(
+            pd.read_parquet(folder / "budget_curves.parquet"), out)},
+        "cost": {"fig_pricing": lambda folder, out: plot_pricing(pd.read_parquet(folder / "pricing.parquet"), out)},
+        "robot": _robot_figures(),
+    }
+
+
+def study_figures(folder: Path) -> dict[str, bytes]:
+    """Each figure of the study that can be drawn from its stored data, drawn again: PNG (without the
+    data-digest chunk publishing adds) and PDF bytes by file name."""
+    from probecommit.report.manifest import strip_stamp
+
+    recipes = _figure_recipes().get(folder.name, {})
+    out: dict[str, bytes] = {}
+    with tempfile.TemporaryDirectory() as tmp:
+        for stem, draw in recipes.items():
+            if not (folder / f"{stem}.png").is_file():
+                continue
+            draw(folder, Path(tmp) / f"{stem}.png")
+            for suffix in (".png", ".pdf"):
+                drawn = Path(tmp) / f"{stem}{suffix}"
+                if drawn.is_file():
+                    out[f"{stem}{suffix}"] = strip_stamp(drawn.read_bytes()) if suffix == ".png" else drawn.read_bytes()
+    return out
