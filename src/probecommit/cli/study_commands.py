@@ -39,6 +39,7 @@ def reproduce(
     workers: int = typer.Option(1, "--workers", "-w", min=1, help="Local worker processes for the rollouts."),
     families: Optional[str] = typer.Option(None, "--families", help="breadth only: comma-separated families (default: all of them)."),
     publish: Optional[bool] = typer.Option(None, help="Copy results into results/paper/ and rewrite REPRODUCTION.md (default: yes for full runs, no with --quick or a --families subset)."),
+    publish_to: Optional[Path] = typer.Option(None, "--publish-to", help="Publish into this folder instead of the checkout (DIR/results/paper and DIR/REPRODUCTION.md); `probecommit verify DIR` checks it."),
 ) -> None:
     """Regenerate the paper's tables and figures from the frozen configs in configs/paper/.
 
@@ -67,11 +68,12 @@ def reproduce(
     for name, folder in done["targets"].items():
         console.print(f"{escape(name)}: [bold]{escape(str(folder))}[/bold]  (wall {done['wall_s'][name] / 60:.1f} min)")
     # A family subset would replace the frozen Table II with a partial one: published only on request.
-    if publish if publish is not None else not (quick or families):
+    if publish_to is not None or (publish if publish is not None else not (quick or families)):
         from probecommit.report.publish import publish as publish_results
 
-        published = publish_results(done["targets"], REPO_ROOT, timing=done)
-        console.print(f"frozen results: [bold]{escape(str(published))}[/bold]; REPRODUCTION.md rewritten")
+        published = publish_results(done["targets"], publish_to or REPO_ROOT, timing=done)
+        console.print(f"frozen results: [bold]{escape(str(published))}[/bold]; "
+                      f"{escape(str(published.parent.parent / 'REPRODUCTION.md'))} rewritten")
 
 
 def scan(
@@ -187,22 +189,21 @@ def faults(
 
 
 def verify(
-    results: Path = typer.Argument(REPO_ROOT / "results", help="A results folder (one folder per study) or one study folder."),
-    reproduction: Optional[Path] = typer.Option(None, "--reproduction", help="REPRODUCTION.md to trace (default: beside the results folder)."),
-    trace: bool = typer.Option(False, "--trace", help="Print where each REPRODUCTION.md number comes from."),
+    results: Path = typer.Argument(REPO_ROOT / "results", help="A publication: results/, results/paper, or a --publish-to folder."),
+    notes: bool = typer.Option(False, "--notes", help="Also list what is traced only (files not rendered again, figures without stored data)."),
 ) -> None:
-    """Check the numerical invariants of frozen results: hashes, intervals, ranges, identities, traceability."""
+    """Recompute the published numbers from the stored episode tables and render every published file again."""
     from rich.markup import escape
 
     from probecommit.report.verify import verify as run_verify
 
-    report = run_verify(results, reproduction)
-    if trace:
-        for line in report.traces:
-            console.print(escape(line))
+    report = run_verify(results)
+    if notes:
+        for line in report.notes:
+            console.print(escape(f"traced only: {line}"))
     for line in report.failures:
         err_console.print(f"FAILED {escape(line)}")
-    console.print(f"{report.checked} invariants checked, {len(report.failures)} failed")
+    console.print(escape(report.summary()))
     if not report.ok:
         raise typer.Exit(1)
 

@@ -20,6 +20,7 @@ from typing import Any, Callable
 
 import numpy as np
 
+import probecommit.report.style  # noqa: F401  (every target's figures in one style, whichever ran first)
 from probecommit.tasks.base import shared_engine_answers
 from probecommit.errors import UsageError
 
@@ -116,6 +117,7 @@ def insertion_row(root: Path) -> dict[str, Any] | None:
 def _breadth(root: Path, quick: bool, progress: Progress, workers: int) -> Path:
     import pandas as pd
 
+    from probecommit.audit.stats import DEFAULT_RESAMPLES
     from probecommit.studies.breadth import (BREADTH_FAMILIES, FAMILY_K, SUCCESS_FAMILIES, breadth_markdown,
                                              budget_curves, feasible_instances, paper_config, plot_budget_curves,
                                              quick_config, run_breadth, truth_sign_flip)
@@ -135,6 +137,7 @@ def _breadth(root: Path, quick: bool, progress: Progress, workers: int) -> Path:
     curves = budget_curves(runs)
     progress("breadth: families", len(families), len(families))
     sign_flips = {}
+    store_breadth_episodes(families, runs, quick, results / "breadth_episodes.parquet")
     for family in (f for f in families if f in SUCCESS_FAMILIES):
         config = paper_config(family)
         config = quick_config(config) if quick else config
@@ -154,11 +157,30 @@ def _breadth(root: Path, quick: bool, progress: Progress, workers: int) -> Path:
     write_table(results, "table_II_breadth", breadth_markdown(table))
     plot_budget_curves(curves, results / "fig_breadth_budget.png")
     rows = json.loads(table.to_json(orient="records"))
-    payload = {"results": {"table_II": {row["family"]: row for row in rows},
+    payload = {"results": {"settings": {"k": 5, "resamples": DEFAULT_RESAMPLES, "seed": 0},
+                           "table_II": {row["family"]: row for row in rows},
                            "curves": json.loads(curves.to_json(orient="records")),
                            "sign_flip_over_truths": sign_flips}}
     (results / "results.json").write_text(json.dumps(payload, indent=1))
     return results
+
+
+def store_breadth_episodes(families: tuple[str, ...], runs: dict[str, Path], quick: bool, path: Path) -> None:
+    """Every family's episodes as Table II reads them (grasp: its feasible truths), one compact file:
+    verify recomputes Table II and the budget curves from it."""
+    import pandas as pd
+
+    from probecommit.studies.breadth import (SUCCESS_FAMILIES, feasible_episodes, paper_config, quick_config,
+                                             read_episodes)
+
+    frames = []
+    for family in families:
+        episodes = read_episodes(runs[family])
+        if family in SUCCESS_FAMILIES:
+            config = paper_config(family)
+            episodes = feasible_episodes(quick_config(config) if quick else config, runs[family], episodes)
+        frames.append(episodes.assign(family=family))
+    pd.concat(frames, ignore_index=True).to_parquet(path, compression="zstd", index=False)
 
 
 def _beyond(root: Path, quick: bool, progress: Progress, workers: int) -> Path:
@@ -290,15 +312,13 @@ def reproduce(names: list[str], root: str | Path, quick: bool = False, progress:
 
 # ----------------------------------------------------------------------------- publish
 
-#: Files small enough to version.
+#: Files small enough to version (episode tables are stored compactly: verify recomputes from them).
 PUBLISHED_SUFFIXES = (".md", ".tex", ".json", ".png", ".pdf", ".parquet")
-#: Per-episode tables that stay in the run root.
-UNPUBLISHED = ("faults_episodes.parquet",)
 
 
 def publish(results: dict[str, str | Path], repo_root: str | Path) -> Path:
     """Copy each target's results into ``results/paper/<target>/`` with a hash manifest."""
-    from probecommit.report.verify import write_manifest
+    from probecommit.report.manifest import write_manifest
 
     target_root = Path(repo_root) / "results" / "paper"
     for name, folder in results.items():
@@ -309,7 +329,7 @@ def publish(results: dict[str, str | Path], repo_root: str | Path) -> Path:
             if stale.is_file() and stale.suffix in PUBLISHED_SUFFIXES and stale.name not in fresh:
                 stale.unlink()
         for path in sorted(Path(folder).iterdir()):
-            if path.is_file() and path.suffix in PUBLISHED_SUFFIXES and path.name not in UNPUBLISHED:
+            if path.is_file() and path.suffix in PUBLISHED_SUFFIXES:
                 shutil.copy2(path, dest / path.name)
         write_manifest(dest)
     return target_root
@@ -319,13 +339,14 @@ def engines_markdown(table: Any) -> str:
     """Table VI: ours per engine and variant, the paper's row under each of ours (labelled)."""
     from probecommit.studies.paper_values import PRINTED as PAPER
 
-    header = "| quantity | " + " | ".join(f"{e} {v}" for e, v in table.columns) + " |"
-    lines = [header, "|---" * (len(table.columns) + 1) + "|"]
+    columns = [tuple(c.split("/", 1)) if isinstance(c, str) else tuple(c) for c in table.columns]  # flat when re-rendered
+    header = "| quantity | " + " | ".join(f"{e} {v}" for e, v in columns) + " |"
+    lines = [header, "|---" * (len(columns) + 1) + "|"]
     for label, values in table.iterrows():
         metric = label.replace(" ", "_")
         lines.append(f"| {label} (ours) | " + " | ".join(f"{v:.3f}" for v in values) + " |")
         lines.append(f"| {label} (paper) | " + " | ".join(PAPER.get(f"tab:engines.{e}/{v}.{metric}", "--")
-                                                      for e, v in table.columns) + " |")
+                                                      for e, v in columns) + " |")
     return "\n".join(lines)
 
 
@@ -364,7 +385,9 @@ def _engines(root: Path, quick: bool, progress: Progress, workers: int) -> Path:
     flat.columns = [f"{e}/{v}" for e, v in flat.columns]
     flat.to_parquet(results / "table_VI_engines.parquet")
     escape.to_parquet(results / "escape_by_budget.parquet")
+    study["episodes"].to_parquet(results / "engine_episodes.parquet", compression="zstd", index=False)
     payload = {"results": {
+        "settings": study["bootstrap"],
         "table": {f"{e}/{v}": dict(zip([r.replace(" ", "_") for r in table.index], map(float, table[(e, v)])))
                   for e, v in table.columns},
         "paired_failure": study["paired"], "scans": study["scans"],
@@ -451,19 +474,10 @@ def paper_setup_cell(family: str) -> str:
     return f"{PAPER_TABLE_I_ENGINES[family]}, {n.replace(times, ' x ')}"
 
 
-def _setup(root: Path, quick: bool, progress: Progress, workers: int) -> Path:
-    """Table I from the task registry, and Fig. 1b (an insertion belief after taps 1, 3, 5)."""
-    from importlib import resources
-
-    import yaml
-
-    from probecommit.report.demo import belief_figure
-    from probecommit.runner.config import parse_config
-    from probecommit.runner.study import run_study
+def table_I() -> tuple[list[str], list[dict[str, Any]]]:
+    """Table I's Markdown lines and records, from the task registry (verify renders it again)."""
     from probecommit.tasks.registry import families
 
-    results = root / "setup" / "results"
-    results.mkdir(parents=True, exist_ok=True)
     specs = families()
     lines = ["| family | engines (ours) | latents | probe / action | sigma | budgets k | n; metric | paper: engine, n |",
              "|---|---|---|---|---|---|---|---|"]
@@ -476,6 +490,22 @@ def _setup(root: Path, quick: bool, progress: Progress, workers: int) -> Path:
                      f"{s.get('sigma', '')} | {s.get('budgets', '')} | {s.get('n', '')}; {s.get('metric', '')} | "
                      f"{paper_setup_cell(name)} |")
         rows.append({"family": name, "engines": list(spec.engines), **s})
+    return lines, rows
+
+
+def _setup(root: Path, quick: bool, progress: Progress, workers: int) -> Path:
+    """Table I from the task registry, and Fig. 1b (an insertion belief after taps 1, 3, 5)."""
+    from importlib import resources
+
+    import yaml
+
+    from probecommit.report.demo import belief_figure
+    from probecommit.runner.config import parse_config
+    from probecommit.runner.study import run_study
+
+    results = root / "setup" / "results"
+    results.mkdir(parents=True, exist_ok=True)
+    lines, rows = table_I()
     write_table(results, "table_I_setup", "\n".join(lines))
     data = yaml.safe_load(resources.files("probecommit").joinpath("configs/demo.yaml").read_text())
     if quick:

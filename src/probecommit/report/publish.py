@@ -17,6 +17,7 @@ from typing import Any
 
 from probecommit.report import claims_json
 from probecommit.report.ledger import LEDGER_NAME, Entry, Ledger
+from probecommit.report.manifest import write_root_manifest
 from probecommit.report.paper import publish as publish_folders
 from probecommit.report.reproduction_md import (CONFIGURATION, MD_FILE, Doc, beyond_section, breadth_section, claims_section,
                                                 cost_section, engines_section, gru_section, insertion_section,
@@ -27,8 +28,10 @@ HEADER = """# Reproduction
 Every number below was produced by this repository's code from a config in it:
 `probecommit reproduce all` reruns every study from `configs/paper/` (or one target:
 `probecommit reproduce --list`), rewrites `results/paper/` and this file, and
-`probecommit verify` checks the frozen numbers. Each number here is printed from a key of
-the results tree and recorded with it in `results/paper/published_numbers.json`. "paper"
+`probecommit verify` recomputes the summary numbers from the stored episode tables, renders
+every table and this file again from the stored data, and checks each printed number against
+its source (`docs/verify.md`). Each number here is printed from a key of the results tree and
+recorded with it in `results/paper/published_numbers.json`. "paper"
 is the value the paper reports, printed as the paper prints it; "ours" is our frozen result
 with its truth-cluster bootstrap interval where one applies. Tables and figures are named by
 the paper's own numbering and labels (`table_II_breadth.md`, `fig_6_decision.png`; see
@@ -107,6 +110,7 @@ def publish(results: dict[str, str | Path], repo_root: str | Path, timing: dict[
             record["machine"] = machine
         (root / "reproduction.json").write_text(json.dumps(record, indent=1) + "\n")
     write_reproduction_md(repo_root)
+    write_root_manifest(root)  # last: it hashes reproduction.json, report.html and REPRODUCTION.md
     return root
 
 

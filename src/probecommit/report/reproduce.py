@@ -23,7 +23,7 @@ from probecommit.runner.calibration import calibrate
 from probecommit.audit.stats import cluster_bootstrap_mean, paired_bootstrap
 from probecommit.audit.surprise import surprise_auc
 from probecommit.core.memory import release_free_heap, trim_heap
-from probecommit.report.figures import save_figure
+from probecommit.report.insertion_tables import RENDERERS
 from probecommit.report.study_figures import decisive_tap_figure, fault_signatures, scan_figure
 from probecommit.runner.build import build_model, build_simulator
 from probecommit.runner.replay import LoadedRun, RunBeliefs, load_run, replay_episodes, replay_run, trace_for_run
@@ -57,6 +57,27 @@ class Reproduction:
     def add_calls(self, calls: dict[str, int]) -> None:
         for key, value in calls.items():
             self.engine_calls[key] = self.engine_calls.get(key, 0) + int(value)
+
+
+#: Runs whose episodes the publication stores (``episodes.parquet``): verify recomputes from them.
+RECOMPUTED_RUNS = ("A_cover", "B_cal_cover", "B_cal_random", "B_test_random", "C_random", "C_random_corrected", "C_cover",
+                   "C_cover_corrected")
+#: The episode columns the recomputed numbers read.
+STORED_COLUMNS = ("instance_id", "repeat", "k", "method", "status", "predicted", "realized", "covered", "escaped",
+                  "score_s", "max_surprise")
+
+
+def store_episodes(episodes: pd.DataFrame, path: Path, extra: tuple[str, ...] = ()) -> None:
+    """Write the columns verify reads, strings as dictionaries (a few bytes an episode)."""
+    table = episodes[[*extra, *STORED_COLUMNS]].reset_index(drop=True)
+    table.to_parquet(path, compression="zstd", index=False)
+
+
+def signature_points(signatures: pd.DataFrame) -> dict[str, Any]:
+    """Fig. 7's data by fault and budget, so a claim can name one point (``fault_signatures.prior.1``);
+    verify recomputes it from the stored fault episodes."""
+    return {str(fault): {str(int(r["k"])): {c: float(r[c]) for c in ("escape", "coverage", "optimism", "failure")}
+                         for _, r in part.iterrows()} for fault, part in signatures.groupby("fault", sort=False)}
 
 
 def probe_rows(episodes: pd.DataFrame, k: int | None = None) -> pd.DataFrame:
@@ -109,20 +130,6 @@ def paired(base: pd.DataFrame, treat: pd.DataFrame, k: int, value: str, resample
     return [diff.difference.estimate, diff.difference.lo, diff.difference.hi]
 
 
-def fmt(v: Any, signed: bool = False) -> str:
-    if isinstance(v, (list, tuple)) and len(v) == 3:
-        return f"{v[0]:+.3f} [{v[1]:+.3f}, {v[2]:+.3f}]" if signed else f"{v[0]:.3f} [{v[1]:.3f}, {v[2]:.3f}]"
-    if isinstance(v, float):
-        return f"{v:+.3f}" if signed else f"{v:.3f}"
-    return str(v)
-
-
-def md_table(header: list[str], rows: list[list[Any]]) -> str:
-    lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
-    lines += ["| " + " | ".join(str(c) for c in row) + " |" for row in rows]
-    return "\n".join(lines)
-
-
 class InsertionReproduction:
     """Runs the insertion reproduction step by step into ``root``."""
 
@@ -144,6 +151,12 @@ class InsertionReproduction:
         self.boot = dict(resamples=protocol.bootstrap.resamples, seed=protocol.bootstrap.seed)
         self.chunk = dict(chunk_instances=self.CHUNK_INSTANCES)
         self.loaded: dict[str, LoadedRun] = {}
+        # What the tables print about the protocol itself (Table I's row, the fault table's header).
+        self.rep.results["setup"] = {
+            "engine": protocol.engine, "sigma": protocol.sigma, "k_random": protocol.budgets["random"],
+            "cover_schedule": list(protocol.cover_schedule), "n": f"{protocol.instances['B'].count}x{protocol.repeats}",
+            "temperature": protocol.faults.temperature, "alpha": protocol.alpha,
+            "bootstrap": {"resamples": protocol.bootstrap.resamples, "seed": protocol.bootstrap.seed}}
 
     # ---------------------------------------------------------------- helpers
     def run(self, name: str, config) -> LoadedRun:
@@ -170,8 +183,9 @@ class InsertionReproduction:
             release_free_heap()  # a replay held a chunk of beliefs at a time: give their pages back
         return self.loaded[name]
 
-    def write_table(self, key: str, title: str, table: str, note: str = "") -> None:
-        text = f"### {title}\n\n{table}\n" + (f"\n{note}\n" if note else "")
+    def write_table(self, key: str) -> None:
+        """Render table ``key`` from the results so far (``report.insertion_tables``; verify renders it again)."""
+        text = RENDERERS[key](self.rep.results, self.out)
         (self.out / f"{key}.md").write_text(text)
         self.rep.tables[key] = text
 
@@ -188,12 +202,7 @@ class InsertionReproduction:
         self.rep.results["scan"] = summary
         first = str(result.scans["instance_id"].iloc[0])
         self.rep.figures["scan"] = str(scan_figure(result.grid, result.scans, first, summary["delta"], self.out / "fig_4a_teaser_scan_section.png"))
-        self.write_table(
-            "scan", "Boundary scan on the development truths",
-            md_table(["scans", "delta mean (mm)", "SD", "min", "max", "shift vs deployed hg - r (mm)", "frozen delta"],
-                     [[summary["scans"], f"{summary['delta']:+.4f}", f"{summary['sd']:.4f}", f"{summary['min']:+.4f}",
-                       f"{summary['max']:+.4f}", f"{summary['shift_vs_deployed_mm']:.3f}", f"{p.delta:+.3f}"]]),
-        )
+        self.write_table("scan")
 
     def cover_search(self, limit: int | None) -> None:
         p = self.p
@@ -209,12 +218,7 @@ class InsertionReproduction:
             "frozen_rank": int(table.index[table["schedule"].map(lambda s: list(map(float, s)) == list(p.cover_schedule))][0]) + 1
             if any(table["schedule"].map(lambda s: list(map(float, s)) == list(p.cover_schedule))) else None,
         }
-        top = table.head(5)
-        self.write_table(
-            "cover_search", f"Cover-schedule search ({len(table)} subsets, development instances, k = 5)",
-            md_table(["rank", "schedule (mm)", "failure", "mean aim error (mm)"],
-                     [[i + 1, str([float(u) for u in r["schedule"]]), f"{r['failure']:.3f}", f"{r['aim_error']:.2f}"] for i, r in top.iterrows()]),
-        )
+        self.write_table("cover_search")
 
     def rollouts(self) -> None:
         p = self.p
@@ -267,23 +271,7 @@ class InsertionReproduction:
             "simultaneous_random": float(self.cal_random.simultaneous_threshold),
         }
         self.rep.results["table_insertion"] = res
-        rows = [["A", "no probe (Blind-Bayes)", "--", "--", fmt(res["A.no_probe"])],
-                ["A", "cover, k=5", "no", "no", fmt(a_k5)]]
-        for _, r in self.cal_cover.cost.iterrows():
-            rows.append(["B", *self._cost_row(r)])
-        self.write_table("table_IV_insertion", "Insertion failure by split and calibration setting (MuJoCo)",
-                         md_table(["split", "method", "set cal.", "margin", "failure [95% CI]"], rows),
-                         note=f"Margin gamma (cover) = {res['margin_cover']}; conformal t_k (cover) = "
-                              f"{ {k: round(v, 3) for k, v in res['thresholds_cover'].items()} }; distribution-free margin = "
-                              f"{res['distribution_free_margin_cover']:.3f}.")
-
-    @staticmethod
-    def _cost_row(r: pd.Series) -> list[str]:
-        k = int(r["k"])
-        label = {"blind_robust": ("Blind-Robust", "--", "--"), "no calibration": (f"cover, k={k}", "no", "no"),
-                 "set calibration": (f"cover, k={k}", "yes", "no"),
-                 "set calibration + margin": (f"cover, k={k}", "yes", "yes")}[str(r["setting"])]
-        return [*label, fmt([float(r["failure"]), float(r["failure_lo"]), float(r["failure_hi"])])]
+        self.write_table("table_IV_insertion")
 
     def table_audit(self) -> None:
         t3 = self.cal_random.table3
@@ -292,19 +280,13 @@ class InsertionReproduction:
         esc = {k: episode_metrics(test, k, **self.boot) for k in (1, 8)}
         self.rep.results["text"] = {"escape_k1": esc[1]["escape"], "escape_k8": esc[8]["escape"],
                                      "episode_coverage_k1": esc[1]["episode_coverage"], "episode_coverage_k8": esc[8]["episode_coverage"]}
-        cols = [c for c in t3.columns if not c.endswith(("_lo", "_hi"))]
-        rows = [[fmt(v) if isinstance(v, float) else v for v in r] for r in t3[cols].itertuples(index=False)]
-        s = self.cal_random.summary
-        self.write_table("table_III_audit", "Insertion audit, Split B, random probes (MuJoCo)", md_table(cols, rows),
-                         note=f"Summary: {json.dumps({k: round(float(v), 3) for k, v in s.items()})}. "
-                              f"Escape k=1: {fmt(esc[1]['escape'])}, k=8: {fmt(esc[8]['escape'])}; "
-                              f"episode coverage k=1: {fmt(esc[1]['episode_coverage'])}, k=8: {fmt(esc[8]['episode_coverage'])}.")
+        self.write_table("table_III_audit")
 
     def table_testc(self) -> None:
         L, b = self.loaded, self.boot
         old_r, new_r = L["C_random"].episodes, L["C_random_corrected"].episodes
         old_c, new_c = L["C_cover"].episodes, L["C_cover_corrected"].episodes
-        rows, res = [], {}
+        res = {}
         spec = [("escape_random_k8", old_r, new_r, 8, "escaped"), ("episode_coverage_random_k8", old_r, new_r, 8, "covered"),
                 ("optimism_random_k8", old_r, new_r, 8, "optimism"), ("failure_random_k8", old_r, new_r, 8, "realized"),
                 ("failure_cover_k5", old_c, new_c, 5, "realized"), ("failure_cover_k1", old_c, new_c, 1, "realized")]
@@ -313,17 +295,13 @@ class InsertionReproduction:
             name = {"escaped": "escape", "covered": "episode_coverage", "realized": "failure", "optimism": "optimism"}[col]
             d = paired(new, old, k, col, **b)  # old - corrected
             res[key] = {"old": mo[name], "corrected": mn[name], "old_minus_corrected": d}
-            rows.append([key, fmt(mo[name][0]), fmt(mn[name][0]), fmt(d, signed=True)])
         cal_old = calibrate(L["B_cal_cover"], L["C_cover"], alpha=self.p.alpha, budgets=[1, 2, 3, 4, 5], **b, **self.chunk)
         cal_new = calibrate(L["B_cal_cover_corrected"], L["C_cover_corrected"], alpha=self.p.alpha, budgets=[1, 2, 3, 4, 5], **b, **self.chunk)
         fo, fn = self._setmargin_failure(cal_old), self._setmargin_failure(cal_new)
         res["failure_cover_k5_setcal_margin"] = {"old": fo, "corrected": fn,
                                                  "simultaneous_threshold": {"old": cal_old.simultaneous_threshold, "corrected": cal_new.simultaneous_threshold}}
-        rows.append(["failure_cover_k5_setcal_margin", fmt(fo), fmt(fn), f"{fo - fn:+.3f}" if isinstance(fo, float) else "--"])
         self.rep.results["table_testc"] = res
-        self.write_table("table_V_testc", "Confirmation on untouched instances (Test C), MuJoCo",
-                         md_table(["row", "old", "corrected", "old - corrected [95% CI]"], rows),
-                         note="Both models see identical taps; paired cluster bootstrap over instances.")
+        self.write_table("table_V_testc")
 
     @staticmethod
     def _setmargin_failure(cal) -> float:
@@ -336,9 +314,9 @@ class InsertionReproduction:
         arms = fault_arms(f.noise_factor, f.prior_half_width, f.particles, f.frame_offset, f.temperature, p.sigma)
         rollouts = {"base": L["faults_base"], "noise": L["faults_noise"], "prior": L["faults_prior"]}
         episodes = run_fault_harness(rollouts, arms, progress=lambda d, t: self.progress("fault harness", d, t), **self.chunk)
-        episodes.to_parquet(self.out / "faults_episodes.parquet")
+        store_episodes(episodes, self.out / "faults_episodes.parquet", extra=("fault", "arm"))
         kmax = p.budgets["random"]
-        table, res = [], {}
+        res = {}
         for fault in FAULTS:
             fa = episodes[(episodes.fault == fault) & (episodes.arm == "fault")]
             row = {"fail": episode_metrics(fa, kmax, **b)["failure"]}
@@ -354,19 +332,12 @@ class InsertionReproduction:
             if len(fix):
                 row["paired_fix"] = paired(fa, fix, kmax, "realized", **b)
             res[fault] = row
-            table.append([fault, fmt(row["fail"]), f"{row['surprise_auc']:.2f}" if row.get("surprise_auc") is not None else "--",
-                          fmt(row["tempered"][0]) if "tempered" in row else "--", fmt(row["fix"][0]) if "fix" in row else "--",
-                          fmt(row["paired_fix"], signed=True) if "paired_fix" in row else "--"])
         signatures = signature_table(episodes)
         signatures.to_parquet(self.out / "fault_signatures.parquet")
-        # The figure's data by fault and budget, so a claim can name one point (``fault_signatures.prior.1``).
-        self.rep.results["fault_signatures"] = {
-            str(fault): {str(int(r["k"])): {c: float(r[c]) for c in ("escape", "coverage", "optimism", "failure")}
-                         for _, r in part.iterrows()} for fault, part in signatures.groupby("fault", sort=False)}
+        self.rep.results["fault_signatures"] = signature_points(signatures)
         self.rep.figures["signatures"] = str(fault_signatures(signatures, self.out / "fig_7_signatures.png"))
         self.rep.results["table_faults"] = res
-        self.write_table("table_VIII_faults", f"Controlled mismatch tests, random probes, k = {kmax} (MuJoCo)",
-                         md_table(["fault", "fail [95% CI]", "surprise AUC", f"tempered T={f.temperature:g}", "known fix", "fix - fault (paired)"], table))
+        self.write_table("table_VIII_faults")
 
     def robust(self) -> None:
         p, L, b = self.p, self.loaded, self.boot
@@ -379,24 +350,17 @@ class InsertionReproduction:
         deployed, _ = replay_episodes(base, {"model": {"boundary": "deployed"}}, **self.chunk)
         res = {"tuning": tuning.drop(columns="belief").to_dict("records"), "chosen": {k: v[0] for k, v in chosen.items()},
                "deployed": episode_metrics(deployed, kmax, **b)}
-        rows = [["deployed (no robust filter)", "--", fmt(res["deployed"]["escape"][0]), fmt(res["deployed"]["failure"][0]),
-                 fmt(res["deployed"]["optimism"][0], signed=True), "--"]]
         for family, (value, belief) in chosen.items():
             ep, _ = replay_episodes(base, {"model": {"boundary": "deployed"}, "belief": belief}, **self.chunk)
             m = episode_metrics(ep, kmax, **b)
             d = paired(deployed, ep, kmax, "realized", **b)
             res[family] = {"value": value, **m, "failure_diff": d}
-            rows.append([family, f"{value:g}", fmt(m["escape"][0]), fmt(m["failure"][0]), fmt(m["optimism"][0], signed=True), fmt(d, signed=True)])
         if "mixture" in chosen:
             right = probe_rows(base.episodes, kmax)["realized"].mean()
             mix, _ = replay_episodes(base, {"belief": chosen["mixture"][1]}, **self.chunk)
             res["mixture_cost_when_right"] = [float(right), float(probe_rows(mix, kmax)["realized"].mean())]
         self.rep.results["robust"] = res
-        self.write_table("robust", f"Robust filters under the boundary error, random k = {kmax} (MuJoCo)",
-                         md_table(["filter", "chosen", "escape", "failure", "optimism", "failure vs deployed (paired)"], rows),
-                         note=f"Chosen on the development instances by lowest k = {kmax} failure under the deployed model. "
-                              + (f"When the model is right the mixture moves failure {res['mixture_cost_when_right'][0]:.3f} -> "
-                                 f"{res['mixture_cost_when_right'][1]:.3f}." if "mixture_cost_when_right" in res else ""))
+        self.write_table("robust")
 
     def resplits(self) -> None:
         p = self.p
@@ -430,13 +394,9 @@ class InsertionReproduction:
                    "failure_mean_sd": [float(table.failure.mean()), float(table.failure.std(ddof=1))],
                    "heldout_cluster_coverage": float(table.heldout_cluster_coverage.mean()),
                    "margin_optimistic_fraction": float(table.margin_optimistic.mean()),
-                   "splits": count}
+                   "splits": count, "pool": int(len(ids))}
         self.rep.results["resplits"] = summary
-        self.write_table("resplits", f"{count} random re-splits of one {len(ids)}-instance pool (cover, k = 5)",
-                         md_table(["calibrated level t_5 (mean +- SD)", "failure set+margin (mean +- SD)", "held-out cluster coverage", "margin optimistic"],
-                                  [[f"{summary['level_mean_sd'][0]:.3f} +- {summary['level_mean_sd'][1]:.3f}",
-                                    f"{summary['failure_mean_sd'][0]:.3f} +- {summary['failure_mean_sd'][1]:.3f}",
-                                    f"{summary['heldout_cluster_coverage']:.3f}", summary["margin_optimistic_fraction"]]]))
+        self.write_table("resplits")
 
     def commit_gates(self) -> None:
         """Commit gates on Split B, cover schedule (paper Fig. "commit decision" b, c)."""
@@ -454,19 +414,12 @@ class InsertionReproduction:
         summary = result.summary
         self.rep.results["gates"] = {"summary": summary.to_dict("records"), "info": result.info}
         result.curves.to_parquet(self.out / "gates_curves.parquet")
-        cols = [c for c in summary.columns if summary[c].dtype != object or c == "signal"]
-        rows = [[fmt(v) if isinstance(v, float) else v for v in r] for r in summary[cols].itertuples(index=False)]
-        self.write_table("gates", "Commit gates, Split B, cover schedule (failure among committed vs commit rate)",
-                         md_table(cols, rows))
+        self.write_table("gates")
 
     def setup_table(self) -> None:
         """Table I, the insertion row, from the protocol."""
         p = self.p
-        n = f"{p.instances['B'].count}x{p.repeats}"
-        self.write_table("table_I_setup_insertion", "Experimental setup, insertion (MuJoCo)", md_table(
-            ["family", "engine", "latents", "probe / action", "sigma", "budgets k", "n; metric"],
-            [["insertion", p.engine, "x_hole, c", "tap / aim", f"{p.sigma} mm", f"1-{p.budgets['random']}, cover {p.cover_schedule}",
-              f"{n}; failure"]]))
+        self.write_table("table_I_setup_insertion")
 
     def decisive_tap(self) -> None:
         """Fig. (teaser b): a development episode where a chamfer-band tap removes the truth."""
@@ -499,6 +452,11 @@ class InsertionReproduction:
                 self.rep.figures["decisive_tap"] = str(path)
                 return
 
+    def store_episodes(self) -> None:
+        """The episode tables verify recomputes the summary numbers from, compactly, in one file."""
+        frames = [self.loaded[name].episodes.assign(run=name) for name in RECOMPUTED_RUNS if name in self.loaded]
+        store_episodes(pd.concat(frames, ignore_index=True), self.out / "episodes.parquet", extra=("run",))
+
     # ---------------------------------------------------------------- all
     def run_all(self, cover_limit: int | None = None) -> Reproduction:
         start = time.perf_counter()
@@ -508,6 +466,7 @@ class InsertionReproduction:
         for step in steps:
             step()
             release_free_heap()  # the next step's peak starts from what is live, not this one's high-water mark
+        self.store_episodes()
         self.rep.wall_s = time.perf_counter() - start
         payload = {"results": self.rep.results, "engine_calls": self.rep.engine_calls, "wall_s": self.rep.wall_s,
                    "figures": self.rep.figures}

@@ -1,414 +1,412 @@
-"""Check the numerical invariants of frozen result files (``probecommit verify``).
+"""``probecommit verify``: every published number must follow from the stored data.
 
-A results tree holds one folder per study (``results/paper/insertion/``, ...), each with a
-``results.json`` (the numbers the tables print), Parquet tables and figures, and a
-``MANIFEST.json`` with the sha256 of every file. The verifier reads files only and
-checks, without rerunning anything:
+A publication (``results/paper`` in a checkout, or a ``--publish-to`` folder's
+``results/paper``) holds one folder per study, the root files (``reproduction.json``,
+``report.html``) and REPRODUCTION.md two levels up. The verifier reads files only and checks,
+by kind:
 
-* **hashes**: every file listed in a study's manifest exists and matches; no result
-  file is missing from it;
-* **intervals**: every ``[point, lo, hi]`` triple has ``lo <= point <= hi``;
-* **ranges**: rates (failure, coverage, escape, success, rates of commit) lie in [0, 1]
-  and counts are non-negative integers;
-* **identities**: optimism = realized - predicted; a paired ``a_minus_b`` equals
-  ``a - b``; a ``failure_diff``/``paired_fix`` equals the difference of its rows;
-  ``shift_vs_deployed_mm`` = delta + tip radius; the per-budget fault-signature table
-  holds one row per (fault, k); a robot table's realized failure is ``1 - in_window /
-  episodes``, its optimism ``realized - predicted``, its counts within ``0..episodes``;
-* **counts**: ``n`` = 384 = 96 x 4 where the protocol says so;
-* **traceability**: every number in ``REPRODUCTION.md``'s "ours" column is found,
-  to the printed precision, in a ``results.json`` (and the key it came from is
-  reported with ``--trace``).
+* **recomputed**: each study's summary numbers recomputed from its stored episode-level
+  tables with the stored bootstrap seeds (``report.recompute``) and compared with
+  ``results.json``; derived Parquet tables (fault signatures, Table II, budget curves, prices)
+  rebuilt and compared cell by cell; figures' data digests compared with their data;
+* **traced**: every published text file rendered again from the stored data
+  (``report.rerender``: each table from its study's results, each ``.tex`` from its ``.md``,
+  claims.json (the claims' statuses recomputed from the registry), REPRODUCTION.md, the
+  published-numbers ledger and report.html from the whole publication) and compared; a
+  difference names the file, the line and the number (for claims.json, the claim whose status
+  differs); every ledger entry re-resolved and re-formatted, and every number in a ledgered
+  file accounted for (``report.ledger``);
+* **identities** and **ranges**: intervals contain their points, paired differences equal
+  their rows', a results.json table equals its Parquet twin, rates in [0, 1], no NaN or inf
+  unless declared (``report.checks``);
+* **files**: the publication and study manifests exist, list every file the folders hold,
+  and match their bytes; REPRODUCTION.md exists.
 
-Every check is one invariant; the report counts them and lists each failure in one line.
+The headline is the number of distinct published numbers verified (recomputed, or printed in
+a file that re-renders identically); traced-only numbers are counted apart.
 """
 
 from __future__ import annotations
 
-import hashlib
 import json
 import math
 import re
+from collections import Counter
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Iterator
+from typing import Any
 
-import numpy as np
 import pandas as pd
 
-MANIFEST = "MANIFEST.json"
-#: Result files that belong in a study's manifest.
-RESULT_SUFFIXES = (".json", ".md", ".parquet", ".png", ".pdf", ".tex", ".html")
-#: Keys whose numbers are probabilities or rates.
-RATE_WORDS = ("failure", "coverage", "escape", "success", "commit_rate", "fail", "realized", "predicted")
-#: Protocol sizes: rows of 96 instances x 4 repeats.
-EPISODES_PER_ROW = 384
+from probecommit.report import checks, manifest
+from probecommit.report.manifest import MANIFEST, REPRODUCTION_REL, write_manifest  # noqa: F401 (re-exported)
+
+#: Publishing writes ``published_numbers.json`` (REPRODUCTION.md's numbers and their keys): a missing ledger fails.
+REQUIRE_LEDGER = True
 TOLERANCE = 1e-9
+_NUMBER = re.compile(r"(?<![\w.])[+-]?(?:\d+\.\d+|\d+)(?:e[+-]?\d+)?")
+#: A results.json list of records and the Parquet table it mirrors, per study.
+#: A dict of records (keyed by a row's name, ``table_II.push1d``) is compared in the table's row order.
+TWINS = {"breadth": {"table_II": "table_II_breadth.parquet", "curves": "budget_curves.parquet"},
+         "cost": {"pricing": "pricing.parquet", "prices": "pricing.parquet"},
+         "robot": {"table": "table_robot.parquet", "boundary_fault": "fault_boundary.parquet",
+                   "prior_fault": "fault_prior.parquet", "boundary_by_mm": "fault_boundary.parquet",
+                   "prior_by_mm": "fault_prior.parquet"},
+         "engines": {"escape_by_budget": "escape_by_budget.parquet"},
+         "beyond": {"plateau": "plateau.parquet", "moves": "moves.parquet", "adaptive": "adaptive.parquet"}}
 
 
 @dataclass
 class Report:
-    """Outcome of a verification: how many invariants, which failed."""
+    """Checks by kind, failures one line each, and the published numbers they verified."""
 
-    checked: int = 0
+    counts: Counter = field(default_factory=Counter)
     failures: list[str] = field(default_factory=list)
-    traces: list[str] = field(default_factory=list)
+    verified_numbers: int = 0
+    traced_only_numbers: int = 0
+    notes: list[str] = field(default_factory=list)
 
-    def check(self, ok: bool, message: str) -> None:
-        self.checked += 1
+    def check(self, kind: str, ok: bool, message: str) -> None:
+        self.counts[kind] += 1
         if not ok:
             self.failures.append(message)
+
+    @property
+    def checked(self) -> int:
+        return sum(self.counts.values())
 
     @property
     def ok(self) -> bool:
         return not self.failures
 
-
-def sha256_file(path: Path) -> str:
-    digest = hashlib.sha256()
-    with open(path, "rb") as handle:
-        for block in iter(lambda: handle.read(1 << 20), b""):
-            digest.update(block)
-    return digest.hexdigest()
+    def summary(self) -> str:
+        kinds = ", ".join(f"{self.counts[k]} {k}" for k in ("recomputed", "traced", "identity", "range", "file")
+                          if self.counts[k])
+        return (f"{self.verified_numbers} published numbers verified ({kinds} checks); "
+                f"{self.traced_only_numbers} results.json numbers traced only; {len(self.failures)} failed")
 
 
-def write_manifest(study_dir: str | Path) -> Path:
-    """Write ``MANIFEST.json``: the sha256 of every result file of a study folder."""
-    study_dir = Path(study_dir)
-    files = sorted(p for p in study_dir.iterdir() if p.is_file() and p.suffix in RESULT_SUFFIXES and p.name != MANIFEST)
-    manifest = {"sha256": {p.name: sha256_file(p) for p in files}}
-    path = study_dir / MANIFEST
-    path.write_text(json.dumps(manifest, indent=1, sort_keys=True) + "\n")
-    return path
+# ----------------------------------------------------------------------------- layout
 
 
-# ----------------------------------------------------------------------------- walking
+def publication_root(path: str | Path) -> Path:
+    """The publication root under ``path``: itself, ``paper/``, or ``results/paper/``."""
+    path = Path(path)
+    for candidate in (path, path / "paper", path / "results" / "paper"):
+        if (candidate / MANIFEST).is_file() and "studies" in _json(candidate / MANIFEST, {}):
+            return candidate
+        if candidate.is_dir() and any((p / "results.json").is_file() for p in candidate.iterdir() if p.is_dir()):
+            return candidate
+    raise FileNotFoundError(f"{path} holds no publication (results/paper with study folders and {MANIFEST})")
 
 
-def _walk(node: Any, path: str = "") -> Iterator[tuple[str, Any]]:
-    """Every (dotted key, value) of a JSON tree, lists of records included (``key[i]``)."""
-    yield path, node
-    if isinstance(node, dict):
-        for key, value in node.items():
-            yield from _walk(value, f"{path}.{key}" if path else str(key))
-    elif isinstance(node, list) and node and all(isinstance(v, dict) for v in node):
-        for i, value in enumerate(node):
-            yield from _walk(value, f"{path}[{i}]")
+def _json(path: Path, default: Any = None) -> Any:
+    try:
+        return json.loads(path.read_text())
+    except (OSError, ValueError):
+        return default
 
 
-def _is_number(x: Any) -> bool:
-    return isinstance(x, (int, float)) and not isinstance(x, bool)
+def check_root(root: Path, report: Report) -> list[Path]:
+    """The publication manifest: present, listing every root file and study, bytes matching."""
+    path = root / MANIFEST
+    report.check("file", path.is_file(), f"{path}: no publication manifest")
+    report.check("file", (root / REPRODUCTION_REL).is_file(),
+                 f"{(root / REPRODUCTION_REL).resolve()}: no REPRODUCTION.md beside the publication")
+    studies = sorted(p for p in root.iterdir() if p.is_dir())
+    listed = _json(path, {}) or {}
+    _hashes(root, listed.get("sha256", {}), manifest.root_files(root), report)
+    named = set(listed.get("studies", []))
+    for name in sorted(named ^ {p.name for p in studies}):
+        state = "listed in" if name in named else "not in"
+        report.check("file", False, f"{root / name}: study folder {state} {MANIFEST}{' but missing' if name in named else ''}")
+    return studies
 
 
-def _is_triple(x: Any) -> bool:
-    return isinstance(x, list) and len(x) == 3 and all(_is_number(v) for v in x)
+def _hashes(folder: Path, listed: dict[str, str], present: list[str], report: Report) -> None:
+    for name, digest in sorted(listed.items()):
+        target = folder / name
+        if not target.is_file():
+            report.check("file", False, f"{target}: listed in {MANIFEST} but missing")
+        else:
+            report.check("file", manifest.sha256_file(target) == digest, f"{target}: sha256 differs from {MANIFEST}")
+    for name in present:
+        report.check("file", name in listed, f"{folder / name}: a file not in {MANIFEST}")
 
 
-def _point(x: Any) -> float | None:
-    if _is_number(x):
-        return float(x)
-    if _is_triple(x):
-        return float(x[0])
+def check_study_files(study: Path, report: Report) -> None:
+    """The study manifest, and each figure bound to the digest of the data it was drawn from."""
+    path = study / MANIFEST
+    report.check("file", path.is_file(), f"{path}: no study manifest")
+    listed = _json(path, {}) or {}
+    _hashes(study, listed.get("sha256", {}), sorted(p.name for p in study.iterdir() if p.is_file() and p.name != MANIFEST),
+            report)
+    for sub in sorted(p for p in study.iterdir() if p.is_dir()):
+        report.check("file", False, f"{sub}: a folder inside a study folder (a publication holds files only)")
+    for fig in sorted(study.glob("*.png")):
+        binding = listed.get("figures", {}).get(fig.name)
+        declared = manifest.FIGURE_DATA.get(study.name, {}).get(fig.stem, ())
+        if not declared:
+            report.notes.append(f"{study.name}/{fig.name}: drawn from run directories the publication does not hold")
+            continue
+        ok = binding is not None and binding.get("data") == list(declared)
+        report.check("file", ok, f"{fig}: manifest does not bind it to its data {list(declared)}")
+        if not ok or not all((study / n).is_file() for n in declared):
+            continue
+        digest = manifest.data_digest(study, declared)
+        report.check("recomputed", binding.get("data_sha256") == digest,
+                     f"{fig}: drawn from data with digest {str(binding.get('data_sha256'))[:12]}, its data "
+                     f"{', '.join(declared)} now digest {digest[:12]}")
+        carried = manifest.png_data_digest(fig)
+        report.check("recomputed", carried == digest,
+                     f"{fig}: the figure carries data digest {str(carried)[:12]}, not its data's {digest[:12]} "
+                     "(drawn from other data)")
+
+
+# ----------------------------------------------------------------------------- numbers
+
+
+def _count_numbers(text: str) -> int:
+    return len(_NUMBER.findall(text))
+
+
+def _equal(a: Any, b: Any) -> bool:
+    if checks.is_number(a) and checks.is_number(b):
+        if isinstance(a, float) and isinstance(b, float) and math.isnan(a) and math.isnan(b):
+            return True
+        return abs(float(a) - float(b)) <= TOLERANCE * max(1.0, abs(float(b)))
+    if isinstance(a, list) and isinstance(b, list):
+        return len(a) == len(b) and all(_equal(x, y) for x, y in zip(a, b))
+    if isinstance(a, dict) and isinstance(b, dict):
+        return a.keys() == b.keys() and all(_equal(a[k], b[k]) for k in a)
+    if a is None and isinstance(b, float) and math.isnan(b):
+        return True
+    return a == b
+
+
+def _leaves(value: Any) -> int:
+    return sum(1 for _, v in checks.walk(value) if checks.is_number(v))
+
+
+def check_recomputed(study: Path, results: dict[str, Any], report: Report) -> set[str]:
+    """Recompute the study's numbers from its episode tables; return the keys recomputed."""
+    from probecommit.report.ledger import walk_dotted
+    from probecommit.report.recompute import STUDIES
+
+    if study.name not in STUDIES:
+        return set()
+    try:
+        again = STUDIES[study.name](study, results)
+    except (OSError, KeyError, ValueError, TypeError, IndexError) as exc:
+        report.check("recomputed", False, f"{study}: cannot recompute from the stored tables ({type(exc).__name__}: {exc})")
+        return set()
+    for key, value in again.values.items():
+        try:
+            published = walk_dotted(results, key.split("."))
+        except KeyError:
+            report.check("recomputed", False, f"{study.name}/results.json: {key} missing (the stored episodes give {value})")
+            continue
+        report.counts["recomputed"] += _leaves(value) - 1
+        report.check("recomputed", _equal(published, value),
+                     f"{study.name}/results.json: {key} = {published} but {again.source(key)} gives {value}")
+    for name, table in again.tables.items():
+        _compare_table(study, name, table, again.table_sources.get(name, "the stored episode tables"), report)
+    return set(again.values)
+
+
+def _compare_table(study: Path, name: str, expected: pd.DataFrame, source: str, report: Report) -> None:
+    path = study / name
+    if not path.is_file():
+        report.check("recomputed", False, f"{path}: missing (it is derived from the stored episodes)")
+        return
+    stored = pd.read_parquet(path).reset_index(drop=True)
+    expected = expected.reset_index(drop=True)
+    if list(stored.columns) != list(expected.columns) or len(stored) != len(expected):
+        report.check("recomputed", False, f"{study.name}/{name}: {len(stored)} rows x {list(stored.columns)}, {source} "
+                                          f"gives {len(expected)} rows x {list(expected.columns)}")
+        return
+    for column in stored.columns:
+        for row, (a, b) in enumerate(zip(stored[column].tolist(), expected[column].tolist())):
+            report.counts["recomputed"] += 1
+            if not _equal(a, b):
+                report.check("recomputed", False, f"{study.name}/{name}: row {row} {column} = {a}, {source} gives {b}")
+                break
+
+
+def check_twins(study: Path, results: dict[str, Any], report: Report) -> None:
+    """A results.json list of records equals the Parquet table it was written with."""
+    for key, name in TWINS.get(study.name, {}).items():
+        if key not in results or not (study / name).is_file():
+            continue
+        table = pd.read_parquet(study / name).reset_index(drop=True)
+        records = list(results[key].values()) if isinstance(results[key], dict) else results[key]
+        report.check("identity", len(records) == len(table),
+                     f"{study.name}/results.json: {key} has {len(records)} rows, {name} has {len(table)}")
+        for i, (rec, row) in enumerate(zip(records, table.to_dict("records"))):
+            bad = [c for c in rec if c in row and not _equal(_plain(rec[c]), _plain(row[c]))]
+            report.check("identity", not bad, f"{study.name}/results.json: {key}.{i}.{bad[0] if bad else ''} = "
+                                              f"{rec.get(bad[0]) if bad else ''} but {name} holds "
+                                              f"{row.get(bad[0]) if bad else ''}")
+
+
+def _plain(v: Any) -> Any:
+    if hasattr(v, "tolist"):
+        v = v.tolist()
+    return v
+
+
+def check_texts(study: Path, report: Report) -> None:
+    """Every table of the study rendered again from the stored data, compared with the published file."""
+    from probecommit.report.rerender import expected_texts, first_difference, study_texts
+
+    try:
+        texts = study_texts(study)
+    except (OSError, KeyError, ValueError, TypeError, IndexError) as exc:
+        report.check("traced", False, f"{study}: cannot render its tables from the stored data ({type(exc).__name__}: {exc})")
+        return
+    for name in expected_texts(study.name):
+        report.check("file", (study / name).is_file(), f"{study.name}/{name}: missing (the study publishes it)")
+    for name in sorted(p.name for p in study.iterdir() if p.suffix in (".md", ".tex")):
+        if name not in texts:
+            report.notes.append(f"{study.name}/{name}: not rendered again (traced by its hash only)")
+            continue
+        published = (study / name).read_text()
+        ok = published == texts[name]
+        report.check("traced", ok, f"{study.name}/{name}: {first_difference(published, texts[name])}")
+        if ok:
+            report.verified_numbers += _count_numbers(published)
+
+
+def check_figures(study: Path, report: Report) -> None:
+    """Each figure that can be drawn from the stored data, drawn again: its PDF and PNG must be those bytes."""
+    from probecommit.report.manifest import strip_stamp
+    from probecommit.report.rerender import study_figures
+
+    try:
+        drawn = study_figures(study)
+    except (OSError, KeyError, ValueError, TypeError, IndexError) as exc:
+        report.check("recomputed", False, f"{study}: cannot draw its figures from the stored data ({type(exc).__name__}: {exc})")
+        return
+    for name, expected in sorted(drawn.items()):
+        published = (study / name).read_bytes()
+        if name.endswith(".png"):
+            published = strip_stamp(published)
+        report.check("recomputed", published == expected,
+                     f"{study.name}/{name}: not the figure its stored data draw (drawn again, the bytes differ)")
+
+
+def check_publication_texts(root: Path, report: Report) -> None:
+    """REPRODUCTION.md and report.html rendered again from the whole publication."""
+    from probecommit.report.rerender import first_difference, publication_texts
+
+    if not (root / REPRODUCTION_REL).is_file():
+        return
+    try:
+        texts = publication_texts(root)
+    except (OSError, KeyError, ValueError, TypeError, IndexError, AttributeError) as exc:
+        report.check("traced", False,
+                     f"REPRODUCTION.md: cannot render it from the publication ({type(exc).__name__}: {exc})")
+        return
+    for rel, expected in texts.items():
+        path = root / rel
+        name = Path(rel).name
+        if not path.is_file():
+            report.check("file", False, f"{name}: missing (publishing writes it)")
+            continue
+        published = path.read_bytes()
+        ok = published == expected
+        where = first_difference(published.decode(errors="replace"), expected.decode(errors="replace"))
+        if not ok and name == "claims.json":
+            where = _claims_difference(published, expected) or where
+        report.check("traced", ok, f"{name}: {where} (rendered from the studies' results, tables and reproduction.json)")
+        if ok and name.endswith(".md"):
+            report.verified_numbers += _count_numbers(published.decode())
+
+
+def _claims_difference(published: bytes, expected: bytes) -> str | None:
+    """The first claim whose status (or the counts) claims.json holds but the registry does not recompute."""
+    try:
+        stored, again = json.loads(published.decode(errors="replace")), json.loads(expected)
+    except ValueError:
+        return "not JSON"
+    if stored.get("counts") != again.get("counts"):
+        return f"counts {stored.get('counts')} but the registry recomputes {again.get('counts')}"
+    for cid, entry in again.get("claims", {}).items():
+        old = stored.get("claims", {}).get(cid, {})
+        if (old.get("status"), old.get("experiment")) != (entry["status"], entry["experiment"]):
+            return f"{cid} is {old.get('status')!r} but recomputes as {entry['status']!r}"
     return None
 
 
-def _last_word(key: str) -> str:
-    return re.split(r"[.\[]", key)[-1].lower()
-
-
-def _is_rate_key(key: str) -> bool:
-    word = _last_word(key)
-    if word.startswith("n_") or "escaped_" in word:  # counts of episodes
-        return False
-    if any(tag in word for tag in ("diff", "minus", "optimism", "delta", "gap", "paired", "_s", "auc")):
-        return False
-    return any(w in word for w in RATE_WORDS)
-
-
-# ----------------------------------------------------------------------------- checks
-
-
-def check_hashes(study: Path, report: Report) -> None:
-    manifest_path = study / MANIFEST
-    report.check(manifest_path.is_file(), f"{study}: no {MANIFEST} (hashes of the frozen files)")
-    if not manifest_path.is_file():
-        return
-    listed = json.loads(manifest_path.read_text()).get("sha256", {})
-    for name, digest in sorted(listed.items()):
-        path = study / name
-        if not path.is_file():
-            report.check(False, f"{study / name}: listed in {MANIFEST} but missing")
-            continue
-        report.check(sha256_file(path) == digest, f"{path}: sha256 differs from {MANIFEST} (the file changed)")
-    for path in sorted(study.iterdir()):
-        if path.is_file() and path.suffix in RESULT_SUFFIXES and path.name != MANIFEST:
-            report.check(path.name in listed, f"{path}: a result file not in {MANIFEST}")
-
-
-def check_json(study: Path, report: Report) -> dict[str, Any]:
-    """Interval, range and identity invariants of ``results.json``; returns its flat numbers."""
-    path = study / "results.json"
-    report.check(path.is_file(), f"{study}: no results.json")
-    if not path.is_file():
-        return {}
-    payload = json.loads(path.read_text())
-    numbers: dict[str, Any] = {}
-    where = f"{path}"
-    for key, value in _walk(payload):
-        if _is_triple(value):
-            p, lo, hi = value
-            report.check(lo - TOLERANCE <= p <= hi + TOLERANCE, f"{where}: {key} = {p} lies outside its interval [{lo}, {hi}]")
-            numbers[key] = value
-        elif _is_number(value):
-            # NaN stands for "no value" (a signal that makes no probability claim); infinity never.
-            report.check(not math.isinf(float(value)), f"{where}: {key} is infinite")
-            if math.isnan(float(value)):
-                continue
-            numbers[key] = value
-        else:
-            continue
-        point = _point(value)
-        if _is_rate_key(key) and point is not None:
-            report.check(-TOLERANCE <= point <= 1 + TOLERANCE, f"{where}: {key} = {point} is a rate outside [0, 1]")
-        if _last_word(key) in ("n", "n_episodes", "episodes", "scans", "candidates") and point is not None:
-            report.check(point >= 0 and float(point).is_integer(), f"{where}: {key} = {point} is not a count")
-    # Records that spell an interval as X, X_lo, X_hi (tables of rows).
-    for key, node in _walk(payload):
-        if isinstance(node, dict):
-            for k in list(node):
-                lo, hi = node.get(f"{k}_lo"), node.get(f"{k}_hi")
-                if all(_is_number(v) for v in (node[k], lo, hi)):
-                    value = [float(node[k]), float(lo), float(hi)]
-                    report.check(lo - TOLERANCE <= node[k] <= hi + TOLERANCE,
-                                 f"{where}: {key}.{k} = {node[k]} lies outside its interval [{lo}, {hi}]")
-                    numbers[f"{key}.{k}[ci]"] = value
-    _check_identities(payload, where, report)
-    return numbers
-
-
-def _check_identities(payload: dict, where: str, report: Report) -> None:
-    for key, node in _walk(payload):
-        if not isinstance(node, dict):
-            continue
-        pts = {k: _point(v) for k, v in node.items()}
-        # a, b and a_minus_b
-        for k, v in pts.items():
-            m = re.fullmatch(r"(.+)_minus_(.+)", k)
-            if m and v is not None and pts.get(m.group(1)) is not None and pts.get(m.group(2)) is not None:
-                expected = pts[m.group(1)] - pts[m.group(2)]
-                report.check(abs(v - expected) < 1e-9, f"{where}: {key}.{k} = {v} but {m.group(1)} - {m.group(2)} = {expected}")
-        # optimism = realized failure - predicted score
-        if all(pts.get(k) is not None for k in ("optimism", "failure", "predicted")):
-            expected = pts["failure"] - pts["predicted"]
-            report.check(abs(pts["optimism"] - expected) < 1e-9,
-                         f"{where}: {key}.optimism = {pts['optimism']} but failure - predicted = {expected}")
-        # robot table (Table IX): realized failure is the share of aims outside the window
-        if all(pts.get(k) is not None for k in ("in_window", "episodes", "realized", "predicted", "optimism")):
-            expected = 1.0 - pts["in_window"] / pts["episodes"]
-            report.check(abs(pts["realized"] - expected) < 1e-9,
-                         f"{where}: {key}.realized = {pts['realized']} but 1 - in_window / episodes = {expected}")
-            report.check(abs(pts["optimism"] - (pts["realized"] - pts["predicted"])) < 1e-9,
-                         f"{where}: {key}.optimism = {pts['optimism']} but realized - predicted = "
-                         f"{pts['realized'] - pts['predicted']}")
-            for count in ("in_window", "entered", "covered"):
-                if pts.get(count) is not None:
-                    report.check(0 <= pts[count] <= pts["episodes"],
-                                 f"{where}: {key}.{count} = {pts[count]} is not within 0..episodes = {pts['episodes']}")
-        if pts.get("n") is not None and key.startswith("robust"):
-            report.check(pts["n"] == EPISODES_PER_ROW, f"{where}: {key}.n = {pts['n']}, expected {EPISODES_PER_ROW} (96 x 4)")
-        # fault table: a paired fix is the difference of the fixed and faulty rows
-        if all(pts.get(k) is not None for k in ("paired_fix", "fix", "fail")):
-            expected = pts["fix"] - pts["fail"]
-            report.check(abs(pts["paired_fix"] - expected) < 1e-9,
-                         f"{where}: {key}.paired_fix = {pts['paired_fix']} but fix - fail = {expected}")
-        if "shift_vs_deployed_mm" in pts and pts.get("delta") is not None:
-            expected = pts["delta"] + 1.2  # the deployed boundary is hg - r, r = 1.2 mm
-            report.check(abs(pts["shift_vs_deployed_mm"] - expected) < 1e-9,
-                         f"{where}: {key}.shift_vs_deployed_mm = {pts['shift_vs_deployed_mm']} but delta + r = {expected}")
-
-
-def check_parquet(study: Path, report: Report) -> dict[str, float]:
-    """Range and shape invariants of every Parquet table of a study folder.
-
-    Returns:
-        Column means and SDs (``file:column.mean``), which REPRODUCTION.md may print.
-    """
-    summaries: dict[str, float] = {}
-    for path in sorted(study.glob("*.parquet")):
-        try:
-            frame = pd.read_parquet(path)
-        except Exception as exc:  # noqa: BLE001 - any unreadable table is one failed invariant
-            report.check(False, f"{path}: unreadable ({type(exc).__name__})")
-            continue
-        report.check(len(frame) > 0, f"{path}: no rows")
-        for column in frame.columns:
-            values = frame[column]
-            if not pd.api.types.is_numeric_dtype(values) or pd.api.types.is_bool_dtype(values):
-                continue
-            arr = values.to_numpy(dtype=float, na_value=np.nan)
-            report.check(not np.isinf(arr).any(), f"{path}: column {column} holds infinities")
-            finite = arr[np.isfinite(arr)]
-            if len(finite):
-                summaries[f"{study.name}/{path.name}:{column}.mean"] = float(finite.mean())
-                if len(finite) > 1:
-                    summaries[f"{study.name}/{path.name}:{column}.sd"] = float(finite.std(ddof=1))
-            if _is_rate_key(column):
-                bad = np.flatnonzero((arr < -TOLERANCE) | (arr > 1 + TOLERANCE))
-                for row in bad[:5]:
-                    report.check(False, f"{path}: {column} = {arr[row]} at row {row} is a rate outside [0, 1]")
-                report.checked += int(np.isfinite(arr).sum()) - len(bad[:5])
-        if {"fault", "k"} <= set(frame.columns):
-            dup = frame.duplicated(["fault", "k"])
-            report.check(not dup.any(), f"{path}: (fault, k) repeated, first at row {int(np.argmax(dup))}")
-            counts = frame.groupby("fault")["k"].nunique()
-            report.check(counts.nunique() == 1, f"{path}: faults have different budget sets {counts.to_dict()}")
-        if {"commit_rate", "n_committed"} <= set(frame.columns) and "signal" in frame.columns:
-            for signal, part in frame.groupby("signal"):
-                rates = part.sort_values("tau")["commit_rate"].to_numpy()
-                report.check(bool(np.all(np.diff(rates) >= -TOLERANCE)),
-                             f"{path}: commit rate of signal {signal} decreases as the threshold grows")
-    return summaries
-
-
-_NUMBER = re.compile(r"(?<![\w.])[+-]?\d+\.\d+")
-
-
-def check_reproduction(md: Path, numbers: dict[str, Any], report: Report) -> None:
-    """Every number in REPRODUCTION.md's "ours" column traces to a results.json key.
-
-    A section that says which target generated it ("Generated by `probecommit reproduce
-    X`") is traced against X's own files only, so a number another study happens to
-    repeat cannot stand in for a changed one.
-    """
-    if not md.is_file():
-        report.check(False, f"{md}: missing")
-        return
-    all_candidates: list[tuple[str, float]] = []
-    for key, value in numbers.items():
-        if _is_triple(value):
-            all_candidates += [(f"{key}[{i}]", float(v)) for i, v in enumerate(value)]
-        else:
-            all_candidates.append((key, float(value)))
-    all_triples = {k: v for k, v in numbers.items() if _is_triple(v)}
-    candidates, triples = all_candidates, all_triples
-
-    def close(v: float, text: str) -> bool:
-        digits = len(text.split(".")[1])
-        return abs(v - float(text)) <= 0.5 * 10**-digits + 1e-12
-
-    def owned_by(key: str, target: str) -> bool:
-        return key.startswith(f"{target}:") or key.startswith(f"{target}/")
-
-    header: list[str] | None = None
-    for line_no, line in enumerate(md.read_text().splitlines(), start=1):
-        if line.startswith("## "):  # a new section: traced against every study until it names its own
-            candidates, triples = all_candidates, all_triples
-        generated = re.search(r"Generated by `probecommit reproduce (\w+)`", line)
-        if generated:
-            target = generated.group(1)
-            scoped = [(k, v) for k, v in all_candidates if owned_by(k, target)]
-            if scoped:
-                candidates = scoped
-                triples = {k: v for k, v in all_triples.items() if owned_by(k, target)}
-        if not line.strip().startswith("|"):
-            header = None
-            continue
-        cells = [c.strip() for c in line.strip().strip("|").split("|")]
-        if header is None:
-            header = [c.lower() for c in cells]
-            continue
-        if all(set(c) <= set("-: ") for c in cells):
-            continue
-        # Which cells are ours: the "ours" column of a paper-vs-ours table; otherwise
-        # every cell of a row that is not the paper's own (its label says "paper").
-        ours_cols = [i for i, h in enumerate(header) if h.startswith("ours") and "paper" not in h]
-        if ours_cols:
-            checked_cells = [cells[i] for i in ours_cols if i < len(cells)]
-        elif "paper" in cells[0].lower():
-            continue
-        else:  # every cell but the label and the paper's own columns
-            checked_cells = [c for i, c in enumerate(cells[1:], start=1) if i >= len(header) or "paper" not in header[i]]
-        for cell in checked_cells:
-            texts = _NUMBER.findall(cell)
-            if len(texts) == 3 and "[" in cell:  # "point [lo, hi]": the three must come from one interval
-                hits = [k for k, v in triples.items() if all(close(float(x), t) for x, t in zip(v, texts))]
-                report.check(bool(hits), f"{md}:{line_no}: {cells[0]!r} prints {cell}, no results.json interval matches")
-                if hits:
-                    report.traces.append(f"{md.name}:{line_no} {cells[0]} {cell} <- {hits[0]}")
-                continue
-            for text in texts:
-                hits = [k for k, v in candidates if close(v, text)]
-                report.check(bool(hits), f"{md}:{line_no}: {cells[0]!r} prints {text}, found in no results.json")
-                if hits:
-                    report.traces.append(f"{md.name}:{line_no} {cells[0]} {text} <- {hits[0]}")
-
-
-def verify(results_root: str | Path, reproduction_md: str | Path | None = None) -> Report:
-    """Verify every study folder under ``results_root`` (or one study folder).
-
-    Args:
-        results_root: ``results/`` (every folder below it holding a ``results.json`` or a
-            manifest is a study) or a single study folder.
-        reproduction_md: REPRODUCTION.md to trace (default: beside ``results_root``'s parent
-            when it exists).
-
-    Returns:
-        The report: invariants checked and one line per failure.
-    """
-    root = Path(results_root)
-    if not root.is_dir():
-        raise FileNotFoundError(f"no results folder at {root}")
-    report = Report()
-    studies = sorted({p.parent for name in ("results.json", MANIFEST) for p in root.rglob(name)})
-    if not studies:
-        raise FileNotFoundError(f"{root} holds no study folder (results.json / {MANIFEST})")
-    numbers: dict[str, Any] = {}
-    for study in studies:
-        check_hashes(study, report)
-        numbers.update({f"{study.name}:{k}": v for k, v in check_json(study, report).items()})
-        numbers.update(check_parquet(study, report))
-    if reproduction_md is None:  # the nearest REPRODUCTION.md above the results folder
-        reproduction_md = next((p / "REPRODUCTION.md" for p in [root, *root.resolve().parents]
-                                if (p / "REPRODUCTION.md").is_file()), None)
-    if reproduction_md is not None:
-        if not _check_ledger(root, report):
-            check_reproduction(Path(reproduction_md), numbers, report)
-    return report
-
-
-def _check_ledger(root: Path, report: Report) -> bool:
-    """Re-resolve every number of the published-numbers ledger, when the publication has one.
-
-    Returns whether a ledger was found (then it replaces the heuristic trace of REPRODUCTION.md).
-    """
+def check_ledger(root: Path, report: Report) -> None:
+    """The published-numbers ledger, where publishing wrote one: every key re-resolved and found."""
     from probecommit.report import ledger
     from probecommit.studies.paper_values import tree
 
-    publication = next((p for p in (root, root / "paper") if (p / ledger.LEDGER_NAME).is_file()), None)
-    if publication is None:
-        return False
-    entries = ledger.read(publication)
-    problems = list(ledger.check(entries, publication, {"paper": tree()}))
-    report.checked += len(entries) - len(problems)
-    for problem in problems:
-        report.check(False, problem)
-    report.traces += [f"{e.file}: {e.text} <- {e.key}" for e in entries]
-    _check_claims(publication, report)
-    return True
-
-
-def _check_claims(publication: Path, report: Report) -> None:
-    """claims.json's statuses recomputed from the registry and the results tree."""
-    from probecommit.report import claims_json
-
-    path = publication / claims_json.CLAIMS_NAME
-    report.check(path.is_file(), f"{path}: missing (publishing writes the claims' statuses)")
-    if not path.is_file():
+    if not (root / ledger.LEDGER_NAME).is_file():
+        report.check("file", not REQUIRE_LEDGER, f"{root / ledger.LEDGER_NAME}: no published-numbers ledger")
         return
-    stored, again = json.loads(path.read_text()), claims_json.compute(publication)
-    report.check(stored.get("counts") == again["counts"],
-                 f"{path}: counts {stored.get('counts')} but the registry recomputes {again['counts']}")
-    for cid, entry in again["claims"].items():
-        old = stored.get("claims", {}).get(cid, {})
-        report.check((old.get("status"), old.get("experiment")) == (entry["status"], entry["experiment"]),
-                     f"{path}: {cid} is {old.get('status')!r} but recomputes as {entry['status']!r}")
+    try:
+        entries = ledger.read(root)
+    except (ValueError, TypeError, KeyError) as exc:
+        report.check("traced", False, f"{ledger.LEDGER_NAME}: {exc}")
+        return
+    problems = list(ledger.check(entries, root, extra={"paper": tree()})) + list(ledger.uncovered(entries, root))
+    report.counts["traced"] += max(len(entries) - len(problems), 0)
+    for problem in problems:
+        report.check("traced", False, problem)
+
+
+# ----------------------------------------------------------------------------- entry point
+
+
+def verify(results_root: str | Path, reproduction_md: str | Path | None = None, *, figures: bool = True) -> Report:
+    """Verify a publication (``results/``, ``results/paper`` or a ``--publish-to`` folder).
+
+    Args:
+        results_root: Where the publication is.
+        reproduction_md: Unused (REPRODUCTION.md sits two levels above the publication root);
+            kept for callers of the earlier signature.
+        figures: Draw the figures again from the stored data and compare their bytes (a few
+            seconds a figure). Off, a figure is still checked against its data's digest.
+
+    Returns:
+        The report: checks by kind, failures, and the count of published numbers verified.
+    """
+    root = publication_root(results_root)
+    report = Report()
+    for study in check_root(root, report):
+        check_study_files(study, report)
+        payload = _json(study / "results.json")
+        report.check("file", payload is not None, f"{study}/results.json: missing or unreadable")
+        if payload is None:
+            continue
+        results = payload.get("results", {})
+        checks.nonfinite(study.name, "results.json", payload, report)
+        checks.json_invariants(study.name, payload, report)
+        for path in sorted(study.glob("*.parquet")):
+            try:
+                frame = pd.read_parquet(path)
+            except Exception as exc:  # noqa: BLE001 - an unreadable table is one failed check
+                report.check("file", False, f"{path}: unreadable ({type(exc).__name__})")
+                continue
+            checks.parquet_invariants(study.name, path.name, frame, report)
+        recomputed = check_recomputed(study, results, report)
+        report.verified_numbers += sum(_leaves(_get(results, k)) for k in recomputed)
+        report.traced_only_numbers += max(_leaves(results) - sum(_leaves(_get(results, k)) for k in recomputed), 0)
+        check_twins(study, results, report)
+        check_texts(study, report)
+        if figures:
+            check_figures(study, report)
+    check_publication_texts(root, report)
+    check_ledger(root, report)
+    return report
+
+
+def _get(results: dict[str, Any], key: str) -> Any:
+    from probecommit.report.ledger import walk_dotted
+
+    try:
+        return walk_dotted(results, key.split("."))
+    except KeyError:
+        return None

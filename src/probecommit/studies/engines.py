@@ -326,6 +326,38 @@ def engines_table(audits: Mapping[tuple[str, str], pd.DataFrame], k: int = 8,
 # ----------------------------------------------------------------------------- the study
 
 
+#: The episode columns Table VIII, the escape curves and the paired differences read (stored compactly).
+ENGINE_EPISODE_COLUMNS = ("instance_id", "repeat", "k", "method", "status", "predicted", "realized", "covered",
+                          "escaped", "score_s")
+
+
+def summarize_engine_runs(episodes: pd.DataFrame, resamples: int, seed: int) -> tuple[pd.DataFrame, list[dict], pd.DataFrame]:
+    """Table VIII, the paired failure differences at k = 8 and escape against k, from the episodes of
+    every (engine, variant) run (columns ``engine``, ``variant``). ``verify`` calls it on the stored table."""
+    from probecommit.audit.metrics import audit_table
+    from probecommit.audit.stats import paired_bootstrap
+
+    boot = dict(resamples=resamples, seed=seed)
+    audits: dict[tuple[str, str], pd.DataFrame] = {}
+    paired_rows: list[dict] = []
+    escape_rows: list[dict] = []
+    for (engine, variant), part in episodes.groupby(["engine", "variant"], sort=False):
+        part = part.drop(columns=["engine", "variant"]).reset_index(drop=True)
+        audits[(engine, variant)] = audit_table(part[part["method"] == "probe_robust"], **boot)
+        per_k = part[(part["method"] == "probe_robust") & (part["status"] == "ok")].groupby("k")["escaped"].mean()
+        escape_rows += [{"engine": engine, "variant": variant, "k": int(k), "escape": float(v)} for k, v in per_k.items()]
+    for engine, part in episodes.groupby("engine", sort=False):
+        deployed = part[part["variant"] == "deployed"]
+        for variant in ("mj_offset", "own_scan"):
+            treat = part[part["variant"] == variant]
+            b = deployed[(deployed["method"] == "probe_robust") & (deployed["k"] == 8)].drop(columns=["engine", "variant"])
+            t = treat[(treat["method"] == "probe_robust") & (treat["k"] == 8)].drop(columns=["engine", "variant"])
+            diff = paired_bootstrap(b.reset_index(drop=True), t.reset_index(drop=True), "realized", **boot).difference
+            paired_rows.append({"engine": engine, "variant": variant,
+                                "failure_difference": [diff.estimate, diff.lo, diff.hi]})
+    return engines_table(audits, k=8), paired_rows, pd.DataFrame(escape_rows)
+
+
 def run_engine_study(protocol: Any, root: str | Path, engines: Iterable[str] = ("pybullet", "sapien"), *,
                      workers: int = 1, progress: Any = None) -> dict[str, Any]:
     """Table VIII and the scene properties of the insertion scene in each engine.
@@ -348,8 +380,6 @@ def run_engine_study(protocol: Any, root: str | Path, engines: Iterable[str] = (
     """
     from pathlib import Path as _Path
 
-    from probecommit.audit.metrics import audit_table
-    from probecommit.audit.stats import paired_bootstrap
     from probecommit.runner.build import build_model
     from probecommit.runner.config import config_data, parse_config
     from probecommit.runner.instances import draw_instances
@@ -362,8 +392,8 @@ def run_engine_study(protocol: Any, root: str | Path, engines: Iterable[str] = (
     boot = dict(resamples=protocol.bootstrap.resamples, seed=protocol.bootstrap.seed)
     dev_config = protocol.run_config("development", "development", "development", "random")
     dev = draw_instances(dev_config, build_model(dev_config))
-    audits: dict[tuple[str, str], pd.DataFrame] = {}
-    paired_rows, escape_rows, scans = [], [], {}
+    stored: list[pd.DataFrame] = []
+    scans: dict[str, Any] = {}
     for engine in engines:
         sim = make_simulator(engine, noise_sigma=protocol.noise_sigma)
         step(f"{engine}: boundary scan", 0, 1)
@@ -385,17 +415,9 @@ def run_engine_study(protocol: Any, root: str | Path, engines: Iterable[str] = (
                 replay_run(base.run_dir, path, {"model": {"boundary": "corrected", "delta": float(delta)}})
             runs[variant] = load_run(path)
         for variant, loaded in runs.items():
-            episodes = loaded.episodes
-            audits[(engine, variant)] = audit_table(episodes[episodes["method"] == "probe_robust"], **boot)
-            per_k = episodes[(episodes["method"] == "probe_robust") & (episodes["status"] == "ok")].groupby("k")["escaped"].mean()
-            escape_rows += [{"engine": engine, "variant": variant, "k": int(k), "escape": float(v)} for k, v in per_k.items()]
-        deployed = runs["deployed"].episodes
-        for variant in ("mj_offset", "own_scan"):
-            treat = runs[variant].episodes
-            b = deployed[(deployed["method"] == "probe_robust") & (deployed["k"] == 8)]
-            t = treat[(treat["method"] == "probe_robust") & (treat["k"] == 8)]
-            diff = paired_bootstrap(b, t, "realized", **boot).difference
-            paired_rows.append({"engine": engine, "variant": variant,
-                                "failure_difference": [diff.estimate, diff.lo, diff.hi]})
-    table = engines_table(audits, k=8)
-    return {"table": table, "paired": paired_rows, "escape": pd.DataFrame(escape_rows), "scans": scans}
+            stored.append(loaded.episodes[[c for c in ENGINE_EPISODE_COLUMNS if c in loaded.episodes.columns]]
+                          .assign(engine=engine, variant=variant))
+    episodes = pd.concat(stored, ignore_index=True)
+    table, paired_rows, escape = summarize_engine_runs(episodes, **boot)
+    return {"table": table, "paired": paired_rows, "escape": escape, "scans": scans, "episodes": episodes,
+            "bootstrap": boot}

@@ -85,13 +85,20 @@ def reproduce_gru(out: str | Path, pipeline_run: str | Path, quick: bool = False
         "seed_miss_min": float(seed_means.min()), "seed_miss_max": float(seed_means.max()),
         "episodes": int(batch.n_episodes),
         "training_loss_last_mean": float(np.mean([m["loss_last"] for m in meta])),
+        "k": int(k),
     }
     out.mkdir(parents=True, exist_ok=True)
     (out / "results.json").write_text(json.dumps({"results": results}, indent=1))
-    table = ("| quantity | paper | ours [95% CI] |\n|---|---|---|\n"
-             f"| pipeline mean miss, Probe-Robust({k}) (m) | {PAPER_GRU['T10-gru.pipeline']} | {results['pipeline_miss']:.3f} |\n"
-             f"| GRU mean miss over {seeds} seeds (m) | {PAPER_GRU['T10-gru.gru']} | {results['gru_miss']:.3f} |\n"
-             f"| GRU - pipeline (m) | {PAPER_GRU['T10-gru.diff']} [{PAPER_GRU['T10-gru.diff_lo']}, {PAPER_GRU['T10-gru.diff_hi']}] | {difference[0]:+.3f} [{difference[1]:+.3f}, {difference[2]:+.3f}] |\n"
-             f"| inside the +-{cfg['equivalence_margin']:.3f} m margin | yes | {'yes' if results['equivalent'] else 'no'} |\n")
-    (out / "table_gru.md").write_text(table)
+    (out / "table_gru.md").write_text(gru_markdown(results))
     return results
+
+
+def gru_markdown(results: dict) -> str:
+    """The GRU table from its results (verify renders it again from the stored results.json)."""
+    k, seeds, difference, margin = results["k"], results["seeds"], results["gru_minus_pipeline"], results["equivalence_margin"]
+    return ("| quantity | paper | ours [95% CI] |\n|---|---|---|\n"
+            f"| pipeline mean miss, Probe-Robust({k}) (m) | {PAPER_GRU['T10-gru.pipeline']} | {results['pipeline_miss']:.3f} |\n"
+            f"| GRU mean miss over {seeds} seeds (m) | {PAPER_GRU['T10-gru.gru']} | {results['gru_miss']:.3f} |\n"
+            f"| GRU - pipeline (m) | {PAPER_GRU['T10-gru.diff']} [{PAPER_GRU['T10-gru.diff_lo']}, {PAPER_GRU['T10-gru.diff_hi']}] "
+            f"| {difference[0]:+.3f} [{difference[1]:+.3f}, {difference[2]:+.3f}] |\n"
+            f"| inside the +-{margin:.3f} m margin | yes | {'yes' if results['equivalent'] else 'no'} |\n")

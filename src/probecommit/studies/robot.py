@@ -107,20 +107,20 @@ class RobotStudy:
                 "boundary_fault": json.loads(self.boundary.to_json(orient="records")),
                 "prior_fault": json.loads(self.prior.to_json(orient="records")),
                 "boundary_first_resolved_mm": float(resolved["size"].min()) if len(resolved) else None,
-                "boundary_holds_to_mm": _holds_to(self.boundary),
+                "boundary_holds_to_mm": boundary_holds_to(self.boundary),
                 "optimism_pooled": float((rows["realized"] - rows["predicted"]).mean()),
-                "boundary_by_mm": _by_size(self.boundary), "prior_by_mm": _by_size(self.prior),
+                "boundary_by_mm": sweep_by_size(self.boundary), "prior_by_mm": sweep_by_size(self.prior),
                 "unscored": self.episodes.unscored,
             },
         }
 
 
-def _by_size(sweep: pd.DataFrame) -> dict[str, Any]:
+def sweep_by_size(sweep: pd.DataFrame) -> dict[str, Any]:
     """A fault sweep's rows by size (``"12"``, ``"38.6"``), so a claim can name one."""
     return {f"{float(r['size']):g}": r for r in json.loads(sweep.to_json(orient="records"))}
 
 
-def _holds_to(sweep: pd.DataFrame) -> float:
+def boundary_holds_to(sweep: pd.DataFrame) -> float:
     """The largest size up to which no coverage change is resolved (the sweep's last size if none is)."""
     rows = sweep.sort_values("size")
     resolved = rows[rows["coverage_resolved"].astype(bool) & (rows["size"] > 0)]

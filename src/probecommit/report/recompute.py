@@ -1,0 +1,270 @@
+"""Recompute a publication's summary numbers from its stored episode-level tables.
+
+Why: a manifest re-hashed after an edit proves nothing; a number is trusted only when the
+same code that made it, run again on the lowest stored tables with the stored seeds, gives
+it again. Each study has one function ``<study>(folder, results) -> Recomputed``: the values
+it recomputes, keyed like ``results.json`` (``"table_testc.escape_random_k8.old"``), and the
+derived Parquet tables it rebuilds (``"fault_signatures.parquet"``). ``verify`` compares.
+
+What is recomputed and what is not is listed in ``RECOMPUTED`` and ``TRACED_ONLY``
+(``docs/verify.md`` prints them): numbers that need beliefs recomputed from stored probes
+(calibrated commits, margins, replays under robust filters) are traced, not recomputed.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Callable
+
+import pandas as pd
+
+
+@dataclass
+class Recomputed:
+    """Values by results.json key, and rebuilt derived tables by file name."""
+
+    values: dict[str, Any] = field(default_factory=dict)
+    tables: dict[str, pd.DataFrame] = field(default_factory=dict)
+    #: The stored table each value was recomputed from, by the key's first part (for messages).
+    sources: dict[str, str] = field(default_factory=dict)
+
+    #: The stored table each rebuilt table was derived from (for messages).
+    table_sources: dict[str, str] = field(default_factory=dict)
+
+    def source(self, key: str) -> str:
+        return self.sources.get(key.split(".")[0], "the stored episode tables")
+
+
+def _triple(iv: Any) -> list[float]:
+    return [float(iv.estimate), float(iv.lo), float(iv.hi)]
+
+
+# ----------------------------------------------------------------------------- insertion
+
+
+def insertion(folder: Path, results: dict[str, Any]) -> Recomputed:
+    """Tables IV (Split A), III (uncalibrated half, thresholds), VI, VII, the text's escapes, scan,
+    cover search, re-splits and the fault signatures, from ``episodes.parquet`` and friends."""
+    from probecommit.audit.conformal import budget_thresholds, instance_scores
+    from probecommit.audit.stats import cluster_bootstrap_mean, paired_bootstrap
+    from probecommit.report.reproduce import episode_metrics, paired
+
+    setup = results["setup"]
+    boot = dict(resamples=int(setup["bootstrap"]["resamples"]), seed=int(setup["bootstrap"]["seed"]))
+    out = Recomputed()
+    v = out.values
+    ep = pd.read_parquet(folder / "episodes.parquet")
+    runs = {name: part.drop(columns="run").reset_index(drop=True) for name, part in ep.groupby("run", sort=False)}
+
+    a = runs["A_cover"]
+    blind = a[(a.method == "blind_bayes") & (a.status == "ok")]
+    v["table_insertion.A.no_probe"] = _triple(cluster_bootstrap_mean(
+        blind["realized"].to_numpy(float), blind["instance_id"].to_numpy(), **boot))
+    v["table_insertion.A.cover_k5"] = episode_metrics(a, 5, **boot)["failure"]
+    cover = a[(a.method == "probe_robust") & (a.k == 5) & (a.status == "ok")]
+    v["table_insertion.A.paired_reduction_k5"] = _triple(
+        paired_bootstrap(cover, blind, "realized", keys=("instance_id", "repeat"), **boot).difference)
+
+    alpha = float(setup["alpha"])
+    for name, budgets in (("B_cal_cover", [1, 2, 3, 4, 5]), ("B_cal_random", [1, 2, 3, 5, 8])):
+        if name in runs:
+            probe = runs[name][(runs[name].method == "probe_robust") & (runs[name].status == "ok")]
+            t_k = budget_thresholds(instance_scores(probe), alpha, budgets)
+            kind = name.split("_")[-1]
+            v[f"table_insertion.thresholds_{kind}"] = {str(k): float(t) for k, t in t_k.items()}
+
+    test = runs["B_test_random"]
+    _audit_original(test, results, out)
+    for k in (1, 8):
+        m = episode_metrics(test, k, **boot)
+        v[f"text.escape_k{k}"], v[f"text.episode_coverage_k{k}"] = m["escape"], m["episode_coverage"]
+
+    spec = [("escape_random_k8", "C_random", 8, "escaped", "escape"),
+            ("episode_coverage_random_k8", "C_random", 8, "covered", "episode_coverage"),
+            ("optimism_random_k8", "C_random", 8, "optimism", "optimism"),
+            ("failure_random_k8", "C_random", 8, "realized", "failure"),
+            ("failure_cover_k5", "C_cover", 5, "realized", "failure"),
+            ("failure_cover_k1", "C_cover", 1, "realized", "failure")]
+    for key, run, k, col, name in spec:
+        old, new = runs[run], runs[f"{run}_corrected"]
+        v[f"table_testc.{key}.old"] = episode_metrics(old, k, **boot)[name]
+        v[f"table_testc.{key}.corrected"] = episode_metrics(new, k, **boot)[name]
+        v[f"table_testc.{key}.old_minus_corrected"] = paired(new, old, k, col, **boot)
+
+    _faults(folder, setup, boot, out)
+    _small_tables(folder, out)
+    out.sources = {"table_insertion": "episodes.parquet", "table_audit": "episodes.parquet", "text": "episodes.parquet", "table_testc": "episodes.parquet",
+                   "table_faults": "faults_episodes.parquet", "fault_signatures": "faults_episodes.parquet", "scan": "scan.parquet", "cover": "cover_search.parquet",
+                   "resplits": "resplits.parquet"}
+    return out
+
+
+def _audit_original(test: pd.DataFrame, results: dict[str, Any], out: Recomputed) -> None:
+    """Table III's uncalibrated columns (point estimates) and their summary, from the stored test episodes.
+
+    The intervals are traced only: calibration bootstraps the re-committed episodes' per-instance
+    sums in its own instance order, which the stored table does not record.
+    """
+    from probecommit.audit.metrics import audit_table, summary_row
+
+    records = results["table_audit"]["table"]
+    budgets = [int(r["k"]) for r in records]
+    audit = audit_table(test[test.method == "probe_robust"], budgets=budgets)
+    nominal = 1.0 - float(results["setup"]["alpha"])
+    for i, row in enumerate(audit.itertuples(index=False)):
+        for metric in ("cluster_coverage", "coverage", "optimism"):
+            out.values[f"table_audit.table.{i}.{metric}_original"] = float(getattr(row, metric))
+    for key, value in summary_row(audit, nominal).items():
+        out.values[f"table_audit.summary.{key}_original"] = value
+
+
+def _faults(folder: Path, setup: dict[str, Any], boot: dict[str, int], out: Recomputed) -> None:
+    from probecommit.audit.surprise import surprise_auc
+    from probecommit.report.reproduce import episode_metrics, paired, probe_rows, signature_points
+    from probecommit.studies.faults import FAULTS, signature_table
+
+    episodes = pd.read_parquet(folder / "faults_episodes.parquet")
+    kmax = int(setup["k_random"])
+    for fault in FAULTS:
+        fa = episodes[(episodes.fault == fault) & (episodes.arm == "fault")]
+        if not len(fa):
+            continue
+        out.values[f"table_faults.{fault}.fail"] = episode_metrics(fa, kmax, **boot)["failure"]
+        probe = probe_rows(fa)
+        if probe[probe.k == kmax]["escaped"].any():
+            auc = surprise_auc(probe, final_k=kmax, **boot)
+            out.values[f"table_faults.{fault}.surprise_auc"] = float(auc[auc.k == kmax]["auc"].iloc[0])
+        for arm in ("tempered", "fix"):
+            other = episodes[(episodes.fault == fault) & (episodes.arm == arm)]
+            if len(other):
+                out.values[f"table_faults.{fault}.{arm}"] = episode_metrics(other, kmax, **boot)["failure"]
+        fix = episodes[(episodes.fault == fault) & (episodes.arm == "fix")]
+        if len(fix):
+            out.values[f"table_faults.{fault}.paired_fix"] = paired(fa, fix, kmax, "realized", **boot)
+    signatures = signature_table(episodes)
+    out.tables["fault_signatures.parquet"] = signatures
+    out.table_sources["fault_signatures.parquet"] = "faults_episodes.parquet"
+    out.values["fault_signatures"] = signature_points(signatures)
+
+
+def _small_tables(folder: Path, out: Recomputed) -> None:
+    """Scan, cover search and re-split summaries from their stored per-scan / per-split tables."""
+    off = pd.read_parquet(folder / "scan.parquet")["offset"]
+    out.values.update({"scan.delta": float(off.mean()), "scan.sd": float(off.std(ddof=1)) if len(off) > 1 else 0.0,
+                       "scan.min": float(off.min()), "scan.max": float(off.max()), "scan.scans": int(len(off)),
+                       "scan.shift_vs_deployed_mm": float(off.mean() + 1.2)})
+    cover = pd.read_parquet(folder / "cover_search.parquet")
+    out.values.update({"cover.winner": [float(u) for u in json.loads(str(cover["schedule"].iloc[0]))],
+                       "cover.winner_failure": float(cover["failure"].iloc[0]), "cover.candidates": int(len(cover))})
+    table = pd.read_parquet(folder / "resplits.parquet")
+    out.values.update({
+        "resplits.level_mean_sd": [float(table.level.mean()), float(table.level.std(ddof=1))],
+        "resplits.failure_mean_sd": [float(table.failure.mean()), float(table.failure.std(ddof=1))],
+        "resplits.heldout_cluster_coverage": float(table.heldout_cluster_coverage.mean()),
+        "resplits.margin_optimistic_fraction": float(table.margin_optimistic.mean()),
+        "resplits.splits": int(len(table))})
+
+
+# ----------------------------------------------------------------------------- breadth and cost
+
+
+def breadth(folder: Path, results: dict[str, Any]) -> Recomputed:
+    """Table II's rows (but insertion's, checked against the insertion study) and the budget curves."""
+    from probecommit.studies.breadth import SUCCESS_FAMILIES, as_success, breadth_table, budget_curves
+
+    settings = results["settings"]
+    ep = pd.read_parquet(folder / "breadth_episodes.parquet")
+    runs = {f: part.drop(columns="family").reset_index(drop=True) for f, part in ep.groupby("family", sort=False)}
+    boot = dict(resamples=int(settings["resamples"]), seed=int(settings["seed"]))
+    table = breadth_table(runs, int(settings["k"]), **boot)
+    rows = [as_success(r) if r["family"] in SUCCESS_FAMILIES else r for r in table.to_dict("records")]
+    out = Recomputed()
+    stored = pd.read_parquet(folder / "table_II_breadth.parquet")
+    insertion_rows = stored[stored["family"] == "insertion_A"]
+    out.tables["table_II_breadth.parquet"] = pd.concat([insertion_rows, pd.DataFrame(rows)], ignore_index=True)
+    out.tables["budget_curves.parquet"] = budget_curves(runs)
+    out.table_sources = {"table_II_breadth.parquet": "breadth_episodes.parquet",
+                         "budget_curves.parquet": "breadth_episodes.parquet"}
+    return out
+
+
+def cost(folder: Path, results: dict[str, Any]) -> Recomputed:
+    """The break-even prices from the breadth curves the cost study stores beside them."""
+    from probecommit.studies.breadth import SUCCESS_FAMILIES
+    from probecommit.studies.pricing import pricing_table
+
+    curves = pd.read_parquet(folder.parent / "breadth" / "budget_curves.parquet")
+    out = Recomputed()
+    out.tables["pricing.parquet"] = pricing_table(curves[~curves["family"].isin(SUCCESS_FAMILIES)])
+    out.table_sources["pricing.parquet"] = "breadth/budget_curves.parquet"
+    return out
+
+
+def engines(folder: Path, results: dict[str, Any]) -> Recomputed:
+    """Table VI, the paired failure differences and escape against k, from the stored engine episodes."""
+    from probecommit.studies.engines import summarize_engine_runs
+
+    settings = results["settings"]
+    episodes = pd.read_parquet(folder / "engine_episodes.parquet")
+    table, paired_rows, escape = summarize_engine_runs(episodes, resamples=int(settings["resamples"]),
+                                                       seed=int(settings["seed"]))
+    flat = table.copy()
+    flat.columns = [f"{e}/{v}" for e, v in flat.columns]
+    out = Recomputed(tables={"table_VI_engines.parquet": flat, "escape_by_budget.parquet": escape})
+    out.values["paired_failure"] = paired_rows
+    out.values["paired"] = {f"{p['engine']}/{p['variant']}": p["failure_difference"] for p in paired_rows}
+    out.values["escape"] = {f"{e}/{v}": {str(int(r["k"])): float(r["escape"]) for _, r in part.iterrows()}
+                            for (e, v), part in escape.groupby(["engine", "variant"], sort=False)}
+    out.values["table"] = {f"{e}/{v}": dict(zip([r.replace(" ", "_") for r in table.index], map(float, table[(e, v)])))
+                           for e, v in table.columns}
+    out.sources = dict.fromkeys(out.values, "engine_episodes.parquet")
+    out.table_sources = {"table_VI_engines.parquet": "engine_episodes.parquet",
+                         "escape_by_budget.parquet": "engine_episodes.parquet"}
+    return out
+
+
+def robot(folder: Path, results: dict[str, Any]) -> Recomputed:
+    """Table VII and the session's counts from the stored session episodes; the sweep summaries from the
+    stored sweeps (the sweeps themselves are replays: traced only)."""
+    from probecommit.robot.table import robot_table
+    from probecommit.studies.robot import boundary_holds_to
+
+    rows = pd.read_parquet(folder / "robot_episodes.parquet")
+    out = Recomputed(tables={"table_robot.parquet": robot_table(rows)})
+    out.values.update({"episodes": int(len(rows)), "positions": int(rows["instance_id"].nunique()),
+                       "n_covered": int(rows["covered"].sum()), "n_escaped": int(rows["escaped"].sum()),
+                       "optimism_pooled": float((rows["realized"] - rows["predicted"]).mean())})
+    out.sources = dict.fromkeys(out.values, "robot_episodes.parquet")
+    boundary = pd.read_parquet(folder / "fault_boundary.parquet")
+    out.values["boundary_holds_to_mm"] = boundary_holds_to(boundary)
+    out.sources["boundary_holds_to_mm"] = "fault_boundary.parquet"
+    out.table_sources = {"table_robot.parquet": "robot_episodes.parquet"}
+    return out
+
+
+#: Study folder -> its recomputation.
+STUDIES: dict[str, Callable[[Path, dict[str, Any]], Recomputed]] = {
+    "insertion": insertion, "breadth": breadth, "cost": cost, "engines": engines, "robot": robot}
+
+#: What each study's recomputation covers, and what is traced only (for the report and the docs).
+RECOMPUTED = {
+    "insertion": "Table IV Split A rows and paired reduction; conformal t_k (cover and random); Table III's "
+                 "uncalibrated columns (points) and their summary; escape and episode coverage at k = 1, 8; Table V "
+                 "(Test C) but its set+margin row; Table VIII (failure, surprise AUC, tempered, fix, paired fix); the "
+                 "fault signatures (Fig. 7's data, table and by-fault points); scan; cover search; re-split summary",
+    "breadth": "Table II (every family but insertion's row, which is the insertion study's); the budget curves",
+    "cost": "the probe prices",
+    "engines": "Table VI, the paired failure differences at k = 8 (also by name), escape against k (also by name)",
+    "robot": "Table VII (simulated rig) and the session's episode, position, coverage and escape counts, pooled "
+             "optimism; the boundary sweep's holds-to size from the stored sweep",
+}
+TRACED_ONLY = {
+    "insertion": "Table IV Split B (calibrated commits); Table III calibrated columns; margins; the set+margin row of "
+                 "Test C; robust filters; commit gates (they re-commit from recomputed beliefs)",
+    "engines": "the engine scans (boundary offsets, capture windows)",
+    "robot": "the fault sweeps (replays of the log; their by-size copies are checked against the stored sweeps)",
+    "gru": "the GRU table", "beyond": "every table", "setup": "Table I",
+}
+
