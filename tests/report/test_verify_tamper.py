@@ -204,6 +204,34 @@ def reproduction_json(field: str) -> Edit:
     return edit
 
 
+def claims_status(pub: Path) -> list[str]:
+    """A claim that differs marked reproduced in claims.json (its counts left alone)."""
+    f = paper_root(pub) / "claims.json"
+    data = json.loads(f.read_text())
+    cid = next(c for c, e in data["claims"].items() if e["status"] != "reproduced")
+    data["claims"][cid]["status"] = "reproduced"
+    f.write_text(json.dumps(data, indent=1) + "\n")
+    return ["claims.json", cid]
+
+
+def ledger_entry(change: str) -> Edit:
+    """One published-numbers ledger entry re-keyed, or its last entries dropped (their numbers then unaccounted for)."""
+    def edit(pub: Path) -> list[str]:
+        f = paper_root(pub) / "published_numbers.json"
+        data = json.loads(f.read_text())
+        numbers = [e for e in data["numbers"] if e["fmt"] != "literal"]
+        if change == "key":
+            numbers[0]["key"] += "x"
+            expected = ["REPRODUCTION.md", numbers[0]["text"], numbers[0]["key"]]
+        else:
+            dropped = numbers[-1]
+            data["numbers"] = [e for e in data["numbers"] if e is not dropped]
+            expected = ["REPRODUCTION.md", dropped["text"]]
+        f.write_text(json.dumps(data, indent=1) + "\n")
+        return expected
+    return edit
+
+
 # Each case: (id, edit, rehash). ``rehash`` False: the attacker left the manifests alone.
 CASES: list[tuple[str, Edit, bool]] = [
     ("json-recomputed-point", edit_results("insertion", ["table_testc", "escape_random_k8", "old", 0], bump), True),
@@ -222,6 +250,13 @@ CASES: list[tuple[str, Edit, bool]] = [
     ("json-inf-traced-only", nan_traced, True),
     ("json-breadth-row", edit_results("breadth", ["table_II", "push1d", "probe_robust"], bump), True),
     ("json-cost-price", edit_results("cost", ["pricing", 0, "blind_above"], bump), True),
+    ("json-cost-price-by-name", edit_results("cost", ["prices", "push1d", "blind_above"], bump), True),
+    ("json-fault-signature-point", edit_results("insertion", ["fault_signatures", "prior", "1", "failure"], bump), True),
+    ("json-robot-sweep-by-size", edit_results("robot", ["prior_by_mm", "12", "escape"], bump), True),
+    ("json-robot-pooled-optimism", edit_results("robot", ["optimism_pooled"], bump), True),
+    ("claims-status", claims_status, True),
+    ("ledger-key", ledger_entry("key"), True),
+    ("ledger-entry-dropped", ledger_entry("drop"), True),
     ("parquet-episode-cell", edit_parquet("insertion/episodes.parquet", "realized", 0, lambda v: 1.0 - v), True),
     ("parquet-fault-episode-cell", edit_parquet("insertion/faults_episodes.parquet", "escaped", 0, lambda v: not v), True),
     ("parquet-derived-cell", edit_parquet("insertion/fault_signatures.parquet", "failure", 0, bump), True),

@@ -16,11 +16,11 @@ import pandas as pd
 
 TITLES = {
     "scan": "Boundary scan on the development truths",
-    "table_insertion": "Insertion failure by split and calibration setting (MuJoCo)",
-    "table_audit": "Insertion audit, Split B, random probes (MuJoCo)",
-    "table_testc": "Confirmation on untouched instances (Test C), MuJoCo",
+    "table_IV_insertion": "Insertion failure by split and calibration setting (MuJoCo)",
+    "table_III_audit": "Insertion audit, Split B, random probes (MuJoCo)",
+    "table_V_testc": "Confirmation on untouched instances (Test C), MuJoCo",
     "gates": "Commit gates, Split B, cover schedule (failure among committed vs commit rate)",
-    "table_setup": "Experimental setup, insertion (MuJoCo)",
+    "table_I_setup_insertion": "Experimental setup, insertion (MuJoCo)",
 }
 
 
@@ -76,7 +76,7 @@ def table_IV_insertion(r: dict[str, Any], folder: Path) -> str:
     thresholds = {int(k): round(v, 3) for k, v in res["thresholds_cover"].items()}
     note = (f"Margin gamma (cover) = {res['margin_cover']}; conformal t_k (cover) = {thresholds}; "
             f"distribution-free margin = {res['distribution_free_margin_cover']:.3f}.")
-    return page(TITLES["table_insertion"], md_table(["split", "method", "set cal.", "margin", "failure [95% CI]"], rows),
+    return page(TITLES["table_IV_insertion"], md_table(["split", "method", "set cal.", "margin", "failure [95% CI]"], rows),
                 note)
 
 
@@ -87,7 +87,7 @@ def table_III_audit(r: dict[str, Any], folder: Path) -> str:
     note = (f"Summary: {json.dumps({k: round(float(v), 3) for k, v in summary.items()})}. "
             f"Escape k=1: {fmt(esc['escape_k1'])}, k=8: {fmt(esc['escape_k8'])}; "
             f"episode coverage k=1: {fmt(esc['episode_coverage_k1'])}, k=8: {fmt(esc['episode_coverage_k8'])}.")
-    return page(TITLES["table_audit"], md_table(cols, rows), note)
+    return page(TITLES["table_III_audit"], md_table(cols, rows), note)
 
 
 def table_V_testc(r: dict[str, Any], folder: Path) -> str:
@@ -99,7 +99,7 @@ def table_V_testc(r: dict[str, Any], folder: Path) -> str:
             rows.append([key, fmt(fo), fmt(fn), f"{fo - fn:+.3f}" if isinstance(fo, float) else "--"])
         else:
             rows.append([key, fmt(row["old"][0]), fmt(row["corrected"][0]), fmt(row["old_minus_corrected"], signed=True)])
-    return page(TITLES["table_testc"], md_table(["row", "old", "corrected", "old - corrected [95% CI]"], rows),
+    return page(TITLES["table_V_testc"], md_table(["row", "old", "corrected", "old - corrected [95% CI]"], rows),
                 "Both models see identical taps; paired cluster bootstrap over instances.")
 
 
@@ -152,7 +152,7 @@ def gates(r: dict[str, Any], folder: Path) -> str:
 
 def table_I_setup_insertion(r: dict[str, Any], folder: Path) -> str:
     s = r["setup"]
-    return page(TITLES["table_setup"], md_table(
+    return page(TITLES["table_I_setup_insertion"], md_table(
         ["family", "engine", "latents", "probe / action", "sigma", "budgets k", "n; metric"],
         [["insertion", s["engine"], "x_hole, c", "tap / aim", f"{s['sigma']} mm",
           f"1-{s['k_random']}, cover {list(s['cover_schedule'])}", f"{s['n']}; failure"]]))

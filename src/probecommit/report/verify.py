@@ -184,6 +184,17 @@ def _equal(a: Any, b: Any) -> bool:
     return a == b
 
 
+def _first_difference(key: str, published: Any, expected: Any) -> tuple[str, Any, Any]:
+    """The dotted key of the first leaf where two values differ (a table of values names its one cell)."""
+    if isinstance(published, dict) and isinstance(expected, dict) and published.keys() == expected.keys():
+        part = next(k for k in expected if not _equal(published[k], expected[k]))
+        return _first_difference(f"{key}.{part}", published[part], expected[part])
+    if isinstance(published, list) and isinstance(expected, list) and len(published) == len(expected):
+        i = next(i for i, (x, y) in enumerate(zip(published, expected)) if not _equal(x, y))
+        return _first_difference(f"{key}.{i}", published[i], expected[i])
+    return key, published, expected
+
+
 def _leaves(value: Any) -> int:
     return sum(1 for _, v in checks.walk(value) if checks.is_number(v))
 
@@ -207,8 +218,9 @@ def check_recomputed(study: Path, results: dict[str, Any], report: Report) -> se
             report.check("recomputed", False, f"{study.name}/results.json: {key} missing (the stored episodes give {value})")
             continue
         report.counts["recomputed"] += _leaves(value) - 1
-        report.check("recomputed", _equal(published, value),
-                     f"{study.name}/results.json: {key} = {published} but {again.source(key)} gives {value}")
+        ok = _equal(published, value)
+        where, a, b = (key, published, value) if ok else _first_difference(key, published, value)
+        report.check("recomputed", ok, f"{study.name}/results.json: {where} = {a} but {again.source(key)} gives {b}")
     for name, table in again.tables.items():
         _compare_table(study, name, table, again.table_sources.get(name, "the stored episode tables"), report)
     return set(again.values)
@@ -239,14 +251,31 @@ def check_twins(study: Path, results: dict[str, Any], report: Report) -> None:
         if key not in results or not (study / name).is_file():
             continue
         table = pd.read_parquet(study / name).reset_index(drop=True)
-        records = list(results[key].values()) if isinstance(results[key], dict) else results[key]
+        by_name = isinstance(results[key], dict)
+        records = list(results[key].values()) if by_name else results[key]
+        labels = list(results[key]) if by_name else list(range(len(records)))
         report.check("identity", len(records) == len(table),
                      f"{study.name}/results.json: {key} has {len(records)} rows, {name} has {len(table)}")
-        for i, (rec, row) in enumerate(zip(records, table.to_dict("records"))):
+        for i, rec, row in zip(labels, records, table.to_dict("records")):
             bad = [c for c in rec if c in row and not _equal(_plain(rec[c]), _plain(row[c]))]
             report.check("identity", not bad, f"{study.name}/results.json: {key}.{i}.{bad[0] if bad else ''} = "
                                               f"{rec.get(bad[0]) if bad else ''} but {name} holds "
                                               f"{row.get(bad[0]) if bad else ''}")
+
+
+#: A results.json dict of records by name and the list it copies (study -> (by name, list, name field)).
+JSON_TWINS = {"setup": [("families_by_name", "families", "family")]}
+
+
+def check_json_twins(study: Path, results: dict[str, Any], report: Report) -> None:
+    """A by-name copy in results.json equals the list of records it was made from."""
+    for by_name, listed, field_ in JSON_TWINS.get(study.name, []):
+        if by_name not in results or listed not in results:
+            continue
+        expected = {r[field_]: r for r in results[listed]}
+        ok = _equal(results[by_name], expected)
+        where, a, b = (by_name, None, None) if ok else _first_difference(by_name, results[by_name], expected)
+        report.check("identity", ok, f"{study.name}/results.json: {where} = {a} but {listed} holds {b}")
 
 
 def _plain(v: Any) -> Any:
@@ -395,6 +424,7 @@ def verify(results_root: str | Path, reproduction_md: str | Path | None = None, 
         report.verified_numbers += sum(_leaves(_get(results, k)) for k in recomputed)
         report.traced_only_numbers += max(_leaves(results) - sum(_leaves(_get(results, k)) for k in recomputed), 0)
         check_twins(study, results, report)
+        check_json_twins(study, results, report)
         check_texts(study, report)
         if figures:
             check_figures(study, report)
