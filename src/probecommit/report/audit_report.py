@@ -23,7 +23,8 @@ import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 
 from probecommit import __version__  # noqa: E402
-from probecommit.report.style import DOUBLE  # noqa: E402
+from probecommit.report import vocabulary as V  # noqa: E402
+from probecommit.report.style import COLUMN, DOUBLE, integer_ticks, legend_above  # noqa: E402
 from probecommit.audit.io import GROUP_COLUMNS  # noqa: E402
 
 
@@ -31,64 +32,80 @@ def _label(row: pd.Series | dict, groups: list[str]) -> str:
     return " / ".join(str(row[g]) for g in groups) or "episodes"
 
 
-def audit_figure(table: pd.DataFrame, nominal: float = 0.8):
-    """Per-budget coverage, support escape and optimism with bootstrap bands.
+#: Display names of the commit-gate signals (figures and tables).
+SIGNAL_NAMES = {"raw": "raw fraction", "adjusted": "adjusted score", "posterior_variance": "posterior variance",
+                "oracle": "oracle (hindsight)"}
+#: Gate curves: one colour and line style per signal; the oracle long-dashed black.
+SIGNAL_STYLES = {"raw": ("C0", "-"), "adjusted": ("C1", (0, (5, 1.5, 1, 1.5))), "posterior_variance": ("C2", (0, (1, 1))),
+                 "oracle": ("k", (0, (6, 3)))}
+
+
+def _group_key(key) -> tuple:
+    return key if isinstance(key, tuple) else (key,)
+
+
+def audit_figure(table: pd.DataFrame, nominal: float = 0.8, width: float = DOUBLE):
+    """Per-budget coverage, support escape, optimism and realized vs predicted, with bootstrap bands.
+
+    Drawn at ``width`` inches (the page width by default; :data:`COLUMN` stacks the panels)
+    with every label in the paper's words (:mod:`probecommit.report.vocabulary`).
 
     Args:
         table: Output of :func:`probecommit.audit.metrics.audit_table`.
-        nominal: Nominal coverage drawn as a dashed line.
+        nominal: Nominal coverage drawn as a dotted line.
+        width: Figure width in inches.
 
     Returns:
         A matplotlib Figure.
     """
     groups = [g for g in GROUP_COLUMNS if g in table.columns]
-    fig, axes = plt.subplots(2, 2, figsize=(DOUBLE, 5.0))
+    narrow = width < DOUBLE - 0.1
+    fig, axes = plt.subplots(4 if narrow else 2, 1 if narrow else 2, figsize=(width, 6.4 if narrow else 4.6))
     axes = axes.ravel()
     panels = (
-        (axes[0], (("coverage", "episode"), ("cluster_coverage", "cluster")), "coverage", nominal),
-        (axes[1], (("escape", "escape"),), "support escape", None),
-        (axes[2], (("optimism", "e_k"),), "optimism $e_k = R_k - \\hat R_k$", 0.0),
-        (axes[3], (("realized", "realized"), ("predicted", "predicted")), "failure (or miss): realized vs predicted", None),
+        (axes[0], (("coverage", "-"), ("cluster_coverage", "--")), "(a) coverage", V.AXIS["coverage"], nominal),
+        (axes[1], (("escape", "-"),), "(b) support escape", V.AXIS["escape"], None),
+        (axes[2], (("optimism", "-"),), "(c) optimism", "optimism eₖ", 0.0),
+        (axes[3], (("realized", "-"), ("predicted", ":")), "(d) realized Rₖ and predicted R̂ₖ", "failure rate", None),
     )
     keyed = list(table.groupby(groups, sort=True)) if groups else [((), table)]
     colors = plt.cm.tab10(np.arange(max(len(keyed), 1)) % 10)
     for (key, g), color in zip(keyed, colors):
-        key = key if isinstance(key, tuple) else (key,)
-        name = " / ".join(map(str, key)) or "episodes"
         g = g.sort_values("k")
-        for ax, metrics, _, _ in panels:
-            for metric, tag in metrics:
-                style = "-" if metric != "cluster_coverage" else "--"
-                label = f"{name} ({tag})" if len(metrics) > 1 else name
-                marker = "o" if len(g) == 1 else "."
-                if metric == "predicted":
-                    style = ":"
-                ax.plot(g["k"], g[metric], style, marker=marker, color=color, label=label)
+        for ax, metrics, _, _, _ in panels:
+            for metric, style in metrics:
+                if metric not in g.columns:
+                    continue
+                ax.plot(g["k"], g[metric], style, marker="o" if len(g) == 1 else ".", color=color)
                 if f"{metric}_lo" in g.columns:
                     ax.fill_between(g["k"], g[f"{metric}_lo"], g[f"{metric}_hi"], color=color, alpha=0.15, lw=0)
-    for ax, _, title, ref in panels:
-        ax.set_title(title)
-        ax.set_xlabel("budget k")
+    for ax, _, title, ylabel, ref in panels:
+        ax.set_title(title, loc="left")
+        ax.set_xlabel(V.AXIS["k"])
+        ax.set_ylabel(ylabel)
+        integer_ticks(ax.xaxis)
         if ref is not None:
             ax.axhline(ref, color="grey", ls=":", lw=1)
         ax.grid(alpha=0.3)
-    # One legend below the panels: colours name the method / variant; line styles the metric.
+    # One legend above the panels: colours name the method / variant; line styles the metric.
     from matplotlib.lines import Line2D
 
-    handles = [Line2D([], [], color=color, marker="o", ms=3, label=" / ".join(map(str, key if isinstance(key, tuple) else (key,))) or "episodes")
+    handles = [Line2D([], [], color=color, marker="o", ms=3, label=" / ".join(map(str, _group_key(key))) or "episodes")
                for (key, _), color in zip(keyed, colors)]
-    handles += [Line2D([], [], color="0.3", ls="-", label="episode coverage / realized"),
+    handles += [Line2D([], [], color="0.3", ls="-", label="coverage / realized Rₖ"),
                 Line2D([], [], color="0.3", ls="--", label="cluster coverage"),
-                Line2D([], [], color="0.3", ls=":", label="predicted"),
-                Line2D([], [], color="grey", ls=":", lw=1, label=f"nominal {nominal:.2f} (coverage), 0 (optimism)")]
-    fig.tight_layout(rect=(0, 0.12, 1, 1))
-    fig.legend(handles=handles, loc="lower center", ncol=3, frameon=False)
+                Line2D([], [], color="0.3", ls=":", label="predicted R̂ₖ"),
+                Line2D([], [], color="grey", ls=":", lw=1, label=f"nominal {nominal:.2f}; optimism 0")]
+    rows = -(-len(handles) // (2 if narrow else 3))
+    top = 1 - (0.16 * rows + 0.1) / fig.get_size_inches()[1]
+    fig.tight_layout(rect=(0, 0, 1, top))
+    fig.legend(handles=handles, loc="lower center", bbox_to_anchor=(0.5, top), ncol=2 if narrow else 3, frameon=False)
     return fig
 
 
-def calibration_figure(table3: pd.DataFrame, nominal: float = 0.8):
-    """Original vs calibrated cluster coverage and optimism per budget (Table III)."""
-    fig, axes = plt.subplots(1, 2, figsize=(DOUBLE, 2.4))
+def calibration_figure(table3: pd.DataFrame, nominal: float = 0.8, width: float = COLUMN):
+    """Original vs calibrated cluster coverage and optimism per budget (the calibration table)."""
+    fig, axes = plt.subplots(1, 2, figsize=(width, 2.3))
     for name, color in (("original", "tab:red"), ("calibrated", "tab:blue")):
         for ax, metric in zip(axes, ("cluster_coverage", "optimism")):
             ax.plot(table3["k"], table3[f"{metric}_{name}"], "o-", color=color, label=name)
@@ -96,40 +113,70 @@ def calibration_figure(table3: pd.DataFrame, nominal: float = 0.8):
                             color=color, alpha=0.15, lw=0)
     axes[0].axhline(nominal, color="grey", ls=":", lw=1, label=f"nominal {nominal:.2f}")
     axes[1].axhline(0.0, color="grey", ls=":", lw=1)
-    axes[0].set_title("cluster coverage")
-    axes[1].set_title("optimism $e_k$")
+    axes[0].set_ylabel(V.AXIS["cluster_coverage"])
+    axes[1].set_ylabel("optimism eₖ")
     for ax in axes:
-        ax.set_xlabel("budget k")
+        ax.set_xlabel(V.AXIS["k"])
+        integer_ticks(ax.xaxis)
         ax.grid(alpha=0.3)
-    axes[0].legend(frameon=False)
-    fig.tight_layout()
+    fig.tight_layout(rect=(0, 0, 1, 0.86))
+    legend_above(fig, *axes[0].get_legend_handles_labels(), bbox_to_anchor=(0.5, 0.86))
     return fig
 
 
-def gates_figure(result):
-    """Failure among committed vs commit rate per gate, and claimed vs realized at the operating point."""
-    fig, axes = plt.subplots(1, 2, figsize=(DOUBLE, 2.6), gridspec_kw={"width_ratios": [3, 2]})
-    for name, c in result.curves.groupby("signal", sort=False):
+def draw_gate_curves(ax, curves: pd.DataFrame, legend: bool = True) -> None:
+    """Failure among committed against commit rate, one curve per signal; the oracle dashed, as a step."""
+    for name, c in curves.groupby("signal", sort=False):
+        color, ls = SIGNAL_STYLES.get(name, ("0.4", "-"))
+        c = c.sort_values("commit_rate")
         if name == "oracle":
             # The hindsight oracle commits the successes first: zero failure up to its commit
             # rate, then each further commit is a failure. Drawn as the step it is.
-            c = c.sort_values("commit_rate")
-            axes[0].step(c["commit_rate"], c["failure"], where="post", lw=1.2, ls="--", color="k", label="oracle (hindsight)")
+            ax.step(c["commit_rate"], c["failure"], where="post", lw=1.2, ls=ls, color=color, label=SIGNAL_NAMES[name])
             continue
-        axes[0].plot(c["commit_rate"], c["failure"], lw=1.2, label=name)
-    axes[0].set_xlabel("commit rate")
-    axes[0].set_ylabel("failure among committed")
-    axes[0].set_xlim(0, 1)
-    axes[0].grid(alpha=0.3)
-    axes[0].legend(frameon=False)
-    s = result.summary
-    if "claimed" in s.columns:
-        x = np.arange(len(s))
-        axes[1].bar(x - 0.2, s["claimed"].fillna(0.0), 0.4, color="lightgrey", label="claimed")
-        axes[1].bar(x + 0.2, s["realized"], 0.4, color="tab:red", label="realized")
-        axes[1].set_xticks(x, s["signal"], rotation=20)
-        axes[1].set_title("at the operating point")
-        axes[1].legend(frameon=False)
+        ax.plot(c["commit_rate"], c["failure"], lw=1.2, ls=ls, color=color, label=SIGNAL_NAMES.get(name, name))
+    ax.set_xlabel("commit rate (fraction of episodes)")
+    ax.set_ylabel("failure among committed")
+    ax.set_xlim(0, 1)
+    ax.set_ylim(bottom=0)
+    ax.grid(alpha=0.3)
+    if legend:
+        legend_above(ax, ncol=2)
+
+
+def draw_gate_operating_point(ax, summary: pd.DataFrame, legend: bool = True) -> None:
+    """Mean predicted score at commit (pale) against realized failure (solid), per signal.
+
+    Posterior variance makes no probability claim: its predicted bar is absent, not zero.
+    """
+    x = np.arange(len(summary))
+    names = [SIGNAL_NAMES.get(s, str(s)).replace(" (hindsight)", "") for s in summary["signal"]]
+    colors = [SIGNAL_STYLES.get(s, ("0.4", "-"))[0] for s in summary["signal"]]
+    if "claimed" in summary.columns:
+        claimed = summary["claimed"].to_numpy(float)
+        ax.bar(x - 0.2, np.nan_to_num(claimed), 0.4, color=colors, alpha=0.35, label="predicted R̂ₖ (pale)")
+    ax.bar(x + 0.2, summary["realized"], 0.4, color=colors, label="realized Rₖ (solid)")
+    ax.set_xticks(x, [n.replace(" ", "\n", 1) for n in names])
+    ax.set_ylabel("failure at commit")
+    ax.set_ylim(bottom=0)
+    ax.grid(alpha=0.3, axis="y")
+    if legend:
+        from matplotlib.patches import Patch
+
+        ax.legend(handles=[Patch(color="0.45", alpha=0.35, label="predicted R̂ₖ"), Patch(color="0.45", label="realized Rₖ")],
+                  loc="upper right", ncol=1, frameon=False)  # the bars grow from the left; this corner stays empty
+
+
+def gates_figure(result, width: float = COLUMN):
+    """Failure among committed vs commit rate per gate (top), and predicted vs realized at the operating point."""
+    fig, axes = plt.subplots(2, 1, figsize=(width, 4.4), gridspec_kw={"height_ratios": [3, 2]})
+    draw_gate_curves(axes[0], result.curves)
+    axes[0].set_title("(a) failure among committed", loc="left", pad=28)
+    if "realized" in result.summary.columns:
+        draw_gate_operating_point(axes[1], result.summary)
+        axes[1].set_title("(b) at the operating point", loc="left")
+    else:
+        axes[1].set_visible(False)
     fig.tight_layout()
     return fig
 

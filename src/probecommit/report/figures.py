@@ -15,21 +15,35 @@ import pandas as pd  # noqa: E402
 from probecommit.report.style import COLUMN  # noqa: E402  (applies the shared style)
 
 
-def save_figure(fig, path: str | Path, dpi: int | None = None) -> Path:
+def save_figure(fig, path: str | Path, dpi: int | None = None, caption: str | None = None) -> Path:
     """Write ``fig`` as PNG (``path``, 300 dpi) and PDF beside it, then close it.
 
     The PDF carries no creation date, so the same figure is the same bytes (frozen
     results are hashed). Figures are built in loops; open ones leak, hence the close.
+    ``caption`` (written from the data: n, what a band is) travels inside both files (PNG
+    ``Description``, PDF ``Subject``), where the HTML report reads it: no sidecar file.
 
     Returns:
         The PNG path.
     """
     path = Path(path)
     png = path.with_suffix(".png")
-    fig.savefig(png, dpi=dpi or 300)
-    fig.savefig(png.with_suffix(".pdf"), metadata={"CreationDate": None})
+    png.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(png, dpi=dpi or 300, metadata={"Description": caption} if caption else None)
+    fig.savefig(png.with_suffix(".pdf"), metadata={"CreationDate": None, **({"Subject": caption} if caption else {})})
     plt.close(fig)
     return png
+
+
+def read_caption(png: str | Path) -> str | None:
+    """The caption :func:`save_figure` stored in a PNG, or None."""
+    from PIL import Image
+
+    try:
+        with Image.open(png) as image:
+            return image.info.get("Description") or None
+    except OSError:
+        return None
 
 
 def belief_density(z: np.ndarray, weights: np.ndarray, grid: np.ndarray, bandwidth: float) -> np.ndarray:

@@ -352,7 +352,7 @@ TARGETS["gru"] = Target("gru", ("the GRU baseline on MuJoCo 2-D pushing, with th
 
 def _robot(root: Path, quick: bool, progress: Progress, workers: int) -> Path:
     from probecommit.report.figures import save_figure
-    from probecommit.report.robot_figures import aim_error_figure, fault_sweep_figure
+    from probecommit.report.robot_figures import aim_error_figure, fault_sweep_figure, sweep_caption
     from probecommit.studies.robot import SIM_ERROR_AT_RIG_SCALE_MM, run_robot_study, sweep_markdown, table_markdown
     from probecommit.tasks.rig.model import rig_half_gap, rig_window
 
@@ -367,11 +367,14 @@ def _robot(root: Path, quick: bool, progress: Progress, workers: int) -> Path:
     write_table(results, "fault_boundary", sweep_markdown(study.boundary, "boundary pulled in (mm)"))
     write_table(results, "fault_prior", sweep_markdown(study.prior, "prior half-width (mm)"))
     save_figure(aim_error_figure(study.episodes.rows, float(rig_window(1.0)), float(rig_half_gap(1.0))),
-                results / "fig_7b_aim_error.png")
+                results / "fig_7b_aim_error.png",
+                caption=f"Aim error against taps, {len(study.episodes.rows)} episodes; filled points entered, open did "
+                        "not; black: medians; band: the model's window; dashed: the opening's half-width.")
     save_figure(fault_sweep_figure(study.boundary, "boundary pulled inward (mm)", SIM_ERROR_AT_RIG_SCALE_MM,
-                                   "sim. 2.1 mm error at rig scale"), results / "fig_7c_boundary_fault.png")
+                                   "sim. 2.1 mm error at rig scale"), results / "fig_7c_boundary_fault.png",
+                caption=sweep_caption(study.boundary, "a tap boundary pulled inward"))
     save_figure(fault_sweep_figure(study.prior.sort_values("size"), "prior half-width (mm)"),
-                results / "fig_7d_prior_fault.png")
+                results / "fig_7d_prior_fault.png", caption=sweep_caption(study.prior, "a narrowed prior"))
     (results / "results.json").write_text(json.dumps(study.payload(), indent=1, default=float))
     return results
 

@@ -359,7 +359,9 @@ class InsertionReproduction:
                           fmt(row["paired_fix"], signed=True) if "paired_fix" in row else "--"])
         signatures = signature_table(episodes)
         signatures.to_parquet(self.out / "fault_signatures.parquet")
-        self.rep.figures["signatures"] = str(fault_signatures(signatures, self.out / "fig_fault_signatures.png"))
+        n_point = int(((episodes.arm == "fault") & (episodes.fault == FAULTS[0]) & (episodes.k == kmax)
+                       & (episodes.method == "probe_robust")).sum())
+        self.rep.figures["signatures"] = str(fault_signatures(signatures, self.out / "fig_fault_signatures.png", n=n_point))
         self.rep.results["table_faults"] = res
         self.write_table("table_faults", f"Controlled mismatch tests, random probes, k = {kmax} (MuJoCo)",
                          md_table(["fault", "fail [95% CI]", "surprise AUC", f"tempered T={f.temperature:g}", "known fix", "fix - fault (paired)"], table))
@@ -491,7 +493,7 @@ class InsertionReproduction:
                 path = decisive_tap_figure(
                     z[e], now.weights[e], kept_new[e], trace_new.states[k].weights[e], float(z_true[e]),
                     float(batch.u[e, k - 1]), float(batch.y[e, k - 1, 0]),
-                    f"{batch.instance_id[e]} repeat {batch.repeat[e]}, after tap {k}", self.out / "fig_decisive_tap.png")
+                    f"after tap {k}", self.out / "fig_decisive_tap.png")  # no internal ids in a title
                 self.rep.figures["decisive_tap"] = str(path)
                 return
 
