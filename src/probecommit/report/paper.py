@@ -485,3 +485,50 @@ def _cost(root: Path, quick: bool, progress: Progress, workers: int) -> Path:
 
 TARGETS["cost"] = Target("cost", ("probe pricing J(k) = miss(k) + lambda k: break-even prices per family, figure",),
                          ("breadth",), _cost)
+
+
+def _fig1_spec(run_dir: Path) -> dict[str, Any]:
+    """Fig. 1's episode (the one Fig. 1b draws): its first five taps, whether each read the pocket, the hole and the aim."""
+    from probecommit.report.demo import FIGURE_BUDGETS, illustrative_episode
+    from probecommit.runner.replay import load_run, trace_for_run
+
+    loaded = load_run(run_dir)
+    trace, model, _ = trace_for_run(loaded)
+    row = illustrative_episode(trace, loaded.episodes)
+    batch, k = trace.batch, max(FIGURE_BUDGETS)
+    ep = loaded.episodes
+    hit = ep[(ep.instance_id == batch.instance_id[row]) & (ep.repeat == batch.repeat[row]) & (ep.k == k)
+             & (ep.method == "probe_robust")]
+    truth = batch.truths[row]
+    return {"taps": [[float(u), bool(y < -7.5)] for u, y in zip(batch.u[row, :k, 0], batch.y[row, :k, 0])],
+            "x_hole": float(model.decision(truth)), "c": float(truth[1]), "aim": float(hit["action"].iloc[0])}
+
+
+def _figures(root: Path, quick: bool, progress: Progress, workers: int) -> Path:
+    """Fig. 1a/1c (the demo episode's taps and insertion, rendered), Fig. 2 (the pipeline), Fig. 3 (every scene)."""
+    from probecommit.report.pipeline_diagram import pipeline_figure
+    from probecommit.report.scene_figures import fig1_panel, fig3_scenes
+    from probecommit.report.scenes import render_scenes
+
+    results = root / "figures" / "results"
+    results.mkdir(parents=True, exist_ok=True)
+    renders = root / "figures" / "renders"  # raw renders stay out of the published folder
+    runs = root / "setup" / "runs"
+    demo = runs / ("demo-quick" if quick else "demo")
+    spec = _fig1_spec(demo) if demo.is_dir() else None
+    listing = render_scenes(renders, spec)
+    pipeline_figure(results / "fig_pipeline.png")
+    fig3_scenes(renders, results / "fig_scenes.png")
+    if spec is not None:
+        fig1_panel(renders, "a", spec, results / "fig_1a_taps.png")
+        fig1_panel(renders, "c", spec, results / "fig_1c_insertion.png")
+    (results / "results.json").write_text(json.dumps({"results": {"scenes": listing, "fig1": spec}}, indent=1))
+    return results
+
+
+TARGETS["figures"] = Target("figures", ("Fig. 1a and 1c (the demo episode's taps and insertion, rendered)",
+                                        "Fig. 2 (the pipeline, drawn by code)", "Fig. 3 (the scene of every family)"),
+                            ("setup",), _figures)
+ALIASES["fig-2"] = "figures"
+ALIASES["fig-3"] = "figures"
+ALIASES["fig-1"] = "figures"  # Fig. 1b comes from setup, which figures runs first
