@@ -90,7 +90,7 @@ def audit_figure(table: pd.DataFrame, nominal: float = 0.8, width: float = DOUBL
     # One legend above the panels: colours name the method / variant; line styles the metric.
     from matplotlib.lines import Line2D
 
-    handles = [Line2D([], [], color=color, marker="o", ms=3, label=" / ".join(map(str, _group_key(key))) or "episodes")
+    handles = [Line2D([], [], color=color, marker="o", ms=3, label=" / ".join(map(V.value_name, _group_key(key))) or "episodes")
                for (key, _), color in zip(keyed, colors)]
     handles += [Line2D([], [], color="0.3", ls="-", label="coverage / realized Rₖ"),
                 Line2D([], [], color="0.3", ls="--", label="cluster coverage"),

@@ -82,3 +82,13 @@ def csv_name(column: str) -> str:
         if column.endswith(suffix) and column[: -len(suffix)] in CSV:
             return CSV[column[: -len(suffix)]] + suffix
     return column
+
+
+#: Method names as the paper writes them.
+METHODS = {"probe_robust": "Probe-Robust", "blind_bayes": "Blind-Bayes", "blind_robust": "Blind-Robust"}
+
+
+def value_name(value: object) -> str:
+    """A cell value or legend entry as a reader says it (method names the paper's way, no underscores)."""
+    text = str(value)
+    return METHODS.get(text, text.replace("_", " "))
