@@ -183,10 +183,52 @@ def gates_figure(result, width: float = COLUMN):
 
 def figure_to_base64(fig) -> str:
     """PNG bytes of a figure, base64-encoded; the figure is closed."""
+    return _figure_png(fig)[0]
+
+
+#: Resolution of figures embedded in HTML.
+HTML_DPI = 150
+#: Smallest figure text on screen (CSS px): an image is never shown so small that its text falls below this.
+MIN_SCREEN_PX = 9
+
+
+def _figure_png(fig) -> tuple[str, float | None]:
+    """(base64 PNG, smallest text in image pixels); the figure is closed."""
+    from probecommit.report.style import text_sizes
+
+    sizes = [size for size, _ in text_sizes(fig)]
     buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=150)
+    fig.savefig(buf, format="png", dpi=HTML_DPI)
     plt.close(fig)
-    return base64.b64encode(buf.getvalue()).decode("ascii")
+    return base64.b64encode(buf.getvalue()).decode("ascii"), (min(sizes) * HTML_DPI / 72 if sizes else None)
+
+
+def img_tag(data: str, alt: str, min_font_px: float | None, narrow: tuple[str, float | None] | None = None) -> str:
+    """An embedded PNG that keeps its smallest text at least :data:`MIN_SCREEN_PX` CSS px.
+
+    The image gets a ``min-width`` (in its scrolling container, the page never scrolls
+    sideways) from its natural width and the size of its smallest text; ``narrow``
+    (base64, min font px) is a phone layout served below 600 px. ``data-min-font-px``
+    lets the browser test measure the text as shown.
+    """
+    from PIL import Image
+
+    width = Image.open(io.BytesIO(base64.b64decode(data))).size[0]
+    style = f" style='min-width:{math.ceil(width * MIN_SCREEN_PX / min_font_px)}px'" if min_font_px else ""
+    attr = f" data-min-font-px='{min_font_px:.2f}'" if min_font_px else ""
+    img = f"<img alt='{html.escape(alt)}'{attr}{style} src='data:image/png;base64,{data}'>"
+    if narrow is None:
+        return img
+    return f"<picture><source media='(max-width: 600px)' srcset='data:image/png;base64,{narrow[0]}'>{img}</picture>"
+
+
+def figure_html(fig, alt: str, narrow_fig=None) -> str:
+    """A figure (and optionally its phone layout) as a scrolling ``<div class='fig'>`` block."""
+    data, px = _figure_png(fig)
+    narrow = _figure_png(narrow_fig) if narrow_fig is not None else None
+    if narrow is not None and narrow[1] and px:
+        px = min(px, narrow[1])
+    return f"<div class='fig'>{img_tag(data, alt, px, narrow)}</div>"
 
 
 def _fmt(v: Any) -> str:
@@ -201,37 +243,65 @@ def _fmt(v: Any) -> str:
     return html.escape(str(v))
 
 
+def _integer_columns(df: pd.DataFrame) -> set[str]:
+    """Numeric columns whose every value is a whole number: printed as integers (60, not 60.000)."""
+    out = set()
+    for c in df.columns:
+        if pd.api.types.is_bool_dtype(df[c]) or not pd.api.types.is_numeric_dtype(df[c]):
+            continue
+        values = df[c].dropna().to_numpy(float)
+        if len(values) and np.all(np.isfinite(values)) and np.all(values == np.round(values)) and not c.endswith(("_lo", "_hi")):
+            if c not in ("coverage", "cluster_coverage", "escape", "realized", "predicted", "optimism"):
+                out.add(c)
+    return out
+
+
 def table_html(df: pd.DataFrame, intervals: bool = True) -> str:
-    """An HTML table; ``x``, ``x_lo``, ``x_hi`` triples collapse to ``x [lo, hi]``."""
+    """An HTML table in the paper's words; ``x``, ``x_lo``, ``x_hi`` triples collapse to ``x [lo, hi]``.
+
+    Key columns (budget, method, variant, the audit metrics) come first, so they are in view
+    at 1280 px; below 600 px each row stacks into label: value lines (``data-label``).
+    """
     cols = list(df.columns)
     shown = []
     for c in cols:
         if intervals and (c.endswith("_lo") or c.endswith("_hi")) and c[:-3] in cols:
             continue
         shown.append(c)
-    head = "".join(f"<th>{html.escape(HEADERS.get(c, c.replace('_', ' ')))}</th>" for c in shown)
+    shown = [c for c in V.KEY_COLUMNS if c in shown] + [c for c in shown if c not in V.KEY_COLUMNS]
+    integers = _integer_columns(df)
+    names = {c: HEADERS.get(c, V.html_name(c)) for c in shown}
+    head = "".join(f"<th class='{'key' if c in V.KEY_COLUMNS else ''}'>{html.escape(names[c])}</th>" for c in shown)
     body = []
     for _, row in df.iterrows():
         cells = []
         for c in shown:
-            text = _fmt(row[c])
+            value = row[c]
+            if c in integers and not pd.isna(value):
+                text = str(int(value))
+            elif isinstance(value, str) or c in ("method", "variant", "signal"):
+                text = html.escape(V.value_name(value))
+            else:
+                text = _fmt(value)
             if intervals and f"{c}_lo" in cols and f"{c}_hi" in cols:
                 text += f" <span class='ci'>[{_fmt(row[c + '_lo'])}, {_fmt(row[c + '_hi'])}]</span>"
-            cells.append(f"<td>{text}</td>")
+            key = " class='key'" if c in V.KEY_COLUMNS else ""
+            cells.append(f"<td{key} data-label='{html.escape(names[c])}'>{text}</td>")
         body.append("<tr>" + "".join(cells) + "</tr>")
-    return (f"<div class='scroll'><table><thead><tr>{head}</tr></thead><tbody>{''.join(body)}</tbody></table></div>")
+    return (f"<div class='scroll'><table class='stack'><thead><tr>{head}</tr></thead><tbody>{''.join(body)}</tbody>"
+            "</table></div>")
 
 
 #: Table headers as a reader says them.
 HEADERS = {
     "k": "budget k", "n_episodes": "episodes", "n_instances": "instances", "n_repeats": "repeats", "n_failed": "failed",
     "coverage": "episode coverage", "cluster_coverage": "cluster coverage", "escape": "support escape",
-    "realized": "realized Rₖ", "predicted": "predicted R̂ₖ", "optimism": "optimism eₖ", "n_escaped": "escaped", "n_covered": "not escaped",
+    "realized": V.HTML["realized"], "predicted": V.HTML["predicted"], "optimism": V.HTML["optimism"], "n_escaped": "escaped", "n_covered": "not escaped",
     "auc": "rank AUC", "method": "method", "variant": "model variant", "threshold": "threshold t_k",
 }
 
 #: Fewer clusters than this make intervals (and AUCs) too coarse to read as evidence.
-FEW_CLUSTERS = 20
+FEW_CLUSTERS = V.MIN_CLUSTERS
 
 _CSS = """
 body{font-family:system-ui,-apple-system,Segoe UI,sans-serif;max-width:1100px;margin:1.5em auto;padding:0 0.8em;color:#222;line-height:1.4}
@@ -240,7 +310,14 @@ table{border-collapse:collapse;font-size:13px;margin:0.6em 0;white-space:nowrap}
 th,td{border:1px solid #ccc;padding:3px 6px;text-align:right}th{background:#f3f3f3;position:sticky;top:0}
 .ci{color:#666;font-size:12px}img{max-width:100%;height:auto}.note{color:#555;font-size:14px}
 .warn{background:#fff4e5;border-left:4px solid #f0a020;padding:0.5em 0.8em;margin:0.8em 0}
-@media (max-width:600px){body{margin:0.5em auto}h1{font-size:1.3em}table{font-size:12px}}
+.fig{overflow-x:auto;-webkit-overflow-scrolling:touch;max-width:100%}.fig img{width:100%;display:block}
+table td.wrap{white-space:normal;min-width:12em;text-align:left}
+@media (max-width:600px){body{margin:0.5em auto}h1{font-size:1.3em}table{font-size:13px}
+ table.stack,table.stack tbody,table.stack tr,table.stack td{display:block;white-space:normal}
+ table.stack thead{position:absolute;left:-9999px;top:-9999px}
+ table.stack tr{border:1px solid #ccc;margin:0 0 0.6em;padding:0.2em 0}
+ table.stack td{border:none;border-bottom:1px solid #eee;text-align:right;padding:2px 6px;position:relative;padding-left:45%;min-height:1.2em}
+ table.stack td::before{content:attr(data-label);position:absolute;left:6px;width:42%;text-align:left;font-weight:600;white-space:normal}}
 """
 
 
@@ -250,11 +327,11 @@ def _warnings(table: pd.DataFrame, audit_result: Any) -> list[str]:
     n_clusters = None
     for col in ("n_instances", "n_episodes"):
         if col in table.columns and len(table):
-            n_clusters = int(table[col].max())
+            n_clusters = int(table[col].min())
             break
     if n_clusters is not None and n_clusters < FEW_CLUSTERS:
-        out.append(f"Only {n_clusters} episodes or instances per budget: bootstrap intervals over so few clusters are "
-                   "too coarse to be evidence (an interval of zero width here does not mean certainty).")
+        out.append(f"Intervals here rest on {n_clusters} clusters, fewer than {FEW_CLUSTERS}: a cluster bootstrap over so "
+                   "few is too coarse to be evidence (an interval of zero width does not mean certainty).")
     surprise = getattr(audit_result, "surprise", None)
     if isinstance(surprise, pd.DataFrame) and len(surprise) and "n_escaped" in surprise.columns:
         few = int(surprise["n_escaped"].max())
@@ -299,16 +376,18 @@ def write_html_report(path: str | Path, audit_result=None, *, title: str = "prob
                          f"{audit_result.n_total} rows, {audit_result.n_failed} failed (excluded).</p>")
         for text in _warnings(table, audit_result):
             parts.append(f"<div class='warn'>{html.escape(text)}</div>")
-        parts.append(f"<img alt='audit: coverage, escape, optimism, realized vs predicted per budget' "
-                     f"src='data:image/png;base64,{figure_to_base64(audit_figure(table, nominal))}'>")
+        parts.append(figure_html(audit_figure(table, nominal), "audit: coverage, support escape, optimism, realized vs "
+                                 "predicted per budget", audit_figure(table, nominal, width=COLUMN)))
         parts.append(table_html(table))
         surprise = getattr(audit_result, "surprise", None)
         if surprise is not None and len(surprise):
             parts.append("<h3>Prequential surprise: rank AUC for final-budget escape</h3>")
             parts.append(table_html(surprise))
     for caption, image in images or []:
+        from probecommit.report.figures import min_font_px
+
         data = base64.b64encode(Path(image).read_bytes()).decode("ascii")
-        parts.append(f"<h3>{html.escape(caption)}</h3><img alt='{html.escape(caption)}' src='data:image/png;base64,{data}'>")
+        parts.append(f"<h3>{html.escape(caption)}</h3><div class='fig'>{img_tag(data, caption, min_font_px(image))}</div>")
     if calibration is not None:
         c = calibration
         parts.append("<h2>Calibration</h2>")
@@ -317,8 +396,7 @@ def write_html_report(path: str | Path, audit_result=None, *, title: str = "prob
                      f"Fixed-budget thresholds: {thr}. Simultaneous t = {_fmt(c.simultaneous_threshold)}. "
                      f"Margin γ = {c.margin.gamma:.2f}{'' if c.margin.satisfied else ' (rule not met on the grid)'}; "
                      f"distribution-free margin {_fmt(c.distribution_free_margin)}.</p>")
-        parts.append(f"<img alt='calibration' src='data:image/png;base64,"
-                     f"{figure_to_base64(calibration_figure(c.table3, 1 - c.alpha))}'>")
+        parts.append(figure_html(calibration_figure(c.table3, 1 - c.alpha), "calibration: cluster coverage and optimism per budget"))
         parts.append(table_html(c.table3))
         parts.append(table_html(pd.DataFrame([c.summary]), intervals=False))
         parts.append(f"<h3>Cost of calibration (failure at k = {c.cost_budget})</h3>")
@@ -329,7 +407,7 @@ def write_html_report(path: str | Path, audit_result=None, *, title: str = "prob
         info = ", ".join(f"{k} = {_fmt(v)}" for k, v in gates.info.items() if not isinstance(v, pd.DataFrame))
         if info:
             parts.append(f"<p class='note'>{info}; {gates.n_trajectories} trajectories, {gates.n_dropped} dropped.</p>")
-        parts.append(f"<img alt='gates' src='data:image/png;base64,{figure_to_base64(gates_figure(gates))}'>")
+        parts.append(figure_html(gates_figure(gates), "commit gates: failure among committed vs commit rate"))
         parts.append(table_html(gates.summary, intervals=False))
         surprise = gates.info.get("surprise")
         if isinstance(surprise, pd.DataFrame) and len(surprise):

@@ -29,7 +29,12 @@ def save_figure(fig, path: str | Path, dpi: int | None = None, caption: str | No
     path = Path(path)
     png = path.with_suffix(".png")
     png.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(png, dpi=dpi or 300, metadata={"Description": caption} if caption else None)
+    from probecommit.report.style import text_sizes
+
+    sizes = [size for size, _ in text_sizes(fig)]
+    # the smallest text, so a page showing the PNG can keep it legible (HTML reports read it back)
+    meta = {"MinFontPt": f"{min(sizes):.2f}" if sizes else "", "Dpi": str(dpi or 300)}
+    fig.savefig(png, dpi=dpi or 300, metadata={**meta, **({"Description": caption} if caption else {})})
     fig.savefig(png.with_suffix(".pdf"), metadata={"CreationDate": None, **({"Subject": caption} if caption else {})})
     plt.close(fig)
     return png
@@ -44,6 +49,18 @@ def read_caption(png: str | Path) -> str | None:
             return image.info.get("Description") or None
     except OSError:
         return None
+
+
+def min_font_px(png: str | Path) -> float | None:
+    """The smallest text of a PNG written by :func:`save_figure`, in image pixels (None if unknown)."""
+    from PIL import Image
+
+    try:
+        with Image.open(png) as image:
+            pt, dpi = image.info.get("MinFontPt"), image.info.get("Dpi")
+    except OSError:
+        return None
+    return float(pt) * float(dpi) / 72 if pt and dpi else None
 
 
 def belief_density(z: np.ndarray, weights: np.ndarray, grid: np.ndarray, bandwidth: float) -> np.ndarray:
