@@ -21,7 +21,7 @@ def test_html_report_is_self_contained(tmp_path):
     assert html.count("<img") == 2  # the audit figure and the gates figure (the audit one with a phone layout)
     assert not re.search(r"(src|href)=['\"](?!data:)", html)  # nothing fetched from outside
     assert "t &lt;&amp;&gt;" in html
-    assert "cluster coverage" in html and "posterior_variance" in html
+    assert "cluster coverage" in html and "posterior variance" in html and "posterior_variance" not in html
 
 
 BLOCKER = """
