@@ -304,11 +304,11 @@ HEADERS = {
 FEW_CLUSTERS = V.MIN_CLUSTERS
 
 _CSS = """
-body{font-family:system-ui,-apple-system,Segoe UI,sans-serif;max-width:1100px;margin:1.5em auto;padding:0 0.8em;color:#222;line-height:1.4}
+body{font-family:system-ui,-apple-system,Segoe UI,sans-serif;max-width:1200px;margin:1.5em auto;padding:0 0.8em;color:#222;line-height:1.4}
 .scroll{overflow-x:auto;-webkit-overflow-scrolling:touch;max-width:100%}
 table{border-collapse:collapse;font-size:13px;margin:0.6em 0;white-space:nowrap}
 th,td{border:1px solid #ccc;padding:3px 6px;text-align:right}th{background:#f3f3f3;position:sticky;top:0}
-.ci{color:#666;font-size:12px}img{max-width:100%;height:auto}.note{color:#555;font-size:14px}
+.ci{color:#666;font-size:12px;display:block}img{max-width:100%;height:auto}.note{color:#555;font-size:14px}
 .warn{background:#fff4e5;border-left:4px solid #f0a020;padding:0.5em 0.8em;margin:0.8em 0}
 .fig{overflow-x:auto;-webkit-overflow-scrolling:touch;max-width:100%}.fig img{width:100%;display:block}
 table td.wrap{white-space:normal;min-width:12em;text-align:left}

@@ -58,6 +58,10 @@ def min_font_px(png: str | Path) -> float | None:
     try:
         with Image.open(png) as image:
             pt, dpi = image.info.get("MinFontPt"), image.info.get("Dpi")
+            if not pt and "dpi" in image.info:  # written before the size was stored: the style's floor at its dpi
+                from probecommit.report.style import MIN_FONT
+
+                pt, dpi = MIN_FONT, image.info["dpi"][0]
     except OSError:
         return None
     return float(pt) * float(dpi) / 72 if pt and dpi else None
