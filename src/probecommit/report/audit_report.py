@@ -213,8 +213,13 @@ def img_tag(data: str, alt: str, min_font_px: float | None, narrow: tuple[str, f
     """
     from PIL import Image
 
-    width = Image.open(io.BytesIO(base64.b64decode(data))).size[0]
-    style = f" style='min-width:{math.ceil(width * MIN_SCREEN_PX / min_font_px)}px'" if min_font_px else ""
+    def least(b64: str) -> int:  # the narrowest width (CSS px) at which the image's smallest text stays legible
+        return math.ceil(Image.open(io.BytesIO(base64.b64decode(b64))).size[0] * MIN_SCREEN_PX / min_font_px)
+
+    style = ""
+    if min_font_px:  # custom properties: the phone layout's own minimum applies where its source does (CSS below)
+        style = f"--minw:{least(data)}px" + (f";--minw-narrow:{least(narrow[0])}px" if narrow else "")
+        style = f" style='{style}'"
     attr = f" data-min-font-px='{min_font_px:.2f}'" if min_font_px else ""
     img = f"<img alt='{html.escape(alt)}'{attr}{style} src='data:image/png;base64,{data}'>"
     if narrow is None:
@@ -310,9 +315,10 @@ table{border-collapse:collapse;font-size:13px;margin:0.6em 0;white-space:nowrap}
 th,td{border:1px solid #ccc;padding:3px 6px;text-align:right}th{background:#f3f3f3;position:sticky;top:0}
 .ci{color:#666;font-size:12px;display:block}img{max-width:100%;height:auto}.note{color:#555;font-size:14px}
 .warn{background:#fff4e5;border-left:4px solid #f0a020;padding:0.5em 0.8em;margin:0.8em 0}
-.fig{overflow-x:auto;-webkit-overflow-scrolling:touch;max-width:100%}.fig img{width:100%;display:block}
+.fig{overflow-x:auto;-webkit-overflow-scrolling:touch;max-width:100%}.fig img{width:100%;display:block;min-width:var(--minw,0)}
 table td.wrap{white-space:normal;min-width:12em;text-align:left}
 @media (max-width:600px){body{margin:0.5em auto}h1{font-size:1.3em}table{font-size:13px}
+ .fig img{min-width:var(--minw-narrow,var(--minw,0))}
  table.stack,table.stack tbody,table.stack tr,table.stack td{display:block;white-space:normal}
  table.stack thead{position:absolute;left:-9999px;top:-9999px}
  table.stack tr{border:1px solid #ccc;margin:0 0 0.6em;padding:0.2em 0}

@@ -30,6 +30,7 @@ nav.toc{background:#f7f7f9;border:1px solid #ddd;padding:0.5em 1em;margin:1em 0}
 .headline{display:flex;flex-wrap:wrap;gap:0.6em;margin:0.6em 0}.headline div{border:1px solid #ddd;border-radius:6px;padding:0.4em 0.8em}
 .headline b{font-size:1.3em;display:block}
 figure img{border:1px solid #eee}
+table.claims td{text-align:left}
 """
 
 
@@ -105,11 +106,12 @@ def summary_html(results_root: Path) -> str:
         ours = e.get("ours")
         if ours is None and e.get("total") is not None:
             ours = f"{e.get('passed', 0)} of {e.get('total')} comparisons hold"
-        rows.append(f"<tr><td>{_cell(e.get('id'))}</td><td>{_cell(e.get('location'))}</td>"
-                    f"<td class='wrap'>{_cell(e.get('what', ''))}</td>"
-                    f"<td class='status-{html.escape(status.split()[0].lower())}'>{_cell(status)}</td>"
-                    f"<td class='wrap'>{_cell(e.get('paper'))}</td><td class='wrap'>{_cell(ours)}</td></tr>")
-    table = ("<div class='scroll'><table class='claims'><thead><tr><th>item</th><th>in the paper</th><th>what</th>"
+        rows.append(f"<tr><td data-label='item'>{_cell(e.get('id'))}</td><td data-label='in the paper'>"
+                    f"{_cell(e.get('location'))}</td><td class='wrap' data-label='what'>{_cell(e.get('what', ''))}</td>"
+                    f"<td class='status-{html.escape(status.split()[0].lower())}' data-label='status'>{_cell(status)}</td>"
+                    f"<td class='wrap' data-label='paper'>{_cell(e.get('paper'))}</td>"
+                    f"<td class='wrap' data-label='ours'>{_cell(ours)}</td></tr>")
+    table = ("<div class='scroll'><table class='claims stack'><thead><tr><th>item</th><th>in the paper</th><th>what</th>"
              "<th>status</th><th>paper</th><th>ours</th></tr></thead><tbody>" + "".join(rows) + "</tbody></table></div>")
     return (f"<section id='summary'><h2>Summary</h2><p>{len(entries)} paper items, by status:</p>"
             f"<div class='headline'>{head}</div>{table}</section>")
@@ -144,10 +146,17 @@ def write_paper_report(results_root: str | Path, reproduction_md: str | Path, ou
         parts.append("<section><h2 id='other-figures'>Other figures</h2>" + "".join(_figures(d) for d in rest) + "</section>")
         toc.append("<li><a href='#other-figures'>Other figures</a></li>")
     intro, sections_html = (parts[0], parts[1:]) if parts and not parts[0].startswith("<section") else ("", parts)
+    # the title, then the summary and the contents; the preamble (how the numbers were made) after them
+    title = re.match(r"\s*(<h1>.*?</h1>)(.*)", intro, re.S)
+    heading, preamble = (title.group(1), title.group(2)) if title else ("<h1>Reproduction</h1>", intro)
+    if preamble.strip():
+        toc.insert(1, "<li><a href='#about'>How these numbers were made</a></li>")
+        preamble = f"<section id='about'><h2>How these numbers were made</h2>{preamble}</section>"
     nav = f"<nav class='toc' id='contents'><b>Contents</b><ol>{''.join(toc)}</ol></nav>"
     css = _CSS + _EXTRA_CSS
     doc = ("<!DOCTYPE html><html lang='en'><head><meta charset='utf-8'>"
            "<meta name='viewport' content='width=device-width, initial-scale=1'><title>probecommit: reproduction</title>"
-           f"<style>{css}</style></head><body>{intro}{summary_html(results_root)}{nav}{''.join(sections_html)}</body></html>")
+           f"<style>{css}</style></head><body>{heading}{summary_html(results_root)}{nav}{preamble}{''.join(sections_html)}"
+           "</body></html>")
     out.write_text(doc, encoding="utf-8")
     return out
