@@ -350,7 +350,8 @@ def _warnings(table: pd.DataFrame, audit_result: Any) -> list[str]:
 
 def write_html_report(path: str | Path, audit_result=None, *, title: str = "probecommit audit",
                       calibration=None, gates=None, nominal: float = 0.8, notes: str = "",
-                      images: list[tuple[str, Path]] | None = None) -> Path:
+                      images: list[tuple[str, Path]] | None = None,
+                      tables: list[tuple[str, pd.DataFrame]] | None = None, warnings: list[str] | None = None) -> Path:
     """Write the self-contained HTML report.
 
     Args:
@@ -363,6 +364,8 @@ def write_html_report(path: str | Path, audit_result=None, *, title: str = "prob
         nominal: Nominal coverage line.
         notes: Free text shown under the title.
         images: ``(caption, png path)`` pairs embedded after the audit (e.g. a belief snapshot).
+        tables: ``(heading, table)`` pairs shown after the images (e.g. a robot session's per-budget table).
+        warnings: Extra warnings shown under the title (e.g. too few positions for the intervals).
 
     Returns:
         The written path.
@@ -374,6 +377,8 @@ def write_html_report(path: str | Path, audit_result=None, *, title: str = "prob
              "instances (repeats kept together), percentile.</p>"]
     if notes:
         parts.append(f"<p class='note'>{html.escape(notes)}</p>")
+    for text in warnings or []:
+        parts.append(f"<div class='warn'>{html.escape(text)}</div>")
     if audit_result is not None:
         table = audit_result if isinstance(audit_result, pd.DataFrame) else audit_result.table
         parts.append("<h2>Audit: coverage, support escape, optimism</h2>")
@@ -394,6 +399,9 @@ def write_html_report(path: str | Path, audit_result=None, *, title: str = "prob
 
         data = base64.b64encode(Path(image).read_bytes()).decode("ascii")
         parts.append(f"<h3>{html.escape(caption)}</h3><div class='fig'>{img_tag(data, caption, min_font_px(image))}</div>")
+    for heading, frame in tables or []:
+        parts.append(f"<h2>{html.escape(heading)}</h2>")
+        parts.append(table_html(frame))
     if calibration is not None:
         c = calibration
         parts.append("<h2>Calibration</h2>")

@@ -12,6 +12,11 @@ from __future__ import annotations
 #: column name in the episode/audit tables -> the paper's name (HTML and figures).
 HTML = {
     "k": "budget k",
+    "taps": "taps k",
+    "aim_error": "aim error (mm)",
+    "in_window": "in window",
+    "covered": "covered",
+    "entered": "entered",
     "realized": "realized Rₖ",
     "predicted": "predicted R̂ₖ",
     "optimism": "optimism eₖ",
@@ -58,7 +63,7 @@ AXIS = {
 }
 
 #: Columns a reader needs first; an audit table keeps these at its left edge.
-KEY_COLUMNS = ("k", "method", "variant", "coverage", "cluster_coverage", "escape", "realized", "predicted", "optimism")
+KEY_COLUMNS = ("k", "taps", "method", "variant", "coverage", "cluster_coverage", "escape", "realized", "predicted", "optimism")
 
 #: Fewer clusters than this: an interval is flagged as resting on too few clusters.
 MIN_CLUSTERS = 10
@@ -92,3 +97,16 @@ def value_name(value: object) -> str:
     """A cell value or legend entry as a reader says it (method names the paper's way, no underscores)."""
     text = str(value)
     return METHODS.get(text, text.replace("_", " "))
+
+
+def default_output(path, kind: str = "audit"):
+    """Where an audit of ``path`` writes when no ``-o`` is given: ``<input>-<kind>/`` beside the input.
+
+    One rule for every input (a run directory, a CSV or Parquet log, a robot session log or
+    its directory): ``runs/x`` -> ``runs/x-audit/``, ``log.csv`` -> ``log-audit/``.
+    """
+    from pathlib import Path
+
+    path = Path(path)
+    base = path.name if path.is_dir() else path.stem
+    return path.with_name(f"{base}-{kind}")
