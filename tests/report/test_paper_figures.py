@@ -203,3 +203,21 @@ def test_scene_figures_are_readable(scenes, tmp_path, captured):
         fig1_panel(out, which, spec, tmp_path / f"fig1{which}.png")
         _assert_readable(figs[-1], COLUMN / 2)
         assert (tmp_path / f"fig1{which}.pdf").is_file()
+
+
+def test_verify_notices_a_figure_without_its_pdf(tmp_path):
+    """A paper figure is published as PNG and PDF; a missing PDF fails verify, even with a fresh manifest."""
+    import shutil
+    from pathlib import Path
+
+    from probecommit.report.verify import verify, write_manifest
+
+    frozen = Path(__file__).resolve().parents[2] / "results" / "paper" / "robot"
+    if not frozen.is_dir():
+        pytest.skip("no frozen robot results in this checkout")
+    study = tmp_path / "robot"
+    shutil.copytree(frozen, study)
+    assert not [f for f in verify(study).failures if "PDF" in f]
+    (study / "fig_7b_aim_error.pdf").unlink()
+    write_manifest(study)
+    assert any("fig_7b_aim_error.png: a figure without its PDF" in f for f in verify(study).failures)

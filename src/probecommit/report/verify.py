@@ -143,6 +143,8 @@ def check_hashes(study: Path, report: Report) -> None:
     for path in sorted(study.iterdir()):
         if path.is_file() and path.suffix in RESULT_SUFFIXES and path.name != MANIFEST:
             report.check(path.name in listed, f"{path}: a result file not in {MANIFEST}")
+    for png in sorted(study.glob("fig_*.png")):  # a paper figure is published as PNG and PDF
+        report.check(png.with_suffix(".pdf").is_file(), f"{png}: a figure without its PDF beside it")
 
 
 def check_json(study: Path, report: Report) -> dict[str, Any]:
