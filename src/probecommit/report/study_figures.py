@@ -70,7 +70,7 @@ def scan_figure(grid: pd.DataFrame, scans: pd.DataFrame, instance_id: str, delta
         ax.plot([outer, edge, edge], [0, -delta, -15], color="0.3", lw=1)
         ax.plot([sign * 9, outer], [0, 0], color="0.3", lw=1)
     ax.plot([-hg, hg], [-15, -15], color="0.3", lw=1)
-    ax.annotate("pocket floor", (0, -15), xytext=(0, 3), textcoords="offset points", ha="center", fontsize=7)
+    ax.annotate("pocket floor", (0, -15), xytext=(0, -3), textcoords="offset points", ha="center", va="top", fontsize=7)
     ax.scatter(g["offset_from_hole"], g["reading"], s=4, color="C0", zorder=3, label="tap reading (engine)")
     # The simulated probe path of two taps beside the edge: down to the plate top outside the
     # scanned boundary; down the chamfer and into the slot inside it (tip centre, radius r).
@@ -85,14 +85,14 @@ def scan_figure(grid: pd.DataFrame, scans: pd.DataFrame, instance_id: str, delta
         ax.plot(end_x + TIP_RADIUS_MM * np.cos(theta_circle), end_z + TIP_RADIUS_MM * np.sin(theta_circle),
                 color="C3" if inside else "0.5", lw=0.8)
     for sign in (-1, 1):
-        ax.axvline(sign * (hg - TIP_RADIUS_MM), color="C3", ls="--", lw=1, label="deployed boundary hg - r" if sign < 0 else None)
+        ax.axvline(sign * (hg - TIP_RADIUS_MM), color="C3", ls="--", lw=1, label="deployed boundary hg − r" if sign < 0 else None)
         ax.axvline(sign * float(s[s.side == ("left" if sign < 0 else "right")]["boundary"].iloc[0]), color="C2", lw=1.2,
                    label="scanned boundary" if sign < 0 else None)
     ax.set_xlim(-9, 9)
-    ax.set_ylim(-17, 10)
+    ax.set_ylim(-19, 10)
     ax.set_xlabel("tap offset from hole centre (mm)")
     ax.set_ylabel("height (mm)")
-    ax.set_title(f"c = {c:.2f}, hg = {hg:.2f} mm: the boundary moves {delta + TIP_RADIUS_MM:.2f} mm")
+    ax.set_title(f"c = {c:.2f}: the boundary moves {delta + TIP_RADIUS_MM:.2f} mm")
     ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.2), frameon=False, ncol=2, fontsize=7)
     fig.tight_layout()
     caption = (f"Scale-accurate section of the slot (c = {c:.2f}, chamfer {delta:.2f} mm) with {len(g)} engine tap readings; "
