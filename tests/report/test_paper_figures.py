@@ -68,7 +68,15 @@ def test_column_figures_are_readable_at_one_column(tmp_path, captured):
     fault_signatures(pd.DataFrame(rows), tmp_path / "sig.png", n=384)
     coverage = pd.DataFrame({"nominal": [0.5, 0.8, 0.95], "cluster_coverage": [0.55, 0.74, 0.95]})
     decision_figure(coverage, _gates(), tmp_path / "decision.png")
-    assert len(figs) == 2
+    from probecommit.report.study_figures import decisive_tap_figure, scan_figure
+
+    scans = pd.DataFrame({"instance_id": "d0", "c": 0.8, "side": ["left", "right"], "boundary": [5.4, 5.4]})
+    off = np.arange(-7, 7.01, 0.25)
+    grid = pd.DataFrame({"instance_id": "d0", "offset_from_hole": off, "reading": np.where(abs(off) < 5.4, -13.8, 1.2)})
+    scan_figure(grid, scans, "d0", 0.905, tmp_path / "scan.png")
+    z = np.linspace(0, 4, 50)
+    decisive_tap_figure(z, np.ones(50) / 50, z + 1, np.ones(50) / 50, 4.3, 4.5, -13.8, "after tap 3", tmp_path / "tap.png")
+    assert len(figs) == 4
     for record in figs:
         _assert_readable(record, COLUMN)
     assert "n = 384" in figs[0]["caption"] and "band" in figs[0]["caption"]
