@@ -455,12 +455,15 @@ def plot_pricing(table: Any, path: str | Path) -> Path:
             ax.plot(lam, m + k * lam, style, lw=1.0, label=f"k = {k}")
         for price in {r["blind_above"], r["five_below"]}:
             ax.axvline(price, color="0.6", lw=0.6, ls=":")
-        ax.set_title(str(r["family"]))
-        ax.set_xlabel("price per probe")
-    axes[0][0].set_ylabel("miss + price x k")
-    axes[0][0].legend(frameon=False)
-    fig.tight_layout()
-    return save_figure(fig, path)
+        family = str(r["family"])
+        ax.set_title(family.replace("_pybullet", " (PyBullet)").replace("_", " "))
+    axes[0][0].set_ylabel("J(k) = miss + λk")
+    fig.supxlabel("price λ per probe (loss units)", fontsize=8)  # one label: six would collide at this width
+    fig.tight_layout(rect=(0, 0, 1, 0.86))
+    fig.legend(*axes[0][0].get_legend_handles_labels(), loc="lower center", bbox_to_anchor=(0.5, 0.86), ncol=3,
+               frameon=False)  # above the panels, off the data
+    return save_figure(fig, path, caption="Probe pricing: J(k) = miss(k) + λk against the price λ per probe, per family, "
+                                          "for k = 0, 2 and 5 probes; dotted: the break-even prices (in the loss's units per probe).")
 
 
 def _cost(root: Path, quick: bool, progress: Progress, workers: int) -> Path:
