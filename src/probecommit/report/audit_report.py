@@ -203,7 +203,8 @@ def _figure_png(fig) -> tuple[str, float | None]:
     return base64.b64encode(buf.getvalue()).decode("ascii"), (min(sizes) * HTML_DPI / 72 if sizes else None)
 
 
-def img_tag(data: str, alt: str, min_font_px: float | None, narrow: tuple[str, float | None] | None = None) -> str:
+def img_tag(data: str, alt: str, min_font_px: float | None, narrow: tuple[str, float | None] | None = None,
+            dpi: float = HTML_DPI) -> str:
     """An embedded PNG that keeps its smallest text at least :data:`MIN_SCREEN_PX` CSS px.
 
     The image gets a ``min-width`` (in its scrolling container, the page never scrolls
@@ -216,10 +217,12 @@ def img_tag(data: str, alt: str, min_font_px: float | None, narrow: tuple[str, f
     def least(b64: str) -> int:  # the narrowest width (CSS px) at which the image's smallest text stays legible
         return math.ceil(Image.open(io.BytesIO(base64.b64decode(b64))).size[0] * MIN_SCREEN_PX / min_font_px)
 
-    style = ""
+    # never shown larger than at HTML_DPI (a column figure is not blown up to the page's width)
+    natural = Image.open(io.BytesIO(base64.b64decode(data))).size[0]
+    style = f"--maxw:{math.ceil(natural * HTML_DPI / dpi)}px"
     if min_font_px:  # custom properties: the phone layout's own minimum applies where its source does (CSS below)
-        style = f"--minw:{least(data)}px" + (f";--minw-narrow:{least(narrow[0])}px" if narrow else "")
-        style = f" style='{style}'"
+        style += f";--minw:{least(data)}px" + (f";--minw-narrow:{least(narrow[0])}px" if narrow else "")
+    style = f" style='{style}'"
     attr = f" data-min-font-px='{min_font_px:.2f}'" if min_font_px else ""
     img = f"<img alt='{html.escape(alt)}'{attr}{style} src='data:image/png;base64,{data}'>"
     if narrow is None:
@@ -248,17 +251,36 @@ def _fmt(v: Any) -> str:
     return html.escape(str(v))
 
 
+#: Count columns: whole numbers printed as integers (60, not 60.000).
+COUNT_COLUMNS = {"k", "taps", "episodes", "instances", "clusters", "repeats", "failed", "positions", "in_window", "entered",
+                 "covered", "escaped_committed", "escaped_rejected", "n_committed", "n_rejected"}
+
+
 def _integer_columns(df: pd.DataFrame) -> set[str]:
-    """Numeric columns whose every value is a whole number: printed as integers (60, not 60.000)."""
+    """Columns printed as integers: integer dtype, or counts (``COUNT_COLUMNS``, ``n_*``) whose values are whole."""
     out = set()
     for c in df.columns:
         if pd.api.types.is_bool_dtype(df[c]) or not pd.api.types.is_numeric_dtype(df[c]):
             continue
+        if pd.api.types.is_integer_dtype(df[c]):
+            out.add(c)
+            continue
         values = df[c].dropna().to_numpy(float)
-        if len(values) and np.all(np.isfinite(values)) and np.all(values == np.round(values)) and not c.endswith(("_lo", "_hi")):
-            if c not in ("coverage", "cluster_coverage", "escape", "realized", "predicted", "optimism"):
-                out.add(c)
+        count = c in COUNT_COLUMNS or c.startswith("n_")
+        if count and len(values) and np.all(np.isfinite(values)) and np.all(values == np.round(values)):
+            out.add(c)
     return out
+
+
+def _bounds(c: str, cols: list[str]) -> tuple[str, str] | None:
+    """The interval columns of ``c``: ``c_lo``/``c_hi``, or ``m_lo_arm``/``m_hi_arm`` for ``c = m_arm``."""
+    if f"{c}_lo" in cols and f"{c}_hi" in cols:
+        return f"{c}_lo", f"{c}_hi"
+    if "_" in c:
+        m, arm = c.rsplit("_", 1)
+        if f"{m}_lo_{arm}" in cols and f"{m}_hi_{arm}" in cols:
+            return f"{m}_lo_{arm}", f"{m}_hi_{arm}"
+    return None
 
 
 def table_html(df: pd.DataFrame, intervals: bool = True) -> str:
@@ -268,11 +290,9 @@ def table_html(df: pd.DataFrame, intervals: bool = True) -> str:
     at 1280 px; below 600 px each row stacks into label: value lines (``data-label``).
     """
     cols = list(df.columns)
-    shown = []
-    for c in cols:
-        if intervals and (c.endswith("_lo") or c.endswith("_hi")) and c[:-3] in cols:
-            continue
-        shown.append(c)
+    bounds = {c: _bounds(c, cols) for c in cols} if intervals else {}
+    hidden = {b for pair in bounds.values() if pair for b in pair}
+    shown = [c for c in cols if c not in hidden]
     shown = [c for c in V.KEY_COLUMNS if c in shown] + [c for c in shown if c not in V.KEY_COLUMNS]
     integers = _integer_columns(df)
     names = {c: HEADERS.get(c, V.html_name(c)) for c in shown}
@@ -288,8 +308,9 @@ def table_html(df: pd.DataFrame, intervals: bool = True) -> str:
                 text = html.escape(V.value_name(value))
             else:
                 text = _fmt(value)
-            if intervals and f"{c}_lo" in cols and f"{c}_hi" in cols:
-                text += f" <span class='ci'>[{_fmt(row[c + '_lo'])}, {_fmt(row[c + '_hi'])}]</span>"
+            if bounds.get(c):
+                lo, hi = bounds[c]
+                text += f" <span class='ci'>[{_fmt(row[lo])}, {_fmt(row[hi])}]</span>"
             key = " class='key'" if c in V.KEY_COLUMNS else ""
             cells.append(f"<td{key} data-label='{html.escape(names[c])}'>{text}</td>")
         body.append("<tr>" + "".join(cells) + "</tr>")
@@ -302,20 +323,20 @@ HEADERS = {
     "k": "budget k", "n_episodes": "episodes", "n_instances": "instances", "n_repeats": "repeats", "n_failed": "failed",
     "coverage": "episode coverage", "cluster_coverage": "cluster coverage", "escape": "support escape",
     "realized": V.HTML["realized"], "predicted": V.HTML["predicted"], "optimism": V.HTML["optimism"], "n_escaped": "escaped", "n_covered": "not escaped",
-    "auc": "rank AUC", "method": "method", "variant": "model variant", "threshold": "threshold t_k",
+    "auc": "rank AUC", "method": "method", "variant": "model variant", "threshold": "threshold tₖ",
 }
 
 #: Fewer clusters than this make intervals (and AUCs) too coarse to read as evidence.
 FEW_CLUSTERS = V.MIN_CLUSTERS
 
 _CSS = """
-body{font-family:system-ui,-apple-system,Segoe UI,sans-serif;max-width:1200px;margin:1.5em auto;padding:0 0.8em;color:#222;line-height:1.4}
+html{background:#fff}body{font-family:system-ui,-apple-system,Segoe UI,sans-serif;max-width:1200px;margin:1.5em auto;padding:0 0.8em;color:#222;line-height:1.4}
 .scroll{overflow-x:auto;-webkit-overflow-scrolling:touch;max-width:100%}
 table{border-collapse:collapse;font-size:13px;margin:0.6em 0;white-space:nowrap}
 th,td{border:1px solid #ccc;padding:3px 6px;text-align:right}th{background:#f3f3f3;position:sticky;top:0}
 .ci{color:#666;font-size:12px;display:block}img{max-width:100%;height:auto}.note{color:#555;font-size:14px}
 .warn{background:#fff4e5;border-left:4px solid #f0a020;padding:0.5em 0.8em;margin:0.8em 0}
-.fig{overflow-x:auto;-webkit-overflow-scrolling:touch;max-width:100%}.fig img{width:100%;display:block;min-width:var(--minw,0)}
+.fig{overflow-x:auto;-webkit-overflow-scrolling:touch;max-width:100%}.fig img{width:100%;display:block;max-width:var(--maxw,100%);min-width:var(--minw,0)}
 table td.wrap{white-space:normal;min-width:12em;text-align:left}
 @media (max-width:600px){body{margin:0.5em auto}h1{font-size:1.3em}table{font-size:13px}
  .fig img{min-width:var(--minw-narrow,var(--minw,0))}

@@ -51,6 +51,13 @@ def _slug(text: str, used: set[str]) -> str:
     return slug
 
 
+def _dpi(png: Path) -> float:
+    from PIL import Image
+
+    with Image.open(png) as image:
+        return float(image.info.get("Dpi") or (image.info.get("dpi") or (300,))[0])
+
+
 def _figures(folder: Path) -> str:
     from probecommit.report.figures import min_font_px, read_caption
 
@@ -59,7 +66,7 @@ def _figures(folder: Path) -> str:
         data = base64.b64encode(png.read_bytes()).decode("ascii")
         caption = read_caption(png) or png.stem.replace("fig_", "").replace("_", " ")
         pdf = " PDF beside it." if png.with_suffix(".pdf").is_file() else ""
-        out.append(f"<figure><div class='fig'>{img_tag(data, caption, min_font_px(png))}</div>"
+        out.append(f"<figure><div class='fig'>{img_tag(data, caption, min_font_px(png), dpi=_dpi(png))}</div>"
                    f"<figcaption>{html.escape(caption)} <span class='note'>({html.escape(png.name)}.{pdf})</span>"
                    "</figcaption></figure>")
     return "".join(out)
