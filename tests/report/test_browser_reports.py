@@ -42,6 +42,9 @@ CHECK = """(async () => {
     pageFits: document.documentElement.scrollWidth <= W + 1,
     toc: document.querySelectorAll('nav.toc a').length,
     headings: [...document.querySelectorAll('h2')].map(h => h.textContent),
+    headers: [...document.querySelectorAll('th')].map(th => th.textContent),
+    hiddenCells: [...document.querySelectorAll('td')].filter(c => getComputedStyle(c).display === 'none'
+                                                              || getComputedStyle(c).visibility === 'hidden').length,
     rawMarkdown: (document.body.innerText.match(/^- /mg) || []).length,
     warnings: document.querySelectorAll('.warn').length,
   };
@@ -98,9 +101,12 @@ def test_audit_report_in_chromium(tmp_path, runs, browser, width):
     from probecommit.audit.pipeline import audit
     from probecommit.report.audit_report import write_html_report
 
-    page = write_html_report(tmp_path / "audit.html", audit(runs["test"], resamples=200), title="Audit of a run")
+    page = write_html_report(tmp_path / "audit.html", audit(runs["test"], resamples=200), title="Audit <b>x</b>")
     check = check_page(browser, page, width, "audit")
     assert_readable(check, width)
+    assert check["hiddenCells"] == 0
+    assert "episode coverage" in check["headers"] and not any("_" in h for h in check["headers"])
+    assert "<b>x</b>" not in page.read_text()  # the title is escaped
     assert check["warnings"] >= 1  # 6 instances: fewer than 10 clusters is flagged
     assert check["figText"], "the audit figure carries its text size"
 

@@ -131,4 +131,7 @@ def belief_snapshots(
     ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.2), frameon=False, ncol=3, handlelength=1.2,
               columnspacing=0.8)
     fig.tight_layout()
-    return save_figure(fig, path)
+    caption = (f"Peak-normalized particle beliefs over the hole position after taps {', '.join(map(str, budgets))} of one "
+               f"simulated insertion episode; dashed: the true hole; triangles on top: each budget's aim (filled: the "
+               f"peg entered); markers below: the taps, numbered in order (square: read the top; triangle: the pocket).")
+    return save_figure(fig, path, caption=caption)
