@@ -65,9 +65,9 @@ def _figures(folder: Path) -> str:
     for png in sorted(folder.glob("*.png")):
         data = base64.b64encode(png.read_bytes()).decode("ascii")
         caption = read_caption(png) or png.stem.replace("fig_", "").replace("_", " ")
-        pdf = " PDF beside it." if png.with_suffix(".pdf").is_file() else ""
+        pdf = "; PDF beside it" if png.with_suffix(".pdf").is_file() else ""
         out.append(f"<figure><div class='fig'>{img_tag(data, caption, min_font_px(png), dpi=_dpi(png))}</div>"
-                   f"<figcaption>{html.escape(caption)} <span class='note'>({html.escape(png.name)}.{pdf})</span>"
+                   f"<figcaption>{html.escape(caption)} <span class='note'>({html.escape(png.name)}{pdf})</span>"
                    "</figcaption></figure>")
     return "".join(out)
 
