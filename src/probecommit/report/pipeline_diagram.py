@@ -27,14 +27,6 @@ BOXES = (
     ("coverage", 22, 3, 22, 9, "coverage audit", "truth in the retained\ninterval? escape?", "#fbe5cc"),
     ("optimism", 54, 3, 22, 9, "optimism audit", "eₖ = Rₖ − R̂ₖ\n(mean over episodes)", "#fbe5cc"),
 )
-#: Arrows between box keys: (from, to, label, dashed).
-ARROWS = (
-    ("probe", "belief", "", False), ("belief", "retain", "", False), ("retain", "commit", "", False),
-    ("commit", "outcome", "", False), ("belief", "probe", "next tap", False),
-    ("retain", "coverage", "", False), ("commit", "optimism", "", False), ("outcome", "optimism", "", False),
-)
-
-
 def _anchor(box: tuple, side: str) -> tuple[float, float]:
     _, x, y, w, h, *_ = box
     return {"left": (x, y + h / 2), "right": (x + w, y + h / 2), "top": (x + w / 2, y + h), "bottom": (x + w / 2, y)}[side]

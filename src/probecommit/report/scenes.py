@@ -227,7 +227,7 @@ def shuffleboard_drawn() -> Render:
     import matplotlib.pyplot as plt
     from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 
-    from probecommit.tasks.shuffleboard.sim_sapien import BOARD_CENTRE_X, BOARD_HALF, PUCK_HALF
+    from probecommit.tasks.shuffleboard.sim_sapien import BOARD_HALF, PUCK_HALF
 
     def box(centre, half):
         cx, cy, cz = centre
@@ -238,7 +238,7 @@ def shuffleboard_drawn() -> Render:
 
     fig = plt.figure(figsize=(SIZE[1] / 100, SIZE[0] / 100), dpi=100)
     ax = fig.add_subplot(projection="3d", computed_zorder=False)  # the puck on top of the board, drawn after it
-    # The first 3 m of the 120 m board, where the puck starts; the puck enlarged 10x to be seen.
+    # The first 3 m of the board (it runs 2 x BOARD_HALF[0] along +x), where the puck starts; the puck enlarged 10x to be seen.
     near_half = (1.5, BOARD_HALF[1], BOARD_HALF[2])
     ax.add_collection3d(Poly3DCollection(box((1.2, 0, -BOARD_HALF[2]), near_half), facecolor=PLATE[:3], edgecolor="0.2", lw=0.3))
     scale = 10
@@ -249,7 +249,6 @@ def shuffleboard_drawn() -> Render:
     ax.set_zlim(-0.6, 1.0)
     ax.view_init(elev=30, azim=-120)
     ax.set_axis_off()
-    assert BOARD_CENTRE_X > 0  # the board reaches far along +x; only its start is drawn
     fig.subplots_adjust(0, 0, 1, 1)
     fig.canvas.draw()
     rgb = np.asarray(fig.canvas.buffer_rgba())[..., :3].copy()
