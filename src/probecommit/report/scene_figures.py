@@ -79,6 +79,7 @@ def fig3_scenes(scene_dir: str | Path, path: str | Path) -> Path | None:
     skipped = ", ".join(f"{s['family']} ({s['engine']})" for s in listing.get("skipped", []))
     caption = ("The simulated scenes: MuJoCo rendered through software OpenGL, PyBullet by its TinyRenderer, the SAPIEN "
                "shuffleboard drawn with matplotlib from the scene's own box dimensions (SAPIEN 3 finds no render device "
-               "on a CPU). The 1-D push is closed form and has no scene."
+               "on a CPU; its puck drawn 10x its size). The darts sphere is drawn at 6x its 1 cm radius so that it shows over "
+               "its fall. The 1-D push is closed form and has no scene."
                + (f" Not rendered on this machine: {skipped}." if skipped else ""))
     return save_figure(fig, path, caption=caption)
