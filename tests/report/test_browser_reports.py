@@ -53,6 +53,7 @@ CHECK = """(async () => {
 
 @pytest.fixture(scope="module")
 def browser():
+    pytest.importorskip("websockets", reason="the DevTools client needs websockets (the test extra)")
     from tests.report.cdp import Page
 
     page = Page(BROWSER)
