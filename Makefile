@@ -6,7 +6,7 @@ PY := $(VENV)/bin/python
 DEMO_STAMP := $(VENV)/.installed-demo
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test test-fast bench reproduce clean-venv browser kernels
+.PHONY: demo test test-fast bench reproduce clean-venv browser system-packages kernels
 
 $(VENV)/bin/python:
 	$(PYTHON) -m venv $(VENV)
@@ -37,14 +37,28 @@ demo: $(DEMO_STAMP) $(AOT_DIGEST)
 	$(VENV)/bin/probecommit demo
 
 ## Create the venv, install every pinned extra, run the whole test suite (slow tests included).
-## The HTML report is checked in a real browser: Chromium from Debian's packages, installed here when missing.
-test: $(STAMP) $(AOT_DIGEST) browser
+## Two system needs come from Debian's packages, installed here when missing (as root; it says what first):
+## Chromium (the HTML reports are checked in a real browser) and software OpenGL (Mesa's EGL/llvmpipe
+## and OSMesa: MuJoCo renders the scenes of Fig. 1 and Fig. 3 on the CPU).
+test: $(STAMP) $(AOT_DIGEST) system-packages
 	$(PY) -m pytest -q
+	@echo "browser screenshots of the reports: $(CURDIR)/build/screenshots/"
 
-browser:
-	@command -v chromium >/dev/null 2>&1 || command -v chromium-browser >/dev/null 2>&1 || \
-	  { [ "$$(id -u)" = 0 ] && (apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends chromium >/dev/null) ; } || \
-	  echo "chromium is not installed and could not be: the browser test of the HTML report will be skipped"
+#: Debian packages the tests and the scene renders use.
+SYSTEM_PACKAGES := chromium libegl1 libgl1-mesa-dri libosmesa6
+
+system-packages:
+	@missing=""; for p in $(SYSTEM_PACKAGES); do dpkg -s $$p >/dev/null 2>&1 || missing="$$missing $$p"; done; \
+	if [ -z "$$missing" ]; then exit 0; fi; \
+	if [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then \
+	  echo "installing Debian packages:$$missing (apt-get update, then apt-get install --no-install-recommends)"; \
+	  apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends $$missing >/dev/null \
+	  || echo "warning: could not install$$missing: the browser test or the scene-render tests will skip"; \
+	else \
+	  echo "missing Debian packages:$$missing (run as root: apt-get install$$missing); the tests that need them will skip"; \
+	fi
+
+browser: system-packages
 
 ## The suite without tests marked slow.
 test-fast: $(STAMP) $(AOT_DIGEST)

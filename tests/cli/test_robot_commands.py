@@ -22,8 +22,11 @@ def test_simulate_audit_and_replay_a_session(tmp_path):
     assert runner.invoke(app, ["robot", "simulate", str(config), "-o", str(out)]).exit_code == 0  # resumes
     res = runner.invoke(app, ["audit", str(out), "--resamples", "200"])
     assert res.exit_code == 0, res.output
-    assert "coverage" in res.output and (out / "audit" / "robot_table.csv").is_file()
-    assert (out / "audit" / "aim_error.png").is_file() and (out / "audit" / "aim_error.pdf").is_file()
+    audited = tmp_path / "session-audit"  # <input>-audit/ beside the input
+    assert "coverage" in res.output and (audited / "robot_table.csv").is_file()
+    assert (audited / "aim_error.png").is_file() and (audited / "aim_error.pdf").is_file()
+    html = (audited / "audit.html").read_text()
+    assert "realized Rₖ" in html and "fewer than 10" in html  # the robot audit writes HTML; few positions flagged
     res = runner.invoke(app, ["replay", str(out)])
     assert res.exit_code == 0 and "reproduced: 1.000" in res.output
     res = runner.invoke(app, ["replay", str(out / "session.jsonl"), "--fault", "boundary", "--sweep", "0:8:4",

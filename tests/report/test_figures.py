@@ -30,9 +30,9 @@ def test_fault_signatures_one_visible_line_per_fault(tmp_path):
     captured = {}
     real_save = save_figure
 
-    def keep(fig, path):
+    def keep(fig, path, **kwargs):
         captured["fig"] = fig
-        return real_save(fig, path)
+        return real_save(fig, path, **kwargs)
 
     import probecommit.report.study_figures as sf
 
@@ -43,7 +43,7 @@ def test_fault_signatures_one_visible_line_per_fault(tmp_path):
         sf.save_figure = real_save
     fig = captured["fig"]
     assert png.suffix == ".png" and png.with_suffix(".pdf").is_file()
-    check(fig, style.DOUBLE)
+    check(fig, style.COLUMN)  # the paper sets it in one column
     lines = [l for l in fig.axes[0].get_lines()]
     # identical data: every fault still distinguishable by colour, style or marker and an x offset
     keys = {(l.get_color(), str(l.get_linestyle()), l.get_marker(), round(float(l.get_xdata()[0]), 3)) for l in lines}
@@ -61,7 +61,7 @@ def test_the_oracle_is_drawn_as_a_step(tmp_path):
     result.curves = curves
     result.summary = pd.DataFrame({"signal": ["raw"], "claimed": [0.1], "realized": [0.3]})
     fig = gates_figure(result)
-    check(fig, style.DOUBLE)
+    check(fig, style.COLUMN)
     oracle = [l for l in fig.axes[0].get_lines() if l.get_label().startswith("oracle")][0]
     assert oracle.get_drawstyle() == "steps-post"
     plt.close(fig)

@@ -78,12 +78,17 @@ def print_table(table) -> None:
         console.width = saved
 
 
-def write_csv(frame, path: Path) -> None:
+def write_csv(frame, path: Path, paper_names: bool = False) -> None:
     """CSV for spreadsheets: text cells that a spreadsheet would run as a formula
-    (``=``, ``+``, ``-``, ``@``, tab, CR first) are prefixed with a quote (OWASP CSV injection)."""
+    (``=``, ``+``, ``-``, ``@``, tab, CR first) are prefixed with a quote (OWASP CSV injection).
+    ``paper_names``: the header in the paper's words (``realized_R_k``, ``optimism_e_k``, ...)."""
     import pandas as pd
 
     out = frame.copy()
+    if paper_names:
+        from probecommit.report.vocabulary import csv_name
+
+        out = out.rename(columns=csv_name)
     for col in out.columns:
         if pd.api.types.is_object_dtype(out[col]) or pd.api.types.is_string_dtype(out[col]):
             out[col] = out[col].map(lambda v: "'" + v if isinstance(v, str) and v[:1] in ("=", "+", "-", "@", "\t", "\r") else v)
@@ -93,8 +98,8 @@ def write_csv(frame, path: Path) -> None:
 @user_errors
 def audit_command(
     path: Path = typer.Argument(..., help="Run directory, a Parquet/CSV episode log, or a robot session log (.jsonl or its directory: Table VII)."),
-    out: Optional[Path] = typer.Option(None, "--out", "-o", help="Output folder (default: the run directory, "
-                                       "or <log>-audit next to a log file)."),
+    out: Optional[Path] = typer.Option(None, "--out", "-o", help="Output folder (default: <input>-audit/ beside the "
+                                       "run directory or log)."),
     resamples: int = typer.Option(2000, min=100, help="Cluster-bootstrap resamples."),
     seed: int = typer.Option(0, help="Bootstrap seed."),
     nominal: float = typer.Option(0.8, min=0.0, max=1.0, help="Nominal coverage drawn in the figure."),
@@ -119,7 +124,9 @@ def audit_command(
 
             print_warning("this run's probes were chosen adaptively by its own belief: its episodes are not paired "
                           "with a run of another model on the same instances (other probes would have been chosen)")
-    out = out or (path if path.is_dir() else path.with_name(f"{path.stem}-audit"))
+    from probecommit.report.vocabulary import default_output
+
+    out = out or default_output(path, "audit")
     out.mkdir(parents=True, exist_ok=True)
     print_audit_table(result.table, f"audit of {path}")
     if result.n_failed:
@@ -135,7 +142,7 @@ def audit_command(
         for _, row in result.surprise.iterrows():
             s.add_row(str(row["k"]), str(row["n_escaped"]), str(row["n_covered"]), _ci(row, "auc"))
         print_table(s)
-    write_csv(result.table, out / "audit.csv")
+    write_csv(result.table, out / "audit.csv", paper_names=True)
     if result.surprise is not None:
         write_csv(result.surprise, out / "surprise_auc.csv")
     save_figure(audit_figure(result.table, nominal), out / "audit.png")
@@ -158,7 +165,7 @@ def calibrate_command(
     alpha: float = typer.Option(0.2, min=0.001, max=0.999, help="Miscoverage level (1 - alpha is the target)."),
     budgets: Optional[str] = typer.Option(None, help="Comma-separated budgets (default: all)."),
     cost_budget: Optional[int] = typer.Option(None, help="Budget of the failure comparison (default: the last)."),
-    out: Optional[Path] = typer.Option(None, "--out", "-o", help="Output folder (default: <test>/calibration)."),
+    out: Optional[Path] = typer.Option(None, "--out", "-o", help="Output folder (default: <test>-calibration/ beside the test run)."),
     resamples: int = typer.Option(2000, min=100, help="Cluster-bootstrap resamples."),
     seed: int = typer.Option(0, help="Bootstrap seed."),
     plateau: Optional[str] = typer.Option(
@@ -174,7 +181,9 @@ def calibrate_command(
         raise UsageError(f"--plateau must be 'prefix' or 'hull', got {plateau!r}")
     res = calibrate(cal, test, alpha, _parse_budgets(budgets), cost_budget=cost_budget, resamples=resamples, seed=seed,
                     plateau=plateau)
-    out = out or test / "calibration"
+    from probecommit.report.vocabulary import default_output
+
+    out = out or default_output(test, "calibration")
     out.mkdir(parents=True, exist_ok=True)
     console.print(f"M = {res.n_calibration} calibration instances, 1 - alpha = {1 - alpha:.2f}; "
                   f"simultaneous t = {_f(res.simultaneous_threshold)}; margin gamma = {res.margin.gamma:.2f}"
@@ -207,7 +216,7 @@ def calibrate_command(
                    f"{_f(r['difference'], True)} [{_f(r['lo'], True)}, {_f(r['hi'], True)}] p={r['p_sign_flip']:.3g}")
     print_table(t4)
     (out / "calibration.json").write_text(json.dumps(res.to_dict(), indent=2, default=float))
-    write_csv(res.table3, out / "table3.csv")
+    write_csv(res.table3, out / "table3.csv", paper_names=True)
     write_csv(res.cost, out / "cost.csv")
     write_csv(res.cost_differences, out / "cost_differences.csv")
     write_csv(res.margin.search, out / "margin_search.csv")
@@ -225,7 +234,7 @@ def gates_command(
     alpha: float = typer.Option(0.2, min=0.001, max=0.999, help="Miscoverage level of the simultaneous threshold."),
     budgets: Optional[str] = typer.Option(None, help="Comma-separated nested budgets (default: all)."),
     target: float = typer.Option(0.6, min=0.0, max=1.0, help="Commit rate of the operating point."),
-    out: Optional[Path] = typer.Option(None, "--out", "-o", help="Output folder (default: <test>/gates)."),
+    out: Optional[Path] = typer.Option(None, "--out", "-o", help="Output folder (default: <test>-gates/ beside the test run)."),
     resamples: int = typer.Option(2000, min=100, help="Bootstrap resamples (surprise AUC)."),
     seed: int = typer.Option(0, help="Bootstrap seed."),
 ) -> None:
@@ -235,7 +244,9 @@ def gates_command(
     from probecommit.report.figures import save_figure
 
     res = gates(cal, test, alpha, _parse_budgets(budgets), target_rate=target, resamples=resamples, seed=seed)
-    out = out or test / "gates"
+    from probecommit.report.vocabulary import default_output
+
+    out = out or default_output(test, "gates")
     out.mkdir(parents=True, exist_ok=True)
     console.print(f"simultaneous t = {_f(res.info['threshold'])}, margin gamma = {res.info['gamma']:.2f}; "
                   f"{res.n_trajectories} trajectories ({res.n_dropped} dropped), budgets {res.budgets}")

@@ -63,8 +63,17 @@ def audit_session_log(path: Path, out: Optional[Path], resamples: int, seed: int
                   f"{result.rows['instance_id'].nunique()} positions")
     for note in result.notes:
         print_warning(note)
-    target = _out_dir(path, out, "audit")
-    write_csv(table, target / "robot_table.csv")
+    from probecommit.report.vocabulary import MIN_CLUSTERS, default_output
+
+    target = out or default_output(path, "audit")
+    target.mkdir(parents=True, exist_ok=True)
+    positions = int(result.rows["instance_id"].nunique())
+    few = []
+    if positions < MIN_CLUSTERS:
+        few.append(f"Intervals here rest on {positions} positions (the clusters), fewer than {MIN_CLUSTERS}: a cluster "
+                   "bootstrap over so few is too coarse to be evidence.")
+        print_warning(few[0])
+    write_csv(table, target / "robot_table.csv", paper_names=True)
     write_csv(result.rows, target / "episodes.csv")
     from probecommit.tasks.registry import get as get_family
 
@@ -79,7 +88,16 @@ def audit_session_log(path: Path, out: Optional[Path], resamples: int, seed: int
     if guides is not None:
         half = guides(model).get("half_gap")
     png = save_figure(aim_error_figure(result.rows, window, half), target / "aim_error.png")
-    console.print(f"table: [bold]{safe(target / 'robot_table.csv')}[/bold]; figure: [bold]{safe(png)}[/bold]")
+    from probecommit.report.audit_report import write_html_report
+
+    report = write_html_report(
+        target / "audit.html", title=f"Robot audit of {Path(result.path).name}", warnings=few + list(result.notes),
+        notes=f"{len(result.rows)} episodes at {positions} positions; coverage {covered} of {len(result.rows)}; "
+              "optimism intervals: cluster bootstrap over positions.",
+        tables=[("Per budget: predicted R̂ₖ, realized Rₖ, optimism eₖ, coverage", table)],
+        images=[("Aim error against taps (filled: entered)", png)])
+    console.print(f"table: [bold]{safe(target / 'robot_table.csv')}[/bold]; figure: [bold]{safe(png)}[/bold]; "
+                  f"report: [bold]{safe(report)}[/bold]")
 
 
 def replay_session_log(path: Path, fault: Optional[str], sweep: Optional[str], half_width: Optional[float],

@@ -17,21 +17,56 @@ import pandas as pd  # noqa: E402
 from probecommit.report.style import COLUMN  # noqa: E402  (applies the shared style)
 
 
-def save_figure(fig, path: str | Path, dpi: int | None = None) -> Path:
+def save_figure(fig, path: str | Path, dpi: int | None = None, caption: str | None = None) -> Path:
     """Write ``fig`` as PNG (``path``, 300 dpi) and PDF beside it, then close it.
 
     The PDF carries no creation date, so the same figure is the same bytes (frozen
     results are hashed). Figures are built in loops; open ones leak, hence the close.
+    ``caption`` (written from the data: n, what a band is) travels inside both files (PNG
+    ``Description``, PDF ``Subject``), where the HTML report reads it: no sidecar file.
 
     Returns:
         The PNG path.
     """
     path = Path(path)
     png = path.with_suffix(".png")
-    fig.savefig(png, dpi=dpi or 300)
-    fig.savefig(png.with_suffix(".pdf"), metadata={"CreationDate": None})
+    png.parent.mkdir(parents=True, exist_ok=True)
+    from probecommit.report.style import text_sizes
+
+    sizes = [size for size, _ in text_sizes(fig)]
+    # the smallest text, so a page showing the PNG can keep it legible (HTML reports read it back)
+    meta = {"MinFontPt": f"{min(sizes):.2f}" if sizes else "", "Dpi": str(dpi or 300)}
+    fig.savefig(png, dpi=dpi or 300, metadata={**meta, **({"Description": caption} if caption else {})})
+    fig.savefig(png.with_suffix(".pdf"), metadata={"CreationDate": None, **({"Subject": caption} if caption else {})})
     plt.close(fig)
     return png
+
+
+def read_caption(png: str | Path) -> str | None:
+    """The caption :func:`save_figure` stored in a PNG, or None."""
+    from PIL import Image
+
+    try:
+        with Image.open(png) as image:
+            return image.info.get("Description") or None
+    except OSError:
+        return None
+
+
+def min_font_px(png: str | Path) -> float | None:
+    """The smallest text of a PNG written by :func:`save_figure`, in image pixels (None if unknown)."""
+    from PIL import Image
+
+    try:
+        with Image.open(png) as image:
+            pt, dpi = image.info.get("MinFontPt"), image.info.get("Dpi")
+            if not pt and "dpi" in image.info:  # written before the size was stored: the style's floor at its dpi
+                from probecommit.report.style import MIN_FONT
+
+                pt, dpi = MIN_FONT, image.info["dpi"][0]
+    except OSError:
+        return None
+    return float(pt) * float(dpi) / 72 if pt and dpi else None
 
 
 def belief_density(z: np.ndarray, weights: np.ndarray, grid: np.ndarray, bandwidth: float) -> np.ndarray:
@@ -98,4 +133,7 @@ def belief_snapshots(
     ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.2), frameon=False, ncol=3, handlelength=1.2,
               columnspacing=0.8)
     fig.tight_layout()
-    return save_figure(fig, path)
+    caption = (f"Peak-normalized particle beliefs over the hole position after taps {', '.join(map(str, budgets))} of one "
+               f"simulated insertion episode; dashed: the true hole; triangles on top: each budget's aim (filled: the "
+               f"peg entered); markers below: the taps, numbered in order (square: read the top; triangle: the pocket).")
+    return save_figure(fig, path, caption=caption)

@@ -422,7 +422,7 @@ TARGETS["gru"] = Target("gru", ("the GRU baseline on MuJoCo 2-D pushing, with th
 
 def _robot(root: Path, quick: bool, progress: Progress, workers: int) -> Path:
     from probecommit.report.figures import save_figure
-    from probecommit.report.robot_figures import aim_error_figure, fault_sweep_figure
+    from probecommit.report.robot_figures import aim_error_caption, aim_error_figure, fault_sweep_figure, sweep_caption
     from probecommit.studies.robot import (RIG_LABEL, SIM_ERROR_AT_RIG_SCALE_MM, run_robot_study, sweep_markdown,
                                            table_markdown)
     from probecommit.tasks.rig.model import rig_half_gap, rig_window
@@ -438,12 +438,14 @@ def _robot(root: Path, quick: bool, progress: Progress, workers: int) -> Path:
     write_table(results, "fault_boundary_simulated_rig", sweep_markdown(study.boundary, "boundary pulled in (mm)"))
     write_table(results, "fault_prior_simulated_rig", sweep_markdown(study.prior, "prior half-width (mm)"))
     save_figure(aim_error_figure(study.episodes.rows, float(rig_window(1.0)), float(rig_half_gap(1.0)), title=RIG_LABEL),
-                results / "fig_5b_hardware_simulated_rig_aim_error.png")
+                results / "fig_5b_hardware_simulated_rig_aim_error.png", caption=aim_error_caption(study.episodes.rows))
     save_figure(fault_sweep_figure(study.boundary, "boundary pulled inward (mm)", SIM_ERROR_AT_RIG_SCALE_MM,
                                    "sim. error at rig scale", title=RIG_LABEL),
-                results / "fig_5c_hardware_simulated_rig_boundary_fault.png")
+                results / "fig_5c_hardware_simulated_rig_boundary_fault.png",
+                caption=sweep_caption(study.boundary, "a tap boundary pulled inward"))
     save_figure(fault_sweep_figure(study.prior.sort_values("size"), "prior half-width (mm)", title=RIG_LABEL),
-                results / "fig_5d_hardware_simulated_rig_prior_fault.png")
+                results / "fig_5d_hardware_simulated_rig_prior_fault.png",
+                caption=sweep_caption(study.prior, "a narrowed prior"))
     (results / "results.json").write_text(json.dumps(study.payload(), indent=1, default=float))
     return results
 
@@ -542,12 +544,15 @@ def plot_pricing(table: Any, path: str | Path) -> Path:
             ax.plot(lam, m + k * lam, style, lw=1.0, label=f"k = {k}")
         for price in {r["blind_above"], r["five_below"]}:
             ax.axvline(price, color="0.6", lw=0.6, ls=":")
-        ax.set_title(str(r["family"]))
-        ax.set_xlabel("price per probe")
-    axes[0][0].set_ylabel("miss + price x k")
-    axes[0][0].legend(frameon=False)
-    fig.tight_layout()
-    return save_figure(fig, path)
+        family = str(r["family"])
+        ax.set_title(family.replace("_pybullet", " (PyBullet)").replace("_", " "))
+    axes[0][0].set_ylabel("J(k) = miss + λk")
+    fig.supxlabel("price λ per probe (loss units)", fontsize=8)  # one label: six would collide at this width
+    fig.tight_layout(rect=(0, 0, 1, 0.86))
+    fig.legend(*axes[0][0].get_legend_handles_labels(), loc="lower center", bbox_to_anchor=(0.5, 0.86), ncol=3,
+               frameon=False)  # above the panels, off the data
+    return save_figure(fig, path, caption="Probe pricing: J(k) = miss(k) + λk against the price λ per probe, per family, "
+                                          "for k = 0, 2 and 5 probes; dotted: the break-even prices (in the loss's units per probe).")
 
 
 def _cost(root: Path, quick: bool, progress: Progress, workers: int) -> Path:
@@ -573,3 +578,50 @@ def _cost(root: Path, quick: bool, progress: Progress, workers: int) -> Path:
 
 TARGETS["cost"] = Target("cost", ("probe pricing J(k) = miss(k) + lambda k: break-even prices per family, figure",),
                          ("breadth",), _cost)
+
+
+def _fig1_spec(run_dir: Path) -> dict[str, Any]:
+    """Fig. 1's episode (the one Fig. 1b draws): its first five taps, whether each read the pocket, the hole and the aim."""
+    from probecommit.report.demo import FIGURE_BUDGETS, illustrative_episode
+    from probecommit.runner.replay import load_run, trace_for_run
+
+    loaded = load_run(run_dir)
+    trace, model, _ = trace_for_run(loaded)
+    row = illustrative_episode(trace, loaded.episodes)
+    batch, k = trace.batch, max(FIGURE_BUDGETS)
+    ep = loaded.episodes
+    hit = ep[(ep.instance_id == batch.instance_id[row]) & (ep.repeat == batch.repeat[row]) & (ep.k == k)
+             & (ep.method == "probe_robust")]
+    truth = batch.truths[row]
+    return {"taps": [[float(u), bool(y < -7.5)] for u, y in zip(batch.u[row, :k, 0], batch.y[row, :k, 0])],
+            "x_hole": float(model.decision(truth)), "c": float(truth[1]), "aim": float(hit["action"].iloc[0])}
+
+
+def _figures(root: Path, quick: bool, progress: Progress, workers: int) -> Path:
+    """Fig. 1a/1c (the demo episode's taps and insertion, rendered), Fig. 2 (the pipeline), Fig. 3 (every scene)."""
+    from probecommit.report.pipeline_diagram import pipeline_figure
+    from probecommit.report.scene_figures import fig1_panel, fig3_scenes
+    from probecommit.report.scenes import render_scenes
+
+    results = root / "figures" / "results"
+    results.mkdir(parents=True, exist_ok=True)
+    renders = root / "figures" / "renders"  # raw renders stay out of the published folder
+    runs = root / "setup" / "runs"
+    demo = runs / ("demo-quick" if quick else "demo")
+    spec = _fig1_spec(demo) if demo.is_dir() else None
+    listing = render_scenes(renders, spec)
+    pipeline_figure(results / "fig_2_pipeline.png")
+    fig3_scenes(renders, results / "fig_3_testbeds.png")
+    if spec is not None:
+        fig1_panel(renders, "a", spec, results / "fig_1a_overview_taps.png")
+        fig1_panel(renders, "c", spec, results / "fig_1c_overview_insertion.png")
+    (results / "results.json").write_text(json.dumps({"results": {"scenes": listing, "fig1": spec}}, indent=1))
+    return results
+
+
+TARGETS["figures"] = Target("figures", ("Fig. 1a and 1c (fig:overview: the demo episode's taps and insertion, rendered)",
+                                        "Fig. 2 (fig:pipeline, drawn by code)", "Fig. 3 (fig:testbeds: the scene of every family)"),
+                            ("setup",), _figures)
+ALIASES["fig-2"] = ALIASES["fig:pipeline"] = "figures"
+ALIASES["fig-3"] = ALIASES["fig:testbeds"] = "figures"
+ALIASES["fig-1"] = ALIASES["fig:overview"] = "figures"  # Fig. 1b comes from setup, which figures runs first

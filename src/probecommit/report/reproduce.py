@@ -80,6 +80,12 @@ def signature_points(signatures: pd.DataFrame) -> dict[str, Any]:
                          for _, r in part.iterrows()} for fault, part in signatures.groupby("fault", sort=False)}
 
 
+def signature_n(episodes: pd.DataFrame, kmax: int) -> int:
+    """Episodes behind each point of Fig. 7 (its caption prints it; verify draws the figure again with it)."""
+    return int(((episodes.arm == "fault") & (episodes.fault == FAULTS[0]) & (episodes.k == kmax)
+                & (episodes.method == "probe_robust")).sum())
+
+
 def probe_rows(episodes: pd.DataFrame, k: int | None = None) -> pd.DataFrame:
     out = episodes[(episodes.method == "probe_robust") & (episodes.status == "ok")]
     return out if k is None else out[out.k == k]
@@ -335,7 +341,8 @@ class InsertionReproduction:
         signatures = signature_table(episodes)
         signatures.to_parquet(self.out / "fault_signatures.parquet")
         self.rep.results["fault_signatures"] = signature_points(signatures)
-        self.rep.figures["signatures"] = str(fault_signatures(signatures, self.out / "fig_7_signatures.png"))
+        self.rep.figures["signatures"] = str(fault_signatures(signatures, self.out / "fig_7_signatures.png",
+                                                              n=signature_n(episodes, kmax)))
         self.rep.results["table_faults"] = res
         self.write_table("table_VIII_faults")
 
@@ -448,7 +455,7 @@ class InsertionReproduction:
                 path = decisive_tap_figure(
                     z[e], now.weights[e], kept_new[e], trace_new.states[k].weights[e], float(z_true[e]),
                     float(batch.u[e, k - 1]), float(batch.y[e, k - 1, 0]),
-                    f"{batch.instance_id[e]} repeat {batch.repeat[e]}, after tap {k}", self.out / "fig_4b_teaser_decisive_tap.png")
+                    f"after tap {k}", self.out / "fig_4b_teaser_decisive_tap.png")  # no internal ids in a title
                 self.rep.figures["decisive_tap"] = str(path)
                 return
 

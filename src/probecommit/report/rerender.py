@@ -140,22 +140,25 @@ def _excerpt(line: str, other: str, width: int = 60) -> str:
 
 def _robot_figures() -> dict[str, Callable[[Path, Path], Any]]:
     from probecommit.report.figures import save_figure
-    from probecommit.report.robot_figures import aim_error_figure, fault_sweep_figure
+    from probecommit.report.robot_figures import aim_error_caption, aim_error_figure, fault_sweep_figure, sweep_caption
     from probecommit.studies.robot import RIG_LABEL, SIM_ERROR_AT_RIG_SCALE_MM
     from probecommit.tasks.rig.model import rig_half_gap, rig_window
 
     def aim(folder: Path, out: Path) -> Any:
         rows = pd.read_parquet(folder / "robot_episodes.parquet")
-        return save_figure(aim_error_figure(rows, float(rig_window(1.0)), float(rig_half_gap(1.0)), title=RIG_LABEL), out)
+        return save_figure(aim_error_figure(rows, float(rig_window(1.0)), float(rig_half_gap(1.0)), title=RIG_LABEL), out,
+                           caption=aim_error_caption(rows))
 
     def boundary(folder: Path, out: Path) -> Any:
         sweep = pd.read_parquet(folder / "fault_boundary.parquet")
         return save_figure(fault_sweep_figure(sweep, "boundary pulled inward (mm)", SIM_ERROR_AT_RIG_SCALE_MM,
-                                              "sim. error at rig scale", title=RIG_LABEL), out)
+                                              "sim. error at rig scale", title=RIG_LABEL), out,
+                           caption=sweep_caption(sweep, "a tap boundary pulled inward"))
 
     def prior(folder: Path, out: Path) -> Any:
         sweep = pd.read_parquet(folder / "fault_prior.parquet")
-        return save_figure(fault_sweep_figure(sweep.sort_values("size"), "prior half-width (mm)", title=RIG_LABEL), out)
+        return save_figure(fault_sweep_figure(sweep.sort_values("size"), "prior half-width (mm)", title=RIG_LABEL), out,
+                           caption=sweep_caption(sweep, "a narrowed prior"))
 
     return {"fig_5b_hardware_simulated_rig_aim_error": aim, "fig_5c_hardware_simulated_rig_boundary_fault": boundary,
             "fig_5d_hardware_simulated_rig_prior_fault": prior}
@@ -169,12 +172,17 @@ def _figure_recipes() -> dict[str, dict[str, Callable[[Path, Path], Any]]]:
     bound to their data by digest only.
     """
     from probecommit.report.paper import plot_pricing
+    from probecommit.report.reproduce import signature_n
     from probecommit.report.study_figures import fault_signatures
     from probecommit.studies.breadth import plot_budget_curves
 
+    def signatures(folder: Path, out: Path) -> Any:
+        k = int(json.loads((folder / "results.json").read_text())["results"]["setup"]["k_random"])
+        n = signature_n(pd.read_parquet(folder / "faults_episodes.parquet"), k)
+        return fault_signatures(pd.read_parquet(folder / "fault_signatures.parquet"), out, n=n)
+
     return {
-        "insertion": {"fig_7_signatures": lambda folder, out: fault_signatures(
-            pd.read_parquet(folder / "fault_signatures.parquet"), out)},
+        "insertion": {"fig_7_signatures": signatures},
         "breadth": {"fig_breadth_budget": lambda folder, out: plot_budget_curves(
             pd.read_parquet(folder / "budget_curves.parquet"), out)},
         "cost": {"fig_pricing": lambda folder, out: plot_pricing(pd.read_parquet(folder / "pricing.parquet"), out)},

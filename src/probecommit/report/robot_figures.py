@@ -13,13 +13,14 @@ import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
 
-from probecommit.report.style import COLUMN
+from probecommit.report.style import COLUMN, legend_above
 
 
 def aim_error_figure(rows: pd.DataFrame, window: float | None = None, half_opening: float | None = None,
                      title: str | None = None):
-    """Fig. 5b: aim error (mm) against taps. ``title`` labels the source (the simulated rig)."""
-    fig, ax = plt.subplots(figsize=(COLUMN, 2.6))
+    """Fig. 5b: aim error (mm) against taps, one column wide; legend above the axes. ``title`` labels the
+    source (the simulated rig), under the axes."""
+    fig, ax = plt.subplots(figsize=(COLUMN, 2.7))
     rng = np.random.default_rng(0)  # horizontal jitter only, for legibility
     entered = rows["entered"].fillna(0).astype(bool).to_numpy() if "entered" in rows else np.zeros(len(rows), bool)
     x = rows["k"].to_numpy() + rng.uniform(-0.15, 0.15, len(rows))
@@ -33,22 +34,22 @@ def aim_error_figure(rows: pd.DataFrame, window: float | None = None, half_openi
     if half_opening is not None:
         ax.axhline(half_opening, color="0.4", ls="--", lw=0.8, label=f"opening half-width ({half_opening:.1f} mm)")
     ax.set_xlabel("taps before the commit")
-    ax.set_ylabel("aim error |a - x| (mm)")
-    ax.set_xticks(sorted(rows["k"].unique()))
+    ax.set_ylabel("aim error |a − x| (mm)")
+    ax.set_xticks(sorted(int(k) for k in rows["k"].unique()))
     ax.set_ylim(bottom=0)
-    ax.legend(frameon=False, ncol=3, fontsize=6.5, loc="lower center", bbox_to_anchor=(0.5, 1.0))
+    legend_above(ax, ncol=2)
+    fig.tight_layout(rect=(0, 0.06 if title else 0, 1, 1))
     if title:
-        fig.suptitle(title, fontsize=7, y=0.02, va="bottom")
-        fig.subplots_adjust(bottom=0.25)
+        fig.suptitle(title, fontsize=7, y=0.01, va="bottom")
     return fig
 
 
 def fault_sweep_figure(sweep: pd.DataFrame, xlabel: str, reference: float | None = None, reference_label: str = "",
                        title: str | None = None):
-    """Fig. 5c/5d: faulted minus deployed optimism and coverage against fault size, 95 % bands."""
-    fig, axes = plt.subplots(1, 2, figsize=(COLUMN * 2, 2.1))
-    for ax, metric, label in ((axes[0], "optimism", "optimism, faulted - deployed"),
-                              (axes[1], "coverage", "coverage, faulted - deployed")):
+    """Fig. 5c/5d: faulted minus deployed optimism and coverage against fault size, 95 % bands; one column wide.
+    ``title`` labels the source (the simulated rig), above the legend."""
+    fig, axes = plt.subplots(1, 2, figsize=(COLUMN, 2.4))
+    for ax, metric, panel in ((axes[0], "optimism", "Δ optimism eₖ"), (axes[1], "coverage", "Δ coverage")):
         x = sweep["size"].to_numpy()
         mid = sweep[f"delta_{metric}"].to_numpy()
         ax.fill_between(x, sweep[f"delta_{metric}_lo"], sweep[f"delta_{metric}_hi"], color="C0", alpha=0.2, lw=0, label="95% CI")
@@ -59,10 +60,26 @@ def fault_sweep_figure(sweep: pd.DataFrame, xlabel: str, reference: float | None
         ax.axhline(0, color="0.5", lw=0.6)
         if reference is not None:
             ax.axvline(reference, color="0.3", ls=":", lw=0.9, label=reference_label)
-        ax.set_xlabel(xlabel)
-        ax.set_ylabel(label)
-    axes[0].legend(frameon=False, fontsize=6.5)
+        ax.set_title(panel, loc="left")
+        ax.grid(alpha=0.3)
+    axes[0].set_ylabel("faulted − deployed")
+    fig.supxlabel(xlabel, fontsize=8, y=0.02)  # one label for both panels: two would collide at this width
+    top = 0.74 if title else 0.8
+    fig.tight_layout(rect=(0, 0.03, 1, top))
+    fig.legend(*axes[0].get_legend_handles_labels(), loc="lower center", bbox_to_anchor=(0.5, top), ncol=2, frameon=False)
     if title:
-        fig.suptitle(title, fontsize=7)
-    fig.tight_layout()
+        fig.suptitle(title, fontsize=7, y=0.995, va="top")
     return fig
+
+
+def sweep_caption(sweep: pd.DataFrame, what: str) -> str:
+    """Caption of a fault sweep from its data."""
+    n = int(sweep["episodes"].iloc[0]) if "episodes" in sweep.columns else None
+    return (f"The recorded taps replayed under {what}: faulted minus deployed model, paired over positions"
+            + (f" (n = {n} episodes per size)" if n else "") + "; band: 95% cluster-bootstrap interval; filled: resolved.")
+
+
+def aim_error_caption(rows: pd.DataFrame) -> str:
+    """Caption of the aim-error figure from its data (verify draws it again with the same caption)."""
+    return (f"Aim error against taps, {len(rows)} episodes; filled points entered, open did not; black: medians; "
+            "band: the model's window; dashed: the opening's half-width.")

@@ -44,3 +44,41 @@ def apply() -> None:
 
 
 apply()
+
+
+def integer_ticks(axis) -> None:
+    """Ticks at whole numbers only on an integer axis (a budget k has no tick at 2.5).
+
+    ``axis`` is ``ax.xaxis`` or ``ax.yaxis``.
+    """
+    from matplotlib.ticker import MaxNLocator
+
+    axis.set_major_locator(MaxNLocator(integer=True))
+
+
+def legend_above(ax_or_fig, handles=None, labels=None, ncol: int = 3, **kwargs):
+    """A frameless legend above the axes (or figure), off the data."""
+    from matplotlib.figure import Figure
+
+    if handles is None:
+        target = ax_or_fig.axes[0] if isinstance(ax_or_fig, Figure) else ax_or_fig
+        handles, labels = target.get_legend_handles_labels()
+    anchor = kwargs.pop("bbox_to_anchor", (0.5, 1.0))
+    return ax_or_fig.legend(handles, labels, loc="lower center", bbox_to_anchor=anchor, ncol=ncol, frameon=False,
+                            handlelength=1.6, columnspacing=1.0, borderaxespad=0.2, **kwargs)
+
+
+def text_sizes(fig) -> list[tuple[float, str]]:
+    """``(size in pt, text)`` of every visible, non-empty Text artist of ``fig`` (titles,
+    labels, tick labels, legends, annotations), as drawn after a layout pass."""
+    from matplotlib.text import Text
+
+    fig.canvas.draw()
+    return [(t.get_fontsize(), t.get_text()) for t in fig.findobj(Text)
+            if t.get_visible() and t.get_text().strip() and t.get_figure() is not None]
+
+
+def placed_sizes(fig, placed_width: float) -> list[tuple[float, str]]:
+    """Font sizes as a reader sees them when the figure is scaled to ``placed_width`` inches."""
+    scale = placed_width / float(fig.get_size_inches()[0])
+    return [(size * scale, text) for size, text in text_sizes(fig)]

@@ -143,6 +143,8 @@ def check_study_files(study: Path, report: Report) -> None:
             report)
     for sub in sorted(p for p in study.iterdir() if p.is_dir()):
         report.check("file", False, f"{sub}: a folder inside a study folder (a publication holds files only)")
+    for png in sorted(study.glob("fig_*.png")):  # a paper figure is published as PNG and PDF
+        report.check("file", png.with_suffix(".pdf").is_file(), f"{png}: a figure without its PDF beside it")
     for fig in sorted(study.glob("*.png")):
         binding = listed.get("figures", {}).get(fig.name)
         declared = manifest.FIGURE_DATA.get(study.name, {}).get(fig.stem, ())

@@ -64,7 +64,7 @@ def test_run_replay_audit_calibrate_end_to_end(tmp_path, monkeypatch):
 
     result = runner.invoke(app, ["audit", "test"])
     assert result.exit_code == 0, result.output
-    assert (tmp_path / "test" / "audit.html").is_file()
+    assert (tmp_path / "test-audit" / "audit.html").is_file()
     result = runner.invoke(app, ["calibrate", "--cal", "cal", "--test", "test"])
     assert result.exit_code == 0, result.output
     assert "set calibration" in result.output
