@@ -167,11 +167,13 @@ def _robot_figures() -> dict[str, Callable[[Path, Path], Any]]:
 def _figure_recipes() -> dict[str, dict[str, Callable[[Path, Path], Any]]]:
     """Study -> figure stem -> ``draw(folder, out_png)``: the same call that drew the figure, on the stored data.
 
-    Figures drawn from data the publication does not hold (the scan section needs the scan grid,
+    Fig. 2 (the pipeline) is drawn from code alone. Figures drawn from data the publication does not
+    hold (the scan section needs the scan grid,
     the commit gates the calibration result, Fig. 1b and the decisive tap the run directories) are
     bound to their data by digest only.
     """
     from probecommit.report.paper import plot_pricing
+    from probecommit.report.pipeline_diagram import pipeline_figure
     from probecommit.report.reproduce import signature_n
     from probecommit.report.study_figures import fault_signatures
     from probecommit.studies.breadth import plot_budget_curves
@@ -187,6 +189,7 @@ def _figure_recipes() -> dict[str, dict[str, Callable[[Path, Path], Any]]]:
             pd.read_parquet(folder / "budget_curves.parquet"), out)},
         "cost": {"fig_pricing": lambda folder, out: plot_pricing(pd.read_parquet(folder / "pricing.parquet"), out)},
         "robot": _robot_figures(),
+        "figures": {"fig_2_pipeline": lambda folder, out: pipeline_figure(out)},  # drawn from code alone
     }
 
 
