@@ -189,18 +189,23 @@ def nan_traced(pub: Path) -> list[str]:
 
 
 def reproduction_json(field: str) -> Edit:
+    """A wall time or an engine-query count edited in reproduction.json; the failure names REPRODUCTION.md's
+    number for it, formatted as the ledger records it."""
     def edit(pub: Path) -> list[str]:
+        from probecommit.report.ledger import format_value, read
+
         f = paper_root(pub) / "reproduction.json"
         data = json.loads(f.read_text())
         if field == "wall_s":
             data["wall_s"]["insertion"] = data["wall_s"]["insertion"] + 600.0
-            shown = f"{data['wall_s']['insertion'] / 60:.1f}"
+            key, value = "reproduction:wall_s.insertion", data["wall_s"]["insertion"]
         else:
             engine = next(iter(data["engine_calls"]["insertion"]))
             data["engine_calls"]["insertion"][engine] += 7
-            shown = f"{engine} {sum(t.get(engine, 0) for t in data['engine_calls'].values())}"
+            key, value = f"reproduction:engine_calls.insertion.{engine}", data["engine_calls"]["insertion"][engine]
         f.write_text(json.dumps(data))
-        return ["REPRODUCTION.md", shown]
+        entry = next(e for e in read(paper_root(pub)) if e.key == key)
+        return ["REPRODUCTION.md", format_value(value, entry.fmt)]
     return edit
 
 
@@ -277,11 +282,11 @@ CASES: list[tuple[str, Edit, bool]] = [
     ("md-robot-cell", md_number("robot/table_VII_hardware_simulated_rig.md", "| 1 | ", plus), True),
     ("md-pricing-cell", md_number("cost/table_pricing.md", "| push1d | ", plus), True),
     ("reproduction-ours-to-paper", paper_value_as_ours, True),
-    ("reproduction-prose-number", reproduction_md(r"failure (\d\.\d{3}) over", lambda m: f"failure {plus(m.group(1))} over"), True),
+    ("reproduction-prose-number", reproduction_md(r"\(failure (\d\.\d{3})\)", lambda m: f"(failure {plus(m.group(1))})"), True),
     ("reproduction-integer", reproduction_md(r"over (\d+) subsets", lambda m: f"over {int(m.group(1)) + 4} subsets"), True),
-    ("reproduction-paper-value", reproduction_md(r"\| fitted delta \(mm\) \| (\d\.\d{3})",
-                                                  lambda m: f"| fitted delta (mm) | {plus(m.group(1))}"), True),
-    ("reproduction-wall-time", reproduction_md(r"insertion (\d+\.\d) min", lambda m: f"insertion {float(m.group(1)) + 1:.1f} min"), True),
+    ("reproduction-paper-value", reproduction_md(r"\| fitted delta \(mm\) \| \+(\d\.\d{3})",
+                                                  lambda m: f"| fitted delta (mm) | +{plus(m.group(1))}"), True),
+    ("reproduction-wall-time", reproduction_md(r"insertion (\d+) s,", lambda m: f"insertion {int(m.group(1)) + 60} s,"), True),
     ("reproduction-json-wall", reproduction_json("wall_s"), True),
     ("reproduction-json-engine-calls", reproduction_json("engine_calls"), True),
     ("report-html-number", edit_text("report.html", r"<td>(\d\.\d{3})</td>", lambda m: f"<td>{plus(m.group(1))}</td>"), True),
