@@ -482,3 +482,14 @@ def _cost(root: Path, quick: bool, progress: Progress, workers: int) -> Path:
 
 TARGETS["cost"] = Target("cost", ("probe pricing J(k) = miss(k) + lambda k: break-even prices per family, figure",),
                          ("breadth",), _cost)
+
+
+def _explain(root: Path, quick: bool, progress: Progress, workers: int) -> Path:
+    from probecommit.studies.explain import reproduce_explain
+
+    return reproduce_explain(root, quick=quick, progress=progress, workers=workers)
+
+
+TARGETS["explain"] = Target("explain", ("the measurements behind each difference from the paper, and the paper's items "
+                                        "computed from stored runs (EXPLAIN_KEYS.md)",),
+                            ("insertion", "engines", "gru"), _explain)

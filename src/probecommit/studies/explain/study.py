@@ -1,0 +1,387 @@
+"""``probecommit reproduce explain``: the measurements behind every difference from the paper.
+
+Reads the run directories of ``reproduce insertion`` and ``reproduce engines`` (and the GRU's
+results when present) under the same root, adds a few controlled runs (:mod:`.runs`), and
+writes ``results.json``: ``{"results": {group: {name: value}}}`` with values numbers or
+``[point, lo, hi]`` cluster-bootstrap triples. ``EXPLAIN_KEYS.md`` at the repository root says
+what each key measures.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any, Callable
+
+import numpy as np
+import pandas as pd
+import yaml
+
+from probecommit.audit.conformal import simultaneous_threshold
+from probecommit.audit.stats import cluster_bootstrap_mean, paired_bootstrap
+from probecommit.audit.surprise import surprise_auc
+from probecommit.runner.replay import load_run, replay_episodes
+from probecommit.studies.explain import generator, runs
+from probecommit.studies.explain.margin import margin_curve
+from probecommit.studies.explain.pool import gate_pools, pool_variants
+from probecommit.studies.explain.stats import capture_failure, equivalence_power, interval_se
+from probecommit.studies.paper_values import PAPER
+from probecommit.studies.protocol import Protocol, load_protocol
+
+CONFIG = Path(__file__).resolve().parents[2] / "configs" / "paper" / "explain.yaml"
+Progress = Callable[[str, int, int], None]
+
+
+def load_explain_config(path: str | Path | None = None) -> dict[str, Any]:
+    return yaml.safe_load(Path(path or CONFIG).read_text())
+
+
+def _probe(episodes: pd.DataFrame, k: int | None = None) -> pd.DataFrame:
+    rows = episodes[(episodes["method"] == "probe_robust") & (episodes["status"] == "ok")]
+    return rows if k is None else rows[rows["k"] == k]
+
+
+def _triple(iv: Any) -> list[float]:
+    return [float(iv.estimate), float(iv.lo), float(iv.hi)]
+
+
+def _final_escape(episodes: pd.DataFrame, k: int) -> pd.Series:
+    last = _probe(episodes, k)
+    return last.set_index(["instance_id", "repeat"])["escaped"].astype(bool)
+
+
+class Explain:
+    """One explain reproduction: where the runs are, the settings, and the results as they fill in."""
+
+    def __init__(self, root: Path, quick: bool, progress: Progress, workers: int, config: dict[str, Any]) -> None:
+        protocol = load_protocol()
+        self.p: Protocol = protocol.quick_version() if quick else protocol
+        self.quick = quick
+        self.root = Path(root)
+        self.ins = self.root / "insertion" / "runs"
+        self.runs = self.root / "explain" / "runs"
+        self.progress = progress
+        self.workers = workers
+        self.cfg = config
+        self.boot = dict(resamples=self.p.bootstrap.resamples, seed=self.p.bootstrap.seed)
+        self.res: dict[str, dict[str, Any]] = {g: {} for g in (
+            "missing", "committed_pool", "instance_generator", "margin_per_gamma", "thresholds", "gru", "physx_capture",
+            "boundary_fault", "robust")}
+        self.tables: dict[str, pd.DataFrame] = {}
+        self._loaded: dict[str, Any] = {}
+
+    def load(self, name: str) -> Any:
+        if name not in self._loaded:
+            self._loaded[name] = load_run(self.ins / name)
+        return self._loaded[name]
+
+    def insertion_results(self) -> dict[str, Any]:
+        return json.loads((self.root / "insertion" / "results" / "results.json").read_text())["results"]
+
+    # ------------------------------------------------------------------ part 3: missing items
+    def missing(self) -> None:
+        from probecommit.runner.calibration import gates
+
+        m, b, p = self.res["missing"], self.boot, self.p
+        cover_k, random_k = p.budgets["cover"], p.budgets["random"]
+        test = _probe(self.load("B_test_cover").episodes)
+        auc = surprise_auc(test, budgets=[1, cover_k], final_k=cover_k, **b).set_index("k")
+        for k in (1, cover_k):
+            m[f"surprise_auc_cover_k{k}"] = [float(auc.loc[k, c]) for c in ("auc", "auc_lo", "auc_hi")]
+        m["surprise_n_escaped"] = int(auc.loc[cover_k, "n_escaped"])
+        m["surprise_n_covered"] = int(auc.loc[cover_k, "n_covered"])
+        self.progress("explain: random-probe gates", 0, 1)
+        result = gates(self.load("B_cal_random"), self.load("B_test_random"), alpha=p.alpha, **b, chunk_instances=48)
+        pools = gate_pools(result)
+        for name in ("raw", "adjusted", "posterior_variance"):
+            m[f"gate_area_random.{name}"] = pools.get(f"{name}.area", float("nan"))
+        areas = {n: m[f"gate_area_random.{n}"] for n in ("raw", "adjusted", "posterior_variance")}
+        m["gate_area_random.lowest_is_posterior_variance"] = int(min(areas, key=areas.get) == "posterior_variance")
+        self.res["committed_pool"].update({f"random.{k}": v for k, v in pools.items()})
+        self.progress("explain: corrected random calibration", 0, 1)
+        corrected = runs.corrected_replay(self.ins / "B_cal_random", self.runs, p.delta)
+        random_budgets = self.cfg["random_budgets"] if not self.quick else [1, 2, 3, 5, random_k]
+        m["simultaneous_threshold_random_corrected"] = simultaneous_threshold(_probe(corrected.episodes), random_budgets, p.alpha)
+        self.res["thresholds"]["simultaneous_random_original_recomputed"] = simultaneous_threshold(
+            _probe(self.load("B_cal_random").episodes), random_budgets, p.alpha)
+        self.res["thresholds"]["simultaneous_cover_corrected_recomputed"] = simultaneous_threshold(
+            _probe(self.load("B_cal_cover_corrected").episodes), list(range(1, cover_k + 1)), p.alpha)
+        # Cost of calibration: the insertion study's paired differences, as keys.
+        labels = {("no calibration", "set calibration + margin"): "full", ("no calibration", "set calibration"): "set",
+                  ("set calibration", "set calibration + margin"): "margin"}
+        for row in self.insertion_results()["table_insertion"]["B.cost_differences"]:
+            key = labels[(row["baseline"], row["treatment"])]
+            m[f"cost_of_calibration.{key}"] = [row["difference"], row["lo"], row["hi"]]
+        for name, k in (("C_cover_corrected", cover_k), ("C_random_corrected", random_k), ("C_cover", cover_k),
+                        ("C_random", random_k)):
+            m[f"testc_final_escapes.{name}"] = int(_probe(self.load(name).episodes, k)["escaped"].sum())
+        self._prior_all_four(m)
+
+    def _prior_all_four(self, m: dict[str, Any]) -> None:
+        """How often a fault's escapes come in whole clusters (all repeats of an instance at once)."""
+        episodes = pd.read_parquet(self.root / "insertion" / "results" / "faults_episodes.parquet")
+        for fault in ("prior", "boundary"):
+            rows = _probe(episodes[(episodes["fault"] == fault) & (episodes["arm"] == "fault")])
+            for k in (1, self.p.budgets["random"]):
+                at = rows[rows["k"] == k].groupby("instance_id")["escaped"].agg(["sum", "count"])
+                any_ = at["sum"] > 0
+                m[f"all_repeats_escape.{fault}.k{k}.escape"] = float(rows[rows["k"] == k]["escaped"].mean())
+                m[f"all_repeats_escape.{fault}.k{k}.clusters_all"] = float((at["sum"] == at["count"]).mean())
+                m[f"all_repeats_escape.{fault}.k{k}.of_escaping_clusters"] = float(
+                    (at["sum"] == at["count"])[any_].mean()) if any_.any() else float("nan")
+
+    def physx_coverage(self) -> None:
+        m = self.res["missing"]
+        engines = self.root / "engines" / "runs"
+        for variant, suffix in (("deployed", ""), ("mj_offset", "_mj_offset"), ("own_scan", "_own_scan")):
+            path = engines / f"sapien_B_test_random{suffix}"
+            if not path.is_dir():
+                continue
+            rows = _probe(load_run(path).episodes, self.p.budgets["random"])
+            m[f"physx_cluster_coverage.{variant}"] = float(rows.groupby("instance_id")["covered"].all().mean())
+            m[f"physx_episode_coverage.{variant}"] = float(rows["covered"].mean())
+
+    # ------------------------------------------------------------------ committed pool
+    def committed_pool(self, paper_schedule: dict[str, Any]) -> None:
+        c, b, k = self.res["committed_pool"], self.boot, self.p.budgets["cover"]
+        budgets = list(range(1, k + 1))
+        for label, run in (("ours", self.load("B_test_cover")), ("paper_schedule", paper_schedule["test"])):
+            pv = pool_variants(_probe(run.episodes), budgets, **b)
+            c.update({f"{label}.{key}": v for key, v in pv.items()})
+            if label == "paper_schedule":
+                auc = surprise_auc(_probe(run.episodes), budgets=[1, k], final_k=k, **b).set_index("k")
+                for kk in (1, k):
+                    self.res["missing"][f"surprise_auc_cover_paper_schedule_k{kk}"] = [
+                        float(auc.loc[kk, col]) for col in ("auc", "auc_lo", "auc_hi")]
+                self.res["missing"]["surprise_paper_schedule_n_escaped"] = int(auc.loc[k, "n_escaped"])
+        rb = list(range(1, self.p.budgets["random"] + 1))
+        pv = pool_variants(_probe(self.load("B_test_random").episodes), rb, **b)
+        c.update({f"random_schedule.{key}": v for key, v in pv.items()})
+
+    # ------------------------------------------------------------------ margin and thresholds
+    def margins(self, paper_schedule: dict[str, Any]) -> None:
+        g, t, p = self.res["margin_per_gamma"], self.res["thresholds"], self.p
+        k = p.budgets["cover"]
+        budgets = list(range(1, k + 1))
+        for label, run in (("ours", self.load("B_cal_cover")), ("paper_schedule", paper_schedule["cal"])):
+            self.progress(f"explain: margin curve ({label})", 0, 1)
+            curve = margin_curve(run, budgets, p.alpha, _final_escape(run.episodes, k))
+            table = curve["table"]
+            self.tables[f"margin_{label}"] = table.assign(schedule=label)
+            for row in table.itertuples():
+                g[f"{label}.g{row.gamma:.2f}.predicted"] = row.mean_predicted
+                g[f"{label}.g{row.gamma:.2f}.realized"] = row.mean_realized
+                g[f"{label}.g{row.gamma:.2f}.predicted_covered"] = row.mean_predicted_covered
+                g[f"{label}.g{row.gamma:.2f}.realized_covered"] = row.mean_realized_covered
+            g[f"{label}.gamma"] = curve["gamma"]
+            g[f"{label}.gamma_covered_only"] = curve["gamma_covered_only"]
+            first = table.iloc[0]
+            g[f"{label}.optimism_at_gamma_1"] = first.mean_realized - first.mean_predicted
+            g[f"{label}.optimism_at_gamma_1_covered"] = first.mean_realized_covered - first.mean_predicted_covered
+            g[f"{label}.escaped_share_cal"] = float(_final_escape(run.episodes, k).mean())
+            t[f"{label}.t_{k}"] = curve["thresholds"][k]
+            t[f"{label}.simultaneous"] = curve["simultaneous_threshold"]
+            t[f"{label}.distribution_free_margin"] = curve["distribution_free_margin"]
+            s = curve["scores_final"]
+            t[f"{label}.share_scores_final_above_paper_t"] = float((s > PAPER["calibration.t5_cover"]).mean())
+            t[f"{label}.share_scores_final_escaped"] = float((s > 1.0).mean())
+            worst = curve["worst_budget_optimism"]
+            t[f"{label}.share_worst_optimism_above_paper_df"] = float(
+                (worst > PAPER["calibration.distribution_free_margin_cover"]).mean())
+
+    # ------------------------------------------------------------------ instance draws
+    def instance_generator(self) -> None:
+        out, p = self.res["instance_generator"], self.p
+        edge, seeds = self.cfg["stratum_edge_mm"], self.cfg["generator_seeds_quick" if self.quick else "generator_seeds"]
+        low, high = -10.0, 10.0
+        for name in ("A_cover", "B_cal_cover", "B_test_cover", "B_cal_random", "B_test_random", "C_cover", "C_random"):
+            run = self.load(name)
+            cfg = run.config.instances
+            if cfg.sampling != "uniform":
+                continue
+            test = generator.generator_test(run.instances, cfg.split, cfg.seed, low, high, edge, seeds)
+            out.update({f"{name}.{k}": v for k, v in test.items()})
+        expected = out.get("B_test_random.expected_share", 0.3)
+        for name, k in (("B_test_random", p.budgets["random"]), ("C_random", p.budgets["random"]),
+                        ("B_test_cover", p.budgets["cover"]), ("C_cover", p.budgets["cover"])):
+            strat = generator.stratified_metrics(self.load(name).episodes, k, edge, expected)
+            out.update({f"stratified.{name}.k{k}.{key}": v for key, v in strat.items()})
+
+    # ------------------------------------------------------------------ boundary fault and robust filters
+    def boundary_fault(self) -> None:
+        out, p, b = self.res["boundary_fault"], self.p, self.boot
+        kmax = p.budgets["random"]
+        edge = self.cfg["stratum_edge_mm"]
+        expected = self.res["instance_generator"].get("B_test_random.expected_share", 0.3)
+        episodes = pd.read_parquet(self.root / "insertion" / "results" / "faults_episodes.parquet")
+        fault = episodes[(episodes["fault"] == "boundary") & (episodes["arm"] == "fault")]
+        fix = episodes[(episodes["fault"] == "boundary") & (episodes["arm"] == "fix")]
+        for k in (1, kmax):
+            s = generator.stratified_metrics(fault, k, edge, expected)
+            out.update({f"harness.k{k}.{key}": v for key, v in s.items() if key.startswith(("escape", "share", "optimism", "failure"))})
+        f8, x8 = _probe(fault, kmax), _probe(fix, kmax)
+        out["harness.paired_fix"] = _triple(paired_bootstrap(f8, x8, "realized", **b).difference)
+        beyond = np.abs(f8.set_index(["instance_id", "repeat"])["z_true"]) > edge
+        diff = (x8.set_index(["instance_id", "repeat"])["realized"] - f8.set_index(["instance_id", "repeat"])["realized"])
+        inside_fix, beyond_fix = float(diff[~beyond].mean()), float(diff[beyond].mean())
+        out["harness.paired_fix.inside"], out["harness.paired_fix.beyond"] = inside_fix, beyond_fix
+        out["harness.paired_fix.standardized"] = (1 - expected) * inside_fix + expected * beyond_fix
+        # The same fault and fix on another draw of the same generator: Test C, old vs corrected model.
+        old, new = self.load("C_random").episodes, self.load("C_random_corrected").episodes
+        for k in (1, kmax):
+            out[f"testc.k{k}.escape"] = _triple(cluster_bootstrap_mean(
+                _probe(old, k)["escaped"].to_numpy(float), _probe(old, k)["instance_id"].to_numpy(), **b))
+        out["testc.paired_fix"] = _triple(paired_bootstrap(_probe(old, kmax), _probe(new, kmax), "realized", **b).difference)
+
+    def robust(self) -> None:
+        """The mixture's cost when the model is right, at every epsilon; its optimism on Test C."""
+        out, p, r = self.res["robust"], self.p, self.p.robust
+        kmax = p.budgets["random"]
+        base = self.load("faults_base")
+        right = float(_probe(base.episodes, kmax)["realized"].mean())
+        out["right_model.failure"] = right
+        eps_grid = r.epsilons[:1] if self.quick else r.epsilons
+        for i, eps in enumerate(eps_grid):
+            self.progress("explain: mixture when right", i, len(eps_grid))
+            belief = {"likelihood": "mixture", "epsilon": float(eps), "mixture_low": r.mixture_range[0],
+                      "mixture_high": r.mixture_range[1]}
+            ep, _ = replay_episodes(base, {"belief": belief}, chunk_instances=48)
+            rows = _probe(ep, kmax)
+            out[f"right_model.mixture_eps{eps:g}.failure"] = float(rows["realized"].mean())
+            out[f"right_model.mixture_eps{eps:g}.changed_aims"] = float(
+                (rows.set_index(["instance_id", "repeat"])["action"]
+                 != _probe(base.episodes, kmax).set_index(["instance_id", "repeat"])["action"]).mean())
+        chosen = json.loads(json.dumps(self.insertion_results()["robust"]["chosen"]))
+        eps = float(chosen.get("mixture", r.epsilons[0]))
+        belief = {"likelihood": "mixture", "epsilon": eps, "mixture_low": r.mixture_range[0], "mixture_high": r.mixture_range[1]}
+        c_old = self.load("C_random")
+        ep, _ = replay_episodes(c_old, {"belief": belief}, chunk_instances=48)
+        rows, dep = _probe(ep, kmax), _probe(c_old.episodes, kmax)
+        out["testc.deployed.optimism"] = float((dep["realized"] - dep["predicted"]).mean())
+        out["testc.mixture.optimism"] = float((rows["realized"] - rows["predicted"]).mean())
+        out["testc.mixture.escape"] = float(rows["escaped"].mean())
+        out["testc.mixture.failure_change"] = _triple(paired_bootstrap(dep, rows, "realized", **self.boot).difference)
+        res = self.insertion_results()["robust"]
+        out["harness.deployed.optimism"] = float(res["deployed"]["optimism"][0])
+        for family in ("mixture", "rejuvenation"):
+            if family in res:
+                out[f"harness.{family}.optimism"] = float(res[family]["optimism"][0])
+
+    # ------------------------------------------------------------------ PhysX
+    def physx(self) -> None:
+        out, p, e = self.res["physx_capture"], self.p, self.cfg["physx_emulation"]
+        path = self.root / "engines" / "results" / "results.json"
+        if path.is_file():
+            scans = json.loads(path.read_text())["results"]["scans"]
+            if "sapien" in scans:
+                out["ours.capture_ratio"] = float(scans["sapien"]["capture"]["ratio_mean"])
+                out["ours.capture_ratio_sd"] = float(scans["sapien"]["capture"]["ratio_sd"])
+                out["ours.boundary_offset"] = float(scans["sapien"]["boundary"]["delta"])
+        self.progress("explain: emulated PhysX scene", 0, 1)
+        emulated = runs.emulated_engine_runs(p, self.runs, e["boundary_offset"], e["capture_scale"], self.workers)
+        instances = emulated["deployed"].instances.set_index("instance_id")
+        kmax = p.budgets["random"]
+        tables = {}
+        for variant, run in emulated.items():
+            rows = _probe(run.episodes, kmax).copy()
+            c = instances.loc[rows["instance_id"], "true_c"].to_numpy(float)
+            for scale_name, scale in (("paper_capture", e["capture_scale"]), ("model_capture", 1.0)):
+                realized = capture_failure(rows["action"].to_numpy(), rows["z_true"].to_numpy(), c, scale)
+                pre = f"emulated.{scale_name}.{variant}"
+                out[f"{pre}.failure"] = float(realized.mean())
+                out[f"{pre}.optimism"] = float((realized - rows["predicted"].to_numpy(float)).mean())
+                tables[(scale_name, variant)] = rows.assign(realized=realized)
+            out[f"emulated.{variant}.escape"] = float(rows["escaped"].mean())
+            out[f"emulated.{variant}.episode_coverage"] = float(rows["covered"].mean())
+            out[f"emulated.{variant}.cluster_coverage"] = float(rows.groupby("instance_id")["covered"].all().mean())
+            stored = rows["realized"].to_numpy(float)
+            mine = tables[("paper_capture", variant)]["realized"].to_numpy(float)
+            out[f"emulated.{variant}.stored_equals_recomputed"] = int(np.array_equal(stored, mine))
+        for scale_name in ("paper_capture", "model_capture"):
+            for variant in ("mj_offset", "own_scan"):
+                d = paired_bootstrap(tables[(scale_name, "deployed")], tables[(scale_name, variant)], "realized", **self.boot)
+                out[f"emulated.{scale_name}.{variant}.paired_failure"] = _triple(d.difference)
+
+    # ------------------------------------------------------------------ GRU
+    def gru(self) -> None:
+        out = self.res["gru"]
+        path = self.root / "gru" / "results" / "results.json"
+        if not path.is_file():
+            out["available"] = 0
+            return
+        r = json.loads(path.read_text())["results"]
+        est, lo, hi = r["gru_minus_pipeline"]
+        margin = float(r["equivalence_margin"])
+        se = interval_se(lo, hi)
+        out["available"] = 1
+        out["difference"] = [est, lo, hi]
+        out["se_implied"] = se
+        out["seed_miss_sd"] = float(r["seed_miss_sd"])
+        out["seed_sd_of_mean"] = float(r["seed_miss_sd"]) / np.sqrt(max(int(r["seeds"]), 1))
+        for name, delta in (("power_at_zero", 0.0), ("power_at_estimate", est)):
+            out[name] = equivalence_power(se, delta, margin)
+        paper_lo, paper_hi = self.cfg["gru_paper_interval"]
+        paper_se = interval_se(paper_lo, paper_hi)
+        out["se_paper_implied"] = paper_se
+        out["se_ratio"] = se / paper_se
+        out["power_at_estimate_with_paper_se"] = equivalence_power(paper_se, est, margin)
+        for key in ("cross_run_tolerance", "cross_run_other_interval"):
+            if key in self.cfg.get("gru", {}):
+                out[key] = self.cfg["gru"][key]
+
+    def run(self, out: Path) -> Path:
+        out.mkdir(parents=True, exist_ok=True)
+        self.progress("explain: paper's cover schedule on Split B", 0, 1)
+        paper = runs.schedule_runs(self.p, PAPER["cover.schedule"], self.runs, self.workers)
+        steps = [self.missing, self.physx_coverage, lambda: self.committed_pool(paper), lambda: self.margins(paper),
+                 self.instance_generator, self.boundary_fault, self.robust, self.physx, self.gru]
+        for i, step in enumerate(steps):
+            self.progress("explain", i, len(steps))
+            step()
+        if self.tables:
+            pd.concat(self.tables.values(), ignore_index=True).to_parquet(out / "margin_per_gamma.parquet")
+        payload = {"results": _plain(self.res)}
+        (out / "results.json").write_text(json.dumps(payload, indent=1, allow_nan=True))
+        (out / "explain.md").write_text(summary_markdown(self.res))
+        return out
+
+
+def _plain(o: Any) -> Any:
+    if isinstance(o, dict):
+        return {str(k): _plain(v) for k, v in o.items()}
+    if isinstance(o, (list, tuple)):
+        return [_plain(v) for v in o]
+    if isinstance(o, (np.integer,)):
+        return int(o)
+    if isinstance(o, (np.floating, float)):
+        return float(o)
+    if isinstance(o, (np.bool_, bool)):
+        return int(o)
+    return o
+
+
+def _fmt(v: Any) -> str:
+    if isinstance(v, (list, tuple)) and len(v) == 3:
+        return f"{v[0]:.3f} [{v[1]:.3f}, {v[2]:.3f}]"
+    if isinstance(v, float):
+        return f"{v:.4g}"
+    return str(v)
+
+
+def summary_markdown(res: dict[str, dict[str, Any]]) -> str:
+    """Every key with its value, one table per group (the margin curve is in its parquet)."""
+    lines = ["# Explanations: every measured key", ""]
+    for group, values in res.items():
+        lines += [f"## {group}", "", "| key | value |", "|---|---|"]
+        lines += [f"| explain:results.{group}.{k} | {_fmt(v)} |" for k, v in values.items()
+                  if not (group == "margin_per_gamma" and ".g" in k)]
+        lines.append("")
+    return "\n".join(lines)
+
+
+def reproduce_explain(root: str | Path, quick: bool = False, progress: Progress | None = None, workers: int = 1,
+                      config_path: str | Path | None = None) -> Path:
+    """Run every explanation into ``<root>/explain/results``."""
+    root = Path(root)
+    job = Explain(root, quick, progress or (lambda *a: None), workers, load_explain_config(config_path))
+    return job.run(root / "explain" / "results")
