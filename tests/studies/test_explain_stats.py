@@ -95,3 +95,29 @@ def test_stratified_metrics_hand_table():
     assert out["escape.standardized"] == pytest.approx(0.3)
     assert out["failure.inside"] == 0.5
     assert out["optimism.beyond"] == pytest.approx(0.75)
+
+
+def test_conformal_quantile_draws_identity_resample_is_the_quantile():
+    from probecommit.audit.conformal import conformal_quantile
+    from probecommit.studies.explain.stats import conformal_quantile_draws
+
+    values = np.array([0.3, 0.1, 0.9, 0.5, 0.7, 0.2, 0.8, 0.4, 0.6])
+    counts = np.ones((1, values.size))
+    assert conformal_quantile_draws(values, counts, 0.2)[0] == conformal_quantile(values, 0.2)
+    # a resample that takes only the smallest value three times over... and the rest
+    counts = np.zeros((1, values.size))
+    counts[0, 1] = values.size  # every draw is 0.1
+    assert conformal_quantile_draws(values, counts, 0.2)[0] == 0.1
+    # too few instances: +inf, as the conformal rule says
+    assert np.isinf(conformal_quantile_draws(values[:3], np.ones((2, 3)), 0.2)).all()
+
+
+def test_margin_draws_picks_largest_gamma_reaching_realized():
+    from probecommit.studies.explain.stats import margin_draws
+
+    gammas = np.array([1.0, 0.8, 0.6])
+    # two instances; predicted rises as gamma falls, realized flat at 1 per instance
+    predicted = np.array([[0.5, 0.5], [0.9, 1.2], [1.5, 1.5]])
+    realized = np.ones((3, 2))
+    counts = np.array([[1.0, 1.0], [2.0, 0.0], [0.0, 2.0]])
+    assert margin_draws(gammas, predicted, realized, counts).tolist() == [0.8, 0.6, 0.8]

@@ -55,11 +55,19 @@ def margin_curve(cal_run: Any, budgets: Sequence[int], alpha: float, escaped_fin
     set_only = tables[0]
     optimism = instance_optimism(set_only, budgets)
     rows = []
+    instances = np.sort(set_only["instance_id"].astype(str).unique())
+    pred_sums, real_sums = [], []
     for gamma, table in zip(gammas, tables[1:]):
         ok = table[(table["status"] == "ok") & table["k"].isin(list(budgets))]
         row = {"gamma": gamma, "n": int(len(ok)), "mean_predicted": float(ok["predicted"].mean()),
                "mean_realized": float(ok["realized"].mean()), "sum_predicted": float(ok["predicted"].sum()),
                "sum_realized": float(ok["realized"].sum())}
+        for k in budgets:
+            at = ok[ok["k"] == k]
+            row[f"sum_predicted_k{k}"], row[f"sum_realized_k{k}"] = float(at["predicted"].sum()), float(at["realized"].sum())
+        per = ok.groupby(ok["instance_id"].astype(str))[["predicted", "realized"]].sum().reindex(instances, fill_value=0.0)
+        pred_sums.append(per["predicted"].to_numpy(float))
+        real_sums.append(per["realized"].to_numpy(float))
         if escaped_final is not None:
             label = pd.MultiIndex.from_frame(ok[["instance_id", "repeat"]]).map(escaped_final.to_dict().get)
             cov = ok[~np.asarray(label, dtype=bool)]
@@ -67,7 +75,10 @@ def margin_curve(cal_run: Any, budgets: Sequence[int], alpha: float, escaped_fin
                        sum_predicted_covered=float(cov["predicted"].sum()), sum_realized_covered=float(cov["realized"].sum()))
         rows.append(row)
     table = pd.DataFrame(rows)
-    out = {"table": table, "gamma": _select(table), "thresholds": {int(k): float(v) for k, v in t_k.items()},
+    per_budget = {k: _select(pd.DataFrame({"gamma": table["gamma"], "sum_predicted": table[f"sum_predicted_k{k}"],
+                                           "sum_realized": table[f"sum_realized_k{k}"]})) for k in budgets}
+    out = {"gamma_per_budget": per_budget, "instance_sums": (np.array(gammas), np.array(pred_sums), np.array(real_sums)),
+           "scores": scores, "table": table, "gamma": _select(table), "thresholds": {int(k): float(v) for k, v in t_k.items()},
            "simultaneous_threshold": float(t_sim), "distribution_free_margin": float(optimism_margin(optimism, alpha)),
            "worst_budget_optimism": optimism.max(axis=1)}
     if escaped_final is not None:

@@ -69,7 +69,7 @@ def gate_pools(result: Any) -> dict[str, Any]:
     out: dict[str, Any] = {}
     for row in result.summary.to_dict("records"):
         name = row["signal"]
-        for key in ("area", "c_min", "c_max", "tau", "commit_rate", "n_committed", "escaped_committed", "n_rejected",
+        for key in ("area", "mean_failure", "c_min", "c_max", "tau", "commit_rate", "n_committed", "escaped_committed", "n_rejected",
                     "escaped_rejected", "claimed", "realized"):
             if key in row and row[key] == row[key]:  # skip NaN
                 value = row[key]

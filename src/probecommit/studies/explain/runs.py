@@ -35,12 +35,13 @@ def _replay(source: Path, path: Path, overrides: dict) -> LoadedRun:
 
 
 def schedule_runs(protocol: Protocol, schedule: list[float], runs: Path, workers: int = 1) -> dict[str, LoadedRun]:
-    """Split B calibration and test under another cover schedule (probe executor only)."""
+    """Split B calibration and test, and Split A, under another cover schedule (probe executor only)."""
     p = protocol.model_copy(update={"cover_schedule": [float(u) for u in schedule]})
     out = {}
     for part in ("cal", "test"):
         config = p.run_config(f"B_{part}_cover_paper_schedule", "B", f"B_{part}_cover", "cover")
         out[part] = _run(config, runs / f"B_{part}_cover_paper_schedule", workers)
+    out["A"] = _run(p.run_config("A_cover_paper_schedule", "A", "A", "cover"), runs / "A_cover_paper_schedule", workers)
     return out
 
 

@@ -114,3 +114,41 @@ def capture_failure(action: np.ndarray, x_hole: np.ndarray, c: np.ndarray, scale
     """
     window = scale * (0.6 * np.asarray(c, dtype=float) + 1.1)
     return (np.abs(np.asarray(action, dtype=float) - np.asarray(x_hole, dtype=float)) >= window).astype(float)
+
+
+def conformal_quantile_draws(values: np.ndarray, counts: np.ndarray, alpha: float) -> np.ndarray:
+    """The split-conformal quantile of each cluster-bootstrap resample of per-instance ``values``.
+
+    ``counts`` is ``[B, M]`` multiplicities (``audit.stats.resample_counts``); resample ``b`` is
+    ``values`` repeated by ``counts[b]``; its quantile is the ``ceil((1 - alpha)(M + 1))``-th
+    smallest (``+inf`` past ``M``), the rule of ``audit.conformal.conformal_quantile``.
+    """
+    values = np.asarray(values, dtype=float)
+    m = values.size
+    q = math.ceil((1 - alpha) * (m + 1) - 1e-9)
+    if q > m:
+        return np.full(counts.shape[0], np.inf)
+    order = np.argsort(values, kind="stable")
+    cum = np.cumsum(counts[:, order], axis=1)  # [B, M] resampled counts at or below each sorted value
+    idx = (cum >= q).argmax(axis=1)
+    return values[order][idx]
+
+
+def margin_draws(gammas: np.ndarray, predicted: np.ndarray, realized: np.ndarray, counts: np.ndarray,
+                 slack: float = 1e-9) -> np.ndarray:
+    """The validation-tuned margin of each cluster-bootstrap resample.
+
+    Args:
+        gammas: ``[G]`` candidates.
+        predicted, realized: ``[G, M]`` per-instance sums of predicted and realized failure at
+            each candidate.
+        counts: ``[B, M]`` resample multiplicities.
+
+    Returns:
+        ``[B]`` the largest gamma whose resampled predicted sum reaches the realized sum (NaN
+        where none does).
+    """
+    gammas = np.asarray(gammas, dtype=float)
+    ok = counts @ np.asarray(predicted, float).T >= counts @ np.asarray(realized, float).T - slack  # [B, G]
+    best = np.where(ok, gammas[None, :], -np.inf).max(axis=1)
+    return np.where(np.isfinite(best), best, np.nan)

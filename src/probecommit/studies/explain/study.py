@@ -10,6 +10,7 @@ what each key measures.
 from __future__ import annotations
 
 import json
+import re
 from pathlib import Path
 from typing import Any, Callable
 
@@ -18,13 +19,14 @@ import pandas as pd
 import yaml
 
 from probecommit.audit.conformal import simultaneous_threshold
-from probecommit.audit.stats import cluster_bootstrap_mean, paired_bootstrap
+from probecommit.audit.stats import cluster_bootstrap_mean, paired_bootstrap, percentile_interval, resample_counts
 from probecommit.audit.surprise import surprise_auc
 from probecommit.runner.replay import load_run, replay_episodes
 from probecommit.studies.explain import generator, runs
 from probecommit.studies.explain.margin import margin_curve
 from probecommit.studies.explain.pool import gate_pools, pool_variants
-from probecommit.studies.explain.stats import capture_failure, equivalence_power, interval_se
+from probecommit.studies.explain.stats import (capture_failure, conformal_quantile_draws, equivalence_power, interval_se,
+                                                margin_draws)
 from probecommit.studies.paper_values import PAPER
 from probecommit.studies.protocol import Protocol, load_protocol
 
@@ -154,6 +156,15 @@ class Explain:
                     self.res["missing"][f"surprise_auc_cover_paper_schedule_k{kk}"] = [
                         float(auc.loc[kk, col]) for col in ("auc", "auc_lo", "auc_hi")]
                 self.res["missing"]["surprise_paper_schedule_n_escaped"] = int(auc.loc[k, "n_escaped"])
+        # Failure at the final budget under each schedule, on the same instances and repeats (paired).
+        for split, ours in (("B_test", self.load("B_test_cover")), ("A", self.load("A_cover"))):
+            mine, theirs = _probe(ours.episodes, k), _probe(paper_schedule["test" if split == "B_test" else "A"].episodes, k)
+            for label, rows in (("ours", mine), ("paper_schedule", theirs)):
+                c[f"schedule.{split}.{label}.failure_k{k}"] = _triple(cluster_bootstrap_mean(
+                    rows["realized"].to_numpy(float), rows["instance_id"].to_numpy(), **b))
+                c[f"schedule.{split}.{label}.escape_k{k}"] = float(rows["escaped"].mean())
+            c[f"schedule.{split}.paper_minus_ours_failure_k{k}"] = _triple(paired_bootstrap(
+                mine, theirs, "realized", keys=("instance_id", "repeat"), **b).difference)
         rb = list(range(1, self.p.budgets["random"] + 1))
         pv = pool_variants(_probe(self.load("B_test_random").episodes), rb, **b)
         c.update({f"random_schedule.{key}": v for key, v in pv.items()})
@@ -188,6 +199,31 @@ class Explain:
             worst = curve["worst_budget_optimism"]
             t[f"{label}.share_worst_optimism_above_paper_df"] = float(
                 (worst > PAPER["calibration.distribution_free_margin_cover"]).mean())
+            for kk, value in curve["gamma_per_budget"].items():
+                g[f"{label}.gamma_at_k{kk}"] = value
+            self._sampling_intervals(label, curve, k)
+
+    def _sampling_intervals(self, label: str, curve: dict[str, Any], k: int) -> None:
+        """Cluster-bootstrap intervals of gamma, t_k, the simultaneous t and the distribution-free
+        margin: how far a quantile of 96 calibration instances moves with the draw alone."""
+        g, t, p = self.res["margin_per_gamma"], self.res["thresholds"], self.p
+        gammas, pred, real = curve["instance_sums"]
+        scores = curve["scores"]
+        scores.index = scores.index.astype(str)
+        order = np.sort(scores.index.to_numpy())
+        counts = resample_counts(order.size, self.boot["resamples"], self.boot["seed"])
+        draws = margin_draws(gammas, pred, real, counts)
+        g[f"{label}.gamma_interval"] = [curve["gamma"], *percentile_interval(draws)]
+        g[f"{label}.share_resamples_gamma_at_least_paper"] = float(np.mean(draws >= PAPER["calibration.margin_cover"] - 1e-12))
+        t_draws = conformal_quantile_draws(scores.loc[order, k].to_numpy(float), counts, p.alpha)
+        t[f"{label}.t_{k}_interval"] = [curve["thresholds"][k], *percentile_interval(t_draws)]
+        t[f"{label}.share_resamples_t_{k}_at_most_paper"] = float(np.mean(t_draws <= PAPER["calibration.t5_cover"]))
+        worst = curve["worst_budget_optimism"]
+        worst.index = worst.index.astype(str)
+        df_draws = conformal_quantile_draws(worst.reindex(order).to_numpy(float), counts, p.alpha)
+        t[f"{label}.distribution_free_margin_interval"] = [curve["distribution_free_margin"], *percentile_interval(df_draws)]
+        t[f"{label}.share_resamples_df_at_least_paper"] = float(
+            np.mean(df_draws >= PAPER["calibration.distribution_free_margin_cover"]))
 
     # ------------------------------------------------------------------ instance draws
     def instance_generator(self) -> None:
@@ -374,7 +410,7 @@ def summary_markdown(res: dict[str, dict[str, Any]]) -> str:
     for group, values in res.items():
         lines += [f"## {group}", "", "| key | value |", "|---|---|"]
         lines += [f"| explain:results.{group}.{k} | {_fmt(v)} |" for k, v in values.items()
-                  if not (group == "margin_per_gamma" and ".g" in k)]
+                  if not (group == "margin_per_gamma" and re.search(r"\.g\d", k))]
         lines.append("")
     return "\n".join(lines)
 
