@@ -23,6 +23,7 @@ from probecommit.audit.stats import cluster_bootstrap_mean, paired_bootstrap, pe
 from probecommit.audit.surprise import surprise_auc
 from probecommit.runner.replay import load_run, replay_episodes
 from probecommit.studies.explain import generator, runs
+from probecommit.studies.explain import gru as gru_study
 from probecommit.studies.explain.margin import margin_curve
 from probecommit.studies.explain.pool import gate_pools, pool_variants
 from probecommit.studies.explain.stats import (capture_failure, conformal_quantile_draws, equivalence_power, interval_se,
@@ -361,9 +362,17 @@ class Explain:
         out["se_paper_implied"] = paper_se
         out["se_ratio"] = se / paper_se
         out["power_at_estimate_with_paper_se"] = equivalence_power(paper_se, est, margin)
-        for key in ("cross_run_tolerance", "cross_run_other_interval"):
-            if key in self.cfg.get("gru", {}):
-                out[key] = self.cfg["gru"][key]
+        episodes = self.root / "gru" / "results" / "gru_episodes.parquet"
+        if episodes.is_file():
+            spread = gru_study.difference_spread(pd.read_parquet(episodes), **self.boot)
+            out.update(spread)
+            out["instances_for_paper_se"] = float(spread["instances"] * (se / paper_se) ** 2)
+            out["power_at_estimate_two_way"] = equivalence_power(interval_se(*spread["two_way_interval"][1:]), est, margin)
+        runs_dir = self.root / "breadth" / "runs"
+        pipeline = runs_dir / ("push2d-quick" if self.quick and (runs_dir / "push2d-quick").is_dir() else "push2d")
+        if pipeline.is_dir():
+            self.progress("explain: GRU seed 0 retrained", 0, 1)
+            out.update(gru_study.retrain_tolerance(self.root / "gru" / "results", pipeline, self.runs, self.quick))
 
     def run(self, out: Path) -> Path:
         out.mkdir(parents=True, exist_ok=True)
@@ -390,7 +399,7 @@ def _plain(o: Any) -> Any:
     if isinstance(o, (np.integer,)):
         return int(o)
     if isinstance(o, (np.floating, float)):
-        return float(o)
+        return "inf" if np.isinf(o) else float(o)  # verify refuses infinities; the conformal "+inf" is spelled out
     if isinstance(o, (np.bool_, bool)):
         return int(o)
     return o
