@@ -49,7 +49,13 @@ def pool_variants(raw: pd.DataFrame, budgets: Sequence[int], *, resamples: int, 
               "final_retained": ~covered[:, -1]}
     clusters = index.get_level_values("instance_id").to_numpy()
     out: dict[str, Any] = {"tau": tau, "n_committed": int(committed.sum()), "n_rejected": int((~committed).sum()),
-                           "commit_rate": float(committed.mean())}
+                           "commit_rate": float(committed.mean()), "claimed": float(summary.loc["raw", "claimed"]),
+                           "realized": float(summary.loc["raw", "realized"])}
+    if "posterior_variance" in summary.index:
+        pv = summary.loc["posterior_variance"]
+        out["posterior_variance.escaped_committed"] = int(pv["escaped_committed"])
+        out["posterior_variance.n_committed"] = int(pv["n_committed"])
+        out["posterior_variance.escaped_rejected"] = int(pv["escaped_rejected"])
     for name, label in labels.items():
         out[f"{name}.escaped_committed"] = int(label[committed].sum())
         out[f"{name}.escaped_rejected"] = int(label[~committed].sum())
