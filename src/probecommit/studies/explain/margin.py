@@ -31,7 +31,8 @@ def _select(table: pd.DataFrame) -> float:
 
 
 def margin_curve(cal_run: Any, budgets: Sequence[int], alpha: float, escaped_final: pd.Series | None = None, *,
-                 grid: Sequence[float] = GAMMA_GRID, chunk_instances: int | None = 48) -> dict[str, Any]:
+                 grid: Sequence[float] = GAMMA_GRID, chunk_instances: int | None = 48,
+                 set_calibrated: bool = True) -> dict[str, Any]:
     """Per-gamma mean predicted and realized failure of the set-calibrated executor on a calibration run.
 
     Args:
@@ -40,6 +41,8 @@ def margin_curve(cal_run: Any, budgets: Sequence[int], alpha: float, escaped_fin
         alpha: Miscoverage level of the thresholds.
         escaped_final: Per ``(instance_id, repeat)``, final-budget escape (to rerun the rule
             on the trajectories that stay covered); None skips it.
+        set_calibrated: Commit at the thresholds ``t_k`` (the paper's rule); False commits at the
+            run's mass ``nu`` instead (the margin an uncalibrated executor would get).
 
     Returns:
         ``table`` (a DataFrame: gamma, mean predicted and realized over all and over covered
@@ -51,7 +54,8 @@ def margin_curve(cal_run: Any, budgets: Sequence[int], alpha: float, escaped_fin
     t_k = budget_thresholds(scores, alpha, budgets)
     t_sim = conformal_quantile(worst_budget_scores(scores, budgets).to_numpy(), alpha)
     gammas = margin_candidates(grid)
-    tables = cal.commit((t_k, None), *[(t_k, g) for g in gammas], keep=[COLUMNS] * (len(gammas) + 1), final=True)
+    sets = t_k if set_calibrated else cal.nu
+    tables = cal.commit((t_k, None), *[(sets, g) for g in gammas], keep=[COLUMNS] * (len(gammas) + 1), final=True)
     set_only = tables[0]
     optimism = instance_optimism(set_only, budgets)
     rows = []
@@ -77,7 +81,8 @@ def margin_curve(cal_run: Any, budgets: Sequence[int], alpha: float, escaped_fin
     table = pd.DataFrame(rows)
     per_budget = {k: _select(pd.DataFrame({"gamma": table["gamma"], "sum_predicted": table[f"sum_predicted_k{k}"],
                                            "sum_realized": table[f"sum_realized_k{k}"]})) for k in budgets}
-    out = {"gamma_per_budget": per_budget, "instance_sums": (np.array(gammas), np.array(pred_sums), np.array(real_sums)),
+    x = cal.loaded.instances.set_index(cal.loaded.instances["instance_id"].astype(str))["true_x_hole"]
+    out = {"x_hole": x.reindex(instances).to_numpy(float), "gamma_per_budget": per_budget, "instance_sums": (np.array(gammas), np.array(pred_sums), np.array(real_sums)),
            "scores": scores, "table": table, "gamma": _select(table), "thresholds": {int(k): float(v) for k, v in t_k.items()},
            "simultaneous_threshold": float(t_sim), "distribution_free_margin": float(optimism_margin(optimism, alpha)),
            "worst_budget_optimism": optimism.max(axis=1)}

@@ -203,6 +203,18 @@ class Explain:
             for kk, value in curve["gamma_per_budget"].items():
                 g[f"{label}.gamma_at_k{kk}"] = value
             self._sampling_intervals(label, curve, k)
+            gammas, pred, real = curve["instance_sums"]
+            beyond = np.abs(curve["x_hole"]) > self.cfg["stratum_edge_mm"]
+            share = (10.0 - self.cfg["stratum_edge_mm"]) / 10.0  # the +-10 mm box's share beyond the edge
+            weights = np.where(beyond, share / max(beyond.mean(), 1e-12), (1 - share) / max((~beyond).mean(), 1e-12))
+            g[f"{label}.gamma_standardized"] = float(margin_draws(gammas, pred, real, weights[None, :])[0])
+            g[f"{label}.gamma_inside"] = float(margin_draws(gammas, pred, real, (~beyond).astype(float)[None, :])[0])
+            g[f"{label}.gamma_beyond"] = float(margin_draws(gammas, pred, real, beyond.astype(float)[None, :])[0])
+            if label == "ours":
+                nu_curve = margin_curve(run, budgets, p.alpha, None, set_calibrated=False)
+                g["ours.gamma_nu_executor"] = nu_curve["gamma"]
+                g["ours.optimism_at_gamma_1_nu_executor"] = float(
+                    nu_curve["table"].iloc[0].mean_realized - nu_curve["table"].iloc[0].mean_predicted)
 
     def _sampling_intervals(self, label: str, curve: dict[str, Any], k: int) -> None:
         """Cluster-bootstrap intervals of gamma, t_k, the simultaneous t and the distribution-free
