@@ -166,6 +166,21 @@ class Explain:
                 c[f"schedule.{split}.{label}.escape_k{k}"] = float(rows["escaped"].mean())
             c[f"schedule.{split}.paper_minus_ours_failure_k{k}"] = _triple(paired_bootstrap(
                 mine, theirs, "realized", keys=("instance_id", "repeat"), **b).difference)
+        # Table IV's calibrated rows and the cost of calibration under the paper's schedule.
+        from probecommit.runner.calibration import calibrate
+
+        self.progress("explain: calibration under the paper's schedule", 0, 1)
+        cal = calibrate(paper_schedule["cal"], paper_schedule["test"], alpha=self.p.alpha, budgets=budgets, **b,
+                        chunk_instances=48)
+        for row in cal.cost.to_dict("records"):
+            name = str(row["setting"]).replace(" + ", "_").replace(" ", "_")
+            c[f"schedule.B_test.paper_schedule.cost_table.{name}"] = [row["failure"], row["failure_lo"], row["failure_hi"]]
+        labels = {("no calibration", "set calibration + margin"): "full", ("no calibration", "set calibration"): "set",
+                  ("set calibration", "set calibration + margin"): "margin"}
+        for row in cal.cost_differences.to_dict("records"):
+            key = labels[(row["baseline"], row["treatment"])]
+            self.res["missing"][f"cost_of_calibration_paper_schedule.{key}"] = [row["difference"], row["lo"], row["hi"]]
+        self.res["margin_per_gamma"]["paper_schedule.gamma_calibrate"] = cal.margin.gamma
         rb = list(range(1, self.p.budgets["random"] + 1))
         pv = pool_variants(_probe(self.load("B_test_random").episodes), rb, **b)
         c.update({f"random_schedule.{key}": v for key, v in pv.items()})
@@ -289,7 +304,7 @@ class Explain:
         base = self.load("faults_base")
         right = float(_probe(base.episodes, kmax)["realized"].mean())
         out["right_model.failure"] = right
-        eps_grid = r.epsilons[:1] if self.quick else r.epsilons
+        eps_grid = r.epsilons[:1] if self.quick else [*r.epsilons, *self.cfg["mixture_extra_epsilons"]]
         for i, eps in enumerate(eps_grid):
             self.progress("explain: mixture when right", i, len(eps_grid))
             belief = {"likelihood": "mixture", "epsilon": float(eps), "mixture_low": r.mixture_range[0],
