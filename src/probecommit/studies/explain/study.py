@@ -33,6 +33,9 @@ from probecommit.studies.protocol import Protocol, load_protocol
 
 CONFIG = Path(__file__).resolve().parents[2] / "configs" / "paper" / "explain.yaml"
 Progress = Callable[[str, int, int], None]
+#: The cost-of-calibration comparisons (baseline, treatment) and their key names.
+COST_LABELS = {("no calibration", "set calibration + margin"): "full", ("no calibration", "set calibration"): "set",
+               ("set calibration", "set calibration + margin"): "margin"}
 
 
 def load_explain_config(path: str | Path | None = None) -> dict[str, Any]:
@@ -83,42 +86,56 @@ class Explain:
 
     # ------------------------------------------------------------------ part 3: missing items
     def missing(self) -> None:
+        self._surprise()
+        self._random_gates()
+        self._corrected_thresholds()
+        self._cost_and_testc()
+        self._prior_all_four(self.res["missing"])
+
+    def _surprise(self) -> None:
+        """Surprise AUC for final-budget escape on the cover schedule, at k = 1 and the final budget."""
+        m, k = self.res["missing"], self.p.budgets["cover"]
+        auc = surprise_auc(_probe(self.load("B_test_cover").episodes), budgets=[1, k], final_k=k, **self.boot).set_index("k")
+        for kk in (1, k):
+            m[f"surprise_auc_cover_k{kk}"] = [float(auc.loc[kk, c]) for c in ("auc", "auc_lo", "auc_hi")]
+        m["surprise_n_escaped"] = int(auc.loc[k, "n_escaped"])
+        m["surprise_n_covered"] = int(auc.loc[k, "n_covered"])
+
+    def _random_gates(self) -> None:
+        """Every commit gate under random probes (the paper reports only that posterior variance is lowest)."""
         from probecommit.runner.calibration import gates
 
-        m, b, p = self.res["missing"], self.boot, self.p
-        cover_k, random_k = p.budgets["cover"], p.budgets["random"]
-        test = _probe(self.load("B_test_cover").episodes)
-        auc = surprise_auc(test, budgets=[1, cover_k], final_k=cover_k, **b).set_index("k")
-        for k in (1, cover_k):
-            m[f"surprise_auc_cover_k{k}"] = [float(auc.loc[k, c]) for c in ("auc", "auc_lo", "auc_hi")]
-        m["surprise_n_escaped"] = int(auc.loc[cover_k, "n_escaped"])
-        m["surprise_n_covered"] = int(auc.loc[cover_k, "n_covered"])
+        m = self.res["missing"]
         self.progress("explain: random-probe gates", 0, 1)
-        result = gates(self.load("B_cal_random"), self.load("B_test_random"), alpha=p.alpha, **b, chunk_instances=48)
+        result = gates(self.load("B_cal_random"), self.load("B_test_random"), alpha=self.p.alpha, **self.boot,
+                       chunk_instances=48)
         pools = gate_pools(result)
-        for name in ("raw", "adjusted", "posterior_variance"):
-            m[f"gate_area_random.{name}"] = pools.get(f"{name}.area", float("nan"))
-        areas = {n: m[f"gate_area_random.{n}"] for n in ("raw", "adjusted", "posterior_variance")}
+        areas = {name: pools.get(f"{name}.area", float("nan")) for name in ("raw", "adjusted", "posterior_variance")}
+        m.update({f"gate_area_random.{name}": area for name, area in areas.items()})
         m["gate_area_random.lowest_is_posterior_variance"] = int(min(areas, key=areas.get) == "posterior_variance")
         self.res["committed_pool"].update({f"random.{k}": v for k, v in pools.items()})
+
+    def _corrected_thresholds(self) -> None:
+        """The corrected random-probe simultaneous threshold, and two stored thresholds recomputed."""
+        p, t = self.p, self.res["thresholds"]
         self.progress("explain: corrected random calibration", 0, 1)
         corrected = runs.corrected_replay(self.ins / "B_cal_random", self.runs, p.delta)
-        random_budgets = self.cfg["random_budgets"] if not self.quick else [1, 2, 3, 5, random_k]
-        m["simultaneous_threshold_random_corrected"] = simultaneous_threshold(_probe(corrected.episodes), random_budgets, p.alpha)
-        self.res["thresholds"]["simultaneous_random_original_recomputed"] = simultaneous_threshold(
-            _probe(self.load("B_cal_random").episodes), random_budgets, p.alpha)
-        self.res["thresholds"]["simultaneous_cover_corrected_recomputed"] = simultaneous_threshold(
-            _probe(self.load("B_cal_cover_corrected").episodes), list(range(1, cover_k + 1)), p.alpha)
-        # Cost of calibration: the insertion study's paired differences, as keys.
-        labels = {("no calibration", "set calibration + margin"): "full", ("no calibration", "set calibration"): "set",
-                  ("set calibration", "set calibration + margin"): "margin"}
+        budgets = self.cfg["random_budgets"]
+        self.res["missing"]["simultaneous_threshold_random_corrected"] = simultaneous_threshold(
+            _probe(corrected.episodes), budgets, p.alpha)
+        t["simultaneous_random_original_recomputed"] = simultaneous_threshold(
+            _probe(self.load("B_cal_random").episodes), budgets, p.alpha)
+        t["simultaneous_cover_corrected_recomputed"] = simultaneous_threshold(
+            _probe(self.load("B_cal_cover_corrected").episodes), list(range(1, p.budgets["cover"] + 1)), p.alpha)
+
+    def _cost_and_testc(self) -> None:
+        """The cost-of-calibration differences as keys; Test C escapes at the final budget."""
+        m, p = self.res["missing"], self.p
         for row in self.insertion_results()["table_insertion"]["B.cost_differences"]:
-            key = labels[(row["baseline"], row["treatment"])]
-            m[f"cost_of_calibration.{key}"] = [row["difference"], row["lo"], row["hi"]]
-        for name, k in (("C_cover_corrected", cover_k), ("C_random_corrected", random_k), ("C_cover", cover_k),
-                        ("C_random", random_k)):
+            m[f"cost_of_calibration.{COST_LABELS[(row['baseline'], row['treatment'])]}"] = [row["difference"], row["lo"], row["hi"]]
+        for name, k in (("C_cover_corrected", p.budgets["cover"]), ("C_random_corrected", p.budgets["random"]),
+                        ("C_cover", p.budgets["cover"]), ("C_random", p.budgets["random"])):
             m[f"testc_final_escapes.{name}"] = int(_probe(self.load(name).episodes, k)["escaped"].sum())
-        self._prior_all_four(m)
 
     def _prior_all_four(self, m: dict[str, Any]) -> None:
         """How often a fault's escapes come in whole clusters (all repeats of an instance at once)."""
@@ -134,6 +151,7 @@ class Explain:
                     (at["sum"] == at["count"])[any_].mean()) if any_.any() else float("nan")
 
     def physx_coverage(self) -> None:
+        """Cluster and episode coverage of our PhysX runs at the final random budget."""
         m = self.res["missing"]
         engines = self.root / "engines" / "runs"
         for variant, suffix in (("deployed", ""), ("mj_offset", "_mj_offset"), ("own_scan", "_own_scan")):
@@ -146,18 +164,27 @@ class Explain:
 
     # ------------------------------------------------------------------ committed pool
     def committed_pool(self, paper_schedule: dict[str, Any]) -> None:
+        """The raw gate's pool under each escape definition, per schedule; then the schedules' failures."""
         c, b, k = self.res["committed_pool"], self.boot, self.p.budgets["cover"]
         budgets = list(range(1, k + 1))
         for label, run in (("ours", self.load("B_test_cover")), ("paper_schedule", paper_schedule["test"])):
-            pv = pool_variants(_probe(run.episodes), budgets, **b)
-            c.update({f"{label}.{key}": v for key, v in pv.items()})
-            if label == "paper_schedule":
-                auc = surprise_auc(_probe(run.episodes), budgets=[1, k], final_k=k, **b).set_index("k")
-                for kk in (1, k):
-                    self.res["missing"][f"surprise_auc_cover_paper_schedule_k{kk}"] = [
-                        float(auc.loc[kk, col]) for col in ("auc", "auc_lo", "auc_hi")]
-                self.res["missing"]["surprise_paper_schedule_n_escaped"] = int(auc.loc[k, "n_escaped"])
-        # Failure at the final budget under each schedule, on the same instances and repeats (paired).
+            c.update({f"{label}.{key}": v for key, v in pool_variants(_probe(run.episodes), budgets, **b).items()})
+        auc = surprise_auc(_probe(paper_schedule["test"].episodes), budgets=[1, k], final_k=k, **b).set_index("k")
+        for kk in (1, k):
+            self.res["missing"][f"surprise_auc_cover_paper_schedule_k{kk}"] = [
+                float(auc.loc[kk, col]) for col in ("auc", "auc_lo", "auc_hi")]
+        self.res["missing"]["surprise_paper_schedule_n_escaped"] = int(auc.loc[k, "n_escaped"])
+        rb = list(range(1, self.p.budgets["random"] + 1))
+        c.update({f"random_schedule.{key}": v for key, v in
+                  pool_variants(_probe(self.load("B_test_random").episodes), rb, **b).items()})
+        self._schedule_failure(paper_schedule)
+
+    def _schedule_failure(self, paper_schedule: dict[str, Any]) -> None:
+        """Cover k = 5 failure under each schedule on the same instances (paired), and Table IV's
+        calibrated rows and the cost of calibration under the paper's schedule."""
+        from probecommit.runner.calibration import calibrate
+
+        c, b, k = self.res["committed_pool"], self.boot, self.p.budgets["cover"]
         for split, ours in (("B_test", self.load("B_test_cover")), ("A", self.load("A_cover"))):
             mine, theirs = _probe(ours.episodes, k), _probe(paper_schedule["test" if split == "B_test" else "A"].episodes, k)
             for label, rows in (("ours", mine), ("paper_schedule", theirs)):
@@ -166,24 +193,16 @@ class Explain:
                 c[f"schedule.{split}.{label}.escape_k{k}"] = float(rows["escaped"].mean())
             c[f"schedule.{split}.paper_minus_ours_failure_k{k}"] = _triple(paired_bootstrap(
                 mine, theirs, "realized", keys=("instance_id", "repeat"), **b).difference)
-        # Table IV's calibrated rows and the cost of calibration under the paper's schedule.
-        from probecommit.runner.calibration import calibrate
-
         self.progress("explain: calibration under the paper's schedule", 0, 1)
-        cal = calibrate(paper_schedule["cal"], paper_schedule["test"], alpha=self.p.alpha, budgets=budgets, **b,
-                        chunk_instances=48)
+        cal = calibrate(paper_schedule["cal"], paper_schedule["test"], alpha=self.p.alpha, budgets=list(range(1, k + 1)),
+                        **b, chunk_instances=48)
         for row in cal.cost.to_dict("records"):
             name = str(row["setting"]).replace(" + ", "_").replace(" ", "_")
             c[f"schedule.B_test.paper_schedule.cost_table.{name}"] = [row["failure"], row["failure_lo"], row["failure_hi"]]
-        labels = {("no calibration", "set calibration + margin"): "full", ("no calibration", "set calibration"): "set",
-                  ("set calibration", "set calibration + margin"): "margin"}
         for row in cal.cost_differences.to_dict("records"):
-            key = labels[(row["baseline"], row["treatment"])]
+            key = COST_LABELS[(row["baseline"], row["treatment"])]
             self.res["missing"][f"cost_of_calibration_paper_schedule.{key}"] = [row["difference"], row["lo"], row["hi"]]
         self.res["margin_per_gamma"]["paper_schedule.gamma_calibrate"] = cal.margin.gamma
-        rb = list(range(1, self.p.budgets["random"] + 1))
-        pv = pool_variants(_probe(self.load("B_test_random").episodes), rb, **b)
-        c.update({f"random_schedule.{key}": v for key, v in pv.items()})
 
     # ------------------------------------------------------------------ margin and thresholds
     def margins(self, paper_schedule: dict[str, Any]) -> None:
@@ -333,6 +352,7 @@ class Explain:
 
     # ------------------------------------------------------------------ PhysX
     def physx(self) -> None:
+        """Our PhysX capture window, and the analytic scene with the paper's PhysX boundary and window."""
         out, p, e = self.res["physx_capture"], self.p, self.cfg["physx_emulation"]
         path = self.root / "engines" / "results" / "results.json"
         if path.is_file():
@@ -368,6 +388,7 @@ class Explain:
 
     # ------------------------------------------------------------------ GRU
     def gru(self) -> None:
+        """Why the GRU interval is wider than the paper's, its power, and a retrained seed's tolerance."""
         out = self.res["gru"]
         path = self.root / "gru" / "results" / "results.json"
         if not path.is_file():
