@@ -98,8 +98,8 @@ class Explain:
         auc = surprise_auc(_probe(self.load("B_test_cover").episodes), budgets=[1, k], final_k=k, **self.boot).set_index("k")
         for kk in (1, k):
             m[f"surprise_auc_cover_k{kk}"] = [float(auc.loc[kk, c]) for c in ("auc", "auc_lo", "auc_hi")]
-        m["surprise_n_escaped"] = int(auc.loc[k, "n_escaped"])
-        m["surprise_n_covered"] = int(auc.loc[k, "n_covered"])
+        m["surprise.n_escaped"] = int(auc.loc[k, "n_escaped"])
+        m["surprise.n_covered"] = int(auc.loc[k, "n_covered"])
 
     def _random_gates(self) -> None:
         """Every commit gate under random probes (the paper reports only that posterior variance is lowest)."""
@@ -173,7 +173,7 @@ class Explain:
         for kk in (1, k):
             self.res["missing"][f"surprise_auc_cover_paper_schedule_k{kk}"] = [
                 float(auc.loc[kk, col]) for col in ("auc", "auc_lo", "auc_hi")]
-        self.res["missing"]["surprise_paper_schedule_n_escaped"] = int(auc.loc[k, "n_escaped"])
+        self.res["missing"]["surprise_paper_schedule.n_escaped"] = int(auc.loc[k, "n_escaped"])
         rb = list(range(1, self.p.budgets["random"] + 1))
         c.update({f"random_schedule.{key}": v for key, v in
                   pool_variants(_probe(self.load("B_test_random").episodes), rb, **b).items()})
@@ -213,7 +213,8 @@ class Explain:
             self.progress(f"explain: margin curve ({label})", 0, 1)
             curve = margin_curve(run, budgets, p.alpha, _final_escape(run.episodes, k))
             table = curve["table"]
-            self.tables[f"margin_{label}"] = table.assign(schedule=label)
+            kept = [c for c in table.columns if not c.startswith("sum_")]  # sums are the rule's; the means are published
+            self.tables[f"margin_{label}"] = table[kept].assign(schedule=label)
             for row in table.itertuples():
                 g[f"{label}.g{row.gamma:.2f}.predicted"] = row.mean_predicted
                 g[f"{label}.g{row.gamma:.2f}.realized"] = row.mean_realized
