@@ -66,3 +66,25 @@ def emulated_engine_runs(protocol: Protocol, runs: Path, boundary_offset: float,
         out[variant] = _replay(deployed.path, runs / f"emulated_B_test_random_{variant}",
                                {"model": {"boundary": "corrected", "delta": float(delta)}})
     return out
+
+
+def fresh_draws(protocol: Protocol, runs: Path, count: int, workers: int = 1) -> list[tuple[str, LoadedRun, LoadedRun]]:
+    """``count`` fresh 96-instance draws of Split B's generator, random probes, on the analytic scene
+    whose tap boundary is the MuJoCo scene's (hg + delta), each with its corrected-model replay.
+
+    Split names ``draw_<i>`` give disjoint instance streams; ``B_test_random`` first reproduces
+    the MuJoCo run's instances and probe streams (the check that the analytic scene stands in).
+
+    Returns:
+        ``(split, deployed run, corrected replay)`` per draw, the check first.
+    """
+    out = []
+    for split in ["B_test_random", *[f"draw_{i:02d}" for i in range(count)]]:
+        data = config_data(protocol.run_config(f"analytic_{split}", "B", split, "random"))
+        data["simulator"] = {**data["simulator"], "engine": "analytic", "boundary_offset": float(protocol.delta),
+                             "capture_scale": 1.0}
+        deployed = _run(parse_config(data), runs / f"analytic_{split}", workers)
+        corrected = _replay(deployed.path, runs / f"analytic_{split}_corrected",
+                            {"model": {"boundary": "corrected", "delta": float(protocol.delta)}})
+        out.append((split, deployed, corrected))
+    return out

@@ -113,6 +113,10 @@ class Explain:
         areas = {name: pools.get(f"{name}.area", float("nan")) for name in ("raw", "adjusted", "posterior_variance")}
         m.update({f"gate_area_random.{name}": area for name, area in areas.items()})
         m["gate_area_random.lowest_is_posterior_variance"] = int(min(areas, key=areas.get) == "posterior_variance")
+        # Areas span each gate's own attainable range; the mean failure over it compares them on equal terms.
+        means = {name: pools.get(f"{name}.mean_failure", float("nan")) for name in areas}
+        m.update({f"gate_mean_failure_random.{name}": v for name, v in means.items()})
+        m["gate_mean_failure_random.lowest_is_posterior_variance"] = int(min(means, key=means.get) == "posterior_variance")
         self.res["committed_pool"].update({f"random.{k}": v for k, v in pools.items()})
 
     def _corrected_thresholds(self) -> None:
@@ -291,6 +295,38 @@ class Explain:
             strat = generator.stratified_metrics(self.load(name).episodes, k, edge, expected)
             out.update({f"stratified.{name}.k{k}.{key}": v for key, v in strat.items()})
 
+    def draws(self) -> None:
+        """Escape, failure and the boundary fix across fresh draws of the generator (analytic scene)."""
+        out, p, b = self.res["instance_generator"], self.p, self.boot
+        kmax, edge = p.budgets["random"], self.cfg["stratum_edge_mm"]
+        count = self.cfg["fresh_draws_quick" if self.quick else "fresh_draws"]
+        self.progress("explain: fresh draws of the generator", 0, 1)
+        rows = []
+        for split, deployed, corrected in runs.fresh_draws(p, self.runs, count, self.workers):
+            old, new = _probe(deployed.episodes), _probe(corrected.episodes)
+            x = deployed.instances["true_x_hole"].to_numpy(float)
+            fix = paired_bootstrap(old[old["k"] == kmax], new[new["k"] == kmax], "realized", resamples=2, seed=0)
+            rows.append({"split": split, "share_beyond": generator.share_beyond(x, edge),
+                         "escape_k1": float(old[old["k"] == 1]["escaped"].mean()),
+                         "escape_k8": float(old[old["k"] == kmax]["escaped"].mean()),
+                         "failure_k8": float(old[old["k"] == kmax]["realized"].mean()),
+                         "optimism_k8": float((old[old["k"] == kmax]["realized"] - old[old["k"] == kmax]["predicted"]).mean()),
+                         "paired_fix_k8": float(fix.difference.estimate)})
+        table = pd.DataFrame(rows)
+        check, fresh = table.iloc[0], table.iloc[1:]
+        mujoco = _probe(self.load("B_test_random").episodes, kmax)
+        out["draws.analytic_B_test_random.escape_k8"] = float(check["escape_k8"])
+        out["draws.analytic_equals_mujoco_escape_k8"] = int(abs(check["escape_k8"] - mujoco["escaped"].mean()) < 1e-12)
+        out["draws.count"] = int(len(fresh))
+        for col in ("share_beyond", "escape_k1", "escape_k8", "failure_k8", "optimism_k8", "paired_fix_k8"):
+            values = fresh[col].to_numpy(float)
+            out[f"draws.{col}.mean"] = float(values.mean())
+            out[f"draws.{col}.sd"] = float(values.std(ddof=1)) if len(values) > 1 else float("nan")
+            out[f"draws.{col}.min"], out[f"draws.{col}.max"] = float(values.min()), float(values.max())
+        if len(fresh) > 2:
+            out["draws.corr_share_beyond_escape_k8"] = float(np.corrcoef(fresh["share_beyond"], fresh["escape_k8"])[0, 1])
+        self.tables["draws"] = table.assign(schedule="draws")
+
     # ------------------------------------------------------------------ boundary fault and robust filters
     def boundary_fault(self) -> None:
         out, p, b = self.res["boundary_fault"], self.p, self.boot
@@ -428,12 +464,15 @@ class Explain:
         self.progress("explain: paper's cover schedule on Split B", 0, 1)
         paper = runs.schedule_runs(self.p, PAPER["cover.schedule"], self.runs, self.workers)
         steps = [self.missing, self.physx_coverage, lambda: self.committed_pool(paper), lambda: self.margins(paper),
-                 self.instance_generator, self.boundary_fault, self.robust, self.physx, self.gru]
+                 self.instance_generator, self.draws, self.boundary_fault, self.robust, self.physx, self.gru]
         for i, step in enumerate(steps):
             self.progress("explain", i, len(steps))
             step()
-        if self.tables:
-            pd.concat(self.tables.values(), ignore_index=True).to_parquet(out / "margin_per_gamma.parquet")
+        margins = [t for name, t in self.tables.items() if name.startswith("margin_")]
+        if margins:
+            pd.concat(margins, ignore_index=True).to_parquet(out / "margin_per_gamma.parquet")
+        if "draws" in self.tables:
+            self.tables["draws"].drop(columns="schedule").to_parquet(out / "fresh_draws.parquet")
         payload = {"results": _plain(self.res)}
         (out / "results.json").write_text(json.dumps(payload, indent=1, allow_nan=True))
         (out / "explain.md").write_text(summary_markdown(self.res))
