@@ -89,6 +89,9 @@ def reproduce_gru(out: str | Path, pipeline_run: str | Path, quick: bool = False
     }
     out.mkdir(parents=True, exist_ok=True)
     (out / "results.json").write_text(json.dumps({"results": results}, indent=1))
+    # Per episode: the pipeline's miss and each seed's GRU miss (what `reproduce explain` reads
+    # to split the interval's width into instance and seed variation).
+    pipe.assign(**{f"gru_seed_{s}": per_seed[s] for s in range(len(per_seed))}).to_parquet(out / "gru_episodes.parquet")
     (out / "table_gru.md").write_text(gru_markdown(results))
     return results
 

@@ -1,0 +1,46 @@
+"""`reproduce explain --quick` end to end: every group written, and the numbers it recomputes from
+stored runs equal the ones the insertion study computed its own way (same data, two paths)."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from probecommit.report import paper
+
+
+def test_explain_is_a_target_after_what_it_reads():
+    order = paper.resolve(["explain"])
+    assert order[-1] == "explain" and {"insertion", "engines", "gru"} <= set(order)
+
+
+@pytest.mark.slow
+def test_reproduce_explain_quick(tmp_path):
+    from probecommit.studies.explain import reproduce_explain
+
+    paper.reproduce(["insertion", "engines"], tmp_path, quick=True)
+    folder = reproduce_explain(tmp_path, quick=True)
+    res = json.loads((folder / "results.json").read_text())["results"]
+    for group in ("missing", "committed_pool", "instance_generator", "margin_per_gamma", "thresholds", "gru",
+                  "physx_capture", "boundary_fault", "robust"):
+        assert res[group], group
+    ins = json.loads((tmp_path / "insertion" / "results" / "results.json").read_text())["results"]
+    ti = ins["table_insertion"]
+    # The per-gamma rule over every gamma picks the margin the insertion study's search stopped at.
+    assert res["margin_per_gamma"]["ours.gamma"] == ti["margin_cover"]
+    assert res["thresholds"]["ours.t_5"] == ti["thresholds_cover"]["5"]
+    assert res["thresholds"]["ours.distribution_free_margin"] == pytest.approx(ti["distribution_free_margin_cover"], abs=1e-12)
+    # Thresholds from the stored scores equal calibrate()'s re-executed ones.
+    assert res["thresholds"]["simultaneous_random_original_recomputed"] == ti["simultaneous_random"]
+    corrected = ins["table_testc"]["failure_cover_k5_setcal_margin"]["simultaneous_threshold"]["corrected"]
+    assert res["thresholds"]["simultaneous_cover_corrected_recomputed"] == corrected
+    # The raw gate's pool read from the stored run equals the insertion study's re-executed gate.
+    raw = next(r for r in ins["gates"]["summary"] if r["signal"] == "raw")
+    assert res["committed_pool"]["ours.final_hull.escaped_committed"] == raw["escaped_committed"]
+    assert res["committed_pool"]["ours.final_hull.escaped_rejected"] == raw["escaped_rejected"]
+    # The emulated engine's stored outcomes equal the capture rule recomputed from its aims.
+    for variant in ("deployed", "mj_offset", "own_scan"):
+        assert res["physx_capture"][f"emulated.{variant}.stored_equals_recomputed"] == 1
+    assert res["gru"]["available"] == 0  # the GRU target did not run here
+    assert (folder / "explain.md").read_text().count("explain:results.") > 100
