@@ -58,7 +58,7 @@ def _is_rate(key: str) -> bool:
         word = key.split(".")[-2].lower()
     if word.startswith("n_") or "escaped_" in word:
         return False
-    if any(tag in word for tag in ("diff", "minus", "optimism", "delta", "gap", "paired", "_s", "auc", "fix")):
+    if any(tag in word for tag in ("diff", "minus", "change", "optimism", "delta", "gap", "paired", "_s", "auc", "fix")):
         return False
     return any(w in word for w in RATE_WORDS)
 

@@ -62,9 +62,10 @@ class Reproduction:
 #: Runs whose episodes the publication stores (``episodes.parquet``): verify recomputes from them.
 RECOMPUTED_RUNS = ("A_cover", "B_cal_cover", "B_cal_random", "B_test_random", "C_random", "C_random_corrected", "C_cover",
                    "C_cover_corrected")
-#: The episode columns the recomputed numbers read.
+#: The episode columns the recomputed numbers read (``z_true``: the explain target stratifies the fault
+#: harness's episodes by where the hole is).
 STORED_COLUMNS = ("instance_id", "repeat", "k", "method", "status", "predicted", "realized", "covered", "escaped",
-                  "score_s", "max_surprise")
+                  "score_s", "max_surprise", "z_true")
 
 
 def store_episodes(episodes: pd.DataFrame, path: Path, extra: tuple[str, ...] = ()) -> None:

@@ -474,19 +474,26 @@ class Explain:
         if "draws" in self.tables:
             self.tables["draws"].drop(columns="schedule").to_parquet(out / "fresh_draws.parquet")
         payload = {"results": _plain(self.res)}
-        (out / "results.json").write_text(json.dumps(payload, indent=1, allow_nan=True))
-        (out / "explain.md").write_text(summary_markdown(self.res))
+        (out / "results.json").write_text(json.dumps(payload, indent=1, allow_nan=False))
+        (out / "explain.md").write_text(summary_markdown(payload["results"]))
         return out
 
 
 def _plain(o: Any) -> Any:
+    """JSON-ready values. A value the data leave undefined (NaN: no escapes to rank, one draw for an SD, an
+    empty stratum; a quick run has many) is ``null``, an interval with an undefined end wholly so: verify
+    refuses an undeclared NaN, and a claim reading ``null`` is unresolved, not compared."""
     if isinstance(o, dict):
         return {str(k): _plain(v) for k, v in o.items()}
     if isinstance(o, (list, tuple)):
+        if len(o) == 3 and all(isinstance(v, (float, np.floating)) for v in o) and any(np.isnan(v) for v in o):
+            return None
         return [_plain(v) for v in o]
     if isinstance(o, (np.integer,)):
         return int(o)
     if isinstance(o, (np.floating, float)):
+        if np.isnan(o):
+            return None
         return "inf" if np.isinf(o) else float(o)  # verify refuses infinities; the conformal "+inf" is spelled out
     if isinstance(o, (np.bool_, bool)):
         return int(o)
@@ -494,6 +501,8 @@ def _plain(o: Any) -> Any:
 
 
 def _fmt(v: Any) -> str:
+    if v is None:
+        return "--"  # undefined with these data
     if isinstance(v, (list, tuple)) and len(v) == 3:
         return f"{v[0]:.3f} [{v[1]:.3f}, {v[2]:.3f}]"
     if isinstance(v, float):
