@@ -266,7 +266,8 @@ TRACED_ONLY = {
     "engines": "the engine scans (boundary offsets, capture windows)",
     "robot": "the fault sweeps (replays of the log; their by-size copies are checked against the stored sweeps)",
     "gru": "the GRU table", "beyond": "every table", "setup": "Table I",
-    "explain": "every number (they re-commit or replay from run directories the publication does not hold)",
+    "explain": "every number (they re-commit or replay from run directories the publication does not hold); "
+               "explain.md is rendered again from results.json",
     "figures": "Fig. 1a/1c and Fig. 3 (scene renders from run directories); Fig. 2 is drawn again from code",
 }
 

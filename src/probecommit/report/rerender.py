@@ -73,9 +73,15 @@ def _setup() -> dict[str, Renderer]:
     return {"table_I_setup.md": lambda folder, r: "\n".join(table_I()[0]) + "\n"}
 
 
+def _explain() -> dict[str, Renderer]:
+    from probecommit.studies.explain.study import summary_markdown
+
+    return {"explain.md": lambda folder, r: summary_markdown(r)}
+
+
 RENDERERS: dict[str, Callable[[], dict[str, Renderer]]] = {
     "insertion": _insertion, "breadth": _breadth, "cost": _cost, "robot": _robot, "engines": _engines, "gru": _gru,
-    "setup": _setup}
+    "setup": _setup, "explain": _explain}
 
 
 def expected_texts(study: str) -> list[str]:
