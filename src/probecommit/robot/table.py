@@ -16,6 +16,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from probecommit.audit.io import validate_episodes
 from probecommit.audit.rows import episode_row
 from probecommit.audit.stats import DEFAULT_RESAMPLES, DEFAULT_SEED, cluster_bootstrap_mean
 from probecommit.robot.log import SessionLogError
@@ -84,7 +85,12 @@ def rows_from_decisions(model: Any, episodes: dict[int, EpisodeRecord], truths: 
             entered=np.nan if entered is None else float(entered),
             aim_error=float(abs(np.ravel(action)[0] - z_true)), n_retained=decision.get("n_retained"),
         ))
-    return SessionEpisodes(pd.DataFrame(rows), unscored)
+    frame = pd.DataFrame(rows)
+    if len(frame):  # the episode-row rules, as for every other audit path
+        loss = "binary" if getattr(model, "binary_loss", False) else "continuous"
+        frame = validate_episodes(frame, "session log", structure=False, loss=loss)
+        frame.attrs = {}
+    return SessionEpisodes(frame, unscored)
 
 
 def session_episodes(path: str | Path) -> SessionEpisodes:
