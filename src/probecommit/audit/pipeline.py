@@ -14,7 +14,7 @@ import pandas as pd
 
 from probecommit.audit.io import group_columns, ok_episodes, read_episodes, validate_episodes
 from probecommit.audit.metrics import audit_table
-from probecommit.audit.stats import DEFAULT_LEVEL, DEFAULT_RESAMPLES, DEFAULT_SEED
+from probecommit.audit.stats import DEFAULT_LEVEL, DEFAULT_RESAMPLES, DEFAULT_SEED, few_clusters_note
 from probecommit.audit.surprise import surprise_auc
 
 #: The executor's method whose episodes the surprise AUC reads.
@@ -81,5 +81,10 @@ def audit(path_or_table: str | Path | pd.DataFrame, *, resamples: int = DEFAULT_
                 part.insert(0, name, value)
             parts.append(part)
         surprise = pd.concat(parts, ignore_index=True) if parts else None
+    notes = list(df.attrs.get("notes", []))
+    if len(table):
+        few = few_clusters_note(int(table["n_instances"].min()))
+        if few:
+            notes.append(few)
     return AuditResult(table, surprise, df.attrs.get("source", "table"), df.attrs.get("n_total", len(df)),
-                       df.attrs.get("n_failed", 0), list(df.attrs.get("notes", [])))
+                       df.attrs.get("n_failed", 0), notes)

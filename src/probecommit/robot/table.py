@@ -18,7 +18,7 @@ import pandas as pd
 
 from probecommit.audit.io import validate_episodes
 from probecommit.audit.rows import episode_row
-from probecommit.audit.stats import DEFAULT_RESAMPLES, DEFAULT_SEED, cluster_bootstrap_mean
+from probecommit.audit.stats import DEFAULT_RESAMPLES, DEFAULT_SEED, cluster_bootstrap_mean, few_clusters_note
 from probecommit.robot.log import SessionLogError
 from probecommit.robot.session import EpisodeRecord, load_session
 from probecommit.runner.build import build_model
@@ -111,6 +111,10 @@ def session_episodes(path: str | Path) -> SessionEpisodes:
     if result.rows.empty:
         why = "; ".join(result.notes) or "it has no episodes"
         raise SessionLogError(f"{log}: no episode can be audited ({why})")
+    few = few_clusters_note(int(result.rows.groupby("k")["instance_id"].nunique().min()),
+                            "the optimism and aim-error intervals")
+    if few:
+        result.warnings.append(few)
     return result
 
 
