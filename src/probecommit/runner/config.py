@@ -221,6 +221,9 @@ class StudyConfig(_Strict):
             n = len(task.latent_names)
             if n and len(inst.truths[0]) != n:
                 raise _FieldError("instances.truths", f"rows need {n} coordinates ({', '.join(task.latent_names)}), got {len(inst.truths[0])}")
+            # The family's limits hold for a fixed truth set as for a sampled box: its bounding box is checked.
+            rows = list(zip(*inst.truths))
+            task.check_truth_box(tuple(min(c) for c in rows), tuple(max(c) for c in rows), "instances.truths")
         else:
             low = inst.truth_low if inst.truth_low is not None else self.model.prior_low
             high = inst.truth_high if inst.truth_high is not None else self.model.prior_high
@@ -239,6 +242,8 @@ class StudyConfig(_Strict):
             raise _FieldError("instances.contexts", f"rows need {n_ctx} coordinates ({', '.join(task.context_names) or 'the family has no context'}), got {len(inst.contexts[0])}")
         if n_ctx and inst.contexts is None:
             raise _FieldError("instances.contexts", f"the {task.family} family needs a context per instance ({', '.join(task.context_names)})")
+        if inst.contexts is not None:
+            task.check_contexts(inst.contexts, "instances.contexts")
         if isinstance(self.probes.schedule, list):
             bad = [p for p in self.probes.schedule if len(p) != task.probe_dim]
             if bad:
