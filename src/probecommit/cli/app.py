@@ -9,7 +9,7 @@ from typing import Optional
 
 import typer
 from rich import box
-from rich.markup import escape
+from probecommit.cli.common import safe as escape
 from rich.table import Table
 
 from probecommit.cli.common import console, err_console, print_warning, progress_bar, safe, user_errors
@@ -99,7 +99,7 @@ def run(
     result = _run(cfg, out or Path("runs") / cfg.name, workers, ray, threads)
     print_budget_table(result.episodes, f"{cfg.name}: per-budget summary")
     warn_failed(result)
-    console.print(f"run directory: [bold]{safe(result.run_dir)}[/bold]")
+    console.print(f"run directory: {safe(result.run_dir)}")
 
 
 @app.command()
@@ -122,8 +122,8 @@ def demo(
     print_budget_table(result.episodes, "demo: insertion, random taps, deployed tap model")
     warn_failed(result)
     report = write_demo_report(result.run_dir)
-    console.print(f"run directory: [bold]{safe(result.run_dir)}[/bold]")
-    console.print(f"report: [bold]{safe(report)}[/bold]")
+    console.print(f"run directory: {safe(result.run_dir)}")
+    console.print(f"report: {safe(report)}")
 
 
 @app.command()
@@ -187,7 +187,7 @@ def replay(
     target = out or run_dir.with_name(f"{run_dir.name}-{label}")
     path = replay_run(run_dir, target, overrides, fixed_probes=fixed_probes)
     print_budget_table(load_run(path).episodes, f"replay of {run_dir.name} ({', '.join(f'{s}.{k}' for s, v in overrides.items() for k in v)})")
-    console.print(f"run directory: [bold]{safe(path)}[/bold]")
+    console.print(f"run directory: {safe(path)}")
 
 
 @app.command()

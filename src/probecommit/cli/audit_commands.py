@@ -147,7 +147,7 @@ def audit_command(
         except Exception:  # noqa: BLE001 - the snapshot is an extra; the audit stands without it
             pass
     report = write_html_report(out / "audit.html", result, title=f"Audit of {path.name}", nominal=nominal, images=images)
-    console.print(f"report: [bold]{safe(report)}[/bold]")
+    console.print(f"report: {safe(report)}")
 
 
 @user_errors
@@ -214,7 +214,7 @@ def calibrate_command(
     report = write_html_report(out / "calibration.html", res.audit_calibrated, title="Calibration",
                                calibration=res, nominal=1 - alpha,
                                notes=f"calibration run {cal}, test run {test}; the audit table is the calibrated executor's.")
-    console.print(f"report: [bold]{safe(report)}[/bold]")
+    console.print(f"report: {safe(report)}")
 
 
 @user_errors
@@ -255,7 +255,7 @@ def gates_command(
     save_figure(gates_figure(res), out / "gates.png")
     report = write_html_report(out / "gates.html", title="Commit gates", gates=res, nominal=1 - alpha,
                                notes=f"calibration run {cal}, test run {test}")
-    console.print(f"report: [bold]{safe(report)}[/bold]")
+    console.print(f"report: {safe(report)}")
 
 
 def register(app: typer.Typer) -> None:

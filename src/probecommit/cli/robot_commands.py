@@ -77,7 +77,7 @@ def audit_session_log(path: Path, out: Optional[Path], resamples: int, seed: int
 
         half = float(rig_half_gap(1.0))
     png = save_figure(aim_error_figure(result.rows, window, half), target / "aim_error.png")
-    console.print(f"table: [bold]{safe(target / 'robot_table.csv')}[/bold]; figure: [bold]{safe(png)}[/bold]")
+    console.print(f"table: {safe(target / 'robot_table.csv')}; figure: {safe(png)}")
 
 
 def replay_session_log(path: Path, fault: Optional[str], sweep: Optional[str], half_width: Optional[float],
@@ -136,7 +136,7 @@ def replay_session_log(path: Path, fault: Optional[str], sweep: Optional[str], h
     png = None
     if len(table) > 1:
         png = save_figure(fault_sweep_figure(table, xlabel, reference, ref_label), target / f"fault_{fault}.png")
-    console.print(f"table: [bold]{safe(target / f'fault_{fault}.csv')}[/bold]" + (f"; figure: [bold]{safe(png)}[/bold]" if png else ""))
+    console.print(f"table: {safe(target / f'fault_{fault}.csv')}" + (f"; figure: {safe(png)}" if png else ""))
 
 
 @robot_app.command("simulate")
@@ -156,7 +156,7 @@ def simulate(
     bar, update = progress_bar("simulated rig: episodes")
     with bar:
         log = simulate_session(out, config or paper_config("rig"), progress=update, stop_after=stop_after)
-    console.print(f"session log: [bold]{safe(log)}[/bold]")
+    console.print(f"session log: {safe(log)}")
     console.print(f"next: probecommit audit {safe(out)}   |   probecommit replay {safe(out)} --fault boundary")
 
 

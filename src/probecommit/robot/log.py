@@ -112,6 +112,8 @@ def check_record(record: Any, where: str) -> None:
     if not isinstance(record, dict) or record.get("type") not in RECORD_TYPES:
         raise SessionLogError(f"{where} is not a session record (needs 'type' in {', '.join(RECORD_TYPES)})")
     kind = record["type"]
+    if kind == "header" and record.get("format") != LOG_FORMAT:
+        raise SessionLogError(f"{where}: header format {record.get('format')!r:.80}, this version reads {LOG_FORMAT!r}")
     for name, (ok, what) in RECORD_FIELDS[kind].items():
         if name not in record:
             raise SessionLogError(f"{where}: {kind} record lacks field '{name}' ({what})")
