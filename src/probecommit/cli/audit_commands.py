@@ -15,6 +15,7 @@ import typer
 from rich.table import Table
 
 from probecommit.cli.common import console, err_console, safe, user_errors
+from probecommit.store.safefile import output_dir, write_bytes, write_text
 
 def _f(v, signed: bool = False) -> str:
     try:
@@ -86,7 +87,7 @@ def write_csv(frame, path: Path) -> None:
     for col in out.columns:
         if pd.api.types.is_object_dtype(out[col]) or pd.api.types.is_string_dtype(out[col]):
             out[col] = out[col].map(lambda v: "'" + v if isinstance(v, str) and v[:1] in ("=", "+", "-", "@", "\t", "\r") else v)
-    out.to_csv(path, index=False)
+    write_bytes(path, out.to_csv(index=False).encode())
 
 
 @user_errors
@@ -118,8 +119,7 @@ def audit_command(
 
             print_warning("this run's probes were chosen adaptively by its own belief: its episodes are not paired "
                           "with a run of another model on the same instances (other probes would have been chosen)")
-    out = out or (path if path.is_dir() else path.with_name(f"{path.stem}-audit"))
-    out.mkdir(parents=True, exist_ok=True)
+    out = output_dir(out or (path if path.is_dir() else path.with_name(f"{path.stem}-audit")))
     print_audit_table(result.table, f"audit of {path}")
     if result.n_failed:
         console.print(f"{result.n_failed} failed row(s) of {result.n_total} excluded from every metric")
@@ -173,8 +173,7 @@ def calibrate_command(
         raise ValueError(f"--plateau must be 'prefix' or 'hull', got {plateau!r}")
     res = calibrate(cal, test, alpha, _parse_budgets(budgets), cost_budget=cost_budget, resamples=resamples, seed=seed,
                     plateau=plateau)
-    out = out or test / "calibration"
-    out.mkdir(parents=True, exist_ok=True)
+    out = output_dir(out or test / "calibration")
     console.print(f"M = {res.n_calibration} calibration instances, 1 - alpha = {1 - alpha:.2f}; "
                   f"simultaneous t = {_f(res.simultaneous_threshold)}; margin gamma = {res.margin.gamma:.2f}"
                   f"{'' if res.margin.satisfied else ' (rule not met on the grid)'}; "
@@ -205,7 +204,7 @@ def calibrate_command(
         t4.add_row(f"{r['treatment']} - {r['baseline']}", "", str(int(r["n_pairs"])),
                    f"{_f(r['difference'], True)} [{_f(r['lo'], True)}, {_f(r['hi'], True)}] p={r['p_sign_flip']:.3g}")
     print_table(t4)
-    (out / "calibration.json").write_text(json.dumps(res.to_dict(), indent=2, default=float))
+    write_text(out / "calibration.json", json.dumps(res.to_dict(), indent=2, default=float))
     write_csv(res.table3, out / "table3.csv")
     write_csv(res.cost, out / "cost.csv")
     write_csv(res.cost_differences, out / "cost_differences.csv")
@@ -234,8 +233,7 @@ def gates_command(
     from probecommit.report.figures import save_figure
 
     res = gates(cal, test, alpha, _parse_budgets(budgets), target_rate=target, resamples=resamples, seed=seed)
-    out = out or test / "gates"
-    out.mkdir(parents=True, exist_ok=True)
+    out = output_dir(out or test / "gates")
     console.print(f"simultaneous t = {_f(res.info['threshold'])}, margin gamma = {res.info['gamma']:.2f}; "
                   f"{res.n_trajectories} trajectories ({res.n_dropped} dropped), budgets {res.budgets}")
     tab = Table(title=f"gates at the commit rate nearest {target:.0%}", title_style="bold")

@@ -22,9 +22,9 @@ def is_session_log(path: Path) -> bool:
 
 def _out_dir(path: Path, out: Optional[Path], suffix: str) -> Path:
     folder = path if path.is_dir() else path.parent
-    target = out or folder / suffix
-    target.mkdir(parents=True, exist_ok=True)
-    return target
+    from probecommit.store.safefile import output_dir
+
+    return output_dir(out or folder / suffix)
 
 
 def _ci(lo: float, hi: float) -> str:

@@ -8,6 +8,7 @@ from typing import Optional
 
 import typer
 
+from probecommit.store.safefile import output_dir, write_text, write_with
 from probecommit.cli.common import console, err_console, progress_bar, safe, user_errors
 from probecommit.tasks.insertion.model import PAPER_DELTA_MM
 
@@ -100,11 +101,11 @@ def scan(
         update(0, 1)
         result = scan_development(p, sim, step)
         update(1, 1)
-    out.mkdir(parents=True, exist_ok=True)
-    result.scans.to_parquet(out / "scan.parquet")
+    out = output_dir(out)
+    write_with(out / "scan.parquet", result.scans.to_parquet)
     summary = result.summary()
     fig = scan_figure(result.grid, result.scans, str(result.scans.instance_id.iloc[0]), summary["delta"], out / "scan_section.png")
-    (out / "scan_summary.json").write_text(json.dumps(summary, indent=2))
+    write_text(out / "scan_summary.json", json.dumps(summary, indent=2))
     console.print(f"{engine}: delta = {summary['delta']:+.4f} mm (SD {summary['sd']:.4f}, min {summary['min']:+.4f}, "
                   f"max {summary['max']:+.4f}) over {summary['scans']} scans; boundary moves "
                   f"{summary['shift_vs_deployed_mm']:.3f} mm from the deployed hg - r; engine calls {sim.engine_calls}")
@@ -116,7 +117,7 @@ def scan(
 
         cfg = p.run_config("development", "development", "development", "random")
         window = scan_capture_window(sim, draw_instances(cfg, build_model(cfg)))
-        window.truths.to_parquet(out / "capture.parquet")
+        write_with(out / "capture.parquet", window.truths.to_parquet)
         c = window.summary()
         console.print(f"{engine}: capture window / w(c) = {c['ratio_mean']:.3f} (SD {c['ratio_sd']:.3f} over the "
                       f"development truths); per truth: {safe(out / 'capture.parquet')}")
@@ -172,8 +173,8 @@ def faults(
     bar, update = progress_bar("fault arms")
     with bar:
         episodes = run_fault_harness(rollouts, arms, progress=update)
-    out.mkdir(parents=True, exist_ok=True)
-    episodes.to_parquet(out / "faults_episodes.parquet")
+    out = output_dir(out)
+    write_with(out / "faults_episodes.parquet", episodes.to_parquet)
     probe = episodes[(episodes.method == "probe_robust") & (episodes.status == "ok")]
     kmax = int(probe.k.max())
     summary = (probe[probe.k == kmax].assign(optimism=lambda d: d.realized - d.predicted)

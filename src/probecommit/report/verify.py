@@ -35,6 +35,7 @@ from typing import Any, Iterator
 
 import numpy as np
 import pandas as pd
+from probecommit.store.safefile import write_text
 
 MANIFEST = "MANIFEST.json"
 #: Result files that belong in a study's manifest.
@@ -78,7 +79,7 @@ def write_manifest(study_dir: str | Path) -> Path:
     files = sorted(p for p in study_dir.iterdir() if p.is_file() and p.suffix in RESULT_SUFFIXES and p.name != MANIFEST)
     manifest = {"sha256": {p.name: sha256_file(p) for p in files}}
     path = study_dir / MANIFEST
-    path.write_text(json.dumps(manifest, indent=1, sort_keys=True) + "\n")
+    write_text(path, json.dumps(manifest, indent=1, sort_keys=True) + "\n")
     return path
 
 
