@@ -119,7 +119,7 @@ def audit_command(
 
             print_warning("this run's probes were chosen adaptively by its own belief: its episodes are not paired "
                           "with a run of another model on the same instances (other probes would have been chosen)")
-    out = output_dir(out or (path if path.is_dir() else path.with_name(f"{path.stem}-audit")))
+    out = output_dir(path if out is None and path.is_dir() else out, path.with_name(f"{path.stem}-audit"))
     print_audit_table(result.table, f"audit of {path}")
     if result.n_failed:
         console.print(f"{result.n_failed} failed row(s) of {result.n_total} excluded from every metric")
@@ -173,7 +173,7 @@ def calibrate_command(
         raise ValueError(f"--plateau must be 'prefix' or 'hull', got {plateau!r}")
     res = calibrate(cal, test, alpha, _parse_budgets(budgets), cost_budget=cost_budget, resamples=resamples, seed=seed,
                     plateau=plateau)
-    out = output_dir(out or test / "calibration")
+    out = output_dir(out, test / "calibration")
     console.print(f"M = {res.n_calibration} calibration instances, 1 - alpha = {1 - alpha:.2f}; "
                   f"simultaneous t = {_f(res.simultaneous_threshold)}; margin gamma = {res.margin.gamma:.2f}"
                   f"{'' if res.margin.satisfied else ' (rule not met on the grid)'}; "
@@ -233,7 +233,7 @@ def gates_command(
     from probecommit.report.figures import save_figure
 
     res = gates(cal, test, alpha, _parse_budgets(budgets), target_rate=target, resamples=resamples, seed=seed)
-    out = output_dir(out or test / "gates")
+    out = output_dir(out, test / "gates")
     console.print(f"simultaneous t = {_f(res.info['threshold'])}, margin gamma = {res.info['gamma']:.2f}; "
                   f"{res.n_trajectories} trajectories ({res.n_dropped} dropped), budgets {res.budgets}")
     tab = Table(title=f"gates at the commit rate nearest {target:.0%}", title_style="bold")

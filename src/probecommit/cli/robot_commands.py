@@ -24,7 +24,7 @@ def _out_dir(path: Path, out: Optional[Path], suffix: str) -> Path:
     folder = path if path.is_dir() else path.parent
     from probecommit.store.safefile import output_dir
 
-    return output_dir(out or folder / suffix)
+    return output_dir(out, folder / suffix)
 
 
 def _ci(lo: float, hi: float) -> str:

@@ -101,7 +101,7 @@ def scan(
         update(0, 1)
         result = scan_development(p, sim, step)
         update(1, 1)
-    out = output_dir(out)
+    out = output_dir(out, out)
     write_with(out / "scan.parquet", result.scans.to_parquet)
     summary = result.summary()
     fig = scan_figure(result.grid, result.scans, str(result.scans.instance_id.iloc[0]), summary["delta"], out / "scan_section.png")
@@ -173,7 +173,7 @@ def faults(
     bar, update = progress_bar("fault arms")
     with bar:
         episodes = run_fault_harness(rollouts, arms, progress=update)
-    out = output_dir(out)
+    out = output_dir(out, out)
     write_with(out / "faults_episodes.parquet", episodes.to_parquet)
     probe = episodes[(episodes.method == "probe_robust") & (episodes.status == "ok")]
     kmax = int(probe.k.max())

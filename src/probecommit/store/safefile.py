@@ -46,10 +46,11 @@ def refuse_symlink(path: str | Path, what: str = "file") -> Path:
     return path
 
 
-def output_dir(path: str | Path) -> Path:
-    """An output folder, created if missing; a symlinked default folder is refused (its files would land
-    outside the run)."""
-    path = refuse_symlink(path, "output folder")
+def output_dir(chosen: str | Path | None, default: str | Path) -> Path:
+    """An output folder, created if missing: the user's ``chosen`` one as it is (a link they made is
+    theirs), else ``default``, which is refused if it is a symlink (a folder inside a run directory
+    pointing elsewhere would put the files outside the run)."""
+    path = Path(chosen) if chosen is not None else refuse_symlink(default, "output folder")
     path.mkdir(parents=True, exist_ok=True)
     return path
 
