@@ -148,9 +148,8 @@ def replay(
     session log is replayed as deployed (it must reproduce its own decisions), or
     under an injected fault with --fault (paper Fig. 7c, 7d).
     """
-    import yaml
-
     from probecommit.cli.robot_commands import is_session_log, replay_session_log
+    from probecommit.store.yamlsafe import load_yaml
 
     if is_session_log(run_dir):
         if model is not None or delta is not None or set_ or fixed_probes:
@@ -170,7 +169,7 @@ def replay(
         section, dot, field = key.strip().partition(".")
         if not (eq and dot and section and field):
             raise ValueError(f"--set expects SECTION.FIELD=VALUE (e.g. model.sigma=0.4), got {item!r}")
-        overrides.setdefault(section, {})[field] = yaml.safe_load(value)
+        overrides.setdefault(section, {})[field] = load_yaml(value, f"--set {key.strip()}")
     if model is not None or delta is not None or not overrides:
         from probecommit.runner.replay import load_run as _load
 

@@ -111,9 +111,10 @@ def audit_command(
     result = audit(path, resamples=resamples, seed=seed)
     config_file = path / "config.yaml" if path.is_dir() else None
     if config_file is not None and config_file.is_file():
-        import yaml
+        from probecommit.store.yamlsafe import load_yaml
 
-        schedule = ((yaml.safe_load(config_file.read_text()) or {}).get("probes") or {}).get("schedule")
+        data = load_yaml(config_file.read_bytes(), str(config_file))
+        schedule = (((data if isinstance(data, dict) else {}).get("probes") or {}) or {}).get("schedule")
         if schedule == "adaptive":
             from probecommit.cli.common import print_warning
 

@@ -8,6 +8,8 @@ from pathlib import Path
 from typing import Annotated, Any, Literal, Union
 
 import yaml
+
+from probecommit.store.yamlsafe import YamlError, load_yaml
 from pydantic import Field, StrictBool, ValidationError, field_validator, model_validator
 
 from probecommit.tasks.config import ConfigError, FieldError as _FieldError, StrictModel as _Strict
@@ -304,41 +306,6 @@ def parse_config(data: dict) -> StudyConfig:
         raise ConfigError(_one_line(f"invalid config: {type(exc).__name__}: {exc}")) from None
 
 
-#: Most YAML aliases a config may hold (a config needs none; anchors for repeated lists are fine).
-MAX_YAML_ALIASES = 64
-
-
-class _UniqueKeyLoader(yaml.SafeLoader):
-    """Safe YAML loader that refuses a key given twice (YAML would keep the last silently)."""
-
-
-def _construct_mapping(loader: _UniqueKeyLoader, node: yaml.MappingNode, deep: bool = False) -> dict:
-    loader.flatten_mapping(node)
-    seen: dict[Any, Any] = {}
-    for key_node, _ in node.value:
-        key = loader.construct_object(key_node, deep=deep)
-        try:
-            duplicate = key in seen
-        except TypeError:  # unhashable key: let the base constructor report it
-            break
-        if duplicate:
-            raise yaml.constructor.ConstructorError(
-                None, None, f"duplicate key {key!r} (first at line {seen[key].start_mark.line + 1})", key_node.start_mark
-            )
-        seen[key] = key_node
-    return loader.construct_mapping(node, deep=deep)
-
-
-_UniqueKeyLoader.add_constructor(yaml.resolver.BaseResolver.DEFAULT_MAPPING_TAG, _construct_mapping)
-
-
-def _yaml_error(path: Path, exc: yaml.YAMLError) -> str:
-    mark = getattr(exc, "problem_mark", None) or getattr(exc, "context_mark", None)
-    where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark is not None else ""
-    problem = getattr(exc, "problem", None) or getattr(exc, "context", None) or str(exc).splitlines()[0]
-    return _one_line(f"{path}: not valid YAML{where}: {problem}")
-
-
 def load_config(path: str | Path) -> StudyConfig:
     """Load and validate a YAML study config.
 
@@ -354,25 +321,13 @@ def load_config(path: str | Path) -> StudyConfig:
     if not path.is_file():
         raise ConfigError(f"config file not found: {path}")
     try:
-        text = path.read_bytes().decode("utf-8")
-    except UnicodeDecodeError as exc:
-        raise ConfigError(f"{path}: not UTF-8 text (byte {exc.start}); a config is a YAML text file") from None
+        raw = path.read_bytes()
     except OSError as exc:
         raise ConfigError(_one_line(f"{path}: cannot read: {exc.strerror or exc}")) from None
     try:
-        # Bound the work on untrusted YAML before constructing anything: a few hundred bytes of
-        # nested aliases (a "billion laughs") expand to billions of nodes for any traversal.
-        aliases = sum(isinstance(event, yaml.AliasEvent) for event in yaml.parse(text, Loader=yaml.SafeLoader))
-        if aliases > MAX_YAML_ALIASES:
-            raise ConfigError(f"{path}: {aliases} YAML aliases (*name); a study config needs none, at most "
-                              f"{MAX_YAML_ALIASES} are accepted")
-        data = yaml.load(text, Loader=_UniqueKeyLoader)  # noqa: S506 - a SafeLoader subclass
-    except ConfigError:
-        raise
-    except yaml.YAMLError as exc:
-        raise ConfigError(_yaml_error(path, exc)) from None
-    except (ValueError, TypeError, RecursionError) as exc:  # e.g. unhashable keys, absurd nesting
-        raise ConfigError(_one_line(f"{path}: not a usable YAML mapping: {type(exc).__name__}: {exc}")) from None
+        data = load_yaml(raw, str(path))  # size, node and depth budgets; safe tags; unique keys
+    except YamlError as exc:
+        raise ConfigError(str(exc)) from None
     if data is None:
         data = {}
     if not isinstance(data, dict):

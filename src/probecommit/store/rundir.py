@@ -39,9 +39,9 @@ import pandas as pd
 import pyarrow as pa
 import pyarrow.compute as pc
 import pyarrow.parquet as pq
-import yaml
 
 from probecommit import __version__
+from probecommit.store.yamlsafe import YamlError, load_yaml
 from probecommit.store.schema import (EPISODE_COLUMNS, INSTANCE_COLUMNS, PROBE_COLUMNS, Column, float_matrix,
                                       vector_columns)
 
@@ -149,8 +149,9 @@ def _flatten(data: Any, prefix: str = "") -> dict[str, Any]:
 def config_difference(old_yaml: str, new_yaml: str) -> str:
     """The first differing config field, as ``field: old in the directory, new here``."""
     try:
-        old, new = _flatten(yaml.safe_load(old_yaml) or {}), _flatten(yaml.safe_load(new_yaml) or {})
-    except yaml.YAMLError:
+        old = _flatten(load_yaml(old_yaml, "config.yaml") or {})
+        new = _flatten(load_yaml(new_yaml, "the config") or {})
+    except YamlError:
         return "its config.yaml is not valid YAML"
     for key in list(new) + [k for k in old if k not in new]:
         if old.get(key, "<unset>") != new.get(key, "<unset>"):
