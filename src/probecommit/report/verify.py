@@ -35,6 +35,7 @@ from typing import Any, Iterator
 
 import numpy as np
 import pandas as pd
+from probecommit.store.manifest_rules import ManifestError, read_json, read_manifest
 from probecommit.store.safefile import write_text
 
 MANIFEST = "MANIFEST.json"
@@ -134,7 +135,11 @@ def check_hashes(study: Path, report: Report) -> None:
     report.check(manifest_path.is_file(), f"{study}: no {MANIFEST} (hashes of the frozen files)")
     if not manifest_path.is_file():
         return
-    listed = json.loads(manifest_path.read_text()).get("sha256", {})
+    try:  # the manifest rule set: named on error, never a traceback
+        listed = read_manifest(manifest_path)["sha256"]
+    except ManifestError as exc:
+        report.check(False, str(exc))
+        return
     for name, digest in sorted(listed.items()):
         path = study / name
         if not path.is_file():
@@ -152,7 +157,11 @@ def check_json(study: Path, report: Report) -> dict[str, Any]:
     report.check(path.is_file(), f"{study}: no results.json")
     if not path.is_file():
         return {}
-    payload = json.loads(path.read_text())
+    try:
+        payload = read_json(path, "results file")
+    except ManifestError as exc:
+        report.check(False, str(exc))
+        return {}
     numbers: dict[str, Any] = {}
     where = f"{path}"
     for key, value in _walk(payload):

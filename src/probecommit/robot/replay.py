@@ -115,7 +115,7 @@ def parse_sweep(text: str) -> list[float]:
     try:
         if ":" in text:
             parts = [float(p) for p in text.split(":")]
-            if len(parts) != 3 or parts[2] <= 0 or parts[1] < parts[0]:
+            if len(parts) != 3 or not all(np.isfinite(parts)) or parts[2] <= 0 or parts[1] < parts[0]:
                 raise ValueError
             n = int(np.floor((parts[1] - parts[0]) / parts[2] + 1e-9)) + 1
             if n > 1000:
@@ -123,7 +123,7 @@ def parse_sweep(text: str) -> list[float]:
             return [round(parts[0] + i * parts[2], 10) for i in range(n)]
         values = [float(p) for p in text.split(",") if p.strip()]
     except ValueError:
-        raise ValueError(f"--sweep must be START:STOP:STEP (STEP > 0, STOP >= START, at most 1000 points) or a comma "
+        raise ValueError(f"--sweep must be START:STOP:STEP (finite, STEP > 0, STOP >= START, at most 1000 points) or a comma "
                          f"list, got {text!r}") from None
     if not values or not all(np.isfinite(values)):
         raise ValueError(f"--sweep has no finite values: {text!r}")

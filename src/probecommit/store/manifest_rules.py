@@ -31,6 +31,26 @@ def _sha256(path: Path) -> str:
     return digest.hexdigest()
 
 
+def read_json(path: str | Path, what: str = "JSON file") -> Any:
+    """A JSON file's content; an unreadable or invalid file is one error naming it (JSON's
+    non-standard NaN/Infinity are read, as Python writes them; callers check values).
+
+    Raises:
+        ManifestError: naming the file, the line and column.
+    """
+    path = Path(path)
+    try:
+        return json.loads(path.read_bytes().decode("utf-8"))
+    except OSError as exc:
+        raise ManifestError(f"{path}: cannot read the {what}: {exc.strerror or exc}") from None
+    except UnicodeDecodeError:
+        raise ManifestError(f"{path}: not UTF-8 text; a {what} is JSON") from None
+    except json.JSONDecodeError as exc:
+        raise ManifestError(f"{path}: not valid JSON ({exc.msg} at line {exc.lineno}, column {exc.colno})") from None
+    except RecursionError:
+        raise ManifestError(f"{path}: the JSON nests too deeply to read") from None
+
+
 def read_manifest(path: str | Path) -> dict[str, Any]:
     """A manifest's content after the structural rules (see the module docstring).
 
@@ -41,12 +61,7 @@ def read_manifest(path: str | Path) -> dict[str, Any]:
     path = Path(path)
     if not path.is_file():
         raise ManifestError(f"{path}: no such manifest")
-    try:
-        data = json.loads(path.read_bytes().decode("utf-8"))
-    except UnicodeDecodeError:
-        raise ManifestError(f"{path}: not UTF-8 text; a manifest is JSON") from None
-    except json.JSONDecodeError as exc:
-        raise ManifestError(f"{path}: not valid JSON ({exc.msg} at line {exc.lineno}, column {exc.colno})") from None
+    data = read_json(path, "manifest")
     if not isinstance(data, dict):
         raise ManifestError(f"{path}: a manifest must be a JSON object, got a JSON {type(data).__name__}")
     digests = data.get("sha256")
@@ -78,6 +93,6 @@ def verify_files(path: str | Path, required: Iterable[str]) -> dict[str, Any]:
         if not file.is_file():
             raise ManifestError(f"{file}: listed in {path.name} but missing")
         if _sha256(file) != digest:
-            raise ManifestError(f"{file}: changed since {path.name} was written (sha256 differs); refusing an "
+            raise ManifestError(f"{file} changed since {path.name} was written (sha256 differs); refusing an "
                                 "altered file")
     return data
