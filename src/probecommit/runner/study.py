@@ -238,10 +238,29 @@ def check_reachable(address: str, timeout_s: float = 3.0) -> None:
     if not host or not port.isdigit():
         raise RuntimeError(f"--ray expects 'local', 'auto' or host:port, got {address!r}")
     try:
-        with socket.create_connection((host, int(port)), timeout=timeout_s):
-            return
+        with socket.create_connection((host, int(port)), timeout=timeout_s) as conn:
+            # Ray's GCS speaks gRPC (HTTP/2): a server answers the client preface with a SETTINGS frame.
+            # A port that accepts but is something else would leave ray.init waiting for minutes.
+            conn.settimeout(timeout_s)
+            conn.sendall(_HTTP2_PREFACE)
+            head = b""
+            while len(head) < 9:
+                chunk = conn.recv(9 - len(head))
+                if not chunk:
+                    break
+                head += chunk
+    except socket.timeout:
+        raise RuntimeError(f"cannot reach the Ray cluster at {address}: the port accepts connections but did not "
+                           f"answer as a Ray (gRPC) server within {timeout_s:g} s") from None
     except OSError as exc:
         raise RuntimeError(f"cannot reach the Ray cluster at {address}: {exc.strerror or exc}") from None
+    if len(head) < 9 or head[3] != 0x04:
+        raise RuntimeError(f"cannot reach the Ray cluster at {address}: the port answers, but not as a Ray (gRPC) "
+                           "server; check the address (the head node's GCS port, usually 6379)")
+
+
+#: HTTP/2 client connection preface and an empty SETTINGS frame (RFC 9113, section 3.4).
+_HTTP2_PREFACE = b"PRI * HTTP/2.0\r\n\r\nSM\r\n\r\n" + b"\x00\x00\x00\x04\x00\x00\x00\x00\x00"
 
 
 @contextlib.contextmanager
