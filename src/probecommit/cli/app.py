@@ -42,12 +42,13 @@ def print_budget_table(episodes, title: str) -> None:
 
 
 def _run(config, out: Path, workers: int, ray: Optional[str], threads: Optional[int] = None):
-    from probecommit.runner.study import preflight, run_study
+    from probecommit.runner.study import preflight, run_concurrency, run_study
     from probecommit.store.rundir import RunDir
     from probecommit.runner.config import dump_config
 
-    # Fail on a bad config or an incompatible directory before drawing a progress bar.
-    preflight(config)
+    # Fail on a bad config, too little memory for the run at its concurrency, or an incompatible
+    # directory before drawing a progress bar.
+    preflight(config, run_concurrency(config, workers, ray, threads))
     RunDir(out).check_writable(dump_config(config))
     bar, update = progress_bar(f"{config.name}: units")
     with bar:

@@ -24,6 +24,10 @@ TASK_SECTIONS = ("model", "simulator")
 __all__ = ["ConfigError", "StudyConfig", "load_config", "parse_config", "dump_config"]
 
 
+#: Most instances of a study (truths x contexts).
+MAX_INSTANCES = 100_000
+
+
 class InstancesConfig(_Strict):
     """Which ground-truth instances to draw."""
 
@@ -246,6 +250,12 @@ class StudyConfig(_Strict):
             raise _FieldError("instances.contexts", f"the {task.family} family needs a context per instance ({', '.join(task.context_names)})")
         if inst.contexts is not None:
             task.check_contexts(inst.contexts, "instances.contexts")
+        n_truths = len(inst.truths) if inst.truths is not None else inst.count
+        n_instances = n_truths * (len(inst.contexts) if inst.contexts is not None else 1)
+        if n_instances > MAX_INSTANCES:
+            raise _FieldError("instances.contexts" if inst.contexts else "instances.count",
+                              f"{n_truths} truths x {len(inst.contexts or [1])} contexts = {n_instances:,} instances, "
+                              f"more than the {MAX_INSTANCES:,} a study may have")
         if isinstance(self.probes.schedule, list):
             bad = [p for p in self.probes.schedule if len(p) != task.probe_dim]
             if bad:
