@@ -145,6 +145,8 @@ def simulate(
     config: Optional[Path] = typer.Argument(None, help="Study config of the rig (default: the frozen configs/paper/rig.yaml)."),
     out: Path = typer.Option(Path("runs/rig-session"), "--out", "-o", help="Session log directory (resumed if it exists)."),
     stop_after: Optional[int] = typer.Option(None, "--stop-after", min=1, help="Stop after this many episodes (resume later)."),
+    repair: bool = typer.Option(False, "--repair", help="Resume a log whose last line a crash cut off (the line is "
+                                "moved, byte for byte, to session.jsonl.partial)."),
 ) -> None:
     """Run the simulated rig (the stand-in robot) through a Session, writing a session log.
 
@@ -155,7 +157,7 @@ def simulate(
 
     bar, update = progress_bar("simulated rig: episodes")
     with bar:
-        log = simulate_session(out, config or paper_config("rig"), progress=update, stop_after=stop_after)
+        log = simulate_session(out, config or paper_config("rig"), progress=update, stop_after=stop_after, repair=repair)
     console.print(f"session log: {safe(log)}")
     console.print(f"next: probecommit audit {safe(out)}   |   probecommit replay {safe(out)} --fault boundary")
 
