@@ -66,7 +66,8 @@ def read_manifest(path: str | Path) -> dict[str, Any]:
         raise ManifestError(f"{path}: a manifest must be a JSON object, got a JSON {type(data).__name__}")
     digests = data.get("sha256")
     if not isinstance(digests, dict) or not digests:
-        shown = "missing" if "sha256" not in data else f"a {type(digests).__name__}" if digests else "empty"
+        shown = ("missing" if "sha256" not in data else "null" if digests is None else
+                 "empty" if isinstance(digests, dict) else f"a JSON {type(digests).__name__}")
         raise ManifestError(f"{path}: field 'sha256' must map each file to its digest; it is {shown}")
     for name, value in digests.items():
         if not isinstance(value, str) or not _HEX64.match(value):
