@@ -62,24 +62,39 @@ def _error_line(source: str, exc: yaml.YAMLError) -> str:
 
 
 def check_budget(node: yaml.Node, source: str, max_nodes: int = MAX_YAML_NODES, max_depth: int = MAX_YAML_DEPTH) -> int:
-    """Walk ``node`` as construction expands it; return the node count or raise :class:`YamlError`."""
-    count = 0
-    stack = [(node, 0)]
+    """The node count of ``node`` as construction expands it (every alias and merged mapping counted
+    each time it is used), or :class:`YamlError` over ``max_nodes`` or ``max_depth``.
+
+    Sizes and depths are computed once per composed node and summed (a post-order walk of the
+    graph), so the check costs the text's size, not the expansion's.
+    """
+    size: dict[int, int] = {}
+    depth: dict[int, int] = {}
+    visiting: set[int] = set()
+    stack: list[tuple[yaml.Node, bool]] = [(node, False)]
     while stack:
-        current, depth = stack.pop()
-        count += 1
-        if count > max_nodes:
+        current, ready = stack.pop()
+        key = id(current)
+        if key in size:
+            continue
+        children = ([n for pair in current.value for n in pair] if isinstance(current, yaml.MappingNode) else
+                    list(current.value) if isinstance(current, yaml.SequenceNode) else [])
+        if not ready:
+            if key in visiting:  # its own ancestor: an alias inside the node it names
+                raise YamlError(f"{source}: a recursive YAML alias (a node that contains itself); refusing it")
+            visiting.add(key)
+            stack.append((current, True))
+            stack.extend((child, False) for child in children if id(child) not in size)
+            continue
+        visiting.discard(key)
+        size[key] = 1 + sum(size.get(id(child), 0) for child in children)
+        depth[key] = 1 + max((depth.get(id(child), 0) for child in children), default=0)
+        if size[key] > max_nodes:
             raise YamlError(f"{source}: the YAML expands to more than {max_nodes:,} nodes (aliases and merge keys "
                             "counted each time they are used); refusing it")
-        if depth > max_depth:
+        if depth[key] > max_depth:
             raise YamlError(f"{source}: the YAML nests deeper than {max_depth} levels; refusing it")
-        if isinstance(current, yaml.MappingNode):
-            for key, value in current.value:
-                stack.append((key, depth + 1))
-                stack.append((value, depth + 1))
-        elif isinstance(current, yaml.SequenceNode):
-            stack.extend((item, depth + 1) for item in current.value)
-    return count
+    return size[id(node)]
 
 
 def load_yaml(text: str | bytes, source: str = "YAML") -> Any:
