@@ -59,7 +59,10 @@ def safe(text: object) -> str:
 
 
 def os_error_line(exc: OSError) -> str:
-    """One line for an OS error, naming the path and what went wrong."""
+    """One line for an OS error, naming the path and what went wrong (an error of ours with no
+    errno, a refused symlink, carries its own message)."""
+    if exc.errno is None and exc.args:
+        return str(exc)
     what = {errno.ENOSPC: "the disk is full", errno.EROFS: "the file system is read-only",
             errno.EACCES: "permission denied", errno.ENAMETOOLONG: "the name is too long",
             errno.EEXIST: "it already exists", errno.ENOTDIR: "a path component is a file, not a directory",
