@@ -16,8 +16,6 @@ from hypothesis import strategies as st
 from typer.testing import CliRunner
 
 from probecommit.cli.app import app
-from probecommit.cli.common import SafeConsole, clean
-from probecommit.store.safefile import UnsafePathError, output_dir, write_bytes
 from tests.audit.test_io import ROBOT
 
 runner = CliRunner()
@@ -57,6 +55,8 @@ def test_a_session_title_prints_literally(tmp_path):
                                                         "\x07", "\x9b", "\u202e", "\r", "\x00"]), max_size=12).map("".join))
 @settings(max_examples=50, deadline=None)
 def test_any_text_prints_as_it_is_minus_control_characters(text):
+    from probecommit.cli.common import SafeConsole, clean
+
     console = SafeConsole(record=True, width=500)
     console.print(text)
     console.print(text, "and", text)
@@ -82,6 +82,8 @@ def test_a_planted_output_symlink_is_refused_and_its_target_untouched(tmp_path, 
 
 
 def test_a_symlinked_default_output_folder_is_refused(tmp_path):
+    from probecommit.store.safefile import UnsafePathError, output_dir
+
     elsewhere = tmp_path / "elsewhere"
     elsewhere.mkdir()
     os.symlink(elsewhere, tmp_path / "calibration")
@@ -94,6 +96,8 @@ def test_a_symlinked_default_output_folder_is_refused(tmp_path):
        planted=st.sampled_from([None, "file", "dir", "dangling"]), data=st.binary(max_size=64))
 @settings(max_examples=30, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
 def test_any_planted_link_is_never_followed(tmp_path_factory, name, planted, data):
+    from probecommit.store.safefile import UnsafePathError, write_bytes
+
     root = tmp_path_factory.mktemp("w")
     victim = root / "victim"
     if planted == "dir":
