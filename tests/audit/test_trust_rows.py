@@ -76,6 +76,14 @@ def test_a_realized_column_in_percent_is_refused(tmp_path):
         read_episodes(csv_of(frame, tmp_path))
     # Declared continuous (a miss in mm that happens to be 0 or 100), it is read.
     assert len(read_episodes(csv_of(frame, tmp_path), loss="continuous")) == len(frame)
+    from typer.testing import CliRunner
+
+    from probecommit.cli.app import app
+
+    refused = CliRunner().invoke(app, ["audit", str(tmp_path / "log.csv"), "--resamples", "100"])
+    assert refused.exit_code == 2 and "--loss continuous" in refused.output
+    declared = CliRunner().invoke(app, ["audit", str(tmp_path / "log.csv"), "--resamples", "100", "--loss", "continuous"])
+    assert declared.exit_code == 0, declared.output
 
 
 def test_continuous_misses_with_exact_zeros_are_read():

@@ -339,11 +339,11 @@ def _check_losses(df: pd.DataFrame, ok: np.ndarray, source: str, csv: bool, loss
     if loss is None and ok.any():
         if np.all(np.isin(real[ok], (0.0, 100.0))) and np.any(real[ok] == 100.0):
             first(real == 100.0, "realized", "the column holds only 0 and 100, a failure in percent; give failure "
-                  "as 0/1 (or declare loss 'continuous' if 100 is a miss)")
+                  "as 0/1 (or declare the loss continuous, --loss continuous, if 100 is a miss)")
         share = binary01[ok].mean()
         if 0.5 <= share < 1.0:  # a stray integer among 0/1 failures (a continuous miss is rarely one)
             first(~binary01 & (real == np.round(real)), "realized", "the other rows are 0/1 failures; a binary task's realized is 0 or 1 "
-                  "(declare loss 'continuous' if the column is a miss)")
+                  "(declare the loss continuous, --loss continuous, if the column is a miss)")
         loss = "binary" if share == 1.0 else "continuous"
     if loss == "binary":
         first(~binary01, "realized", "a binary task's realized failure is 0 or 1")

@@ -46,7 +46,7 @@ class AuditResult:
 
 
 def audit(path_or_table: str | Path | pd.DataFrame, *, resamples: int = DEFAULT_RESAMPLES, seed: int = DEFAULT_SEED,
-          level: float = DEFAULT_LEVEL) -> AuditResult:
+          level: float = DEFAULT_LEVEL, loss: str | None = None) -> AuditResult:
     """Audit a run directory, a user's Parquet/CSV log, or an in-memory table.
 
     Args:
@@ -54,6 +54,7 @@ def audit(path_or_table: str | Path | pd.DataFrame, *, resamples: int = DEFAULT_
         resamples: Cluster-bootstrap resamples.
         seed: Bootstrap seed.
         level: Interval level.
+        loss: ``"binary"`` or ``"continuous"`` (None: inferred; see ``audit.io.validate_episodes``).
 
     Returns:
         The audit result.
@@ -62,9 +63,9 @@ def audit(path_or_table: str | Path | pd.DataFrame, *, resamples: int = DEFAULT_
         EpisodeTableError: The table is malformed (the message says how).
     """
     if isinstance(path_or_table, pd.DataFrame):
-        df = validate_episodes(path_or_table)
+        df = validate_episodes(path_or_table, loss=loss)
     else:
-        df = read_episodes(path_or_table)
+        df = read_episodes(path_or_table, loss=loss)
     table = audit_table(df, resamples=resamples, seed=seed, level=level)
     surprise = None
     probe = ok_episodes(df)

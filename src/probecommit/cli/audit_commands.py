@@ -98,6 +98,8 @@ def audit_command(
     resamples: int = typer.Option(2000, min=100, help="Cluster-bootstrap resamples."),
     seed: int = typer.Option(0, help="Bootstrap seed."),
     nominal: float = typer.Option(0.8, min=0.0, max=1.0, help="Nominal coverage drawn in the figure."),
+    loss: Optional[str] = typer.Option(None, "--loss", help="The loss kind of a log: 'binary' (failure 0/1) or "
+                                       "'continuous' (a miss); default: inferred from the realized column."),
 ) -> None:
     """Audit coverage, support escape and optimism per budget, with cluster-bootstrap intervals."""
     from probecommit.audit.pipeline import audit
@@ -108,7 +110,7 @@ def audit_command(
     if is_session_log(path):
         audit_session_log(path, out, resamples, seed)
         return
-    result = audit(path, resamples=resamples, seed=seed)
+    result = audit(path, resamples=resamples, seed=seed, loss=loss)
     config_file = path / "config.yaml" if path.is_dir() else None
     if config_file is not None and config_file.is_file():
         from probecommit.store.yamlsafe import load_yaml
