@@ -211,3 +211,28 @@ def test_any_edited_table_is_refused_in_one_line_or_audited_from_its_intervals(t
     assert np.isfinite(ok[["predicted", "realized", "z_true"]].to_numpy(float)).all()
     if ok["realized"].isin([0.0, 1.0]).all():
         assert (ok["predicted"] <= 1).all()
+
+
+JSON = st.recursive(st.one_of(st.none(), st.booleans(), st.integers(), st.floats(allow_nan=False), st.text(max_size=8),
+                              st.just("0" * 64), st.just("ab" * 32)),
+                    lambda inner: st.one_of(st.lists(inner, max_size=3),
+                                            st.dictionaries(st.sampled_from(["sha256", "episodes.parquet", "config.yaml",
+                                                                             "../x", "/etc/passwd", "v"]), inner,
+                                                            max_size=3)), max_leaves=10)
+
+
+@given(content=st.one_of(JSON.map(json.dumps), st.text(max_size=20)))
+@settings(max_examples=50, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+def test_any_manifest_is_read_by_the_rules_or_refused_in_one_line(tmp_path_factory, content):
+    from probecommit.store.manifest_rules import ManifestError, read_manifest
+
+    path = tmp_path_factory.mktemp("m") / "manifest.json"
+    path.write_text(content)
+    try:
+        data = read_manifest(path)
+    except ManifestError as exc:
+        assert str(path) in str(exc) and "\n" not in str(exc)
+        return
+    assert isinstance(data, dict) and data["sha256"]
+    for name, digest in data["sha256"].items():
+        assert len(digest) == 64 and not name.startswith("/") and ".." not in name.split("/")
