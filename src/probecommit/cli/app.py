@@ -111,12 +111,11 @@ def demo(
     engine: str = typer.Option("mujoco", help="Ground-truth engine: mujoco or analytic."),
 ) -> None:
     """Run the embedded default insertion study and write its report."""
-    import yaml
-
     from probecommit.report.demo import write_demo_report
     from probecommit.runner.config import parse_config
+    from probecommit.store.yamlsafe import load_yaml
 
-    data = yaml.safe_load(resources.files("probecommit").joinpath("configs/demo.yaml").read_text())
+    data = load_yaml(resources.files("probecommit").joinpath("configs/demo.yaml").read_text(), "configs/demo.yaml")
     data["simulator"]["engine"] = engine
     cfg = parse_config(data)
     result = _run(cfg, out, workers, None)

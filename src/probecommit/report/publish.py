@@ -14,6 +14,7 @@ from typing import Any
 from probecommit.report.paper import publish as publish_folders
 from probecommit.report.reproduction_md import render
 from probecommit.studies.explanations import EXPLANATIONS
+from probecommit.store.safefile import write_text
 
 HEADER = """# Reproduction
 
@@ -255,7 +256,7 @@ def write_reproduction_md(repo_root: str | Path) -> Path:
     if (frozen / "beyond" / "results.json").is_file():
         parts.append("\n" + beyond_section(frozen / "beyond"))
     path = repo_root / "REPRODUCTION.md"
-    path.write_text("".join(parts))
+    write_text(path, "".join(parts))
     from probecommit.report.paper_html import write_paper_report
 
     write_paper_report(frozen, path, frozen / "report.html")
@@ -269,7 +270,7 @@ def publish(results: dict[str, str | Path], repo_root: str | Path, timing: dict[
         merged = _load(root / "reproduction.json") or {}
         merged.setdefault("wall_s", {}).update(timing.get("wall_s", {}))
         merged.setdefault("engine_calls", {}).update(timing.get("engine_calls", {}))
-        (root / "reproduction.json").write_text(
+        write_text(root / "reproduction.json",
             json.dumps({"wall_s": merged["wall_s"], "engine_calls": merged["engine_calls"]}, indent=1) + "\n")
     write_reproduction_md(repo_root)
     return root
