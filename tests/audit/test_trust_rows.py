@@ -86,6 +86,18 @@ def test_a_realized_column_in_percent_is_refused(tmp_path):
     assert declared.exit_code == 0, declared.output
 
 
+def test_episode_row_applies_the_rules_when_a_row_is_made():
+    from probecommit.audit.rows import episode_row
+
+    good = dict(instance_id="p", k=1, z_true=0.0, action=0.0, predicted=0.2, realized=0.0, retained=(-1.0, 1.0),
+                hull=(-2.0, 2.0))
+    assert episode_row(**good)["covered"] is True
+    for bad, message in (({"predicted": -0.1}, "cannot be negative"), ({"retained": (1.0, -1.0)}, "retained_lo"),
+                         ({"hull": (float("nan"), 1.0)}, "hull_lo")):
+        with pytest.raises(ValueError, match=message):
+            episode_row(**{**good, **bad})
+
+
 def test_continuous_misses_with_exact_zeros_are_read():
     frame = robot_frame()
     frame["realized"] = [0.0, 0.0, 0.0, 0.37, 0.0, 0.0, 1.25, 0.0, 0.0, 0.0, 0.0, 0.0]
