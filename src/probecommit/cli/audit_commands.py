@@ -16,6 +16,7 @@ from rich.table import Table
 
 from probecommit.cli.common import console, err_console, safe, user_errors
 from probecommit.errors import UsageError
+from probecommit.store.safefile import output_dir, write_bytes, write_text
 
 def _f(v, signed: bool = False) -> str:
     try:
@@ -87,7 +88,7 @@ def write_csv(frame, path: Path) -> None:
     for col in out.columns:
         if pd.api.types.is_object_dtype(out[col]) or pd.api.types.is_string_dtype(out[col]):
             out[col] = out[col].map(lambda v: "'" + v if isinstance(v, str) and v[:1] in ("=", "+", "-", "@", "\t", "\r") else v)
-    out.to_csv(path, index=False)
+    write_bytes(path, out.to_csv(index=False).encode())
 
 
 @user_errors
@@ -98,6 +99,8 @@ def audit_command(
     resamples: int = typer.Option(2000, min=100, help="Cluster-bootstrap resamples."),
     seed: int = typer.Option(0, help="Bootstrap seed."),
     nominal: float = typer.Option(0.8, min=0.0, max=1.0, help="Nominal coverage drawn in the figure."),
+    loss: Optional[str] = typer.Option(None, "--loss", help="The loss kind of a log: 'binary' (failure 0/1) or "
+                                       "'continuous' (a miss); default: inferred from the realized column."),
 ) -> None:
     """Audit coverage, support escape and optimism per budget, with cluster-bootstrap intervals."""
     from probecommit.audit.pipeline import audit
@@ -108,19 +111,19 @@ def audit_command(
     if is_session_log(path):
         audit_session_log(path, out, resamples, seed)
         return
-    result = audit(path, resamples=resamples, seed=seed)
+    result = audit(path, resamples=resamples, seed=seed, loss=loss)
     config_file = path / "config.yaml" if path.is_dir() else None
     if config_file is not None and config_file.is_file():
-        import yaml
+        from probecommit.store.yamlsafe import load_yaml
 
-        schedule = ((yaml.safe_load(config_file.read_text()) or {}).get("probes") or {}).get("schedule")
+        data = load_yaml(config_file.read_bytes(), str(config_file))
+        schedule = (((data if isinstance(data, dict) else {}).get("probes") or {}) or {}).get("schedule")
         if schedule == "adaptive":
             from probecommit.cli.common import print_warning
 
             print_warning("this run's probes were chosen adaptively by its own belief: its episodes are not paired "
                           "with a run of another model on the same instances (other probes would have been chosen)")
-    out = out or (path if path.is_dir() else path.with_name(f"{path.stem}-audit"))
-    out.mkdir(parents=True, exist_ok=True)
+    out = output_dir(path if out is None and path.is_dir() else out, path.with_name(f"{path.stem}-audit"))
     print_audit_table(result.table, f"audit of {path}")
     if result.n_failed:
         console.print(f"{result.n_failed} failed row(s) of {result.n_total} excluded from every metric")
@@ -148,7 +151,7 @@ def audit_command(
         except Exception:  # noqa: BLE001 - the snapshot is an extra; the audit stands without it
             pass
     report = write_html_report(out / "audit.html", result, title=f"Audit of {path.name}", nominal=nominal, images=images)
-    console.print(f"report: [bold]{safe(report)}[/bold]")
+    console.print(f"report: {safe(report)}")
 
 
 @user_errors
@@ -174,8 +177,7 @@ def calibrate_command(
         raise UsageError(f"--plateau must be 'prefix' or 'hull', got {plateau!r}")
     res = calibrate(cal, test, alpha, _parse_budgets(budgets), cost_budget=cost_budget, resamples=resamples, seed=seed,
                     plateau=plateau)
-    out = out or test / "calibration"
-    out.mkdir(parents=True, exist_ok=True)
+    out = output_dir(out, test / "calibration")
     console.print(f"M = {res.n_calibration} calibration instances, 1 - alpha = {1 - alpha:.2f}; "
                   f"simultaneous t = {_f(res.simultaneous_threshold)}; margin gamma = {res.margin.gamma:.2f}"
                   f"{'' if res.margin.satisfied else ' (rule not met on the grid)'}; "
@@ -206,7 +208,7 @@ def calibrate_command(
         t4.add_row(f"{r['treatment']} - {r['baseline']}", "", str(int(r["n_pairs"])),
                    f"{_f(r['difference'], True)} [{_f(r['lo'], True)}, {_f(r['hi'], True)}] p={r['p_sign_flip']:.3g}")
     print_table(t4)
-    (out / "calibration.json").write_text(json.dumps(res.to_dict(), indent=2, default=float))
+    write_text(out / "calibration.json", json.dumps(res.to_dict(), indent=2, default=float))
     write_csv(res.table3, out / "table3.csv")
     write_csv(res.cost, out / "cost.csv")
     write_csv(res.cost_differences, out / "cost_differences.csv")
@@ -215,7 +217,7 @@ def calibrate_command(
     report = write_html_report(out / "calibration.html", res.audit_calibrated, title="Calibration",
                                calibration=res, nominal=1 - alpha,
                                notes=f"calibration run {cal}, test run {test}; the audit table is the calibrated executor's.")
-    console.print(f"report: [bold]{safe(report)}[/bold]")
+    console.print(f"report: {safe(report)}")
 
 
 @user_errors
@@ -235,8 +237,7 @@ def gates_command(
     from probecommit.report.figures import save_figure
 
     res = gates(cal, test, alpha, _parse_budgets(budgets), target_rate=target, resamples=resamples, seed=seed)
-    out = out or test / "gates"
-    out.mkdir(parents=True, exist_ok=True)
+    out = output_dir(out, test / "gates")
     console.print(f"simultaneous t = {_f(res.info['threshold'])}, margin gamma = {res.info['gamma']:.2f}; "
                   f"{res.n_trajectories} trajectories ({res.n_dropped} dropped), budgets {res.budgets}")
     tab = Table(title=f"gates at the commit rate nearest {target:.0%}", title_style="bold")
@@ -256,7 +257,7 @@ def gates_command(
     save_figure(gates_figure(res), out / "gates.png")
     report = write_html_report(out / "gates.html", title="Commit gates", gates=res, nominal=1 - alpha,
                                notes=f"calibration run {cal}, test run {test}")
-    console.print(f"report: [bold]{safe(report)}[/bold]")
+    console.print(f"report: {safe(report)}")
 
 
 def register(app: typer.Typer) -> None:

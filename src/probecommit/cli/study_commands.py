@@ -8,6 +8,7 @@ from typing import Optional
 
 import typer
 
+from probecommit.store.safefile import output_dir, write_text, write_with
 from probecommit.cli.common import console, err_console, progress_bar, safe, user_errors
 from probecommit.errors import UsageError
 from probecommit.tasks.insertion.model import PAPER_DELTA_MM
@@ -19,7 +20,7 @@ def _stepper():
     """A progress callback that shows one bar per named step."""
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
-    bar = Progress(TextColumn("[bold]{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
+    bar = Progress(TextColumn("{task.description}", style="bold", markup=False), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
                    console=err_console)
     tasks: dict[str, int] = {}
 
@@ -44,7 +45,7 @@ def reproduce(
 
     A killed reproduction resumes: rerun the same command and finished runs are kept.
     """
-    from rich.markup import escape
+    from probecommit.cli.common import safe as escape
     from rich.table import Table
 
     from probecommit.report import paper
@@ -65,13 +66,13 @@ def reproduce(
         options = {"families": [f.strip() for f in families.split(",") if f.strip()]} if families else {}
         done = paper.reproduce(names, root, quick=quick, progress=update, workers=workers, options=options)
     for name, folder in done["targets"].items():
-        console.print(f"{escape(name)}: [bold]{escape(str(folder))}[/bold]  (wall {done['wall_s'][name] / 60:.1f} min)")
+        console.print(f"{escape(name)}: {escape(str(folder))}  (wall {done['wall_s'][name] / 60:.1f} min)")
     # A family subset would replace the frozen Table II with a partial one: published only on request.
     if publish if publish is not None else not (quick or families):
         from probecommit.report.publish import publish as publish_results
 
         published = publish_results(done["targets"], REPO_ROOT, timing=done)
-        console.print(f"frozen results: [bold]{escape(str(published))}[/bold]; REPRODUCTION.md rewritten")
+        console.print(f"frozen results: {escape(str(published))}; REPRODUCTION.md rewritten")
 
 
 def scan(
@@ -101,15 +102,15 @@ def scan(
         update(0, 1)
         result = scan_development(p, sim, step)
         update(1, 1)
-    out.mkdir(parents=True, exist_ok=True)
-    result.scans.to_parquet(out / "scan.parquet")
+    out = output_dir(out, out)
+    write_with(out / "scan.parquet", result.scans.to_parquet)
     summary = result.summary()
     fig = scan_figure(result.grid, result.scans, str(result.scans.instance_id.iloc[0]), summary["delta"], out / "scan_section.png")
-    (out / "scan_summary.json").write_text(json.dumps(summary, indent=2))
+    write_text(out / "scan_summary.json", json.dumps(summary, indent=2))
     console.print(f"{engine}: delta = {summary['delta']:+.4f} mm (SD {summary['sd']:.4f}, min {summary['min']:+.4f}, "
                   f"max {summary['max']:+.4f}) over {summary['scans']} scans; boundary moves "
                   f"{summary['shift_vs_deployed_mm']:.3f} mm from the deployed hg - r; engine calls {sim.engine_calls}")
-    console.print(f"scans: [bold]{safe(out / 'scan.parquet')}[/bold]; figure: [bold]{safe(fig)}[/bold]")
+    console.print(f"scans: {safe(out / 'scan.parquet')}; figure: {safe(fig)}")
     if capture:
         from probecommit.runner.build import build_model
         from probecommit.runner.instances import draw_instances
@@ -117,10 +118,10 @@ def scan(
 
         cfg = p.run_config("development", "development", "development", "random")
         window = scan_capture_window(sim, draw_instances(cfg, build_model(cfg)))
-        window.truths.to_parquet(out / "capture.parquet")
+        write_with(out / "capture.parquet", window.truths.to_parquet)
         c = window.summary()
         console.print(f"{engine}: capture window / w(c) = {c['ratio_mean']:.3f} (SD {c['ratio_sd']:.3f} over the "
-                      f"development truths); per truth: [bold]{safe(out / 'capture.parquet')}[/bold]")
+                      f"development truths); per truth: {safe(out / 'capture.parquet')}")
 
 
 def engines_check(
@@ -129,7 +130,7 @@ def engines_check(
 ) -> None:
     """The same hand queries on every engine (taps over the plate, the slot centre, the chamfer;
     pegs centred, 1 mm and 3 mm off), and where they agree with the scene's design."""
-    from rich.markup import escape
+    from probecommit.cli.common import safe as escape
     from rich.table import Table
 
     from probecommit.studies.engines import check_engines
@@ -173,8 +174,8 @@ def faults(
     bar, update = progress_bar("fault arms")
     with bar:
         episodes = run_fault_harness(rollouts, arms, progress=update)
-    out.mkdir(parents=True, exist_ok=True)
-    episodes.to_parquet(out / "faults_episodes.parquet")
+    out = output_dir(out, out)
+    write_with(out / "faults_episodes.parquet", episodes.to_parquet)
     probe = episodes[(episodes.method == "probe_robust") & (episodes.status == "ok")]
     kmax = int(probe.k.max())
     summary = (probe[probe.k == kmax].assign(optimism=lambda d: d.realized - d.predicted)
@@ -182,8 +183,8 @@ def faults(
     console.print(summary.rename(columns={"realized": "failure", "covered": "coverage", "escaped": "escape"}).round(3).to_string())
     fig = fault_signatures(signature_table(episodes), out / "fault_signatures.png")
     if skipped:
-        err_console.print(f"[yellow]skipped faults needing other rollouts:[/yellow] {', '.join(skipped)} (pass --noise-run / --prior-run)")
-    console.print(f"episodes: [bold]{safe(out / 'faults_episodes.parquet')}[/bold]; figure: [bold]{safe(fig)}[/bold]")
+        err_console.print(f"skipped faults needing other rollouts: {', '.join(skipped)} (pass --noise-run / --prior-run)")
+    console.print(f"episodes: {safe(out / 'faults_episodes.parquet')}; figure: {safe(fig)}")
 
 
 def verify(
@@ -192,7 +193,7 @@ def verify(
     trace: bool = typer.Option(False, "--trace", help="Print where each REPRODUCTION.md number comes from."),
 ) -> None:
     """Check the numerical invariants of frozen results: hashes, intervals, ranges, identities, traceability."""
-    from rich.markup import escape
+    from probecommit.cli.common import safe as escape
 
     from probecommit.report.verify import verify as run_verify
 

@@ -27,6 +27,7 @@ import pandas as pd  # noqa: E402
 from probecommit import __version__  # noqa: E402
 from probecommit.report.style import DOUBLE  # noqa: E402
 from probecommit.audit.io import GROUP_COLUMNS  # noqa: E402
+from probecommit.store.safefile import write_text
 
 
 def _label(row: pd.Series | dict, groups: list[str]) -> str:
@@ -294,6 +295,5 @@ def write_html_report(path: str | Path, audit_result=None, *, title: str = "prob
            "<meta name='viewport' content='width=device-width, initial-scale=1'>"
            f"<title>{html.escape(title)}</title>"
            f"<style>{_CSS}</style></head><body>{''.join(parts)}</body></html>")
-    path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(doc, encoding="utf-8")
+    write_text(path, doc)
     return path

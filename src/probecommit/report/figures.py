@@ -15,6 +15,7 @@ import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 
 from probecommit.report.style import COLUMN  # noqa: E402  (applies the shared style)
+from probecommit.store.safefile import write_with  # noqa: E402
 
 
 def save_figure(fig, path: str | Path, dpi: int | None = None) -> Path:
@@ -28,8 +29,8 @@ def save_figure(fig, path: str | Path, dpi: int | None = None) -> Path:
     """
     path = Path(path)
     png = path.with_suffix(".png")
-    fig.savefig(png, dpi=dpi or 300)
-    fig.savefig(png.with_suffix(".pdf"), metadata={"CreationDate": None})
+    write_with(png, lambda buf: fig.savefig(buf, format="png", dpi=dpi or 300))
+    write_with(png.with_suffix(".pdf"), lambda buf: fig.savefig(buf, format="pdf", metadata={"CreationDate": None}))
     plt.close(fig)
     return png
 

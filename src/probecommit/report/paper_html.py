@@ -13,6 +13,7 @@ import re
 from pathlib import Path
 
 from probecommit.report.audit_report import _CSS
+from probecommit.store.safefile import write_text
 
 #: Target folders whose figures follow each REPRODUCTION.md section (by heading keyword).
 SECTION_TARGETS = (("MuJoCo insertion", "insertion"), ("Every family", "breadth"), ("Across engines", "engines"),
@@ -89,5 +90,5 @@ def write_paper_report(results_root: str | Path, reproduction_md: str | Path, ou
     doc = ("<!DOCTYPE html><html><head><meta charset='utf-8'>"
            "<meta name='viewport' content='width=device-width, initial-scale=1'><title>probecommit: reproduction</title>"
            f"<style>{css}</style></head><body>{''.join(parts)}</body></html>")
-    out.write_text(doc, encoding="utf-8")
+    write_text(out, doc)
     return out

@@ -35,6 +35,7 @@ from probecommit.studies.protocol import DEFAULT_PROTOCOL, Protocol, load_protoc
 from probecommit.studies.robust import final_failure, robust_candidates, tune_robust_filters
 from probecommit.studies.scan import scan_development
 from probecommit.store.rundir import RunDir
+from probecommit.store.safefile import write_text, write_with
 
 Progress = Callable[[str, int, int], None]
 
@@ -172,7 +173,7 @@ class InsertionReproduction:
 
     def write_table(self, key: str, title: str, table: str, note: str = "") -> None:
         text = f"### {title}\n\n{table}\n" + (f"\n{note}\n" if note else "")
-        (self.out / f"{key}.md").write_text(text)
+        write_text(self.out / f"{key}.md", text)
         self.rep.tables[key] = text
 
     # ---------------------------------------------------------------- steps
@@ -182,7 +183,7 @@ class InsertionReproduction:
         self.progress("boundary scan", 0, 1)
         result = scan_development(p, sim)
         self.rep.add_calls(sim.engine_calls)
-        result.scans.to_parquet(self.out / "scan.parquet")
+        write_with(self.out / "scan.parquet", result.scans.to_parquet)
         summary = result.summary()
         summary["frozen_delta"] = p.delta
         self.rep.results["scan"] = summary
@@ -201,7 +202,7 @@ class InsertionReproduction:
         sim = build_simulator(cfg)
         table = search_cover_schedule(cfg, sim, limit=limit, progress=lambda d, t: self.progress("cover search", d, t))
         self.rep.add_calls(sim.engine_calls)
-        table.assign(schedule=table["schedule"].map(str)).to_parquet(self.out / "cover_search.parquet")
+        write_with(self.out / "cover_search.parquet", table.assign(schedule=table["schedule"].map(str)).to_parquet)
         best = table.iloc[0]
         self.rep.results["cover"] = {
             "winner": [float(u) for u in best["schedule"]], "winner_failure": float(best["failure"]),
@@ -336,7 +337,7 @@ class InsertionReproduction:
         arms = fault_arms(f.noise_factor, f.prior_half_width, f.particles, f.frame_offset, f.temperature, p.sigma)
         rollouts = {"base": L["faults_base"], "noise": L["faults_noise"], "prior": L["faults_prior"]}
         episodes = run_fault_harness(rollouts, arms, progress=lambda d, t: self.progress("fault harness", d, t), **self.chunk)
-        episodes.to_parquet(self.out / "faults_episodes.parquet")
+        write_with(self.out / "faults_episodes.parquet", episodes.to_parquet)
         kmax = p.budgets["random"]
         table, res = [], {}
         for fault in FAULTS:
@@ -358,7 +359,7 @@ class InsertionReproduction:
                           fmt(row["tempered"][0]) if "tempered" in row else "--", fmt(row["fix"][0]) if "fix" in row else "--",
                           fmt(row["paired_fix"], signed=True) if "paired_fix" in row else "--"])
         signatures = signature_table(episodes)
-        signatures.to_parquet(self.out / "fault_signatures.parquet")
+        write_with(self.out / "fault_signatures.parquet", signatures.to_parquet)
         # The figure's data by fault and budget, so a claim can name one point (``fault_signatures.prior.1``).
         self.rep.results["fault_signatures"] = {
             str(fault): {str(int(r["k"])): {c: float(r[c]) for c in ("escape", "coverage", "optimism", "failure")}
@@ -425,7 +426,7 @@ class InsertionReproduction:
             del cal, test, res
             trim_heap()  # a split's copies go back before the next split copies its halves
         table = pd.DataFrame(rows)
-        table.to_parquet(self.out / "resplits.parquet")
+        write_with(self.out / "resplits.parquet", table.to_parquet)
         summary = {"level_mean_sd": [float(table.level.mean()), float(table.level.std(ddof=1))],
                    "failure_mean_sd": [float(table.failure.mean()), float(table.failure.std(ddof=1))],
                    "heldout_cluster_coverage": float(table.heldout_cluster_coverage.mean()),
@@ -448,12 +449,12 @@ class InsertionReproduction:
         result = gates(L["B_cal_cover"], L["B_test_cover"], alpha=self.p.alpha, **self.boot, **self.chunk)
         k = self.p.budgets["random"]
         coverage = coverage_vs_nominal(L["B_cal_random"].episodes, L["B_test_random"].episodes, k)
-        coverage.to_parquet(self.out / "coverage_vs_nominal.parquet")
+        write_with(self.out / "coverage_vs_nominal.parquet", coverage.to_parquet)
         path = decision_figure(coverage, result, self.out / "fig_6_decision.png")
         self.rep.figures["commit_gates"] = str(path)
         summary = result.summary
         self.rep.results["gates"] = {"summary": summary.to_dict("records"), "info": result.info}
-        result.curves.to_parquet(self.out / "gates_curves.parquet")
+        write_with(self.out / "gates_curves.parquet", result.curves.to_parquet)
         cols = [c for c in summary.columns if summary[c].dtype != object or c == "signal"]
         rows = [[fmt(v) if isinstance(v, float) else v for v in r] for r in summary[cols].itertuples(index=False)]
         self.write_table("gates", "Commit gates, Split B, cover schedule (failure among committed vs commit rate)",
@@ -511,7 +512,7 @@ class InsertionReproduction:
         self.rep.wall_s = time.perf_counter() - start
         payload = {"results": self.rep.results, "engine_calls": self.rep.engine_calls, "wall_s": self.rep.wall_s,
                    "figures": self.rep.figures}
-        (self.out / "results.json").write_text(json.dumps(payload, indent=2, default=_json_default))
+        write_text(self.out / "results.json", json.dumps(payload, indent=2, default=_json_default))
         return self.rep
 
 

@@ -35,6 +35,8 @@ from typing import Any, Iterator
 
 import numpy as np
 import pandas as pd
+from probecommit.store.manifest_rules import ManifestError, read_json, read_manifest
+from probecommit.store.safefile import write_text
 
 MANIFEST = "MANIFEST.json"
 #: Result files that belong in a study's manifest.
@@ -78,7 +80,7 @@ def write_manifest(study_dir: str | Path) -> Path:
     files = sorted(p for p in study_dir.iterdir() if p.is_file() and p.suffix in RESULT_SUFFIXES and p.name != MANIFEST)
     manifest = {"sha256": {p.name: sha256_file(p) for p in files}}
     path = study_dir / MANIFEST
-    path.write_text(json.dumps(manifest, indent=1, sort_keys=True) + "\n")
+    write_text(path, json.dumps(manifest, indent=1, sort_keys=True) + "\n")
     return path
 
 
@@ -133,7 +135,11 @@ def check_hashes(study: Path, report: Report) -> None:
     report.check(manifest_path.is_file(), f"{study}: no {MANIFEST} (hashes of the frozen files)")
     if not manifest_path.is_file():
         return
-    listed = json.loads(manifest_path.read_text()).get("sha256", {})
+    try:  # the manifest rule set: named on error, never a traceback
+        listed = read_manifest(manifest_path)["sha256"]
+    except ManifestError as exc:
+        report.check(False, str(exc))
+        return
     for name, digest in sorted(listed.items()):
         path = study / name
         if not path.is_file():
@@ -151,7 +157,11 @@ def check_json(study: Path, report: Report) -> dict[str, Any]:
     report.check(path.is_file(), f"{study}: no results.json")
     if not path.is_file():
         return {}
-    payload = json.loads(path.read_text())
+    try:
+        payload = read_json(path, "results file")
+    except ManifestError as exc:
+        report.check(False, str(exc))
+        return {}
     numbers: dict[str, Any] = {}
     where = f"{path}"
     for key, value in _walk(payload):

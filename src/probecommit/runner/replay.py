@@ -33,6 +33,7 @@ from probecommit.runner.inference import (
 )
 from probecommit.store.probes import validate_probes
 from probecommit.store.rundir import RunDir
+from probecommit.store.yamlsafe import load_yaml
 from probecommit.store.schema import cache_frame, cache_records, component_names
 
 import yaml
@@ -119,7 +120,7 @@ def load_run(run_dir: str | Path) -> LoadedRun:
     changed = run.verify_digests()
     if changed:
         raise run.altered(changed)
-    config = parse_config(yaml.safe_load(run.config_text()))
+    config = parse_config(load_yaml(run.config_text(), str(run.path / "config.yaml")))
     return LoadedRun(run.path, config, run.read("instances"), manifest=manifest)
 
 

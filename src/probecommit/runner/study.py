@@ -242,10 +242,29 @@ def check_reachable(address: str, timeout_s: float = 3.0) -> None:
     if not host or not port.isdigit():
         raise UnavailableError(f"--ray expects 'local', 'auto' or host:port, got {address!r}")
     try:
-        with socket.create_connection((host, int(port)), timeout=timeout_s):
-            return
+        with socket.create_connection((host, int(port)), timeout=timeout_s) as conn:
+            # Ray's GCS speaks gRPC (HTTP/2): a server answers the client preface with a SETTINGS frame.
+            # A port that accepts but is something else would leave ray.init waiting for minutes.
+            conn.settimeout(timeout_s)
+            conn.sendall(_HTTP2_PREFACE)
+            head = b""
+            while len(head) < 9:
+                chunk = conn.recv(9 - len(head))
+                if not chunk:
+                    break
+                head += chunk
+    except socket.timeout:
+        raise RuntimeError(f"cannot reach the Ray cluster at {address}: the port accepts connections but did not "
+                           f"answer as a Ray (gRPC) server within {timeout_s:g} s") from None
     except OSError as exc:
         raise UnavailableError(f"cannot reach the Ray cluster at {address}: {exc.strerror or exc}") from None
+    if len(head) < 9 or head[3] != 0x04:
+        raise UnavailableError(f"cannot reach the Ray cluster at {address}: the port answers, but not as a Ray (gRPC) "
+                           "server; check the address (the head node's GCS port, usually 6379)")
+
+
+#: HTTP/2 client connection preface and an empty SETTINGS frame (RFC 9113, section 3.4).
+_HTTP2_PREFACE = b"PRI * HTTP/2.0\r\n\r\nSM\r\n\r\n" + b"\x00\x00\x00\x04\x00\x00\x00\x00\x00"
 
 
 @contextlib.contextmanager
@@ -284,11 +303,19 @@ def _run_ray(jobs: list[Job], ray: Any) -> Iterator[Result]:
         yield ray.get(done[0])
 
 
-def preflight(config: StudyConfig) -> pd.DataFrame:
+#: Most episode rows a run may produce (a larger one is a config error, not a study).
+MAX_EPISODE_ROWS = 50_000_000
+#: Bytes an episode row takes in memory when the final table is merged (measured order, rounded up).
+EPISODE_ROW_BYTES = 400
+
+
+def preflight(config: StudyConfig, concurrency: int = 1) -> pd.DataFrame:
     """Everything that can fail on a bad config, before anything is written.
 
     Builds the model, filter and simulator (which imports the engine) and draws the
-    instances; returns the instances.
+    instances; returns the instances. The memory estimate is of the whole run: the units
+    held at once at the chosen ``concurrency``, and the final tables, read against the
+    host's and the container's memory; the output's size is bounded.
     """
     model = build.build_model(config)
     build.build_filter(model, config.belief)
@@ -299,11 +326,36 @@ def preflight(config: StudyConfig) -> pd.DataFrame:
     episodes = config.unit_instances * config.repeats
     d, budgets = len(model.latent_names), len(config.probes.commit_budgets) + 2
     per_particle = 8.0 * ((d + 2) * budgets + (0 if model.binary_loss else len(model.action_grid)))
-    check_fits(episodes * config.belief.particles * per_particle,
-               f"one work unit ({episodes} episodes x {config.belief.particles} particles)",
-               "belief.particles, repeats or unit_instances")
+    concurrency = max(1, int(concurrency))
+    check_fits(concurrency * episodes * config.belief.particles * per_particle,
+               f"{concurrency} work unit(s) at once ({episodes} episodes x {config.belief.particles} particles each)",
+               "belief.particles, repeats, unit_instances or the number of workers/threads")
+    rows = output_rows(config)
+    if rows > MAX_EPISODE_ROWS:
+        raise MemoryError(f"the run would write about {rows:,} episode rows, more than the {MAX_EPISODE_ROWS:,} a run "
+                          "may hold; reduce instances (count, truths x contexts), repeats, budgets or methods")
+    check_fits(rows * EPISODE_ROW_BYTES, f"the run's final tables ({rows:,} episode rows)",
+               "instances, repeats, budgets or methods")
     build.build_simulator(config)
     return draw_instances(config, model)
+
+
+def output_rows(config: StudyConfig) -> int:
+    """An upper bound on the episode rows of a run: instances x repeats x (budgets + 1) x methods."""
+    inst = config.instances
+    n = (len(inst.truths) if inst.truths is not None else inst.count) * (len(inst.contexts) if inst.contexts else 1)
+    return n * config.repeats * (len(config.probes.commit_budgets) + 1) * len(config.methods)
+
+
+def run_concurrency(config: StudyConfig, workers: int = 1, ray_address: str | None = None,
+                    threads: int | None = None) -> int:
+    """Work units held in memory at once on this machine for the chosen backend."""
+    if ray_address and ray_address != "local":
+        return 1  # units run on the cluster's nodes; the driver holds one result at a time
+    if workers > 1 or ray_address == "local":
+        return max(1, workers)
+    n_threads = unit_threads(config, threads)
+    return 2 * n_threads if n_threads > 1 else 1  # _run_threads keeps 2 x threads units in flight
 
 
 def run_study(
@@ -334,7 +386,8 @@ def run_study(
             at most 4, or ``$PROBECOMMIT_ENGINE_THREADS``; 1: one after the other).
     """
     start = time.perf_counter()
-    instances = preflight(config)  # a bad config fails here: no directory is created
+    # A bad config fails here, the memory of the whole run at its concurrency too: no directory is created.
+    instances = preflight(config, run_concurrency(config, workers, ray_address, threads))
     run = RunDir(out)
     config_yaml = dump_config(config)
     run.check_writable(config_yaml)  # an incompatible directory too

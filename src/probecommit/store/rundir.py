@@ -39,9 +39,10 @@ import pandas as pd
 import pyarrow as pa
 import pyarrow.compute as pc
 import pyarrow.parquet as pq
-import yaml
 
 from probecommit import __version__
+from probecommit.store.manifest_rules import ManifestError, read_manifest
+from probecommit.store.yamlsafe import YamlError, load_yaml
 from probecommit.store.schema import (EPISODE_COLUMNS, INSTANCE_COLUMNS, PROBE_COLUMNS, Column, float_matrix,
                                       vector_columns)
 from probecommit.errors import UserError
@@ -150,8 +151,9 @@ def _flatten(data: Any, prefix: str = "") -> dict[str, Any]:
 def config_difference(old_yaml: str, new_yaml: str) -> str:
     """The first differing config field, as ``field: old in the directory, new here``."""
     try:
-        old, new = _flatten(yaml.safe_load(old_yaml) or {}), _flatten(yaml.safe_load(new_yaml) or {})
-    except yaml.YAMLError:
+        old = _flatten(load_yaml(old_yaml, "config.yaml") or {})
+        new = _flatten(load_yaml(new_yaml, "the config") or {})
+    except YamlError:
         return "its config.yaml is not valid YAML"
     for key in list(new) + [k for k in old if k not in new]:
         if old.get(key, "<unset>") != new.get(key, "<unset>"):
@@ -479,7 +481,10 @@ class RunDir:
     def manifest(self) -> dict[str, Any]:
         if not self.is_complete():
             raise RunDirError(f"{self.path} is not a complete run (no {MANIFEST}); rerun the same command to resume it")
-        return json.loads((self.path / MANIFEST).read_text())
+        try:  # the manifest rule set: a JSON object with a non-empty sha256 map, named on error
+            return read_manifest(self.path / MANIFEST)
+        except ManifestError as exc:
+            raise RunDirError(str(exc)) from None
 
     def read(self, name: str) -> pd.DataFrame:
         self.manifest()
@@ -519,7 +524,12 @@ class RunDir:
     def verify_digests(self) -> list[str]:
         """Tables whose sha256 no longer matches the manifest."""
         manifest = self.manifest()
-        return [f for f, h in manifest["sha256"].items() if not (self.path / f).is_file() or sha256_file(self.path / f) != h]
+        listed = manifest["sha256"]
+        # Integrity on read: every file a reader uses must be listed (an emptied map proves nothing).
+        unlisted = [f"{f} (not in the manifest)" for f in (*(f"{t}.parquet" for t in TABLES), CONFIG)
+                    if f not in listed and (self.path / f).exists()]
+        return unlisted + [f for f, h in listed.items()
+                           if not (self.path / f).is_file() or sha256_file(self.path / f) != h]
 
 
 class EpisodeStream:

@@ -18,7 +18,6 @@ from typing import Any, Callable
 
 import numpy as np
 import pandas as pd
-import yaml
 
 from probecommit.audit.stats import paired_bootstrap
 from probecommit.baselines.gru import TrainingConfig, act, encode_history, equivalent, feature_scales, make_training_set, train_or_resume
@@ -26,12 +25,14 @@ from probecommit.runner.build import build_model
 from probecommit.runner.inference import instance_arrays
 from probecommit.runner.replay import load_run, probe_batch, simulator_for_run
 from probecommit.studies.paper_values import PRINTED as PAPER_GRU
+from probecommit.store.safefile import write_text
+from probecommit.store.yamlsafe import load_yaml
 
 CONFIG_DIR = Path(__file__).resolve().parents[1] / "configs" / "paper"
 
 
 def load_gru_config(path: str | Path | None = None) -> dict[str, Any]:
-    return yaml.safe_load(Path(path or CONFIG_DIR / "gru.yaml").read_text())
+    return load_yaml(Path(path or CONFIG_DIR / "gru.yaml").read_bytes(), str(path or CONFIG_DIR / "gru.yaml"))
 
 
 def reproduce_gru(out: str | Path, pipeline_run: str | Path, quick: bool = False,
@@ -87,11 +88,11 @@ def reproduce_gru(out: str | Path, pipeline_run: str | Path, quick: bool = False
         "training_loss_last_mean": float(np.mean([m["loss_last"] for m in meta])),
     }
     out.mkdir(parents=True, exist_ok=True)
-    (out / "results.json").write_text(json.dumps({"results": results}, indent=1))
+    write_text(out / "results.json", json.dumps({"results": results}, indent=1))
     table = ("| quantity | paper | ours [95% CI] |\n|---|---|---|\n"
              f"| pipeline mean miss, Probe-Robust({k}) (m) | {PAPER_GRU['T10-gru.pipeline']} | {results['pipeline_miss']:.3f} |\n"
              f"| GRU mean miss over {seeds} seeds (m) | {PAPER_GRU['T10-gru.gru']} | {results['gru_miss']:.3f} |\n"
              f"| GRU - pipeline (m) | {PAPER_GRU['T10-gru.diff']} [{PAPER_GRU['T10-gru.diff_lo']}, {PAPER_GRU['T10-gru.diff_hi']}] | {difference[0]:+.3f} [{difference[1]:+.3f}, {difference[2]:+.3f}] |\n"
              f"| inside the +-{cfg['equivalence_margin']:.3f} m margin | yes | {'yes' if results['equivalent'] else 'no'} |\n")
-    (out / "table_gru.md").write_text(table)
+    write_text(out / "table_gru.md", table)
     return results

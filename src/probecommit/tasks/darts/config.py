@@ -30,5 +30,6 @@ class DartsConfig(TaskConfigBase):
     simulator: DartsSimulatorConfig = DartsSimulatorConfig()
     latent_names = ("k_d", "m", "g")
     context_names = ("target",)
+    context_ranges = ((0.0, 100.0),)  # target (m): what the task can aim at
     positive_latents = True
     probe_dim = 2

@@ -30,5 +30,6 @@ class HingeConfig(TaskConfigBase):
     simulator: HingeSimulatorConfig = HingeSimulatorConfig()
     latent_names = ("f", "b", "m")
     context_names = ("target",)
+    context_ranges = ((0.0, 6.2832),)  # target (rad): what the task can aim at
     positive_latents = True
     probe_dim = 1

@@ -29,4 +29,5 @@ class PlanarSlideConfig(TaskConfigBase):
     simulator: PlanarSlideSimulatorConfig = PlanarSlideSimulatorConfig()
     latent_names = ("mu", "phi", "m")
     context_names = ("target_x", "target_y")
+    context_ranges = ((-20.0, 20.0), (-20.0, 20.0))  # target (m): what the task can aim at
     probe_dim = 1

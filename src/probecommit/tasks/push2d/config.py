@@ -33,5 +33,6 @@ class Push2DConfig(TaskConfigBase):
     simulator: Push2DSimulatorConfig = Push2DSimulatorConfig()
     latent_names = ("mu", "m", "k_d")
     context_names = ("target_x", "target_y")
+    context_ranges = ((-20.0, 20.0), (-20.0, 20.0))  # target (m): what the task can aim at
     positive_latents = True
     probe_dim = 1

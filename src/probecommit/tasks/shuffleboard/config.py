@@ -30,5 +30,6 @@ class ShuffleboardConfig(TaskConfigBase):
     simulator: ShuffleboardSimulatorConfig = ShuffleboardSimulatorConfig()
     latent_names = ("mu", "m", "k_d")
     context_names = ("target",)
+    context_ranges = ((0.0, 50.0),)  # target (m): what the task can aim at
     positive_latents = True
     probe_dim = 1
