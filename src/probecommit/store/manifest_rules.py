@@ -16,10 +16,12 @@ import re
 from pathlib import Path
 from typing import Any, Iterable
 
+from probecommit.errors import UserError
+
 _HEX64 = re.compile(r"^[0-9a-f]{64}$")
 
 
-class ManifestError(ValueError):
+class ManifestError(UserError, ValueError):
     """A manifest that is malformed, incomplete, or disagrees with the files; the message names them."""
 
 

@@ -17,6 +17,8 @@ from typing import Any
 
 import yaml
 
+from probecommit.errors import UserError
+
 #: Largest YAML text read (bytes): a config with 100,000 fixed truth rows fits.
 MAX_YAML_BYTES = 8 << 20
 #: Most nodes after alias and merge-key expansion.
@@ -27,7 +29,7 @@ MAX_YAML_DEPTH = 64
 _Composer = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
 
 
-class YamlError(ValueError):
+class YamlError(UserError, ValueError):
     """YAML that is malformed or over the budget; the message names the source."""
 
 
