@@ -78,7 +78,13 @@ class Declaration:
         example: Extra study-config fields of a small example study (contexts are added).
         default: The family a config naming no task runs (one family only).
         analytic: Add the ``analytic`` simulator that reads the model itself at the truth (a family
-            whose model is its own ground truth); False for a family whose model is a surrogate.
+            whose model is its own ground truth); False for a family whose model is a surrogate
+            or that names its own engines (the first engine of ``simulators`` is then the default).
+        sigma_limit: Upper bound of ``model.sigma`` and ``simulator.noise_sigma`` a config may set.
+        model_fields: Extra model-section fields, ``name -> (type, default or pydantic Field)``
+            (a fitted factor the model takes as a keyword); they follow ``margin``.
+        simulator_fields: Extra simulator-section fields, the same way; they follow ``noise_sigma``.
+        doc: The config class's docstring (one line for people).
     """
 
     name: str
@@ -96,6 +102,10 @@ class Declaration:
     example: Mapping[str, Any] = field(default_factory=dict)
     default: bool = False
     analytic: bool = True
+    sigma_limit: float = 1e6
+    model_fields: Mapping[str, Any] = field(default_factory=dict)
+    simulator_fields: Mapping[str, Any] = field(default_factory=dict)
+    doc: str = ""
 
     def __post_init__(self) -> None:
         problems = []
@@ -115,6 +125,12 @@ class Declaration:
             problems.append(f"decision {self.decision!r} is not a latent ({', '.join(names)})")
         if self.loss not in ("binary", "continuous"):
             problems.append(f"loss must be 'binary' or 'continuous', got {self.loss!r}")
+        if not 0 < self.sigma <= self.sigma_limit:
+            problems.append(f"sigma must be in (0, sigma_limit={self.sigma_limit:g}], got {self.sigma}")
+        clash = set(self.model_fields) & {"sigma", "margin", "prior_low", "prior_high"}
+        clash |= set(self.simulator_fields) & {"engine", "noise_sigma", "execute_all_aims"}
+        if clash:
+            problems.append(f"model_fields/simulator_fields redeclare the derived field(s) {sorted(clash)}")
         if not 0 < self.margin <= 1.5:
             problems.append(f"margin must be in (0, 1.5], got {self.margin}")
         if problems:
@@ -262,8 +278,8 @@ def _config_class(decl: Declaration) -> type:
     box = tuple[(float,) * d]  # type: ignore[misc]
     model_section = create_model(
         f"{decl.name}_model", __base__=ModelConfigBase,
-        sigma=(float, Field(decl.sigma, gt=0, le=1e6)), margin=(float, Field(decl.margin, gt=0, le=1.5)),
-        prior_low=(box, decl.prior_low), prior_high=(box, decl.prior_high),
+        sigma=(float, Field(decl.sigma, gt=0, le=decl.sigma_limit)), margin=(float, Field(decl.margin, gt=0, le=1.5)),
+        **dict(decl.model_fields), prior_low=(box, decl.prior_low), prior_high=(box, decl.prior_high),
     )
     engines = tuple(dict.fromkeys((["analytic"] if decl.analytic else []) + list(decl.simulators)))
     if not engines:
@@ -271,7 +287,8 @@ def _config_class(decl: Declaration) -> type:
     noise = decl.sigma if decl.noise_sigma is None else decl.noise_sigma
     simulator_section = create_model(
         f"{decl.name}_simulator", __base__=SimulatorConfigBase,
-        engine=(Literal[engines], engines[0]), noise_sigma=(float, Field(noise, ge=0, le=1e6)),  # type: ignore[valid-type]
+        engine=(Literal[engines], engines[0]), noise_sigma=(float, Field(noise, ge=0, le=decl.sigma_limit)),  # type: ignore[valid-type]
+        **dict(decl.simulator_fields),
     )
     positive = tuple(lat.positive for lat in decl.latents)
 
@@ -292,23 +309,32 @@ def _config_class(decl: Declaration) -> type:
     config.positive_latents = all(positive)
     config.latent_positive = positive
     config.check_truth_box = check_truth_box
-    config.__doc__ = f"Config of the declared family {decl.name!r}."
+    config.__doc__ = decl.doc or f"Config of the declared family {decl.name!r}."
     return config
 
 
-def family(decl: Declaration, model: type[DeclaredModel], *, register: bool = True) -> TaskSpec:
+def family(decl: Declaration, model: type, *, register: bool = True) -> TaskSpec:
     """The :class:`TaskSpec` of a declaration and its model class, registered (unless ``register=False``).
 
     Args:
         decl: The family's declaration.
-        model: A :class:`DeclaredModel` subclass writing ``predict`` and ``loss``.
+        model: A :class:`DeclaredModel` subclass writing ``predict`` and ``loss``; or a model class
+            of its own (a :class:`~probecommit.tasks.base.TaskModelBase` subclass built as
+            ``Model(**model_section.model_kwargs())``, as the built-in families' are), which gets
+            its ``name``, ``latent_names`` and ``context_names`` from the declaration.
         register: Add it to the registry (idempotent for the same family module).
     """
     from probecommit.tasks import registry
 
-    if not (isinstance(model, type) and issubclass(model, DeclaredModel)):
-        raise TypeError(f"family {decl.name!r}: the model must be a DeclaredModel subclass, got {model!r}")
-    model.declaration = decl
+    if not (isinstance(model, type) and issubclass(model, TaskModelBase)):
+        raise TypeError(f"family {decl.name!r}: the model must be a DeclaredModel (or TaskModelBase) subclass, got {model!r}")
+    if issubclass(model, DeclaredModel):
+        model.declaration = decl
+    else:
+        if decl.analytic and "analytic" not in decl.simulators:
+            raise ValueError(f"declaration of family {decl.name!r}: a model of its own needs its engines named "
+                             "in `simulators` (analytic=False)")
+        model.name, model.latent_names, model.context_names = decl.name, decl.latent_names, decl.context_names
     config = _config_class(decl)
     simulators = dict(decl.simulators)
     if decl.analytic and "analytic" not in simulators:
