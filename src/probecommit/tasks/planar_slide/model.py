@@ -51,9 +51,7 @@ class PlanarSlideModel(TaskModelBase):
     jitter_scale: np.ndarray = field(default_factory=lambda: np.array([0.01, 0.005, 0.02]))
     variant: str = "deployed"
 
-    name = "planar_slide"
-    latent_names = ("mu", "phi", "m")
-    context_names = ("target_x", "target_y")
+    # name, latent_names and context_names: from the declaration (probecommit.tasks.planar_slide).
     probe_grid = np.array([[1.0], [2.0], [3.0]])
     action_grid = np.stack(
         np.meshgrid(np.linspace(0.5, 4.0, 15), np.linspace(-1.5, 1.5, 13), indexing="ij"), axis=-1
