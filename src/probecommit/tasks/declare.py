@@ -85,6 +85,17 @@ class Declaration:
             (a fitted factor the model takes as a keyword); they follow ``margin``.
         simulator_fields: Extra simulator-section fields, the same way; they follow ``noise_sigma``.
         doc: The config class's docstring (one line for people).
+        model_order: The model section's field order in a dumped config, when not ``sigma``,
+            ``margin``, the extra fields, the prior box (a family whose frozen configs list it so).
+        engines_open: ``simulator.engine`` is any name, checked against the spec's engines when a
+            config is validated (an engine added to the spec later is accepted; the message lists
+            them); False: a ``Literal`` of the declared engines.
+        model_base, simulator_base, config_base: Bases of the derived model section, simulator
+            section and config (subclasses of ``ModelConfigBase``, ``SimulatorConfigBase`` and
+            ``TaskConfigBase`` that add validators or override ``simulator_kwargs`` and
+            ``check_truth_box``; they declare no fields: fields belong in the declaration).
+        default_engine: The simulator section's default engine (default: the first engine).
+        replay_shorthands, figure_guides: As :class:`~probecommit.tasks.base.TaskSpec`'s.
     """
 
     name: str
@@ -106,6 +117,14 @@ class Declaration:
     model_fields: Mapping[str, Any] = field(default_factory=dict)
     simulator_fields: Mapping[str, Any] = field(default_factory=dict)
     doc: str = ""
+    model_order: tuple[str, ...] = ()
+    engines_open: bool = False
+    default_engine: str | None = None
+    model_base: type = ModelConfigBase
+    simulator_base: type = SimulatorConfigBase
+    config_base: type = TaskConfigBase
+    replay_shorthands: Mapping[str, str] = field(default_factory=dict)
+    figure_guides: Any = None
 
     def __post_init__(self) -> None:
         problems = []
@@ -276,30 +295,37 @@ def _config_class(decl: Declaration) -> type:
     """The family's pydantic config, from the declaration (defaults, shapes, positivity)."""
     d = len(decl.latents)
     box = tuple[(float,) * d]  # type: ignore[misc]
-    model_section = create_model(
-        f"{decl.name}_model", __base__=ModelConfigBase,
-        sigma=(float, Field(decl.sigma, gt=0, le=decl.sigma_limit)), margin=(float, Field(decl.margin, gt=0, le=1.5)),
-        **dict(decl.model_fields), prior_low=(box, decl.prior_low), prior_high=(box, decl.prior_high),
-    )
+    model_fields = {"sigma": (float, Field(decl.sigma, gt=0, le=decl.sigma_limit)),
+                    "margin": (float, Field(decl.margin, gt=0, le=1.5)), **dict(decl.model_fields),
+                    "prior_low": (box, decl.prior_low), "prior_high": (box, decl.prior_high)}
+    if decl.model_order:
+        if sorted(decl.model_order) != sorted(model_fields):
+            raise ValueError(f"declaration of family {decl.name!r}: model_order {decl.model_order} must list the "
+                             f"model section's fields {tuple(model_fields)}")
+        model_fields = {name: model_fields[name] for name in decl.model_order}
+    model_section = create_model(f"{decl.name}_model", __base__=decl.model_base, **model_fields)
     engines = tuple(dict.fromkeys((["analytic"] if decl.analytic else []) + list(decl.simulators)))
     if not engines:
         raise ValueError(f"declaration of family {decl.name!r}: no simulators and analytic=False")
+    default_engine = decl.default_engine or engines[0]
+    if default_engine not in engines:
+        raise ValueError(f"declaration of family {decl.name!r}: default_engine {default_engine!r} is not one of {engines}")
     noise = decl.sigma if decl.noise_sigma is None else decl.noise_sigma
     simulator_section = create_model(
         f"{decl.name}_simulator", __base__=SimulatorConfigBase,
-        engine=(Literal[engines], engines[0]), noise_sigma=(float, Field(noise, ge=0, le=decl.sigma_limit)),  # type: ignore[valid-type]
+        engine=(str if decl.engines_open else Literal[engines], default_engine), noise_sigma=(float, Field(noise, ge=0, le=decl.sigma_limit)),  # type: ignore[valid-type]
         **dict(decl.simulator_fields),
     )
     positive = tuple(lat.positive for lat in decl.latents)
 
     def check_truth_box(self, low, high, field):  # noqa: ANN001 - the TaskConfigBase hook
-        TaskConfigBase.check_truth_box(self, low, high, field)
+        decl.config_base.check_truth_box(self, low, high, field)
         bad = [lat.name for lat, v in zip(decl.latents, low) if lat.positive and v <= 0]
         if bad:
             raise FieldError(f"{field}.truth_low", f"{', '.join(bad)} must be positive, got {list(low)}")
 
     config = create_model(
-        f"{decl.name}_config", __base__=TaskConfigBase,
+        f"{decl.name}_config", __base__=decl.config_base,
         family=(Literal[decl.name], decl.name),  # type: ignore[valid-type]
         model=(model_section, model_section()), simulator=(simulator_section, simulator_section()),
     )
@@ -313,7 +339,7 @@ def _config_class(decl: Declaration) -> type:
     return config
 
 
-def family(decl: Declaration, model: type, *, register: bool = True) -> TaskSpec:
+def family(decl: Declaration, model: type, *, register: bool = True, build_model: Any = None) -> TaskSpec:
     """The :class:`TaskSpec` of a declaration and its model class, registered (unless ``register=False``).
 
     Args:
@@ -323,6 +349,8 @@ def family(decl: Declaration, model: type, *, register: bool = True) -> TaskSpec
             ``Model(**model_section.model_kwargs())``, as the built-in families' are), which gets
             its ``name``, ``latent_names`` and ``context_names`` from the declaration.
         register: Add it to the registry (idempotent for the same family module).
+        build_model: ``build_model(task_config) -> model``, where the model is not simply
+            ``model(**task_config.model.model_kwargs())`` (a model section naming a variant).
     """
     from probecommit.tasks import registry
 
@@ -342,7 +370,7 @@ def family(decl: Declaration, model: type, *, register: bool = True) -> TaskSpec
                                                                       "__module__": model.__module__})
         simulators = {"analytic": simulator, **simulators}
 
-    def build_model(task_config: Any) -> DeclaredModel:
+    def build(task_config: Any) -> Any:
         return model(**task_config.model.model_kwargs())
 
     example = dict(decl.example)
@@ -351,8 +379,9 @@ def family(decl: Declaration, model: type, *, register: bool = True) -> TaskSpec
         example["instances"] = {**example.get("instances", {}), "contexts": rows}
     summary = {"latents": ", ".join(decl.latent_names), "metric": "failure" if decl.loss == "binary" else "miss",
                "sigma": f"{decl.sigma:g}", **decl.summary}
-    spec = TaskSpec(name=decl.name, config=config, build_model=build_model, simulators=simulators, summary=summary,
-                    example=example, default=decl.default, declaration=decl)
+    spec = TaskSpec(name=decl.name, config=config, build_model=build_model or build, simulators=simulators, summary=summary,
+                    example=example, default=decl.default, replay_shorthands=dict(decl.replay_shorthands),
+                    figure_guides=decl.figure_guides, declaration=decl)
     if register:
         # A declared family registered again (its module re-imported, a notebook cell re-run) replaces itself.
         registry.register(spec, replace=registry.registered(decl.name, declared=True))

@@ -60,9 +60,7 @@ class InsertionModel(TaskModelBase):
     prior_high: np.ndarray = field(default_factory=lambda: np.array([10.0, 1.3]))
     jitter_scale: np.ndarray = field(default_factory=lambda: np.array([0.6, 0.006]))
 
-    name = "insertion"
-    latent_names = ("x_hole", "c")
-    context_names = ()
+    # name, latent_names and context_names: from the declaration (probecommit.tasks.insertion).
     #: Nine tap positions, -12..12 mm in 3 mm steps ``[9, 1]``.
     probe_grid = np.arange(-12.0, 12.0 + 1e-9, 3.0)[:, None]
     #: Aims on a 0.5 mm grid over [-10, 10] mm ``[41, 1]``.
