@@ -73,7 +73,7 @@ class RigModel(InsertionModel):
     prior_high: np.ndarray = field(default_factory=lambda: np.array([10.0 * RIG_SCALE, 1.3]))
     jitter_scale: np.ndarray = field(default_factory=lambda: np.array([0.6 * RIG_SCALE, 0.006]))
 
-    name = "rig"
+    # name, latent_names and context_names: from the declaration (probecommit.tasks.rig).
     #: Nine taps, the simulation's -12..12 mm in 3 mm steps at rig scale ``[9, 1]``.
     probe_grid = np.round(RIG_SCALE * InsertionModel.probe_grid, 10)
     #: 41 aims, the simulation's 0.5 mm grid over [-10, 10] mm at rig scale ``[41, 1]``.
