@@ -49,3 +49,15 @@ class InsertionConfigHooks(TaskConfigBase):
         super().check_truth_box(low, high, field)
         check_box(f"{field}.truth_low", low)
         check_box(f"{field}.truth_high", high)
+
+
+def __getattr__(name: str):
+    """The derived config classes under their former names (``InsertionConfig`` is ``SPEC.config``), for
+    code written before the declaration; new code reads ``probecommit.tasks.insertion.SPEC.config``."""
+    if name in ('InsertionConfig', 'InsertionModelConfig', 'InsertionSimulatorConfig'):
+        from probecommit.tasks.insertion import SPEC
+
+        config = SPEC.config
+        return {"InsertionConfig": config, "InsertionModelConfig": config.model_fields["model"].annotation,
+                "InsertionSimulatorConfig": config.model_fields["simulator"].annotation}[name]
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

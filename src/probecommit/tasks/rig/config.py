@@ -48,3 +48,15 @@ class RigConfigHooks(TaskConfigBase):
 
 
 __all__ = ["RIG_BOX_LIMIT_MM", "RigConfigHooks", "RigModelChecks", "check_rig_box"]
+
+
+def __getattr__(name: str):
+    """The derived config classes under their former names (``RigConfig`` is ``SPEC.config``), for
+    code written before the declaration; new code reads ``probecommit.tasks.rig.SPEC.config``."""
+    if name in ('RigConfig', 'RigModelConfig', 'RigSimulatorConfig'):
+        from probecommit.tasks.rig import SPEC
+
+        config = SPEC.config
+        return {"RigConfig": config, "RigModelConfig": config.model_fields["model"].annotation,
+                "RigSimulatorConfig": config.model_fields["simulator"].annotation}[name]
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
