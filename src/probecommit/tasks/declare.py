@@ -68,7 +68,8 @@ class Declaration:
         action_grid: Admissible commit actions ``[A]`` or ``[A, a]``.
         loss: ``"binary"`` (failure 0/1) or ``"continuous"`` (a miss, >= 0).
         sigma: The likelihood's reading noise (the model section's default).
-        decision: Name of the decision-coordinate latent (default: the first).
+        decision: Name of the decision-coordinate latent (default: the first). A model class of its
+            own computes the coordinate in ``decision()``, which may be a function of several latents.
         contexts: Observed per-episode context components (a target), or none.
         margin: The execution margin's default (``model.margin``, in (0, 1.5]; 1 = none).
         noise_sigma: The simulator's reading noise default (default: ``sigma``).

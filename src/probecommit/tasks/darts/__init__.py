@@ -37,7 +37,8 @@ DECLARATION = Declaration(
              Latent("m", "kg", PRIOR_LOW[1], PRIOR_HIGH[1], positive=True),
              Latent("g", "m/s^2", PRIOR_LOW[2], PRIOR_HIGH[2], positive=True)),
     probe_grid=DartsModel.probe_grid, action_grid=DartsModel.action_grid,
-    loss="continuous", sigma=0.02, sigma_limit=10, decision=None,  # the model's decision() is the drag rate k_d / m, not one latent
+    #: No latent is the decision coordinate: the model's decision() is the drag rate k_d / m.
+    loss="continuous", sigma=0.02, sigma_limit=10, decision=None,
     contexts=(Context("target", "m", 2.0, 3.0),),
     simulators={"mujoco": "probecommit.tasks.darts.sim_mujoco:MujocoDartsSimulator"},
     analytic=False,

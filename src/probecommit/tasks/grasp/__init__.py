@@ -31,7 +31,8 @@ DECLARATION = Declaration(
     latents=(Latent("mu", "", PRIOR_LOW[0], PRIOR_HIGH[0], positive=True),
              Latent("m", "kg", PRIOR_LOW[1], PRIOR_HIGH[1], positive=True)),
     probe_grid=GraspModel.probe_grid, action_grid=GraspModel.action_grid,
-    loss="binary", sigma=2.0, sigma_limit=100, decision=None,  # the model's decision() is the hold force m (g + a) / (2 mu), not one latent
+    #: No latent is the decision coordinate: the model's decision() is the hold force m (g + a) / (2 mu).
+    loss="binary", sigma=2.0, sigma_limit=100, decision=None,
     simulators={"mujoco": "probecommit.tasks.grasp.sim_mujoco:MujocoGraspSimulator",
                 "analytic": "probecommit.tasks.grasp.sim_base:AnalyticGraspSimulator"},
     analytic=False,
