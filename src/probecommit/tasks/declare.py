@@ -86,8 +86,10 @@ class Declaration:
             (a fitted factor the model takes as a keyword); they follow ``margin``.
         simulator_fields: Extra simulator-section fields, the same way; they follow ``noise_sigma``.
         doc: The config class's docstring (one line for people).
-        model_order: The model section's field order in a dumped config, when not ``sigma``,
-            ``margin``, the extra fields, the prior box (a family whose frozen configs list it so).
+        model_order: The order the model section's fields are declared in, when not ``sigma``,
+            ``margin``, the extra fields, the prior box. A dumped config lists ``sigma`` and the prior
+            box (``ModelConfigBase``'s) first, then the rest in this order (insertion's ``boundary``
+            and ``delta`` before ``margin``, as its frozen configs have them).
         engines_open: ``simulator.engine`` is any name, checked against the spec's engines when a
             config is validated (an engine added to the spec later is accepted; the message lists
             them); False: a ``Literal`` of the declared engines.
@@ -312,10 +314,10 @@ def _config_class(decl: Declaration) -> type:
     if default_engine not in engines:
         raise ValueError(f"declaration of family {decl.name!r}: default_engine {default_engine!r} is not one of {engines}")
     noise = decl.sigma if decl.noise_sigma is None else decl.noise_sigma
+    engine = str if decl.engines_open else Literal[engines]  # type: ignore[valid-type]
     simulator_section = create_model(
-        f"{decl.name}_simulator", __base__=SimulatorConfigBase,
-        engine=(str if decl.engines_open else Literal[engines], default_engine), noise_sigma=(float, Field(noise, ge=0, le=decl.sigma_limit)),  # type: ignore[valid-type]
-        **dict(decl.simulator_fields),
+        f"{decl.name}_simulator", __base__=decl.simulator_base, engine=(engine, default_engine),
+        noise_sigma=(float, Field(noise, ge=0, le=decl.sigma_limit)), **dict(decl.simulator_fields),
     )
     positive = tuple(lat.positive for lat in decl.latents)
 
