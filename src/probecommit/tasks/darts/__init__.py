@@ -42,7 +42,7 @@ DECLARATION = Declaration(
     contexts=(Context("target", "m", 2.0, 3.0),),
     simulators={"mujoco": "probecommit.tasks.darts.sim_mujoco:MujocoDartsSimulator"},
     analytic=False,
-    summary={"latents": "k_d, m, g", "probe": "throw / landing point", "action": "launch (v, alpha)",
+    summary={"probe": "throw / landing point", "action": "launch (v, alpha)",
              "sigma": "2 cm", "budgets": "0, 2, 5", "metric": "miss (m)", "n": "18 x 8"},
     example={"instances": {"contexts": [[2.0], [3.0]]}},
     doc="A dart thrown with linear drag to land at a target distance.",

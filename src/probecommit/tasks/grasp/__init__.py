@@ -36,7 +36,7 @@ DECLARATION = Declaration(
     simulators={"mujoco": "probecommit.tasks.grasp.sim_mujoco:MujocoGraspSimulator",
                 "analytic": "probecommit.tasks.grasp.sim_base:AnalyticGraspSimulator"},
     analytic=False,
-    summary={"latents": "mu, m", "probe": "squeeze / slip", "action": "grip force",
+    summary={"probe": "squeeze / slip", "action": "grip force",
              "sigma": "2 mm", "budgets": "0, 2, 5, 8", "metric": "success (feasible)", "n": "16 x 80"},
     doc="A delicate object gripped hard enough to lift, gently enough not to crush.",
 )

@@ -40,7 +40,7 @@ DECLARATION = Declaration(
     simulators={"mujoco": "probecommit.tasks.hinge.sim_mujoco:MujocoHingeSimulator",
                 "analytic": "probecommit.tasks.hinge.sim_analytic:AnalyticHingeSimulator"},
     analytic=False,
-    summary={"latents": "f, b, m", "probe": "coast / stop angle", "action": "release speed (torque)",
+    summary={"probe": "coast / stop angle", "action": "release speed (torque)",
              "sigma": "0.02 rad", "budgets": "0, 2, 5", "metric": "miss (rad)", "n": "18 x 16"},
     example={"instances": {"contexts": [[0.5], [1.0]]}},
     doc="A door on a hinge released to coast to a target angle.",

@@ -55,7 +55,7 @@ DECLARATION = Declaration(
     },
     analytic=False, engines_open=True, default_engine="mujoco",
     model_base=InsertionModelChecks, config_base=InsertionConfigHooks,
-    summary={"latents": "x_hole, c", "probe": "tap", "action": "aim", "sigma": "0.5 mm", "budgets": "1-8, cover",
+    summary={"probe": "tap", "action": "aim", "sigma": "0.5 mm", "budgets": "1-8, cover",
              "metric": "failure", "n": "96 x 4"},
     default=True,
     replay_shorthands={"model": "boundary", "delta": "delta", "model_default": "corrected"},

@@ -19,7 +19,7 @@ DECLARATION = Declaration(
     contexts=(Context("target_x", "m", 0.6, 1.0), Context("target_y", "m", -0.3, 0.2)),
     simulators={"analytic": "probecommit.tasks.planar_slide.sim_analytic:AnalyticPlanarSlideSimulator"},
     analytic=False,
-    summary={"latents": "mu, phi, m", "probe": "strike / 2-D rest", "action": "2-D impulse",
+    summary={"probe": "strike / 2-D rest", "action": "2-D impulse",
              "sigma": "2 cm", "budgets": "0, 2, 5", "metric": "miss (m)", "n": "example"},
     example={"instances": {"contexts": [[1.0, 0.2], [0.6, -0.3]]}, "probes": {"budget": 5, "budgets": [2, 5]}},
     doc="A puck struck at a target (example family: 3-D latent, 2-D observation and action).",

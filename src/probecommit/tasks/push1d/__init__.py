@@ -37,7 +37,7 @@ DECLARATION = Declaration(
     loss="continuous", sigma=0.05, sigma_limit=10, decision="mu",
     contexts=(Context("target", "m", 0.5, 1.0),),
     simulators={"analytic": "probecommit.tasks.push1d.sim_analytic:AnalyticPush1DSimulator"}, analytic=False,
-    summary={"latents": "mu, m, k_d", "probe": "pulse / slide distance", "action": "impulse",
+    summary={"probe": "pulse / slide distance", "action": "impulse",
              "sigma": "5 cm", "budgets": "0, 2, 5", "metric": "miss (m)", "n": "81 x 6"},
     example={"instances": {"contexts": [[0.5], [1.0]]}},
     doc="A box pushed along a line by an impulse to stop at a target distance.",

@@ -47,7 +47,7 @@ DECLARATION = Declaration(
     simulators={"mujoco": "probecommit.tasks.push2d.sim_mujoco:MujocoPush2DSimulator",
                 "pybullet": "probecommit.tasks.push2d.sim_pybullet:PybulletPush2DSimulator"},
     analytic=False,
-    summary={"latents": "mu, m, k_d", "probe": "pulse / 2-D rest", "action": "2-D impulse",
+    summary={"probe": "pulse / 2-D rest", "action": "2-D impulse",
              "sigma": "5 cm", "budgets": "0, 2, 5", "metric": "miss (m)", "n": "18 x 6"},
     example={"instances": {"contexts": [[0.469846, -0.171010], [0.866025, 0.5]]}},
     doc="A box on a plane struck by a 2-D impulse to stop at a 2-D target.",

@@ -49,7 +49,7 @@ DECLARATION = Declaration(
     },
     analytic=False, engines_open=True, default_engine="mujoco",
     model_base=RigModelChecks, config_base=RigConfigHooks,
-    summary={"latents": "x_hole, c", "probe": "touch tap", "action": "aim", "sigma": "0.5 mm", "budgets": "1-5",
+    summary={"probe": "touch tap", "action": "aim", "sigma": "0.5 mm", "budgets": "1-5",
              "metric": "failure (window)", "n": "12 x 10"},
     example={"belief": {"likelihood": "mixture", "epsilon": 0.03, "mixture_low": -12.0, "mixture_high": 2.0}},
     figure_guides=lambda model: {"half_gap": float(rig_half_gap(1.0))},

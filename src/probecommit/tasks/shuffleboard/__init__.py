@@ -36,7 +36,7 @@ DECLARATION = Declaration(
     simulators={"sapien": "probecommit.tasks.shuffleboard.sim_sapien:SapienShuffleboardSimulator",
                 "analytic": "probecommit.tasks.push1d.sim_analytic:AnalyticPush1DSimulator"},
     analytic=False,
-    summary={"latents": "mu, m, k_d", "probe": "strike / slide", "action": "strike",
+    summary={"probe": "strike / slide", "action": "strike",
              "sigma": "5 cm", "budgets": "0, 2, 5", "metric": "miss (m), mean / P90", "n": "18 x 6"},
     example={"instances": {"contexts": [[1.5], [2.5]]}},
     doc="A puck struck along a board to stop at a target distance.",
