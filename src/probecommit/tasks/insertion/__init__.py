@@ -14,7 +14,7 @@ from pydantic import Field
 
 from probecommit.tasks.declare import Declaration, Latent, family
 from probecommit.tasks.insertion.config import BOX_LIMIT_MM, InsertionConfigHooks, InsertionModelChecks
-from probecommit.tasks.insertion.model import PAPER_DELTA_MM, TIP_RADIUS_MM, InsertionModel
+from probecommit.tasks.insertion.model import PAPER_DELTA_MM, PRIOR_HIGH, PRIOR_LOW, TIP_RADIUS_MM, InsertionModel
 
 
 def build_model(config) -> InsertionModel:  # noqa: ANN001 - the derived config
@@ -33,7 +33,7 @@ def build_model(config) -> InsertionModel:  # noqa: ANN001 - the derived config
 
 DECLARATION = Declaration(
     name="insertion",
-    latents=(Latent("x_hole", "mm", -10.0, 10.0), Latent("c", "", 0.7, 1.3)),
+    latents=(Latent("x_hole", "mm", PRIOR_LOW[0], PRIOR_HIGH[0]), Latent("c", "", PRIOR_LOW[1], PRIOR_HIGH[1])),
     probe_grid=InsertionModel.probe_grid, action_grid=InsertionModel.action_grid,
     loss="binary", sigma=0.5, sigma_limit=1000, decision="x_hole",
     model_fields={

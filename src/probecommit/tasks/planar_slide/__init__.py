@@ -7,13 +7,13 @@ rest position, a 2-D impulse action aimed at a per-instance target, continuous m
 from __future__ import annotations
 
 from probecommit.tasks.declare import Context, Declaration, Latent, family
-from probecommit.tasks.planar_slide.model import PlanarSlideModel
+from probecommit.tasks.planar_slide.model import PRIOR_HIGH, PRIOR_LOW, PlanarSlideModel
 
 DECLARATION = Declaration(
     name="planar_slide",
-    latents=(Latent("mu", "", 0.2, 0.6),
-             Latent("phi", "rad", -0.2, 0.2),
-             Latent("m", "kg", 0.5, 1.5)),
+    latents=(Latent("mu", "", PRIOR_LOW[0], PRIOR_HIGH[0]),
+             Latent("phi", "rad", PRIOR_LOW[1], PRIOR_HIGH[1]),
+             Latent("m", "kg", PRIOR_LOW[2], PRIOR_HIGH[2])),
     probe_grid=PlanarSlideModel.probe_grid, action_grid=PlanarSlideModel.action_grid,
     loss="continuous", sigma=0.02, sigma_limit=10, decision="mu",
     contexts=(Context("target_x", "m", 0.6, 1.0), Context("target_y", "m", -0.3, 0.2)),

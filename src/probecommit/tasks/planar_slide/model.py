@@ -23,6 +23,9 @@ import numpy as np
 from probecommit.tasks.base import TaskModelBase
 
 G = 9.81
+#: Prior box on (mu, phi [rad], m [kg]).
+PRIOR_LOW = (0.2, -0.2, 0.5)
+PRIOR_HIGH = (0.6, 0.2, 1.5)
 
 
 def rest_position(impulse: np.ndarray, mu: np.ndarray, phi: np.ndarray, m: np.ndarray) -> np.ndarray:
@@ -46,8 +49,8 @@ class PlanarSlideModel(TaskModelBase):
 
     sigma: float = 0.02
     margin: float = 1.0
-    prior_low: np.ndarray = field(default_factory=lambda: np.array([0.2, -0.2, 0.5]))
-    prior_high: np.ndarray = field(default_factory=lambda: np.array([0.6, 0.2, 1.5]))
+    prior_low: np.ndarray = field(default_factory=lambda: np.array(PRIOR_LOW))
+    prior_high: np.ndarray = field(default_factory=lambda: np.array(PRIOR_HIGH))
     jitter_scale: np.ndarray = field(default_factory=lambda: np.array([0.01, 0.005, 0.02]))
     variant: str = "deployed"
 

@@ -13,7 +13,7 @@ from pydantic import Field
 
 from probecommit.tasks.declare import Declaration, Latent, family
 from probecommit.tasks.rig.config import RIG_BOX_LIMIT_MM, RigConfigHooks, RigModelChecks
-from probecommit.tasks.rig.model import DESCENT_STEP_MM, RIG_SCALE, TOOL_RADIUS_MM, RigModel, rig_half_gap
+from probecommit.tasks.rig.model import DESCENT_STEP_MM, PRIOR_HIGH, PRIOR_LOW, TOOL_RADIUS_MM, RigModel, rig_half_gap
 
 
 def build_model(config) -> RigModel:  # noqa: ANN001 - the derived config
@@ -32,7 +32,7 @@ def build_model(config) -> RigModel:  # noqa: ANN001 - the derived config
 
 DECLARATION = Declaration(
     name="rig",
-    latents=(Latent("x_hole", "mm", -10.0 * RIG_SCALE, 10.0 * RIG_SCALE), Latent("c", "", 0.7, 1.3)),
+    latents=(Latent("x_hole", "mm", PRIOR_LOW[0], PRIOR_HIGH[0]), Latent("c", "", PRIOR_LOW[1], PRIOR_HIGH[1])),
     probe_grid=RigModel.probe_grid, action_grid=RigModel.action_grid,
     loss="binary", sigma=DESCENT_STEP_MM, sigma_limit=1000, decision="x_hole", noise_sigma=0.0,
     #: The injected boundary fault: the through-the-opening boundary moved inward by that many mm (0 = as deployed).
