@@ -42,7 +42,9 @@ def test_unit_threads_follow_the_engine_threads_and_the_simulator(monkeypatch, m
     with pytest.raises(ValueError, match="threads must be >= 1"):
         unit_threads(cfg, 0)
 
-    class Unsafe:  # a simulator that does not declare itself thread-safe runs its units one by one
+    from probecommit.tasks.base import CachedSimulator
+
+    class Unsafe(CachedSimulator):  # a simulator keeping the base's thread_safe = False runs its units one by one
         pass
 
     monkeypatch.setattr(study.build, "simulator_class", lambda config: Unsafe)

@@ -108,7 +108,7 @@ def rollout(
     p, m = model.probe_dim, model.observation_dim
     truths, contexts = instance_arrays(instances, model)
     random_schedule = isinstance(schedule, str) and schedule == "random"
-    if not random_schedule and getattr(simulator, "parallel_queries", False) and hasattr(simulator, "probe_query_key"):
+    if not random_schedule and simulator.parallel_queries:
         # A fixed schedule taps the same positions in every episode: run those engine queries in threads first.
         simulator.prefetch([simulator.probe_query_key(theta, np.atleast_1d(np.asarray(schedule[j], dtype=float)))
                             for theta in truths for j in range(budget)])
@@ -451,7 +451,7 @@ def _execute(simulator, batch: ProbeBatch, action: np.ndarray, index: np.ndarray
     inverse = np.asarray(inverse).reshape(-1)
     values = np.empty(len(unique))
     errors: dict[int, str] = {}
-    if getattr(simulator, "parallel_queries", False) and hasattr(simulator, "execute_query_key"):
+    if simulator.parallel_queries:
         # Every distinct action's engine query is needed below: run them in engine threads first.
         simulator.prefetch([simulator.execute_query_key(batch.truths[e], action[e], None if context is None else context[e])
                             for key, e in zip(unique.tolist(), first) if key not in outcomes])

@@ -264,8 +264,7 @@ def _chunked_simulator(loaded: LoadedRun, config: StudyConfig, latent_names: Seq
     be told apart by instance or the simulator cannot forget them)."""
     sim = build_simulator(config)
     table = loaded.arrow_table("engine_cache")
-    if not (hasattr(sim, "forget_answers") and hasattr(sim, "answered_keys")
-            and StoredAnswers.usable(table, latent_names, truths)):
+    if not StoredAnswers.usable(table, latent_names, truths):
         sim.load_cache(cache_records(table.to_pandas(), latent_names))
         return sim, None
     answers = StoredAnswers(table, latent_names)

@@ -159,7 +159,7 @@ def unit_threads(config: StudyConfig, threads: int | None = None) -> int:
     wanted = engine_threads() if threads is None else int(threads)
     if wanted < 1:
         raise UsageError(f"threads must be >= 1, got {threads!r}")
-    if wanted == 1 or not getattr(build.simulator_class(config), "thread_safe", False):
+    if wanted == 1 or not build.simulator_class(config).thread_safe:
         return 1
     return wanted
 
