@@ -7,6 +7,7 @@ import pytest
 
 from probecommit.runner import study
 from probecommit.runner.study import run_study, unit_threads
+from probecommit.store.rundir import RunDir
 from tests.runner.test_resume import assert_same_tables
 
 
@@ -62,7 +63,7 @@ def test_a_failing_unit_thread_stops_the_run_and_leaves_it_resumable(tmp_path, m
     with pytest.raises(RuntimeError, match="unit 3"):
         run_study(cfg, tmp_path / "run", threads=2)
     monkeypatch.setattr(study, "compute_unit", real)
-    finished = len(list((tmp_path / "run" / "shards").glob("*.episodes.parquet")))  # whole units written before the error
+    finished = len(RunDir(tmp_path / "run").done_units())  # whole units committed before the error
     assert finished < 6
     resumed = run_study(cfg, tmp_path / "run", threads=2)
     assert resumed.manifest["resumed_units"] == finished
@@ -71,9 +72,8 @@ def test_a_failing_unit_thread_stops_the_run_and_leaves_it_resumable(tmp_path, m
 
 
 def _unit_pids(run_dir):
-    import json
-
-    return [json.loads(p.read_text())["pid"] for p in (run_dir / "shards").glob("*.stats.json")]
+    run = RunDir(run_dir)
+    return [run.unit_stats(unit)["pid"] for unit in run.done_units()]
 
 
 @pytest.mark.ray

@@ -139,31 +139,24 @@ def test_manifest_engine_versions_are_the_installed_distributions():
     assert _header_version("Name: x\n\nVersion: 9") is None  # a body line is not the header
 
 
-@pytest.mark.parametrize("kept", [True, False])
-def test_merged_shards_equal_concatenating_each_shard_read_by_pandas(tmp_path, kept):
-    """Shards of one schema are joined as Arrow tables and converted once; shards whose columns
-    differ, and empty ones, are joined as pandas joins each shard read alone (kept or from disk)."""
+def test_merged_tables_equal_concatenating_each_table_converted_by_pandas(tmp_path):
+    """Tables of one schema are joined as Arrow tables and converted once; tables whose columns
+    differ, and empty ones, are joined as pandas joins each table converted alone."""
     import pandas as pd
+    import pyarrow as pa
 
-    from probecommit.store.rundir import atomic_write_parquet
+    from probecommit.store.rundir import merge_tables
 
-    run = RunDir(tmp_path / "run")
     full = pd.DataFrame({"instance_id": ["a", "b"], "repeat": [0, 1], "realized": [0.0, 1.0], "status": ["ok", "ok"]})
-    shards = {"u0": full, "u1": full.iloc[:0], "u2": full.assign(instance_id=["c", "d"]),
+    frames = {"u0": full, "u1": full.iloc[:0], "u2": full.assign(instance_id=["c", "d"]),
               "u3": pd.DataFrame({"instance_id": ["e"], "repeat": [0], "status": ["failed"]})}  # fewer columns
-    for unit, frame in shards.items():
-        path = run.shard_path(unit, "episodes")
-        table = atomic_write_parquet(path, frame)
-        if kept:
-            run._keep(path, table)
-    expected = pd.concat([pd.read_parquet(run.shard_path(u, "episodes")) for u in ("u0", "u2", "u3")], ignore_index=True)
-    pd.testing.assert_frame_equal(run._merged("episodes", list(shards)), expected)
-    same = pd.concat([pd.read_parquet(run.shard_path(u, "episodes")) for u in ("u0", "u2")], ignore_index=True)
-    if kept:  # the kept tables were handed over by the first merge
-        for unit in ("u0", "u1", "u2"):
-            run._keep(run.shard_path(unit, "episodes"), atomic_write_parquet(run.shard_path(unit, "episodes"), shards[unit]))
-    pd.testing.assert_frame_equal(run._merged("episodes", ["u0", "u1", "u2"]), same)
-    pd.testing.assert_frame_equal(run._merged("episodes", ["u1"]), pd.read_parquet(run.shard_path("u1", "episodes")))
+    tables = {u: pa.Table.from_pandas(f, preserve_index=False) for u, f in frames.items()}
+    alone = {u: t.to_pandas() for u, t in tables.items()}
+    expected = pd.concat([alone[u] for u in ("u0", "u2", "u3")], ignore_index=True)
+    pd.testing.assert_frame_equal(merge_tables(list(tables.values())), expected)
+    same = pd.concat([alone[u] for u in ("u0", "u2")], ignore_index=True)
+    pd.testing.assert_frame_equal(merge_tables([tables[u] for u in ("u0", "u1", "u2")]), same)
+    pd.testing.assert_frame_equal(merge_tables([tables["u1"]]), alone["u1"])
 
 
 def _episode_rows(ids_repeats, vector, k=(1, 2)):

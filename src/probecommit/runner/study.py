@@ -3,7 +3,7 @@
 A *unit* is a fixed group of ``unit_instances`` instances with all their repeats.
 Units are independent (every random draw is keyed by instance and repeat), so they
 run in any order, in local processes or on Ray, and a killed run resumes by
-skipping the units whose shards are already on disk. Results are bit-identical
+skipping the units already committed in a batch on disk. Results are bit-identical
 whatever the backend or the number of workers.
 """
 
@@ -32,8 +32,8 @@ from probecommit.runner.inference import (
     rollout_adaptive,
 )
 from probecommit.runner.instances import draw_instances
-from probecommit.store.rundir import RunDir
-from probecommit.store.schema import cache_frame
+from probecommit.store.rundir import RunDir, arrow_table
+from probecommit.store.schema import EPISODE_COLUMNS, INSTANCE_COLUMNS, PROBE_COLUMNS, cache_frame
 
 
 @dataclass
@@ -55,8 +55,10 @@ def unit_names(n_instances: int, unit_instances: int) -> list[tuple[str, slice]]
     ]
 
 
-def compute_unit(config_data: dict, instances: pd.DataFrame, unit: str) -> tuple[str, dict[str, pd.DataFrame], dict[str, Any]]:
-    """Run one unit end to end in memory; returns ``(unit, tables, stats)``.
+def compute_unit(config_data: dict, instances: pd.DataFrame, unit: str) -> tuple[str, dict[str, Any], dict[str, Any]]:
+    """Run one unit end to end in memory; returns ``(unit, tables, stats)``, the tables as
+    the Arrow tables the run stores (converted here, in the worker, so the driver that
+    writes them converts nothing).
 
     Top-level, argument-only and free of disk writes, so process pools and Ray
     workers (on any node, with no shared filesystem) can run it; only the driver
@@ -99,19 +101,12 @@ def compute_unit(config_data: dict, instances: pd.DataFrame, unit: str) -> tuple
         "failed_rows": int(np.sum(episodes["status"] != "ok")) if len(episodes) else 0,
     }
     tables = {
-        "instances": instances.reset_index(drop=True),
-        "probes": batch.probes_frame(),
-        "engine_cache": cache_frame(simulator.cache_records(), model.latent_names),
-        "episodes": episodes,
+        "instances": arrow_table(instances.reset_index(drop=True), INSTANCE_COLUMNS),
+        "probes": arrow_table(batch.probes_frame(), PROBE_COLUMNS),
+        "engine_cache": arrow_table(cache_frame(simulator.cache_records(), model.latent_names)),
+        "episodes": arrow_table(episodes, EPISODE_COLUMNS),
     }
     return unit, tables, stats
-
-
-def run_unit(config_data: dict, instances: pd.DataFrame, unit: str, out: str) -> dict[str, Any]:
-    """Run one unit and write its shards into the run directory ``out``; returns its stats."""
-    unit, tables, stats = compute_unit(config_data, instances, unit)
-    RunDir(out).write_unit(unit, tables, stats)
-    return stats
 
 
 Job = tuple[dict, pd.DataFrame, str]
@@ -359,7 +354,8 @@ def _run_units(config, run: RunDir, instances, workers, ray, ray_address, timing
                threads: int | None = None) -> StudyResult:
     units = unit_names(len(instances), config.unit_instances)
     config_data = config.model_dump(mode="json")
-    jobs = [(config_data, instances.iloc[sl], name) for name, sl in units if not run.unit_done(name)]
+    stored = run.done_units()  # refuses batches of other code: a run never mixes two builds
+    jobs = [(config_data, instances.iloc[sl], name) for name, sl in units if name not in stored]
     done = len(units) - len(jobs)
     if progress:
         progress(done, len(units))
@@ -376,11 +372,16 @@ def _run_units(config, run: RunDir, instances, workers, ray, ray_address, timing
         results = _run_serial(jobs)
         backend = "serial"
     t_units = time.perf_counter()
-    for unit, tables, stats in results:
-        run.write_unit(unit, tables, stats)  # only the driver writes: one writer per file
-        done += 1
-        if progress:
-            progress(done, len(units))
+    try:
+        for unit, tables, stats in results:
+            run.add_unit(unit, tables, stats)  # only the driver writes, a batch of units at a time
+            done += 1
+            if progress:
+                progress(done, len(units))
+    except Exception:
+        run.flush()  # the units finished before the error are kept for the resume
+        raise
+    run.flush()  # the last batch
     units_wall = time.perf_counter() - t_units
     stats = [run.unit_stats(name) for name, _ in units]
     calls: dict[str, int] = {}
