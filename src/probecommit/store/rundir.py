@@ -238,16 +238,12 @@ def git_dirty() -> bool | None:
 def engine_versions() -> dict[str, str | None]:
     """Python's version and those of the engines and the data stack, as the manifest records them."""
     import platform
-    from importlib import metadata
+
+    from probecommit import _distribution_version
 
     out: dict[str, str | None] = {"python": platform.python_version()}
     for name in ("mujoco", "pybullet", "sapien", "ray", "numpy", "pandas", "pyarrow", "numba"):
-        try:
-            dist = metadata.distribution(name)
-        except metadata.PackageNotFoundError:
-            out[name] = None
-            continue
-        out[name] = _header_version(dist.read_text("METADATA") or dist.read_text("PKG-INFO") or "") or dist.version
+        out[name] = _distribution_version(name)
     return out
 
 
