@@ -213,16 +213,31 @@ def package_runtime_env() -> dict[str, Any]:
     return {"py_modules": [str(package)], "excludes": ["__pycache__", "*.pyc"]}
 
 
+#: Seconds ``--ray local`` may take to start its instance, and ``--ray ADDRESS`` to connect.
+RAY_START_TIMEOUT_S = float(os.environ.get("PROBECOMMIT_RAY_TIMEOUT_S", "60"))
+#: Seconds a ``--ray host:port`` has to accept a connection and answer as a gRPC (HTTP/2) server.
+RAY_PROBE_TIMEOUT_S = 3.0
+
+
 def ray_init_kwargs(address: str, workers: int) -> dict[str, Any]:
-    """``ray.init`` arguments for ``--ray``: ``local`` starts an instance, else connect and ship the package."""
+    """``ray.init`` arguments for ``--ray``: ``local`` always starts an instance of its own
+    (``address="local"``: never one another process recorded), else connect and ship the package."""
     common = dict(include_dashboard=False, log_to_driver=False, configure_logging=False)
     if address == "local":
-        return dict(num_cpus=workers if workers > 1 else None, **common)
+        return dict(address="local", num_cpus=workers if workers > 1 else None, **common)
     return dict(address=address, runtime_env=package_runtime_env(), **common)
 
 
-def check_reachable(address: str, timeout_s: float = 3.0) -> None:
-    """Fail within seconds when nothing listens at a Ray ``host:port`` (Ray itself retries for minutes).
+#: The HTTP/2 client preface and an empty SETTINGS frame: what a gRPC client (Ray's) sends first.
+_HTTP2_PREFACE = b"PRI * HTTP/2.0\r\n\r\nSM\r\n\r\n" + b"\x00\x00\x00\x04\x00\x00\x00\x00\x00"
+
+
+def check_reachable(address: str, timeout_s: float = RAY_PROBE_TIMEOUT_S) -> None:
+    """Fail within seconds when no Ray head listens at ``host:port`` (Ray itself retries for minutes).
+
+    A TCP connection is not enough: a port that accepts but is not Ray (a web server, a
+    silent socket) made ``ray.init`` hang for minutes. Ray's head is a gRPC server, so it
+    must answer the HTTP/2 preface with a SETTINGS frame within ``timeout_s``.
 
     Raises:
         RuntimeError: one line naming the address.
@@ -233,18 +248,70 @@ def check_reachable(address: str, timeout_s: float = 3.0) -> None:
     if not host or not port.isdigit():
         raise RuntimeError(f"--ray expects 'local', 'auto' or host:port, got {address!r}")
     try:
-        with socket.create_connection((host, int(port)), timeout=timeout_s):
-            return
+        with socket.create_connection((host, int(port)), timeout=timeout_s) as conn:
+            conn.settimeout(timeout_s)
+            conn.sendall(_HTTP2_PREFACE)
+            answer = b""
+            while len(answer) < 9:  # a frame header: length (3), type (1), flags (1), stream (4)
+                more = conn.recv(9 - len(answer))
+                if not more:
+                    break
+                answer += more
+    except socket.timeout:
+        raise RuntimeError(f"{address} accepted a connection but did not answer as a Ray head (no gRPC reply within "
+                           f"{timeout_s:g} s); check the address (the head's GCS port, 6379 by default)") from None
     except OSError as exc:
         raise RuntimeError(f"cannot reach the Ray cluster at {address}: {exc.strerror or exc}") from None
+    if len(answer) < 9 or answer[3] != 0x4:
+        raise RuntimeError(f"{address} is not a Ray head (it did not answer as a gRPC server); check the address "
+                           "(the head's GCS port, 6379 by default)")
+
+
+def _init_within(ray: Any, kwargs: dict[str, Any], address: str, timeout_s: float) -> None:
+    """``ray.init(**kwargs)``, given up after ``timeout_s`` with one line (it has no timeout of its own)."""
+    import threading
+
+    outcome: dict[str, BaseException | None] = {}
+
+    def start() -> None:
+        try:
+            ray.init(**kwargs)
+            outcome["error"] = None
+        except BaseException as exc:  # noqa: BLE001 - handed to the caller's thread
+            outcome["error"] = exc
+
+    thread = threading.Thread(target=start, name="probecommit-ray-init", daemon=True)
+    thread.start()
+    thread.join(timeout_s)
+    if thread.is_alive():
+        what = "start a local Ray instance" if address == "local" else f"connect to the Ray cluster at {address}"
+        raise RuntimeError(f"could not {what} within {timeout_s:g} s (set PROBECOMMIT_RAY_TIMEOUT_S to wait longer)")
+    error = outcome.get("error")
+    if isinstance(error, (ConnectionError, TimeoutError)):
+        raise RuntimeError(f"cannot reach the Ray cluster at {address!r}: {str(error).splitlines()[0]}") from None
+    if error is not None:
+        raise error
 
 
 @contextlib.contextmanager
-def ray_session(address: str, workers: int, timing: dict[str, float]) -> Iterator[Any]:
-    """Connect to (or, for ``"local"``, start) Ray; shut down on exit what was started here.
+def _without_recorded_address(address: str) -> Iterator[None]:
+    """For ``local``: no ``RAY_ADDRESS`` while Ray starts, so nothing steers it to another cluster."""
+    saved = os.environ.pop("RAY_ADDRESS", None) if address == "local" else None
+    try:
+        yield
+    finally:
+        if saved is not None:
+            os.environ["RAY_ADDRESS"] = saved
+
+
+@contextlib.contextmanager
+def ray_session(address: str, workers: int, timing: dict[str, float],
+                timeout_s: float | None = None) -> Iterator[Any]:
+    """Connect to (or, for ``"local"``, start a fresh) Ray; shut down on exit what was started here.
 
     Raises:
-        RuntimeError: the cluster cannot be reached (one line).
+        RuntimeError: the cluster cannot be reached or Ray does not start within ``timeout_s``
+            (default :data:`RAY_START_TIMEOUT_S`), in one line.
     """
     from probecommit.engines import require
 
@@ -254,10 +321,9 @@ def ray_session(address: str, workers: int, timing: dict[str, float]) -> Iterato
     started_here = not ray.is_initialized()
     t0 = time.perf_counter()
     if started_here:
-        try:
-            ray.init(**ray_init_kwargs(address, workers))
-        except (ConnectionError, TimeoutError) as exc:
-            raise RuntimeError(f"cannot reach the Ray cluster at {address!r}: {str(exc).splitlines()[0]}") from None
+        with _without_recorded_address(address):
+            _init_within(ray, ray_init_kwargs(address, workers), address,
+                         RAY_START_TIMEOUT_S if timeout_s is None else timeout_s)
     timing["backend_start_s"] = time.perf_counter() - t0
     try:
         yield ray
