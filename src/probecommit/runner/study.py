@@ -10,7 +10,9 @@ whatever the backend or the number of workers.
 from __future__ import annotations
 
 import contextlib
+import functools
 import itertools
+import json
 import os
 import time
 from dataclasses import dataclass
@@ -26,14 +28,14 @@ from probecommit.runner.inference import (
     blind_bayes_executor,
     build_trace,
     commit,
-    failed_episode_rows,
+    failed_episode_columns,
     instance_arrays,
     rollout,
     rollout_adaptive,
 )
 from probecommit.runner.instances import draw_instances
-from probecommit.store.rundir import RunDir, arrow_table
-from probecommit.store.schema import EPISODE_COLUMNS, INSTANCE_COLUMNS, PROBE_COLUMNS, cache_frame
+from probecommit.store.rundir import RunDir, arrow_from_columns, arrow_table
+from probecommit.store.schema import EPISODE_COLUMNS, INSTANCE_COLUMNS, PROBE_COLUMNS, cache_columns
 
 
 @dataclass
@@ -55,6 +57,13 @@ def unit_names(n_instances: int, unit_instances: int) -> list[tuple[str, slice]]
     ]
 
 
+@functools.lru_cache(maxsize=4)
+def _parsed(config_json: str) -> StudyConfig:
+    """The validated config of a unit's config data, validated once per process (every unit of a
+    study sends the same data; validating it cost about 5 ms a unit)."""
+    return parse_config(json.loads(config_json))
+
+
 def compute_unit(config_data: dict, instances: pd.DataFrame, unit: str) -> tuple[str, dict[str, Any], dict[str, Any]]:
     """Run one unit end to end in memory; returns ``(unit, tables, stats)``, the tables as
     the Arrow tables the run stores (converted here, in the worker, so the driver that
@@ -65,7 +74,7 @@ def compute_unit(config_data: dict, instances: pd.DataFrame, unit: str) -> tuple
     writes the run directory.
     """
     start = time.perf_counter()
-    config = parse_config(config_data)
+    config = _parsed(json.dumps(config_data, sort_keys=True))
     model = build.build_model(config)
     pfilter = build.build_filter(model, config.belief)
     simulator = build.build_simulator(config)
@@ -82,14 +91,21 @@ def compute_unit(config_data: dict, instances: pd.DataFrame, unit: str) -> tuple
                     simulator.execute(theta, aim, ctx if len(ctx) else None)
                 except Exception:  # noqa: BLE001 - recorded when an episode commits there
                     pass
-    episodes = pd.DataFrame()
+    columns: dict[str, Any] = {}
     if np.any(batch.status == "ok"):  # a unit whose every trajectory failed has nothing to infer
         trace = build_trace(pfilter, batch, config.seed, config.probes.commit_budgets, keep_weights=True)
         blind = blind_bayes_executor(model, config.seed, config.blind_prior_samples) if "blind_bayes" in config.methods else None
-        episodes = commit(trace, model, simulator, thresholds=config.belief.nu, methods=config.methods, blind=blind)
-    failed = failed_episode_rows(batch, model.variant)
-    if len(failed):
-        episodes = pd.concat([episodes, failed], ignore_index=True) if len(episodes) else failed
+        columns = commit(trace, model, simulator, thresholds=config.belief.nu, methods=config.methods, blind=blind,
+                         as_columns=True)
+    n_rows = len(next(iter(columns.values()))) if columns else 0
+    if np.any(batch.status != "ok"):  # rare: through pandas, as the rows were always joined
+        failed = pd.DataFrame(failed_episode_columns(batch, model.variant))
+        frame = pd.concat([pd.DataFrame(columns), failed], ignore_index=True) if columns else failed
+        episodes = arrow_table(frame, EPISODE_COLUMNS)
+        failed_rows = int((frame["status"] != "ok").sum())
+    else:
+        episodes = arrow_from_columns(columns, n_rows, EPISODE_COLUMNS)
+        failed_rows = int(np.sum(columns["status"] != "ok")) if columns else 0
     stats = {
         "unit": unit,
         "engine_calls": dict(simulator.engine_calls),
@@ -98,13 +114,15 @@ def compute_unit(config_data: dict, instances: pd.DataFrame, unit: str) -> tuple
         "pid": os.getpid(),
         "episodes": int(batch.n_episodes),
         "failed_trajectories": int(np.sum(batch.status != "ok")),
-        "failed_rows": int(np.sum(episodes["status"] != "ok")) if len(episodes) else 0,
+        "failed_rows": failed_rows,
     }
+    probes = batch.probes_columns()
+    cache = cache_columns(simulator.cache_records(), model.latent_names)
     tables = {
         "instances": arrow_table(instances.reset_index(drop=True), INSTANCE_COLUMNS),
-        "probes": arrow_table(batch.probes_frame(), PROBE_COLUMNS),
-        "engine_cache": arrow_table(cache_frame(simulator.cache_records(), model.latent_names)),
-        "episodes": arrow_table(episodes, EPISODE_COLUMNS),
+        "probes": arrow_from_columns(probes, len(probes["instance_id"]), PROBE_COLUMNS),
+        "engine_cache": arrow_from_columns(cache, len(cache["engine"])),
+        "episodes": episodes,
     }
     return unit, tables, stats
 

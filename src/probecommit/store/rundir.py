@@ -139,7 +139,11 @@ def _is_tmp(path: Path) -> bool:
 def arrow_table(frame: pd.DataFrame, columns: tuple[Column, ...] = ()) -> pa.Table:
     """``frame`` as the Arrow table a run file holds: columns named in ``columns`` get their schema type."""
     # One thread: for a long table pyarrow would start (and join) a thread pool per call.
-    table = pa.Table.from_pandas(frame, preserve_index=False, nthreads=1)
+    return _schema_typed(pa.Table.from_pandas(frame, preserve_index=False, nthreads=1), columns)
+
+
+def _schema_typed(table: pa.Table, columns: tuple[Column, ...]) -> pa.Table:
+    """``table`` with the columns named in ``columns`` cast to their schema type."""
     types = {c.name: c.type for c in columns}
     for c in columns:
         if c.vector:  # u_0, u_1, ... take the type of u
@@ -149,6 +153,45 @@ def arrow_table(frame: pd.DataFrame, columns: tuple[Column, ...] = ()) -> pa.Tab
         if target != table.schema:
             table = table.cast(target)
     return table
+
+
+#: pandas metadata of tables built by :func:`arrow_from_columns`, by column names and types.
+_PANDAS_METADATA: dict[tuple, dict[bytes, bytes] | None] = {}
+
+
+def arrow_from_columns(columns: dict[str, Any], n_rows: int, schema: tuple[Column, ...] = ()) -> pa.Table:
+    """The table ``arrow_table(pd.DataFrame(columns), schema)`` gives, built without a DataFrame.
+
+    ``columns`` maps names to 1-D NumPy arrays or lists of ``n_rows`` values, or to scalars
+    (broadcast). Converted as ``from_pandas`` converts them (NaN is null; strings are large
+    strings) and with the same pandas metadata (made once per column names and types from a
+    one-row frame), so the merge reads back the same frame; tested against ``arrow_table``.
+    A unit's tables are built this way: a DataFrame per table per unit cost more than the
+    unit's beliefs on a short study.
+    """
+    if not columns or not n_rows:  # pandas decides an empty column's type: ask it (cheap when empty)
+        return arrow_table(pd.DataFrame(columns), schema)
+    arrays = []
+    for value in columns.values():
+        if not isinstance(value, (list, np.ndarray)):  # a scalar
+            value = np.broadcast_to(np.asarray(value), (n_rows,))
+            if value.dtype.kind == "U":
+                value = value.astype(object)
+        if isinstance(value, np.ndarray) and value.dtype.kind == "U":  # strings: large, as pandas' str dtype gives
+            array = pa.array(value, type=pa.large_string())
+        else:
+            array = pa.array(value, from_pandas=True)
+            if pa.types.is_string(array.type):
+                array = array.cast(pa.large_string())
+        arrays.append(array)
+    names = list(columns)
+    key = tuple(zip(names, (a.type for a in arrays)))
+    if key not in _PANDAS_METADATA:
+        sample = pd.DataFrame({name: (value[:1] if isinstance(value, (list, np.ndarray)) else value)
+                               for name, value in columns.items()}, index=range(1))
+        _PANDAS_METADATA[key] = pa.Schema.from_pandas(sample, preserve_index=False).metadata
+    table = pa.Table.from_arrays(arrays, names=names).replace_schema_metadata(_PANDAS_METADATA[key])
+    return _schema_typed(table, schema)
 
 
 def atomic_write_parquet(path: Path, frame: pd.DataFrame, columns: tuple[Column, ...] = ()) -> pa.Table:
