@@ -34,9 +34,11 @@ def test_resume_after_a_code_change_is_refused_with_the_fresh_start_command(tmp_
 # ---- provenance per shard: every batch carries the code that wrote it (issue 38, item 1) ----
 
 def _complete(tmp_path, monkeypatch):
+    from probecommit.runner import study
     from probecommit.store.rundir import RunDir
 
     monkeypatch.setattr(RunDir, "batch_units", 1)  # a batch per unit, as after a run killed often
+    monkeypatch.setattr(study, "GROUP_EPISODES", 1)
     config = small_config(name="prov", instances={"count": 4})
     out = tmp_path / "run"
     return config, out, run_study(config, out)

@@ -13,6 +13,7 @@ import contextlib
 import functools
 import itertools
 import json
+import math
 import os
 import time
 from dataclasses import dataclass
@@ -76,27 +77,7 @@ def compute_unit(config_data: dict, instances: pd.DataFrame, unit: str) -> tuple
     start = time.perf_counter()
     config = _parsed(json.dumps(config_data, sort_keys=True))
     model = build.build_model(config)
-    pfilter = build.build_filter(model, config.belief)
-    simulator = build.build_simulator(config)
-    schedule = config.probes.schedule
-    if schedule == "adaptive":
-        batch = rollout_adaptive(instances, config.repeats, config.probes.budget, model, pfilter, simulator, config.seed)
-    else:
-        batch = rollout(instances, config.repeats, schedule, config.probes.budget, model, simulator, config.seed)
-    if config.simulator.execute_all_aims:
-        truths, contexts = instance_arrays(instances, model)
-        for theta, ctx in zip(truths, contexts):
-            for aim in model.action_grid:
-                try:
-                    simulator.execute(theta, aim, ctx if len(ctx) else None)
-                except Exception:  # noqa: BLE001 - recorded when an episode commits there
-                    pass
-    columns: dict[str, Any] = {}
-    if np.any(batch.status == "ok"):  # a unit whose every trajectory failed has nothing to infer
-        trace = build_trace(pfilter, batch, config.seed, config.probes.commit_budgets, keep_weights=True)
-        blind = blind_bayes_executor(model, config.seed, config.blind_prior_samples) if "blind_bayes" in config.methods else None
-        columns = commit(trace, model, simulator, thresholds=config.belief.nu, methods=config.methods, blind=blind,
-                         as_columns=True)
+    batch, columns, simulator = _episodes(config, model, instances)
     n_rows = len(next(iter(columns.values()))) if columns else 0
     if np.any(batch.status != "ok"):  # rare: through pandas, as the rows were always joined
         failed = pd.DataFrame(failed_episode_columns(batch, model.variant))
@@ -127,13 +108,133 @@ def compute_unit(config_data: dict, instances: pd.DataFrame, unit: str) -> tuple
     return unit, tables, stats
 
 
-Job = tuple[dict, pd.DataFrame, str]
-Result = tuple[str, dict[str, pd.DataFrame], dict[str, Any]]
+#: Episodes computed in one batch when several small units go together (:func:`compute_units`);
+#: ``$PROBECOMMIT_GROUP_EPISODES`` overrides it (1: every unit alone).
+GROUP_EPISODES = int(os.environ.get("PROBECOMMIT_GROUP_EPISODES", "256"))
+
+
+def compute_units(config_data: dict, instances: pd.DataFrame, units: list[tuple[str, int]]) -> list[tuple]:
+    """Several units computed as one batch of episodes and returned unit by unit: the
+    ``(unit, tables, stats)`` of :func:`compute_unit` for each, with identical tables.
+
+    A unit of a few episodes spends most of its time on per-call overheads (a filter update
+    of 16 episodes costs nearly what one of 256 costs), so consecutive small units are
+    computed together and split afterwards; the unit stays the grain of resumption. Exact
+    because an episode never depends on its batch (``tests/runner/test_batch_independence.py``),
+    rows come in instance order (each unit's rows a contiguous slice) and, with every truth
+    distinct, each engine answer belongs to one unit. Otherwise (a truth shared by two
+    instances, or a failed rollout) the units are computed one by one. The group's engine
+    calls and times are recorded on its first unit (the run's manifest sums them).
+
+    Args:
+        config_data: The study config (JSON data).
+        instances: The units' instances, in unit order.
+        units: ``(name, number of instances)`` of each unit, in order.
+    """
+    one_by_one = functools.partial(_units_one_by_one, config_data, instances, units)
+    if len(units) == 1:
+        return one_by_one()
+    start = time.perf_counter()
+    config = _parsed(json.dumps(config_data, sort_keys=True))
+    model = build.build_model(config)
+    truths, _ = instance_arrays(instances, model)
+    owner: dict[tuple[float, ...], int] = {}  # each truth's unit
+    at = 0
+    for u, (_, n) in enumerate(units):
+        for theta in truths[at:at + n]:
+            owner.setdefault(tuple(theta.astype(float).tolist()), u)
+        at += n
+    if len(owner) < len(truths):  # a truth shared by two instances: whose engine answer is it?
+        return one_by_one()
+    batch, columns, simulator = _episodes(config, model, instances)
+    if np.any(batch.status != "ok"):  # failed rollouts: their rows are joined unit by unit
+        return one_by_one()
+    records = simulator.cache_records()
+    by_unit: list[list[dict]] = [[] for _ in units]
+    for record in records:
+        u = owner.get(tuple(record["theta"]))
+        if u is None:  # an answer keyed otherwise than by an instance's truth: no owner to give it
+            return one_by_one()
+        by_unit[u].append(record)
+    n_rows = len(next(iter(columns.values()))) if columns else 0
+    per_episode = n_rows // max(batch.n_episodes, 1)
+    budget = batch.u.shape[1]
+    probes = batch.probes_columns()
+    out, first_episode, first_instance = [], 0, 0
+    for u, (name, n) in enumerate(units):
+        episodes = n * config.repeats
+        rows = slice(first_episode * per_episode, (first_episode + episodes) * per_episode)
+        taps = slice(first_episode * budget, (first_episode + episodes) * budget)
+        unit_columns = {key: value[rows] for key, value in columns.items()}
+        cache = cache_columns(by_unit[u], model.latent_names)
+        lead = u == 0
+        stats = {
+            "unit": name,
+            "engine_calls": dict(simulator.engine_calls) if lead else {},
+            "engine_s": simulator.engine_seconds if lead else 0.0,
+            "wall_s": time.perf_counter() - start if lead else 0.0,
+            "pid": os.getpid(),
+            "episodes": episodes,
+            "failed_trajectories": 0,
+            "failed_rows": int(np.sum(unit_columns["status"] != "ok")) if unit_columns else 0,
+            "group": [unit for unit, _ in units] if lead else units[0][0],
+        }
+        tables = {
+            "instances": arrow_table(instances.iloc[first_instance:first_instance + n].reset_index(drop=True),
+                                     INSTANCE_COLUMNS),
+            "probes": arrow_from_columns({key: value[taps] for key, value in probes.items()}, taps.stop - taps.start,
+                                         PROBE_COLUMNS),
+            "engine_cache": arrow_from_columns(cache, len(cache["engine"])),
+            "episodes": arrow_from_columns(unit_columns, rows.stop - rows.start, EPISODE_COLUMNS),
+        }
+        out.append((name, tables, stats))
+        first_episode += episodes
+        first_instance += n
+    return out
+
+
+def _units_one_by_one(config_data: dict, instances: pd.DataFrame, units: list[tuple[str, int]]) -> list[tuple]:
+    out, at = [], 0
+    for name, n in units:
+        out.append(compute_unit(config_data, instances.iloc[at:at + n], name))
+        at += n
+    return out
+
+
+def _episodes(config: StudyConfig, model: Any, instances: pd.DataFrame) -> tuple[Any, dict[str, Any], Any]:
+    """Rollouts, beliefs and commits of ``instances``: the probe batch, the episode table's
+    columns (``commit(..., as_columns=True)``; empty when every rollout failed) and the simulator."""
+    pfilter = build.build_filter(model, config.belief)
+    simulator = build.build_simulator(config)
+    schedule = config.probes.schedule
+    if schedule == "adaptive":
+        batch = rollout_adaptive(instances, config.repeats, config.probes.budget, model, pfilter, simulator, config.seed)
+    else:
+        batch = rollout(instances, config.repeats, schedule, config.probes.budget, model, simulator, config.seed)
+    if config.simulator.execute_all_aims:
+        truths, contexts = instance_arrays(instances, model)
+        for theta, ctx in zip(truths, contexts):
+            for aim in model.action_grid:
+                try:
+                    simulator.execute(theta, aim, ctx if len(ctx) else None)
+                except Exception:  # noqa: BLE001 - recorded when an episode commits there
+                    pass
+    columns: dict[str, Any] = {}
+    if np.any(batch.status == "ok"):  # a unit whose every trajectory failed has nothing to infer
+        trace = build_trace(pfilter, batch, config.seed, config.probes.commit_budgets, keep_weights=True)
+        blind = blind_bayes_executor(model, config.seed, config.blind_prior_samples) if "blind_bayes" in config.methods else None
+        columns = commit(trace, model, simulator, thresholds=config.belief.nu, methods=config.methods, blind=blind,
+                         as_columns=True)
+    return batch, columns, simulator
+
+
+Job = tuple[dict, pd.DataFrame, list[tuple[str, int]]]
+Result = list[tuple[str, dict[str, Any], dict[str, Any]]]
 
 
 def _run_serial(jobs: list[Job]) -> Iterator[Result]:
     for job in jobs:
-        yield compute_unit(*job)
+        yield compute_units(*job)
 
 
 def _run_threads(jobs: list[Job], threads: int) -> Iterator[Result]:
@@ -147,11 +248,11 @@ def _run_threads(jobs: list[Job], threads: int) -> Iterator[Result]:
 
     queue = iter(jobs)
     with ThreadPoolExecutor(max_workers=threads, thread_name_prefix="probecommit-unit") as pool:
-        pending = {pool.submit(compute_unit, *job) for job in itertools.islice(queue, 2 * threads)}
+        pending = {pool.submit(compute_units, *job) for job in itertools.islice(queue, 2 * threads)}
         try:
             while pending:
                 done, pending = wait(pending, return_when=FIRST_COMPLETED)
-                pending |= {pool.submit(compute_unit, *job) for job in itertools.islice(queue, len(done))}
+                pending |= {pool.submit(compute_units, *job) for job in itertools.islice(queue, len(done))}
                 for fut in done:
                     yield fut.result()
         finally:
@@ -209,7 +310,7 @@ def _run_processes(jobs: list[Job], workers: int) -> Iterator[Result]:
     threads = max(1, engine_threads() // n_workers)  # the processes share the CPUs the threads would use
     with ProcessPoolExecutor(max_workers=n_workers, mp_context=mp.get_context("spawn"),
                              initializer=_init_worker, initargs=(os.getpid(), 0.5, threads)) as pool:
-        pending = {pool.submit(compute_unit, *job) for job in jobs}
+        pending = {pool.submit(compute_units, *job) for job in jobs}
         try:
             while pending:
                 done, pending = wait(pending, return_when=FIRST_COMPLETED)
@@ -352,7 +453,7 @@ def ray_session(address: str, workers: int, timing: dict[str, float],
 
 def _run_ray(jobs: list[Job], ray: Any) -> Iterator[Result]:
     # Tasks return their tables to the driver: no shared filesystem is needed.
-    remote = ray.remote(max_retries=2)(compute_unit)
+    remote = ray.remote(max_retries=2)(compute_units)
     pending = [remote.remote(*job) for job in jobs]
     while pending:
         done, pending = ray.wait(pending, num_returns=1)
@@ -434,22 +535,42 @@ def run_study(
         return _run_units(config, run, instances, workers, ray, ray_address, timing, progress, start, threads)
 
 
+def _groups(config_data: dict, instances: pd.DataFrame, todo: list[tuple[str, slice]], repeats: int,
+            parallel: int) -> list[Job]:
+    """The jobs: consecutive units to compute, in groups of about :data:`GROUP_EPISODES` episodes
+    (:func:`compute_units`), and with several workers or threads, at least two groups each."""
+    if not todo:
+        return []
+    per_unit = max(1, max(sl.stop - sl.start for _, sl in todo) * repeats)
+    size = max(1, GROUP_EPISODES // per_unit)
+    if parallel > 1:  # enough groups to keep every worker busy
+        size = max(1, min(size, math.ceil(len(todo) / (2 * parallel))))
+    jobs = []
+    for first in range(0, len(todo), size):
+        group = todo[first:first + size]
+        rows = np.concatenate([np.arange(sl.start, sl.stop) for _, sl in group])
+        jobs.append((config_data, instances.iloc[rows], [(name, sl.stop - sl.start) for name, sl in group]))
+    return jobs
+
+
 def _run_units(config, run: RunDir, instances, workers, ray, ray_address, timing, progress, start,
                threads: int | None = None) -> StudyResult:
     units = unit_names(len(instances), config.unit_instances)
     config_data = config.model_dump(mode="json")
     stored = run.done_units()  # refuses batches of other code: a run never mixes two builds
-    jobs = [(config_data, instances.iloc[sl], name) for name, sl in units if name not in stored]
-    done = len(units) - len(jobs)
+    todo = [(name, sl) for name, sl in units if name not in stored]
+    done = len(units) - len(todo)
     if progress:
         progress(done, len(units))
+    n_threads = unit_threads(config, threads) if ray is None and workers <= 1 else 1
+    jobs = _groups(config_data, instances, todo, config.repeats, max(workers, n_threads))
     if ray is not None:
         results: Iterable[Result] = _run_ray(jobs, ray)
         backend = f"ray:{ray_address}"
     elif workers > 1 and len(jobs) > 1:
         results = _run_processes(jobs, workers)
         backend = f"processes:{min(workers, len(jobs))}"
-    elif len(jobs) > 1 and (n_threads := unit_threads(config, threads)) > 1:
+    elif len(jobs) > 1 and n_threads > 1:
         results = _run_threads(jobs, n_threads)
         backend = f"threads:{min(n_threads, len(jobs))}"
     else:
@@ -457,9 +578,11 @@ def _run_units(config, run: RunDir, instances, workers, ray, ray_address, timing
         backend = "serial"
     t_units = time.perf_counter()
     try:
-        for unit, tables, stats in results:
-            run.add_unit(unit, tables, stats)  # only the driver writes, a batch of units at a time
-            done += 1
+        for group in results:
+            for unit, tables, stats in group:
+                run.add_unit(unit, tables, stats, commit=False)  # only the driver writes, a batch at a time
+            run.commit_if_due()  # a group's units go into one batch (its first unit holds the group's stats)
+            done += len(group)
             if progress:
                 progress(done, len(units))
     except Exception:
@@ -490,7 +613,7 @@ def _run_units(config, run: RunDir, instances, workers, ray, ray_address, timing
             "episodes": int(sum(s["episodes"] for s in stats)),
             "failed_trajectories": int(sum(s["failed_trajectories"] for s in stats)),
             "failed_rows": int(sum(s["failed_rows"] for s in stats)),
-            "resumed_units": len(units) - len(jobs),
+            "resumed_units": len(units) - len(todo),
         },
     )
     return StudyResult(run.path, manifest, pd.read_parquet(run.table_path("episodes")))

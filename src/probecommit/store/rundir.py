@@ -520,14 +520,20 @@ class RunDir:
         """Whether ``unit`` is stored in a batch (see :meth:`done_units`)."""
         return unit in self.done_units()
 
-    def add_unit(self, unit: str, tables: dict[str, "pd.DataFrame | pa.Table"], stats: dict[str, Any]) -> None:
-        """Queue a finished unit; the batch is committed (one durable write) when it is due:
-        ``batch_units`` units, ``batch_bytes`` of tables or ``batch_seconds`` since the last
-        commit. Call :meth:`flush` (``finalize`` does) to commit the rest."""
+    def add_unit(self, unit: str, tables: dict[str, "pd.DataFrame | pa.Table"], stats: dict[str, Any],
+                 commit: bool = True) -> None:
+        """Queue a finished unit; with ``commit``, the batch is committed (one durable write) when
+        it is due (:meth:`commit_if_due`). Call :meth:`flush` (``finalize`` does) to commit the rest."""
         arrow = {name: t if isinstance(t, pa.Table) else arrow_table(t, _SCHEMAS.get(name, ()))
                  for name, t in tables.items()}
         self._pending.append((unit, arrow, stats))
         self._pending_bytes += sum(t.nbytes for t in arrow.values())
+        if commit:
+            self.commit_if_due()
+
+    def commit_if_due(self) -> None:
+        """Commit the queued units if the batch is due: ``batch_units`` units, ``batch_bytes`` of
+        tables or ``batch_seconds`` since the last commit."""
         if (len(self._pending) >= self.batch_units or self._pending_bytes >= self.batch_bytes
                 or time.monotonic() - self._last_commit >= self.batch_seconds):
             self.flush()
