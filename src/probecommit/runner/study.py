@@ -160,12 +160,17 @@ def compute_units(config_data: dict, instances: pd.DataFrame, units: list[tuple[
     per_episode = n_rows // max(batch.n_episodes, 1)
     budget = batch.u.shape[1]
     probes = batch.probes_columns()
+    # Each table built once for the group and sliced per unit (a slice shares the group's buffers;
+    # its types and pandas metadata are those a unit's own table gets: tested on the final tables).
+    whole = {"instances": arrow_table(instances.reset_index(drop=True), INSTANCE_COLUMNS),
+             "probes": arrow_from_columns(probes, batch.n_episodes * budget, PROBE_COLUMNS),
+             "episodes": arrow_from_columns(columns, n_rows, EPISODE_COLUMNS)}
     out, first_episode, first_instance = [], 0, 0
     for u, (name, n) in enumerate(units):
         episodes = n * config.repeats
         rows = slice(first_episode * per_episode, (first_episode + episodes) * per_episode)
         taps = slice(first_episode * budget, (first_episode + episodes) * budget)
-        unit_columns = {key: value[rows] for key, value in columns.items()}
+        unit_columns = {"status": columns["status"][rows]} if columns else {}
         cache = cache_columns(by_unit[u], model.latent_names)
         lead = u == 0
         stats = {
@@ -180,12 +185,10 @@ def compute_units(config_data: dict, instances: pd.DataFrame, units: list[tuple[
             "group": [unit for unit, _ in units] if lead else units[0][0],
         }
         tables = {
-            "instances": arrow_table(instances.iloc[first_instance:first_instance + n].reset_index(drop=True),
-                                     INSTANCE_COLUMNS),
-            "probes": arrow_from_columns({key: value[taps] for key, value in probes.items()}, taps.stop - taps.start,
-                                         PROBE_COLUMNS),
+            "instances": whole["instances"].slice(first_instance, n),
+            "probes": whole["probes"].slice(taps.start, taps.stop - taps.start),
             "engine_cache": arrow_from_columns(cache, len(cache["engine"])),
-            "episodes": arrow_from_columns(unit_columns, rows.stop - rows.start, EPISODE_COLUMNS),
+            "episodes": whole["episodes"].slice(rows.start, rows.stop - rows.start),
         }
         out.append((name, tables, stats))
         first_episode += episodes
