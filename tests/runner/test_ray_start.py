@@ -96,6 +96,9 @@ def test_a_ray_start_that_hangs_is_given_up_with_one_line(monkeypatch):
         def init(self, **kwargs):
             time.sleep(30)
 
+        def shutdown(self):
+            pass
+
     monkeypatch.setattr("probecommit.engines.require", lambda name: HangingRay())
     t0 = time.perf_counter()
     with pytest.raises(RuntimeError, match=r"could not start a local Ray instance within 0.3 s"):

@@ -389,30 +389,43 @@ def check_reachable(address: str, timeout_s: float = RAY_PROBE_TIMEOUT_S) -> Non
                            "(the head's GCS port, 6379 by default)")
 
 
+class _RayStartExpired(BaseException):
+    """Raised in the main thread by the alarm of :func:`_init_within` (a BaseException, so no
+    ``except Exception`` inside Ray swallows it)."""
+
+
 def _init_within(ray: Any, kwargs: dict[str, Any], address: str, timeout_s: float) -> None:
-    """``ray.init(**kwargs)``, given up after ``timeout_s`` with one line (it has no timeout of its own)."""
+    """``ray.init(**kwargs)``, given up after ``timeout_s`` with one line (it has no timeout of its own).
+
+    Ray must start in the thread that keeps running: the processes it starts die with the
+    thread that started them (Linux's parent-death signal is per thread), so a helper thread
+    would kill the instance when it ends. The timeout is an interval timer whose signal raises
+    in the main thread; called from another thread, Ray starts without one.
+    """
+    import signal
     import threading
 
-    outcome: dict[str, BaseException | None] = {}
+    def expired(signum, frame):  # noqa: ARG001 - a signal handler's signature
+        raise _RayStartExpired
 
-    def start() -> None:
-        try:
-            ray.init(**kwargs)
-            outcome["error"] = None
-        except BaseException as exc:  # noqa: BLE001 - handed to the caller's thread
-            outcome["error"] = exc
-
-    thread = threading.Thread(target=start, name="probecommit-ray-init", daemon=True)
-    thread.start()
-    thread.join(timeout_s)
-    if thread.is_alive():
+    timed = threading.current_thread() is threading.main_thread() and hasattr(signal, "setitimer")
+    if timed:
+        previous = signal.signal(signal.SIGALRM, expired)
+        signal.setitimer(signal.ITIMER_REAL, timeout_s)
+    try:
+        ray.init(**kwargs)
+    except _RayStartExpired:
+        with contextlib.suppress(Exception):
+            ray.shutdown()
         what = "start a local Ray instance" if address == "local" else f"connect to the Ray cluster at {address}"
-        raise RuntimeError(f"could not {what} within {timeout_s:g} s (set PROBECOMMIT_RAY_TIMEOUT_S to wait longer)")
-    error = outcome.get("error")
-    if isinstance(error, (ConnectionError, TimeoutError)):
-        raise RuntimeError(f"cannot reach the Ray cluster at {address!r}: {str(error).splitlines()[0]}") from None
-    if error is not None:
-        raise error
+        raise RuntimeError(f"could not {what} within {timeout_s:g} s (set PROBECOMMIT_RAY_TIMEOUT_S to wait longer)"
+                           ) from None
+    except (ConnectionError, TimeoutError) as exc:
+        raise RuntimeError(f"cannot reach the Ray cluster at {address!r}: {str(exc).splitlines()[0]}") from None
+    finally:
+        if timed:
+            signal.setitimer(signal.ITIMER_REAL, 0)
+            signal.signal(signal.SIGALRM, previous)
 
 
 @contextlib.contextmanager
