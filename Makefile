@@ -57,6 +57,7 @@ bench: $(STAMP) $(AOT_DIGEST)
 	$(PY) benchmarks/scale.py
 	$(PY) benchmarks/session.py
 	$(PY) benchmarks/startup.py
+	$(PY) benchmarks/writes.py
 	$(PY) benchmarks/end_to_end.py
 
 ## Every table and figure of the paper (resumable; see probecommit reproduce --list).
