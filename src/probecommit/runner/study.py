@@ -108,9 +108,12 @@ def compute_unit(config_data: dict, instances: pd.DataFrame, unit: str) -> tuple
     return unit, tables, stats
 
 
-#: Episodes computed in one batch when several small units go together (:func:`compute_units`);
+#: Episodes computed in one batch when several small units go together (:func:`compute_units`),
+#: at 1024 particles (fewer at more particles: a group holds no more belief memory than 256
+#: episodes of 1024 particles, and a unit larger than that is computed alone, as before);
 #: ``$PROBECOMMIT_GROUP_EPISODES`` overrides it (1: every unit alone).
 GROUP_EPISODES = int(os.environ.get("PROBECOMMIT_GROUP_EPISODES", "256"))
+GROUP_PARTICLES = 1024
 
 
 def compute_units(config_data: dict, instances: pd.DataFrame, units: list[tuple[str, int]]) -> list[tuple]:
@@ -552,13 +555,13 @@ def run_study(
 
 
 def _groups(config_data: dict, instances: pd.DataFrame, todo: list[tuple[str, slice]], repeats: int,
-            parallel: int) -> list[Job]:
+            parallel: int, particles: int = GROUP_PARTICLES) -> list[Job]:
     """The jobs: consecutive units to compute, in groups of about :data:`GROUP_EPISODES` episodes
     (:func:`compute_units`), and with several workers or threads, at least two groups each."""
     if not todo:
         return []
     per_unit = max(1, max(sl.stop - sl.start for _, sl in todo) * repeats)
-    size = max(1, GROUP_EPISODES // per_unit)
+    size = max(1, (GROUP_EPISODES * GROUP_PARTICLES) // (per_unit * max(particles, GROUP_PARTICLES)))
     if parallel > 1:  # enough groups to keep every worker busy
         size = max(1, min(size, math.ceil(len(todo) / (2 * parallel))))
     jobs = []
@@ -579,7 +582,7 @@ def _run_units(config, run: RunDir, instances, workers, ray, ray_address, timing
     if progress:
         progress(done, len(units))
     n_threads = unit_threads(config, threads) if ray is None and workers <= 1 else 1
-    jobs = _groups(config_data, instances, todo, config.repeats, max(workers, n_threads))
+    jobs = _groups(config_data, instances, todo, config.repeats, max(workers, n_threads), config.belief.particles)
     if ray is not None:
         results: Iterable[Result] = _run_ray(jobs, ray)
         backend = f"ray:{ray_address}"
