@@ -369,6 +369,7 @@ class RunDir:
                     f"{self.path} was written by probecommit {written_by}, this is {__version__}; "
                     f"refusing to mix results from two versions ({hint})"
                 )
+        self._check_batch_code()
         existing = (self.path / CONFIG).read_text()
         if existing != config_yaml:
             raise RunDirError(
@@ -508,6 +509,20 @@ class RunDir:
             atomic_write_bytes(code, code_identity().encode())
         self._next_batch = 1 + max((batches.batch_index(p) or 0 for p in self._batch_paths()), default=-1)
         return set(self._batches)
+
+    def _check_batch_code(self) -> None:
+        """Read-only: refuse batches of other code (or shards of the earlier layout) before any
+        work starts; headers only (:meth:`done_units` checks every batch whole, with the lock)."""
+        legacy = sorted(p.name for p in self.shards.glob("unit-*")) if self.shards.is_dir() else []
+        if legacy:
+            raise self._other_code(legacy[0], "unrecorded (a shard of the earlier per-unit layout)")
+        for path in self._batch_paths():
+            try:
+                code = batches.read_header(path).get("code")
+            except (batches.BatchError, OSError):
+                continue  # a damaged batch: deleted and redone by done_units
+            if code != code_identity():
+                raise self._other_code(path.name, str(code))
 
     def _other_code(self, name: str, other: str) -> RunDirError:
         return RunDirError(
