@@ -47,6 +47,8 @@ def print_robot_table(table, title: str) -> None:
 
 def audit_session_log(path: Path, out: Optional[Path], resamples: int, seed: int) -> None:
     """``probecommit audit LOG`` for a session log: Table VII, Fig. 5b, CSVs."""
+    import numpy as np
+
     from probecommit.cli.audit_commands import write_csv
     from probecommit.report.figures import save_figure
     from probecommit.report.robot_figures import aim_error_figure
@@ -183,9 +185,6 @@ def show(log: Path = typer.Argument(..., help="Session log (.jsonl) or its direc
     for ep in open_eps:
         console.print(f"open: episode {ep.episode} at {safe(ep.position)}, {len(ep.probes)} of {ep.taps} taps"
                       f"{', committed' if ep.decision else ''}")
-
-
-import numpy as np  # noqa: E402  (used by audit_session_log)
 
 
 def register(app: typer.Typer) -> None:

@@ -11,9 +11,16 @@ import typer
 from probecommit.store.safefile import output_dir, write_text, write_with
 from probecommit.cli.common import console, err_console, progress_bar, safe, user_errors
 from probecommit.errors import UsageError
-from probecommit.tasks.insertion.model import PAPER_DELTA_MM
 
 REPO_ROOT = Path(__file__).resolve().parents[3]
+
+
+def _paper_delta_mm() -> float:
+    """The paper's tap-boundary offset, read when a command runs (importing the insertion family
+    at start-up would cost every command, ``--help`` included, its model and config imports)."""
+    from probecommit.tasks.insertion.model import PAPER_DELTA_MM
+
+    return PAPER_DELTA_MM
 
 
 def _stepper():
@@ -79,7 +86,8 @@ def scan(
     engine: str = typer.Option("mujoco", help="Engine to scan: mujoco, pybullet, sapien or analytic."),
     protocol: Path = typer.Option(REPO_ROOT / "configs" / "paper" / "insertion.yaml", help="Frozen protocol config."),
     step: Optional[float] = typer.Option(None, min=0.001, help="Grid step (mm); default from the protocol (0.25)."),
-    boundary_offset: float = typer.Option(PAPER_DELTA_MM, help="Analytic engine only: its planted boundary offset (mm)."),
+    boundary_offset: float = typer.Option(default_factory=lambda: _paper_delta_mm(), show_default="the paper's delta",
+                                          help="Analytic engine only: its planted boundary offset (mm)."),
     capture: bool = typer.Option(False, "--capture", help="Also scan the capture window (peg entry against lateral offset)."),
     out: Path = typer.Option(Path("runs/scan"), "--out", "-o", help="Output folder for scan.parquet and the figure."),
 ) -> None:
