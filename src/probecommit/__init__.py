@@ -87,8 +87,6 @@ def paper_config(name: str) -> _Path:
     """
     from importlib import resources as _resources
 
-    from importlib import resources as _resources
-
     folder = _Path(str(_resources.files("probecommit") / "configs" / "paper"))
     path = folder / (name if name.endswith(".yaml") else f"{name}.yaml")
     if not path.is_file():
