@@ -70,6 +70,8 @@ bench: $(STAMP) $(AOT_DIGEST)
 	$(PY) benchmarks/calibrate.py
 	$(PY) benchmarks/scale.py
 	$(PY) benchmarks/session.py
+	$(PY) benchmarks/startup.py
+	$(PY) benchmarks/writes.py
 	$(PY) benchmarks/end_to_end.py
 
 ## Every table and figure of the paper (resumable; see probecommit reproduce --list).

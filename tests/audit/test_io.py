@@ -124,12 +124,14 @@ def test_unknown_format_missing_file_and_empty_table(tmp_path):
         read_episodes(_write(tmp_path, _robot_lines()[0]))
 
 
-def test_given_indicators_are_kept_and_parsed(tmp_path):
+def test_given_indicators_are_parsed_but_recomputed(tmp_path):
     lines = _robot_lines()
     out = [lines[0] + ",covered"] + [ln + (",TRUE" if i % 2 else ",0") for i, ln in enumerate(lines[1:])]
     df = read_episodes(_write(tmp_path, "\n".join(out)))
-    assert df["covered"].tolist() == [bool(i % 2) for i in range(12)]
-    assert df["escaped"].dtype == bool  # still derived
+    # Derived columns are never trusted: the intervals' values are used and the contradiction said.
+    assert df["covered"].tolist()[:8] == [True, False, True, False, True, True, True, True]
+    assert any("contradicts the intervals" in n for n in df.attrs["notes"])
+    assert df["escaped"].dtype == bool
 
 
 def test_run_directory_and_parquet_roundtrip(tmp_path):

@@ -33,10 +33,11 @@ def test_an_unreachable_ray_address_fails_within_seconds(tmp_path, monkeypatch):
                 max_size=12).map("".join))
 @settings(max_examples=60, deadline=None)
 def test_markup_and_control_characters_from_data_are_inert(text):
-    from rich.console import Console
+    from probecommit.cli.common import SafeConsole
 
-    console = Console(record=True, width=200)
-    console.print(f"value: {safe(text)}")  # must never raise or render markup
+    console = SafeConsole(record=True, width=200)
+    console.print(f"value: {text}")  # must never raise or render markup, escaped or not
+    console.print(f"value: {safe(text)}")
     out = console.export_text()
     assert "\x1b" not in out and "\x07" not in out
 

@@ -18,12 +18,13 @@ def test_a_family_that_passes_lists_its_checks():
 
 
 def test_a_failing_family_exits_1_naming_the_declaration(monkeypatch):
-    from probecommit.tasks.push1d.config import Push1DConfig
+    spec = registry.families()["push1d"]
 
-    class Planted(Push1DConfig):
+    class Planted(spec.config):
         latent_names = ("mu", "mass", "k_d")
 
-    monkeypatch.setitem(registry._REGISTRY, "push1d", dataclasses.replace(registry.families()["push1d"], config=Planted))
+    # A copy written by hand (no declaration): the failure names the hand-written attribute.
+    monkeypatch.setitem(registry._REGISTRY, "push1d", dataclasses.replace(spec, config=Planted, declaration=None))
     result = CliRunner().invoke(app, ["tasks", "--check", "push1d"])
     assert result.exit_code == 1
     assert "FAIL latents: fix the model's `latent_names` or the config's `latent_names`" in result.output

@@ -17,6 +17,7 @@ class ToyModel:
     prior_low: np.ndarray = field(default=None)
     prior_high: np.ndarray = field(default=None)
     jitter_scale: np.ndarray = field(default=None)
+    reading_levels = None  # ForwardModel: no few-level fast path
 
     def __post_init__(self):
         self.prior_low = np.zeros(self.d)

@@ -13,7 +13,7 @@ def test_check_fits_refuses_with_the_estimate_and_the_setting(monkeypatch):
     monkeypatch.setattr(memory, "available_bytes", lambda: 4 * 1024**3)
     memory.check_fits(1.9 * 1024**3, "the beliefs of one unit", "belief.particles")  # under half: fine
     with pytest.raises(MemoryError, match=r"the beliefs of one unit would need about 2\.5 GiB, more than half the "
-                                          r"4\.0 GiB available; reduce belief\.particles"):
+                                          r"4\.0 GiB available \(host or container limit, the smaller\); reduce belief\.particles"):
         memory.check_fits(2.5 * 1024**3, "the beliefs of one unit", "belief.particles")
 
 

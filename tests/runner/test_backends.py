@@ -7,6 +7,7 @@ import pytest
 
 from probecommit.runner import study
 from probecommit.runner.study import run_study, unit_threads
+from probecommit.store.rundir import RunDir
 from tests.runner.test_resume import assert_same_tables
 
 
@@ -42,7 +43,9 @@ def test_unit_threads_follow_the_engine_threads_and_the_simulator(monkeypatch, m
     with pytest.raises(ValueError, match="threads must be >= 1"):
         unit_threads(cfg, 0)
 
-    class Unsafe:  # a simulator that does not declare itself thread-safe runs its units one by one
+    from probecommit.tasks.base import CachedSimulator
+
+    class Unsafe(CachedSimulator):  # a simulator keeping the base's thread_safe = False runs its units one by one
         pass
 
     monkeypatch.setattr(study.build, "simulator_class", lambda config: Unsafe)
@@ -51,18 +54,18 @@ def test_unit_threads_follow_the_engine_threads_and_the_simulator(monkeypatch, m
 
 def test_a_failing_unit_thread_stops_the_run_and_leaves_it_resumable(tmp_path, monkeypatch, make_config):
     cfg = make_config(unit_instances=1)
-    real = study.compute_unit
+    real = study.compute_units
 
-    def flaky(config_data, instances, unit):
-        if unit == "unit-00003":
+    def flaky(config_data, instances, units):
+        if "unit-00003" in [name for name, _ in units]:
             raise RuntimeError("engine crashed in unit 3")
-        return real(config_data, instances, unit)
+        return real(config_data, instances, units)
 
-    monkeypatch.setattr(study, "compute_unit", flaky)
+    monkeypatch.setattr(study, "compute_units", flaky)
     with pytest.raises(RuntimeError, match="unit 3"):
         run_study(cfg, tmp_path / "run", threads=2)
-    monkeypatch.setattr(study, "compute_unit", real)
-    finished = len(list((tmp_path / "run" / "shards").glob("*.episodes.parquet")))  # whole units written before the error
+    monkeypatch.setattr(study, "compute_units", real)
+    finished = len(RunDir(tmp_path / "run").done_units())  # whole units committed before the error
     assert finished < 6
     resumed = run_study(cfg, tmp_path / "run", threads=2)
     assert resumed.manifest["resumed_units"] == finished
@@ -71,9 +74,30 @@ def test_a_failing_unit_thread_stops_the_run_and_leaves_it_resumable(tmp_path, m
 
 
 def _unit_pids(run_dir):
-    import json
+    run = RunDir(run_dir)
+    return [run.unit_stats(unit)["pid"] for unit in run.done_units()]
 
-    return [json.loads(p.read_text())["pid"] for p in (run_dir / "shards").glob("*.stats.json")]
+
+@pytest.mark.parametrize("units", [1, 2], ids=["units of one instance", "units of two"])
+def test_units_computed_in_groups_equal_units_computed_alone(tmp_path, make_config, monkeypatch, units):
+    """Several small units computed as one batch and split give each unit's tables exactly."""
+    cfg = make_config(unit_instances=units)
+    monkeypatch.setattr(study, "GROUP_EPISODES", 1)
+    alone = run_study(cfg, tmp_path / "alone", threads=1)
+    monkeypatch.setattr(study, "GROUP_EPISODES", 10_000)
+    grouped = run_study(cfg, tmp_path / "grouped", threads=1)
+    run = RunDir(grouped.run_dir)
+    first = sorted(run.done_units())[0]
+    assert len(run.unit_stats(first)["group"]) == 6 // units  # really computed together
+    assert_same_tables(alone.run_dir, grouped.run_dir)
+    assert grouped.manifest["engine_calls"] == alone.manifest["engine_calls"]
+    assert grouped.manifest["episodes"] == alone.manifest["episodes"]
+    # Rebuilt from the stored batches (slices of the group's tables, read back): the same tables.
+    (grouped.run_dir / "manifest.json").unlink()
+    (grouped.run_dir / "episodes.parquet").unlink()
+    rebuilt = run_study(cfg, tmp_path / "grouped", threads=1)
+    assert rebuilt.manifest["resumed_units"] == 6 // units
+    assert_same_tables(alone.run_dir, rebuilt.run_dir)
 
 
 @pytest.mark.ray

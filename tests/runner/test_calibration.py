@@ -153,5 +153,5 @@ def test_runs_with_a_failed_trajectory(tmp_path, runs, monkeypatch):
 
 
 def test_in_sample_calibration_is_refused(runs):
-    with pytest.raises(ValueError, match="same run"):
+    with pytest.raises(ValueError, match="share 8 instance"):
         calibrate(runs["test"], runs["test"])

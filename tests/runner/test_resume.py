@@ -12,6 +12,7 @@ import pytest
 import yaml
 
 import probecommit.store.rundir as rundir
+from probecommit.runner import study
 from probecommit.runner.config import load_config
 from probecommit.runner.study import run_study
 from probecommit.store.rundir import RunDir, RunDirError
@@ -41,6 +42,8 @@ class Killed(BaseException):
 
 def test_killed_at_every_write_resumes_to_identical_tables(tmp_path, make_config, monkeypatch):
     cfg = tiny(make_config)
+    monkeypatch.setattr(RunDir, "batch_units", 1)  # a batch per unit: a kill between any two units
+    monkeypatch.setattr(study, "GROUP_EPISODES", 1)
     real_write = rundir.atomic_write_bytes
     writes = []
 
@@ -51,8 +54,8 @@ def test_killed_at_every_write_resumes_to_identical_tables(tmp_path, make_config
     monkeypatch.setattr(rundir, "atomic_write_bytes", counting)
     reference = run_study(cfg, tmp_path / "ref").run_dir
     monkeypatch.setattr(rundir, "atomic_write_bytes", real_write)
-    # VERSION, CODE, config, 2 units x 5 shard files, 4 tables, manifest.
-    assert len(writes) == 3 + 2 * 5 + 4 + 1 and writes[-1] == "manifest.json"
+    # VERSION, CODE, config, 2 batches of one unit (one durable write each), 4 tables, manifest.
+    assert len(writes) == 3 + 2 + 4 + 1 and writes[-1] == "manifest.json"
 
     for n in range(len(writes)):
         calls = {"n": 0}
@@ -75,33 +78,65 @@ def test_killed_at_every_write_resumes_to_identical_tables(tmp_path, make_config
         result = run_study(cfg, out)
         assert_same_tables(reference, out)
         assert not list(out.glob("**/*.tmp")), f"temporaries left after resuming a kill at write {n}"
-        assert result.manifest["resumed_units"] == sum(1 for w in writes[:n] if w.startswith("unit-") and w.endswith(".episodes.parquet"))
+        assert result.manifest["resumed_units"] == sum(1 for w in writes[:n] if w.startswith("batch-"))
 
 
-def test_partial_unit_is_redone_and_finished_units_are_kept(tmp_path, make_config):
-    cfg = make_config()  # 6 instances, 2 per unit: 3 units
+def test_units_are_group_committed_one_durable_write_per_batch(tmp_path, make_config, monkeypatch):
+    """Six units in batches of four: two batch files, each one fsynced write plus an fsync of
+    shards/ (not five files a unit); the tables equal those of a batch per unit."""
+    cfg = make_config(unit_instances=1)  # 6 instances: 6 units
+    monkeypatch.setattr(RunDir, "batch_units", 1)
+    monkeypatch.setattr(study, "GROUP_EPISODES", 1)  # each unit computed alone
+    reference = run_study(cfg, tmp_path / "ref").run_dir
+    assert len(list((reference / "shards").glob("batch-*.pcb"))) == 6
+    monkeypatch.setattr(RunDir, "batch_units", 4)
+    monkeypatch.setattr(RunDir, "batch_seconds", 1e9)
+    fsyncs = []
+    real_fsync = os.fsync
+    monkeypatch.setattr(os, "fsync", lambda fd: (fsyncs.append(fd), real_fsync(fd))[1])
+    out = run_study(cfg, tmp_path / "run").run_dir
+    assert sorted(p.name for p in (out / "shards").glob("batch-*")) == ["batch-000000.pcb", "batch-000001.pcb"]
+    # VERSION, CODE, config: 3; batches: 2 x (file + directory); 4 tables and the manifest: 5.
+    assert len(fsyncs) == 3 + 2 * 2 + 5
+    assert_same_tables(reference, out)
+
+
+@pytest.mark.parametrize("damage", ["garbage", "cut", "flipped", "deleted"])
+def test_a_damaged_batch_is_redone_and_the_others_are_kept(tmp_path, make_config, monkeypatch, damage):
+    monkeypatch.setattr(RunDir, "batch_units", 1)
+    monkeypatch.setattr(study, "GROUP_EPISODES", 1)
+    cfg = make_config()  # 6 instances, 2 per unit: 3 units, a batch each
     reference = run_study(cfg, tmp_path / "ref").run_dir
     out = run_study(cfg, tmp_path / "run").run_dir
     shards = out / "shards"
     (out / "manifest.json").unlink()
     (out / "episodes.parquet").unlink()
-    # unit-00001 is partial: its episodes shard is missing and its probes shard is garbage.
-    (shards / "unit-00001.episodes.parquet").unlink()
-    (shards / "unit-00001.probes.parquet").write_bytes(b"not parquet")
-    kept = {p.name: p.stat().st_mtime_ns for p in shards.glob("unit-0000[02].*")}
+    bad = shards / "batch-000001.pcb"
+    data = bad.read_bytes()
+    if damage == "garbage":
+        bad.write_bytes(b"not a batch")
+    elif damage == "cut":
+        bad.write_bytes(data[:-10])
+    elif damage == "flipped":  # one payload byte altered: the payload's sha256 catches it
+        bad.write_bytes(data[:-5] + bytes([data[-5] ^ 1]) + data[-4:])
+    else:
+        bad.unlink()
+    kept = {p.name: p.stat().st_mtime_ns for p in shards.glob("batch-00000[02].pcb")}
     time.sleep(0.01)
     result = run_study(cfg, out)
     assert result.manifest["resumed_units"] == 2
-    assert {p.name: p.stat().st_mtime_ns for p in shards.glob("unit-0000[02].*")} == kept
+    assert {p.name: p.stat().st_mtime_ns for p in shards.glob("batch-00000[02].pcb")} == kept
     assert_same_tables(reference, out)
 
 
-def test_a_unit_missing_any_shard_counts_as_not_done(tmp_path, make_config):
+def test_a_unit_in_no_batch_counts_as_not_done(tmp_path, make_config, monkeypatch):
+    monkeypatch.setattr(RunDir, "batch_units", 1)
+    monkeypatch.setattr(study, "GROUP_EPISODES", 1)
     out = run_study(make_config(), tmp_path / "run").run_dir
     run = RunDir(out)
     assert run.unit_done("unit-00000")
-    (out / "shards" / "unit-00000.engine_cache.parquet").unlink()
-    assert not run.unit_done("unit-00000")
+    run._batches["unit-00000"].unlink()  # the batch holding it (threads finish in any order)
+    assert not run.unit_done("unit-00000") and run.unit_done("unit-00001")
 
 
 def test_rerunning_a_complete_run_changes_nothing(tmp_path, make_config):
@@ -142,12 +177,13 @@ def test_sigkilled_cli_run_resumes_to_identical_tables(tmp_path):
     script = Path(sys.executable).with_name("probecommit")
     entry = [str(script)] if script.is_file() else [sys.executable, "-m", "probecommit.cli.app"]
     cmd = entry + ["run", str(path), "--out", str(out)]
-    env = {**os.environ, "COLUMNS": "120"}
+    env = {**os.environ, "COLUMNS": "120", "PROBECOMMIT_BATCH_UNITS": "1",
+           "PROBECOMMIT_GROUP_EPISODES": "1"}
     proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, env=env)
     deadline = time.monotonic() + 30
     done = []
     while time.monotonic() < deadline and proc.poll() is None:
-        done = list((out / "shards").glob("unit-*.episodes.parquet"))
+        done = list((out / "shards").glob("batch-*.pcb"))
         if len(done) >= 3:
             break
         time.sleep(0.005)
@@ -157,7 +193,7 @@ def test_sigkilled_cli_run_resumes_to_identical_tables(tmp_path):
     proc.stderr.close()
     assert proc.returncode == -signal.SIGKILL
     assert not (out / "manifest.json").exists()
-    units_done = len(list((out / "shards").glob("unit-*.episodes.parquet")))
+    units_done = len(RunDir(out).done_units())
     assert 3 <= units_done < 24
 
     again = subprocess.run(cmd, capture_output=True, text=True, env=env, timeout=60)

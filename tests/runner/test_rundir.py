@@ -139,31 +139,24 @@ def test_manifest_engine_versions_are_the_installed_distributions():
     assert _header_version("Name: x\n\nVersion: 9") is None  # a body line is not the header
 
 
-@pytest.mark.parametrize("kept", [True, False])
-def test_merged_shards_equal_concatenating_each_shard_read_by_pandas(tmp_path, kept):
-    """Shards of one schema are joined as Arrow tables and converted once; shards whose columns
-    differ, and empty ones, are joined as pandas joins each shard read alone (kept or from disk)."""
+def test_merged_tables_equal_concatenating_each_table_converted_by_pandas(tmp_path):
+    """Tables of one schema are joined as Arrow tables and converted once; tables whose columns
+    differ, and empty ones, are joined as pandas joins each table converted alone."""
     import pandas as pd
+    import pyarrow as pa
 
-    from probecommit.store.rundir import atomic_write_parquet
+    from probecommit.store.rundir import merge_tables
 
-    run = RunDir(tmp_path / "run")
     full = pd.DataFrame({"instance_id": ["a", "b"], "repeat": [0, 1], "realized": [0.0, 1.0], "status": ["ok", "ok"]})
-    shards = {"u0": full, "u1": full.iloc[:0], "u2": full.assign(instance_id=["c", "d"]),
+    frames = {"u0": full, "u1": full.iloc[:0], "u2": full.assign(instance_id=["c", "d"]),
               "u3": pd.DataFrame({"instance_id": ["e"], "repeat": [0], "status": ["failed"]})}  # fewer columns
-    for unit, frame in shards.items():
-        path = run.shard_path(unit, "episodes")
-        table = atomic_write_parquet(path, frame)
-        if kept:
-            run._keep(path, table)
-    expected = pd.concat([pd.read_parquet(run.shard_path(u, "episodes")) for u in ("u0", "u2", "u3")], ignore_index=True)
-    pd.testing.assert_frame_equal(run._merged("episodes", list(shards)), expected)
-    same = pd.concat([pd.read_parquet(run.shard_path(u, "episodes")) for u in ("u0", "u2")], ignore_index=True)
-    if kept:  # the kept tables were handed over by the first merge
-        for unit in ("u0", "u1", "u2"):
-            run._keep(run.shard_path(unit, "episodes"), atomic_write_parquet(run.shard_path(unit, "episodes"), shards[unit]))
-    pd.testing.assert_frame_equal(run._merged("episodes", ["u0", "u1", "u2"]), same)
-    pd.testing.assert_frame_equal(run._merged("episodes", ["u1"]), pd.read_parquet(run.shard_path("u1", "episodes")))
+    tables = {u: pa.Table.from_pandas(f, preserve_index=False) for u, f in frames.items()}
+    alone = {u: t.to_pandas() for u, t in tables.items()}
+    expected = pd.concat([alone[u] for u in ("u0", "u2", "u3")], ignore_index=True)
+    pd.testing.assert_frame_equal(merge_tables(list(tables.values())), expected)
+    same = pd.concat([alone[u] for u in ("u0", "u2")], ignore_index=True)
+    pd.testing.assert_frame_equal(merge_tables([tables[u] for u in ("u0", "u1", "u2")]), same)
+    pd.testing.assert_frame_equal(merge_tables([tables["u1"]]), alone["u1"])
 
 
 def _episode_rows(ids_repeats, vector, k=(1, 2)):
@@ -222,3 +215,63 @@ def test_episodes_streamed_in_parts_equal_the_merged_table(tmp_path, vector):
         stream.add(parts[1])
         stream.add(parts[0])
     assert not list(run.shards.iterdir()) and not run.table_path("episodes").exists()
+
+
+def _pandas_route(columns, n_rows, schema=()):
+    import pandas as pd
+
+    from probecommit.store.rundir import arrow_table
+
+    return arrow_table(pd.DataFrame(columns), schema)
+
+
+@pytest.mark.parametrize("case", ["numbers", "strings", "scalars", "lists", "empty", "nulls"])
+def test_tables_built_from_columns_equal_those_built_through_pandas(case):
+    """Same types, values (NaN as null) and pandas metadata as ``arrow_table(pd.DataFrame(columns))``."""
+    import numpy as np
+
+    from probecommit.store.rundir import arrow_from_columns
+    from probecommit.store.schema import EPISODE_COLUMNS, PROBE_COLUMNS
+
+    n = 3
+    cases = {
+        "numbers": ({"instance_id": np.array(["a", "b", "c"]), "repeat": np.arange(n), "j": np.arange(n, dtype=np.int64),
+                     "u_0": np.array([0.5, np.nan, 2.0]), "y_0": np.array([1.0, 2.0, -np.inf])}, PROBE_COLUMNS),
+        "strings": ({"instance_id": np.array(["a", "b", "c"], dtype=object), "k": np.array([1, 2, 3]),
+                     "status": np.array(["ok", "failed", "ok"], dtype=object), "covered": np.array([True, False, True]),
+                     "n_retained": np.array([1, 2, 3], dtype=np.int64)}, EPISODE_COLUMNS),
+        "scalars": ({"instance_id": np.array(["a", "b", "c"]), "repeat": np.arange(n, dtype=np.int64),
+                     "k": np.int64(0), "method": "rollout", "status": "failed", "error": np.array(["x", "y", "z"])},
+                    EPISODE_COLUMNS),
+        "lists": ({"engine": ["analytic"] * n, "query": ["tap", "tap", "aim"], "x_hole": [0.5, None, 1.0],
+                   "c": [1.0, 1.1, 1.2], "arg": [[0.0], [1.0], [2.0, 3.0]], "value": [[1.0], [2.0], [3.0]]}, ()),
+        "empty": ({"engine": [], "query": [], "x_hole": [], "arg": [], "value": []}, ()),
+        "nulls": ({"instance_id": np.array(["a", "b", "c"]), "hull_lo": np.array([None, None, None], dtype=object),
+                   "max_surprise": np.full(n, np.nan)}, EPISODE_COLUMNS),
+    }
+    columns, schema = cases[case]
+    rows = 0 if case == "empty" else n
+    built = arrow_from_columns(columns, rows, schema)
+    expected = _pandas_route(columns, rows, schema)
+    assert built.equals(expected, check_metadata=True), (built.schema, expected.schema)
+    assert built.to_pandas().equals(expected.to_pandas())
+
+
+@pytest.mark.parametrize("family", ["insertion", "planar_slide"], ids=["insertion", "vector actions"])
+def test_a_units_tables_equal_those_built_through_pandas(monkeypatch, family):
+    from probecommit.runner import study
+    from probecommit.runner.build import build_model
+    from probecommit.runner.config import parse_config
+    from probecommit.runner.instances import draw_instances
+
+    contexts = {"contexts": [[1.0, 0.2], [0.6, -0.3]]} if family == "planar_slide" else {}
+    config = parse_config({"name": "cols", "task": family, "seed": 3, "repeats": 2, "probes": {"budget": 3},
+                           "instances": {"split": "t", "count": 2, "seed": 1, **contexts}, "belief": {"particles": 64},
+                           "simulator": {"engine": "analytic"}, "blind_prior_samples": 200})
+    instances = draw_instances(config, build_model(config))
+    data = config.model_dump(mode="json")
+    _, built, _ = study.compute_unit(data, instances, "unit-00000")
+    monkeypatch.setattr(study, "arrow_from_columns", _pandas_route)
+    _, expected, _ = study.compute_unit(data, instances, "unit-00000")
+    for name in built:
+        assert built[name].equals(expected[name], check_metadata=True), name

@@ -68,7 +68,8 @@ def test_budget_curve_table_markdown_and_figure(tmp_path):
     assert curve["mean"].tolist() == pytest.approx([0.5, 0.6, 0.3, 0.1])
     tab = breadth_table({"push2d": ep}, resamples=100)
     md = breadth_markdown(tab)
-    assert "push2d (ours, k=5) | m | 0.500 | 0.600 | 0.100 | 0.400 [0.400, 0.400] | 0.500 [0.500, 0.500] |" in md
+    # One instance is one cluster: no bootstrap interval (issue 38: never a zero-width one).
+    assert "push2d (ours, k=5) | m | 0.500 | 0.600 | 0.100 | 0.400 [nan, nan] | 0.500 [nan, nan] |" in md
     assert "push2d (paper, k=5) | m | 0.252 | 0.307 | 0.221 | 0.031 [0.007, 0.054] | -- |" in md
     # Shuffleboard's cells are mean / P90 and its column is Probe-Robust(2).
     md = breadth_markdown(breadth_table({"shuffleboard": ep}, resamples=100))

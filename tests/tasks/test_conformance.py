@@ -38,16 +38,14 @@ def test_check_family_is_shipped_at_the_package_root():
 
 
 def _variant(spec, **changes):
-    """An unregistered copy of a family's spec with its config class changed (a planted mistake)."""
-    from probecommit.tasks.push1d.config import Push1DConfig
-
+    """An unregistered copy of a family's spec written by hand, with its config class changed (a planted mistake)."""
     attrs = {"__annotations__": {"family": Literal["push1d"]}, "family": "push1d", **changes}
-    config = type("Planted", (Push1DConfig,), attrs)
-    return dataclasses.replace(spec, config=config)
+    config = type("Planted", (spec.config,), attrs)
+    return dataclasses.replace(spec, config=config, declaration=None)
 
 
 def test_mismatched_names_are_caught_naming_the_declaration():
-    spec = dataclasses.replace(families()["push1d"], name="push_one")
+    spec = dataclasses.replace(families()["push1d"], name="push_one", declaration=None)  # written by hand
     report = check_family(spec, study=False, raise_errors=False)
     assert [f[:2] for f in report.failures] == [("names", "the config class's `family` default")]
 
@@ -68,7 +66,7 @@ def test_a_negative_truth_for_positive_latents_is_caught(monkeypatch):
 
 
 def test_a_failure_raises_one_line_per_check():
-    spec = dataclasses.replace(families()["push1d"], name="push_one")
+    spec = dataclasses.replace(families()["push1d"], name="push_one", declaration=None)  # written by hand
     with pytest.raises(probecommit.FamilyCheckError, match=r"names: fix the config class's `family` default"):
         check_family(spec, study=False)
 

@@ -28,13 +28,12 @@ def test_builtin_families_register_with_their_engines():
 THIRD_PARTY = '''
 from typing import Literal
 from probecommit.tasks.base import TaskSpec
-from probecommit.tasks.planar_slide import build_model
-from probecommit.tasks.planar_slide.config import PlanarSlideConfig
+from probecommit.tasks.planar_slide import SPEC as SLIDE
 
-class ToySlideConfig(PlanarSlideConfig):
+class ToySlideConfig(SLIDE.config):
     family: Literal["toy_slide"] = "toy_slide"
 
-SPEC = TaskSpec(name="toy_slide", config=ToySlideConfig, build_model=build_model,
+SPEC = TaskSpec(name="toy_slide", config=ToySlideConfig, build_model=SLIDE.build_model,
                 simulators={"analytic": "probecommit.tasks.planar_slide.sim_analytic:AnalyticPlanarSlideSimulator"},
                 example={"instances": {"contexts": [[1.0, 0.0]]}})
 '''

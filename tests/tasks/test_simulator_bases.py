@@ -38,7 +38,9 @@ def test_probe_and_miss_from_one_cached_query():
 
 def test_simulators_of_one_ground_truth_share_engine_answers_inside_the_block_only():
     from probecommit.tasks.base import shared_engine_answers
-    from probecommit.tasks.insertion.config import InsertionConfig
+    from probecommit.tasks.insertion import SPEC
+
+    InsertionConfig = SPEC.config
     from probecommit.tasks.registry import build_simulator
 
     analytic = InsertionConfig.model_validate({"simulator": {"engine": "analytic"}})
@@ -62,7 +64,9 @@ def test_simulators_of_one_ground_truth_share_engine_answers_inside_the_block_on
 
 def test_settings_applied_outside_the_queries_do_not_split_the_shared_answers():
     from probecommit.tasks.base import shared_engine_answers
-    from probecommit.tasks.insertion.config import InsertionConfig
+    from probecommit.tasks.insertion import SPEC
+
+    InsertionConfig = SPEC.config
     from probecommit.tasks.registry import build_simulator
 
     clean = InsertionConfig.model_validate({"simulator": {"engine": "analytic", "noise_sigma": 0.0}})

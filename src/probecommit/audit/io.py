@@ -27,6 +27,11 @@ GROUP_COLUMNS = ("method", "variant")
 FINITE_REQUIRED = tuple(c for c in AUDIT_REQUIRED if c not in ("instance_id", "repeat", "k"))
 
 _TYPES = {c.name: c.type for c in EPISODE_COLUMNS}
+#: Largest magnitude of a required float (a larger one is a unit or parse error, and its
+#: differences would overflow to inf).
+MAX_MAGNITUDE = 1e12
+#: Loss kinds an episode table may declare.
+LOSS_KINDS = ("binary", "continuous")
 _OK_STATUS = ("ok", "failed")
 
 
@@ -38,19 +43,28 @@ def _where(row: int, csv: bool) -> str:
     return f"row {row} (CSV line {row + 2})" if csv else f"row {row}"
 
 
-def _check_intact(run_dir: Path) -> None:
-    """A run directory is audited only if complete and unchanged since its manifest."""
-    from probecommit.store.rundir import CONFIG, MANIFEST, RunDir
+#: Files whose presence makes a folder a probecommit run directory (any one of them).
+RUN_MARKERS = ("config.yaml", "manifest.json", "shards", "instances.parquet", "probes.parquet")
 
-    if not ((run_dir / CONFIG).is_file() or (run_dir / "shards").is_dir()):
-        return  # a folder holding a user's episodes.parquet, not a probecommit run directory
-    if not (run_dir / MANIFEST).is_file():
-        raise EpisodeTableError(f"run directory {run_dir} has no {MANIFEST}: the run is incomplete "
+
+def _check_intact(run_dir: Path) -> None:
+    """A run directory is audited only if complete and unchanged since its manifest.
+
+    A folder is a run directory when it holds any run file besides ``episodes.parquet``
+    (removing some of them does not make a run a user's folder). Its manifest must list
+    ``episodes.parquet`` and the config, and every listed file must match its digest.
+    """
+    from probecommit.store.manifest_rules import ManifestError, verify_files
+
+    if not any((run_dir / name).exists() for name in RUN_MARKERS):
+        return  # a folder holding only a user's episodes.parquet, not a probecommit run directory
+    if not (run_dir / "manifest.json").is_file():
+        raise EpisodeTableError(f"run directory {run_dir} has no manifest.json: the run is incomplete "
                                 "(rerun the command that made it to finish it)")
-    changed = RunDir(run_dir).verify_digests()
-    if changed:
-        raise EpisodeTableError(f"run directory {run_dir}: {', '.join(changed)} changed since the run wrote its "
-                                f"manifest (sha256 differs); refusing to audit an altered run")
+    try:
+        verify_files(run_dir / "manifest.json", ("episodes.parquet", "config.yaml"))
+    except ManifestError as exc:
+        raise EpisodeTableError(str(exc)) from None
 
 
 def _load(path: Path) -> tuple[pd.DataFrame, str, bool]:
@@ -158,7 +172,7 @@ def _boolean(df: pd.DataFrame, name: str, csv: bool, source: str) -> pd.Series |
 
 
 def validate_episodes(table: pd.DataFrame, source: str = "episode table", *, csv: bool = False,
-                      structure: bool = True) -> pd.DataFrame:
+                      structure: bool = True, loss: str | None = None) -> pd.DataFrame:
     """Validate an in-memory episode table and return its normalized copy.
 
     The returned table keeps every row (failed ones included, see
@@ -176,6 +190,8 @@ def validate_episodes(table: pd.DataFrame, source: str = "episode table", *, csv
             instance and budget, every instance at every budget). A caller that re-commits
             the same episodes many times (a margin search) checks it once and passes False
             after; the normalization and the value checks always run.
+        loss: ``"binary"`` (failure 0/1, predicted a fraction in [0, 1]), ``"continuous"``
+            (a miss >= 0), or None to infer it (see :func:`_check_losses`).
 
     Returns:
         The validated table.
@@ -239,6 +255,12 @@ def validate_episodes(table: pd.DataFrame, source: str = "episode table", *, csv
             raise EpisodeTableError(f"{source}: column '{name}' has {kind} at {_where(row, csv)} "
                                     f"({int(bad.sum())} ok row(s) affected); mark the episode "
                                     "status 'failed' or drop it")
+    for name in FINITE_REQUIRED:
+        big = (np.abs(df[name].to_numpy()) > MAX_MAGNITUDE) & ok
+        if big.any():
+            row = int(np.flatnonzero(big)[0])
+            raise EpisodeTableError(f"{source}: column '{name}' has {df[name].iloc[row]!r} at {_where(row, csv)}, "
+                                    f"beyond the magnitude any episode value can have ({MAX_MAGNITUDE:g})")
     for lo, hi in (("retained_lo", "retained_hi"), ("hull_lo", "hull_hi")):
         bad = (df[lo] > df[hi]).to_numpy() & ok
         if bad.any():
@@ -269,13 +291,22 @@ def validate_episodes(table: pd.DataFrame, source: str = "episode table", *, csv
         _check_repeats(df, groups, source)
         _check_budgets(df, groups, source)
 
-    # Derived indicators, measured on the set as recorded (closed intervals).
+    _check_losses(df, ok, source, csv, loss)
+    # Derived indicators are recomputed from the intervals (closed), never trusted: a given
+    # column that contradicts them is replaced by the recomputed value, and that is said.
     z = df["z_true"]
     derived_cov = (df["retained_lo"] <= z) & (z <= df["retained_hi"])
     derived_esc = (z < df["hull_lo"]) | (z > df["hull_hi"])
     for name, derived in (("covered", derived_cov), ("escaped", derived_esc)):
         given = _boolean(df, name, csv, source) if name in df.columns else None
-        df[name] = derived.astype(bool) if given is None else given
+        if given is not None:
+            differ = (given.to_numpy() != derived.to_numpy()) & ok
+            if differ.any():
+                row = int(np.flatnonzero(differ)[0])
+                notes.append(f"column '{name}' contradicts the intervals on {int(differ.sum())} ok row(s) (first at "
+                             f"{_where(row, csv)}: given {bool(given.iloc[row])}, intervals give "
+                             f"{bool(derived.iloc[row])}); the value recomputed from the intervals is used")
+        df[name] = derived.astype(bool)
     if (~ok).any():
         partial = set(df.loc[~ok, "instance_id"]) & set(df.loc[ok, "instance_id"])
         if partial:
@@ -283,6 +314,41 @@ def validate_episodes(table: pd.DataFrame, source: str = "episode table", *, csv
                          "is over the remaining repeats only, which can only raise it")
     df.attrs = {"source": source, "n_total": int(len(df)), "n_failed": int((~ok).sum()), "notes": notes}
     return df
+
+
+def _check_losses(df: pd.DataFrame, ok: np.ndarray, source: str, csv: bool, loss: str | None) -> None:
+    """``predicted`` and ``realized`` are losses of one kind: never negative; for a binary task
+    (declared, or inferred when every realized value is 0 or 1) realized is 0/1 and predicted
+    a failure fraction in [0, 1]. Undeclared, realized values that are 0/1 on most rows but
+    not all with the others whole numbers, or only 0 and 100 (a percent column), are refused:
+    they are not one kind of loss.
+    """
+    if loss is not None and loss not in LOSS_KINDS:
+        raise EpisodeTableError(f"{source}: loss must be one of {', '.join(LOSS_KINDS)}, got {loss!r}")
+    pred, real = df["predicted"].to_numpy(float), df["realized"].to_numpy(float)
+
+    def first(mask: np.ndarray, name: str, why: str) -> None:
+        mask = mask & ok
+        if mask.any():
+            row = int(np.flatnonzero(mask)[0])
+            raise EpisodeTableError(f"{source}: column '{name}' has {df[name].iloc[row]!r} at {_where(row, csv)}: "
+                                    f"{why} ({int(mask.sum())} ok row(s) affected)")
+
+    first(pred < 0, "predicted", "a predicted loss (failure fraction or miss) is never negative")
+    first(real < 0, "realized", "a realized loss (failure or miss) is never negative")
+    binary01 = np.isin(real, (0.0, 1.0))
+    if loss is None and ok.any():
+        if np.all(np.isin(real[ok], (0.0, 100.0))) and np.any(real[ok] == 100.0):
+            first(real == 100.0, "realized", "the column holds only 0 and 100, a failure in percent; give failure "
+                  "as 0/1 (or declare the loss continuous, --loss continuous, if 100 is a miss)")
+        share = binary01[ok].mean()
+        if 0.5 <= share < 1.0:  # a stray integer among 0/1 failures (a continuous miss is rarely one)
+            first(~binary01 & (real == np.round(real)), "realized", "the other rows are 0/1 failures; a binary task's realized is 0 or 1 "
+                  "(declare the loss continuous, --loss continuous, if the column is a miss)")
+        loss = "binary" if share == 1.0 else "continuous"
+    if loss == "binary":
+        first(~binary01, "realized", "a binary task's realized failure is 0 or 1")
+        first(pred > 1, "predicted", "a binary task's predicted score is a failure fraction in [0, 1]")
 
 
 def _check_repeats(df: pd.DataFrame, groups: list[str], source: str) -> None:
@@ -338,7 +404,7 @@ def _check_budgets(df: pd.DataFrame, groups: list[str], source: str) -> None:
                                     f"({len(missing)} instance(s) affected); per-budget metrics need every instance")
 
 
-def read_episodes(path: str | Path) -> pd.DataFrame:
+def read_episodes(path: str | Path, *, loss: str | None = None) -> pd.DataFrame:
     """Read and validate an episode table.
 
     Args:
@@ -356,7 +422,7 @@ def read_episodes(path: str | Path) -> pd.DataFrame:
             unequal count across instances at a budget.
     """
     df, source, csv = _load(Path(path))
-    return validate_episodes(df, source, csv=csv)
+    return validate_episodes(df, source, csv=csv, loss=loss)
 
 
 def ok_episodes(df: pd.DataFrame) -> pd.DataFrame:

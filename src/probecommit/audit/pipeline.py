@@ -15,7 +15,7 @@ import pandas as pd
 
 from probecommit.audit.io import group_columns, ok_episodes, read_episodes, validate_episodes
 from probecommit.audit.metrics import audit_table
-from probecommit.audit.stats import DEFAULT_LEVEL, DEFAULT_RESAMPLES, DEFAULT_SEED
+from probecommit.audit.stats import DEFAULT_LEVEL, DEFAULT_RESAMPLES, DEFAULT_SEED, few_clusters_note
 from probecommit.audit.surprise import surprise_auc
 
 logger = logging.getLogger(__name__)
@@ -56,7 +56,7 @@ class AuditResult:
 
 
 def audit(path_or_table: str | Path | pd.DataFrame, *, resamples: int = DEFAULT_RESAMPLES, seed: int = DEFAULT_SEED,
-          level: float = DEFAULT_LEVEL) -> AuditResult:
+          level: float = DEFAULT_LEVEL, loss: str | None = None) -> AuditResult:
     """Audit a run directory, a user's Parquet/CSV log, or an in-memory table.
 
     Args:
@@ -64,6 +64,7 @@ def audit(path_or_table: str | Path | pd.DataFrame, *, resamples: int = DEFAULT_
         resamples: Cluster-bootstrap resamples.
         seed: Bootstrap seed.
         level: Interval level.
+        loss: ``"binary"`` or ``"continuous"`` (None: inferred; see ``audit.io.validate_episodes``).
 
     Returns:
         The audit result.
@@ -72,9 +73,9 @@ def audit(path_or_table: str | Path | pd.DataFrame, *, resamples: int = DEFAULT_
         EpisodeTableError: The table is malformed (the message says how).
     """
     if isinstance(path_or_table, pd.DataFrame):
-        df = validate_episodes(path_or_table)
+        df = validate_episodes(path_or_table, loss=loss)
     else:
-        df = read_episodes(path_or_table)
+        df = read_episodes(path_or_table, loss=loss)
     table = audit_table(df, resamples=resamples, seed=seed, level=level)
     surprise = None
     probe = ok_episodes(df)
@@ -93,5 +94,10 @@ def audit(path_or_table: str | Path | pd.DataFrame, *, resamples: int = DEFAULT_
         surprise = pd.concat(parts, ignore_index=True) if parts else None
     logger.info("audited %s: %d rows (%d failed, excluded), %d resamples", df.attrs.get("source", "a table"),
                 df.attrs.get("n_total", len(df)), df.attrs.get("n_failed", 0), resamples)
+    notes = list(df.attrs.get("notes", []))
+    if len(table):
+        few = few_clusters_note(int(table["n_instances"].min()))
+        if few:
+            notes.append(few)
     return AuditResult(table, surprise, df.attrs.get("source", "table"), df.attrs.get("n_total", len(df)),
-                       df.attrs.get("n_failed", 0), list(df.attrs.get("notes", [])))
+                       df.attrs.get("n_failed", 0), notes)

@@ -82,6 +82,13 @@ def episode_row(*, instance_id: str, k: int, z_true: float, action: float | Sequ
             raise ValueError("episode_row: give z_particles and weights, or both retained and hull intervals")
         row.update(retained_lo=float(retained[0]), retained_hi=float(retained[1]), hull_lo=float(hull[0]),
                    hull_hi=float(hull[1]))
+    # The episode-row rules at write time too (audit.io.validate_episodes applies them on every read).
+    for name in ("predicted", "realized"):
+        if row[name] < 0:
+            raise ValueError(f"episode_row: {name} is a loss and cannot be negative, got {row[name]!r}")
+    for lo, hi in (("retained_lo", "retained_hi"), ("hull_lo", "hull_hi")):
+        if not (np.isfinite(row[lo]) and np.isfinite(row[hi]) and row[lo] <= row[hi]):
+            raise ValueError(f"episode_row: {lo} {row[lo]!r} must be finite and <= {hi} {row[hi]!r}")
     row["covered"] = bool(row["retained_lo"] <= row["z_true"] <= row["retained_hi"])
     row["escaped"] = bool(not row["hull_lo"] <= row["z_true"] <= row["hull_hi"])
     row.update(extra)

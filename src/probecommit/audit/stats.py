@@ -24,6 +24,23 @@ DEFAULT_RESAMPLES = 2000
 DEFAULT_SEED = 0
 DEFAULT_LEVEL = 0.95
 
+#: Fewest clusters an interval is given on (one cluster resamples to itself: zero width).
+MIN_INTERVAL_CLUSTERS = 2
+#: Below this many clusters an interval is given but flagged as unreliable.
+FEW_CLUSTERS = 10
+
+
+def few_clusters_note(n_clusters: int, what: str = "the intervals") -> str | None:
+    """The warning for a bootstrap over few clusters (None when there are enough)."""
+    if n_clusters < MIN_INTERVAL_CLUSTERS:
+        return (f"{what} rest on {n_clusters} cluster(s) (instances): a bootstrap needs at least "
+                f"{MIN_INTERVAL_CLUSTERS}, so no interval is given (shown as '–')")
+    if n_clusters < FEW_CLUSTERS:
+        return (f"{what} rest on only {n_clusters} clusters (instances); a cluster bootstrap under "
+                f"{FEW_CLUSTERS} clusters is unreliable (intervals too narrow)")
+    return None
+
+
 #: Keys that identify one episode; paired comparisons join on them.
 EPISODE_KEYS = ("instance_id", "repeat", "k")
 
@@ -144,6 +161,9 @@ def bootstrap_ratio(numerators: np.ndarray, denominators: np.ndarray, *,
     if counts is None:
         counts = resample_counts(num.shape[0], resamples, seed)
     estimate = float(_ratio(num.sum(), den.sum()))
+    if int(np.count_nonzero(den > 0)) < MIN_INTERVAL_CLUSTERS:
+        # One cluster resamples to itself: a zero-width interval would claim certainty it does not have.
+        return Interval(estimate, math.nan, math.nan, num.shape[0], counts.shape[0], level)
     draws = _ratio(counts @ num, counts @ den)
     lo, hi = percentile_interval(draws, level)
     return Interval(estimate, lo, hi, num.shape[0], counts.shape[0], level)
@@ -393,8 +413,8 @@ def cluster_bootstrap_auc(scores: np.ndarray, labels: np.ndarray, clusters: Sequ
     scores, labels = scores[ok], labels[ok]
     names, inverse = np.unique(np.asarray(clusters)[ok], return_inverse=True)
     estimate = rank_auc(scores, labels)
-    if scores.size == 0:
-        return Interval(math.nan, math.nan, math.nan, 0, resamples, level)
+    if scores.size == 0 or names.size < MIN_INTERVAL_CLUSTERS:
+        return Interval(estimate if scores.size else math.nan, math.nan, math.nan, names.size, resamples, level)
     counts = resample_counts(names.size, resamples, seed)
     # Each resample's AUC is computed from its own row of episode weights: a block of rows at a
     # time, so the [B, E] weights (0.5 GB at B = 2000, E = 30720) never exist at once.

@@ -28,6 +28,7 @@ from typing import Any, Callable
 import numpy as np
 
 from probecommit.engines import require
+from probecommit.store.safefile import write_text
 
 
 @dataclass(frozen=True)
@@ -183,7 +184,7 @@ def train_or_resume(out: Path, data: dict[str, np.ndarray], model: Any, config: 
     torch.save(state, tmp)
     tmp.replace(path)
     meta = {"seed": seed, "config": asdict(config), "loss_first": curve[0], "loss_last": float(np.mean(curve[-20:]))}
-    meta_path.write_text(json.dumps(meta, indent=1))
+    write_text(meta_path, json.dumps(meta, indent=1))
     return state, meta
 
 

@@ -9,7 +9,7 @@ from typing import Optional
 
 import typer
 from rich import box
-from rich.markup import escape
+from probecommit.cli.common import safe as escape
 from rich.table import Table
 
 from probecommit.cli import help_format  # noqa: F401 - flags shown as flags in --help
@@ -64,12 +64,13 @@ def print_budget_table(episodes, title: str) -> None:
 
 
 def _run(config, out: Path, workers: int, ray: Optional[str], threads: Optional[int] = None):
-    from probecommit.runner.study import preflight, run_study
+    from probecommit.runner.study import preflight, run_concurrency, run_study
     from probecommit.store.rundir import RunDir
     from probecommit.runner.config import dump_config
 
-    # Fail on a bad config or an incompatible directory before drawing a progress bar.
-    preflight(config)
+    # Fail on a bad config, too little memory for the run at its concurrency, or an incompatible
+    # directory before drawing a progress bar.
+    preflight(config, run_concurrency(config, workers, ray, threads))
     RunDir(out).check_writable(dump_config(config))
     bar, update = progress_bar(f"{config.name}: units")
     with bar:
@@ -131,7 +132,7 @@ def run(
         result = _run(cfg, run_dir, workers, ray, threads)
         print_budget_table(result.episodes, title)
         warn_failed(result)
-        console.print(f"run directory: [bold]{safe(result.run_dir)}[/bold]")
+        console.print(f"run directory: {safe(result.run_dir)}")
         return result
 
     run_config_with_overrides(config, list(overrides or []), sweep, out, one_run)
@@ -145,12 +146,11 @@ def demo(
     engine: str = typer.Option("mujoco", help="Ground-truth engine: mujoco or analytic."),
 ) -> None:
     """Run the embedded default insertion study and write its report."""
-    import yaml
-
     from probecommit.report.demo import write_demo_report
     from probecommit.runner.config import parse_config
+    from probecommit.store.yamlsafe import load_yaml
 
-    data = yaml.safe_load(resources.files("probecommit").joinpath("configs/demo.yaml").read_text())
+    data = load_yaml(resources.files("probecommit").joinpath("configs/demo.yaml").read_text(), "configs/demo.yaml")
     data["simulator"]["engine"] = engine
     cfg = parse_config(data)
     result = _run(cfg, out, workers, None)
@@ -160,8 +160,8 @@ def demo(
     from probecommit.cli.runs_commands import print_demo_reading
 
     print_demo_reading(result.episodes, out, cfg.model.boundary)
-    console.print(f"run directory: [bold]{safe(result.run_dir)}[/bold]")
-    console.print(f"report: [bold]{safe(report)}[/bold]")
+    console.print(f"run directory: {safe(result.run_dir)}")
+    console.print(f"report: {safe(report)}")
 
 
 @app.command()
@@ -186,9 +186,8 @@ def replay(
     session log is replayed as deployed (it must reproduce its own decisions), or
     under an injected fault with --fault (paper Fig. 5c, 5d).
     """
-    import yaml
-
     from probecommit.cli.robot_commands import is_session_log, replay_session_log
+    from probecommit.store.yamlsafe import load_yaml
 
     if is_session_log(run_dir):
         if model is not None or delta is not None or set_ or fixed_probes:
@@ -208,7 +207,7 @@ def replay(
         section, dot, field = key.strip().partition(".")
         if not (eq and dot and section and field):
             raise UsageError(f"--set expects SECTION.FIELD=VALUE (e.g. model.sigma=0.4), got {item!r}")
-        overrides.setdefault(section, {})[field] = yaml.safe_load(value)
+        overrides.setdefault(section, {})[field] = load_yaml(value, f"--set {key.strip()}")
     if model is not None or delta is not None or not overrides:
         from probecommit.runner.replay import load_run as _load
 
@@ -229,8 +228,8 @@ def replay(
     target = out or run_dir.with_name(f"{run_dir.name}-{label}")
     path = replay_run(run_dir, target, overrides, fixed_probes=fixed_probes)
     print_budget_table(load_run(path).episodes, f"replay of {run_dir.name} ({', '.join(f'{s}.{k}' for s, v in overrides.items() for k in v)})")
-    console.print(f"run directory: [bold]{safe(path)}[/bold]")
-    console.print(f"compare: [bold]probecommit runs compare {safe(run_dir.as_posix())} {safe(Path(path).as_posix())}[/bold]",
+    console.print(f"run directory: {safe(path)}")
+    console.print(f"compare: probecommit runs compare {safe(run_dir.as_posix())} {safe(Path(path).as_posix())}",
                   highlight=False)
 
 

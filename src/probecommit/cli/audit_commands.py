@@ -16,6 +16,7 @@ from rich.table import Table
 
 from probecommit.cli.common import console, err_console, safe, user_errors
 from probecommit.errors import UsageError
+from probecommit.store.safefile import output_dir, write_bytes, write_text
 
 def _f(v, signed: bool = False) -> str:
     try:
@@ -92,7 +93,7 @@ def write_csv(frame, path: Path, paper_names: bool = False) -> None:
     for col in out.columns:
         if pd.api.types.is_object_dtype(out[col]) or pd.api.types.is_string_dtype(out[col]):
             out[col] = out[col].map(lambda v: "'" + v if isinstance(v, str) and v[:1] in ("=", "+", "-", "@", "\t", "\r") else v)
-    out.to_csv(path, index=False)
+    write_bytes(path, out.to_csv(index=False).encode())
 
 
 @user_errors
@@ -103,6 +104,8 @@ def audit_command(
     resamples: int = typer.Option(2000, min=100, help="Cluster-bootstrap resamples."),
     seed: int = typer.Option(0, help="Bootstrap seed."),
     nominal: float = typer.Option(0.8, min=0.0, max=1.0, help="Nominal coverage drawn in the figure."),
+    loss: Optional[str] = typer.Option(None, "--loss", help="The loss kind of a log: 'binary' (failure 0/1) or "
+                                       "'continuous' (a miss); default: inferred from the realized column."),
 ) -> None:
     """Audit coverage, support escape and optimism per budget, with cluster-bootstrap intervals."""
     from probecommit.audit.pipeline import audit
@@ -113,12 +116,13 @@ def audit_command(
     if is_session_log(path):
         audit_session_log(path, out, resamples, seed)
         return
-    result = audit(path, resamples=resamples, seed=seed)
+    result = audit(path, resamples=resamples, seed=seed, loss=loss)
     config_file = path / "config.yaml" if path.is_dir() else None
     if config_file is not None and config_file.is_file():
-        import yaml
+        from probecommit.store.yamlsafe import load_yaml
 
-        schedule = ((yaml.safe_load(config_file.read_text()) or {}).get("probes") or {}).get("schedule")
+        data = load_yaml(config_file.read_bytes(), str(config_file))
+        schedule = (((data if isinstance(data, dict) else {}).get("probes") or {}) or {}).get("schedule")
         if schedule == "adaptive":
             from probecommit.cli.common import print_warning
 
@@ -126,8 +130,7 @@ def audit_command(
                           "with a run of another model on the same instances (other probes would have been chosen)")
     from probecommit.report.vocabulary import default_output
 
-    out = out or default_output(path, "audit")
-    out.mkdir(parents=True, exist_ok=True)
+    out = output_dir(out, default_output(path, "audit"))  # created; a symlinked default refused
     print_audit_table(result.table, f"audit of {path}")
     if result.n_failed:
         console.print(f"{result.n_failed} failed row(s) of {result.n_total} excluded from every metric")
@@ -155,7 +158,7 @@ def audit_command(
         except Exception:  # noqa: BLE001 - the snapshot is an extra; the audit stands without it
             pass
     report = write_html_report(out / "audit.html", result, title=f"Audit of {path.name}", nominal=nominal, images=images)
-    console.print(f"report: [bold]{safe(report)}[/bold]")
+    console.print(f"report: {safe(report)}")
 
 
 @user_errors
@@ -183,8 +186,7 @@ def calibrate_command(
                     plateau=plateau)
     from probecommit.report.vocabulary import default_output
 
-    out = out or default_output(test, "calibration")
-    out.mkdir(parents=True, exist_ok=True)
+    out = output_dir(out, default_output(test, "calibration"))  # created; a symlinked default refused
     console.print(f"M = {res.n_calibration} calibration instances, 1 - alpha = {1 - alpha:.2f}; "
                   f"simultaneous t = {_f(res.simultaneous_threshold)}; margin gamma = {res.margin.gamma:.2f}"
                   f"{'' if res.margin.satisfied else ' (rule not met on the grid)'}; "
@@ -215,7 +217,7 @@ def calibrate_command(
         t4.add_row(f"{r['treatment']} - {r['baseline']}", "", str(int(r["n_pairs"])),
                    f"{_f(r['difference'], True)} [{_f(r['lo'], True)}, {_f(r['hi'], True)}] p={r['p_sign_flip']:.3g}")
     print_table(t4)
-    (out / "calibration.json").write_text(json.dumps(res.to_dict(), indent=2, default=float))
+    write_text(out / "calibration.json", json.dumps(res.to_dict(), indent=2, default=float))
     write_csv(res.table3, out / "table3.csv", paper_names=True)
     write_csv(res.cost, out / "cost.csv")
     write_csv(res.cost_differences, out / "cost_differences.csv")
@@ -224,7 +226,7 @@ def calibrate_command(
     report = write_html_report(out / "calibration.html", res.audit_calibrated, title="Calibration",
                                calibration=res, nominal=1 - alpha,
                                notes=f"calibration run {cal}, test run {test}; the audit table is the calibrated executor's.")
-    console.print(f"report: [bold]{safe(report)}[/bold]")
+    console.print(f"report: {safe(report)}")
 
 
 @user_errors
@@ -246,8 +248,7 @@ def gates_command(
     res = gates(cal, test, alpha, _parse_budgets(budgets), target_rate=target, resamples=resamples, seed=seed)
     from probecommit.report.vocabulary import default_output
 
-    out = out or default_output(test, "gates")
-    out.mkdir(parents=True, exist_ok=True)
+    out = output_dir(out, default_output(test, "gates"))  # created; a symlinked default refused
     console.print(f"simultaneous t = {_f(res.info['threshold'])}, margin gamma = {res.info['gamma']:.2f}; "
                   f"{res.n_trajectories} trajectories ({res.n_dropped} dropped), budgets {res.budgets}")
     tab = Table(title=f"gates at the commit rate nearest {target:.0%}", title_style="bold")
@@ -267,7 +268,7 @@ def gates_command(
     save_figure(gates_figure(res), out / "gates.png")
     report = write_html_report(out / "gates.html", title="Commit gates", gates=res, nominal=1 - alpha,
                                notes=f"calibration run {cal}, test run {test}")
-    console.print(f"report: [bold]{safe(report)}[/bold]")
+    console.print(f"report: {safe(report)}")
 
 
 def register(app: typer.Typer) -> None:

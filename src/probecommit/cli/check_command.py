@@ -3,9 +3,9 @@
 from __future__ import annotations
 
 import typer
-from rich.markup import escape
 
 from probecommit.cli.common import console, print_error
+from probecommit.cli.common import safe as escape
 
 
 def check_command(name: str) -> None:
@@ -13,9 +13,9 @@ def check_command(name: str) -> None:
     from probecommit.runner.family_check import check_family
     report = check_family(name, raise_errors=False)  # an unknown name raises a UserError: one line
     for check in report.passed:
-        console.print(f"[green]ok[/green]   {escape(check)}")
+        console.print(f"ok   {escape(check)}")
     for check, why in report.skipped:
-        console.print(f"[yellow]skip[/yellow] {escape(check)}: {escape(why)}")
+        console.print(f"skip {escape(check)}: {escape(why)}")
     for line in report.lines():
         print_error(f"FAIL {line}")
     if not report.ok:

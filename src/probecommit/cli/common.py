@@ -1,4 +1,11 @@
-"""Shared CLI plumbing: consoles, the user-error wrapper, progress bars."""
+"""Shared CLI plumbing: the safe consoles, the user-error wrapper, progress bars.
+
+Every text the CLI shows goes through :data:`console` or :data:`err_console`, which never
+interpret anything in it: no Rich markup (``[red]``, ``[@click=...]``), no emoji codes
+(``:fire:``), no highlighting, and every control character (an ANSI escape from a
+directory name included) shown as ``?``. Styling is done with :class:`rich.text.Text`
+styles, never with markup in a string, so text from data or paths prints as it is.
+"""
 
 from __future__ import annotations
 
@@ -9,13 +16,10 @@ from typing import Callable
 
 import typer
 from rich.console import Console
-from rich.markup import escape
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
+from rich.text import Text
 
 from probecommit.errors import UserError
-
-console = Console()
-err_console = Console(stderr=True)
 
 # Errors a user can cause and fix (bad config, bad log, wrong directory, a missing file or
 # extra, a full disk): one line, exit 2. Any other exception is a bug: exit 1 (see diagnostics).
@@ -24,7 +28,28 @@ USER_ERRORS: tuple[type[BaseException], ...] = (UserError, OSError, ImportError,
 _CLICK_EXCEPTION = next(c for c in typer.BadParameter.__mro__ if c.__name__ == "ClickException")
 
 
-_CONTROL = re.compile(r"[\x00-\x08\x0b-\x1f\x7f-\x9f]")
+_CONTROL = re.compile(r"[\x00-\x08\x0b-\x1f\x7f-\x9f\u2028\u2029\u202a-\u202e\u2066-\u2069]")
+
+
+def clean(text: object) -> str:
+    """``text`` with every control character (C0, C1, line separators, bidi overrides) as ``?``."""
+    return _CONTROL.sub("?", str(text))
+
+
+class SafeConsole(Console):
+    """A console that renders every string literally: no markup, no emoji codes, no highlighting,
+    control characters shown as ``?`` (tables' titles and cells included: they render through here)."""
+
+    def __init__(self, **kwargs) -> None:
+        super().__init__(markup=False, emoji=False, highlight=False, **kwargs)
+
+    def render_str(self, text: str, **kwargs) -> Text:  # type: ignore[override]
+        kwargs.update(markup=False, emoji=False, highlight=False)
+        return super().render_str(clean(text), **kwargs)
+
+
+console = SafeConsole()
+err_console = SafeConsole(stderr=True)
 
 
 def one_line(text: object) -> str:
@@ -33,13 +58,16 @@ def one_line(text: object) -> str:
 
 
 def safe(text: object) -> str:
-    """A string from data or a path, safe to print with rich: markup escaped, control
-    characters (ANSI escape sequences included) shown as ``?``."""
-    return escape(_CONTROL.sub("?", str(text)))
+    """A string from data or a path, safe to print: control characters (ANSI escape sequences
+    included) shown as ``?``. The consoles interpret no markup, so nothing else needs escaping."""
+    return clean(text)
 
 
 def os_error_line(exc: OSError) -> str:
-    """One line for an OS error, naming the path and what went wrong."""
+    """One line for an OS error, naming the path and what went wrong (an error of ours with no
+    errno, a refused symlink, carries its own message)."""
+    if exc.errno is None and exc.args:
+        return str(exc)
     what = {errno.ENOSPC: "the disk is full", errno.EROFS: "the file system is read-only",
             errno.EACCES: "permission denied", errno.ENAMETOOLONG: "the name is too long",
             errno.EEXIST: "it already exists", errno.ENOTDIR: "a path component is a file, not a directory",
@@ -51,11 +79,11 @@ def os_error_line(exc: OSError) -> str:
 def print_error(exc: BaseException) -> None:
     """One line on stderr, never wrapped at the terminal width."""
     text = os_error_line(exc) if isinstance(exc, OSError) and not isinstance(exc, FileNotFoundError) else (one_line(exc) or type(exc).__name__)
-    err_console.print(f"[red]error:[/red] {safe(one_line(text))}", soft_wrap=True, highlight=False)
+    err_console.print(Text("error:", style="red"), clean(one_line(text)), soft_wrap=True)
 
 
 def print_warning(message: str) -> None:
-    err_console.print(f"[yellow]warning:[/yellow] {safe(one_line(message))}", soft_wrap=True, highlight=False)
+    err_console.print(Text("warning:", style="yellow"), clean(one_line(message)), soft_wrap=True)
 
 
 def user_errors(fn: Callable) -> Callable:
@@ -83,8 +111,8 @@ def user_errors(fn: Callable) -> Callable:
         except Exception as exc:  # noqa: BLE001 - a bug: say so, exit 1
             from probecommit.cli.diagnostics import report_internal_error
 
-            report_internal_error(exc, lambda text: err_console.print(f"[red]error:[/red] {safe(one_line(text))}",
-                                                                      soft_wrap=True, highlight=False))
+            report_internal_error(exc, lambda text: err_console.print(Text("error:", style="red"), safe(one_line(text)),
+                                                                      soft_wrap=True))
             raise typer.Exit(1) from None
 
     return wrapper
@@ -93,7 +121,7 @@ def user_errors(fn: Callable) -> Callable:
 def progress_bar(description: str):
     """A rich progress bar and a ``(done, total)`` callback that drives it."""
     bar = Progress(
-        TextColumn("[bold]{task.description}"), BarColumn(), MofNCompleteColumn(),
+        TextColumn("{task.description}", style="bold", markup=False), BarColumn(), MofNCompleteColumn(),
         TimeElapsedColumn(), TimeRemainingColumn(), console=err_console, transient=False,
     )
     task = bar.add_task(description, total=None)

@@ -23,9 +23,9 @@ def is_session_log(path: Path) -> bool:
 
 def _out_dir(path: Path, out: Optional[Path], suffix: str) -> Path:
     folder = path if path.is_dir() else path.parent
-    target = out or folder / suffix
-    target.mkdir(parents=True, exist_ok=True)
-    return target
+    from probecommit.store.safefile import output_dir
+
+    return output_dir(out, folder / suffix)
 
 
 def _ci(lo: float, hi: float) -> str:
@@ -47,6 +47,8 @@ def print_robot_table(table, title: str) -> None:
 
 def audit_session_log(path: Path, out: Optional[Path], resamples: int, seed: int) -> None:
     """``probecommit audit LOG`` for a session log: Table VII, Fig. 5b, CSVs."""
+    import numpy as np
+
     from probecommit.cli.audit_commands import write_csv
     from probecommit.report.figures import save_figure
     from probecommit.report.robot_figures import aim_error_figure
@@ -96,8 +98,7 @@ def audit_session_log(path: Path, out: Optional[Path], resamples: int, seed: int
               "optimism intervals: cluster bootstrap over positions.",
         tables=[("Per budget: predicted R̂ₖ, realized Rₖ, optimism eₖ, coverage", table)],
         images=[("Aim error against taps (filled: entered)", png)])
-    console.print(f"table: [bold]{safe(target / 'robot_table.csv')}[/bold]; figure: [bold]{safe(png)}[/bold]; "
-                  f"report: [bold]{safe(report)}[/bold]")
+    console.print(f"table: {safe(target / 'robot_table.csv')}; figure: {safe(png)}; report: {safe(report)}")
 
 
 def replay_session_log(path: Path, fault: Optional[str], sweep: Optional[str], half_width: Optional[float],
@@ -156,7 +157,7 @@ def replay_session_log(path: Path, fault: Optional[str], sweep: Optional[str], h
     png = None
     if len(table) > 1:
         png = save_figure(fault_sweep_figure(table, xlabel, reference, ref_label), target / f"fault_{fault}.png")
-    console.print(f"table: [bold]{safe(target / f'fault_{fault}.csv')}[/bold]" + (f"; figure: [bold]{safe(png)}[/bold]" if png else ""))
+    console.print(f"table: {safe(target / f'fault_{fault}.csv')}" + (f"; figure: {safe(png)}" if png else ""))
 
 
 @robot_app.command("simulate")
@@ -165,6 +166,8 @@ def simulate(
     config: Optional[Path] = typer.Argument(None, help="Study config of the rig (default: the frozen configs/paper/rig.yaml)."),
     out: Path = typer.Option(Path("runs/rig-session"), "--out", "-o", help="Session log directory (resumed if it exists)."),
     stop_after: Optional[int] = typer.Option(None, "--stop-after", min=1, help="Stop after this many episodes (resume later)."),
+    repair: bool = typer.Option(False, "--repair", help="Resume a log whose last line a crash cut off (the line is "
+                                "moved, byte for byte, to session.jsonl.partial)."),
 ) -> None:
     """Run the simulated rig (the stand-in robot) through a Session, writing a session log.
 
@@ -175,8 +178,8 @@ def simulate(
 
     bar, update = progress_bar("simulated rig: episodes")
     with bar:
-        log = simulate_session(out, config or rig_config(), progress=update, stop_after=stop_after)
-    console.print(f"session log: [bold]{safe(log)}[/bold]")
+        log = simulate_session(out, config or rig_config(), progress=update, stop_after=stop_after, repair=repair)
+    console.print(f"session log: {safe(log)}")
     console.print(f"next: probecommit audit {safe(out)}   |   probecommit replay {safe(out)} --fault boundary")
 
 
@@ -199,9 +202,6 @@ def show(log: Path = typer.Argument(..., help="Session log (.jsonl) or its direc
     for ep in open_eps:
         console.print(f"open: episode {ep.episode} at {safe(ep.position)}, {len(ep.probes)} of {ep.taps} taps"
                       f"{', committed' if ep.decision else ''}")
-
-
-import numpy as np  # noqa: E402  (used by audit_session_log)
 
 
 def register(app: typer.Typer) -> None:

@@ -103,7 +103,7 @@ def print_sweep_summary(rows: list[dict], root: Path) -> None:
                       _num(r["coverage"]), safe(r["run"]))
     _print(table)
     write_csv(pd.DataFrame(rows), root / "sweep.csv")
-    console.print(f"sweep summary: [bold]{safe(root / 'sweep.csv')}[/bold]")
+    console.print(f"sweep summary: {safe(root / 'sweep.csv')}")
 
 
 def print_demo_reading(episodes, run_dir: Path, boundary: str) -> None:
@@ -115,7 +115,7 @@ def print_demo_reading(episodes, run_dir: Path, boundary: str) -> None:
         console.print(safe(line), highlight=False)
     command = next_command(run_dir, boundary)
     if command:
-        console.print(f"next: [bold]{safe(command)}[/bold]  (the same taps under the {'corrected' if boundary == 'deployed' else 'deployed'} "
+        console.print(f"next: {safe(command)}  (the same taps under the {'corrected' if boundary == 'deployed' else 'deployed'} "
                       "tap model)", highlight=False)
 
 

@@ -8,18 +8,26 @@ from typing import Optional
 
 import typer
 
+from probecommit.store.safefile import output_dir, write_text, write_with
 from probecommit.cli.common import console, err_console, progress_bar, safe, user_errors
 from probecommit.errors import UsageError
-from probecommit.tasks.insertion.model import PAPER_DELTA_MM
 
 REPO_ROOT = Path(__file__).resolve().parents[3]
+
+
+def _paper_delta_mm() -> float:
+    """The paper's tap-boundary offset, read when a command runs (importing the insertion family
+    at start-up would cost every command, ``--help`` included, its model and config imports)."""
+    from probecommit.tasks.insertion.model import PAPER_DELTA_MM
+
+    return PAPER_DELTA_MM
 
 
 def _stepper():
     """A progress callback that shows one bar per named step."""
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
-    bar = Progress(TextColumn("[bold]{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
+    bar = Progress(TextColumn("{task.description}", style="bold", markup=False), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
                    console=err_console)
     tasks: dict[str, int] = {}
 
@@ -45,7 +53,7 @@ def reproduce(
 
     A killed reproduction resumes: rerun the same command and finished runs are kept.
     """
-    from rich.markup import escape
+    from probecommit.cli.common import safe as escape
     from rich.table import Table
 
     from probecommit.report import paper
@@ -66,13 +74,13 @@ def reproduce(
         options = {"families": [f.strip() for f in families.split(",") if f.strip()]} if families else {}
         done = paper.reproduce(names, root, quick=quick, progress=update, workers=workers, options=options)
     for name, folder in done["targets"].items():
-        console.print(f"{escape(name)}: [bold]{escape(str(folder))}[/bold]  (wall {done['wall_s'][name] / 60:.1f} min)")
+        console.print(f"{escape(name)}: {escape(str(folder))}  (wall {done['wall_s'][name] / 60:.1f} min)")
     # A family subset would replace the frozen Table II with a partial one: published only on request.
     if publish_to is not None or (publish if publish is not None else not (quick or families)):
         from probecommit.report.publish import publish as publish_results
 
         published = publish_results(done["targets"], publish_to or REPO_ROOT, timing=done)
-        console.print(f"frozen results: [bold]{escape(str(published))}[/bold]; "
+        console.print(f"frozen results: {escape(str(published))}; "
                       f"{escape(str(published.parent.parent / 'REPRODUCTION.md'))} rewritten")
 
 
@@ -80,7 +88,8 @@ def scan(
     engine: str = typer.Option("mujoco", help="Engine to scan: mujoco, pybullet, sapien or analytic."),
     protocol: Path = typer.Option(REPO_ROOT / "configs" / "paper" / "insertion.yaml", help="Frozen protocol config."),
     step: Optional[float] = typer.Option(None, min=0.001, help="Grid step (mm); default from the protocol (0.25)."),
-    boundary_offset: float = typer.Option(PAPER_DELTA_MM, help="Analytic engine only: its planted boundary offset (mm)."),
+    boundary_offset: float = typer.Option(default_factory=lambda: _paper_delta_mm(), show_default="the paper's delta",
+                                          help="Analytic engine only: its planted boundary offset (mm)."),
     capture: bool = typer.Option(False, "--capture", help="Also scan the capture window (peg entry against lateral offset)."),
     out: Path = typer.Option(Path("runs/scan"), "--out", "-o", help="Output folder for scan.parquet and the figure."),
 ) -> None:
@@ -103,15 +112,15 @@ def scan(
         update(0, 1)
         result = scan_development(p, sim, step)
         update(1, 1)
-    out.mkdir(parents=True, exist_ok=True)
-    result.scans.to_parquet(out / "scan.parquet")
+    out = output_dir(out, out)
+    write_with(out / "scan.parquet", result.scans.to_parquet)
     summary = result.summary()
     fig = scan_figure(result.grid, result.scans, str(result.scans.instance_id.iloc[0]), summary["delta"], out / "scan_section.png")
-    (out / "scan_summary.json").write_text(json.dumps(summary, indent=2))
+    write_text(out / "scan_summary.json", json.dumps(summary, indent=2))
     console.print(f"{engine}: delta = {summary['delta']:+.4f} mm (SD {summary['sd']:.4f}, min {summary['min']:+.4f}, "
                   f"max {summary['max']:+.4f}) over {summary['scans']} scans; boundary moves "
                   f"{summary['shift_vs_deployed_mm']:.3f} mm from the deployed hg - r; engine calls {sim.engine_calls}")
-    console.print(f"scans: [bold]{safe(out / 'scan.parquet')}[/bold]; figure: [bold]{safe(fig)}[/bold]")
+    console.print(f"scans: {safe(out / 'scan.parquet')}; figure: {safe(fig)}")
     if capture:
         from probecommit.runner.build import build_model
         from probecommit.runner.instances import draw_instances
@@ -119,10 +128,10 @@ def scan(
 
         cfg = p.run_config("development", "development", "development", "random")
         window = scan_capture_window(sim, draw_instances(cfg, build_model(cfg)))
-        window.truths.to_parquet(out / "capture.parquet")
+        write_with(out / "capture.parquet", window.truths.to_parquet)
         c = window.summary()
         console.print(f"{engine}: capture window / w(c) = {c['ratio_mean']:.3f} (SD {c['ratio_sd']:.3f} over the "
-                      f"development truths); per truth: [bold]{safe(out / 'capture.parquet')}[/bold]")
+                      f"development truths); per truth: {safe(out / 'capture.parquet')}")
 
 
 def engines_check(
@@ -131,7 +140,7 @@ def engines_check(
 ) -> None:
     """The same hand queries on every engine (taps over the plate, the slot centre, the chamfer;
     pegs centred, 1 mm and 3 mm off), and where they agree with the scene's design."""
-    from rich.markup import escape
+    from probecommit.cli.common import safe as escape
     from rich.table import Table
 
     from probecommit.studies.engines import check_engines
@@ -175,8 +184,8 @@ def faults(
     bar, update = progress_bar("fault arms")
     with bar:
         episodes = run_fault_harness(rollouts, arms, progress=update)
-    out.mkdir(parents=True, exist_ok=True)
-    episodes.to_parquet(out / "faults_episodes.parquet")
+    out = output_dir(out, out)
+    write_with(out / "faults_episodes.parquet", episodes.to_parquet)
     probe = episodes[(episodes.method == "probe_robust") & (episodes.status == "ok")]
     kmax = int(probe.k.max())
     summary = (probe[probe.k == kmax].assign(optimism=lambda d: d.realized - d.predicted)
@@ -184,8 +193,8 @@ def faults(
     console.print(summary.rename(columns={"realized": "failure", "covered": "coverage", "escaped": "escape"}).round(3).to_string())
     fig = fault_signatures(signature_table(episodes), out / "fault_signatures.png")
     if skipped:
-        err_console.print(f"[yellow]skipped faults needing other rollouts:[/yellow] {', '.join(skipped)} (pass --noise-run / --prior-run)")
-    console.print(f"episodes: [bold]{safe(out / 'faults_episodes.parquet')}[/bold]; figure: [bold]{safe(fig)}[/bold]")
+        err_console.print(f"skipped faults needing other rollouts: {', '.join(skipped)} (pass --noise-run / --prior-run)")
+    console.print(f"episodes: {safe(out / 'faults_episodes.parquet')}; figure: {safe(fig)}")
 
 
 def verify(
@@ -193,7 +202,7 @@ def verify(
     notes: bool = typer.Option(False, "--notes", help="Also list what is traced only (files not rendered again, figures without stored data)."),
 ) -> None:
     """Recompute the published numbers from the stored episode tables and render every published file again."""
-    from rich.markup import escape
+    from probecommit.cli.common import safe as escape
 
     from probecommit.report.verify import verify as run_verify
 

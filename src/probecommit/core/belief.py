@@ -27,6 +27,10 @@ class ForwardModel(Protocol):
     prior_low: np.ndarray
     prior_high: np.ndarray
     jitter_scale: np.ndarray
+    #: The few distinct noise-free readings ``predict`` can return, or None (``TaskModelBase``'s
+    #: default): with levels, the filter calls ``add_reading_log_likelihood(u, particles,
+    #: log_weights, level_log_likelihood[E, L])`` instead of ``predict`` under an arithmetic likelihood.
+    reading_levels: tuple[float, ...] | None
 
     def predict(self, u: np.ndarray, theta: np.ndarray) -> np.ndarray:
         """Predicted observation ``[E, N, m]`` for probes ``u[E]`` and particles ``[E, N, d]``."""
@@ -319,7 +323,7 @@ class ParticleFilter:
         likelihood has one log-likelihood per level and episode: the model picks each
         particle's (``add_reading_log_likelihood``); the same bits as predicting every particle.
         """
-        levels = getattr(self.model, "reading_levels", None)
+        levels = self.model.reading_levels
         if levels is not None and getattr(self.likelihood, "arithmetic", False) and y.shape[-1] == 1:
             level_pred = np.empty((state.n_episodes, len(levels), 1))
             level_pred[:, :, 0] = levels

@@ -150,8 +150,7 @@ def _compiled_affine(model: Any) -> tuple[int, int, float, float] | None:
     kernel can count with them, so the ``[E, N]`` parts need not be formed; else None."""
     if not HAVE_KERNELS:
         return None
-    affine = getattr(model, "success_interval_affine", None)
-    return affine() if affine is not None else None
+    return model.success_interval_affine()
 
 
 def _failure_counts(model: Any, scenarios: np.ndarray, mask: np.ndarray, context: np.ndarray | None,
@@ -265,7 +264,7 @@ class RetainedSet:
     def interval_parts(self, model: Any) -> list[tuple[np.ndarray, np.ndarray] | None]:
         """The model's success-interval parts of each block, computed once per set and model
         (kind and variant label): they do not depend on the margin, which a margin search varies."""
-        key = (type(model), getattr(model, "variant", None))
+        key = (type(model), model.variant)
         if key not in self._interval_parts:
             self._interval_parts[key] = [model.success_interval_parts(block) for block, _ in self.blocks()]
         return self._interval_parts[key]

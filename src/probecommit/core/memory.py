@@ -15,8 +15,8 @@ from typing import Callable, Iterator
 SHARE = 0.5
 
 
-def available_bytes() -> int:
-    """Memory available to this process now (``MemAvailable``; 8 GiB when it cannot be read)."""
+def _host_available() -> int:
+    """The host's ``MemAvailable`` (8 GiB when it cannot be read)."""
     try:
         with open("/proc/meminfo") as handle:
             for line in handle:
@@ -30,18 +30,70 @@ def available_bytes() -> int:
         return 8 * 1024**3
 
 
+def _read_int(path: str) -> int | None:
+    try:
+        with open(path) as handle:
+            text = handle.read().strip()
+    except OSError:
+        return None
+    return int(text) if text.isdigit() else None  # "max": no limit
+
+
+#: A cgroup limit at or above this is "no limit" (cgroup v1 reports ~2**63 for none).
+_NO_LIMIT = 1 << 60
+
+
+def cgroup_headroom(root: str = "/sys/fs/cgroup", proc_cgroup: str = "/proc/self/cgroup") -> int | None:
+    """Bytes this process's container (cgroup v2 or v1) may still use: limit minus usage; None when
+    there is no limit. A container kills a process at its limit whatever the host has free."""
+    paths: dict[str, str] = {}
+    try:
+        with open(proc_cgroup) as handle:
+            for line in handle:
+                _, controllers, path = line.rstrip("\n").split(":", 2)
+                for name in controllers.split(",") if controllers else [""]:
+                    paths[name] = path.lstrip("/")
+    except (OSError, ValueError):
+        pass
+    candidates = []
+    v2 = paths.get("", "")
+    for folder in dict.fromkeys([os.path.join(root, v2), root]):  # v2: the process's group, then the root
+        candidates.append((os.path.join(folder, "memory.max"), os.path.join(folder, "memory.current")))
+    v1 = paths.get("memory", "")
+    for folder in dict.fromkeys([os.path.join(root, "memory", v1), os.path.join(root, "memory")]):
+        candidates.append((os.path.join(folder, "memory.limit_in_bytes"), os.path.join(folder, "memory.usage_in_bytes")))
+    headrooms = []
+    for limit_file, usage_file in candidates:
+        limit = _read_int(limit_file)
+        if limit is None or limit >= _NO_LIMIT:
+            continue
+        headrooms.append(max(0, limit - (_read_int(usage_file) or 0)))
+    return min(headrooms) if headrooms else None
+
+
+def available_bytes() -> int:
+    """Memory this process may still use: the host's available memory, or the container's (cgroup)
+    headroom when that is smaller."""
+    host = _host_available()
+    room = cgroup_headroom()
+    return host if room is None else min(host, room)
+
+
 def check_fits(needed_bytes: float, what: str, setting: str) -> None:
-    """Raise ``MemoryError`` with one line when ``needed_bytes`` exceeds half the available memory.
+    """Raise ``MemoryError`` with one line when ``needed_bytes`` exceeds half the available memory
+    (the container's limit counted: :func:`available_bytes`).
 
     Args:
         needed_bytes: The estimate.
         what: What would be allocated ("the particle beliefs of one work unit").
         setting: What to change ("belief.particles or unit_instances").
     """
-    limit = SHARE * available_bytes()
+    available = available_bytes()
+    limit = SHARE * available
     if needed_bytes > limit:
         raise MemoryError(f"{what} would need about {needed_bytes / 1024**3:.1f} GiB, more than half the "
-                          f"{available_bytes() / 1024**3:.1f} GiB available; reduce {setting}")
+                          f"{available / 1024**3:.1f} GiB available (host or container limit, the smaller); "
+                          f"reduce {setting}")
 
 
 def _libc_function(name: str, argtypes: list) -> Callable[..., int] | None:

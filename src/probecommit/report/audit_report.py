@@ -28,6 +28,7 @@ from probecommit import __version__  # noqa: E402
 from probecommit.report import vocabulary as V  # noqa: E402
 from probecommit.report.style import COLUMN, DOUBLE, integer_ticks, legend_above  # noqa: E402
 from probecommit.audit.io import GROUP_COLUMNS  # noqa: E402
+from probecommit.store.safefile import write_text
 
 
 def _label(row: pd.Series | dict, groups: list[str]) -> str:
@@ -454,6 +455,5 @@ def write_html_report(path: str | Path, audit_result=None, *, title: str = "prob
            "<meta name='viewport' content='width=device-width, initial-scale=1'>"
            f"<title>{html.escape(title)}</title>"
            f"<style>{_CSS}</style></head><body>{''.join(parts)}</body></html>")
-    path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(doc, encoding="utf-8")
+    write_text(path, doc)
     return path

@@ -14,6 +14,7 @@ from typing import Any
 from probecommit.report.ledger import resolve
 from probecommit.studies import paper_values
 from probecommit.studies.claims import CLAIMS, EXPERIMENTS, Outcome, counts, evaluate, explanations
+from probecommit.store.safefile import write_text
 
 CLAIMS_NAME = "claims.json"
 CLAIMS_VERSION = 1
@@ -62,5 +63,5 @@ def compute(root: str | Path) -> dict[str, Any]:
 def write(root: str | Path) -> Path:
     """Compute and write ``claims.json`` at the publication root."""
     path = Path(root) / CLAIMS_NAME
-    path.write_text(json.dumps(compute(root), indent=1) + "\n")
+    write_text(path, json.dumps(compute(root), indent=1) + "\n")
     return path

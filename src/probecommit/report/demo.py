@@ -9,6 +9,7 @@ import numpy as np
 from probecommit.report.figures import belief_snapshots
 from probecommit.report.tables import budget_summary, to_markdown
 from probecommit.runner.replay import load_run, trace_for_run
+from probecommit.store.safefile import write_text
 
 FIGURE_BUDGETS = (1, 3, 5)
 
@@ -113,5 +114,5 @@ def write_demo_report(run_dir: str | Path) -> Path:
         "",
     ]
     report = Path(run_dir) / "report.md"
-    report.write_text("\n".join(lines))
+    write_text(report, "\n".join(lines))
     return report

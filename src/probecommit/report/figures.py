@@ -15,6 +15,7 @@ import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 
 from probecommit.report.style import COLUMN  # noqa: E402  (applies the shared style)
+from probecommit.store.safefile import write_with  # noqa: E402
 
 
 def save_figure(fig, path: str | Path, dpi: int | None = None, caption: str | None = None) -> Path:
@@ -36,8 +37,10 @@ def save_figure(fig, path: str | Path, dpi: int | None = None, caption: str | No
     sizes = [size for size, _ in text_sizes(fig)]
     # the smallest text, so a page showing the PNG can keep it legible (HTML reports read it back)
     meta = {"MinFontPt": f"{min(sizes):.2f}" if sizes else "", "Dpi": str(dpi or 300)}
-    fig.savefig(png, dpi=dpi or 300, metadata={**meta, **({"Description": caption} if caption else {})})
-    fig.savefig(png.with_suffix(".pdf"), metadata={"CreationDate": None, **({"Subject": caption} if caption else {})})
+    png_meta = {**meta, **({"Description": caption} if caption else {})}
+    pdf_meta = {"CreationDate": None, **({"Subject": caption} if caption else {})}
+    write_with(png, lambda buf: fig.savefig(buf, format="png", dpi=dpi or 300, metadata=png_meta))
+    write_with(png.with_suffix(".pdf"), lambda buf: fig.savefig(buf, format="pdf", metadata=pdf_meta))
     plt.close(fig)
     return png
 

@@ -38,6 +38,7 @@ from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
+from probecommit.store.safefile import write_text
 
 LEDGER_NAME = "published_numbers.json"
 LEDGER_VERSION = 1
@@ -99,7 +100,7 @@ class Ledger:
 
     def write(self, root: str | Path) -> Path:
         path = Path(root) / LEDGER_NAME
-        path.write_text(json.dumps(self.to_json(), indent=1) + "\n")
+        write_text(path, json.dumps(self.to_json(), indent=1) + "\n")
         return path
 
 

@@ -25,6 +25,7 @@ import struct
 import zlib
 from pathlib import Path
 from typing import Any
+from probecommit.store.safefile import write_bytes, write_text
 
 MANIFEST = "MANIFEST.json"
 REPRODUCTION_MD = "REPRODUCTION.md"
@@ -106,7 +107,7 @@ def stamp_png(path: Path, digest: str) -> None:
     out = bytearray(data[:8])
     for kind, payload in chunks:
         out += struct.pack(">I", len(payload)) + kind + payload + struct.pack(">I", zlib.crc32(kind + payload))
-    path.write_bytes(bytes(out))
+    write_bytes(path, bytes(out))
 
 
 # ----------------------------------------------------------------------------- writing
@@ -132,7 +133,7 @@ def write_manifest(study_dir: str | Path) -> Path:
     files = sorted(p for p in study_dir.iterdir() if p.is_file() and p.name != MANIFEST)
     manifest = {"sha256": {p.name: sha256_file(p) for p in files}, "figures": figures}
     path = study_dir / MANIFEST
-    path.write_text(json.dumps(manifest, indent=1, sort_keys=True) + "\n")
+    write_text(path, json.dumps(manifest, indent=1, sort_keys=True) + "\n")
     return path
 
 
@@ -150,7 +151,7 @@ def write_root_manifest(root: str | Path) -> Path:
     studies = sorted(p.name for p in root.iterdir() if p.is_dir())
     manifest = {"sha256": {n: sha256_file(root / n) for n in root_files(root)}, "studies": studies}
     path = root / MANIFEST
-    path.write_text(json.dumps(manifest, indent=1, sort_keys=True) + "\n")
+    write_text(path, json.dumps(manifest, indent=1, sort_keys=True) + "\n")
     return path
 
 

@@ -23,6 +23,7 @@ import numpy as np
 import probecommit.report.style  # noqa: F401  (every target's figures in one style, whichever ran first)
 from probecommit.tasks.base import shared_engine_answers
 from probecommit.errors import UsageError
+from probecommit.store.safefile import write_text, write_with
 
 Progress = Callable[[str, int, int], None]
 
@@ -74,8 +75,8 @@ def markdown_to_latex(markdown: str) -> str:
 
 def write_table(folder: Path, key: str, markdown: str) -> None:
     """``<key>.md`` and ``<key>.tex`` from a Markdown table."""
-    (folder / f"{key}.md").write_text(markdown if markdown.endswith("\n") else markdown + "\n")
-    (folder / f"{key}.tex").write_text(markdown_to_latex(markdown))
+    write_text(folder / f"{key}.md", markdown if markdown.endswith("\n") else markdown + "\n")
+    write_text(folder / f"{key}.tex", markdown_to_latex(markdown))
 
 
 # ----------------------------------------------------------------------------- targets
@@ -90,7 +91,7 @@ def _insertion(root: Path, quick: bool, progress: Progress, workers: int) -> Pat
     for name in list(rep.tables):
         md = results / f"{name}.md"
         if md.is_file():
-            (results / f"{name}.tex").write_text(markdown_to_latex(md.read_text()))
+            write_text(results / f"{name}.tex", markdown_to_latex(md.read_text()))
     return results
 
 
@@ -152,8 +153,8 @@ def _breadth(root: Path, quick: bool, progress: Progress, workers: int) -> Path:
     row = insertion_row(root)
     if row is not None:
         table = pd.concat([pd.DataFrame([row]), table], ignore_index=True)
-    table.to_parquet(results / "table_II_breadth.parquet")
-    curves.to_parquet(results / "budget_curves.parquet")
+    write_with(results / "table_II_breadth.parquet", table.to_parquet)
+    write_with(results / "budget_curves.parquet", curves.to_parquet)
     write_table(results, "table_II_breadth", breadth_markdown(table))
     plot_budget_curves(curves, results / "fig_breadth_budget.png")
     rows = json.loads(table.to_json(orient="records"))
@@ -161,7 +162,7 @@ def _breadth(root: Path, quick: bool, progress: Progress, workers: int) -> Path:
                            "table_II": {row["family"]: row for row in rows},
                            "curves": json.loads(curves.to_json(orient="records")),
                            "sign_flip_over_truths": sign_flips}}
-    (results / "results.json").write_text(json.dumps(payload, indent=1))
+    write_text(results / "results.json", json.dumps(payload, indent=1))
     return results
 
 
@@ -180,7 +181,8 @@ def store_breadth_episodes(families: tuple[str, ...], runs: dict[str, Path], qui
             config = paper_config(family)
             episodes = feasible_episodes(quick_config(config) if quick else config, runs[family], episodes)
         frames.append(episodes.assign(family=family))
-    pd.concat(frames, ignore_index=True).to_parquet(path, compression="zstd", index=False)
+    table = pd.concat(frames, ignore_index=True)
+    write_with(path, lambda buf: table.to_parquet(buf, compression="zstd", index=False))
 
 
 def _beyond(root: Path, quick: bool, progress: Progress, workers: int) -> Path:
@@ -306,7 +308,7 @@ def reproduce(names: list[str], root: str | Path, quick: bool = False, progress:
             out["wall_s"][name] = time.perf_counter() - start
             out["engine_calls"][name] = engine_calls_under(root / name)
     root.mkdir(parents=True, exist_ok=True)
-    (root / "reproduction.json").write_text(json.dumps(out, indent=1))
+    write_text(root / "reproduction.json", json.dumps(out, indent=1))
     return out
 
 
@@ -383,9 +385,10 @@ def _engines(root: Path, quick: bool, progress: Progress, workers: int) -> Path:
     write_table(results, "engine_scans", engine_scans_markdown(study["scans"]))
     flat = table.copy()
     flat.columns = [f"{e}/{v}" for e, v in flat.columns]
-    flat.to_parquet(results / "table_VI_engines.parquet")
-    escape.to_parquet(results / "escape_by_budget.parquet")
-    study["episodes"].to_parquet(results / "engine_episodes.parquet", compression="zstd", index=False)
+    write_with(results / "table_VI_engines.parquet", flat.to_parquet)
+    write_with(results / "escape_by_budget.parquet", escape.to_parquet)
+    write_with(results / "engine_episodes.parquet",
+               lambda buf: study["episodes"].to_parquet(buf, compression="zstd", index=False))
     payload = {"results": {
         "settings": study["bootstrap"],
         "table": {f"{e}/{v}": dict(zip([r.replace(" ", "_") for r in table.index], map(float, table[(e, v)])))
@@ -397,7 +400,7 @@ def _engines(root: Path, quick: bool, progress: Progress, workers: int) -> Path:
         "escape": {f"{e}/{v}": {str(int(r["k"])): float(r["escape"]) for _, r in part.iterrows()}
                    for (e, v), part in escape.groupby(["engine", "variant"], sort=False)},
     }}
-    (results / "results.json").write_text(json.dumps(payload, indent=1, default=float))
+    write_text(results / "results.json", json.dumps(payload, indent=1, default=float))
     return results
 
 
@@ -430,10 +433,10 @@ def _robot(root: Path, quick: bool, progress: Progress, workers: int) -> Path:
     results = root / "robot" / "results"
     results.mkdir(parents=True, exist_ok=True)
     study = run_robot_study(root / "robot" / "runs", quick=quick, progress=progress)
-    study.episodes.rows.to_parquet(results / "robot_episodes.parquet")
-    study.table.to_parquet(results / "table_robot.parquet")
-    study.boundary.to_parquet(results / "fault_boundary.parquet")
-    study.prior.to_parquet(results / "fault_prior.parquet")
+    write_with(results / "robot_episodes.parquet", study.episodes.rows.to_parquet)
+    write_with(results / "table_robot.parquet", study.table.to_parquet)
+    write_with(results / "fault_boundary.parquet", study.boundary.to_parquet)
+    write_with(results / "fault_prior.parquet", study.prior.to_parquet)
     write_table(results, "table_VII_hardware_simulated_rig", table_markdown(study.table))
     write_table(results, "fault_boundary_simulated_rig", sweep_markdown(study.boundary, "boundary pulled in (mm)"))
     write_table(results, "fault_prior_simulated_rig", sweep_markdown(study.prior, "prior half-width (mm)"))
@@ -446,7 +449,7 @@ def _robot(root: Path, quick: bool, progress: Progress, workers: int) -> Path:
     save_figure(fault_sweep_figure(study.prior.sort_values("size"), "prior half-width (mm)", title=RIG_LABEL),
                 results / "fig_5d_hardware_simulated_rig_prior_fault.png",
                 caption=sweep_caption(study.prior, "a narrowed prior"))
-    (results / "results.json").write_text(json.dumps(study.payload(), indent=1, default=float))
+    write_text(results / "results.json", json.dumps(study.payload(), indent=1, default=float))
     return results
 
 
@@ -499,17 +502,16 @@ def _setup(root: Path, quick: bool, progress: Progress, workers: int) -> Path:
     """Table I from the task registry, and Fig. 1b (an insertion belief after taps 1, 3, 5)."""
     from importlib import resources
 
-    import yaml
-
     from probecommit.report.demo import belief_figure
     from probecommit.runner.config import parse_config
     from probecommit.runner.study import run_study
+    from probecommit.store.yamlsafe import load_yaml
 
     results = root / "setup" / "results"
     results.mkdir(parents=True, exist_ok=True)
     lines, rows = table_I()
     write_table(results, "table_I_setup", "\n".join(lines))
-    data = yaml.safe_load(resources.files("probecommit").joinpath("configs/demo.yaml").read_text())
+    data = load_yaml(resources.files("probecommit").joinpath("configs/demo.yaml").read_text(), "configs/demo.yaml")
     if quick:
         data["instances"]["count"] = 2
     run = run_study(parse_config(data), root / "setup" / "runs" / ("demo-quick" if quick else "demo"), workers=workers)
@@ -518,7 +520,7 @@ def _setup(root: Path, quick: bool, progress: Progress, workers: int) -> Path:
     pdf = figure.with_suffix(".pdf")
     if pdf.is_file():
         pdf.rename(results / "fig_1b_overview_belief.pdf")
-    (results / "results.json").write_text(json.dumps(
+    write_text(results / "results.json", json.dumps(
         {"results": {"families": rows, "families_by_name": {row["family"]: row for row in rows}}}, indent=1))
     return results
 
@@ -567,11 +569,11 @@ def _cost(root: Path, quick: bool, progress: Progress, workers: int) -> Path:
     results = root / "cost" / "results"
     results.mkdir(parents=True, exist_ok=True)
     table = pricing_table(curves)
-    table.to_parquet(results / "pricing.parquet")
+    write_with(results / "pricing.parquet", table.to_parquet)
     write_table(results, "table_pricing", pricing_markdown(table))
     plot_pricing(table, results / "fig_pricing.png")
     records = json.loads(table.to_json(orient="records"))
-    (results / "results.json").write_text(json.dumps(
+    write_text(results / "results.json", json.dumps(
         {"results": {"pricing": records, "prices": {r["family"]: r for r in records}}}, indent=1))
     return results
 
@@ -615,7 +617,7 @@ def _figures(root: Path, quick: bool, progress: Progress, workers: int) -> Path:
     if spec is not None:
         fig1_panel(renders, "a", spec, results / "fig_1a_overview_taps.png")
         fig1_panel(renders, "c", spec, results / "fig_1c_overview_insertion.png")
-    (results / "results.json").write_text(json.dumps({"results": {"scenes": listing, "fig1": spec}}, indent=1))
+    write_text(results / "results.json", json.dumps({"results": {"scenes": listing, "fig1": spec}}, indent=1))
     return results
 
 

@@ -17,6 +17,7 @@ from pathlib import Path
 from typing import Any
 
 from probecommit.report.audit_report import _CSS, img_tag
+from probecommit.store.safefile import write_text
 
 #: Target folders whose figures follow each REPRODUCTION.md section (by heading keyword).
 SECTION_TARGETS = (("MuJoCo insertion", "insertion"), ("Every family", "breadth"), ("Across engines", "engines"),
@@ -165,5 +166,5 @@ def write_paper_report(results_root: str | Path, reproduction_md: str | Path, ou
            "<meta name='viewport' content='width=device-width, initial-scale=1'><title>probecommit: reproduction</title>"
            f"<style>{css}</style></head><body>{heading}{summary_html(results_root)}{nav}{preamble}{''.join(sections_html)}"
            "</body></html>")
-    out.write_text(doc, encoding="utf-8")
+    write_text(out, doc)
     return out

@@ -22,6 +22,7 @@ from probecommit.report.paper import publish as publish_folders
 from probecommit.report.reproduction_md import (CONFIGURATION, MD_FILE, Doc, beyond_section, breadth_section, claims_section,
                                                 cost_section, engines_section, gru_section, insertion_section,
                                                 machine_section, robot_section)
+from probecommit.store.safefile import write_text
 
 HEADER = """# Reproduction
 
@@ -89,7 +90,7 @@ def write_reproduction_md(repo_root: str | Path) -> Path:
     claims_json.write(frozen)
     ledger = Ledger(entries=_kept_entries(frozen))
     path = repo_root / "REPRODUCTION.md"
-    path.write_text(render(frozen, ledger))
+    write_text(path, render(frozen, ledger))
     ledger.write(frozen)
     from probecommit.report.paper_html import write_paper_report
 
@@ -108,7 +109,7 @@ def publish(results: dict[str, str | Path], repo_root: str | Path, timing: dict[
         machine = timing.get("machine") or merged.get("machine")
         if machine:
             record["machine"] = machine
-        (root / "reproduction.json").write_text(json.dumps(record, indent=1) + "\n")
+        write_text(root / "reproduction.json", json.dumps(record, indent=1) + "\n")
     write_reproduction_md(repo_root)
     write_root_manifest(root)  # last: it hashes reproduction.json, report.html and REPRODUCTION.md
     return root

@@ -35,6 +35,7 @@ from probecommit.studies.protocol import DEFAULT_PROTOCOL, Protocol, load_protoc
 from probecommit.studies.robust import final_failure, robust_candidates, tune_robust_filters
 from probecommit.studies.scan import scan_development
 from probecommit.store.rundir import RunDir
+from probecommit.store.safefile import write_text, write_with
 
 Progress = Callable[[str, int, int], None]
 
@@ -71,7 +72,7 @@ STORED_COLUMNS = ("instance_id", "repeat", "k", "method", "status", "predicted",
 def store_episodes(episodes: pd.DataFrame, path: Path, extra: tuple[str, ...] = ()) -> None:
     """Write the columns verify reads, strings as dictionaries (a few bytes an episode)."""
     table = episodes[[*extra, *STORED_COLUMNS]].reset_index(drop=True)
-    table.to_parquet(path, compression="zstd", index=False)
+    write_with(path, lambda buf: table.to_parquet(buf, compression="zstd", index=False))
 
 
 def signature_points(signatures: pd.DataFrame) -> dict[str, Any]:
@@ -193,7 +194,7 @@ class InsertionReproduction:
     def write_table(self, key: str) -> None:
         """Render table ``key`` from the results so far (``report.insertion_tables``; verify renders it again)."""
         text = RENDERERS[key](self.rep.results, self.out)
-        (self.out / f"{key}.md").write_text(text)
+        write_text(self.out / f"{key}.md", text)
         self.rep.tables[key] = text
 
     # ---------------------------------------------------------------- steps
@@ -203,7 +204,7 @@ class InsertionReproduction:
         self.progress("boundary scan", 0, 1)
         result = scan_development(p, sim)
         self.rep.add_calls(sim.engine_calls)
-        result.scans.to_parquet(self.out / "scan.parquet")
+        write_with(self.out / "scan.parquet", result.scans.to_parquet)
         summary = result.summary()
         summary["frozen_delta"] = p.delta
         self.rep.results["scan"] = summary
@@ -217,7 +218,7 @@ class InsertionReproduction:
         sim = build_simulator(cfg)
         table = search_cover_schedule(cfg, sim, limit=limit, progress=lambda d, t: self.progress("cover search", d, t))
         self.rep.add_calls(sim.engine_calls)
-        table.assign(schedule=table["schedule"].map(str)).to_parquet(self.out / "cover_search.parquet")
+        write_with(self.out / "cover_search.parquet", table.assign(schedule=table["schedule"].map(str)).to_parquet)
         best = table.iloc[0]
         self.rep.results["cover"] = {
             "winner": [float(u) for u in best["schedule"]], "winner_failure": float(best["failure"]),
@@ -340,7 +341,7 @@ class InsertionReproduction:
                 row["paired_fix"] = paired(fa, fix, kmax, "realized", **b)
             res[fault] = row
         signatures = signature_table(episodes)
-        signatures.to_parquet(self.out / "fault_signatures.parquet")
+        write_with(self.out / "fault_signatures.parquet", signatures.to_parquet)
         self.rep.results["fault_signatures"] = signature_points(signatures)
         self.rep.figures["signatures"] = str(fault_signatures(signatures, self.out / "fig_7_signatures.png",
                                                               n=signature_n(episodes, kmax)))
@@ -397,7 +398,7 @@ class InsertionReproduction:
             del cal, test, res
             trim_heap()  # a split's copies go back before the next split copies its halves
         table = pd.DataFrame(rows)
-        table.to_parquet(self.out / "resplits.parquet")
+        write_with(self.out / "resplits.parquet", table.to_parquet)
         summary = {"level_mean_sd": [float(table.level.mean()), float(table.level.std(ddof=1))],
                    "failure_mean_sd": [float(table.failure.mean()), float(table.failure.std(ddof=1))],
                    "heldout_cluster_coverage": float(table.heldout_cluster_coverage.mean()),
@@ -416,12 +417,12 @@ class InsertionReproduction:
         result = gates(L["B_cal_cover"], L["B_test_cover"], alpha=self.p.alpha, **self.boot, **self.chunk)
         k = self.p.budgets["random"]
         coverage = coverage_vs_nominal(L["B_cal_random"].episodes, L["B_test_random"].episodes, k)
-        coverage.to_parquet(self.out / "coverage_vs_nominal.parquet")
+        write_with(self.out / "coverage_vs_nominal.parquet", coverage.to_parquet)
         path = decision_figure(coverage, result, self.out / "fig_6_decision.png")
         self.rep.figures["commit_gates"] = str(path)
         summary = result.summary
         self.rep.results["gates"] = {"summary": summary.to_dict("records"), "info": result.info}
-        result.curves.to_parquet(self.out / "gates_curves.parquet")
+        write_with(self.out / "gates_curves.parquet", result.curves.to_parquet)
         self.write_table("gates")
 
     def setup_table(self) -> None:
@@ -478,7 +479,7 @@ class InsertionReproduction:
         self.rep.wall_s = time.perf_counter() - start
         payload = {"results": self.rep.results, "engine_calls": self.rep.engine_calls, "wall_s": self.rep.wall_s,
                    "figures": self.rep.figures}
-        (self.out / "results.json").write_text(json.dumps(payload, indent=2, default=_json_default))
+        write_text(self.out / "results.json", json.dumps(payload, indent=2, default=_json_default))
         return self.rep
 
 

@@ -23,6 +23,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from probecommit.store.safefile import write_text
 
 #: Colours of the picture (RGBA 0..1); the tests look for these hues.
 PLATE = (0.30, 0.45, 0.75, 1.0)  # steel blue
@@ -301,7 +302,7 @@ def render_all(out: str | Path, fig1: dict[str, Any] | None = None) -> dict[str,
         except Exception as exc:  # an engine or GL library missing: say which, go on with the others
             done["skipped"].append({"file": f"{stem}.png", "family": family, "engine": engine,
                                     "reason": f"{type(exc).__name__}: {str(exc).splitlines()[0] if str(exc) else ''}"[:300]})
-    (out / "scenes.json").write_text(json.dumps(done, indent=1))
+    write_text(out / "scenes.json", json.dumps(done, indent=1))
     return done
 
 

@@ -37,6 +37,8 @@ from pathlib import Path
 from typing import Any
 
 import pandas as pd
+from probecommit.store.manifest_rules import ManifestError, read_json, read_manifest
+from probecommit.store.safefile import write_text
 
 from probecommit.report import checks, manifest
 from probecommit.report.manifest import MANIFEST, REPRODUCTION_REL, write_manifest  # noqa: F401 (re-exported)
@@ -107,6 +109,20 @@ def _json(path: Path, default: Any = None) -> Any:
         return default
 
 
+def _read(path: Path, report: Report, what: str, manifest_file: bool = False) -> Any:
+    """A manifest or results file under the store's rule set; a malformed one is one failure naming it
+    (the file, the field or the line), never a traceback. None when missing or malformed."""
+    from probecommit.store.manifest_rules import ManifestError, read_json, read_manifest
+
+    if not path.is_file():
+        return None
+    try:
+        return read_manifest(path) if manifest_file else read_json(path, what)
+    except ManifestError as exc:
+        report.check("file", False, str(exc))
+        return None
+
+
 def check_root(root: Path, report: Report) -> list[Path]:
     """The publication manifest: present, listing every root file and study, bytes matching."""
     path = root / MANIFEST
@@ -114,7 +130,7 @@ def check_root(root: Path, report: Report) -> list[Path]:
     report.check("file", (root / REPRODUCTION_REL).is_file(),
                  f"{(root / REPRODUCTION_REL).resolve()}: no REPRODUCTION.md beside the publication")
     studies = sorted(p for p in root.iterdir() if p.is_dir())
-    listed = _json(path, {}) or {}
+    listed = _read(path, report, "publication manifest", manifest_file=True) or {}
     _hashes(root, listed.get("sha256", {}), manifest.root_files(root), report)
     named = set(listed.get("studies", []))
     for name in sorted(named ^ {p.name for p in studies}):
@@ -138,7 +154,7 @@ def check_study_files(study: Path, report: Report) -> None:
     """The study manifest, and each figure bound to the digest of the data it was drawn from."""
     path = study / MANIFEST
     report.check("file", path.is_file(), f"{path}: no study manifest")
-    listed = _json(path, {}) or {}
+    listed = _read(path, report, "study manifest", manifest_file=True) or {}
     _hashes(study, listed.get("sha256", {}), sorted(p.name for p in study.iterdir() if p.is_file() and p.name != MANIFEST),
             report)
     for sub in sorted(p for p in study.iterdir() if p.is_dir()):
@@ -409,9 +425,9 @@ def verify(results_root: str | Path, reproduction_md: str | Path | None = None, 
     report = Report()
     for study in check_root(root, report):
         check_study_files(study, report)
-        payload = _json(study / "results.json")
-        report.check("file", payload is not None, f"{study}/results.json: missing or unreadable")
-        if payload is None:
+        payload = _read(study / "results.json", report, "results file")
+        report.check("file", (study / "results.json").is_file(), f"{study}/results.json: missing")
+        if not isinstance(payload, dict):
             continue
         results = payload.get("results", {})
         checks.nonfinite(study.name, "results.json", payload, report)

@@ -63,13 +63,28 @@ def fault_overrides(config: StudyConfig, fault: str, size: float) -> dict[str, d
     raise UsageError(f"unknown fault {fault!r}; faults: {', '.join(FAULTS)}")
 
 
+#: Fields a reproduced decision must match: the action, its predicted score and the retained set.
+COMPARED = ("action", "action_index", "predicted", "retained_lo", "retained_hi", "hull_lo", "hull_hi")
+
+
+def same_decision(replayed: dict[str, Any], recorded: dict[str, Any], tol: float = 1e-9) -> bool:
+    """Whether a replayed decision reproduces the recorded one: the action, the predicted score and the
+    retained interval and hull (an action alone can agree while the belief behind it does not)."""
+    for name in COMPARED:
+        a, b = np.asarray(replayed.get(name), dtype=float), np.asarray(recorded.get(name), dtype=float)
+        if a.shape != b.shape or not np.all(np.isfinite(a)) or not np.all(np.abs(a - b) <= tol * (1 + np.abs(b))):
+            return False
+    return True
+
+
 def replay_session(path: str | Path, overrides: dict[str, dict[str, Any]] | None = None,
                    variant: str | None = None) -> tuple[SessionEpisodes, float]:
     """Re-decide every committed episode of a log under ``overrides``.
 
     Returns:
-        The audit rows of the replay, and the fraction of episodes whose action equals
-        the recorded one (1.0 for a replay as deployed).
+        The audit rows of the replay, and the fraction of episodes whose decision (action,
+        predicted score, retained interval and hull: :func:`same_decision`) equals the
+        recorded one (1.0 for a replay as deployed).
     """
     config, episodes, truths, log = load_session(path)
     replay_config = with_overrides(config, overrides or {})
@@ -81,7 +96,7 @@ def replay_session(path: str | Path, overrides: dict[str, dict[str, Any]] | None
             continue
         state, _ = episode_belief(pfilter, replay_config, number, ep.probes, ep.readings)
         decisions[number] = decide_belief(model, replay_config, state, ep.context)
-        same.append(decisions[number]["action"] == ep.decision["action"])
+        same.append(same_decision(decisions[number], ep.decision))
     # Realized outcomes are always scored by the deployed model's window at the truth.
     result = rows_from_decisions(build_model(config), episodes, truths, decisions,
                                  variant=variant or model.variant)
@@ -101,7 +116,7 @@ def parse_sweep(text: str) -> list[float]:
     try:
         if ":" in text:
             parts = [float(p) for p in text.split(":")]
-            if len(parts) != 3 or parts[2] <= 0 or parts[1] < parts[0]:
+            if len(parts) != 3 or not all(np.isfinite(parts)) or parts[2] <= 0 or parts[1] < parts[0]:
                 raise ValueError
             n = int(np.floor((parts[1] - parts[0]) / parts[2] + 1e-9)) + 1
             if n > 1000:
@@ -109,7 +124,7 @@ def parse_sweep(text: str) -> list[float]:
             return [round(parts[0] + i * parts[2], 10) for i in range(n)]
         values = [float(p) for p in text.split(",") if p.strip()]
     except ValueError:
-        raise UsageError(f"--sweep must be START:STOP:STEP (STEP > 0, STOP >= START, at most 1000 points) or a comma "
+        raise UsageError(f"--sweep must be START:STOP:STEP (finite, STEP > 0, STOP >= START, at most 1000 points) or a comma "
                          f"list, got {text!r}") from None
     if not values or not all(np.isfinite(values)):
         raise UsageError(f"--sweep has no finite values: {text!r}")

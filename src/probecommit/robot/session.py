@@ -252,26 +252,84 @@ class Session:
 
     # ------------------------------------------------------------------ replaying the log into state
     def _apply(self, record: dict[str, Any]) -> None:
+        """Apply one (field-checked) record to the state, under the rules the writing calls enforce.
+
+        The episode state machine: ``episode`` (numbered one past the last, the previous
+        one closed) -> ``observe`` x taps (on the probe grid, readings of the model's
+        dimension and range) -> ``decide`` (all taps seen; an action of the action grid;
+        a binary task's score in [0, 1]) -> ``outcome``. A record out of this order, or
+        one another family's model could not have written, is an error naming its line.
+        """
         kind = record["type"]
         where = f"{self.path}: line {record.get('_line', '?')}"
         if kind == "episode":
+            number = int(record["episode"])
+            expected = max(self.episodes) + 1 if self.episodes else 0
+            if number != expected:
+                raise SessionLogError(f"{where}: episode {number} where the session would number the next one "
+                                      f"{expected} (an episode number repeated or skipped)")
+            if self.current is not None:
+                raise SessionLogError(f"{where}: episode {number} starts while episode {self.current.episode} is "
+                                      "still open (a session finishes an episode before starting another)")
             context = record.get("context")
-            self.episodes[int(record["episode"])] = EpisodeRecord(int(record["episode"]), str(record["position"]),
-                                                                  int(record["taps"]),
-                                                                  context=None if context is None else list(context))
+            self.episodes[number] = EpisodeRecord(number, str(record["position"]).strip(), int(record["taps"]),
+                                                  context=None if context is None else list(context))
         elif kind in ("observe", "decide", "outcome"):
-            ep = self.episodes.get(int(record.get("episode", -1)))
+            ep = self.episodes.get(int(record["episode"]))
             if ep is None:
-                raise SessionLogError(f"{where}: a {kind} record for episode {record.get('episode')!r}, which was never started")
-            if kind == "observe":
-                ep.probes.append(list(record["u"]))
-                ep.readings.append(list(record["y"]))
-            elif kind == "decide":
-                ep.decision = {k: v for k, v in record.items() if k not in ("type", "_line")}
-            else:
-                ep.outcome = {k: v for k, v in record.items() if k not in ("type", "_line")}
+                raise SessionLogError(f"{where}: a {kind} record for episode {record['episode']!r}, which was never started")
+            if ep is not self.current:
+                raise SessionLogError(f"{where}: a {kind} record for episode {ep.episode}, which is closed")
+            getattr(self, f"_apply_{kind}")(ep, record, where)
         elif kind == "truth":
-            self.truths[str(record["position"])] = [float(v) for v in record["theta"]]
+            names = self.model.latent_names
+            if len(record["theta"]) != len(names):
+                raise SessionLogError(f"{where}: truth record: theta has {len(record['theta'])} value(s), this "
+                                      f"family has {len(names)} ({', '.join(names)})")
+            self.truths[str(record["position"]).strip()] = [float(v) for v in record["theta"]]
+
+    def _apply_observe(self, ep: EpisodeRecord, record: dict[str, Any], where: str) -> None:
+        if ep.decision is not None:
+            raise SessionLogError(f"{where}: an observe record after episode {ep.episode}'s decision")
+        if len(ep.probes) >= ep.taps:
+            raise SessionLogError(f"{where}: episode {ep.episode} has more observe records than its {ep.taps} taps")
+        if "j" in record and record["j"] != len(ep.probes) + 1:
+            raise SessionLogError(f"{where}: observe record numbered j={record['j']}, expected {len(ep.probes) + 1}")
+        grid = np.asarray(self.model.probe_grid, dtype=float)
+        u = np.asarray(record["u"], dtype=float)
+        if u.shape[0] != grid.shape[1] or _on_grid(u, grid) is None:
+            raise SessionLogError(f"{where}: observe record: probe {record['u']} is not on this family's probe grid "
+                                  f"({self.config.family}); the header names another task or the log was altered")
+        y = np.asarray(record["y"], dtype=float)
+        low, high = getattr(self.model, "observation_range", (-np.inf, np.inf))
+        if y.shape[0] != self.model.observation_dim or np.any(y < low) or np.any(y > high):
+            raise SessionLogError(f"{where}: observe record: reading {record['y']} is not {self.model.observation_dim} "
+                                  f"number(s) in [{low:g}, {high:g}]")
+        ep.probes.append(u.tolist())
+        ep.readings.append(y.tolist())
+
+    def _apply_decide(self, ep: EpisodeRecord, record: dict[str, Any], where: str) -> None:
+        if ep.decision is not None:
+            raise SessionLogError(f"{where}: a second decide record for episode {ep.episode}")
+        if len(ep.probes) != ep.taps or record["k"] != len(ep.probes):
+            raise SessionLogError(f"{where}: decide record with k={record['k']} after {len(ep.probes)} of "
+                                  f"{ep.taps} taps (a session decides after all of its taps)")
+        grid = np.asarray(self.model.action_grid, dtype=float).reshape(len(self.model.action_grid), -1)
+        index = record["action_index"]
+        action = np.asarray(record["action"], dtype=float)
+        if index >= grid.shape[0] or action.shape[0] != grid.shape[1] or \
+                not np.all(np.abs(grid[index] - action) <= GRID_TOLERANCE):
+            raise SessionLogError(f"{where}: decide record: action {record['action']} is not action "
+                                  f"{index} of this family's grid ({self.config.family})")
+        if getattr(self.model, "binary_loss", False) and record["predicted"] > 1:
+            raise SessionLogError(f"{where}: decide record: predicted {record['predicted']!r} is not a failure "
+                                  "fraction in [0, 1]")
+        ep.decision = {k: v for k, v in record.items() if k not in ("type", "_line")}
+
+    def _apply_outcome(self, ep: EpisodeRecord, record: dict[str, Any], where: str) -> None:
+        if ep.decision is None:
+            raise SessionLogError(f"{where}: an outcome record for episode {ep.episode}, which never decided")
+        ep.outcome = {k: v for k, v in record.items() if k not in ("type", "_line")}
 
     def _rebuild(self, ep: EpisodeRecord) -> None:
         self._schedule = scheduled_probes(self.config, self.model, ep.episode, ep.taps)

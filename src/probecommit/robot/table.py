@@ -16,8 +16,9 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from probecommit.audit.io import validate_episodes
 from probecommit.audit.rows import episode_row
-from probecommit.audit.stats import DEFAULT_RESAMPLES, DEFAULT_SEED, cluster_bootstrap_mean
+from probecommit.audit.stats import DEFAULT_RESAMPLES, DEFAULT_SEED, cluster_bootstrap_mean, few_clusters_note
 from probecommit.robot.log import SessionLogError
 from probecommit.robot.session import EpisodeRecord, load_session
 from probecommit.runner.build import build_model
@@ -86,7 +87,12 @@ def rows_from_decisions(model: Any, episodes: dict[int, EpisodeRecord], truths: 
             entered=np.nan if entered is None else float(entered),
             aim_error=float(abs(np.ravel(action)[0] - z_true)), n_retained=decision.get("n_retained"),
         ))
-    return SessionEpisodes(pd.DataFrame(rows), unscored)
+    frame = pd.DataFrame(rows)
+    if len(frame):  # the episode-row rules, as for every other audit path
+        loss = "binary" if getattr(model, "binary_loss", False) else "continuous"
+        frame = validate_episodes(frame, "session log", structure=False, loss=loss)
+        frame.attrs = {}
+    return SessionEpisodes(frame, unscored)
 
 
 def session_episodes(path: str | Path) -> SessionEpisodes:
@@ -107,6 +113,10 @@ def session_episodes(path: str | Path) -> SessionEpisodes:
     if result.rows.empty:
         why = "; ".join(result.notes) or "it has no episodes"
         raise SessionLogError(f"{log}: no episode can be audited ({why})")
+    few = few_clusters_note(int(result.rows.groupby("k")["instance_id"].nunique().min()),
+                            "the optimism and aim-error intervals")
+    if few:
+        result.warnings.append(few)
     return result
 
 

@@ -311,21 +311,35 @@ def _check_pair(cal: _Run, test: _Run) -> None:
         if getattr(a, section) != getattr(b, section):
             raise UsageError(f"calibration and test runs differ in their '{section}' settings; "
                              "calibrate on a run of the same model, belief and probe schedule")
-    ids_a = set(cal.loaded.instances["instance_id"])
-    ids_b = set(test.loaded.instances["instance_id"])
-    if ids_a & ids_b and cal.loaded.path.resolve() == test.loaded.path.resolve():
-        # Disjoint instance subsets of one run (re-splits of a pool) are fine; the same instances are not.
-        raise UsageError(f"calibration and test are the same run ({cal.loaded.path}); in-sample calibration has no "
-                         "coverage guarantee: calibrate on a run of other instances")
-    if ids_a & ids_b:
-        shared = sorted(ids_a & ids_b)
-        # Same ids in different splits would be a leak only if they were the same truths.
-        ia = cal.loaded.instances.set_index("instance_id").loc[shared]
-        ib = test.loaded.instances.set_index("instance_id").loc[shared]
-        truth_cols = [c for c in ia.columns if c.startswith("true_")]
-        if np.allclose(ia[truth_cols].to_numpy(float), ib[truth_cols].to_numpy(float)):
-            raise UsageError(f"calibration and test runs share {len(shared)} instance(s) (e.g. {shared[0]!r}); "
-                             "conformal calibration needs disjoint instances")
+    shared = shared_truths(cal.loaded.instances, test.loaded.instances)
+    if len(shared):
+        # By content, not by id: the same truths under other ids are the same instances.
+        first = shared.iloc[0]
+        raise UsageError(f"calibration and test runs share {len(shared)} instance(s) by their truth and context values "
+                         f"(e.g. {first['instance_id_cal']!r} in {cal.loaded.path} is {first['instance_id_test']!r} "
+                         f"in {test.loaded.path}); in-sample calibration has no coverage guarantee: calibrate on "
+                         "a run of other instances")
+
+
+def shared_truths(cal: pd.DataFrame, test: pd.DataFrame, digits: int = 12) -> pd.DataFrame:
+    """Pairs of instances, one per table, whose truth (``true_*``) and context (``ctx_*``) values are
+    equal (to ``digits`` significant digits): the leak check reads values, never ids.
+
+    Returns:
+        Columns ``instance_id_cal`` and ``instance_id_test``, one row per shared pair.
+    """
+    cols = sorted(c for c in set(cal.columns) & set(test.columns) if c.startswith(("true_", "ctx_")))
+    if not cols:
+        return pd.DataFrame(columns=["instance_id_cal", "instance_id_test"])
+
+    def keyed(frame: pd.DataFrame, tag: str) -> pd.DataFrame:
+        values = frame[cols].to_numpy(float)
+        rounded = np.vectorize(lambda v: float(f"{v:.{digits}g}"), otypes=[float])(values) if values.size else values
+        out = pd.DataFrame(rounded, columns=cols)
+        out[f"instance_id_{tag}"] = frame["instance_id"].astype(str).to_numpy()
+        return out
+
+    return keyed(cal, "cal").merge(keyed(test, "test"), on=cols)[["instance_id_cal", "instance_id_test"]]
 
 
 def _budgets(run: _Run, budgets: Iterable[int] | None) -> list[int]:

@@ -8,6 +8,8 @@ from pathlib import Path
 from typing import Annotated, Any, Literal, Union
 
 import yaml
+
+from probecommit.store.yamlsafe import YamlError, load_yaml
 from pydantic import Field, StrictBool, ValidationError, field_validator, model_validator
 
 from probecommit.tasks.config import ConfigError, FieldError as _FieldError, StrictModel as _Strict
@@ -18,6 +20,10 @@ METHODS = ("blind_bayes", "blind_robust", "probe_robust")
 TASK_SECTIONS = ("model", "simulator")
 
 __all__ = ["ConfigError", "StudyConfig", "load_config", "parse_config", "dump_config"]
+
+
+#: Most instances of a study (truths x contexts).
+MAX_INSTANCES = 100_000
 
 
 class InstancesConfig(_Strict):
@@ -220,6 +226,9 @@ class StudyConfig(_Strict):
             n = len(task.latent_names)
             if n and len(inst.truths[0]) != n:
                 raise _FieldError("instances.truths", f"rows need {n} coordinates ({', '.join(task.latent_names)}), got {len(inst.truths[0])}")
+            # The family's limits hold for a fixed truth set as for a sampled box: its bounding box is checked.
+            rows = list(zip(*inst.truths))
+            task.check_truth_box(tuple(min(c) for c in rows), tuple(max(c) for c in rows), "instances.truths")
         else:
             low = inst.truth_low if inst.truth_low is not None else self.model.prior_low
             high = inst.truth_high if inst.truth_high is not None else self.model.prior_high
@@ -238,6 +247,14 @@ class StudyConfig(_Strict):
             raise _FieldError("instances.contexts", f"rows need {n_ctx} coordinates ({', '.join(task.context_names) or 'the family has no context'}), got {len(inst.contexts[0])}")
         if n_ctx and inst.contexts is None:
             raise _FieldError("instances.contexts", f"the {task.family} family needs a context per instance ({', '.join(task.context_names)})")
+        if inst.contexts is not None:
+            task.check_contexts(inst.contexts, "instances.contexts")
+        n_truths = len(inst.truths) if inst.truths is not None else inst.count
+        n_instances = n_truths * (len(inst.contexts) if inst.contexts is not None else 1)
+        if n_instances > MAX_INSTANCES:
+            raise _FieldError("instances.contexts" if inst.contexts else "instances.count",
+                              f"{n_truths} truths x {len(inst.contexts or [1])} contexts = {n_instances:,} instances, "
+                              f"more than the {MAX_INSTANCES:,} a study may have")
         if isinstance(self.probes.schedule, list):
             bad = [p for p in self.probes.schedule if len(p) != task.probe_dim]
             if bad:
@@ -311,41 +328,6 @@ def parse_config(data: dict) -> StudyConfig:
         raise ConfigError(_one_line(f"invalid config: {type(exc).__name__}: {exc}")) from None
 
 
-#: Most YAML aliases a config may hold (a config needs none; anchors for repeated lists are fine).
-MAX_YAML_ALIASES = 64
-
-
-class _UniqueKeyLoader(yaml.SafeLoader):
-    """Safe YAML loader that refuses a key given twice (YAML would keep the last silently)."""
-
-
-def _construct_mapping(loader: _UniqueKeyLoader, node: yaml.MappingNode, deep: bool = False) -> dict:
-    loader.flatten_mapping(node)
-    seen: dict[Any, Any] = {}
-    for key_node, _ in node.value:
-        key = loader.construct_object(key_node, deep=deep)
-        try:
-            duplicate = key in seen
-        except TypeError:  # unhashable key: let the base constructor report it
-            break
-        if duplicate:
-            raise yaml.constructor.ConstructorError(
-                None, None, f"duplicate key {key!r} (first at line {seen[key].start_mark.line + 1})", key_node.start_mark
-            )
-        seen[key] = key_node
-    return loader.construct_mapping(node, deep=deep)
-
-
-_UniqueKeyLoader.add_constructor(yaml.resolver.BaseResolver.DEFAULT_MAPPING_TAG, _construct_mapping)
-
-
-def _yaml_error(path: Path, exc: yaml.YAMLError) -> str:
-    mark = getattr(exc, "problem_mark", None) or getattr(exc, "context_mark", None)
-    where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark is not None else ""
-    problem = getattr(exc, "problem", None) or getattr(exc, "context", None) or str(exc).splitlines()[0]
-    return _one_line(f"{path}: not valid YAML{where}: {problem}")
-
-
 def load_config(path: str | Path) -> StudyConfig:
     """Load and validate a YAML study config.
 
@@ -361,25 +343,13 @@ def load_config(path: str | Path) -> StudyConfig:
     if not path.is_file():
         raise ConfigError(f"config file not found: {path}")
     try:
-        text = path.read_bytes().decode("utf-8")
-    except UnicodeDecodeError as exc:
-        raise ConfigError(f"{path}: not UTF-8 text (byte {exc.start}); a config is a YAML text file") from None
+        raw = path.read_bytes()
     except OSError as exc:
         raise ConfigError(_one_line(f"{path}: cannot read: {exc.strerror or exc}")) from None
     try:
-        # Bound the work on untrusted YAML before constructing anything: a few hundred bytes of
-        # nested aliases (a "billion laughs") expand to billions of nodes for any traversal.
-        aliases = sum(isinstance(event, yaml.AliasEvent) for event in yaml.parse(text, Loader=yaml.SafeLoader))
-        if aliases > MAX_YAML_ALIASES:
-            raise ConfigError(f"{path}: {aliases} YAML aliases (*name); a study config needs none, at most "
-                              f"{MAX_YAML_ALIASES} are accepted")
-        data = yaml.load(text, Loader=_UniqueKeyLoader)  # noqa: S506 - a SafeLoader subclass
-    except ConfigError:
-        raise
-    except yaml.YAMLError as exc:
-        raise ConfigError(_yaml_error(path, exc)) from None
-    except (ValueError, TypeError, RecursionError) as exc:  # e.g. unhashable keys, absurd nesting
-        raise ConfigError(_one_line(f"{path}: not a usable YAML mapping: {type(exc).__name__}: {exc}")) from None
+        data = load_yaml(raw, str(path))  # size, node and depth budgets; safe tags; unique keys
+    except YamlError as exc:
+        raise ConfigError(str(exc)) from None
     if data is None:
         data = {}
     if not isinstance(data, dict):

@@ -69,6 +69,10 @@ class ProbeBatch:
 
     def probes_frame(self) -> pd.DataFrame:
         """Long table ``instance_id, repeat, j, u.., y..`` of the successful episodes."""
+        return pd.DataFrame(self.probes_columns())
+
+    def probes_columns(self) -> dict[str, np.ndarray]:
+        """:meth:`probes_frame`'s columns."""
         ok = self.status == "ok"
         e, k = self.u[ok].shape[:2]
         frame = {
@@ -79,14 +83,18 @@ class ProbeBatch:
         for base, values in (("u", self.u[ok]), ("y", self.y[ok])):
             for i, name in enumerate(component_names(base, values.shape[2])):
                 frame[name] = values[..., i].ravel().astype(float)
-        return pd.DataFrame(frame)
+        return frame
 
 
 def instance_arrays(instances: pd.DataFrame, model: Any) -> tuple[np.ndarray, np.ndarray]:
     """Truths ``[I, d]`` and contexts ``[I, c]`` of an instance table."""
-    truths = instances[[f"true_{n}" for n in model.latent_names]].to_numpy(float).reshape(len(instances), -1)
-    context = instances[[f"ctx_{n}" for n in model.context_names]].to_numpy(float).reshape(len(instances), -1)
-    return truths, context
+    def matrix(names: list[str]) -> np.ndarray:
+        # Column by column: selecting several columns builds a DataFrame (~10 ms a unit).
+        if not names:
+            return np.empty((len(instances), 0))
+        return np.column_stack([instances[name].to_numpy(float) for name in names]).reshape(len(instances), -1)
+
+    return matrix([f"true_{n}" for n in model.latent_names]), matrix([f"ctx_{n}" for n in model.context_names])
 
 
 def rollout(
@@ -108,7 +116,7 @@ def rollout(
     p, m = model.probe_dim, model.observation_dim
     truths, contexts = instance_arrays(instances, model)
     random_schedule = isinstance(schedule, str) and schedule == "random"
-    if not random_schedule and getattr(simulator, "parallel_queries", False) and hasattr(simulator, "probe_query_key"):
+    if not random_schedule and simulator.parallel_queries:
         # A fixed schedule taps the same positions in every episode: run those engine queries in threads first.
         simulator.prefetch([simulator.probe_query_key(theta, np.atleast_1d(np.asarray(schedule[j], dtype=float)))
                             for theta in truths for j in range(budget)])
@@ -284,6 +292,7 @@ def commit(
     cache: dict | None = None,
     plateau: str = "prefix",
     columns: Sequence[str] | None = None,
+    as_columns: bool = False,
 ) -> pd.DataFrame:
     """Commit once per episode and budget, and score the commit against ground truth.
 
@@ -305,6 +314,8 @@ def commit(
             paper) or ``hull``.
         columns: Build only these columns, in this order (None: all). A margin search reads
             four columns of dozens of tables; the result equals ``table[list(columns)]``.
+        as_columns: Return the table's columns (a dict of arrays, what the DataFrame is made
+            of) instead: a run's unit builds its Arrow table from them directly.
 
     Returns:
         The episode table (columns of ``store.schema.EPISODE_COLUMNS``).
@@ -391,8 +402,9 @@ def commit(
             raise ValueError(f"commit has no column {unknown[0]!r}; it makes {', '.join(makers)}")
         frames.append({name: makers[name]() for name in wanted})
     if not frames:
-        return pd.DataFrame()
-    return _interleave(frames, batch.n_episodes)
+        return {} if as_columns else pd.DataFrame()
+    out = _interleave_columns(frames, batch.n_episodes)
+    return out if as_columns else pd.DataFrame(out)
 
 
 def prune_retained_sets(cache: dict, later: Iterable[float | Mapping[int, float]]) -> None:
@@ -416,10 +428,10 @@ def prune_retained_sets(cache: dict, later: Iterable[float | Mapping[int, float]
             del cache[key]
 
 
-def _interleave(plans: list[dict[str, Any]], n_episodes: int) -> pd.DataFrame:
-    """One table from per-plan columns, in canonical order: episode by episode, each in plan
-    order (blind first, then budgets). Row ``e * P + p`` is episode ``e`` of plan ``p``;
-    built column by column (one DataFrame, no concat or sort)."""
+def _interleave_columns(plans: list[dict[str, Any]], n_episodes: int) -> dict[str, np.ndarray]:
+    """The columns of one table from per-plan columns, in canonical order: episode by episode,
+    each in plan order (blind first, then budgets). Row ``e * P + p`` is episode ``e`` of plan
+    ``p``; built column by column (no concat or sort)."""
     n_plans = len(plans)
     out: dict[str, Any] = {}
     for name in plans[0]:
@@ -430,7 +442,7 @@ def _interleave(plans: list[dict[str, Any]], n_episodes: int) -> pd.DataFrame:
         for p, part in enumerate(parts):
             column[p::n_plans] = part
         out[name] = column
-    return pd.DataFrame(out)
+    return out
 
 
 def _execute(simulator, batch: ProbeBatch, action: np.ndarray, index: np.ndarray, n_actions: int,
@@ -451,7 +463,7 @@ def _execute(simulator, batch: ProbeBatch, action: np.ndarray, index: np.ndarray
     inverse = np.asarray(inverse).reshape(-1)
     values = np.empty(len(unique))
     errors: dict[int, str] = {}
-    if getattr(simulator, "parallel_queries", False) and hasattr(simulator, "execute_query_key"):
+    if simulator.parallel_queries:
         # Every distinct action's engine query is needed below: run them in engine threads first.
         simulator.prefetch([simulator.execute_query_key(batch.truths[e], action[e], None if context is None else context[e])
                             for key, e in zip(unique.tolist(), first) if key not in outcomes])
@@ -476,8 +488,13 @@ def _execute(simulator, batch: ProbeBatch, action: np.ndarray, index: np.ndarray
 
 def failed_episode_rows(batch: ProbeBatch, variant: str) -> pd.DataFrame:
     """Episode rows for trajectories whose rollout failed (kept, counted, never scored)."""
+    return pd.DataFrame(failed_episode_columns(batch, variant))
+
+
+def failed_episode_columns(batch: ProbeBatch, variant: str) -> dict[str, Any]:
+    """:func:`failed_episode_rows`' columns."""
     bad = np.flatnonzero(batch.status != "ok")
-    return pd.DataFrame(
+    return (
         {
             "instance_id": batch.instance_id[bad].astype(str),
             "repeat": batch.repeat[bad].astype(np.int64),

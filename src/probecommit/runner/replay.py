@@ -33,6 +33,7 @@ from probecommit.runner.inference import (
 )
 from probecommit.store.probes import validate_probes
 from probecommit.store.rundir import RunDir
+from probecommit.store.yamlsafe import load_yaml
 from probecommit.store.schema import cache_frame, cache_records, component_names
 
 import yaml
@@ -119,7 +120,7 @@ def load_run(run_dir: str | Path) -> LoadedRun:
     changed = run.verify_digests()
     if changed:
         raise run.altered(changed)
-    config = parse_config(yaml.safe_load(run.config_text()))
+    config = parse_config(load_yaml(run.config_text(), str(run.path / "config.yaml")))
     return LoadedRun(run.path, config, run.read("instances"), manifest=manifest)
 
 
@@ -263,8 +264,7 @@ def _chunked_simulator(loaded: LoadedRun, config: StudyConfig, latent_names: Seq
     be told apart by instance or the simulator cannot forget them)."""
     sim = build_simulator(config)
     table = loaded.arrow_table("engine_cache")
-    if not (hasattr(sim, "forget_answers") and hasattr(sim, "answered_keys")
-            and StoredAnswers.usable(table, latent_names, truths)):
+    if not StoredAnswers.usable(table, latent_names, truths):
         sim.load_cache(cache_records(table.to_pandas(), latent_names))
         return sim, None
     answers = StoredAnswers(table, latent_names)

@@ -3,15 +3,18 @@
 A *unit* is a fixed group of ``unit_instances`` instances with all their repeats.
 Units are independent (every random draw is keyed by instance and repeat), so they
 run in any order, in local processes or on Ray, and a killed run resumes by
-skipping the units whose shards are already on disk. Results are bit-identical
+skipping the units already committed in a batch on disk. Results are bit-identical
 whatever the backend or the number of workers.
 """
 
 from __future__ import annotations
 
 import contextlib
+import functools
 import itertools
 import logging
+import json
+import math
 import os
 import time
 from dataclasses import dataclass
@@ -27,14 +30,14 @@ from probecommit.runner.inference import (
     blind_bayes_executor,
     build_trace,
     commit,
-    failed_episode_rows,
+    failed_episode_columns,
     instance_arrays,
     rollout,
     rollout_adaptive,
 )
 from probecommit.runner.instances import draw_instances
-from probecommit.store.rundir import RunDir
-from probecommit.store.schema import cache_frame
+from probecommit.store.rundir import RunDir, arrow_from_columns, arrow_table
+from probecommit.store.schema import EPISODE_COLUMNS, INSTANCE_COLUMNS, PROBE_COLUMNS, cache_columns
 from probecommit.errors import UnavailableError, UsageError
 
 logger = logging.getLogger(__name__)
@@ -59,16 +62,158 @@ def unit_names(n_instances: int, unit_instances: int) -> list[tuple[str, slice]]
     ]
 
 
-def compute_unit(config_data: dict, instances: pd.DataFrame, unit: str) -> tuple[str, dict[str, pd.DataFrame], dict[str, Any]]:
-    """Run one unit end to end in memory; returns ``(unit, tables, stats)``.
+@functools.lru_cache(maxsize=4)
+def _parsed(config_json: str) -> StudyConfig:
+    """The validated config of a unit's config data, validated once per process (every unit of a
+    study sends the same data; validating it cost about 5 ms a unit)."""
+    return parse_config(json.loads(config_json))
+
+
+def compute_unit(config_data: dict, instances: pd.DataFrame, unit: str) -> tuple[str, dict[str, Any], dict[str, Any]]:
+    """Run one unit end to end in memory; returns ``(unit, tables, stats)``, the tables as
+    the Arrow tables the run stores (converted here, in the worker, so the driver that
+    writes them converts nothing).
 
     Top-level, argument-only and free of disk writes, so process pools and Ray
     workers (on any node, with no shared filesystem) can run it; only the driver
     writes the run directory.
     """
     start = time.perf_counter()
-    config = parse_config(config_data)
+    config = _parsed(json.dumps(config_data, sort_keys=True))
     model = build.build_model(config)
+    batch, columns, simulator = _episodes(config, model, instances)
+    n_rows = len(next(iter(columns.values()))) if columns else 0
+    if np.any(batch.status != "ok"):  # rare: through pandas, as the rows were always joined
+        failed = pd.DataFrame(failed_episode_columns(batch, model.variant))
+        frame = pd.concat([pd.DataFrame(columns), failed], ignore_index=True) if columns else failed
+        episodes = arrow_table(frame, EPISODE_COLUMNS)
+        failed_rows = int((frame["status"] != "ok").sum())
+    else:
+        episodes = arrow_from_columns(columns, n_rows, EPISODE_COLUMNS)
+        failed_rows = int(np.sum(columns["status"] != "ok")) if columns else 0
+    stats = {
+        "unit": unit,
+        "engine_calls": dict(simulator.engine_calls),
+        "engine_s": simulator.engine_seconds,
+        "wall_s": time.perf_counter() - start,
+        "pid": os.getpid(),
+        "episodes": int(batch.n_episodes),
+        "failed_trajectories": int(np.sum(batch.status != "ok")),
+        "failed_rows": failed_rows,
+    }
+    probes = batch.probes_columns()
+    cache = cache_columns(simulator.cache_records(), model.latent_names)
+    tables = {
+        "instances": arrow_table(instances.reset_index(drop=True), INSTANCE_COLUMNS),
+        "probes": arrow_from_columns(probes, len(probes["instance_id"]), PROBE_COLUMNS),
+        "engine_cache": arrow_from_columns(cache, len(cache["engine"])),
+        "episodes": episodes,
+    }
+    return unit, tables, stats
+
+
+#: Episodes computed in one batch when several small units go together (:func:`compute_units`),
+#: at 1024 particles (fewer at more particles: a group holds no more belief memory than 256
+#: episodes of 1024 particles, and a unit larger than that is computed alone, as before);
+#: ``$PROBECOMMIT_GROUP_EPISODES`` overrides it (1: every unit alone).
+GROUP_EPISODES = int(os.environ.get("PROBECOMMIT_GROUP_EPISODES", "256"))
+GROUP_PARTICLES = 1024
+
+
+def compute_units(config_data: dict, instances: pd.DataFrame, units: list[tuple[str, int]]) -> list[tuple]:
+    """Several units computed as one batch of episodes and returned unit by unit: the
+    ``(unit, tables, stats)`` of :func:`compute_unit` for each, with identical tables.
+
+    A unit of a few episodes spends most of its time on per-call overheads (a filter update
+    of 16 episodes costs nearly what one of 256 costs), so consecutive small units are
+    computed together and split afterwards; the unit stays the grain of resumption. Exact
+    because an episode never depends on its batch (``tests/runner/test_batch_independence.py``),
+    rows come in instance order (each unit's rows a contiguous slice) and, with every truth
+    distinct, each engine answer belongs to one unit. Otherwise (a truth shared by two
+    instances, or a failed rollout) the units are computed one by one. The group's engine
+    calls and times are recorded on its first unit (the run's manifest sums them).
+
+    Args:
+        config_data: The study config (JSON data).
+        instances: The units' instances, in unit order.
+        units: ``(name, number of instances)`` of each unit, in order.
+    """
+    one_by_one = functools.partial(_units_one_by_one, config_data, instances, units)
+    if len(units) == 1:
+        return one_by_one()
+    start = time.perf_counter()
+    config = _parsed(json.dumps(config_data, sort_keys=True))
+    model = build.build_model(config)
+    truths, _ = instance_arrays(instances, model)
+    owner: dict[tuple[float, ...], int] = {}  # each truth's unit
+    at = 0
+    for u, (_, n) in enumerate(units):
+        for theta in truths[at:at + n]:
+            owner.setdefault(tuple(theta.astype(float).tolist()), u)
+        at += n
+    if len(owner) < len(truths):  # a truth shared by two instances: whose engine answer is it?
+        return one_by_one()
+    batch, columns, simulator = _episodes(config, model, instances)
+    if np.any(batch.status != "ok"):  # failed rollouts: their rows are joined unit by unit
+        return one_by_one()
+    records = simulator.cache_records()
+    by_unit: list[list[dict]] = [[] for _ in units]
+    for record in records:
+        u = owner.get(tuple(record["theta"]))
+        if u is None:  # an answer keyed otherwise than by an instance's truth: no owner to give it
+            return one_by_one()
+        by_unit[u].append(record)
+    n_rows = len(next(iter(columns.values()))) if columns else 0
+    per_episode = n_rows // max(batch.n_episodes, 1)
+    budget = batch.u.shape[1]
+    probes = batch.probes_columns()
+    # Each table built once for the group and sliced per unit (a slice shares the group's buffers;
+    # its types and pandas metadata are those a unit's own table gets: tested on the final tables).
+    whole = {"instances": arrow_table(instances.reset_index(drop=True), INSTANCE_COLUMNS),
+             "probes": arrow_from_columns(probes, batch.n_episodes * budget, PROBE_COLUMNS),
+             "episodes": arrow_from_columns(columns, n_rows, EPISODE_COLUMNS)}
+    out, first_episode, first_instance = [], 0, 0
+    for u, (name, n) in enumerate(units):
+        episodes = n * config.repeats
+        rows = slice(first_episode * per_episode, (first_episode + episodes) * per_episode)
+        taps = slice(first_episode * budget, (first_episode + episodes) * budget)
+        unit_columns = {"status": columns["status"][rows]} if columns else {}
+        cache = cache_columns(by_unit[u], model.latent_names)
+        lead = u == 0
+        stats = {
+            "unit": name,
+            "engine_calls": dict(simulator.engine_calls) if lead else {},
+            "engine_s": simulator.engine_seconds if lead else 0.0,
+            "wall_s": time.perf_counter() - start if lead else 0.0,
+            "pid": os.getpid(),
+            "episodes": episodes,
+            "failed_trajectories": 0,
+            "failed_rows": int(np.sum(unit_columns["status"] != "ok")) if unit_columns else 0,
+            "group": [unit for unit, _ in units] if lead else units[0][0],
+        }
+        tables = {
+            "instances": whole["instances"].slice(first_instance, n),
+            "probes": whole["probes"].slice(taps.start, taps.stop - taps.start),
+            "engine_cache": arrow_from_columns(cache, len(cache["engine"])),
+            "episodes": whole["episodes"].slice(rows.start, rows.stop - rows.start),
+        }
+        out.append((name, tables, stats))
+        first_episode += episodes
+        first_instance += n
+    return out
+
+
+def _units_one_by_one(config_data: dict, instances: pd.DataFrame, units: list[tuple[str, int]]) -> list[tuple]:
+    out, at = [], 0
+    for name, n in units:
+        out.append(compute_unit(config_data, instances.iloc[at:at + n], name))
+        at += n
+    return out
+
+
+def _episodes(config: StudyConfig, model: Any, instances: pd.DataFrame) -> tuple[Any, dict[str, Any], Any]:
+    """Rollouts, beliefs and commits of ``instances``: the probe batch, the episode table's
+    columns (``commit(..., as_columns=True)``; empty when every rollout failed) and the simulator."""
     pfilter = build.build_filter(model, config.belief)
     simulator = build.build_simulator(config)
     schedule = config.probes.schedule
@@ -84,47 +229,22 @@ def compute_unit(config_data: dict, instances: pd.DataFrame, unit: str) -> tuple
                     simulator.execute(theta, aim, ctx if len(ctx) else None)
                 except Exception:  # noqa: BLE001 - recorded when an episode commits there
                     pass
-    episodes = pd.DataFrame()
+    columns: dict[str, Any] = {}
     if np.any(batch.status == "ok"):  # a unit whose every trajectory failed has nothing to infer
         trace = build_trace(pfilter, batch, config.seed, config.probes.commit_budgets, keep_weights=True)
         blind = blind_bayes_executor(model, config.seed, config.blind_prior_samples) if "blind_bayes" in config.methods else None
-        episodes = commit(trace, model, simulator, thresholds=config.belief.nu, methods=config.methods, blind=blind)
-    failed = failed_episode_rows(batch, model.variant)
-    if len(failed):
-        episodes = pd.concat([episodes, failed], ignore_index=True) if len(episodes) else failed
-    stats = {
-        "unit": unit,
-        "engine_calls": dict(simulator.engine_calls),
-        "engine_s": simulator.engine_seconds,
-        "wall_s": time.perf_counter() - start,
-        "pid": os.getpid(),
-        "episodes": int(batch.n_episodes),
-        "failed_trajectories": int(np.sum(batch.status != "ok")),
-        "failed_rows": int(np.sum(episodes["status"] != "ok")) if len(episodes) else 0,
-    }
-    tables = {
-        "instances": instances.reset_index(drop=True),
-        "probes": batch.probes_frame(),
-        "engine_cache": cache_frame(simulator.cache_records(), model.latent_names),
-        "episodes": episodes,
-    }
-    return unit, tables, stats
+        columns = commit(trace, model, simulator, thresholds=config.belief.nu, methods=config.methods, blind=blind,
+                         as_columns=True)
+    return batch, columns, simulator
 
 
-def run_unit(config_data: dict, instances: pd.DataFrame, unit: str, out: str) -> dict[str, Any]:
-    """Run one unit and write its shards into the run directory ``out``; returns its stats."""
-    unit, tables, stats = compute_unit(config_data, instances, unit)
-    RunDir(out).write_unit(unit, tables, stats)
-    return stats
-
-
-Job = tuple[dict, pd.DataFrame, str]
-Result = tuple[str, dict[str, pd.DataFrame], dict[str, Any]]
+Job = tuple[dict, pd.DataFrame, list[tuple[str, int]]]
+Result = list[tuple[str, dict[str, Any], dict[str, Any]]]
 
 
 def _run_serial(jobs: list[Job]) -> Iterator[Result]:
     for job in jobs:
-        yield compute_unit(*job)
+        yield compute_units(*job)
 
 
 def _run_threads(jobs: list[Job], threads: int) -> Iterator[Result]:
@@ -138,11 +258,11 @@ def _run_threads(jobs: list[Job], threads: int) -> Iterator[Result]:
 
     queue = iter(jobs)
     with ThreadPoolExecutor(max_workers=threads, thread_name_prefix="probecommit-unit") as pool:
-        pending = {pool.submit(compute_unit, *job) for job in itertools.islice(queue, 2 * threads)}
+        pending = {pool.submit(compute_units, *job) for job in itertools.islice(queue, 2 * threads)}
         try:
             while pending:
                 done, pending = wait(pending, return_when=FIRST_COMPLETED)
-                pending |= {pool.submit(compute_unit, *job) for job in itertools.islice(queue, len(done))}
+                pending |= {pool.submit(compute_units, *job) for job in itertools.islice(queue, len(done))}
                 for fut in done:
                     yield fut.result()
         finally:
@@ -159,7 +279,7 @@ def unit_threads(config: StudyConfig, threads: int | None = None) -> int:
     wanted = engine_threads() if threads is None else int(threads)
     if wanted < 1:
         raise UsageError(f"threads must be >= 1, got {threads!r}")
-    if wanted == 1 or not getattr(build.simulator_class(config), "thread_safe", False):
+    if wanted == 1 or not build.simulator_class(config).thread_safe:
         return 1
     return wanted
 
@@ -200,7 +320,7 @@ def _run_processes(jobs: list[Job], workers: int) -> Iterator[Result]:
     threads = max(1, engine_threads() // n_workers)  # the processes share the CPUs the threads would use
     with ProcessPoolExecutor(max_workers=n_workers, mp_context=mp.get_context("spawn"),
                              initializer=_init_worker, initargs=(os.getpid(), 0.5, threads)) as pool:
-        pending = {pool.submit(compute_unit, *job) for job in jobs}
+        pending = {pool.submit(compute_units, *job) for job in jobs}
         try:
             while pending:
                 done, pending = wait(pending, return_when=FIRST_COMPLETED)
@@ -222,16 +342,31 @@ def package_runtime_env() -> dict[str, Any]:
     return {"py_modules": [str(package)], "excludes": ["__pycache__", "*.pyc"]}
 
 
+#: Seconds ``--ray local`` may take to start its instance, and ``--ray ADDRESS`` to connect.
+RAY_START_TIMEOUT_S = float(os.environ.get("PROBECOMMIT_RAY_TIMEOUT_S", "60"))
+#: Seconds a ``--ray host:port`` has to accept a connection and answer as a gRPC (HTTP/2) server.
+RAY_PROBE_TIMEOUT_S = 3.0
+
+
 def ray_init_kwargs(address: str, workers: int) -> dict[str, Any]:
-    """``ray.init`` arguments for ``--ray``: ``local`` starts an instance, else connect and ship the package."""
+    """``ray.init`` arguments for ``--ray``: ``local`` always starts an instance of its own
+    (``address="local"``: never one another process recorded), else connect and ship the package."""
     common = dict(include_dashboard=False, log_to_driver=False, configure_logging=False)
     if address == "local":
-        return dict(num_cpus=workers if workers > 1 else None, **common)
+        return dict(address="local", num_cpus=workers if workers > 1 else None, **common)
     return dict(address=address, runtime_env=package_runtime_env(), **common)
 
 
-def check_reachable(address: str, timeout_s: float = 3.0) -> None:
-    """Fail within seconds when nothing listens at a Ray ``host:port`` (Ray itself retries for minutes).
+#: The HTTP/2 client preface and an empty SETTINGS frame: what a gRPC client (Ray's) sends first.
+_HTTP2_PREFACE = b"PRI * HTTP/2.0\r\n\r\nSM\r\n\r\n" + b"\x00\x00\x00\x04\x00\x00\x00\x00\x00"
+
+
+def check_reachable(address: str, timeout_s: float = RAY_PROBE_TIMEOUT_S) -> None:
+    """Fail within seconds when no Ray head listens at ``host:port`` (Ray itself retries for minutes).
+
+    A TCP connection is not enough: a port that accepts but is not Ray (a web server, a
+    silent socket) made ``ray.init`` hang for minutes. Ray's head is a gRPC server, so it
+    must answer the HTTP/2 preface with a SETTINGS frame within ``timeout_s``.
 
     Raises:
         RuntimeError: one line naming the address.
@@ -242,18 +377,83 @@ def check_reachable(address: str, timeout_s: float = 3.0) -> None:
     if not host or not port.isdigit():
         raise UnavailableError(f"--ray expects 'local', 'auto' or host:port, got {address!r}")
     try:
-        with socket.create_connection((host, int(port)), timeout=timeout_s):
-            return
+        with socket.create_connection((host, int(port)), timeout=timeout_s) as conn:
+            conn.settimeout(timeout_s)
+            conn.sendall(_HTTP2_PREFACE)
+            answer = b""
+            while len(answer) < 9:  # a frame header: length (3), type (1), flags (1), stream (4)
+                more = conn.recv(9 - len(answer))
+                if not more:
+                    break
+                answer += more
+    except socket.timeout:
+        raise UnavailableError(f"{address} accepted a connection but did not answer as a Ray head (no gRPC reply within "
+                           f"{timeout_s:g} s); check the address (the head's GCS port, 6379 by default)") from None
     except OSError as exc:
         raise UnavailableError(f"cannot reach the Ray cluster at {address}: {exc.strerror or exc}") from None
+    if len(answer) < 9 or answer[3] != 0x4:
+        raise UnavailableError(f"{address} is not a Ray head (it did not answer as a gRPC server); check the address "
+                           "(the head's GCS port, 6379 by default)")
+
+
+class _RayStartExpired(BaseException):
+    """Raised in the main thread by the alarm of :func:`_init_within` (a BaseException, so no
+    ``except Exception`` inside Ray swallows it)."""
+
+
+def _init_within(ray: Any, kwargs: dict[str, Any], address: str, timeout_s: float) -> None:
+    """``ray.init(**kwargs)``, given up after ``timeout_s`` with one line (it has no timeout of its own).
+
+    Ray must start in the thread that keeps running: the processes it starts die with the
+    thread that started them (Linux's parent-death signal is per thread), so a helper thread
+    would kill the instance when it ends. The timeout is an interval timer whose signal raises
+    in the main thread; called from another thread, Ray starts without one.
+    """
+    import signal
+    import threading
+
+    def expired(signum, frame):  # noqa: ARG001 - a signal handler's signature
+        raise _RayStartExpired
+
+    timed = threading.current_thread() is threading.main_thread() and hasattr(signal, "setitimer")
+    if timed:
+        previous = signal.signal(signal.SIGALRM, expired)
+        signal.setitimer(signal.ITIMER_REAL, timeout_s)
+    try:
+        ray.init(**kwargs)
+    except _RayStartExpired:
+        with contextlib.suppress(Exception):
+            ray.shutdown()
+        what = "start a local Ray instance" if address == "local" else f"connect to the Ray cluster at {address}"
+        raise UnavailableError(f"could not {what} within {timeout_s:g} s (set PROBECOMMIT_RAY_TIMEOUT_S to wait longer)"
+                           ) from None
+    except (ConnectionError, TimeoutError) as exc:
+        raise UnavailableError(f"cannot reach the Ray cluster at {address!r}: {str(exc).splitlines()[0]}") from None
+    finally:
+        if timed:
+            signal.setitimer(signal.ITIMER_REAL, 0)
+            signal.signal(signal.SIGALRM, previous)
 
 
 @contextlib.contextmanager
-def ray_session(address: str, workers: int, timing: dict[str, float]) -> Iterator[Any]:
-    """Connect to (or, for ``"local"``, start) Ray; shut down on exit what was started here.
+def _without_recorded_address(address: str) -> Iterator[None]:
+    """For ``local``: no ``RAY_ADDRESS`` while Ray starts, so nothing steers it to another cluster."""
+    saved = os.environ.pop("RAY_ADDRESS", None) if address == "local" else None
+    try:
+        yield
+    finally:
+        if saved is not None:
+            os.environ["RAY_ADDRESS"] = saved
+
+
+@contextlib.contextmanager
+def ray_session(address: str, workers: int, timing: dict[str, float],
+                timeout_s: float | None = None) -> Iterator[Any]:
+    """Connect to (or, for ``"local"``, start a fresh) Ray; shut down on exit what was started here.
 
     Raises:
-        RuntimeError: the cluster cannot be reached (one line).
+        RuntimeError: the cluster cannot be reached or Ray does not start within ``timeout_s``
+            (default :data:`RAY_START_TIMEOUT_S`), in one line.
     """
     from probecommit.engines import require
 
@@ -263,10 +463,9 @@ def ray_session(address: str, workers: int, timing: dict[str, float]) -> Iterato
     started_here = not ray.is_initialized()
     t0 = time.perf_counter()
     if started_here:
-        try:
-            ray.init(**ray_init_kwargs(address, workers))
-        except (ConnectionError, TimeoutError) as exc:
-            raise UnavailableError(f"cannot reach the Ray cluster at {address!r}: {str(exc).splitlines()[0]}") from None
+        with _without_recorded_address(address):
+            _init_within(ray, ray_init_kwargs(address, workers), address,
+                         RAY_START_TIMEOUT_S if timeout_s is None else timeout_s)
     timing["backend_start_s"] = time.perf_counter() - t0
     try:
         yield ray
@@ -277,18 +476,26 @@ def ray_session(address: str, workers: int, timing: dict[str, float]) -> Iterato
 
 def _run_ray(jobs: list[Job], ray: Any) -> Iterator[Result]:
     # Tasks return their tables to the driver: no shared filesystem is needed.
-    remote = ray.remote(max_retries=2)(compute_unit)
+    remote = ray.remote(max_retries=2)(compute_units)
     pending = [remote.remote(*job) for job in jobs]
     while pending:
         done, pending = ray.wait(pending, num_returns=1)
         yield ray.get(done[0])
 
 
-def preflight(config: StudyConfig) -> pd.DataFrame:
+#: Most episode rows a run may produce (a larger one is a config error, not a study).
+MAX_EPISODE_ROWS = 50_000_000
+#: Bytes an episode row takes in memory when the final table is merged (measured order, rounded up).
+EPISODE_ROW_BYTES = 400
+
+
+def preflight(config: StudyConfig, concurrency: int = 1) -> pd.DataFrame:
     """Everything that can fail on a bad config, before anything is written.
 
     Builds the model, filter and simulator (which imports the engine) and draws the
-    instances; returns the instances.
+    instances; returns the instances. The memory estimate is of the whole run: the units
+    held at once at the chosen ``concurrency``, and the final tables, read against the
+    host's and the container's memory; the output's size is bounded.
     """
     model = build.build_model(config)
     build.build_filter(model, config.belief)
@@ -299,11 +506,36 @@ def preflight(config: StudyConfig) -> pd.DataFrame:
     episodes = config.unit_instances * config.repeats
     d, budgets = len(model.latent_names), len(config.probes.commit_budgets) + 2
     per_particle = 8.0 * ((d + 2) * budgets + (0 if model.binary_loss else len(model.action_grid)))
-    check_fits(episodes * config.belief.particles * per_particle,
-               f"one work unit ({episodes} episodes x {config.belief.particles} particles)",
-               "belief.particles, repeats or unit_instances")
+    concurrency = max(1, int(concurrency))
+    check_fits(concurrency * episodes * config.belief.particles * per_particle,
+               f"{concurrency} work unit(s) at once ({episodes} episodes x {config.belief.particles} particles each)",
+               "belief.particles, repeats, unit_instances or the number of workers/threads")
+    rows = output_rows(config)
+    if rows > MAX_EPISODE_ROWS:
+        raise MemoryError(f"the run would write about {rows:,} episode rows, more than the {MAX_EPISODE_ROWS:,} a run "
+                          "may hold; reduce instances (count, truths x contexts), repeats, budgets or methods")
+    check_fits(rows * EPISODE_ROW_BYTES, f"the run's final tables ({rows:,} episode rows)",
+               "instances, repeats, budgets or methods")
     build.build_simulator(config)
     return draw_instances(config, model)
+
+
+def output_rows(config: StudyConfig) -> int:
+    """An upper bound on the episode rows of a run: instances x repeats x (budgets + 1) x methods."""
+    inst = config.instances
+    n = (len(inst.truths) if inst.truths is not None else inst.count) * (len(inst.contexts) if inst.contexts else 1)
+    return n * config.repeats * (len(config.probes.commit_budgets) + 1) * len(config.methods)
+
+
+def run_concurrency(config: StudyConfig, workers: int = 1, ray_address: str | None = None,
+                    threads: int | None = None) -> int:
+    """Work units held in memory at once on this machine for the chosen backend."""
+    if ray_address and ray_address != "local":
+        return 1  # units run on the cluster's nodes; the driver holds one result at a time
+    if workers > 1 or ray_address == "local":
+        return max(1, workers)
+    n_threads = unit_threads(config, threads)
+    return 2 * n_threads if n_threads > 1 else 1  # _run_threads keeps 2 x threads units in flight
 
 
 def run_study(
@@ -334,7 +566,8 @@ def run_study(
             at most 4, or ``$PROBECOMMIT_ENGINE_THREADS``; 1: one after the other).
     """
     start = time.perf_counter()
-    instances = preflight(config)  # a bad config fails here: no directory is created
+    # A bad config fails here, the memory of the whole run at its concurrency too: no directory is created.
+    instances = preflight(config, run_concurrency(config, workers, ray_address, threads))
     run = RunDir(out)
     config_yaml = dump_config(config)
     run.check_writable(config_yaml)  # an incompatible directory too
@@ -360,21 +593,42 @@ def run_study(
         return _run_units(config, run, instances, workers, ray, ray_address, timing, progress, start, threads)
 
 
+def _groups(config_data: dict, instances: pd.DataFrame, todo: list[tuple[str, slice]], repeats: int,
+            parallel: int, particles: int = GROUP_PARTICLES) -> list[Job]:
+    """The jobs: consecutive units to compute, in groups of about :data:`GROUP_EPISODES` episodes
+    (:func:`compute_units`), and with several workers or threads, at least two groups each."""
+    if not todo:
+        return []
+    per_unit = max(1, max(sl.stop - sl.start for _, sl in todo) * repeats)
+    size = max(1, (GROUP_EPISODES * GROUP_PARTICLES) // (per_unit * max(particles, GROUP_PARTICLES)))
+    if parallel > 1:  # enough groups to keep every worker busy
+        size = max(1, min(size, math.ceil(len(todo) / (2 * parallel))))
+    jobs = []
+    for first in range(0, len(todo), size):
+        group = todo[first:first + size]
+        rows = np.concatenate([np.arange(sl.start, sl.stop) for _, sl in group])
+        jobs.append((config_data, instances.iloc[rows], [(name, sl.stop - sl.start) for name, sl in group]))
+    return jobs
+
+
 def _run_units(config, run: RunDir, instances, workers, ray, ray_address, timing, progress, start,
                threads: int | None = None) -> StudyResult:
     units = unit_names(len(instances), config.unit_instances)
     config_data = config.model_dump(mode="json")
-    jobs = [(config_data, instances.iloc[sl], name) for name, sl in units if not run.unit_done(name)]
-    done = len(units) - len(jobs)
+    stored = run.done_units()  # refuses batches of other code: a run never mixes two builds
+    todo = [(name, sl) for name, sl in units if name not in stored]
+    done = len(units) - len(todo)
     if progress:
         progress(done, len(units))
+    n_threads = unit_threads(config, threads) if ray is None and workers <= 1 else 1
+    jobs = _groups(config_data, instances, todo, config.repeats, max(workers, n_threads), config.belief.particles)
     if ray is not None:
         results: Iterable[Result] = _run_ray(jobs, ray)
         backend = f"ray:{ray_address}"
     elif workers > 1 and len(jobs) > 1:
         results = _run_processes(jobs, workers)
         backend = f"processes:{min(workers, len(jobs))}"
-    elif len(jobs) > 1 and (n_threads := unit_threads(config, threads)) > 1:
+    elif len(jobs) > 1 and n_threads > 1:
         results = _run_threads(jobs, n_threads)
         backend = f"threads:{min(n_threads, len(jobs))}"
     else:
@@ -383,12 +637,19 @@ def _run_units(config, run: RunDir, instances, workers, ray, ray_address, timing
     logger.info("%s: %d of %d units to run (%d done before), backend %s, engine %s", run.path, len(jobs), len(units),
                 done, backend, config.simulator.engine)
     t_units = time.perf_counter()
-    for unit, tables, stats in results:
-        run.write_unit(unit, tables, stats)  # only the driver writes: one writer per file
-        logger.debug("unit %s written (%d rows of episodes)", unit, len(tables.get("episodes", ())))
-        done += 1
-        if progress:
-            progress(done, len(units))
+    try:
+        for group in results:
+            for unit, tables, stats in group:
+                run.add_unit(unit, tables, stats, commit=False)  # only the driver writes, a batch at a time
+                logger.debug("unit %s done (%d rows of episodes)", unit, len(tables.get("episodes", ())))
+            run.commit_if_due()  # a group's units go into one batch (its first unit holds the group's stats)
+            done += len(group)
+            if progress:
+                progress(done, len(units))
+    except Exception:
+        run.flush()  # the units finished before the error are kept for the resume
+        raise
+    run.flush()  # the last batch
     units_wall = time.perf_counter() - t_units
     stats = [run.unit_stats(name) for name, _ in units]
     calls: dict[str, int] = {}
@@ -413,7 +674,7 @@ def _run_units(config, run: RunDir, instances, workers, ray, ray_address, timing
             "episodes": int(sum(s["episodes"] for s in stats)),
             "failed_trajectories": int(sum(s["failed_trajectories"] for s in stats)),
             "failed_rows": int(sum(s["failed_rows"] for s in stats)),
-            "resumed_units": len(units) - len(jobs),
+            "resumed_units": len(units) - len(todo),
         },
     )
     return StudyResult(run.path, manifest, pd.read_parquet(run.table_path("episodes")))

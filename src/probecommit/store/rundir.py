@@ -9,13 +9,15 @@ Layout (the data contract users see)::
       probes.parquet       instance, repeat, j, probe u, observation y
       episodes.parquet     one row per (instance, repeat, budget, method)
       engine_cache.parquet every deterministic engine answer, so replays never re-run one
-      shards/              per-unit results (kept after completion; safe to delete then)
+      shards/              finished units, group-committed in batches (store/batches.py), each
+                           marked with the code that wrote it (kept after completion)
 
 Every file is written to a temporary name and renamed into place, so a killed run
 never leaves a half-written table; a directory without ``manifest.json`` is
-incomplete by definition. Within a unit the episodes shard is renamed into place
-last, so its presence marks the unit whole; the manifest is written after every
-final table. The final tables are in a canonical row order that does not depend
+incomplete by definition. Finished units are committed a batch at a time (one fsync
+per batch file and one of its directory), so a run resumes at batch granularity; every
+batch carries the code identity that wrote it and a run refuses to join batches of
+other code. The manifest is written after every final table. The final tables are in a canonical row order that does not depend
 on how instances were grouped into units, on the backend or on the worker count.
 A replay (one unit, nothing to resume) writes its final tables directly instead: the
 source's instances and probes copied, its episodes a chunk at a time
@@ -31,6 +33,7 @@ import json
 import os
 import subprocess
 import tempfile
+import time
 from pathlib import Path
 from typing import Any, BinaryIO, Iterator, Sequence
 
@@ -39,9 +42,11 @@ import pandas as pd
 import pyarrow as pa
 import pyarrow.compute as pc
 import pyarrow.parquet as pq
-import yaml
 
 from probecommit import __version__
+from probecommit.store.manifest_rules import ManifestError, read_manifest
+from probecommit.store.yamlsafe import YamlError, load_yaml
+from probecommit.store import batches
 from probecommit.store.schema import (EPISODE_COLUMNS, INSTANCE_COLUMNS, PROBE_COLUMNS, Column, float_matrix,
                                       vector_columns)
 from probecommit.errors import UserError
@@ -53,8 +58,6 @@ VERSION = "VERSION"
 CODE = "CODE"
 LOCK = "LOCK"
 TABLES = ("instances", "probes", "episodes", "engine_cache")
-#: Shard files of one unit, in the order they are written (episodes last marks it done).
-UNIT_FILES = ("instances.parquet", "probes.parquet", "engine_cache.parquet", "stats.json", "episodes.parquet")
 _SCHEMAS: dict[str, tuple[Column, ...]] = {
     "instances": INSTANCE_COLUMNS,
     "probes": PROBE_COLUMNS,
@@ -101,6 +104,36 @@ def atomic_write_bytes(path: Path, data: bytes) -> None:
         fh.write(data)
 
 
+def _fsync_dir(folder: Path) -> None:
+    """Make a rename in ``folder`` durable (POSIX: the directory entry is data of its own)."""
+    try:
+        fd = os.open(folder, os.O_RDONLY)
+    except OSError:  # pragma: no cover - a platform without directory descriptors
+        return
+    try:
+        os.fsync(fd)
+    except OSError:  # pragma: no cover - some filesystems refuse fsync on a directory
+        pass
+    finally:
+        os.close(fd)
+
+
+def merge_tables(tables: list[pa.Table]) -> pd.DataFrame:
+    """One table of several units' tables, in their order: their rows (the empty ones only when
+    every table is empty), as ``pd.concat`` of each converted alone gives them.
+
+    Tables of one schema (the usual case) are joined as Arrow tables and converted once; tables
+    whose columns differ (a unit whose every trajectory failed has only the rollout rows'
+    columns) are converted one by one and joined by pandas.
+    """
+    if not tables:
+        return pd.DataFrame()
+    nonempty = [t for t in tables if t.num_rows] or tables[:1]
+    if all(t.schema.equals(nonempty[0].schema) for t in nonempty[1:]):
+        return pa.concat_tables(nonempty).to_pandas()
+    return pd.concat([t.to_pandas() for t in nonempty], ignore_index=True)
+
+
 def _is_tmp(path: Path) -> bool:
     return path.name.startswith(".") and path.name.endswith(".tmp")
 
@@ -108,7 +141,11 @@ def _is_tmp(path: Path) -> bool:
 def arrow_table(frame: pd.DataFrame, columns: tuple[Column, ...] = ()) -> pa.Table:
     """``frame`` as the Arrow table a run file holds: columns named in ``columns`` get their schema type."""
     # One thread: for a long table pyarrow would start (and join) a thread pool per call.
-    table = pa.Table.from_pandas(frame, preserve_index=False, nthreads=1)
+    return _schema_typed(pa.Table.from_pandas(frame, preserve_index=False, nthreads=1), columns)
+
+
+def _schema_typed(table: pa.Table, columns: tuple[Column, ...]) -> pa.Table:
+    """``table`` with the columns named in ``columns`` cast to their schema type."""
     types = {c.name: c.type for c in columns}
     for c in columns:
         if c.vector:  # u_0, u_1, ... take the type of u
@@ -118,6 +155,45 @@ def arrow_table(frame: pd.DataFrame, columns: tuple[Column, ...] = ()) -> pa.Tab
         if target != table.schema:
             table = table.cast(target)
     return table
+
+
+#: pandas metadata of tables built by :func:`arrow_from_columns`, by column names and types.
+_PANDAS_METADATA: dict[tuple, dict[bytes, bytes] | None] = {}
+
+
+def arrow_from_columns(columns: dict[str, Any], n_rows: int, schema: tuple[Column, ...] = ()) -> pa.Table:
+    """The table ``arrow_table(pd.DataFrame(columns), schema)`` gives, built without a DataFrame.
+
+    ``columns`` maps names to 1-D NumPy arrays or lists of ``n_rows`` values, or to scalars
+    (broadcast). Converted as ``from_pandas`` converts them (NaN is null; strings are large
+    strings) and with the same pandas metadata (made once per column names and types from a
+    one-row frame), so the merge reads back the same frame; tested against ``arrow_table``.
+    A unit's tables are built this way: a DataFrame per table per unit cost more than the
+    unit's beliefs on a short study.
+    """
+    if not columns or not n_rows:  # pandas decides an empty column's type: ask it (cheap when empty)
+        return arrow_table(pd.DataFrame(columns), schema)
+    arrays = []
+    for value in columns.values():
+        if not isinstance(value, (list, np.ndarray)):  # a scalar
+            value = np.broadcast_to(np.asarray(value), (n_rows,))
+            if value.dtype.kind == "U":
+                value = value.astype(object)
+        if isinstance(value, np.ndarray) and value.dtype.kind == "U":  # strings: large, as pandas' str dtype gives
+            array = pa.array(value, type=pa.large_string())
+        else:
+            array = pa.array(value, from_pandas=True)
+            if pa.types.is_string(array.type):
+                array = array.cast(pa.large_string())
+        arrays.append(array)
+    names = list(columns)
+    key = tuple(zip(names, (a.type for a in arrays)))
+    if key not in _PANDAS_METADATA:
+        sample = pd.DataFrame({name: (value[:1] if isinstance(value, (list, np.ndarray)) else value)
+                               for name, value in columns.items()}, index=range(1))
+        _PANDAS_METADATA[key] = pa.Schema.from_pandas(sample, preserve_index=False).metadata
+    table = pa.Table.from_arrays(arrays, names=names).replace_schema_metadata(_PANDAS_METADATA[key])
+    return _schema_typed(table, schema)
 
 
 def atomic_write_parquet(path: Path, frame: pd.DataFrame, columns: tuple[Column, ...] = ()) -> pa.Table:
@@ -150,8 +226,9 @@ def _flatten(data: Any, prefix: str = "") -> dict[str, Any]:
 def config_difference(old_yaml: str, new_yaml: str) -> str:
     """The first differing config field, as ``field: old in the directory, new here``."""
     try:
-        old, new = _flatten(yaml.safe_load(old_yaml) or {}), _flatten(yaml.safe_load(new_yaml) or {})
-    except yaml.YAMLError:
+        old = _flatten(load_yaml(old_yaml, "config.yaml") or {})
+        new = _flatten(load_yaml(new_yaml, "the config") or {})
+    except YamlError:
         return "its config.yaml is not valid YAML"
     for key in list(new) + [k for k in old if k not in new]:
         if old.get(key, "<unset>") != new.get(key, "<unset>"):
@@ -207,16 +284,12 @@ def git_dirty() -> bool | None:
 def engine_versions() -> dict[str, str | None]:
     """Python's version and those of the engines and the data stack, as the manifest records them."""
     import platform
-    from importlib import metadata
+
+    from probecommit import _distribution_version
 
     out: dict[str, str | None] = {"python": platform.python_version()}
     for name in ("mujoco", "pybullet", "sapien", "ray", "numpy", "pandas", "pyarrow", "numba"):
-        try:
-            dist = metadata.distribution(name)
-        except metadata.PackageNotFoundError:
-            out[name] = None
-            continue
-        out[name] = _header_version(dist.read_text("METADATA") or dist.read_text("PKG-INFO") or "") or dist.version
+        out[name] = _distribution_version(name)
     return out
 
 
@@ -237,11 +310,22 @@ class RunDir:
     #: Shard tables this object wrote are kept for the merge up to this many bytes in all
     #: (the merge then converts them instead of reading and decoding the files again).
     KEEP_WRITTEN_BYTES = 64 * 2**20
+    #: A batch is committed at this many units, bytes of tables or seconds since the last one
+    #: (a kill loses at most that much work); ``$PROBECOMMIT_BATCH_UNITS`` and
+    #: ``$PROBECOMMIT_BATCH_SECONDS`` override the first and the last.
+    batch_units = int(os.environ.get("PROBECOMMIT_BATCH_UNITS", "256"))
+    batch_bytes = 64 * 2**20
+    batch_seconds = float(os.environ.get("PROBECOMMIT_BATCH_SECONDS", "2"))
 
     def __init__(self, path: str | Path) -> None:
         self.path = Path(path)
-        self._written: dict[Path, pa.Table] = {}
-        self._written_bytes = 0
+        self._kept: dict[str, dict[str, pa.Table]] = {}
+        self._kept_bytes = 0
+        self._pending: list[tuple[str, dict[str, pa.Table], dict[str, Any]]] = []
+        self._pending_bytes = 0
+        self._last_commit = time.monotonic()
+        self._batches: dict[str, Path] = {}
+        self._stats: dict[str, dict[str, Any]] = {}
 
     @property
     def shards(self) -> Path:
@@ -288,6 +372,7 @@ class RunDir:
                     f"{self.path} was written by probecommit {written_by}, this is {__version__}; "
                     f"refusing to mix results from two versions ({hint})"
                 )
+        self._check_batch_code()
         existing = (self.path / CONFIG).read_text()
         if existing != config_yaml:
             raise RunDirError(
@@ -385,63 +470,133 @@ class RunDir:
     def config_text(self) -> str:
         return (self.path / CONFIG).read_text()
 
-    def shard_path(self, unit: str, table: str) -> Path:
-        return self.shards / f"{unit}.{table}.parquet"
+    # ---- group-committed shard batches (see store/batches.py) -------------------------------
+
+    def _batch_paths(self) -> list[Path]:
+        if not self.shards.is_dir():
+            return []
+        found = [(batches.batch_index(p), p) for p in self.shards.iterdir()]
+        return [p for n, p in sorted((n, p) for n, p in found if n is not None)]
+
+    def done_units(self) -> set[str]:
+        """The units stored in this directory's batches (call with the lock held).
+
+        Every batch is read and checked: one that is not a whole, unaltered batch is deleted
+        (its units run again); one written by other code than this is refused, as are
+        per-unit shards of the earlier layout, which record no code identity. So a resumed
+        or rebuilt run never joins results of two builds.
+
+        Raises:
+            RunDirError: one line naming both code identities.
+        """
+        self._batches, self._stats = {}, {}
+        legacy = sorted(p.name for p in self.shards.glob("unit-*")) if self.shards.is_dir() else []
+        if legacy:
+            raise self._other_code(legacy[0], "unrecorded (a shard of the earlier per-unit layout)")
+        for path in self._batch_paths():
+            try:
+                header, _ = batches.read(path)
+            except (batches.BatchError, OSError, pa.ArrowException, KeyError, TypeError, ValueError):
+                path.unlink(missing_ok=True)  # cut short or altered: its units run again
+                continue
+            if header.get("code") != code_identity():
+                raise self._other_code(path.name, str(header.get("code")))
+            for entry in header["units"]:
+                if entry["unit"] not in self._batches:
+                    self._batches[entry["unit"]] = path
+                    self._stats[entry["unit"]] = entry["stats"]
+        code = self.shards / CODE
+        if self.shards.is_dir() and (not code.is_file() or code.read_text().strip() != code_identity()):
+            # Only a complete run gets here with another CODE (an unfinished one is refused by
+            # check_compatible): its batches are all this code's, so the rebuild is too.
+            atomic_write_bytes(code, code_identity().encode())
+        self._next_batch = 1 + max((batches.batch_index(p) or 0 for p in self._batch_paths()), default=-1)
+        return set(self._batches)
+
+    def _check_batch_code(self) -> None:
+        """Read-only: refuse batches of other code (or shards of the earlier layout) before any
+        work starts; headers only (:meth:`done_units` checks every batch whole, with the lock)."""
+        legacy = sorted(p.name for p in self.shards.glob("unit-*")) if self.shards.is_dir() else []
+        if legacy:
+            raise self._other_code(legacy[0], "unrecorded (a shard of the earlier per-unit layout)")
+        for path in self._batch_paths():
+            try:
+                code = batches.read_header(path).get("code")
+            except (batches.BatchError, OSError):
+                continue  # a damaged batch: deleted and redone by done_units
+            if code != code_identity():
+                raise self._other_code(path.name, str(code))
+
+    def _other_code(self, name: str, other: str) -> RunDirError:
+        return RunDirError(
+            f"{self.path}: shards/{name} was written by other code (package source {other[:12]}), this is "
+            f"{code_identity()[:12]}; a run never mixes two builds: delete {self.path} (or choose another --out) "
+            f"and rerun the same command"
+        )
 
     def unit_done(self, unit: str) -> bool:
-        """Whether every shard of ``unit`` is on disk.
+        """Whether ``unit`` is stored in a batch (see :meth:`done_units`)."""
+        return unit in self.done_units()
 
-        The episodes shard is written last in a unit, so with atomic writes its
-        presence means the unit is whole; the other files are checked too, so a
-        shard deleted by hand makes the unit run again instead of failing the merge.
-        """
-        return all((self.shards / f"{unit}.{name}").is_file() for name in UNIT_FILES)
+    def add_unit(self, unit: str, tables: dict[str, "pd.DataFrame | pa.Table"], stats: dict[str, Any],
+                 commit: bool = True) -> None:
+        """Queue a finished unit; with ``commit``, the batch is committed (one durable write) when
+        it is due (:meth:`commit_if_due`). Call :meth:`flush` (``finalize`` does) to commit the rest."""
+        arrow = {name: t if isinstance(t, pa.Table) else arrow_table(t, _SCHEMAS.get(name, ()))
+                 for name, t in tables.items()}
+        self._pending.append((unit, arrow, stats))
+        self._pending_bytes += sum(t.nbytes for t in arrow.values())
+        if commit:
+            self.commit_if_due()
 
-    def write_unit(self, unit: str, tables: dict[str, pd.DataFrame], stats: dict[str, Any]) -> None:
-        for name in ("instances", "probes", "engine_cache"):
-            self._keep(self.shard_path(unit, name),
-                       atomic_write_parquet(self.shard_path(unit, name), tables[name], _SCHEMAS.get(name, ())))
-        atomic_write_bytes(self.shards / f"{unit}.stats.json", json.dumps(stats).encode())
-        path = self.shard_path(unit, "episodes")
-        self._keep(path, atomic_write_parquet(path, tables["episodes"], EPISODE_COLUMNS))
+    def commit_if_due(self) -> None:
+        """Commit the queued units if the batch is due: ``batch_units`` units, ``batch_bytes`` of
+        tables or ``batch_seconds`` since the last commit."""
+        if (len(self._pending) >= self.batch_units or self._pending_bytes >= self.batch_bytes
+                or time.monotonic() - self._last_commit >= self.batch_seconds):
+            self.flush()
 
-    def _keep(self, path: Path, table: pa.Table) -> None:
-        old = self._written.pop(path, None)
-        self._written_bytes -= 0 if old is None else old.nbytes
-        if self._written_bytes + table.nbytes <= self.KEEP_WRITTEN_BYTES:
-            self._written[path] = table
-            self._written_bytes += table.nbytes
-
-    def _read_shard(self, path: Path) -> pa.Table:
-        """A shard's Arrow table: the one this object wrote, if kept, else read from the file."""
-        table = self._written.pop(path, None)
-        if table is None:
-            return pq.read_table(path)
-        self._written_bytes -= table.nbytes
-        return table
-
-    def _merged(self, name: str, units: list[str]) -> pd.DataFrame:
-        """Table ``name`` of every unit, in unit order: the shards' rows (the empty ones only when
-        every shard is empty), as ``pd.concat`` of each shard read with ``pd.read_parquet`` gives them.
-
-        Shards of one schema (the usual case) are joined as Arrow tables and converted once, not
-        once a shard; shards whose columns differ (a unit whose every trajectory failed has only
-        the rollout rows' columns) are converted one by one and joined by pandas.
-        """
-        tables = [self._read_shard(self.shard_path(u, name)) for u in units]
-        if not tables:
-            return pd.DataFrame()
-        nonempty = [t for t in tables if t.num_rows] or tables[:1]
-        if all(t.schema.equals(nonempty[0].schema) for t in nonempty[1:]):
-            return pa.concat_tables(nonempty).to_pandas()
-        return pd.concat([t.to_pandas() for t in nonempty], ignore_index=True)
+    def flush(self) -> None:
+        """Commit the queued units as one batch: a temporary file, one fsync, a rename and an
+        fsync of ``shards/``."""
+        if not self._pending:
+            return
+        if not hasattr(self, "_next_batch"):
+            self.done_units()
+        path = self.shards / batches.batch_name(self._next_batch)
+        atomic_write_bytes(path, batches.encode(self._pending, code_identity(), __version__))
+        _fsync_dir(self.shards)
+        self._next_batch += 1
+        for unit, tables, stats in self._pending:
+            self._batches[unit], self._stats[unit] = path, stats
+            size = sum(t.nbytes for t in tables.values())
+            if self._kept_bytes + size <= self.KEEP_WRITTEN_BYTES:
+                self._kept[unit] = tables
+                self._kept_bytes += size
+        self._pending, self._pending_bytes, self._last_commit = [], 0, time.monotonic()
 
     def unit_stats(self, unit: str) -> dict[str, Any]:
-        return json.loads((self.shards / f"{unit}.stats.json").read_text())
+        return self._stats[unit]
+
+    def _unit_tables(self, units: list[str]) -> dict[str, dict[str, pa.Table]]:
+        """Every unit's tables: the ones this object committed, if kept, else read (and checked)
+        from their batch, each batch once."""
+        out = {u: self._kept.pop(u) for u in units if u in self._kept}
+        self._kept_bytes = sum(t.nbytes for tables in self._kept.values() for t in tables.values())
+        for path in dict.fromkeys(self._batches[u] for u in units if u not in out):
+            try:
+                _, stored = batches.read(path)
+            except batches.BatchError as exc:
+                raise RunDirError(f"{self.path}: {exc}; rerun the same command to redo its units") from None
+            out.update({u: t for u, t in stored.items() if u in units and u not in out})
+        return out
 
     def finalize(self, units: list[str], manifest_extra: dict[str, Any]) -> dict[str, Any]:
-        """Merge unit shards into the final tables (canonical order), then write the manifest."""
-        frames = {name: self._merged(name, units) for name in TABLES}
+        """Merge the units' tables into the final tables (canonical order), then write the manifest."""
+        self.flush()
+        stored = self._unit_tables(units)
+        frames = {name: merge_tables([stored[u][name] for u in units]) for name in TABLES}
+        del stored
         for name, frame in canonical_tables(frames).items():
             atomic_write_parquet(self.table_path(name), frame, _SCHEMAS.get(name, ()))
         return self.write_manifest(manifest_extra)
@@ -479,7 +634,10 @@ class RunDir:
     def manifest(self) -> dict[str, Any]:
         if not self.is_complete():
             raise RunDirError(f"{self.path} is not a complete run (no {MANIFEST}); rerun the same command to resume it")
-        return json.loads((self.path / MANIFEST).read_text())
+        try:  # the manifest rule set: a JSON object with a non-empty sha256 map, named on error
+            return read_manifest(self.path / MANIFEST)
+        except ManifestError as exc:
+            raise RunDirError(str(exc)) from None
 
     def read(self, name: str) -> pd.DataFrame:
         self.manifest()
@@ -519,7 +677,12 @@ class RunDir:
     def verify_digests(self) -> list[str]:
         """Tables whose sha256 no longer matches the manifest."""
         manifest = self.manifest()
-        return [f for f, h in manifest["sha256"].items() if not (self.path / f).is_file() or sha256_file(self.path / f) != h]
+        listed = manifest["sha256"]
+        # Integrity on read: every file a reader uses must be listed (an emptied map proves nothing).
+        unlisted = [f"{f} (not in the manifest)" for f in (*(f"{t}.parquet" for t in TABLES), CONFIG)
+                    if f not in listed and (self.path / f).exists()]
+        return unlisted + [f for f, h in listed.items()
+                           if not (self.path / f).is_file() or sha256_file(self.path / f) != h]
 
 
 class EpisodeStream:

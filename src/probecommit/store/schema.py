@@ -100,17 +100,23 @@ ENGINE_CACHE_COLUMNS: tuple[Column, ...] = (
 )
 
 
-def cache_frame(records: list[dict], latent_names: tuple[str, ...]):
-    """Engine-cache rows (``Simulator.cache_records``) as a table keyed by the latent names."""
-    import pandas as pd
-
+def cache_columns(records: list[dict], latent_names: tuple[str, ...]) -> dict[str, list]:
+    """Engine-cache rows (``Simulator.cache_records``) as columns keyed by the latent names, in
+    table order (what :func:`cache_frame` makes a DataFrame of)."""
     columns: dict[str, list] = {"engine": [r["engine"] for r in records], "query": [r["query"] for r in records]}
     thetas = [tuple(r["theta"]) for r in records]
     for i, name in enumerate(latent_names):  # built column by column: a run may hold 10^5 answers
         columns[name] = [theta[i] if i < len(theta) else None for theta in thetas]
     columns["arg"] = [list(r["arg"]) for r in records]
     columns["value"] = [list(r["value"]) for r in records]
-    return pd.DataFrame(columns, columns=["engine", "query", *latent_names, "arg", "value"])
+    return columns
+
+
+def cache_frame(records: list[dict], latent_names: tuple[str, ...]):
+    """Engine-cache rows (``Simulator.cache_records``) as a table keyed by the latent names."""
+    import pandas as pd
+
+    return pd.DataFrame(cache_columns(records, latent_names), columns=["engine", "query", *latent_names, "arg", "value"])
 
 
 def cache_records(frame, latent_names: tuple[str, ...]) -> Iterator[dict]:

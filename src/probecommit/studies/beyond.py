@@ -14,6 +14,7 @@ import pandas as pd
 
 from probecommit.runner.calibration import calibrate
 from probecommit.runner.replay import load_run, replay_episodes
+from probecommit.store.safefile import write_text, write_with
 
 
 def move_comparison(runs: Mapping[str, str | Path], budget: int = 8) -> pd.DataFrame:
@@ -142,7 +143,7 @@ def reproduce_beyond(insertion_runs: str | Path, out: str | Path, push1d_run: st
             cover.append(table)
     adaptive = pd.concat([adaptive, *cover], ignore_index=True)
     for name, frame in (("plateau", plateau), ("moves", moves), ("adaptive", adaptive)):
-        frame.to_parquet(out / f"{name}.parquet")
+        write_with(out / f"{name}.parquet", frame.to_parquet)
     results = {"plateau": _records(plateau), "moves": _records(moves), "adaptive": _records(adaptive)}
-    (out / "results.json").write_text(json.dumps({"results": results}, indent=1, default=float))
+    write_text(out / "results.json", json.dumps({"results": results}, indent=1, default=float))
     return results

@@ -25,6 +25,7 @@ import numpy as np
 import pandas as pd
 
 from probecommit.audit.stats import DEFAULT_RESAMPLES, cluster_bootstrap_mean, paired_bootstrap
+from probecommit.store.safefile import write_with
 
 #: Families this study covers, in table order.
 BREADTH_FAMILIES = ("push1d", "push2d", "push2d_pybullet", "darts", "hinge", "shuffleboard", "grasp")
@@ -280,7 +281,8 @@ def plot_budget_curves(curves: pd.DataFrame, path: str | Path) -> list[Path]:
         out = [stem.with_suffix(".png"), stem.with_suffix(".pdf")]
         for p in out:
             # No creation date in the PDF: the same figure is the same bytes (frozen results are hashed).
-            fig.savefig(p, dpi=300, metadata={"CreationDate": None} if p.suffix == ".pdf" else None)
+            write_with(p, lambda buf, p=p: fig.savefig(buf, format=p.suffix[1:], dpi=300,
+                                                      metadata={"CreationDate": None} if p.suffix == ".pdf" else None))
         plt.close(fig)
     return out
 

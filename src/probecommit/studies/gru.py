@@ -18,7 +18,6 @@ from typing import Any, Callable
 
 import numpy as np
 import pandas as pd
-import yaml
 
 from probecommit.audit.stats import paired_bootstrap
 from probecommit.baselines.gru import TrainingConfig, act, encode_history, equivalent, feature_scales, make_training_set, train_or_resume
@@ -26,12 +25,14 @@ from probecommit.runner.build import build_model
 from probecommit.runner.inference import instance_arrays
 from probecommit.runner.replay import load_run, probe_batch, simulator_for_run
 from probecommit.studies.paper_values import PRINTED as PAPER_GRU
+from probecommit.store.safefile import write_text, write_with
+from probecommit.store.yamlsafe import load_yaml
 
 CONFIG_DIR = Path(__file__).resolve().parents[1] / "configs" / "paper"
 
 
 def load_gru_config(path: str | Path | None = None) -> dict[str, Any]:
-    return yaml.safe_load(Path(path or CONFIG_DIR / "gru.yaml").read_text())
+    return load_yaml(Path(path or CONFIG_DIR / "gru.yaml").read_bytes(), str(path or CONFIG_DIR / "gru.yaml"))
 
 
 def reproduce_gru(out: str | Path, pipeline_run: str | Path, quick: bool = False,
@@ -88,11 +89,12 @@ def reproduce_gru(out: str | Path, pipeline_run: str | Path, quick: bool = False
         "k": int(k),
     }
     out.mkdir(parents=True, exist_ok=True)
-    (out / "results.json").write_text(json.dumps({"results": results}, indent=1))
+    write_text(out / "results.json", json.dumps({"results": results}, indent=1))
     # Per episode: the pipeline's miss and each seed's GRU miss (what `reproduce explain` reads
     # to split the interval's width into instance and seed variation).
-    pipe.assign(**{f"gru_seed_{s}": per_seed[s] for s in range(len(per_seed))}).to_parquet(out / "gru_episodes.parquet")
-    (out / "table_gru.md").write_text(gru_markdown(results))
+    per_episode = pipe.assign(**{f"gru_seed_{s}": per_seed[s] for s in range(len(per_seed))})
+    write_with(out / "gru_episodes.parquet", per_episode.to_parquet)
+    write_text(out / "table_gru.md", gru_markdown(results))
     return results
 
 

@@ -5,10 +5,10 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any, Literal
 
-import yaml
 from pydantic import BaseModel, ConfigDict, Field
 
 from probecommit.runner.config import ConfigError, StudyConfig, parse_config
+from probecommit.store.yamlsafe import load_yaml
 
 DEFAULT_PROTOCOL = Path(__file__).resolve().parents[3] / "configs" / "paper" / "insertion.yaml"
 
@@ -132,6 +132,6 @@ def load_protocol(path: str | Path = DEFAULT_PROTOCOL) -> Protocol:
     if not path.is_file():
         raise ConfigError(f"protocol file not found: {path}")
     try:
-        return Protocol.model_validate(yaml.safe_load(path.read_text()))
+        return Protocol.model_validate(load_yaml(path.read_bytes(), str(path)))
     except Exception as exc:  # pydantic's message names the field
         raise ConfigError(f"{path}: {str(exc).splitlines()[0]} — {str(exc).splitlines()[1].strip() if len(str(exc).splitlines()) > 1 else ''}") from None

@@ -80,7 +80,7 @@ def scan_instance(simulator, x_hole: float, c: float, step: float, half_range: f
 def boundary_scan(simulator, instances: pd.DataFrame, step: float = 0.25, half_range: float = 7.0, tolerance: float = 1e-3) -> ScanResult:
     """Scan every truth of ``instances`` (columns ``instance_id, true_x_hole, true_c``)."""
     rows, grids = [], []
-    if getattr(simulator, "parallel_queries", False):  # every truth's grid taps are needed: run them in engine threads
+    if simulator.parallel_queries:  # every truth's grid taps are needed: run them in engine threads
         offsets = scan_offsets(step, half_range)
         simulator.prefetch([simulator.query_key("tap_reading", x, c, x + o) for x, c in
                             zip(instances["true_x_hole"].astype(float), instances["true_c"].astype(float)) for o in offsets])

@@ -63,6 +63,9 @@ class TaskModel(Protocol):
     action_grid: np.ndarray
     binary_loss: bool
     decision_domain_width: float
+    #: The few distinct noise-free readings of ``predict`` (a tap reads the floor or the top), or
+    #: None (the default on :class:`TaskModelBase`): see :class:`~probecommit.core.belief.ForwardModel`.
+    reading_levels: tuple[float, ...] | None
 
     @property
     def probe_dim(self) -> int: ...
@@ -219,14 +222,27 @@ class Simulator(Protocol):
     engine: str
     engine_calls: dict[str, int]
     engine_seconds: float
+    #: Named queries may run in engine threads (:meth:`CachedSimulator.prefetch`); then the
+    #: simulator writes :meth:`probe_query_key` and :meth:`execute_query_key`. Default False.
+    parallel_queries: bool
+    #: Two instances may be used from two threads at once (a study runs units in threads). Default False.
+    thread_safe: bool
 
     def probe(self, theta: np.ndarray, u: np.ndarray, rng: np.random.Generator) -> np.ndarray: ...
 
     def execute(self, theta: np.ndarray, action: np.ndarray, context: np.ndarray | None = None) -> dict[str, Any]: ...
 
+    def probe_query_key(self, theta: np.ndarray, u: np.ndarray) -> tuple: ...
+
+    def execute_query_key(self, theta: np.ndarray, action: np.ndarray, context: np.ndarray | None = None) -> tuple: ...
+
     def cache_records(self) -> list[dict[str, Any]]: ...
 
     def load_cache(self, records: Iterable[dict[str, Any]]) -> list: ...
+
+    def answered_keys(self) -> list: ...
+
+    def forget_answers(self, keys: Iterable[tuple[str, tuple[float, ...], tuple[float, ...]]]) -> None: ...
 
 
 #: Engine answers shared by the simulators built inside :func:`shared_engine_answers`, per
@@ -344,6 +360,16 @@ class CachedSimulator:
         self.shared_answers: dict | None = None
         self.engine_calls: dict[str, int] = {}
         self.engine_seconds = 0.0
+
+    def probe_query_key(self, theta: np.ndarray, u: np.ndarray) -> tuple:
+        """The cache key of the one engine query behind ``probe(theta, u, ...)``, for :meth:`prefetch`:
+        read only when :attr:`parallel_queries` is set, which a simulator sets together with this."""
+        raise NotImplementedError(f"{type(self).__name__} sets parallel_queries but writes no probe_query_key")
+
+    def execute_query_key(self, theta: np.ndarray, action: np.ndarray, context: np.ndarray | None = None) -> tuple:
+        """The cache key of the one engine query behind ``execute(theta, action, context)`` (see
+        :meth:`probe_query_key`)."""
+        raise NotImplementedError(f"{type(self).__name__} sets parallel_queries but writes no execute_query_key")
 
     def cached(self, kind: str, theta: Iterable[float], arg: Iterable[float]) -> np.ndarray:
         """Cached named query ``self.<kind>(*theta, *arg)``; the engine runs once per key."""

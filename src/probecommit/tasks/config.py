@@ -118,6 +118,8 @@ class TaskConfigBase(BaseModel):
     def positive_mask(cls) -> tuple[bool, ...]:
         """Per latent, whether it is declared positive."""
         return tuple(cls.latent_positive) or (cls.positive_latents,) * len(cls.latent_names)
+    #: Open range ``(low, high)`` of each context coordinate (a target the task can aim at).
+    context_ranges: ClassVar[tuple[tuple[float, float], ...]] = ()
 
     @model_validator(mode="after")
     def _check_engine(self) -> "TaskConfigBase":
@@ -136,6 +138,18 @@ class TaskConfigBase(BaseModel):
         """Keyword arguments of the family's simulator classes (default: the simulator section less ``engine``)."""
         return self.simulator.model_dump(exclude={"engine", "execute_all_aims"})  # type: ignore[attr-defined]
 
+    def check_contexts(self, rows: list[tuple[float, ...]], field: str) -> None:
+        """Every context row within the family's ``context_ranges`` (the same limits, however given).
+
+        Raises:
+            FieldError: naming ``field``, the row and the coordinate.
+        """
+        for i, row in enumerate(rows):
+            for name, value, (low, high) in zip(self.context_names, row, self.context_ranges):
+                if not low < value < high:
+                    raise FieldError(field, f"row {i}: {name} = {value!r} is outside ({low:g}, {high:g}), the range "
+                                     f"of a {self.family} target")
+
     def check_truth_box(self, low: tuple[float, ...], high: tuple[float, ...], field: str) -> None:
         """Family checks on a truth box beyond its shape (override to add physical limits).
 
@@ -146,6 +160,9 @@ class TaskConfigBase(BaseModel):
         for name, box in (("truth_low", low), ("truth_high", high)):
             if n and len(box) != n:
                 raise FieldError(f"{field}.{name}", f"needs {n} coordinates ({', '.join(self.latent_names)}), got {len(box)}")
+        if any(not np.isfinite(v) or abs(v) > 1e9 for v in (*low, *high)):
+            raise FieldError(f"{field}.truth_high", f"values must be finite and below 1e9 in magnitude, got "
+                             f"{list(low)} .. {list(high)}")
         if self.positive_latents and any(v <= 0 for v in low):
             names = self.latent_names
             listed = names[0] if len(names) == 1 else f"{', '.join(names[:-1])} and {names[-1]}"

@@ -49,12 +49,16 @@ class Latent:
 @dataclass(frozen=True)
 class Context:
     """One observed per-episode context component (a target distance): name, unit and the range
-    an example study draws from (``low`` and ``high`` are its two example rows)."""
+    an example study draws from (``low`` and ``high`` are its two example rows).
+
+    ``limits`` is the open range the task can aim at at all (``None``: unbounded); every context a
+    config gives, fixed or sampled, is checked against it (the config's ``context_ranges``)."""
 
     name: str
     unit: str
     low: float
     high: float
+    limits: tuple[float, float] | None = None
 
 
 @dataclass(frozen=True, eq=False)
@@ -68,7 +72,8 @@ class Declaration:
         action_grid: Admissible commit actions ``[A]`` or ``[A, a]``.
         loss: ``"binary"`` (failure 0/1) or ``"continuous"`` (a miss, >= 0).
         sigma: The likelihood's reading noise (the model section's default).
-        decision: Name of the decision-coordinate latent (default: the first).
+        decision: Name of the decision-coordinate latent (default: the first). A model class of its
+            own computes the coordinate in ``decision()``, which may be a function of several latents.
         contexts: Observed per-episode context components (a target), or none.
         margin: The execution margin's default (``model.margin``, in (0, 1.5]; 1 = none).
         noise_sigma: The simulator's reading noise default (default: ``sigma``).
@@ -78,7 +83,26 @@ class Declaration:
         example: Extra study-config fields of a small example study (contexts are added).
         default: The family a config naming no task runs (one family only).
         analytic: Add the ``analytic`` simulator that reads the model itself at the truth (a family
-            whose model is its own ground truth); False for a family whose model is a surrogate.
+            whose model is its own ground truth); False for a family whose model is a surrogate
+            or that names its own engines (the first engine of ``simulators`` is then the default).
+        sigma_limit: Upper bound of ``model.sigma`` and ``simulator.noise_sigma`` a config may set.
+        model_fields: Extra model-section fields, ``name -> (type, default or pydantic Field)``
+            (a fitted factor the model takes as a keyword); they follow ``margin``.
+        simulator_fields: Extra simulator-section fields, the same way; they follow ``noise_sigma``.
+        doc: The config class's docstring (one line for people).
+        model_order: The order the model section's fields are declared in, when not ``sigma``,
+            ``margin``, the extra fields, the prior box. A dumped config lists ``sigma`` and the prior
+            box (``ModelConfigBase``'s) first, then the rest in this order (insertion's ``boundary``
+            and ``delta`` before ``margin``, as its frozen configs have them).
+        engines_open: ``simulator.engine`` is any name, checked against the spec's engines when a
+            config is validated (an engine added to the spec later is accepted; the message lists
+            them); False: a ``Literal`` of the declared engines.
+        model_base, simulator_base, config_base: Bases of the derived model section, simulator
+            section and config (subclasses of ``ModelConfigBase``, ``SimulatorConfigBase`` and
+            ``TaskConfigBase`` that add validators or override ``simulator_kwargs`` and
+            ``check_truth_box``; they declare no fields: fields belong in the declaration).
+        default_engine: The simulator section's default engine (default: the first engine).
+        replay_shorthands, figure_guides: As :class:`~probecommit.tasks.base.TaskSpec`'s.
     """
 
     name: str
@@ -96,6 +120,18 @@ class Declaration:
     example: Mapping[str, Any] = field(default_factory=dict)
     default: bool = False
     analytic: bool = True
+    sigma_limit: float = 1e6
+    model_fields: Mapping[str, Any] = field(default_factory=dict)
+    simulator_fields: Mapping[str, Any] = field(default_factory=dict)
+    doc: str = ""
+    model_order: tuple[str, ...] = ()
+    engines_open: bool = False
+    default_engine: str | None = None
+    model_base: type = ModelConfigBase
+    simulator_base: type = SimulatorConfigBase
+    config_base: type = TaskConfigBase
+    replay_shorthands: Mapping[str, str] = field(default_factory=dict)
+    figure_guides: Any = None
 
     def __post_init__(self) -> None:
         problems = []
@@ -115,6 +151,12 @@ class Declaration:
             problems.append(f"decision {self.decision!r} is not a latent ({', '.join(names)})")
         if self.loss not in ("binary", "continuous"):
             problems.append(f"loss must be 'binary' or 'continuous', got {self.loss!r}")
+        if not 0 < self.sigma <= self.sigma_limit:
+            problems.append(f"sigma must be in (0, sigma_limit={self.sigma_limit:g}], got {self.sigma}")
+        clash = set(self.model_fields) & {"sigma", "margin", "prior_low", "prior_high"}
+        clash |= set(self.simulator_fields) & {"engine", "noise_sigma", "execute_all_aims"}
+        if clash:
+            problems.append(f"model_fields/simulator_fields redeclare the derived field(s) {sorted(clash)}")
         if not 0 < self.margin <= 1.5:
             problems.append(f"margin must be in (0, 1.5], got {self.margin}")
         if problems:
@@ -260,55 +302,76 @@ def _config_class(decl: Declaration) -> type:
     """The family's pydantic config, from the declaration (defaults, shapes, positivity)."""
     d = len(decl.latents)
     box = tuple[(float,) * d]  # type: ignore[misc]
-    model_section = create_model(
-        f"{decl.name}_model", __base__=ModelConfigBase,
-        sigma=(float, Field(decl.sigma, gt=0, le=1e6)), margin=(float, Field(decl.margin, gt=0, le=1.5)),
-        prior_low=(box, decl.prior_low), prior_high=(box, decl.prior_high),
-    )
+    model_fields = {"sigma": (float, Field(decl.sigma, gt=0, le=decl.sigma_limit)),
+                    "margin": (float, Field(decl.margin, gt=0, le=1.5)), **dict(decl.model_fields),
+                    "prior_low": (box, decl.prior_low), "prior_high": (box, decl.prior_high)}
+    if decl.model_order:
+        if sorted(decl.model_order) != sorted(model_fields):
+            raise ValueError(f"declaration of family {decl.name!r}: model_order {decl.model_order} must list the "
+                             f"model section's fields {tuple(model_fields)}")
+        model_fields = {name: model_fields[name] for name in decl.model_order}
+    model_section = create_model(f"{decl.name}_model", __base__=decl.model_base, **model_fields)
     engines = tuple(dict.fromkeys((["analytic"] if decl.analytic else []) + list(decl.simulators)))
     if not engines:
         raise ValueError(f"declaration of family {decl.name!r}: no simulators and analytic=False")
+    default_engine = decl.default_engine or engines[0]
+    if default_engine not in engines:
+        raise ValueError(f"declaration of family {decl.name!r}: default_engine {default_engine!r} is not one of {engines}")
     noise = decl.sigma if decl.noise_sigma is None else decl.noise_sigma
+    engine = str if decl.engines_open else Literal[engines]  # type: ignore[valid-type]
     simulator_section = create_model(
-        f"{decl.name}_simulator", __base__=SimulatorConfigBase,
-        engine=(Literal[engines], engines[0]), noise_sigma=(float, Field(noise, ge=0, le=1e6)),  # type: ignore[valid-type]
+        f"{decl.name}_simulator", __base__=decl.simulator_base, engine=(engine, default_engine),
+        noise_sigma=(float, Field(noise, ge=0, le=decl.sigma_limit)), **dict(decl.simulator_fields),
     )
     positive = tuple(lat.positive for lat in decl.latents)
 
     def check_truth_box(self, low, high, field):  # noqa: ANN001 - the TaskConfigBase hook
-        TaskConfigBase.check_truth_box(self, low, high, field)
+        decl.config_base.check_truth_box(self, low, high, field)
         bad = [lat.name for lat, v in zip(decl.latents, low) if lat.positive and v <= 0]
         if bad:
             raise FieldError(f"{field}.truth_low", f"{', '.join(bad)} must be positive, got {list(low)}")
 
     config = create_model(
-        f"{decl.name}_config", __base__=TaskConfigBase,
+        f"{decl.name}_config", __base__=decl.config_base,
         family=(Literal[decl.name], decl.name),  # type: ignore[valid-type]
         model=(model_section, model_section()), simulator=(simulator_section, simulator_section()),
     )
     config.latent_names = decl.latent_names
     config.context_names = decl.context_names
+    config.context_ranges = tuple(c.limits if c.limits is not None else (-float("inf"), float("inf"))
+                                  for c in decl.contexts)
     config.probe_dim = decl.probes().shape[1]
     config.positive_latents = all(positive)
     config.latent_positive = positive
     config.check_truth_box = check_truth_box
-    config.__doc__ = f"Config of the declared family {decl.name!r}."
+    config.__doc__ = decl.doc or f"Config of the declared family {decl.name!r}."
     return config
 
 
-def family(decl: Declaration, model: type[DeclaredModel], *, register: bool = True) -> TaskSpec:
+def family(decl: Declaration, model: type, *, register: bool = True, build_model: Any = None) -> TaskSpec:
     """The :class:`TaskSpec` of a declaration and its model class, registered (unless ``register=False``).
 
     Args:
         decl: The family's declaration.
-        model: A :class:`DeclaredModel` subclass writing ``predict`` and ``loss``.
+        model: A :class:`DeclaredModel` subclass writing ``predict`` and ``loss``; or a model class
+            of its own (a :class:`~probecommit.tasks.base.TaskModelBase` subclass built as
+            ``Model(**model_section.model_kwargs())``, as the built-in families' are), which gets
+            its ``name``, ``latent_names`` and ``context_names`` from the declaration.
         register: Add it to the registry (idempotent for the same family module).
+        build_model: ``build_model(task_config) -> model``, where the model is not simply
+            ``model(**task_config.model.model_kwargs())`` (a model section naming a variant).
     """
     from probecommit.tasks import registry
 
-    if not (isinstance(model, type) and issubclass(model, DeclaredModel)):
-        raise TypeError(f"family {decl.name!r}: the model must be a DeclaredModel subclass, got {model!r}")
-    model.declaration = decl
+    if not (isinstance(model, type) and issubclass(model, TaskModelBase)):
+        raise TypeError(f"family {decl.name!r}: the model must be a DeclaredModel (or TaskModelBase) subclass, got {model!r}")
+    if issubclass(model, DeclaredModel):
+        model.declaration = decl
+    else:
+        if decl.analytic and "analytic" not in decl.simulators:
+            raise ValueError(f"declaration of family {decl.name!r}: a model of its own needs its engines named "
+                             "in `simulators` (analytic=False)")
+        model.name, model.latent_names, model.context_names = decl.name, decl.latent_names, decl.context_names
     config = _config_class(decl)
     simulators = dict(decl.simulators)
     if decl.analytic and "analytic" not in simulators:
@@ -316,7 +379,7 @@ def family(decl: Declaration, model: type[DeclaredModel], *, register: bool = Tr
                                                                       "__module__": model.__module__})
         simulators = {"analytic": simulator, **simulators}
 
-    def build_model(task_config: Any) -> DeclaredModel:
+    def build(task_config: Any) -> Any:
         return model(**task_config.model.model_kwargs())
 
     example = dict(decl.example)
@@ -325,8 +388,9 @@ def family(decl: Declaration, model: type[DeclaredModel], *, register: bool = Tr
         example["instances"] = {**example.get("instances", {}), "contexts": rows}
     summary = {"latents": ", ".join(decl.latent_names), "metric": "failure" if decl.loss == "binary" else "miss",
                "sigma": f"{decl.sigma:g}", **decl.summary}
-    spec = TaskSpec(name=decl.name, config=config, build_model=build_model, simulators=simulators, summary=summary,
-                    example=example, default=decl.default, declaration=decl)
+    spec = TaskSpec(name=decl.name, config=config, build_model=build_model or build, simulators=simulators, summary=summary,
+                    example=example, default=decl.default, replay_shorthands=dict(decl.replay_shorthands),
+                    figure_guides=decl.figure_guides, declaration=decl)
     if register:
         # A declared family registered again (its module re-imported, a notebook cell re-run) replaces itself.
         registry.register(spec, replace=registry.registered(decl.name, declared=True))

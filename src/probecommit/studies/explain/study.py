@@ -30,6 +30,7 @@ from probecommit.studies.explain.stats import (capture_failure, conformal_quanti
                                                 margin_draws)
 from probecommit.studies.paper_values import PAPER
 from probecommit.studies.protocol import Protocol, load_protocol
+from probecommit.store.safefile import write_text, write_with
 
 CONFIG = Path(__file__).resolve().parents[2] / "configs" / "paper" / "explain.yaml"
 Progress = Callable[[str, int, int], None]
@@ -470,12 +471,12 @@ class Explain:
             step()
         margins = [t for name, t in self.tables.items() if name.startswith("margin_")]
         if margins:
-            pd.concat(margins, ignore_index=True).to_parquet(out / "margin_per_gamma.parquet")
+            write_with(out / "margin_per_gamma.parquet", pd.concat(margins, ignore_index=True).to_parquet)
         if "draws" in self.tables:
-            self.tables["draws"].drop(columns="schedule").to_parquet(out / "fresh_draws.parquet")
+            write_with(out / "fresh_draws.parquet", self.tables["draws"].drop(columns="schedule").to_parquet)
         payload = {"results": _plain(self.res)}
-        (out / "results.json").write_text(json.dumps(payload, indent=1, allow_nan=False))
-        (out / "explain.md").write_text(summary_markdown(payload["results"]))
+        write_text(out / "results.json", json.dumps(payload, indent=1, allow_nan=False))
+        write_text(out / "explain.md", summary_markdown(payload["results"]))
         return out
 
 

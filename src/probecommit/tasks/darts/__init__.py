@@ -28,24 +28,23 @@ budgets and the 6 x 3 instance set size, nothing else):
 
 from __future__ import annotations
 
-from probecommit.tasks.base import TaskSpec
-from probecommit.tasks.darts.config import DartsConfig
-from probecommit.tasks.darts.model import DartsModel
-from probecommit.tasks.registry import register
+from probecommit.tasks.declare import Context, Declaration, Latent, family
+from probecommit.tasks.darts.model import PRIOR_HIGH, PRIOR_LOW, DartsModel
 
-
-def build_model(config: DartsConfig) -> DartsModel:
-    return DartsModel(**config.model.model_kwargs())
-
-
-SPEC = register(
-    TaskSpec(
-        name="darts",
-        config=DartsConfig,
-        build_model=build_model,
-        simulators={"mujoco": "probecommit.tasks.darts.sim_mujoco:MujocoDartsSimulator"},
-        summary={"latents": "k_d, m, g", "probe": "throw / landing point", "action": "launch (v, alpha)",
-                 "sigma": "2 cm", "budgets": "0, 2, 5", "metric": "miss (m)", "n": "18 x 8"},
-        example={"instances": {"contexts": [[2.0], [3.0]]}},
-    )
+DECLARATION = Declaration(
+    name="darts",
+    latents=(Latent("k_d", "N s/m", PRIOR_LOW[0], PRIOR_HIGH[0], positive=True),
+             Latent("m", "kg", PRIOR_LOW[1], PRIOR_HIGH[1], positive=True),
+             Latent("g", "m/s^2", PRIOR_LOW[2], PRIOR_HIGH[2], positive=True)),
+    probe_grid=DartsModel.probe_grid, action_grid=DartsModel.action_grid,
+    #: No latent is the decision coordinate: the model's decision() is the drag rate k_d / m.
+    loss="continuous", sigma=0.02, sigma_limit=10, decision=None,
+    contexts=(Context("target", "m", 2.0, 3.0, limits=(0.0, 100.0)),),
+    simulators={"mujoco": "probecommit.tasks.darts.sim_mujoco:MujocoDartsSimulator"},
+    analytic=False,
+    summary={"probe": "throw / landing point", "action": "launch (v, alpha)",
+             "sigma": "2 cm", "budgets": "0, 2, 5", "metric": "miss (m)", "n": "18 x 8"},
+    example={"instances": {"contexts": [[2.0], [3.0]]}},
+    doc="A dart thrown with linear drag to land at a target distance.",
 )
+SPEC = family(DECLARATION, DartsModel)

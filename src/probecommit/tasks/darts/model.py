@@ -116,9 +116,7 @@ class DartsModel(TaskModelBase):
     jitter_scale: np.ndarray = field(default_factory=lambda: np.array([0.000625, 0.00075, 0.05]))
     variant: str = "deployed"
 
-    name = "darts"
-    latent_names = ("k_d", "m", "g")
-    context_names = ("target",)
+    # name, latent_names and context_names: from the declaration (probecommit.tasks.darts).
     probe_grid = np.array(PROBE_THROWS, dtype=float)
     action_grid = action_grid()
     binary_loss = False

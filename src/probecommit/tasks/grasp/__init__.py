@@ -23,24 +23,21 @@ sigma, budgets, 16 x 80 and "a force-balance model with a MuJoCo lift check", no
 
 from __future__ import annotations
 
-from probecommit.tasks.base import TaskSpec
-from probecommit.tasks.grasp.config import GraspConfig
-from probecommit.tasks.grasp.model import GraspModel
-from probecommit.tasks.registry import register
+from probecommit.tasks.declare import Declaration, Latent, family
+from probecommit.tasks.grasp.model import PRIOR_HIGH, PRIOR_LOW, GraspModel
 
-
-def build_model(config: GraspConfig) -> GraspModel:
-    return GraspModel(**config.model.model_kwargs())
-
-
-SPEC = register(
-    TaskSpec(
-        name="grasp",
-        config=GraspConfig,
-        build_model=build_model,
-        simulators={"mujoco": "probecommit.tasks.grasp.sim_mujoco:MujocoGraspSimulator",
-                    "analytic": "probecommit.tasks.grasp.sim_base:AnalyticGraspSimulator"},
-        summary={"latents": "mu, m", "probe": "squeeze / slip", "action": "grip force",
-                 "sigma": "2 mm", "budgets": "0, 2, 5, 8", "metric": "success (feasible)", "n": "16 x 80"},
-    )
+DECLARATION = Declaration(
+    name="grasp",
+    latents=(Latent("mu", "", PRIOR_LOW[0], PRIOR_HIGH[0], positive=True),
+             Latent("m", "kg", PRIOR_LOW[1], PRIOR_HIGH[1], positive=True)),
+    probe_grid=GraspModel.probe_grid, action_grid=GraspModel.action_grid,
+    #: No latent is the decision coordinate: the model's decision() is the hold force m (g + a) / (2 mu).
+    loss="binary", sigma=2.0, sigma_limit=100, decision=None,
+    simulators={"mujoco": "probecommit.tasks.grasp.sim_mujoco:MujocoGraspSimulator",
+                "analytic": "probecommit.tasks.grasp.sim_base:AnalyticGraspSimulator"},
+    analytic=False,
+    summary={"probe": "squeeze / slip", "action": "grip force",
+             "sigma": "2 mm", "budgets": "0, 2, 5, 8", "metric": "success (feasible)", "n": "16 x 80"},
+    doc="A delicate object gripped hard enough to lift, gently enough not to crush.",
 )
+SPEC = family(DECLARATION, GraspModel)

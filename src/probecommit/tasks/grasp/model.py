@@ -74,9 +74,7 @@ class GraspModel(TaskModelBase):
     jitter_scale: np.ndarray = field(default_factory=lambda: np.array([0.02, 0.01125]))
     variant: str = "deployed"
 
-    name = "grasp"
-    latent_names = ("mu", "m")
-    context_names = ()
+    # name, latent_names and context_names: from the declaration (probecommit.tasks.grasp).
     probe_grid = np.array(PROBE_FORCES)[:, None]
     action_grid = ACTION_FORCES[:, None]
     binary_loss = True

@@ -26,25 +26,23 @@ budgets and the 6 x 3 instance set with 16 seeds, nothing else):
 
 from __future__ import annotations
 
-from probecommit.tasks.base import TaskSpec
-from probecommit.tasks.hinge.config import HingeConfig
-from probecommit.tasks.hinge.model import HingeModel
-from probecommit.tasks.registry import register
+from probecommit.tasks.declare import Context, Declaration, Latent, family
+from probecommit.tasks.hinge.model import PRIOR_HIGH, PRIOR_LOW, HingeModel
 
-
-def build_model(config: HingeConfig) -> HingeModel:
-    return HingeModel(**config.model.model_kwargs())
-
-
-SPEC = register(
-    TaskSpec(
-        name="hinge",
-        config=HingeConfig,
-        build_model=build_model,
-        simulators={"mujoco": "probecommit.tasks.hinge.sim_mujoco:MujocoHingeSimulator",
-                    "analytic": "probecommit.tasks.hinge.sim_analytic:AnalyticHingeSimulator"},
-        summary={"latents": "f, b, m", "probe": "coast / stop angle", "action": "release speed (torque)",
-                 "sigma": "0.02 rad", "budgets": "0, 2, 5", "metric": "miss (rad)", "n": "18 x 16"},
-        example={"instances": {"contexts": [[0.5], [1.0]]}},
-    )
+DECLARATION = Declaration(
+    name="hinge",
+    latents=(Latent("f", "N m", PRIOR_LOW[0], PRIOR_HIGH[0], positive=True),
+             Latent("b", "N m s/rad", PRIOR_LOW[1], PRIOR_HIGH[1], positive=True),
+             Latent("m", "kg", PRIOR_LOW[2], PRIOR_HIGH[2], positive=True)),
+    probe_grid=HingeModel.probe_grid, action_grid=HingeModel.action_grid,
+    loss="continuous", sigma=0.02, sigma_limit=10, decision="f",
+    contexts=(Context("target", "rad", 0.5, 1.0, limits=(0.0, 6.2832)),),
+    simulators={"mujoco": "probecommit.tasks.hinge.sim_mujoco:MujocoHingeSimulator",
+                "analytic": "probecommit.tasks.hinge.sim_analytic:AnalyticHingeSimulator"},
+    analytic=False,
+    summary={"probe": "coast / stop angle", "action": "release speed (torque)",
+             "sigma": "0.02 rad", "budgets": "0, 2, 5", "metric": "miss (rad)", "n": "18 x 16"},
+    example={"instances": {"contexts": [[0.5], [1.0]]}},
+    doc="A door on a hinge released to coast to a target angle.",
 )
+SPEC = family(DECLARATION, HingeModel)

@@ -79,8 +79,7 @@ class HingeModel(CoastModel):
     jitter_scale: np.ndarray = field(default_factory=lambda: np.array([0.015, 0.01, 0.1]))
     variant: str = "deployed"
 
-    name = "hinge"
-    latent_names = ("f", "b", "m")
+    # name, latent_names and context_names: from the declaration (probecommit.tasks.hinge).
     outcome = staticmethod(stop_angle)
     target_name = "target angle"
     probe_grid = np.array(PROBE_SPEEDS)[:, None]

@@ -22,6 +22,9 @@ POCKET_DEPTH_MM = 15.0
 PLATE_TOP_MM = 0.0
 #: The paper's MuJoCo-fitted boundary offset; replaced by our own scan's value in configs.
 PAPER_DELTA_MM = 0.905
+#: Prior box on (x_hole [mm], c).
+PRIOR_LOW = (-10.0, 0.7)
+PRIOR_HIGH = (10.0, 1.3)
 
 
 def half_gap(c: np.ndarray) -> np.ndarray:
@@ -56,13 +59,11 @@ class InsertionModel(TaskModelBase):
     variant: str = "deployed"
     sigma: float = 0.5
     margin: float = 1.0
-    prior_low: np.ndarray = field(default_factory=lambda: np.array([-10.0, 0.7]))
-    prior_high: np.ndarray = field(default_factory=lambda: np.array([10.0, 1.3]))
+    prior_low: np.ndarray = field(default_factory=lambda: np.array(PRIOR_LOW))
+    prior_high: np.ndarray = field(default_factory=lambda: np.array(PRIOR_HIGH))
     jitter_scale: np.ndarray = field(default_factory=lambda: np.array([0.6, 0.006]))
 
-    name = "insertion"
-    latent_names = ("x_hole", "c")
-    context_names = ()
+    # name, latent_names and context_names: from the declaration (probecommit.tasks.insertion).
     #: Nine tap positions, -12..12 mm in 3 mm steps ``[9, 1]``.
     probe_grid = np.arange(-12.0, 12.0 + 1e-9, 3.0)[:, None]
     #: Aims on a 0.5 mm grid over [-10, 10] mm ``[41, 1]``.

@@ -23,6 +23,9 @@ import numpy as np
 from probecommit.tasks.base import TaskModelBase
 
 G = 9.81
+#: Prior box on (mu, phi [rad], m [kg]).
+PRIOR_LOW = (0.2, -0.2, 0.5)
+PRIOR_HIGH = (0.6, 0.2, 1.5)
 
 
 def rest_position(impulse: np.ndarray, mu: np.ndarray, phi: np.ndarray, m: np.ndarray) -> np.ndarray:
@@ -46,14 +49,12 @@ class PlanarSlideModel(TaskModelBase):
 
     sigma: float = 0.02
     margin: float = 1.0
-    prior_low: np.ndarray = field(default_factory=lambda: np.array([0.2, -0.2, 0.5]))
-    prior_high: np.ndarray = field(default_factory=lambda: np.array([0.6, 0.2, 1.5]))
+    prior_low: np.ndarray = field(default_factory=lambda: np.array(PRIOR_LOW))
+    prior_high: np.ndarray = field(default_factory=lambda: np.array(PRIOR_HIGH))
     jitter_scale: np.ndarray = field(default_factory=lambda: np.array([0.01, 0.005, 0.02]))
     variant: str = "deployed"
 
-    name = "planar_slide"
-    latent_names = ("mu", "phi", "m")
-    context_names = ("target_x", "target_y")
+    # name, latent_names and context_names: from the declaration (probecommit.tasks.planar_slide).
     probe_grid = np.array([[1.0], [2.0], [3.0]])
     action_grid = np.stack(
         np.meshgrid(np.linspace(0.5, 4.0, 15), np.linspace(-1.5, 1.5, 13), indexing="ij"), axis=-1

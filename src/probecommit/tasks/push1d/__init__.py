@@ -25,24 +25,21 @@ sigma, budgets and instance count, nothing else):
 
 from __future__ import annotations
 
-from probecommit.tasks.base import TaskSpec
-from probecommit.tasks.push1d.config import Push1DConfig
-from probecommit.tasks.push1d.model import Push1DModel
-from probecommit.tasks.registry import register
+from probecommit.tasks.declare import Context, Declaration, Latent, family
+from probecommit.tasks.push1d.model import PRIOR_HIGH, PRIOR_LOW, Push1DModel
 
-
-def build_model(config: Push1DConfig) -> Push1DModel:
-    return Push1DModel(**config.model.model_kwargs())
-
-
-SPEC = register(
-    TaskSpec(
-        name="push1d",
-        config=Push1DConfig,
-        build_model=build_model,
-        simulators={"analytic": "probecommit.tasks.push1d.sim_analytic:AnalyticPush1DSimulator"},
-        summary={"latents": "mu, m, k_d", "probe": "pulse / slide distance", "action": "impulse",
-                 "sigma": "5 cm", "budgets": "0, 2, 5", "metric": "miss (m)", "n": "81 x 6"},
-        example={"instances": {"contexts": [[0.5], [1.0]]}},
-    )
+DECLARATION = Declaration(
+    name="push1d",
+    latents=(Latent("mu", "", PRIOR_LOW[0], PRIOR_HIGH[0], positive=True),
+             Latent("m", "kg", PRIOR_LOW[1], PRIOR_HIGH[1], positive=True),
+             Latent("k_d", "N s/m", PRIOR_LOW[2], PRIOR_HIGH[2], positive=True)),
+    probe_grid=Push1DModel.probe_grid, action_grid=Push1DModel.action_grid,
+    loss="continuous", sigma=0.05, sigma_limit=10, decision="mu",
+    contexts=(Context("target", "m", 0.5, 1.0, limits=(0.0, 20.0)),),
+    simulators={"analytic": "probecommit.tasks.push1d.sim_analytic:AnalyticPush1DSimulator"}, analytic=False,
+    summary={"probe": "pulse / slide distance", "action": "impulse",
+             "sigma": "5 cm", "budgets": "0, 2, 5", "metric": "miss (m)", "n": "81 x 6"},
+    example={"instances": {"contexts": [[0.5], [1.0]]}},
+    doc="A box pushed along a line by an impulse to stop at a target distance.",
 )
+SPEC = family(DECLARATION, Push1DModel)

@@ -142,8 +142,7 @@ class Push1DModel(CoastModel):
     jitter_scale: np.ndarray = field(default_factory=lambda: np.array([0.01, 0.025, 0.06]))
     variant: str = "deployed"
 
-    name = "push1d"
-    latent_names = ("mu", "m", "k_d")
+    # name, latent_names and context_names: from the declaration (probecommit.tasks.push1d).
     probe_grid = np.array(PROBE_PULSES)[:, None]
     action_grid = ACTION_IMPULSES[:, None]
     decision_domain_width = PRIOR_HIGH[0] - PRIOR_LOW[0]

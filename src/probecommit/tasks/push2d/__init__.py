@@ -28,25 +28,28 @@ budgets and the 3 x 6 instance set size, nothing else):
 
 from __future__ import annotations
 
-from probecommit.tasks.base import TaskSpec
-from probecommit.tasks.push2d.config import Push2DConfig
-from probecommit.tasks.push2d.model import Push2DModel
-from probecommit.tasks.registry import register
+from pydantic import Field
 
+from probecommit.tasks.declare import Context, Declaration, Latent, family
+from probecommit.tasks.push1d.model import PRIOR_HIGH, PRIOR_LOW
+from probecommit.tasks.push2d.model import FITTED_MU_SCALE, Push2DModel
 
-def build_model(config: Push2DConfig) -> Push2DModel:
-    return Push2DModel(**config.model.model_kwargs())
-
-
-SPEC = register(
-    TaskSpec(
-        name="push2d",
-        config=Push2DConfig,
-        build_model=build_model,
-        simulators={"mujoco": "probecommit.tasks.push2d.sim_mujoco:MujocoPush2DSimulator",
-                    "pybullet": "probecommit.tasks.push2d.sim_pybullet:PybulletPush2DSimulator"},
-        summary={"latents": "mu, m, k_d", "probe": "pulse / 2-D rest", "action": "2-D impulse",
-                 "sigma": "5 cm", "budgets": "0, 2, 5", "metric": "miss (m)", "n": "18 x 6"},
-        example={"instances": {"contexts": [[0.469846, -0.171010], [0.866025, 0.5]]}},
-    )
+DECLARATION = Declaration(
+    name="push2d",
+    latents=(Latent("mu", "", PRIOR_LOW[0], PRIOR_HIGH[0], positive=True),
+             Latent("m", "kg", PRIOR_LOW[1], PRIOR_HIGH[1], positive=True),
+             Latent("k_d", "N s/m", PRIOR_LOW[2], PRIOR_HIGH[2], positive=True)),
+    probe_grid=Push2DModel.probe_grid, action_grid=Push2DModel.action_grid,
+    loss="continuous", sigma=0.05, sigma_limit=10, decision="mu",
+    contexts=(Context("target_x", "m", 0.469846, 0.866025, limits=(-20.0, 20.0)), Context("target_y", "m", -0.171010, 0.5, limits=(-20.0, 20.0))),
+    #: Effective-friction factor of the analytic model, fitted to the engine before any audit.
+    model_fields={"mu_scale": (float, Field(FITTED_MU_SCALE, gt=0.1, le=10))},
+    simulators={"mujoco": "probecommit.tasks.push2d.sim_mujoco:MujocoPush2DSimulator",
+                "pybullet": "probecommit.tasks.push2d.sim_pybullet:PybulletPush2DSimulator"},
+    analytic=False,
+    summary={"probe": "pulse / 2-D rest", "action": "2-D impulse",
+             "sigma": "5 cm", "budgets": "0, 2, 5", "metric": "miss (m)", "n": "18 x 6"},
+    example={"instances": {"contexts": [[0.469846, -0.171010], [0.866025, 0.5]]}},
+    doc="A box on a plane struck by a 2-D impulse to stop at a 2-D target.",
 )
+SPEC = family(DECLARATION, Push2DModel)

@@ -79,9 +79,7 @@ class Push2DModel(TaskModelBase):
     jitter_scale: np.ndarray = field(default_factory=lambda: np.array([0.01, 0.025, 0.06]))
     variant: str = "deployed"
 
-    name = "push2d"
-    latent_names = ("mu", "m", "k_d")
-    context_names = ("target_x", "target_y")
+    # name, latent_names and context_names: from the declaration (probecommit.tasks.push2d).
     probe_grid = np.array(PROBE_PULSES)[:, None]
     action_grid = polar_grid(ACTION_BEARINGS_DEG, ACTION_MAGNITUDES)
     binary_loss = False

@@ -1,13 +1,14 @@
-"""Config of the rig family: the insertion config at rig scale, validated here."""
+"""Config checks of the rig family: physical box limits and the simulated rig's hooks (the fields
+themselves are declared in ``probecommit.tasks.rig``)."""
 
 from __future__ import annotations
 
-from typing import Any, Literal
+from typing import Any
 
-from pydantic import Field, model_validator
+from pydantic import model_validator
 
-from probecommit.tasks.config import FieldError, ModelConfigBase, SimulatorConfigBase, TaskConfigBase
-from probecommit.tasks.rig.model import DESCENT_STEP_MM, RIG_SCALE, TOOL_RADIUS_MM
+from probecommit.tasks.config import FieldError, ModelConfigBase, TaskConfigBase
+from probecommit.tasks.rig.model import RIG_SCALE
 
 #: Largest |x_hole| of a prior or truth box (mm): the block is 4 x 120 mm wide at rig scale.
 RIG_BOX_LIMIT_MM = 50.0 * RIG_SCALE
@@ -22,50 +23,22 @@ def check_rig_box(field: str, box: tuple[float, ...] | None) -> None:
         raise FieldError(field, f"clearance scale c must be > {-1.1 / 0.6:.4f} (a positive window), got {box[1]!r}")
 
 
-class RigModelConfig(ModelConfigBase):
-    """The rig model the robot deploys.
-
-    ``boundary_pull_in`` is the injected boundary fault: the through-the-opening
-    boundary moved inward by that many mm (0 = as deployed).
-    """
-
-    sigma: float = Field(DESCENT_STEP_MM, gt=0, le=1000)
-    margin: float = Field(1.0, gt=0, le=1.5)
-    boundary_pull_in: float = Field(0.0, ge=-20, le=40)
-    prior_low: tuple[float, float] = (-10.0 * RIG_SCALE, 0.7)
-    prior_high: tuple[float, float] = (10.0 * RIG_SCALE, 1.3)
+class RigModelChecks(ModelConfigBase):
+    """Physical limits of the model section's prior box (the base of the derived model section)."""
 
     @model_validator(mode="after")
-    def _check(self) -> "RigModelConfig":
-        check_rig_box("prior_low", self.prior_low)
-        check_rig_box("prior_high", self.prior_high)
+    def _check(self) -> "RigModelChecks":
+        check_rig_box("prior_low", self.prior_low)  # type: ignore[attr-defined]
+        check_rig_box("prior_high", self.prior_high)  # type: ignore[attr-defined]
         return self
 
 
-class RigSimulatorConfig(SimulatorConfigBase):
-    """The simulated rig: MuJoCo (touch-switch descent) or the analytic rig.
-
-    ``misread_rate`` is the probability that the switch reports the other outcome
-    (a bounce on the edge, a late close); ``aim_offset`` is the frame fault.
-    """
-
-    engine: str = "mujoco"
-    noise_sigma: float = Field(0.0, ge=0, le=1000)
-    misread_rate: float = Field(0.01, ge=0, lt=1)
-    aim_offset: float = Field(0.0, ge=-RIG_BOX_LIMIT_MM, le=RIG_BOX_LIMIT_MM)
-
-
-class RigConfig(TaskConfigBase):
-    """Tool insertion into a machined pocket by touch, at rig scale (paper Sec. V-D)."""
-
-    family: Literal["rig"] = "rig"
-    model: RigModelConfig = RigModelConfig()
-    simulator: RigSimulatorConfig = RigSimulatorConfig()
-    latent_names = ("x_hole", "c")
-    probe_dim = 1
+class RigConfigHooks(TaskConfigBase):
+    """The rig config's hooks (the base of the derived config): the simulated rig's settings and
+    the physical limits of a truth box."""
 
     def simulator_kwargs(self) -> dict[str, Any]:
-        sim = self.simulator
+        sim = self.simulator  # type: ignore[attr-defined]
         return {"noise_sigma": sim.noise_sigma, "misread_rate": sim.misread_rate, "aim_offset": sim.aim_offset}
 
     def check_truth_box(self, low, high, field: str) -> None:
@@ -74,4 +47,16 @@ class RigConfig(TaskConfigBase):
         check_rig_box(f"{field}.truth_high", high)
 
 
-__all__ = ["RigConfig", "RigModelConfig", "RigSimulatorConfig", "TOOL_RADIUS_MM"]
+__all__ = ["RIG_BOX_LIMIT_MM", "RigConfigHooks", "RigModelChecks", "check_rig_box"]
+
+
+def __getattr__(name: str):
+    """The derived config classes under their former names (``RigConfig`` is ``SPEC.config``), for
+    code written before the declaration; new code reads ``probecommit.tasks.rig.SPEC.config``."""
+    if name in ('RigConfig', 'RigModelConfig', 'RigSimulatorConfig'):
+        from probecommit.tasks.rig import SPEC
+
+        config = SPEC.config
+        return {"RigConfig": config, "RigModelConfig": config.model_fields["model"].annotation,
+                "RigSimulatorConfig": config.model_fields["simulator"].annotation}[name]
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

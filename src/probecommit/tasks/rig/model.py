@@ -40,6 +40,9 @@ ALLOWANCE_MM = 10.0
 POCKET_DEPTH_MM = 15.0 * RIG_SCALE
 #: Readings a touch-switch tap can physically give (mm): the start height down to the allowance.
 READING_RANGE_MM = (-ALLOWANCE_MM - 2.0, 2.0)
+#: Prior box on (x_hole [mm], c): the simulation's at rig scale.
+PRIOR_LOW = (-10.0 * RIG_SCALE, 0.7)
+PRIOR_HIGH = (10.0 * RIG_SCALE, 1.3)
 
 
 def rig_half_gap(c: np.ndarray) -> np.ndarray:
@@ -69,11 +72,11 @@ class RigModel(InsertionModel):
     variant: str = "deployed"
     sigma: float = DESCENT_STEP_MM
     margin: float = 1.0
-    prior_low: np.ndarray = field(default_factory=lambda: np.array([-10.0 * RIG_SCALE, 0.7]))
-    prior_high: np.ndarray = field(default_factory=lambda: np.array([10.0 * RIG_SCALE, 1.3]))
+    prior_low: np.ndarray = field(default_factory=lambda: np.array(PRIOR_LOW))
+    prior_high: np.ndarray = field(default_factory=lambda: np.array(PRIOR_HIGH))
     jitter_scale: np.ndarray = field(default_factory=lambda: np.array([0.6 * RIG_SCALE, 0.006]))
 
-    name = "rig"
+    # name, latent_names and context_names: from the declaration (probecommit.tasks.rig).
     #: Nine taps, the simulation's -12..12 mm in 3 mm steps at rig scale ``[9, 1]``.
     probe_grid = np.round(RIG_SCALE * InsertionModel.probe_grid, 10)
     #: 41 aims, the simulation's 0.5 mm grid over [-10, 10] mm at rig scale ``[41, 1]``.

@@ -22,25 +22,23 @@ sigma 5 cm, budgets 0, 2, 5, 512 particles and 18 x 6, nothing else):
 
 from __future__ import annotations
 
-from probecommit.tasks.base import TaskSpec
-from probecommit.tasks.registry import register
-from probecommit.tasks.shuffleboard.config import ShuffleboardConfig
-from probecommit.tasks.shuffleboard.model import ShuffleboardModel
+from probecommit.tasks.declare import Context, Declaration, Latent, family
+from probecommit.tasks.shuffleboard.model import PRIOR_HIGH, PRIOR_LOW, ShuffleboardModel
 
-
-def build_model(config: ShuffleboardConfig) -> ShuffleboardModel:
-    return ShuffleboardModel(**config.model.model_kwargs())
-
-
-SPEC = register(
-    TaskSpec(
-        name="shuffleboard",
-        config=ShuffleboardConfig,
-        build_model=build_model,
-        simulators={"sapien": "probecommit.tasks.shuffleboard.sim_sapien:SapienShuffleboardSimulator",
-                    "analytic": "probecommit.tasks.push1d.sim_analytic:AnalyticPush1DSimulator"},
-        summary={"latents": "mu, m, k_d", "probe": "strike / slide", "action": "strike",
-                 "sigma": "5 cm", "budgets": "0, 2, 5", "metric": "miss (m), mean / P90", "n": "18 x 6"},
-        example={"instances": {"contexts": [[1.5], [2.5]]}},
-    )
+DECLARATION = Declaration(
+    name="shuffleboard",
+    latents=(Latent("mu", "", PRIOR_LOW[0], PRIOR_HIGH[0], positive=True),
+             Latent("m", "kg", PRIOR_LOW[1], PRIOR_HIGH[1], positive=True),
+             Latent("k_d", "N s/m", PRIOR_LOW[2], PRIOR_HIGH[2], positive=True)),
+    probe_grid=ShuffleboardModel.probe_grid, action_grid=ShuffleboardModel.action_grid,
+    loss="continuous", sigma=0.05, sigma_limit=10, decision="mu",
+    contexts=(Context("target", "m", 1.5, 2.5, limits=(0.0, 50.0)),),
+    simulators={"sapien": "probecommit.tasks.shuffleboard.sim_sapien:SapienShuffleboardSimulator",
+                "analytic": "probecommit.tasks.push1d.sim_analytic:AnalyticPush1DSimulator"},
+    analytic=False,
+    summary={"probe": "strike / slide", "action": "strike",
+             "sigma": "5 cm", "budgets": "0, 2, 5", "metric": "miss (m), mean / P90", "n": "18 x 6"},
+    example={"instances": {"contexts": [[1.5], [2.5]]}},
+    doc="A puck struck along a board to stop at a target distance.",
 )
+SPEC = family(DECLARATION, ShuffleboardModel)

@@ -42,7 +42,7 @@ class ShuffleboardModel(Push1DModel):
     #: About 2.5 % of each prior width.
     jitter_scale: np.ndarray = field(default_factory=lambda: np.array([0.005, 0.01, 0.00625]))
 
-    name = "shuffleboard"
+    # name, latent_names and context_names: from the declaration (probecommit.tasks.shuffleboard).
     probe_grid = np.array(PROBE_STRIKES)[:, None]
     action_grid = ACTION_STRIKES[:, None]
     decision_domain_width = PRIOR_HIGH[0] - PRIOR_LOW[0]
