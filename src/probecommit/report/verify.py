@@ -130,7 +130,11 @@ def check_root(root: Path, report: Report) -> list[Path]:
     report.check("file", (root / REPRODUCTION_REL).is_file(),
                  f"{(root / REPRODUCTION_REL).resolve()}: no REPRODUCTION.md beside the publication")
     studies = sorted(p for p in root.iterdir() if p.is_dir())
-    listed = _read(path, report, "publication manifest", manifest_file=True) or {}
+    # read as JSON, not under the study-manifest rules: it names REPRODUCTION.md two levels up on purpose
+    listed = _read(path, report, "publication manifest") or {}
+    if not isinstance(listed, dict) or not isinstance(listed.get("sha256", {}), dict):
+        report.check("file", False, f"{path}: field 'sha256' must map each file to its digest")
+        listed = {}
     _hashes(root, listed.get("sha256", {}), manifest.root_files(root), report)
     named = set(listed.get("studies", []))
     for name in sorted(named ^ {p.name for p in studies}):
