@@ -92,6 +92,7 @@ def test_the_cli_audits_and_replays_a_push_session_log(tmp_path):
     log = simulate_session(tmp_path / "s", PUSH)
     audited = CliRunner().invoke(app, ["audit", str(log.parent)])
     assert audited.exit_code == 0, audited.output
-    assert "coverage" in audited.output and (log.parent / "audit" / "robot_table.csv").is_file()
+    # a session's audit goes beside it, <dir>-audit/ (the one output rule for every audited input)
+    assert "coverage" in audited.output and (log.parent.with_name(f"{log.parent.name}-audit") / "robot_table.csv").is_file()
     replayed = CliRunner().invoke(app, ["replay", str(log.parent)])
     assert replayed.exit_code == 0 and "recorded decisions reproduced: 1.000" in replayed.output
