@@ -190,6 +190,9 @@ def scan_boundary(simulator: Any, truths: pd.DataFrame | Iterable[tuple[float, f
 class _Queryable:
     """Adapter giving a bare simulator (named queries only) the ``query`` entry point."""
 
+    #: The declared Simulator attribute the scans read: a bare simulator answers one query at a time.
+    parallel_queries = False
+
     def __init__(self, sim: Any) -> None:
         self.sim = sim
 
