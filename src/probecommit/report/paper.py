@@ -135,10 +135,12 @@ def _breadth(root: Path, quick: bool, progress: Progress, workers: int) -> Path:
     table = run_breadth(families, folder / "runs", quick=quick, workers=workers)
     runs = {f: folder / "runs" / next(p.name for p in (folder / "runs").iterdir()
                                       if p.name == f or p.name == f"{f}-quick") for f in families}
-    curves = budget_curves(runs)
+    # The curves read the episodes Table II reads (grasp: its feasible truths), the ones stored for verify.
+    episodes_of = breadth_episodes(families, runs, quick)
+    curves = budget_curves(episodes_of)
     progress("breadth: families", len(families), len(families))
     sign_flips = {}
-    store_breadth_episodes(families, runs, quick, results / "breadth_episodes.parquet")
+    store_breadth_episodes(episodes_of, results / "breadth_episodes.parquet")
     for family in (f for f in families if f in SUCCESS_FAMILIES):
         config = paper_config(family)
         config = quick_config(config) if quick else config
@@ -166,22 +168,27 @@ def _breadth(root: Path, quick: bool, progress: Progress, workers: int) -> Path:
     return results
 
 
-def store_breadth_episodes(families: tuple[str, ...], runs: dict[str, Path], quick: bool, path: Path) -> None:
-    """Every family's episodes as Table II reads them (grasp: its feasible truths), one compact file:
-    verify recomputes Table II and the budget curves from it."""
-    import pandas as pd
-
+def breadth_episodes(families: tuple[str, ...], runs: dict[str, Path], quick: bool) -> dict[str, Any]:
+    """Every family's episodes as Table II reads them (grasp: its feasible truths)."""
     from probecommit.studies.breadth import (SUCCESS_FAMILIES, feasible_episodes, paper_config, quick_config,
                                              read_episodes)
 
-    frames = []
+    out = {}
     for family in families:
         episodes = read_episodes(runs[family])
         if family in SUCCESS_FAMILIES:
             config = paper_config(family)
             episodes = feasible_episodes(quick_config(config) if quick else config, runs[family], episodes)
-        frames.append(episodes.assign(family=family))
-    table = pd.concat(frames, ignore_index=True)
+        out[family] = episodes
+    return out
+
+
+def store_breadth_episodes(episodes_of: dict[str, Any], path: Path) -> None:
+    """The episodes of :func:`breadth_episodes` in one compact file: verify recomputes Table II and
+    the budget curves from it."""
+    import pandas as pd
+
+    table = pd.concat([e.assign(family=f) for f, e in episodes_of.items()], ignore_index=True)
     write_with(path, lambda buf: table.to_parquet(buf, compression="zstd", index=False))
 
 
