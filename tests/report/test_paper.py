@@ -71,3 +71,16 @@ def test_publishing_a_target_again_drops_files_it_no_longer_makes(tmp_path):
     dest = paper.publish({"robot": second}, tmp_path / "repo") / "robot"
     assert sorted(p.name for p in dest.iterdir()) == ["MANIFEST.json", "results.json",
                                                       "table_VII_hardware_simulated_rig.md"]
+
+
+def test_with_model_switches_the_model_a_replay_builds():
+    """The decisive-tap figure replays the development run under the corrected model: the copy
+    must reach the task section (a copy of the study config's ``model`` property changed nothing)."""
+    from probecommit.report.reproduce import with_model
+    from probecommit.runner.config import parse_config
+    from probecommit.runner.build import build_model
+
+    cfg = parse_config({"name": "t", "task": "insertion", "instances": {"count": 1}})
+    new = with_model(cfg, boundary="corrected", delta=0.905)
+    assert (cfg.model.boundary, new.model.boundary) == ("deployed", "corrected")
+    assert build_model(new).variant == "corrected" and build_model(cfg).variant == "deployed"

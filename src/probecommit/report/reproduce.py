@@ -44,6 +44,16 @@ def _noop(step: str, done: int, total: int) -> None:
     return None
 
 
+def with_model(config: Any, **fields: Any) -> Any:
+    """``config`` with its family's model section updated by ``fields``.
+
+    ``StudyConfig.model`` is a property over ``task.model``: a copy must update the task
+    section (``model_copy(update={"model": ...})`` on the study config changes nothing).
+    """
+    task = config.task.model_copy(update={"model": config.task.model.model_copy(update=fields)})
+    return config.model_copy(update={"task": task})
+
+
 @dataclass
 class Reproduction:
     """Where everything went, and the numbers."""
@@ -435,7 +445,7 @@ class InsertionReproduction:
         dev = self.loaded["dev_random"]
         p = self.p
         trace_old, model_old, _ = trace_for_run(dev)
-        cfg_new = dev.config.model_copy(update={"model": dev.config.model.model_copy(update={"boundary": "corrected", "delta": p.delta})})
+        cfg_new = with_model(dev.config, boundary="corrected", delta=p.delta)
         trace_new, model_new, _ = trace_for_run(dev, cfg_new)
         batch = trace_old.batch
         for k in trace_old.budgets:
