@@ -466,7 +466,7 @@ class InsertionReproduction:
                 e = int(hits[0])
                 path = decisive_tap_figure(
                     z[e], now.weights[e], kept_new[e], trace_new.states[k].weights[e], float(z_true[e]),
-                    float(batch.u[e, k - 1]), float(batch.y[e, k - 1, 0]),
+                    float(np.ravel(batch.u[e, k - 1])[0]), float(np.ravel(batch.y[e, k - 1])[0]),
                     f"after tap {k}", self.out / "fig_4b_teaser_decisive_tap.png")  # no internal ids in a title
                 self.rep.figures["decisive_tap"] = str(path)
                 return
