@@ -25,6 +25,7 @@ import struct
 import zlib
 from pathlib import Path
 from typing import Any
+from probecommit.store.manifest_rules import sha256_file
 from probecommit.store.safefile import write_bytes, write_text
 
 MANIFEST = "MANIFEST.json"
@@ -48,14 +49,6 @@ FIGURE_DATA: dict[str, dict[str, tuple[str, ...]]] = {
 }
 #: Figures drawn from code alone (no data): verify draws them again and compares the bytes.
 CODE_FIGURES: dict[str, tuple[str, ...]] = {"figures": ("fig_2_pipeline",)}
-
-
-def sha256_file(path: Path) -> str:
-    digest = hashlib.sha256()
-    with open(path, "rb") as handle:
-        for block in iter(lambda: handle.read(1 << 20), b""):
-            digest.update(block)
-    return digest.hexdigest()
 
 
 def data_digest(folder: Path, names: tuple[str, ...] | list[str]) -> str:

@@ -18,6 +18,7 @@ from typing import Any, Sequence
 import yaml
 
 from probecommit.errors import UsageError
+from probecommit.store.yamlsafe import YamlError, load_yaml
 from probecommit.runner.config import ConfigError, StudyConfig, config_data, load_config, parse_config
 
 _KEY = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*(\.[A-Za-z_][A-Za-z0-9_]*)*$")
@@ -31,9 +32,9 @@ def parse_override(item: str) -> Override:
     key = key.strip()
     if not eq or not _KEY.match(key):
         raise UsageError(f"an override is KEY=VALUE with a dotted key (e.g. model.sigma=0.4), got {item!r}")
-    try:
-        return key, yaml.safe_load(value) if value.strip() else None
-    except yaml.YAMLError:
+    try:  # the one bounded loader (size, aliases and merge keys, depth), as for --set and config files
+        return key, load_yaml(value, f"override {key}") if value.strip() else None
+    except YamlError:
         raise UsageError(f"override {key}: {value!r} is not a YAML value") from None
 
 

@@ -25,7 +25,8 @@ class ManifestError(UserError, ValueError):
     """A manifest that is malformed, incomplete, or disagrees with the files; the message names them."""
 
 
-def _sha256(path: Path) -> str:
+def sha256_file(path: Path) -> str:
+    """The sha256 of a file, read in 1 MiB blocks (a table is never held whole for its digest)."""
     digest = hashlib.sha256()
     with open(path, "rb") as fh:
         for block in iter(lambda: fh.read(1 << 20), b""):
@@ -95,7 +96,7 @@ def verify_files(path: str | Path, required: Iterable[str]) -> dict[str, Any]:
         file = path.parent / name
         if not file.is_file():
             raise ManifestError(f"{file}: listed in {path.name} but missing")
-        if _sha256(file) != digest:
+        if sha256_file(file) != digest:
             raise ManifestError(f"{file} changed since {path.name} was written (sha256 differs); refusing an "
                                 "altered file")
     return data

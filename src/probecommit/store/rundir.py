@@ -44,7 +44,7 @@ import pyarrow.compute as pc
 import pyarrow.parquet as pq
 
 from probecommit import __version__
-from probecommit.store.manifest_rules import ManifestError, read_manifest
+from probecommit.store.manifest_rules import ManifestError, read_manifest, sha256_file
 from probecommit.store.yamlsafe import YamlError, load_yaml
 from probecommit.store import batches
 from probecommit.store.schema import (EPISODE_COLUMNS, INSTANCE_COLUMNS, PROBE_COLUMNS, Column, float_matrix,
@@ -234,10 +234,6 @@ def config_difference(old_yaml: str, new_yaml: str) -> str:
         if old.get(key, "<unset>") != new.get(key, "<unset>"):
             return f"{key} is {old.get(key, '<unset>')!r} there, {new.get(key, '<unset>')!r} here"
     return "the config text differs"
-
-
-def sha256_file(path: Path) -> str:
-    return hashlib.sha256(path.read_bytes()).hexdigest()
 
 
 def git_commit() -> str | None:
