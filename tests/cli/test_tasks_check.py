@@ -33,3 +33,16 @@ def test_a_failing_family_exits_1_naming_the_declaration(monkeypatch):
 def test_an_unknown_family_is_one_line():
     result = CliRunner().invoke(app, ["tasks", "--check", "juggling"])
     assert result.exit_code == 2 and result.output.startswith("error: unknown task family 'juggling'")
+
+
+def test_every_engine_hint_names_an_extra_that_exists():
+    """`probecommit tasks` tells a user `pip install 'probecommit[EXTRA]'` for a missing engine:
+    each EXTRA must be one pyproject declares (the Gymnasium engine's extra is `gym`)."""
+    import tomllib
+    from pathlib import Path
+
+    from probecommit.runner.family_check import ENGINE_EXTRAS, ENGINE_PACKAGES
+
+    extras = tomllib.loads((Path(__file__).parents[2] / "pyproject.toml").read_text())["project"]["optional-dependencies"]
+    assert set(ENGINE_PACKAGES) == set(ENGINE_EXTRAS)
+    assert all(extra in extras for extra in ENGINE_EXTRAS.values())

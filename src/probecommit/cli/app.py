@@ -240,14 +240,13 @@ def tasks(
                                         help="Run check_family on family NAME (each failure names the declaration to fix)."),
 ) -> None:
     """List every registered task family: engines, latents, probe, action, sigma, budgets (Table I)."""
-    import importlib.util
-
     if check is not None:
         from probecommit.cli.check_command import check_command
 
         check_command(check)
         return
 
+    from probecommit.runner.family_check import ENGINE_EXTRAS, installed
     from probecommit.tasks.registry import families
 
     table = Table(title="registered task families", title_style="bold", box=box.SIMPLE_HEAD, padding=(0, 1))
@@ -257,9 +256,8 @@ def tasks(
         model = spec.build_model(spec.config())
         engines = []
         for engine in spec.engines:
-            # An engine whose package is missing is shown with the extra that installs it.
-            missing = engine != "analytic" and importlib.util.find_spec(engine) is None
-            engines.append(f"{engine} (pip install 'probecommit[{engine}]')" if missing else engine)
+            # An engine whose package is missing is shown with the extra that installs it (one rule: check_family's).
+            engines.append(engine if installed(engine) else f"{engine} (pip install 'probecommit[{ENGINE_EXTRAS[engine]}]')")
         s = spec.summary
         table.add_row(
             escape(name), escape(", ".join(engines)), escape(", ".join(model.latent_names)),

@@ -285,8 +285,10 @@ def _study(spec: TaskSpec, engine: str) -> None:
                           "a replay under the same model does not reproduce the episodes") from None
 
 
-#: Engines that are packages to install; any other engine name is a family's own code (always runs).
-ENGINE_PACKAGES = ("mujoco", "pybullet", "sapien", "gymnasium")
+#: Engines that are packages to install, with the extra that installs each; any other engine name is
+#: a family's own code (always runs).
+ENGINE_EXTRAS = {"mujoco": "mujoco", "pybullet": "pybullet", "sapien": "sapien", "gymnasium": "gym"}
+ENGINE_PACKAGES = tuple(ENGINE_EXTRAS)
 
 
 def installed(engine: str) -> bool:
