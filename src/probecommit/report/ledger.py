@@ -130,15 +130,14 @@ def resolve(key: str, root: str | Path, extra: dict[str, Any] | None = None) -> 
     Dotted parts are tried greedily: a dict key may itself contain dots (``"B.cost_table"``).
     """
     prefix, _, path = key.partition(":")
-    if extra and prefix in extra:
-        node: Any = extra[prefix]
-    elif prefix == "claims":
-        node = json.loads((Path(root) / "claims.json").read_text())
-    elif prefix == "reproduction":
-        node = json.loads((Path(root) / "reproduction.json").read_text())
-    else:
-        node = json.loads((Path(root) / prefix / "results.json").read_text())
+    node = extra[prefix] if extra and prefix in extra else load_tree(prefix, root)
     return _walk_dotted(node, path.split(".") if path else [])
+
+
+def load_tree(prefix: str, root: str | Path) -> Any:
+    """The JSON file a key prefix names: ``claims.json``, ``reproduction.json`` or ``<study>/results.json``."""
+    name = {"claims": "claims.json", "reproduction": "reproduction.json"}.get(prefix, f"{prefix}/results.json")
+    return json.loads((Path(root) / name).read_text())
 
 
 def _walk_dotted(node: Any, parts: list[str]) -> Any:
@@ -162,12 +161,16 @@ def check(entries: list[Entry], root: str | Path, extra: dict[str, Any] | None =
     """Problems with a ledger: each entry's key re-resolved and re-formatted, and its text found."""
     texts: dict[str, str] = {}
     cursor: dict[str, int] = {}
+    trees: dict[str, Any] = dict(extra or {})  # each JSON file read once, not once per entry
     for e in entries:
         if e.fmt == LITERAL:
             yield from _find(e, root, texts, cursor)
             continue
         try:
-            value = resolve(e.key, root, extra)
+            prefix = e.key.partition(":")[0]
+            if prefix not in trees:
+                trees[prefix] = load_tree(prefix, root)
+            value = resolve(e.key, root, trees)
             again = format_value(value, e.fmt)
         except (KeyError, IndexError, ValueError, TypeError, FileNotFoundError) as exc:
             yield f"{e.file}: {e.text} names {e.key}, which does not resolve ({exc})"
