@@ -7,9 +7,12 @@ import dataclasses
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from pydantic import Field, ValidationError
 
 from probecommit.tasks.base import TaskModelBase
+from probecommit.tasks.config import FieldError
 from probecommit.tasks.declare import Declaration, DeclaredModel, Latent, family
 from probecommit.tasks.registry import builtin_packages, families, unregister
 
@@ -114,3 +117,20 @@ def test_a_model_class_of_its_own_takes_its_names_from_the_declaration(registere
         family(_decl(), Own, register=False)
     with pytest.raises(TypeError, match="DeclaredModel"):
         family(_decl(), object, register=False)
+
+
+@settings(max_examples=40, deadline=None)
+@given(low=st.tuples(st.floats(-5, 5), st.floats(-5, 5)))
+def test_positivity_is_checked_per_latent_by_the_base_rule(low):
+    """One rule (``TaskConfigBase.check_truth_box`` over ``positive_mask()``) for every family:
+    a non-positive start is refused exactly on the latents declared positive, and named."""
+    decl = _decl(name="mixed_decl", latents=(Latent("k", "", 1.0, 2.0, positive=True), Latent("b", "", -1.0, 1.0)))
+    config = family(decl, _Line, register=False).config
+    assert config.positive_mask() == (True, False)
+    high = tuple(v + 1.0 for v in low)
+    if low[0] <= 0:
+        with pytest.raises(FieldError, match=r"truth_low.*\bk must be positive") as err:
+            config.model_construct().check_truth_box(low, high, "truths")
+        assert " b " not in str(err.value) and "b must" not in str(err.value)
+    else:
+        config.model_construct().check_truth_box(low, high, "truths")

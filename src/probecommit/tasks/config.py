@@ -163,7 +163,8 @@ class TaskConfigBase(BaseModel):
         if any(not np.isfinite(v) or abs(v) > 1e9 for v in (*low, *high)):
             raise FieldError(f"{field}.truth_high", f"values must be finite and below 1e9 in magnitude, got "
                              f"{list(low)} .. {list(high)}")
-        if self.positive_latents and any(v <= 0 for v in low):
-            names = self.latent_names
-            listed = names[0] if len(names) == 1 else f"{', '.join(names[:-1])} and {names[-1]}"
+        mask = self.positive_mask()
+        bad = [name for name, positive, v in zip(self.latent_names, mask, low) if positive and v <= 0]
+        if bad:
+            listed = bad[0] if len(bad) == 1 else f"{', '.join(bad[:-1])} and {bad[-1]}"
             raise FieldError(f"{field}.truth_low", f"{listed} must be positive, got {list(low)}")

@@ -23,7 +23,7 @@ import numpy as np
 from pydantic import Field, create_model
 
 from probecommit.tasks.base import NoisySimulator, TaskModelBase, TaskSpec, as_rows
-from probecommit.tasks.config import FieldError, ModelConfigBase, SimulatorConfigBase, TaskConfigBase
+from probecommit.tasks.config import ModelConfigBase, SimulatorConfigBase, TaskConfigBase
 
 
 @dataclass(frozen=True)
@@ -325,11 +325,6 @@ def _config_class(decl: Declaration) -> type:
     )
     positive = tuple(lat.positive for lat in decl.latents)
 
-    def check_truth_box(self, low, high, field):  # noqa: ANN001 - the TaskConfigBase hook
-        decl.config_base.check_truth_box(self, low, high, field)
-        bad = [lat.name for lat, v in zip(decl.latents, low) if lat.positive and v <= 0]
-        if bad:
-            raise FieldError(f"{field}.truth_low", f"{', '.join(bad)} must be positive, got {list(low)}")
 
     config = create_model(
         f"{decl.name}_config", __base__=decl.config_base,
@@ -343,7 +338,6 @@ def _config_class(decl: Declaration) -> type:
     config.probe_dim = decl.probes().shape[1]
     config.positive_latents = all(positive)
     config.latent_positive = positive
-    config.check_truth_box = check_truth_box
     config.__doc__ = decl.doc or f"Config of the declared family {decl.name!r}."
     return config
 

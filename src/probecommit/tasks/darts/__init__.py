@@ -44,7 +44,6 @@ DECLARATION = Declaration(
     analytic=False,
     summary={"probe": "throw / landing point", "action": "launch (v, alpha)",
              "sigma": "2 cm", "budgets": "0, 2, 5", "metric": "miss (m)", "n": "18 x 8"},
-    example={"instances": {"contexts": [[2.0], [3.0]]}},
     doc="A dart thrown with linear drag to land at a target distance.",
 )
 SPEC = family(DECLARATION, DartsModel)

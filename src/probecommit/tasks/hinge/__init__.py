@@ -42,7 +42,6 @@ DECLARATION = Declaration(
     analytic=False,
     summary={"probe": "coast / stop angle", "action": "release speed (torque)",
              "sigma": "0.02 rad", "budgets": "0, 2, 5", "metric": "miss (rad)", "n": "18 x 16"},
-    example={"instances": {"contexts": [[0.5], [1.0]]}},
     doc="A door on a hinge released to coast to a target angle.",
 )
 SPEC = family(DECLARATION, HingeModel)

@@ -39,7 +39,6 @@ DECLARATION = Declaration(
     simulators={"analytic": "probecommit.tasks.push1d.sim_analytic:AnalyticPush1DSimulator"}, analytic=False,
     summary={"probe": "pulse / slide distance", "action": "impulse",
              "sigma": "5 cm", "budgets": "0, 2, 5", "metric": "miss (m)", "n": "81 x 6"},
-    example={"instances": {"contexts": [[0.5], [1.0]]}},
     doc="A box pushed along a line by an impulse to stop at a target distance.",
 )
 SPEC = family(DECLARATION, Push1DModel)

@@ -49,7 +49,6 @@ DECLARATION = Declaration(
     analytic=False,
     summary={"probe": "pulse / 2-D rest", "action": "2-D impulse",
              "sigma": "5 cm", "budgets": "0, 2, 5", "metric": "miss (m)", "n": "18 x 6"},
-    example={"instances": {"contexts": [[0.469846, -0.171010], [0.866025, 0.5]]}},
     doc="A box on a plane struck by a 2-D impulse to stop at a 2-D target.",
 )
 SPEC = family(DECLARATION, Push2DModel)

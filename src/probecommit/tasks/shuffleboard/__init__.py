@@ -38,7 +38,6 @@ DECLARATION = Declaration(
     analytic=False,
     summary={"probe": "strike / slide", "action": "strike",
              "sigma": "5 cm", "budgets": "0, 2, 5", "metric": "miss (m), mean / P90", "n": "18 x 6"},
-    example={"instances": {"contexts": [[1.5], [2.5]]}},
     doc="A puck struck along a board to stop at a target distance.",
 )
 SPEC = family(DECLARATION, ShuffleboardModel)
