@@ -349,13 +349,12 @@ def summarize_engine_runs(episodes: pd.DataFrame, resamples: int, seed: int) -> 
         audits[(engine, variant)] = audit_table(part[part["method"] == "probe_robust"], **boot)
         per_k = part[(part["method"] == "probe_robust") & (part["status"] == "ok")].groupby("k")["escaped"].mean()
         escape_rows += [{"engine": engine, "variant": variant, "k": int(k), "escape": float(v)} for k, v in per_k.items()]
-    for engine, part in episodes.groupby("engine", sort=False):
-        deployed = part[part["variant"] == "deployed"]
+    final = episodes[(episodes["method"] == "probe_robust") & (episodes["k"] == 8)]
+    for engine, part in final.groupby("engine", sort=False):
+        b = part[part["variant"] == "deployed"].drop(columns=["engine", "variant"]).reset_index(drop=True)
         for variant in ("mj_offset", "own_scan"):
-            treat = part[part["variant"] == variant]
-            b = deployed[(deployed["method"] == "probe_robust") & (deployed["k"] == 8)].drop(columns=["engine", "variant"])
-            t = treat[(treat["method"] == "probe_robust") & (treat["k"] == 8)].drop(columns=["engine", "variant"])
-            diff = paired_bootstrap(b.reset_index(drop=True), t.reset_index(drop=True), "realized", **boot).difference
+            t = part[part["variant"] == variant].drop(columns=["engine", "variant"]).reset_index(drop=True)
+            diff = paired_bootstrap(b, t, "realized", **boot).difference
             paired_rows.append({"engine": engine, "variant": variant,
                                 "failure_difference": [diff.estimate, diff.lo, diff.hi]})
     return engines_table(audits, k=8), paired_rows, pd.DataFrame(escape_rows)
