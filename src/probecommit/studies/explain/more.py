@@ -8,11 +8,11 @@ from __future__ import annotations
 
 from typing import Any
 
-from probecommit.studies.explain import searches
+from probecommit.studies.explain import rig, searches
 from probecommit.studies.paper_values import PAPER, value
 
 #: Result groups these steps fill (added to ``Explain.res``).
-GROUPS = ("searches",)
+GROUPS = ("searches", "rig_redraws")
 
 
 def run(job: Any) -> None:
@@ -23,3 +23,5 @@ def run(job: Any) -> None:
     paper = {f: value(f"T42-robust-chosen.{f}") for f in ("tempering", "mixture", "rejuvenation")}
     s.update({f"robust.{k}": v for k, v in searches.robust_stability(job.load("dev_random"), job.p.robust, paper,
                                                                       job.boot).items()})
+    job.progress("explain: the simulated rig redrawn", 0, 1)
+    job.res["rig_redraws"].update(rig.run(job.runs, job.cfg, job.boot, job.quick))
