@@ -105,3 +105,51 @@ def span_summary(rows: dict[float, dict[str, float]], paper: dict[str, float]) -
     out["probing_reduces_everywhere"] = float(all(r["probe_robust"] < min(r["blind_bayes"], r["blind_robust"])
                                                   for r in rows.values()))
     return out
+
+
+def paper_cells(family: str) -> dict[str, float]:
+    """The paper's Table II cells of ``family`` and its break-even prices (in our units)."""
+    from probecommit.studies.paper_values import PRINTED, value
+
+    out = {c: value(f"tab:breadth.{family}.{c}") for c in COLUMNS if f"tab:breadth.{family}.{c}" in PRINTED}
+    for kind in ("blind_above", "five_below"):
+        key = f"T01-pricing.{kind}.{family}"
+        if key in PRINTED:
+            out[f"price.{kind}"] = value(key) * (1.0 if family == "hinge" else 0.01)
+    return out
+
+
+def frozen_row(root: Path, family: str) -> dict[str, float] | None:
+    """The frozen study's row (s = 1, the paper's instance counts) and prices, when published under ``root``."""
+    import json
+
+    table, cost = root / "breadth" / "results" / "results.json", root / "cost" / "results" / "results.json"
+    if not table.is_file():
+        return None
+    row = json.loads(table.read_text())["results"]["table_II"].get(family)
+    if row is None:
+        return None
+    out = {f"{c}{s}": float(row[f"{c}{s}"]) for c in (*COLUMNS, "paired") for s in ("", "_lo", "_hi")}
+    if cost.is_file():
+        prices = json.loads(cost.read_text())["results"]["prices"].get(family, {})
+        out.update({f"price.{k}": float(prices[k]) for k in ("blind_above", "five_below") if k in prices})
+    return out
+
+
+def run(root: Path, runs: Path, cfg: dict[str, Any], boot: dict[str, Any], quick: bool) -> dict[str, Any]:
+    """Every family's prior sweep and its span summary; keys of ``explain:results.breadth_prior``."""
+    suffix = "_quick" if quick else ""
+    scales = [float(s) for s in cfg[f"breadth_prior_scales{suffix}"]]
+    engines = cfg.get("breadth_prior_engines", {})
+    out: dict[str, Any] = {"scales": scales}
+    for family in cfg[f"breadth_prior_families{suffix}"]:
+        rows = sweep_family(family, scales, runs, boot, engine=engines.get(family),
+                            repeats=int(cfg["breadth_prior_repeats"]), quick=quick)
+        frozen = None if quick else frozen_row(root, family)
+        if frozen is not None:
+            rows[1.0] = frozen
+        for s, row in rows.items():
+            out.update({f"{family}.s{s:g}.{k}": v for k, v in row.items()})
+        out.update({f"{family}.{k}": v for k, v in span_summary(rows, paper_cells(family)).items()})
+        out[f"{family}.widths"] = len(rows)
+    return out

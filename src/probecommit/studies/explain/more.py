@@ -8,11 +8,11 @@ from __future__ import annotations
 
 from typing import Any
 
-from probecommit.studies.explain import rig, searches
+from probecommit.studies.explain import breadth, rig, searches
 from probecommit.studies.paper_values import PAPER, value
 
 #: Result groups these steps fill (added to ``Explain.res``).
-GROUPS = ("searches", "rig_redraws")
+GROUPS = ("searches", "rig_redraws", "breadth_prior")
 
 
 def run(job: Any) -> None:
@@ -25,3 +25,5 @@ def run(job: Any) -> None:
                                                                       job.boot).items()})
     job.progress("explain: the simulated rig redrawn", 0, 1)
     job.res["rig_redraws"].update(rig.run(job.runs, job.cfg, job.boot, job.quick))
+    job.progress("explain: Table II's families over the prior's width", 0, 1)
+    job.res["breadth_prior"].update(breadth.run(job.root, job.runs, job.cfg, job.boot, job.quick))
