@@ -65,10 +65,10 @@ def test_paper_cells_read_the_papers_row_and_prices_in_our_units():
 
 def test_ex2_experiments_are_numbered_30_to_49_and_wired_to_their_claims():
     mine = {n for n in claims.EXPERIMENTS if 30 <= int(n[1:]) <= 49}
-    assert {"E31", "E32", "E33", "E34", *(f"E{i}" for i in range(35, 45))} == mine
+    assert {"E30", "E31", "E32", "E33", "E34", *(f"E{i}" for i in range(35, 45))} == mine
     by_id = {c.id: c for c in claims.CLAIMS}
     wired = {e if isinstance(e, str) else e[0] for cid in ("tab:breadth", "T01-pricing", "T07-cover-schedule",
-                                                           "T26-hardware-optimism", "T28-replay-boundary",
+                                                           "T26-hardware-optimism", "T28-replay-boundary", "T18-engine-scans",
                                                            "T42-robust-chosen") for e in by_id[cid].explain}
     assert mine <= wired
 
@@ -87,3 +87,12 @@ def test_a_breadth_experiment_that_does_not_bear_its_cause_out_explains_nothing(
     assert not e.supports({**good, "mpl": -0.001})
     assert not e.supports({**good, "red": 0.0})
     assert not math.isnan(good["mpl"])
+
+
+def test_mean_interval_by_hand():
+    from probecommit.studies.explain.engines_x import mean_interval
+
+    mean, lo, hi = mean_interval(1.21, 0.69, 24)
+    assert mean == 1.21
+    assert hi - mean == pytest.approx(1.959963984540054 * 0.69 / 24 ** 0.5)
+    assert (lo, hi) == pytest.approx((0.934, 1.486), abs=1e-3)

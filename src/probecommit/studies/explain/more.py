@@ -8,15 +8,16 @@ from __future__ import annotations
 
 from typing import Any
 
-from probecommit.studies.explain import breadth, rig, searches
+from probecommit.studies.explain import breadth, engines_x, rig, searches
 from probecommit.studies.paper_values import PAPER, value
 
 #: Result groups these steps fill (added to ``Explain.res``).
-GROUPS = ("searches", "rig_redraws", "breadth_prior")
+GROUPS = ("engines_x", "searches", "rig_redraws", "breadth_prior")
 
 
 def run(job: Any) -> None:
     """Every step, in order of cost (cheapest first)."""
+    job.res["engines_x"].update(engines_x.run(job.root))
     job.progress("explain: development searches resampled", 0, 1)
     s = job.res["searches"]
     s.update({f"cover.{k}": v for k, v in searches.cover_stability(job.p, PAPER["cover.schedule"], job.boot).items()})
