@@ -57,7 +57,8 @@ def row_and_prices(episodes: Any, family: str, boot: dict[str, Any]) -> dict[str
     row = breadth_row(episodes, family, FAMILY_K.get(family, 5), resamples=boot["resamples"], seed=boot["seed"])
     out = {f"{c}{s}": float(row[f"{c}{s}"]) for c in (*COLUMNS, "paired") for s in ("", "_lo", "_hi")}
     curve = budget_curve(episodes, family, resamples=2, seed=0).set_index(["method", "k"])["mean"]
-    m0, m2, m5 = (float(curve.get(key, math.nan)) for key in (("blind_robust", 0), ("probe_robust", 2), ("probe_robust", 5)))
+    keys = (("blind_robust", 0), ("probe_robust", 2), ("probe_robust", 5))
+    m0, m2, m5 = (float(curve.get(key, math.nan)) for key in keys)
     if not np.isnan([m0, m2, m5]).any():
         p = break_even(m0, m2, m5)
         out["price.blind_above"], out["price.five_below"] = p.blind_above, p.five_below

@@ -64,5 +64,6 @@ def choice_stability(values: np.ndarray, clusters: Sequence, target: int, *, sec
     sec_means = None if sec_sums is None else (counts @ sec_sums) / (counts @ n)[:, None]
     chosen = winners(means, sec_means)
     lo, hi = percentile_interval(means[:, target] - means[:, win])
-    return {"winner": win, "share_target": float(np.mean(chosen == target)), "share_winner": float(np.mean(chosen == win)),
+    return {"winner": win, "share_target": float(np.mean(chosen == target)),
+            "share_winner": float(np.mean(chosen == win)),
             "gap": [float(full[target] - full[win]), float(lo), float(hi)]}

@@ -23,7 +23,8 @@ from probecommit.studies.explain.choice import choice_stability
 from probecommit.studies.robust import robust_candidates
 
 
-def cover_episodes(protocol: Any, limit: int | None = None) -> tuple[list[tuple[float, ...]], pd.DataFrame, pd.DataFrame]:
+def cover_episodes(protocol: Any,
+                   limit: int | None = None) -> tuple[list[tuple[float, ...]], pd.DataFrame, pd.DataFrame]:
     """Every candidate schedule's per-episode failure and aim error on the development instances.
 
     The frozen search's own steps (``studies.cover_search``), kept per episode: returns the
@@ -47,7 +48,8 @@ def cover_episodes(protocol: Any, limit: int | None = None) -> tuple[list[tuple[
     return candidates, pd.DataFrame(fail).assign(instance_id=ids), pd.DataFrame(aim).assign(instance_id=ids)
 
 
-def cover_stability(protocol: Any, paper_schedule: list[float], boot: dict[str, Any], limit: int | None = None) -> dict[str, Any]:
+def cover_stability(protocol: Any, paper_schedule: list[float], boot: dict[str, Any],
+                    limit: int | None = None) -> dict[str, Any]:
     """The cover search resampled over development instances; keys of ``explain:results.searches.cover.*``."""
     candidates, fail, aim = cover_episodes(protocol, limit)
     paper = tuple(float(u) for u in paper_schedule)
@@ -70,7 +72,8 @@ def cover_stability(protocol: Any, paper_schedule: list[float], boot: dict[str, 
     return out
 
 
-def robust_stability(development: LoadedRun, robust: Any, paper: dict[str, float], boot: dict[str, Any]) -> dict[str, Any]:
+def robust_stability(development: LoadedRun, robust: Any, paper: dict[str, float],
+                     boot: dict[str, Any]) -> dict[str, Any]:
     """The robust filters' development tuning resampled: share choosing the paper's value, and the gap.
 
     Per-episode final-budget failure of every grid value of each family (the tuning's
