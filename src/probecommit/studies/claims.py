@@ -889,7 +889,7 @@ def _experiments_more() -> list[Experiment]:
                    "replaying {n:d} fresh draws of the rig's block positions (simulated rig) with the tap boundary pulled "
                    "inward, optimism first resolves at a median {f:g} mm (2.5-97.5 % of sessions: {flo:g} to {fhi:g} mm) "
                    "and coverage holds to a median {h:g} mm ({hlo:g} to {hhi:g} mm; {end:.3f} of sessions hold through the "
-                   "whole 14 mm sweep).",
+                   "whole sweep).",
                    supports=lambda v: v["flo"] <= _pv("T28-replay-boundary.first_mm") <= v["fhi"]
                    and v["hhi"] >= _pv("T28-replay-boundary.coverage_holds_mm")),
     ] + _breadth_prior_experiments()
@@ -910,7 +910,8 @@ def _breadth_prior_experiments() -> list[Experiment]:
             f"E{35 + i}", f"{fam} with the prior's width swept (the scene property the paper does not report)",
             {"n": f"{b}widths", "inside": f"{b}cells_inside", "cells": f"{b}cells", "mpl": f"{b}min_paired_lo",
              "red": f"{b}probing_reduces_everywhere"},
-            "over {n:d} prior widths (1/8 to 1.25 of ours, truths at the same relative positions), {inside:g} of the "
+            "over {n:d} prior widths (the declared scales of our prior about its centre, ours included; truths at the "
+            "same relative positions), {inside:g} of the "
             "paper's {cells:g} cells of this row lie inside the span of our intervals; probing reduces the miss at "
             "every width ({red:g} = yes) and the paired reduction Blind-Bayes - Probe-Robust excludes zero at every "
             "width (lowest lower bound {mpl:+.3f}).",
