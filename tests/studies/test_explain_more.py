@@ -96,3 +96,26 @@ def test_mean_interval_by_hand():
     assert mean == 1.21
     assert hi - mean == pytest.approx(1.959963984540054 * 0.69 / 24 ** 0.5)
     assert (lo, hi) == pytest.approx((0.934, 1.486), abs=1e-3)
+
+
+@pytest.mark.slow
+def test_rig_redraw_at_the_frozen_seed_gives_the_robot_studys_numbers(tmp_path):
+    """Two paths, one answer: a "redraw" at the frozen positions' seed is the robot study's own session."""
+    from probecommit.audit.stats import DEFAULT_SEED
+    from probecommit.studies.explain import rig
+    from probecommit.studies.robot import rig_config, run_robot_study
+
+    boot = {"resamples": 200, "seed": DEFAULT_SEED}
+    frozen_seed = int(rig_config(quick=True).instances.seed)
+    sessions = rig.redrawn_sessions(tmp_path / "redraws", [frozen_seed], quick=True)
+    study = run_robot_study(tmp_path / "study", quick=True, resamples=200)
+    opt, table = rig.optimism_redraws(sessions, boot)
+    assert opt["sessions"] == 1
+    own = study.table.set_index("taps")["optimism"]
+    assert table.set_index("taps")["optimism"].to_dict() == pytest.approx(own.to_dict())
+    sizes = rig.BOUNDARY_SWEEP[::7]
+    b = rig.boundary_redraws(sessions, boot, sizes)
+    payload = study.payload()["results"]
+    assert b["coverage_holds_to_mm.median"] == payload["boundary_holds_to_mm"]
+    if payload["boundary_first_resolved_mm"] is not None:
+        assert b["first_resolved_mm.median"] == payload["boundary_first_resolved_mm"]
