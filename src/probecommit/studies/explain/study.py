@@ -22,7 +22,7 @@ from probecommit.audit.conformal import simultaneous_threshold
 from probecommit.audit.stats import cluster_bootstrap_mean, paired_bootstrap, percentile_interval, resample_counts
 from probecommit.audit.surprise import surprise_auc
 from probecommit.runner.replay import load_run, replay_episodes
-from probecommit.studies.explain import generator, runs
+from probecommit.studies.explain import generator, more, runs
 from probecommit.studies.explain import gru as gru_study
 from probecommit.studies.explain.margin import margin_curve
 from probecommit.studies.explain.pool import gate_pools, pool_variants
@@ -73,7 +73,7 @@ class Explain:
         self.boot = dict(resamples=self.p.bootstrap.resamples, seed=self.p.bootstrap.seed)
         self.res: dict[str, dict[str, Any]] = {g: {} for g in (
             "missing", "committed_pool", "instance_generator", "margin_per_gamma", "thresholds", "gru", "physx_capture",
-            "boundary_fault", "robust")}
+            "boundary_fault", "robust", *more.GROUPS)}
         self.tables: dict[str, pd.DataFrame] = {}
         self._loaded: dict[str, Any] = {}
 
@@ -465,7 +465,8 @@ class Explain:
         self.progress("explain: paper's cover schedule on Split B", 0, 1)
         paper = runs.schedule_runs(self.p, PAPER["cover.schedule"], self.runs, self.workers)
         steps = [self.missing, self.physx_coverage, lambda: self.committed_pool(paper), lambda: self.margins(paper),
-                 self.instance_generator, self.draws, self.boundary_fault, self.robust, self.physx, self.gru]
+                 self.instance_generator, self.draws, self.boundary_fault, self.robust, self.physx, self.gru,
+                 lambda: more.run(self)]
         for i, step in enumerate(steps):
             self.progress("explain", i, len(steps))
             step()

@@ -1,0 +1,156 @@
+"""Table II's families under the one scene property the paper does not report: the prior's width (E35..E44).
+
+Why: the paper gives each family's latents, probe noise, budgets and instance counts, never
+the prior over the latents (docs/families.md: every prior is our choice). The blind cells are
+set by the prior's width against the targets, and the probed cells by the width against the
+probe noise, so a different prior moves every cell. Each family is rerun with its prior scaled
+about its centre by ``s`` (truths kept at the same relative positions, everything else frozen)
+over the grid declared in ``configs/paper/explain.yaml`` (docs/decisions.md says why), and we
+ask: do the paper's cells lie inside the span of our intervals over the sweep, and do the
+paper's qualitative claims (probing reduces the miss; the paired reduction excludes zero) hold
+at every width? The frozen study's own row (s = 1, the paper's instance counts) is part of the
+span; the sweep runs use fewer seeds (their intervals are wider, honestly so).
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from probecommit.runner.config import config_data, parse_config
+from probecommit.studies.breadth import FAMILY_K, breadth_row, budget_curve, paper_config, quick_config
+from probecommit.studies.pricing import break_even
+
+COLUMNS = ("blind_bayes", "blind_robust", "probe_robust")
+
+
+def scaled_config(config: Any, scale: float, *, engine: str | None = None, repeats: int | None = None) -> Any:
+    """``config`` with its prior scaled by ``scale`` about the centre and its truths mapped with it.
+
+    A truth at relative position ``r`` of the prior (``low + r (high - low)``) stays at ``r``.
+    Raises ValueError when a scaled prior would reach a non-positive latent (every latent here is
+    a positive physical quantity).
+    """
+    data = config_data(config)
+    low, high = np.asarray(data["model"]["prior_low"], float), np.asarray(data["model"]["prior_high"], float)
+    centre, half = (low + high) / 2, (high - low) / 2
+    new_low, new_high = centre - scale * half, centre + scale * half
+    if np.any(new_low <= 0):
+        raise ValueError(f"{data['name']}: prior scale {scale:g} reaches a non-positive latent")
+    data["model"]["prior_low"], data["model"]["prior_high"] = new_low.tolist(), new_high.tolist()
+    truths = data["instances"].get("truths")
+    if truths:
+        data["instances"]["truths"] = (centre + scale * (np.asarray(truths, float) - centre)).tolist()
+    if engine:
+        data["simulator"]["engine"] = engine
+    if repeats:
+        data["repeats"] = int(repeats)
+    data["name"] = f"{data['name']}_prior{scale:g}"
+    return parse_config(data)
+
+
+def row_and_prices(episodes: Any, family: str, boot: dict[str, Any]) -> dict[str, float]:
+    """A Table II row's cells (with intervals) and the break-even prices of its curve."""
+    row = breadth_row(episodes, family, FAMILY_K.get(family, 5), resamples=boot["resamples"], seed=boot["seed"])
+    out = {f"{c}{s}": float(row[f"{c}{s}"]) for c in (*COLUMNS, "paired") for s in ("", "_lo", "_hi")}
+    curve = budget_curve(episodes, family, resamples=2, seed=0).set_index(["method", "k"])["mean"]
+    keys = (("blind_robust", 0), ("probe_robust", 2), ("probe_robust", 5))
+    m0, m2, m5 = (float(curve.get(key, math.nan)) for key in keys)
+    if not np.isnan([m0, m2, m5]).any():
+        p = break_even(m0, m2, m5)
+        out["price.blind_above"], out["price.five_below"] = p.blind_above, p.five_below
+    return out
+
+
+def sweep_family(family: str, scales: list[float], runs: Path, boot: dict[str, Any], *, engine: str | None,
+                 repeats: int, quick: bool) -> dict[float, dict[str, float]]:
+    """Each scale's row for one family (runs under ``runs/breadth_prior/``, resumed when complete)."""
+    from probecommit.runner.study import run_study
+
+    base = paper_config(family)
+    if quick:
+        base = quick_config(base)
+    out = {}
+    for s in scales:
+        config = scaled_config(base, s, engine=engine, repeats=None if quick else repeats)
+        result = run_study(config, runs / "breadth_prior" / config.name, workers=1, threads=1)
+        out[s] = row_and_prices(result.episodes, family, boot)
+    return out
+
+
+def span_summary(rows: dict[float, dict[str, float]], paper: dict[str, float]) -> dict[str, float]:
+    """Per paper cell: inside the span of our intervals over every scale; and the qualitative checks.
+
+    ``paper`` maps a cell name (``blind_bayes``, ``price.five_below``, ...) to the paper's value.
+    A price has no interval: its span is the range of our point prices.
+    """
+    out: dict[str, float] = {}
+    for name, p in paper.items():
+        if name.startswith("price."):
+            values = [r[name] for r in rows.values() if name in r]
+            lo, hi = (min(values), max(values)) if values else (math.nan, math.nan)
+        else:
+            lo, hi = min(r[f"{name}_lo"] for r in rows.values()), max(r[f"{name}_hi"] for r in rows.values())
+        out[f"span.{name}.lo"], out[f"span.{name}.hi"] = lo, hi
+        out[f"span.{name}.paper_inside"] = float(lo <= p <= hi)
+    cells = [n for n in paper if not n.startswith("price.")]
+    prices = [n for n in paper if n.startswith("price.")]
+    out["cells_inside"] = float(sum(out[f"span.{n}.paper_inside"] for n in cells))
+    out["cells"] = float(len(cells))
+    out["prices_inside"] = float(sum(out[f"span.{n}.paper_inside"] for n in prices))
+    out["prices"] = float(len(prices))
+    out["min_paired_lo"] = min(r["paired_lo"] for r in rows.values())
+    out["probing_reduces_everywhere"] = float(all(r["probe_robust"] < min(r["blind_bayes"], r["blind_robust"])
+                                                  for r in rows.values()))
+    return out
+
+
+def paper_cells(family: str) -> dict[str, float]:
+    """The paper's Table II cells of ``family`` and its break-even prices (in our units)."""
+    from probecommit.studies.paper_values import PRINTED, value
+
+    out = {c: value(f"tab:breadth.{family}.{c}") for c in COLUMNS if f"tab:breadth.{family}.{c}" in PRINTED}
+    for kind in ("blind_above", "five_below"):
+        key = f"T01-pricing.{kind}.{family}"
+        if key in PRINTED:
+            out[f"price.{kind}"] = value(key) * (1.0 if family == "hinge" else 0.01)
+    return out
+
+
+def frozen_row(root: Path, family: str) -> dict[str, float] | None:
+    """The frozen study's row (s = 1, the paper's instance counts) and prices, when published under ``root``."""
+    import json
+
+    table, cost = root / "breadth" / "results" / "results.json", root / "cost" / "results" / "results.json"
+    if not table.is_file():
+        return None
+    row = json.loads(table.read_text())["results"]["table_II"].get(family)
+    if row is None:
+        return None
+    out = {f"{c}{s}": float(row[f"{c}{s}"]) for c in (*COLUMNS, "paired") for s in ("", "_lo", "_hi")}
+    if cost.is_file():
+        prices = json.loads(cost.read_text())["results"]["prices"].get(family, {})
+        out.update({f"price.{k}": float(prices[k]) for k in ("blind_above", "five_below") if k in prices})
+    return out
+
+
+def run(root: Path, runs: Path, cfg: dict[str, Any], boot: dict[str, Any], quick: bool) -> dict[str, Any]:
+    """Every family's prior sweep and its span summary; keys of ``explain:results.breadth_prior``."""
+    suffix = "_quick" if quick else ""
+    scales = [float(s) for s in cfg[f"breadth_prior_scales{suffix}"]]
+    engines = cfg.get("breadth_prior_engines", {})
+    out: dict[str, Any] = {"scales": scales}
+    for family in cfg[f"breadth_prior_families{suffix}"]:
+        rows = sweep_family(family, scales, runs, boot, engine=engines.get(family),
+                            repeats=int(cfg["breadth_prior_repeats"]), quick=quick)
+        frozen = None if quick else frozen_row(root, family)
+        if frozen is not None:
+            rows[1.0] = frozen
+        for s, row in rows.items():
+            out.update({f"{family}.s{s:g}.{k}": v for k, v in row.items()})
+        out.update({f"{family}.{k}": v for k, v in span_summary(rows, paper_cells(family)).items()})
+        out[f"{family}.widths"] = len(rows)
+    return out

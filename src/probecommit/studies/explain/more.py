@@ -1,0 +1,30 @@
+"""The second helper's explain steps (E30..), run after the others by ``Explain.run``.
+
+Each step writes one result group of ``explain:results`` and reads only what ``Explain``
+already holds (the protocol, the root's frozen runs, the bootstrap settings, the config).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from probecommit.studies.explain import breadth, engines_x, rig, searches
+from probecommit.studies.paper_values import PAPER, value
+
+#: Result groups these steps fill (added to ``Explain.res``).
+GROUPS = ("engines_x", "searches", "rig_redraws", "breadth_prior")
+
+
+def run(job: Any) -> None:
+    """Every step, in order of cost (cheapest first)."""
+    job.res["engines_x"].update(engines_x.run(job.root))
+    job.progress("explain: development searches resampled", 0, 1)
+    s = job.res["searches"]
+    s.update({f"cover.{k}": v for k, v in searches.cover_stability(job.p, PAPER["cover.schedule"], job.boot).items()})
+    paper = {f: value(f"T42-robust-chosen.{f}") for f in ("tempering", "mixture", "rejuvenation")}
+    s.update({f"robust.{k}": v for k, v in searches.robust_stability(job.load("dev_random"), job.p.robust, paper,
+                                                                      job.boot).items()})
+    job.progress("explain: the simulated rig redrawn", 0, 1)
+    job.res["rig_redraws"].update(rig.run(job.runs, job.cfg, job.boot, job.quick))
+    job.progress("explain: Table II's families over the prior's width", 0, 1)
+    job.res["breadth_prior"].update(breadth.run(job.root, job.runs, job.cfg, job.boot, job.quick))
