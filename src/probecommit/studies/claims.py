@@ -298,7 +298,7 @@ def experiment_resolves(experiment: Experiment, lookup: Lookup) -> bool:
         values = {name: _point(lookup(key)) for name, key in experiment.keys.items()}
     except (KeyError, IndexError, ValueError, TypeError):
         return False
-    if not all(isinstance(v, (int, float)) and math.isfinite(float(v)) for v in values.values()):
+    if not _finite(*values.values()):
         return False
     return experiment.supports is None or bool(experiment.supports(values))
 
@@ -389,7 +389,7 @@ def _table_claims() -> list[Claim]:
               "Probe-Robust(k)", tuple(breadth), explain=(),
               note="PyBullet's residual model (the caption's last sentence) is not built here."),
         Claim("tab:audit", "Table III (tab:audit)", "Insertion audit, Split B, random probes", tuple(audit),
-              explain=()),
+              explain=tuple((f"E17[{c.label}]", (c.label,)) for c in audit)),
         Claim("tab:insertion", "Table IV (tab:insertion)", "Insertion failure by split and calibration setting",
               tuple(insertion), explain=(("E9", ("A cover", "B cover")), "E2")),
         Claim("tab:testc", "Table V (tab:testc)", "Confirmation on untouched instances (Test C)", tuple(testc),
@@ -510,7 +510,8 @@ def _text_claims() -> list[Claim]:  # noqa: PLR0915 - one entry per claim, in th
               (Near("original", "T12-calibrated-audit.optimism_original",
                     f"{I}table_audit.summary.mean_abs_optimism_original", POINT_TOL * 2.5),
                Near("calibrated", "T12-calibrated-audit.optimism_calibrated",
-                    f"{I}table_audit.summary.mean_abs_optimism_calibrated", POINT_TOL * 2.5)), explain=()))
+                    f"{I}table_audit.summary.mean_abs_optimism_calibrated", POINT_TOL * 2.5)),
+              explain=(("E18[original]", ("original",)), ("E18[calibrated]", ("calibrated",)))))
     cost = f"{I}table_insertion.B.cost_differences."
     add(Claim("T13-cost-of-calibration", "Sec. V-B, Cost of calibration", "Paired failure increase: full adjustment, "
               "set calibration, margin",
@@ -627,20 +628,21 @@ def _text_claims() -> list[Claim]:  # noqa: PLR0915 - one entry per claim, in th
                           {"ec": f"{g}{GATES[sig]}.escaped_committed", "nc": f"{g}{GATES[sig]}.n_committed",
                            "er": f"{g}{GATES[sig]}.escaped_rejected", "nr": f"{g}{GATES[sig]}.n_rejected"},
                           lambda v: v["ec"] / v["nc"] > v["er"] / v["nr"])
-                    for sig in ("raw", "adjusted", "posterior_variance")), explain=(("E1", ("raw",)),)))
+                    for sig in ("raw", "adjusted", "posterior_variance")), explain=(("E1", ("raw",)), "E13")))
     add(Claim("T34-claimed-realized", "Sec. VI, The commit decision", "Selection re-creates optimism: claimed vs "
               "realized failure at commit",
               (Holds("raw", "raw claims less than it realizes", {"c": f"{g}0.claimed", "r": f"{g}0.realized"},
                      lambda v: v["c"] < v["r"]),
                Holds("adjusted", "adjusted claims less than it realizes", {"c": f"{g}1.claimed", "r": f"{g}1.realized"},
                      lambda v: v["c"] < v["r"]),
-               Near("raw realized", "T34-claimed-realized.raw_realized", f"{g}0.realized", 0.05)), explain=()))
+               Near("raw realized", "T34-claimed-realized.raw_realized", f"{g}0.realized", 0.05)), explain=("E14",)))
     add(Claim("T35-oracle", "Sec. VI, The commit decision", "The oracle reaches zero failure at 89 % commitment",
               (Near("commit rate", "T35-oracle.commit_rate_percent", f"{g}3.c_min", 0.05, scale=0.01),)))
     add(Claim("T36-surprise", "Sec. VI, The commit decision", "Prequential surprise detects final-budget escape "
               "(cover) at k = 1 but hardly at k = 5",
               (Inside("k=1", "T36-surprise.auc_k1", f"{X}missing.surprise_auc_cover_k1"),
-               Inside("k=5", "T36-surprise.auc_k5", f"{X}missing.surprise_auc_cover_k5")), explain=()))
+               Inside("k=5", "T36-surprise.auc_k5", f"{X}missing.surprise_auc_cover_k5")),
+              explain=(("E15", ("k=5",)), ("E16", ("k=1",)))))
     add(Claim("T37-prior-signature", "Sec. VI, Fault classes", "The prior fault escapes from the first tap and "
               "fails all four repeats at once",
               (Near("escape k=1", "T37-prior-signature.escape", f"{sig_key('prior', 1)}.escape", 0.05),
@@ -821,7 +823,83 @@ def _experiments() -> list[Experiment]:
                    "on Test C, another draw of the generator, the chosen mixture under the boundary error leaves "
                    "optimism {to:+.3f} (deployed {td:+.3f}); on the harness draw {hm:+.3f}.",
                    supports=lambda v: v["to"] > _pv("T43-robust-filters.optimism_floor")),
+        *_commit_experiments(),
+        *_audit_cell_experiments(),
     ]
+
+
+def _commit_experiments() -> list[Experiment]:
+    """E13-E16: the commit decision (Sec. VI) under the paper's own cover schedule on the same instances."""
+    pool, miss = f"{X}committed_pool.", f"{X}missing."
+    ps = f"{pool}paper_schedule."
+    return [
+        Experiment("E13", "the committed pool under the paper's cover schedule, same instances",
+                   {"ec": f"{ps}final_hull.escaped_committed", "nc": f"{ps}n_committed",
+                    "er": f"{ps}final_hull.escaped_rejected", "nr": f"{ps}n_rejected",
+                    "ratio": f"{ps}final_hull.ratio", "lo": f"{ps}final_hull.ratio.1", "hi": f"{ps}final_hull.ratio.2",
+                    "pvc": f"{ps}posterior_variance.final_hull.committed_rate",
+                    "pvr": f"{ps}posterior_variance.final_hull.rejected_rate",
+                    "ours": f"{pool}ours.final_hull.ratio", "pn": "paper:T36-surprise.escaped"},
+                   "on the same Split B test instances and tap-noise streams, the paper's schedule gives the raw gate's "
+                   "committed pool {ec:d} escaped of {nc:d} against {er:d} of the {nr:d} rejected (ratio {ratio:.2f}) "
+                   "and posterior variance's an escape rate of {pvc:.3f} against {pvr:.3f}; under our schedule the raw "
+                   "ratio is {ours:.2f}: which pool holds more escapes follows the schedule. Our run of the paper's "
+                   "schedule holds fewer escapes in all than the paper's ({pn:.0f}).",
+                   supports=lambda v: v["ratio"] > 1 and v["pvc"] > v["pvr"] and v["ours"] <= 1),
+        Experiment("E14", "claimed and realized failure at commit under the paper's cover schedule",
+                   {"pc": f"{ps}claimed", "pr": f"{ps}realized", "oc": f"{pool}ours.claimed", "orl": f"{pool}ours.realized"},
+                   "under the paper's schedule the raw gate claims {pc:.3f} and realizes {pr:.3f} at commit (our "
+                   "schedule: {oc:.3f} and {orl:.3f}).",
+                   supports=lambda v: v["pc"] < v["pr"]
+                   and abs(v["pr"] - _pv("T34-claimed-realized.raw_realized")) <= 0.05 + 1e-12),
+        Experiment("E15", "the k = 5 surprise AUC under the paper's cover schedule",
+                   {"a": f"{miss}surprise_auc_cover_paper_schedule_k5", "lo": f"{miss}surprise_auc_cover_paper_schedule_k5.1",
+                    "hi": f"{miss}surprise_auc_cover_paper_schedule_k5.2", "n": f"{miss}surprise_paper_schedule.n_escaped",
+                    "ours": f"{miss}surprise_auc_cover_k5"},
+                   "on the same instances under the paper's schedule the k = 5 surprise AUC is {a:.3f} ({n:d} escaped "
+                   "trajectories); under ours {ours:.3f}: our schedule's last tap is the one that makes most escapes, "
+                   "and it is itself surprising.",
+                   supports=lambda v: v["lo"] <= _pv("T36-surprise.auc_k5") <= v["hi"]),
+        Experiment("E16", "the k = 1 surprise AUC with surprise read as the reading class's probability",
+                   {"c1": f"{miss}surprise_variants.paper_schedule.class.final_hull.k1",
+                    "lo": f"{miss}surprise_variants.paper_schedule.class.final_hull.k1.1",
+                    "hi": f"{miss}surprise_variants.paper_schedule.class.final_hull.k1.2",
+                    "d1": f"{miss}surprise_auc_cover_paper_schedule_k1",
+                    "r1": f"{miss}surprise_variants.paper_schedule.class.final_retained.k1",
+                    "c5": f"{miss}surprise_variants.paper_schedule.class.final_hull.k5"},
+                   "under the paper's schedule, surprise read as -log of the reading class's predictive probability "
+                   "(not the reading's density) gives k = 1 AUC {c1:.3f} (density: {d1:.3f}; with "
+                   "escape read as outside the retained set: {r1:.3f}) and {c5:.3f} at k = 5.",
+                   supports=lambda v: v["lo"] <= _pv("T36-surprise.auc_k1") <= v["hi"]),
+    ]
+
+
+def _audit_cell_experiments() -> list[Experiment]:
+    """E17[cell]: one per Table III cell, the cell's range over fresh draws of Split B's test generator
+    (frozen calibration); it speaks to that cell only, and only if the paper's value lies in the range."""
+    d = f"{X}instance_generator.draws."
+    out = []
+    for i, k in enumerate(AUDIT_K):
+        for col in ("cluster_coverage", "optimism"):
+            for arm in ("original", "calibrated"):
+                cell = f"{col}.{arm}.k{k}"
+                out.append(Experiment(
+                    f"E17[{col} {arm} k={k}]", f"Table III's {col.replace('_', ' ')} ({arm}, k = {k}) over fresh draws",
+                    {"lo": f"{d}audit.{cell}.min", "hi": f"{d}audit.{cell}.max", "m": f"{d}audit.{cell}.mean",
+                     "n": f"{d}count", "check": f"{d}audit_check.{cell}"},
+                    "over {n:d} fresh 96-instance draws of Split B's test generator audited with the frozen calibration, "
+                    "this cell ranges {lo:.3f} to {hi:.3f} (mean {m:.3f}; the frozen draw on the analytic scene "
+                    "{check:.3f}).",
+                    supports=lambda v, key=f"tab:audit.{col}_{arm}.{k}": v["lo"] <= _pv(key) <= v["hi"]))
+    for arm in ("original", "calibrated"):
+        out.append(Experiment(
+            f"E18[{arm}]", f"Table III's mean |optimism| ({arm}) over fresh draws",
+            {"lo": f"{d}audit.mean_abs_optimism.{arm}.min", "hi": f"{d}audit.mean_abs_optimism.{arm}.max",
+             "m": f"{d}audit.mean_abs_optimism.{arm}.mean", "n": f"{d}count"},
+            "over {n:d} fresh draws of Split B's test generator (frozen calibration) the mean |optimism| over budgets "
+            "ranges {lo:.3f} to {hi:.3f} (mean {m:.3f}).",
+            supports=lambda v, key=f"T12-calibrated-audit.optimism_{arm}": v["lo"] <= _pv(key) <= v["hi"]))
+    return out
 
 
 for _experiment in _experiments():
