@@ -81,3 +81,37 @@ def test_surprise_and_realized_experiments_test_the_paper_value():
     assert e14.supports({"pc": 0.016, "pr": 0.281, "oc": 0.05, "orl": 0.24})
     assert not e14.supports({"pc": 0.016, "pr": 0.239, "oc": 0.05, "orl": 0.24})  # 0.074 from the paper's 0.313
     assert not e14.supports({"pc": 0.3, "pr": 0.29, "oc": 0.05, "orl": 0.24})  # claims more than it realizes
+
+
+def test_fault_arm_cells_on_a_hand_table():
+    import pandas as pd
+
+    from probecommit.studies.explain.draw_faults import arm_cells, nan_spread
+
+    rows = []
+    for fault, arm, realized, predicted, escaped, surprise in (
+            ("none", "fault", [0, 1], [0.5, 0.5], [False, False], [1.0, 2.0]),
+            ("particles", "fault", [1, 1, 0, 0], [0.9, 0.8, 0.3, 0.2], [True, False, True, False], [3.0, 1.0, 4.0, 2.0]),
+            ("particles", "tempered", [1, 0, 0, 0], [0.5] * 4, [False] * 4, [1.0] * 4)):
+        for i, (r, p, e, s) in enumerate(zip(realized, predicted, escaped, surprise)):
+            rows.append({"fault": fault, "arm": arm, "method": "probe_robust", "status": "ok", "k": 8,
+                         "instance_id": f"i{i}", "repeat": 0, "realized": float(r), "predicted": p, "escaped": e,
+                         "max_surprise": s})
+    out = arm_cells(pd.DataFrame(rows), 8)
+    assert out["none.fail"] == 0.5 and out["none.optimism"] == 0.0 and "none.surprise_auc" not in out  # no escape
+    assert out["particles.fail"] == 0.5 and out["particles.optimism"] == pytest.approx(-0.05)
+    assert out["particles.surprise_auc"] == 1.0  # both escapes (3, 4) above both others (1, 2)
+    assert out["particles.tempered"] == 0.25 and out["particles_residual_improves"] == 1.0  # -0.05 < 0
+    spread = nan_spread([{"a": 1.0, "b": float("nan")}, {"a": 2.0, "b": 5.0}])
+    assert spread == {"a.min": 1.0, "a.max": 2.0, "a.mean": 1.5, "a.n": 2, "b.min": 5.0, "b.max": 5.0, "b.mean": 5.0,
+                      "b.n": 1}
+
+
+def test_draw_experiments_compare_the_paper_value_with_the_range():
+    e20 = C.EXPERIMENTS["E20"]  # paper 0.62
+    assert e20.supports({"lo": 0.5, "hi": 0.7, "m": 0.6, "n": 12}) and not e20.supports({"lo": 0.5, "hi": 0.6, "m": 0.55, "n": 12})
+    fail = C.EXPERIMENTS["E21[boundary fail]"]  # paper 0.38
+    assert fail.supports({"lo": 0.3, "hi": 0.4, "m": 0.35, "n": 12, "check": 0.3})
+    assert not fail.supports({"lo": 0.2, "hi": 0.37, "m": 0.3, "n": 12, "check": 0.3})
+    assert C.EXPERIMENTS["E22"].supports({"share": 0.5, "n": 12, "plo": 0, "phi": 0, "nlo": 0, "nhi": 0})
+    assert not C.EXPERIMENTS["E22"].supports({"share": 0.25, "n": 12, "plo": 0, "phi": 0, "nlo": 0, "nhi": 0})

@@ -389,7 +389,8 @@ def _table_claims() -> list[Claim]:
               "Probe-Robust(k)", tuple(breadth), explain=(),
               note="PyBullet's residual model (the caption's last sentence) is not built here."),
         Claim("tab:audit", "Table III (tab:audit)", "Insertion audit, Split B, random probes", tuple(audit),
-              explain=tuple((f"E17[{c.label}]", (c.label,)) for c in audit)),
+              explain=tuple((f"E17[{c.label}]", (c.label,)) for c in audit)
+              + tuple((f"E19[{c.label}]", (c.label,)) for c in audit if " calibrated " in c.label)),
         Claim("tab:insertion", "Table IV (tab:insertion)", "Insertion failure by split and calibration setting",
               tuple(insertion), explain=(("E9", ("A cover", "B cover")), "E2")),
         Claim("tab:testc", "Table V (tab:testc)", "Confirmation on untouched instances (Test C)", tuple(testc),
@@ -400,7 +401,9 @@ def _table_claims() -> list[Claim]:
               "simulated rig, shown but not comparable)", tuple(hardware), physical=True, simulated_rig=True,
               note="Measured on a physical arm; our simulated rig's table is shown beside it, labelled so."),
         Claim("tab:faults", "Table VIII (tab:faults)", "Controlled mismatch tests, random k = 8", tuple(faults),
-              explain=(("E7", ("boundary",)),)),
+              explain=(("E7", ("boundary",)),
+                       *((f"E21[{label}]", (label,)) for label in ("boundary fail", "boundary tempered",
+                                                                   "boundary surprise AUC", "particles surprise AUC")))),
     ]
 
 
@@ -464,7 +467,8 @@ def _text_claims() -> list[Claim]:  # noqa: PLR0915 - one entry per claim, in th
               (Near("t_5", "T02-t5-cover.t5", f"{I}table_insertion.thresholds_cover.5", POINT_TOL),), explain=("E4",)))
     add(Claim("T03-margin", "Sec. IV, The margin", "Validation-tuned margin gamma (cover, random)",
               (Near("cover", "T03-margin.cover", f"{I}table_insertion.margin_cover", GRID_STEP),
-               Near("random", "T03-margin.random", f"{I}table_insertion.margin_random", GRID_STEP)), explain=(("E3", ("cover",)),)))
+               Near("random", "T03-margin.random", f"{I}table_insertion.margin_random", GRID_STEP)),
+              explain=(("E3", ("cover",)), ("E20", ("random",)))))
     add(Claim("T04-distribution-free-margin", "Sec. IV, The margin", "Distribution-free margin, cover schedule",
               (Near("cover", "T04-distribution-free-margin.cover", f"{I}table_insertion.distribution_free_margin_cover",
                     POINT_TOL),), explain=("E10",)))
@@ -666,7 +670,7 @@ def _text_claims() -> list[Claim]:  # noqa: PLR0915 - one entry per claim, in th
                      lambda v: v["p"] > v["b"]),
                Holds("residual improves", "impoverished optimism at k = 8 below the baseline's",
                      {"p": f"{sig_key('particles', 8)}.optimism", "b": f"{sig_key('none', 8)}.optimism"},
-                     lambda v: v["p"] < v["b"]))))
+                     lambda v: v["p"] < v["b"])), explain=(("E22", ("residual",)),)))
     add(Claim("T40-frame-signature", "Sec. VI, Fault classes", "The frame offset is invisible to the belief "
               "while optimism grows and it fails",
               (Near("coverage", "T40-frame-signature.coverage", f"{sig_key('frame', 8)}.coverage", 0.01),
@@ -825,7 +829,41 @@ def _experiments() -> list[Experiment]:
                    supports=lambda v: v["to"] > _pv("T43-robust-filters.optimism_floor")),
         *_commit_experiments(),
         *_audit_cell_experiments(),
+        *_draw_experiments(),
     ]
+
+
+def _draw_experiments() -> list[Experiment]:
+    """E20-E22: the random-probe margin and the fault harness's cells over fresh draws of Split B's generator."""
+    d = f"{X}instance_generator.draws."
+    out = [Experiment(
+        "E20", "the random-probe margin over fresh calibration draws",
+        {"lo": f"{d}audit_fresh_cal.gamma.min", "hi": f"{d}audit_fresh_cal.gamma.max",
+         "m": f"{d}audit_fresh_cal.gamma.mean", "n": f"{d}count"},
+        "the paper's rule run on {n:d} fresh draws of Split B's generator (random probes) as calibration runs gives "
+        "gamma from {lo:.2f} to {hi:.2f} (mean {m:.2f}).",
+        supports=lambda v: v["lo"] - 1e-9 <= _pv("T03-margin.random") <= v["hi"] + 1e-9)]
+    for fault, col, label in (("boundary", "fail", "boundary fail"), ("boundary", "tempered", "boundary tempered"),
+                              ("boundary", "surprise_auc", "boundary surprise AUC"),
+                              ("particles", "surprise_auc", "particles surprise AUC")):
+        cell = f"{d}faults.{fault}.{col}"
+        out.append(Experiment(
+            f"E21[{label}]", f"Table VIII's {label} over fresh draws",
+            {"lo": f"{cell}.min", "hi": f"{cell}.max", "m": f"{cell}.mean", "n": f"{cell}.n",
+             "check": f"{d}faults_check.{fault}.{col}"},
+            "the harness's arm replayed on {n:d} fresh draws of Split B's generator gives {lo:.3f} to {hi:.3f} "
+            "(mean {m:.3f}; on the analytic stand-in for Split B test itself {check:.3f}).",
+            supports=lambda v, key=f"tab:faults.{fault}.{col.replace('surprise_auc', 'surprise')}":
+            v["lo"] <= _pv(key) <= v["hi"]))
+    out.append(Experiment(
+        "E22", "the particle fault's residual over fresh draws",
+        {"share": f"{d}faults.particles_residual_improves.mean", "n": f"{d}faults.particles_residual_improves.n",
+         "plo": f"{d}faults.particles.optimism.min", "phi": f"{d}faults.particles.optimism.max",
+         "nlo": f"{d}faults.none.optimism.min", "nhi": f"{d}faults.none.optimism.max"},
+        "on {share:.2f} of {n:d} fresh draws of Split B's generator the impoverished filter's optimism at k = 8 is below "
+        "the baseline's (impoverished {plo:+.3f} to {phi:+.3f}, baseline {nlo:+.3f} to {nhi:+.3f}).",
+        supports=lambda v: v["share"] >= 0.5))
+    return out
 
 
 def _commit_experiments() -> list[Experiment]:
@@ -891,6 +929,18 @@ def _audit_cell_experiments() -> list[Experiment]:
                     "this cell ranges {lo:.3f} to {hi:.3f} (mean {m:.3f}; the frozen draw on the analytic scene "
                     "{check:.3f}).",
                     supports=lambda v, key=f"tab:audit.{col}_{arm}.{k}": v["lo"] <= _pv(key) <= v["hi"]))
+    for k in AUDIT_K:  # E19[cell]: the calibrated cells when the calibration run is a fresh draw as well
+        for col in ("cluster_coverage", "optimism"):
+            cell = f"{col}.calibrated.k{k}"
+            out.append(Experiment(
+                f"E19[{col} calibrated k={k}]", f"Table III's {col.replace('_', ' ')} (calibrated, k = {k}) over fresh "
+                "calibration and test draws",
+                {"lo": f"{d}audit_fresh_cal.{cell}.min", "hi": f"{d}audit_fresh_cal.{cell}.max",
+                 "m": f"{d}audit_fresh_cal.{cell}.mean", "n": f"{d}count", "glo": f"{d}audit_fresh_cal.gamma.min",
+                 "ghi": f"{d}audit_fresh_cal.gamma.max"},
+                "calibrating on one fresh draw of Split B's generator and auditing the next ({n:d} such pairs), this "
+                "cell ranges {lo:.3f} to {hi:.3f} (mean {m:.3f}; the margin gamma ranges {glo:.2f} to {ghi:.2f}).",
+                supports=lambda v, key=f"tab:audit.{col}_calibrated.{k}": v["lo"] <= _pv(key) <= v["hi"]))
     for arm in ("original", "calibrated"):
         out.append(Experiment(
             f"E18[{arm}]", f"Table III's mean |optimism| ({arm}) over fresh draws",

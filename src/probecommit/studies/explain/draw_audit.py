@@ -18,6 +18,7 @@ import pandas as pd
 
 from probecommit.audit.metrics import audit_table, summary_row
 from probecommit.runner.calibration import _load as load_for_commit
+from probecommit.runner.calibration import calibrate
 
 #: Table III's columns, as the insertion results name them.
 METRICS = ("cluster_coverage", "optimism")
@@ -54,4 +55,17 @@ def spread(per_draw: Sequence[Mapping[str, float]]) -> dict[str, Any]:
         values = frame[cell].to_numpy(float)
         out[f"{cell}.min"], out[f"{cell}.max"] = float(np.min(values)), float(np.max(values))
         out[f"{cell}.mean"] = float(np.mean(values))
+    return out
+
+
+def fresh_calibration_cells(cal: Path, test: Path, budgets: Sequence[int], *, alpha: float) -> dict[str, float]:
+    """Table III's calibrated cells when the calibration run is a fresh draw too (``calibrate`` on ``cal``,
+    audited on ``test``), with the calibration's ``t_k`` and margin ``gamma``."""
+    result = calibrate(cal, test, alpha=alpha, budgets=list(budgets), resamples=2, seed=0, chunk_instances=48)
+    out: dict[str, float] = {"gamma": float(result.margin.gamma)}
+    out.update({f"t_k{int(k)}": float(t) for k, t in result.thresholds.items()})
+    for row in result.table3.to_dict("records"):
+        for metric in METRICS:
+            out[f"{metric}.calibrated.k{int(row['k'])}"] = float(row[f"{metric}_calibrated"])
+    out["mean_abs_optimism.calibrated"] = float(result.summary["mean_abs_optimism_calibrated"])
     return out

@@ -22,7 +22,7 @@ from probecommit.audit.conformal import simultaneous_threshold
 from probecommit.audit.stats import cluster_bootstrap_mean, paired_bootstrap, percentile_interval, resample_counts
 from probecommit.audit.surprise import surprise_auc
 from probecommit.runner.replay import load_run, replay_episodes
-from probecommit.studies.explain import draw_audit, generator, runs, surprise_variants
+from probecommit.studies.explain import draw_audit, draw_faults, generator, runs, surprise_variants
 from probecommit.studies.explain import gru as gru_study
 from probecommit.studies.explain.margin import margin_curve
 from probecommit.studies.explain.pool import gate_pools, pool_variants
@@ -341,6 +341,7 @@ class Explain:
                          "optimism_k8": float((old[old["k"] == kmax]["realized"] - old[old["k"] == kmax]["predicted"]).mean()),
                          "paired_fix_k8": float(fix.difference.estimate)})
         self._draw_audit(drawn)
+        self._draw_faults(drawn)
         table = pd.DataFrame(rows)
         check, fresh = table.iloc[0], table.iloc[1:]
         mujoco = _probe(self.load("B_test_random").episodes, kmax)
@@ -368,6 +369,22 @@ class Explain:
         out.update({f"draws.audit_check.{key}": v for key, v in cells[0].items()})
         if len(cells) > 1:
             out.update({f"draws.audit.{key}": v for key, v in draw_audit.spread(cells[1:]).items()})
+        fresh = [deployed.path for _, deployed, _ in drawn[1:]]
+        if len(fresh) > 1:  # each fresh draw tested under a calibration on the next one (cyclic): both draws vary
+            self.progress("explain: Table III with fresh calibration draws", 0, len(fresh))
+            pairs = [draw_audit.fresh_calibration_cells(fresh[(i + 1) % len(fresh)], test, sorted(thresholds),
+                                                        alpha=self.p.alpha) for i, test in enumerate(fresh)]
+            out.update({f"draws.audit_fresh_cal.{key}": v for key, v in draw_audit.spread(pairs).items()})
+
+    def _draw_faults(self, drawn: list[tuple[str, Any, Any]]) -> None:
+        """The fault harness's none, boundary and particle arms replayed on each fresh draw's corrected run
+        (``draw_faults``): the range of Table VIII's cells and Fig. 7's particle signature over draws."""
+        out, p = self.res["instance_generator"], self.p
+        self.progress("explain: fault harness on fresh draws", 0, len(drawn))
+        cells = [draw_faults.draw_cells(corrected, p.faults, p.sigma, p.budgets["random"]) for _, _, corrected in drawn]
+        out.update({f"draws.faults_check.{key}": v for key, v in cells[0].items()})
+        if len(cells) > 1:
+            out.update({f"draws.faults.{key}": v for key, v in draw_faults.nan_spread(cells[1:]).items()})
 
     # ------------------------------------------------------------------ boundary fault and robust filters
     def boundary_fault(self) -> None:
