@@ -115,3 +115,11 @@ def test_draw_experiments_compare_the_paper_value_with_the_range():
     assert not fail.supports({"lo": 0.2, "hi": 0.37, "m": 0.3, "n": 12, "check": 0.3})
     assert C.EXPERIMENTS["E22"].supports({"share": 0.5, "n": 12, "plo": 0, "phi": 0, "nlo": 0, "nhi": 0})
     assert not C.EXPERIMENTS["E22"].supports({"share": 0.25, "n": 12, "plo": 0, "phi": 0, "nlo": 0, "nhi": 0})
+
+
+def test_gate_area_experiments():
+    v = {"lo": 0.2, "hi": 0.35, "m": 0.28, "share": 0.5, "n": 12, "rlo": 0.1, "rhi": 0.2}
+    assert C.EXPERIMENTS["E23"].supports(v)  # paper 0.325 inside
+    assert not C.EXPERIMENTS["E23"].supports({**v, "hi": 0.3})
+    e24 = {"share": 0.5, "n": 12, "m": 0.2, "rm": 0.2, "am": 0.3}
+    assert C.EXPERIMENTS["E24"].supports(e24) and not C.EXPERIMENTS["E24"].supports({**e24, "share": 0.4})

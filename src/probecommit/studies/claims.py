@@ -625,7 +625,8 @@ def _text_claims() -> list[Claim]:  # noqa: PLR0915 - one entry per claim, in th
                     f"{X}missing.gate_area_random.posterior_variance", POINT_TOL * 2.5),
                Holds("lowest", "posterior variance's area is the lowest deployable",
                      {"pv": f"{X}missing.gate_area_random.posterior_variance", "raw": f"{X}missing.gate_area_random.raw",
-                      "adj": f"{X}missing.gate_area_random.adjusted"}, lambda v: v["pv"] <= min(v["raw"], v["adj"])))))
+                      "adj": f"{X}missing.gate_area_random.adjusted"}, lambda v: v["pv"] <= min(v["raw"], v["adj"]))),
+              explain=(("E23", ("posterior variance",)), ("E24", ("lowest",)))))
     add(Claim("T33-committed-pool", "Sec. VI, The commit decision", "At 60 % commitment the committed pool holds "
               "escaped episodes at several times the rejected pool's rate",
               tuple(Holds(sig, "escape rate among committed above that among rejected",
@@ -855,6 +856,23 @@ def _draw_experiments() -> list[Experiment]:
             "(mean {m:.3f}; on the analytic stand-in for Split B test itself {check:.3f}).",
             supports=lambda v, key=f"tab:faults.{fault}.{col.replace('surprise_auc', 'surprise')}":
             v["lo"] <= _pv(key) <= v["hi"]))
+    gv = f"{d}gates_fresh_cal."
+    out.append(Experiment(
+        "E23", "the random-probe gate areas over fresh calibration and test draws",
+        {"lo": f"{gv}posterior_variance.area.min", "hi": f"{gv}posterior_variance.area.max",
+         "m": f"{gv}posterior_variance.area.mean", "share": f"{gv}posterior_variance_lowest.mean", "n": f"{d}count",
+         "rlo": f"{gv}raw.area.min", "rhi": f"{gv}raw.area.max"},
+        "with the decision layer calibrated on one fresh draw of Split B's generator and the gates run on the next "
+        "({n:d} such pairs), posterior variance's area ranges {lo:.3f} to {hi:.3f} (mean {m:.3f}; raw {rlo:.3f} to "
+        "{rhi:.3f}); posterior variance has the lowest area on {share:.2f} of the pairs.",
+        supports=lambda v: v["lo"] <= _pv("T32-gate-areas-random.posterior_variance") <= v["hi"]))
+    out.append(Experiment(
+        "E24", "which random-probe gate has the lowest area, over fresh calibration and test draws",
+        {"share": f"{gv}posterior_variance_lowest.mean", "n": f"{d}count", "m": f"{gv}posterior_variance.area.mean",
+         "rm": f"{gv}raw.area.mean", "am": f"{gv}adjusted.area.mean"},
+        "posterior variance has the lowest area of the three deployable gates on {share:.2f} of {n:d} pairs of fresh "
+        "draws (mean areas: posterior variance {m:.3f}, raw {rm:.3f}, adjusted {am:.3f}).",
+        supports=lambda v: v["share"] >= 0.5))
     out.append(Experiment(
         "E22", "the particle fault's residual over fresh draws",
         {"share": f"{d}faults.particles_residual_improves.mean", "n": f"{d}faults.particles_residual_improves.n",
@@ -929,7 +947,7 @@ def _audit_cell_experiments() -> list[Experiment]:
                     "this cell ranges {lo:.3f} to {hi:.3f} (mean {m:.3f}; the frozen draw on the analytic scene "
                     "{check:.3f}).",
                     supports=lambda v, key=f"tab:audit.{col}_{arm}.{k}": v["lo"] <= _pv(key) <= v["hi"]))
-    for k in AUDIT_K:  # E19[cell]: the calibrated cells when the calibration run is a fresh draw as well
+    for i, k in enumerate(AUDIT_K):  # E19[cell]: the calibrated cells when the calibration run is a fresh draw as well
         for col in ("cluster_coverage", "optimism"):
             cell = f"{col}.calibrated.k{k}"
             out.append(Experiment(
@@ -937,9 +955,11 @@ def _audit_cell_experiments() -> list[Experiment]:
                 "calibration and test draws",
                 {"lo": f"{d}audit_fresh_cal.{cell}.min", "hi": f"{d}audit_fresh_cal.{cell}.max",
                  "m": f"{d}audit_fresh_cal.{cell}.mean", "n": f"{d}count", "glo": f"{d}audit_fresh_cal.gamma.min",
-                 "ghi": f"{d}audit_fresh_cal.gamma.max"},
+                 "ghi": f"{d}audit_fresh_cal.gamma.max", "t": f"{I}table_audit.table.{i}.threshold",
+                 "tlo": f"{d}audit_fresh_cal.t_k{k}.min", "thi": f"{d}audit_fresh_cal.t_k{k}.max"},
                 "calibrating on one fresh draw of Split B's generator and auditing the next ({n:d} such pairs), this "
-                "cell ranges {lo:.3f} to {hi:.3f} (mean {m:.3f}; the margin gamma ranges {glo:.2f} to {ghi:.2f}).",
+                "cell ranges {lo:.3f} to {hi:.3f} (mean {m:.3f}); those calibrations give t_k from {tlo:.3f} to "
+                "{thi:.3f} where our frozen calibration run gives {t:.3f}, and gamma from {glo:.2f} to {ghi:.2f}.",
                 supports=lambda v, key=f"tab:audit.{col}_calibrated.{k}": v["lo"] <= _pv(key) <= v["hi"]))
     for arm in ("original", "calibrated"):
         out.append(Experiment(

@@ -69,3 +69,18 @@ def fresh_calibration_cells(cal: Path, test: Path, budgets: Sequence[int], *, al
             out[f"{metric}.calibrated.k{int(row['k'])}"] = float(row[f"{metric}_calibrated"])
     out["mean_abs_optimism.calibrated"] = float(result.summary["mean_abs_optimism_calibrated"])
     return out
+
+
+def fresh_gate_cells(cal: Path, test: Path, *, alpha: float) -> dict[str, float]:
+    """The random-probe commit gates' areas and mean failures on ``test`` with the decision layer calibrated on
+    ``cal`` (the explain target's random-probe gates, on a pair of fresh draws), and whether posterior
+    variance has the lowest area of the three deployable gates."""
+    from probecommit.runner.calibration import gates
+    from probecommit.studies.explain.pool import gate_pools
+
+    pools = gate_pools(gates(cal, test, alpha=alpha, resamples=2, seed=0, chunk_instances=48))
+    areas = {name: pools.get(f"{name}.area", float("nan")) for name in ("raw", "adjusted", "posterior_variance")}
+    out = {f"{name}.area": v for name, v in areas.items()}
+    out.update({f"{name}.mean_failure": pools.get(f"{name}.mean_failure", float("nan")) for name in areas})
+    out["posterior_variance_lowest"] = float(min(areas, key=areas.get) == "posterior_variance")
+    return out

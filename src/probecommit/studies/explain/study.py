@@ -375,6 +375,10 @@ class Explain:
             pairs = [draw_audit.fresh_calibration_cells(fresh[(i + 1) % len(fresh)], test, sorted(thresholds),
                                                         alpha=self.p.alpha) for i, test in enumerate(fresh)]
             out.update({f"draws.audit_fresh_cal.{key}": v for key, v in draw_audit.spread(pairs).items()})
+            self.progress("explain: random-probe gates on fresh draws", 0, len(fresh))
+            gate_cells = [draw_audit.fresh_gate_cells(fresh[(i + 1) % len(fresh)], test, alpha=self.p.alpha)
+                          for i, test in enumerate(fresh)]
+            out.update({f"draws.gates_fresh_cal.{key}": v for key, v in draw_audit.spread(gate_cells).items()})
 
     def _draw_faults(self, drawn: list[tuple[str, Any, Any]]) -> None:
         """The fault harness's none, boundary and particle arms replayed on each fresh draw's corrected run
