@@ -123,3 +123,24 @@ def test_gate_area_experiments():
     assert not C.EXPERIMENTS["E23"].supports({**v, "hi": 0.3})
     e24 = {"share": 0.5, "n": 12, "m": 0.2, "rm": 0.2, "am": 0.3}
     assert C.EXPERIMENTS["E24"].supports(e24) and not C.EXPERIMENTS["E24"].supports({**e24, "share": 0.4})
+
+
+def test_resplit_experiments_use_the_claims_tolerance():
+    v = {"n": 50, "lv": 0.7, "cv": 0.84, "mo": 0.5, "g": 0.6}
+    assert C.EXPERIMENTS["E25[level mean]"].supports({**v, "v": 0.7})  # |0.7 - 0.75| <= 0.1
+    assert not C.EXPERIMENTS["E25[level mean]"].supports({**v, "v": 0.6})
+    assert C.EXPERIMENTS["E25[held-out cluster coverage]"].supports({**v, "v": 0.84})  # paper 0.857, tol 0.05
+    assert C.EXPERIMENTS["E25[margin optimistic]"].supports({**v, "v": 0.55})  # paper 64 %, tol 0.1
+    assert not C.EXPERIMENTS["E25[margin optimistic]"].supports({**v, "v": 0.5})
+
+
+def test_resplit_summary_on_a_hand_table():
+    import pandas as pd
+
+    from probecommit.studies.explain.resplits import summary
+
+    t = pd.DataFrame({"level": [0.5, 0.7], "failure": [0.3, 0.4], "heldout_cluster_coverage": [0.8, 0.9],
+                      "margin_optimistic": [True, False], "gamma": [0.6, 0.7]})
+    out = summary(t)
+    assert out["level_mean"] == pytest.approx(0.6) and out["level_sd"] == pytest.approx(0.1414213562)
+    assert out["margin_optimistic_fraction"] == 0.5 and out["splits"] == 2 and out["gamma_mean"] == pytest.approx(0.65)

@@ -22,7 +22,7 @@ from probecommit.audit.conformal import simultaneous_threshold
 from probecommit.audit.stats import cluster_bootstrap_mean, paired_bootstrap, percentile_interval, resample_counts
 from probecommit.audit.surprise import surprise_auc
 from probecommit.runner.replay import load_run, replay_episodes
-from probecommit.studies.explain import draw_audit, draw_faults, generator, runs, surprise_variants
+from probecommit.studies.explain import draw_audit, draw_faults, generator, resplits, runs, surprise_variants
 from probecommit.studies.explain import gru as gru_study
 from probecommit.studies.explain.margin import margin_curve
 from probecommit.studies.explain.pool import gate_pools, pool_variants
@@ -234,6 +234,12 @@ class Explain:
             key = COST_LABELS[(row["baseline"], row["treatment"])]
             self.res["missing"][f"cost_of_calibration_paper_schedule.{key}"] = [row["difference"], row["lo"], row["hi"]]
         self.res["margin_per_gamma"]["paper_schedule.gamma_calibrate"] = cal.margin.gamma
+
+    def resplits_paper_schedule(self) -> None:
+        """The 50 re-splits of the 192-instance cover pool under the paper's schedule (``resplits``)."""
+        self.progress("explain: re-splits under the paper's schedule", 0, 1)
+        out = resplits.run(self.p, COVER_SCHEDULE, self.runs, self.workers)
+        self.res["committed_pool"].update({f"resplits.paper_schedule.{k}": v for k, v in out.items()})
 
     # ------------------------------------------------------------------ margin and thresholds
     def margins(self, paper_schedule: dict[str, Any]) -> None:
@@ -527,6 +533,7 @@ class Explain:
         self.progress("explain: paper's cover schedule on Split B", 0, 1)
         paper = runs.schedule_runs(self.p, COVER_SCHEDULE, self.runs, self.workers)
         steps = [self.missing, self.physx_coverage, lambda: self.committed_pool(paper), lambda: self.margins(paper),
+                 self.resplits_paper_schedule,
                  self.instance_generator, self.draws, self.boundary_fault, self.robust, self.physx, self.gru]
         for i, step in enumerate(steps):
             self.progress("explain", i, len(steps))
