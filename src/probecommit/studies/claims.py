@@ -887,7 +887,7 @@ def _draw_experiments() -> list[Experiment]:
             f"E25[{label}]", f"the re-split study's {label} under the paper's cover schedule",
             {"v": f"{rs}{key}", "n": f"{rs}splits", "lv": f"{rs}level_mean", "cv": f"{rs}heldout_cluster_coverage",
              "mo": f"{rs}margin_optimistic_fraction", "g": f"{rs}gamma_mean"},
-            "the same {n:d} re-splits of the same 192 instances under the paper's schedule give mean level {lv:.3f}, "
+            "the same {n:d} re-splits of the same pool of Split B instances under the paper's schedule give mean level {lv:.3f}, "
             "held-out cluster coverage {cv:.3f}, the margin optimistic in {mo:.2f} of splits (mean gamma {g:.2f}).",
             supports=lambda v, p=paper, t=tol, s=scale: abs(v["v"] - _pv(p) * s) <= t + 1e-12))
     out.append(Experiment(
@@ -915,7 +915,7 @@ def _commit_experiments() -> list[Experiment]:
                     "ours": f"{pool}ours.final_hull.ratio", "pn": "paper:T36-surprise.escaped"},
                    "on the same Split B test instances and tap-noise streams, the paper's schedule gives the raw gate's "
                    "committed pool {ec:d} escaped of {nc:d} against {er:d} of the {nr:d} rejected (ratio {ratio:.2f}) "
-                   "and posterior variance's an escape rate of {pvc:.3f} against {pvr:.3f}; under our schedule the raw "
+                   "and posterior variance's committed pool an escape rate of {pvc:.3f} against {pvr:.3f}; under our schedule the raw "
                    "ratio is {ours:.2f}: which pool holds more escapes follows the schedule. Our run of the paper's "
                    "schedule holds fewer escapes in all than the paper's ({pn:.0f}).",
                    supports=lambda v: v["ratio"] > 1 and v["pvc"] > v["pvr"] and v["ours"] <= 1),
@@ -960,7 +960,7 @@ def _audit_cell_experiments() -> list[Experiment]:
                     f"E17[{col} {arm} k={k}]", f"Table III's {col.replace('_', ' ')} ({arm}, k = {k}) over fresh draws",
                     {"lo": f"{d}audit.{cell}.min", "hi": f"{d}audit.{cell}.max", "m": f"{d}audit.{cell}.mean",
                      "n": f"{d}count", "check": f"{d}audit_check.{cell}"},
-                    "over {n:d} fresh 96-instance draws of Split B's test generator audited with the frozen calibration, "
+                    "over {n:d} fresh draws of Split B's test generator audited with the frozen calibration, "
                     "this cell ranges {lo:.3f} to {hi:.3f} (mean {m:.3f}; the frozen draw on the analytic scene "
                     "{check:.3f}).",
                     supports=lambda v, key=f"tab:audit.{col}_{arm}.{k}": v["lo"] <= _pv(key) <= v["hi"]))
