@@ -201,14 +201,10 @@ class Explain:
     def _surprise_variants(self, paper_test: Any, k: int) -> None:
         """The surprise AUC with the paper's words read as a class probability, and with escape read as
         "outside the retained set", on both schedules (k = 1 and the final budget)."""
-        from probecommit.runner.replay import trace_for_run
-
         self.progress("explain: surprise read as a class probability", 0, 1)
         for label, run in (("ours", self.load("B_test_cover")), ("paper_schedule", paper_test)):
-            trace, model, _ = trace_for_run(run)
-            aucs = surprise_variants.variant_aucs(trace, model, _probe(run.episodes), [1, k], k, **self.boot)
+            aucs = surprise_variants.variant_aucs(run, _probe(run.episodes), [1, k], k, **self.boot)
             self.res["missing"].update({f"surprise_variants.{label}.{key}": v for key, v in aucs.items()})
-            del trace
 
     def _schedule_failure(self, paper_schedule: dict[str, Any]) -> None:
         """Cover k = 5 failure under each schedule on the same instances (paired), and Table IV's

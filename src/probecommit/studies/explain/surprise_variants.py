@@ -51,16 +51,32 @@ def surprise_tables(trace: Any, model: Any) -> dict[str, np.ndarray]:
     return {"density": np.fmax.accumulate(density, axis=1), "class": np.fmax.accumulate(cls, axis=1)}
 
 
-def variant_aucs(trace: Any, model: Any, episodes: pd.DataFrame, budgets: list[int], final_k: int,
+def run_tables(run: Any, chunk_instances: int = 24) -> tuple[pd.MultiIndex, dict[str, np.ndarray]]:
+    """``surprise_tables`` of a whole run, its beliefs recomputed a chunk of instances at a time (bounded memory)."""
+    from probecommit.runner.replay import RunBeliefs
+
+    beliefs = RunBeliefs.of(run, chunk_instances=chunk_instances)
+    ids, reps, parts = [], [], []
+    for rows in beliefs.chunks:
+        trace = beliefs.trace(rows)
+        ids.append(trace.batch.instance_id.astype(str))
+        reps.append(trace.batch.repeat.astype(int))
+        parts.append(surprise_tables(trace, beliefs.model))
+        del trace
+    index = pd.MultiIndex.from_arrays([np.concatenate(ids), np.concatenate(reps)])
+    return index, {name: np.concatenate([p[name] for p in parts]) for name in parts[0]}
+
+
+def variant_aucs(run: Any, episodes: pd.DataFrame, budgets: list[int], final_k: int,
                  resamples: int, seed: int) -> dict[str, list[float]]:
     """Rank AUC (cluster-bootstrap triple) of each surprise reading at each budget, for two escape labels:
     the paper's (outside the full hull at ``final_k``) and "outside the retained set" at ``final_k``."""
-    index = pd.MultiIndex.from_arrays([trace.batch.instance_id.astype(str), trace.batch.repeat.astype(int)])
+    index, tables = run_tables(run)
     last = episodes[episodes["k"] == final_k].set_index(["instance_id", "repeat"]).reindex(index)
     labels = {"final_hull": last["escaped"].to_numpy(bool), "final_retained": ~last["covered"].to_numpy(bool)}
     clusters = index.get_level_values(0).to_numpy()
     out: dict[str, list[float]] = {}
-    for reading, table in surprise_tables(trace, model).items():
+    for reading, table in tables.items():
         for label, y in labels.items():
             for k in budgets:
                 iv = cluster_bootstrap_auc(table[:, k - 1], y, clusters, resamples=resamples, seed=seed)
