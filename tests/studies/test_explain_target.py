@@ -42,5 +42,15 @@ def test_reproduce_explain_quick(tmp_path):
     # The emulated engine's stored outcomes equal the capture rule recomputed from its aims.
     for variant in ("deployed", "mj_offset", "own_scan"):
         assert res["physx_capture"][f"emulated.{variant}.stored_equals_recomputed"] == 1
+    # Table III's original cells on the analytic stand-in for Split B test equal the MuJoCo run's (ex1, E17).
+    gen = res["instance_generator"]
+    for row in ins["table_audit"]["table"]:
+        for col in ("cluster_coverage", "optimism"):
+            assert gen[f"draws.audit_check.{col}.original.k{row['k']}"] == pytest.approx(row[f"{col}_original"], abs=1e-12)
+    # The surprise recomputed from the stored beliefs gives the stored statistic's AUC (E16's density reading).
+    k = max(int(key.rsplit("_k", 1)[1]) for key in res["missing"] if key.startswith("surprise_auc_cover_k"))
+    if res["missing"][f"surprise_auc_cover_k{k}"] is not None:
+        assert res["missing"][f"surprise_variants.ours.density.final_hull.k{k}"][0] == pytest.approx(
+            res["missing"][f"surprise_auc_cover_k{k}"][0], abs=1e-12)
     assert res["gru"]["available"] == 0  # the GRU target did not run here
     assert (folder / "explain.md").read_text().count("explain:results.") > 100

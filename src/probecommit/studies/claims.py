@@ -298,7 +298,7 @@ def experiment_resolves(experiment: Experiment, lookup: Lookup) -> bool:
         values = {name: _point(lookup(key)) for name, key in experiment.keys.items()}
     except (KeyError, IndexError, ValueError, TypeError):
         return False
-    if not all(isinstance(v, (int, float)) and math.isfinite(float(v)) for v in values.values()):
+    if not _finite(*values.values()):
         return False
     return experiment.supports is None or bool(experiment.supports(values))
 
@@ -390,7 +390,8 @@ def _table_claims() -> list[Claim]:
               explain=tuple((f"E{35 + i}", (f"{fam} ",)) for i, fam in enumerate(PRIOR_SWEPT)),
               note="PyBullet's residual model (the caption's last sentence) is not built here."),
         Claim("tab:audit", "Table III (tab:audit)", "Insertion audit, Split B, random probes", tuple(audit),
-              explain=()),
+              explain=tuple((f"E17[{c.label}]", (c.label,)) for c in audit)
+              + tuple((f"E19[{c.label}]", (c.label,)) for c in audit if " calibrated " in c.label)),
         Claim("tab:insertion", "Table IV (tab:insertion)", "Insertion failure by split and calibration setting",
               tuple(insertion), explain=(("E9", ("A cover", "B cover")), "E2")),
         Claim("tab:testc", "Table V (tab:testc)", "Confirmation on untouched instances (Test C)", tuple(testc),
@@ -401,7 +402,9 @@ def _table_claims() -> list[Claim]:
               "simulated rig, shown but not comparable)", tuple(hardware), physical=True, simulated_rig=True,
               note="Measured on a physical arm; our simulated rig's table is shown beside it, labelled so."),
         Claim("tab:faults", "Table VIII (tab:faults)", "Controlled mismatch tests, random k = 8", tuple(faults),
-              explain=(("E7", ("boundary",)),)),
+              explain=(("E7", ("boundary",)),
+                       *((f"E21[{label}]", (label,)) for label in ("boundary fail", "boundary tempered",
+                                                                   "boundary surprise AUC", "particles surprise AUC")))),
     ]
 
 
@@ -466,7 +469,8 @@ def _text_claims() -> list[Claim]:  # noqa: PLR0915 - one entry per claim, in th
               (Near("t_5", "T02-t5-cover.t5", f"{I}table_insertion.thresholds_cover.5", POINT_TOL),), explain=("E4",)))
     add(Claim("T03-margin", "Sec. IV, The margin", "Validation-tuned margin gamma (cover, random)",
               (Near("cover", "T03-margin.cover", f"{I}table_insertion.margin_cover", GRID_STEP),
-               Near("random", "T03-margin.random", f"{I}table_insertion.margin_random", GRID_STEP)), explain=(("E3", ("cover",)),)))
+               Near("random", "T03-margin.random", f"{I}table_insertion.margin_random", GRID_STEP)),
+              explain=(("E3", ("cover",)), ("E20", ("random",)))))
     add(Claim("T04-distribution-free-margin", "Sec. IV, The margin", "Distribution-free margin, cover schedule",
               (Near("cover", "T04-distribution-free-margin.cover", f"{I}table_insertion.distribution_free_margin_cover",
                     POINT_TOL),), explain=("E10",)))
@@ -513,7 +517,8 @@ def _text_claims() -> list[Claim]:  # noqa: PLR0915 - one entry per claim, in th
               (Near("original", "T12-calibrated-audit.optimism_original",
                     f"{I}table_audit.summary.mean_abs_optimism_original", POINT_TOL * 2.5),
                Near("calibrated", "T12-calibrated-audit.optimism_calibrated",
-                    f"{I}table_audit.summary.mean_abs_optimism_calibrated", POINT_TOL * 2.5)), explain=()))
+                    f"{I}table_audit.summary.mean_abs_optimism_calibrated", POINT_TOL * 2.5)),
+              explain=(("E18[original]", ("original",)), ("E18[calibrated]", ("calibrated",)))))
     cost = f"{I}table_insertion.B.cost_differences."
     add(Claim("T13-cost-of-calibration", "Sec. V-B, Cost of calibration", "Paired failure increase: full adjustment, "
               "set calibration, margin",
@@ -530,7 +535,10 @@ def _text_claims() -> list[Claim]:  # noqa: PLR0915 - one entry per claim, in th
                Near("held-out cluster coverage", "T14-resplits.heldout_cluster_coverage",
                     f"{I}resplits.heldout_cluster_coverage", POINT_TOL * 2.5),
                Near("margin optimistic", "T14-resplits.margin_optimistic_percent",
-                    f"{I}resplits.margin_optimistic_fraction", 0.1, scale=0.01)), explain=(("E3", ("margin optimistic",)),)))
+                    f"{I}resplits.margin_optimistic_fraction", 0.1, scale=0.01)),
+              explain=(("E3", ("margin optimistic",)),
+                       *((f"E25[{label}]", (label,)) for label in ("level mean", "held-out cluster coverage",
+                                                                   "margin optimistic")))))
     add(Claim("T15-scan", "Sec. V-C, Audit-guided correction", "The scan: the simulator's boundary outside the "
               "model's, identical on every scan",
               (Near("delta", "T15-scan.delta", f"{I}scan.delta", 0.01),
@@ -624,27 +632,29 @@ def _text_claims() -> list[Claim]:  # noqa: PLR0915 - one entry per claim, in th
                     f"{X}missing.gate_area_random.posterior_variance", POINT_TOL * 2.5),
                Holds("lowest", "posterior variance's area is the lowest deployable",
                      {"pv": f"{X}missing.gate_area_random.posterior_variance", "raw": f"{X}missing.gate_area_random.raw",
-                      "adj": f"{X}missing.gate_area_random.adjusted"}, lambda v: v["pv"] <= min(v["raw"], v["adj"])))))
+                      "adj": f"{X}missing.gate_area_random.adjusted"}, lambda v: v["pv"] <= min(v["raw"], v["adj"]))),
+              explain=(("E23", ("posterior variance",)), ("E24", ("lowest",)))))
     add(Claim("T33-committed-pool", "Sec. VI, The commit decision", "At 60 % commitment the committed pool holds "
               "escaped episodes at several times the rejected pool's rate",
               tuple(Holds(sig, "escape rate among committed above that among rejected",
                           {"ec": f"{g}{GATES[sig]}.escaped_committed", "nc": f"{g}{GATES[sig]}.n_committed",
                            "er": f"{g}{GATES[sig]}.escaped_rejected", "nr": f"{g}{GATES[sig]}.n_rejected"},
                           lambda v: v["ec"] / v["nc"] > v["er"] / v["nr"])
-                    for sig in ("raw", "adjusted", "posterior_variance")), explain=(("E1", ("raw",)),)))
+                    for sig in ("raw", "adjusted", "posterior_variance")), explain=(("E1", ("raw",)), "E13")))
     add(Claim("T34-claimed-realized", "Sec. VI, The commit decision", "Selection re-creates optimism: claimed vs "
               "realized failure at commit",
               (Holds("raw", "raw claims less than it realizes", {"c": f"{g}0.claimed", "r": f"{g}0.realized"},
                      lambda v: v["c"] < v["r"]),
                Holds("adjusted", "adjusted claims less than it realizes", {"c": f"{g}1.claimed", "r": f"{g}1.realized"},
                      lambda v: v["c"] < v["r"]),
-               Near("raw realized", "T34-claimed-realized.raw_realized", f"{g}0.realized", 0.05)), explain=()))
+               Near("raw realized", "T34-claimed-realized.raw_realized", f"{g}0.realized", 0.05)), explain=("E14",)))
     add(Claim("T35-oracle", "Sec. VI, The commit decision", "The oracle reaches zero failure at 89 % commitment",
               (Near("commit rate", "T35-oracle.commit_rate_percent", f"{g}3.c_min", 0.05, scale=0.01),)))
     add(Claim("T36-surprise", "Sec. VI, The commit decision", "Prequential surprise detects final-budget escape "
               "(cover) at k = 1 but hardly at k = 5",
               (Inside("k=1", "T36-surprise.auc_k1", f"{X}missing.surprise_auc_cover_k1"),
-               Inside("k=5", "T36-surprise.auc_k5", f"{X}missing.surprise_auc_cover_k5")), explain=()))
+               Inside("k=5", "T36-surprise.auc_k5", f"{X}missing.surprise_auc_cover_k5")),
+              explain=(("E15", ("k=5",)), ("E16", ("k=1",)))))
     add(Claim("T37-prior-signature", "Sec. VI, Fault classes", "The prior fault escapes from the first tap and "
               "fails all four repeats at once",
               (Near("escape k=1", "T37-prior-signature.escape", f"{sig_key('prior', 1)}.escape", 0.05),
@@ -668,7 +678,7 @@ def _text_claims() -> list[Claim]:  # noqa: PLR0915 - one entry per claim, in th
                      lambda v: v["p"] > v["b"]),
                Holds("residual improves", "impoverished optimism at k = 8 below the baseline's",
                      {"p": f"{sig_key('particles', 8)}.optimism", "b": f"{sig_key('none', 8)}.optimism"},
-                     lambda v: v["p"] < v["b"]))))
+                     lambda v: v["p"] < v["b"])), explain=(("E22", ("residual",)),)))
     add(Claim("T40-frame-signature", "Sec. VI, Fault classes", "The frame offset is invisible to the belief "
               "while optimism grows and it fails",
               (Near("coverage", "T40-frame-signature.coverage", f"{sig_key('frame', 8)}.coverage", 0.01),
@@ -825,6 +835,9 @@ def _experiments() -> list[Experiment]:
                    "on Test C, another draw of the generator, the chosen mixture under the boundary error leaves "
                    "optimism {to:+.3f} (deployed {td:+.3f}); on the harness draw {hm:+.3f}.",
                    supports=lambda v: v["to"] > _pv("T43-robust-filters.optimism_floor")),
+        *_commit_experiments(),
+        *_audit_cell_experiments(),
+        *_draw_experiments(),
     ]
 
 
@@ -926,6 +939,158 @@ def _breadth_prior_experiments() -> list[Experiment]:
             "over the same prior widths our break-even prices span {blo:.4f} to {bhi:.4f} (blind above) and {flo:.4f} to "
             "{fhi:.4f} (five below) in the miss's units per probe; {inside:g} of the paper's {n:g} prices lie inside.",
             supports=lambda v: v["inside"] == v["n"]))
+    return out
+
+
+def _draw_experiments() -> list[Experiment]:
+    """E20-E22: the random-probe margin and the fault harness's cells over fresh draws of Split B's generator."""
+    d = f"{X}instance_generator.draws."
+    out = [Experiment(
+        "E20", "the random-probe margin over fresh calibration draws",
+        {"lo": f"{d}audit_fresh_cal.gamma.min", "hi": f"{d}audit_fresh_cal.gamma.max",
+         "m": f"{d}audit_fresh_cal.gamma.mean", "n": f"{d}count"},
+        "the paper's rule run on {n:d} fresh draws of Split B's generator (random probes) as calibration runs gives "
+        "gamma from {lo:.2f} to {hi:.2f} (mean {m:.2f}).",
+        supports=lambda v: v["lo"] - 1e-9 <= _pv("T03-margin.random") <= v["hi"] + 1e-9)]
+    for fault, col, label in (("boundary", "fail", "boundary fail"), ("boundary", "tempered", "boundary tempered"),
+                              ("boundary", "surprise_auc", "boundary surprise AUC"),
+                              ("particles", "surprise_auc", "particles surprise AUC")):
+        cell = f"{d}faults.{fault}.{col}"
+        out.append(Experiment(
+            f"E21[{label}]", f"Table VIII's {label} over fresh draws",
+            {"lo": f"{cell}.min", "hi": f"{cell}.max", "m": f"{cell}.mean", "n": f"{cell}.n",
+             "check": f"{d}faults_check.{fault}.{col}"},
+            "the harness's arm replayed on {n:d} fresh draws of Split B's generator gives {lo:.3f} to {hi:.3f} "
+            "(mean {m:.3f}; on the analytic stand-in for Split B test itself {check:.3f}).",
+            supports=lambda v, key=f"tab:faults.{fault}.{col.replace('surprise_auc', 'surprise')}":
+            v["lo"] <= _pv(key) <= v["hi"]))
+    gv = f"{d}gates_fresh_cal."
+    out.append(Experiment(
+        "E23", "the random-probe gate areas over fresh calibration and test draws",
+        {"lo": f"{gv}posterior_variance.area.min", "hi": f"{gv}posterior_variance.area.max",
+         "m": f"{gv}posterior_variance.area.mean", "share": f"{gv}posterior_variance_lowest.mean", "n": f"{d}count",
+         "rlo": f"{gv}raw.area.min", "rhi": f"{gv}raw.area.max"},
+        "with the decision layer calibrated on one fresh draw of Split B's generator and the gates run on the next "
+        "({n:d} such pairs), posterior variance's area ranges {lo:.3f} to {hi:.3f} (mean {m:.3f}; raw {rlo:.3f} to "
+        "{rhi:.3f}); posterior variance has the lowest area on {share:.2f} of the pairs.",
+        supports=lambda v: v["lo"] <= _pv("T32-gate-areas-random.posterior_variance") <= v["hi"]))
+    out.append(Experiment(
+        "E24", "which random-probe gate has the lowest area, over fresh calibration and test draws",
+        {"share": f"{gv}posterior_variance_lowest.mean", "n": f"{d}count", "m": f"{gv}posterior_variance.area.mean",
+         "rm": f"{gv}raw.area.mean", "am": f"{gv}adjusted.area.mean"},
+        "posterior variance has the lowest area of the three deployable gates on {share:.2f} of {n:d} pairs of fresh "
+        "draws (mean areas: posterior variance {m:.3f}, raw {rm:.3f}, adjusted {am:.3f}).",
+        supports=lambda v: v["share"] >= 0.5))
+    rs = f"{X}committed_pool.resplits.paper_schedule."
+    for label, key, paper, tol in (("level mean", "level_mean", "T14-resplits.level_mean", 0.1),
+                                   ("held-out cluster coverage", "heldout_cluster_coverage",
+                                    "T14-resplits.heldout_cluster_coverage", POINT_TOL * 2.5),
+                                   ("margin optimistic", "margin_optimistic_fraction",
+                                    "T14-resplits.margin_optimistic_percent", 0.1)):
+        scale = 0.01 if label == "margin optimistic" else 1.0
+        out.append(Experiment(
+            f"E25[{label}]", f"the re-split study's {label} under the paper's cover schedule",
+            {"v": f"{rs}{key}", "n": f"{rs}splits", "lv": f"{rs}level_mean", "cv": f"{rs}heldout_cluster_coverage",
+             "mo": f"{rs}margin_optimistic_fraction", "g": f"{rs}gamma_mean"},
+            "the same {n:d} re-splits of the same pool of Split B instances under the paper's schedule give mean level {lv:.3f}, "
+            "held-out cluster coverage {cv:.3f}, the margin optimistic in {mo:.2f} of splits (mean gamma {g:.2f}).",
+            supports=lambda v, p=paper, t=tol, s=scale: abs(v["v"] - _pv(p) * s) <= t + 1e-12))
+    out.append(Experiment(
+        "E22", "the particle fault's residual over fresh draws",
+        {"share": f"{d}faults.particles_residual_improves.mean", "n": f"{d}faults.particles_residual_improves.n",
+         "plo": f"{d}faults.particles.optimism.min", "phi": f"{d}faults.particles.optimism.max",
+         "nlo": f"{d}faults.none.optimism.min", "nhi": f"{d}faults.none.optimism.max"},
+        "on {share:.2f} of {n:d} fresh draws of Split B's generator the impoverished filter's optimism at k = 8 is below "
+        "the baseline's (impoverished {plo:+.3f} to {phi:+.3f}, baseline {nlo:+.3f} to {nhi:+.3f}).",
+        supports=lambda v: v["share"] >= 0.5))
+    return out
+
+
+def _commit_experiments() -> list[Experiment]:
+    """E13-E16: the commit decision (Sec. VI) under the paper's own cover schedule on the same instances."""
+    pool, miss = f"{X}committed_pool.", f"{X}missing."
+    ps = f"{pool}paper_schedule."
+    return [
+        Experiment("E13", "the committed pool under the paper's cover schedule, same instances",
+                   {"ec": f"{ps}final_hull.escaped_committed", "nc": f"{ps}n_committed",
+                    "er": f"{ps}final_hull.escaped_rejected", "nr": f"{ps}n_rejected",
+                    "ratio": f"{ps}final_hull.ratio", "lo": f"{ps}final_hull.ratio.1", "hi": f"{ps}final_hull.ratio.2",
+                    "pvc": f"{ps}posterior_variance.final_hull.committed_rate",
+                    "pvr": f"{ps}posterior_variance.final_hull.rejected_rate",
+                    "ours": f"{pool}ours.final_hull.ratio", "pn": "paper:T36-surprise.escaped"},
+                   "on the same Split B test instances and tap-noise streams, the paper's schedule gives the raw gate's "
+                   "committed pool {ec:d} escaped of {nc:d} against {er:d} of the {nr:d} rejected (ratio {ratio:.2f}) "
+                   "and posterior variance's committed pool an escape rate of {pvc:.3f} against {pvr:.3f}; under our schedule the raw "
+                   "ratio is {ours:.2f}: which pool holds more escapes follows the schedule. Our run of the paper's "
+                   "schedule holds fewer escapes in all than the paper's ({pn:.0f}).",
+                   supports=lambda v: v["ratio"] > 1 and v["pvc"] > v["pvr"] and v["ours"] <= 1),
+        Experiment("E14", "claimed and realized failure at commit under the paper's cover schedule",
+                   {"pc": f"{ps}claimed", "pr": f"{ps}realized", "oc": f"{pool}ours.claimed", "orl": f"{pool}ours.realized"},
+                   "under the paper's schedule the raw gate claims {pc:.3f} and realizes {pr:.3f} at commit (our "
+                   "schedule: {oc:.3f} and {orl:.3f}).",
+                   supports=lambda v: v["pc"] < v["pr"]
+                   and abs(v["pr"] - _pv("T34-claimed-realized.raw_realized")) <= 0.05 + 1e-12),
+        Experiment("E15", "the k = 5 surprise AUC under the paper's cover schedule",
+                   {"a": f"{miss}surprise_auc_cover_paper_schedule_k5", "lo": f"{miss}surprise_auc_cover_paper_schedule_k5.1",
+                    "hi": f"{miss}surprise_auc_cover_paper_schedule_k5.2", "n": f"{miss}surprise_paper_schedule.n_escaped",
+                    "ours": f"{miss}surprise_auc_cover_k5"},
+                   "on the same instances under the paper's schedule the k = 5 surprise AUC is {a:.3f} ({n:d} escaped "
+                   "trajectories); under ours {ours:.3f}: our schedule's last tap is the one that makes most escapes, "
+                   "and it is itself surprising.",
+                   supports=lambda v: v["lo"] <= _pv("T36-surprise.auc_k5") <= v["hi"]),
+        Experiment("E16", "the k = 1 surprise AUC with surprise read as the reading class's probability",
+                   {"c1": f"{miss}surprise_variants.paper_schedule.class.final_hull.k1",
+                    "lo": f"{miss}surprise_variants.paper_schedule.class.final_hull.k1.1",
+                    "hi": f"{miss}surprise_variants.paper_schedule.class.final_hull.k1.2",
+                    "d1": f"{miss}surprise_auc_cover_paper_schedule_k1",
+                    "r1": f"{miss}surprise_variants.paper_schedule.class.final_retained.k1",
+                    "c5": f"{miss}surprise_variants.paper_schedule.class.final_hull.k5"},
+                   "under the paper's schedule, surprise read as -log of the reading class's predictive probability "
+                   "(not the reading's density) gives k = 1 AUC {c1:.3f} (density: {d1:.3f}; with "
+                   "escape read as outside the retained set: {r1:.3f}) and {c5:.3f} at k = 5.",
+                   supports=lambda v: v["lo"] <= _pv("T36-surprise.auc_k1") <= v["hi"]),
+    ]
+
+
+def _audit_cell_experiments() -> list[Experiment]:
+    """E17[cell]: one per Table III cell, the cell's range over fresh draws of Split B's test generator
+    (frozen calibration); it speaks to that cell only, and only if the paper's value lies in the range."""
+    d = f"{X}instance_generator.draws."
+    out = []
+    for i, k in enumerate(AUDIT_K):
+        for col in ("cluster_coverage", "optimism"):
+            for arm in ("original", "calibrated"):
+                cell = f"{col}.{arm}.k{k}"
+                out.append(Experiment(
+                    f"E17[{col} {arm} k={k}]", f"Table III's {col.replace('_', ' ')} ({arm}, k = {k}) over fresh draws",
+                    {"lo": f"{d}audit.{cell}.min", "hi": f"{d}audit.{cell}.max", "m": f"{d}audit.{cell}.mean",
+                     "n": f"{d}count", "check": f"{d}audit_check.{cell}"},
+                    "over {n:d} fresh draws of Split B's test generator audited with the frozen calibration, "
+                    "this cell ranges {lo:.3f} to {hi:.3f} (mean {m:.3f}; the frozen draw on the analytic scene "
+                    "{check:.3f}).",
+                    supports=lambda v, key=f"tab:audit.{col}_{arm}.{k}": v["lo"] <= _pv(key) <= v["hi"]))
+    for i, k in enumerate(AUDIT_K):  # E19[cell]: the calibrated cells when the calibration run is a fresh draw as well
+        for col in ("cluster_coverage", "optimism"):
+            cell = f"{col}.calibrated.k{k}"
+            out.append(Experiment(
+                f"E19[{col} calibrated k={k}]", f"Table III's {col.replace('_', ' ')} (calibrated, k = {k}) over fresh "
+                "calibration and test draws",
+                {"lo": f"{d}audit_fresh_cal.{cell}.min", "hi": f"{d}audit_fresh_cal.{cell}.max",
+                 "m": f"{d}audit_fresh_cal.{cell}.mean", "n": f"{d}count", "glo": f"{d}audit_fresh_cal.gamma.min",
+                 "ghi": f"{d}audit_fresh_cal.gamma.max", "t": f"{I}table_audit.table.{i}.threshold",
+                 "tlo": f"{d}audit_fresh_cal.t_k{k}.min", "thi": f"{d}audit_fresh_cal.t_k{k}.max"},
+                "calibrating on one fresh draw of Split B's generator and auditing the next ({n:d} such pairs), this "
+                "cell ranges {lo:.3f} to {hi:.3f} (mean {m:.3f}); those calibrations give t_k from {tlo:.3f} to "
+                "{thi:.3f} where our frozen calibration run gives {t:.3f}, and gamma from {glo:.2f} to {ghi:.2f}.",
+                supports=lambda v, key=f"tab:audit.{col}_calibrated.{k}": v["lo"] <= _pv(key) <= v["hi"]))
+    for arm in ("original", "calibrated"):
+        out.append(Experiment(
+            f"E18[{arm}]", f"Table III's mean |optimism| ({arm}) over fresh draws",
+            {"lo": f"{d}audit.mean_abs_optimism.{arm}.min", "hi": f"{d}audit.mean_abs_optimism.{arm}.max",
+             "m": f"{d}audit.mean_abs_optimism.{arm}.mean", "n": f"{d}count"},
+            "over {n:d} fresh draws of Split B's test generator (frozen calibration) the mean |optimism| over budgets "
+            "ranges {lo:.3f} to {hi:.3f} (mean {m:.3f}).",
+            supports=lambda v, key=f"T12-calibrated-audit.optimism_{arm}": v["lo"] <= _pv(key) <= v["hi"]))
     return out
 
 

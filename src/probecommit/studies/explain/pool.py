@@ -59,8 +59,15 @@ def pool_variants(raw: pd.DataFrame, budgets: Sequence[int], *, resamples: int, 
     for name, label in labels.items():
         out[f"{name}.escaped_committed"] = int(label[committed].sum())
         out[f"{name}.escaped_rejected"] = int(label[~committed].sum())
-    ratio = pool_escape_ratio(committed, labels["final_hull"], clusters, resamples=resamples, seed=seed)
-    out.update({f"final_hull.{k}": v for k, v in ratio.items()})
+    for name in ("final_hull", "stop_hull"):
+        ratio = pool_escape_ratio(committed, labels[name], clusters, resamples=resamples, seed=seed)
+        out.update({f"{name}.{k}": v for k, v in ratio.items()})
+    if "posterior_variance" in summary.index and "post_var" in raw.columns:
+        # The posterior-variance gate's own pool (its first passage at its own 60 % tau), paper's label.
+        variance = trajectory_matrix(raw, "post_var", budgets, index)[2]
+        held = first_passage(variance, float(summary.loc["posterior_variance", "tau"])) >= 0
+        ratio = pool_escape_ratio(held, labels["final_hull"], clusters, resamples=resamples, seed=seed)
+        out.update({f"posterior_variance.final_hull.{k}": v for k, v in ratio.items()})
     # Do escaped trajectories look confident? The rank AUC of (minus) the smallest raw score
     # over the budgets for final escape: above 0.5, escapes reach lower scores than the rest.
     best = np.nanmin(pred, axis=1)

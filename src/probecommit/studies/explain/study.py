@@ -22,18 +22,21 @@ from probecommit.audit.conformal import simultaneous_threshold
 from probecommit.audit.stats import cluster_bootstrap_mean, paired_bootstrap, percentile_interval, resample_counts
 from probecommit.audit.surprise import surprise_auc
 from probecommit.runner.replay import load_run, replay_episodes
-from probecommit.studies.explain import generator, more, runs
+from probecommit.studies.explain import draw_audit, draw_faults, generator, more, resplits, runs, surprise_variants
 from probecommit.studies.explain import gru as gru_study
 from probecommit.studies.explain.margin import margin_curve
 from probecommit.studies.explain.pool import gate_pools, pool_variants
 from probecommit.studies.explain.stats import (capture_failure, conformal_quantile_draws, equivalence_power, interval_se,
                                                 margin_draws)
-from probecommit.studies.paper_values import PAPER
+from probecommit.studies.paper_values import PRINTED
+from probecommit.studies.paper_values import value as paper_value
 from probecommit.studies.protocol import Protocol, load_protocol
 from probecommit.store.safefile import write_text, write_with
 
 CONFIG = Path(__file__).resolve().parents[2] / "configs" / "paper" / "explain.yaml"
 Progress = Callable[[str, int, int], None]
+#: The paper's frozen cover schedule (mm), as printed.
+COVER_SCHEDULE = [float(u) for u in PRINTED["T07-cover-schedule.schedule"].strip("[]").split(",")]
 #: The cost-of-calibration comparisons (baseline, treatment) and their key names.
 COST_LABELS = {("no calibration", "set calibration + margin"): "full", ("no calibration", "set calibration"): "set",
                ("set calibration", "set calibration + margin"): "margin"}
@@ -83,7 +86,17 @@ class Explain:
         return self._loaded[name]
 
     def insertion_results(self) -> dict[str, Any]:
-        return json.loads((self.root / "insertion" / "results" / "results.json").read_text())["results"]
+        """The insertion study's ``results.json`` (read once; several steps read it)."""
+        if "insertion_results" not in self._loaded:
+            path = self.root / "insertion" / "results" / "results.json"
+            self._loaded["insertion_results"] = json.loads(path.read_text())["results"]
+        return self._loaded["insertion_results"]
+
+    def fault_episodes(self) -> pd.DataFrame:
+        """The fault harness's episode table (read once; several steps read it)."""
+        if "faults_episodes" not in self._loaded:
+            self._loaded["faults_episodes"] = pd.read_parquet(self.root / "insertion" / "results" / "faults_episodes.parquet")
+        return self._loaded["faults_episodes"]
 
     # ------------------------------------------------------------------ part 3: missing items
     def missing(self) -> None:
@@ -144,7 +157,7 @@ class Explain:
 
     def _prior_all_four(self, m: dict[str, Any]) -> None:
         """How often a fault's escapes come in whole clusters (all repeats of an instance at once)."""
-        episodes = pd.read_parquet(self.root / "insertion" / "results" / "faults_episodes.parquet")
+        episodes = self.fault_episodes()
         for fault in ("prior", "boundary"):
             rows = _probe(episodes[(episodes["fault"] == fault) & (episodes["arm"] == "fault")])
             for k in (1, self.p.budgets["random"]):
@@ -179,10 +192,19 @@ class Explain:
             self.res["missing"][f"surprise_auc_cover_paper_schedule_k{kk}"] = [
                 float(auc.loc[kk, col]) for col in ("auc", "auc_lo", "auc_hi")]
         self.res["missing"]["surprise_paper_schedule.n_escaped"] = int(auc.loc[k, "n_escaped"])
+        self._surprise_variants(paper_schedule["test"], k)
         rb = list(range(1, self.p.budgets["random"] + 1))
         c.update({f"random_schedule.{key}": v for key, v in
                   pool_variants(_probe(self.load("B_test_random").episodes), rb, **b).items()})
         self._schedule_failure(paper_schedule)
+
+    def _surprise_variants(self, paper_test: Any, k: int) -> None:
+        """The surprise AUC with the paper's words read as a class probability, and with escape read as
+        "outside the retained set", on both schedules (k = 1 and the final budget)."""
+        self.progress("explain: surprise read as a class probability", 0, 1)
+        for label, run in (("ours", self.load("B_test_cover")), ("paper_schedule", paper_test)):
+            aucs = surprise_variants.variant_aucs(run, _probe(run.episodes), [1, k], k, **self.boot)
+            self.res["missing"].update({f"surprise_variants.{label}.{key}": v for key, v in aucs.items()})
 
     def _schedule_failure(self, paper_schedule: dict[str, Any]) -> None:
         """Cover k = 5 failure under each schedule on the same instances (paired), and Table IV's
@@ -208,6 +230,12 @@ class Explain:
             key = COST_LABELS[(row["baseline"], row["treatment"])]
             self.res["missing"][f"cost_of_calibration_paper_schedule.{key}"] = [row["difference"], row["lo"], row["hi"]]
         self.res["margin_per_gamma"]["paper_schedule.gamma_calibrate"] = cal.margin.gamma
+
+    def resplits_paper_schedule(self) -> None:
+        """The 50 re-splits of the 192-instance cover pool under the paper's schedule (``resplits``)."""
+        self.progress("explain: re-splits under the paper's schedule", 0, 1)
+        out = resplits.run(self.p, COVER_SCHEDULE, self.runs, self.workers)
+        self.res["committed_pool"].update({f"resplits.paper_schedule.{k}": v for k, v in out.items()})
 
     # ------------------------------------------------------------------ margin and thresholds
     def margins(self, paper_schedule: dict[str, Any]) -> None:
@@ -235,11 +263,11 @@ class Explain:
             t[f"{label}.simultaneous"] = curve["simultaneous_threshold"]
             t[f"{label}.distribution_free_margin"] = curve["distribution_free_margin"]
             s = curve["scores_final"]
-            t[f"{label}.share_scores_final_above_paper_t"] = float((s > PAPER["calibration.t5_cover"]).mean())
+            t[f"{label}.share_scores_final_above_paper_t"] = float((s > paper_value("T02-t5-cover.t5")).mean())
             t[f"{label}.share_scores_final_escaped"] = float((s > 1.0).mean())
             worst = curve["worst_budget_optimism"]
             t[f"{label}.share_worst_optimism_above_paper_df"] = float(
-                (worst > PAPER["calibration.distribution_free_margin_cover"]).mean())
+                (worst > paper_value("T04-distribution-free-margin.cover")).mean())
             for kk, value in curve["gamma_per_budget"].items():
                 g[f"{label}.gamma_at_k{kk}"] = value
             self._sampling_intervals(label, curve, k)
@@ -267,16 +295,16 @@ class Explain:
         counts = resample_counts(order.size, self.boot["resamples"], self.boot["seed"])
         draws = margin_draws(gammas, pred, real, counts)
         g[f"{label}.gamma_interval"] = [curve["gamma"], *percentile_interval(draws)]
-        g[f"{label}.share_resamples_gamma_at_least_paper"] = float(np.mean(draws >= PAPER["calibration.margin_cover"] - 1e-12))
+        g[f"{label}.share_resamples_gamma_at_least_paper"] = float(np.mean(draws >= paper_value("T03-margin.cover") - 1e-12))
         t_draws = conformal_quantile_draws(scores.loc[order, k].to_numpy(float), counts, p.alpha)
         t[f"{label}.t_{k}_interval"] = [curve["thresholds"][k], *percentile_interval(t_draws)]
-        t[f"{label}.share_resamples_t_{k}_at_most_paper"] = float(np.mean(t_draws <= PAPER["calibration.t5_cover"]))
+        t[f"{label}.share_resamples_t_{k}_at_most_paper"] = float(np.mean(t_draws <= paper_value("T02-t5-cover.t5")))
         worst = curve["worst_budget_optimism"]
         worst.index = worst.index.astype(str)
         df_draws = conformal_quantile_draws(worst.reindex(order).to_numpy(float), counts, p.alpha)
         t[f"{label}.distribution_free_margin_interval"] = [curve["distribution_free_margin"], *percentile_interval(df_draws)]
         t[f"{label}.share_resamples_df_at_least_paper"] = float(
-            np.mean(df_draws >= PAPER["calibration.distribution_free_margin_cover"]))
+            np.mean(df_draws >= paper_value("T04-distribution-free-margin.cover")))
 
     # ------------------------------------------------------------------ instance draws
     def instance_generator(self) -> None:
@@ -303,7 +331,8 @@ class Explain:
         count = self.cfg["fresh_draws_quick" if self.quick else "fresh_draws"]
         self.progress("explain: fresh draws of the generator", 0, 1)
         rows = []
-        for split, deployed, corrected in runs.fresh_draws(p, self.runs, count, self.workers):
+        drawn = runs.fresh_draws(p, self.runs, count, self.workers)
+        for split, deployed, corrected in drawn:
             old, new = _probe(deployed.episodes), _probe(corrected.episodes)
             x = deployed.instances["true_x_hole"].to_numpy(float)
             fix = paired_bootstrap(old[old["k"] == kmax], new[new["k"] == kmax], "realized", resamples=2, seed=0)
@@ -313,6 +342,8 @@ class Explain:
                          "failure_k8": float(old[old["k"] == kmax]["realized"].mean()),
                          "optimism_k8": float((old[old["k"] == kmax]["realized"] - old[old["k"] == kmax]["predicted"]).mean()),
                          "paired_fix_k8": float(fix.difference.estimate)})
+        self._draw_audit(drawn)
+        self._draw_faults(drawn)
         table = pd.DataFrame(rows)
         check, fresh = table.iloc[0], table.iloc[1:]
         mujoco = _probe(self.load("B_test_random").episodes, kmax)
@@ -328,13 +359,46 @@ class Explain:
             out["draws.corr_share_beyond_escape_k8"] = float(np.corrcoef(fresh["share_beyond"], fresh["escape_k8"])[0, 1])
         self.tables["draws"] = table.assign(schedule="draws")
 
+    def _draw_audit(self, drawn: list[tuple[str, Any, Any]]) -> None:
+        """Table III's cells on each fresh draw under the frozen Split B calibration (t_k and gamma of our
+        calibration run): the range over draws that a paper cell is compared with (``draw_audit``)."""
+        out, res = self.res["instance_generator"], self.insertion_results()
+        thresholds = {int(r["k"]): float(r["threshold"]) for r in res["table_audit"]["table"]}
+        gamma = float(res["table_insertion"]["margin_random"])
+        self.progress("explain: Table III on fresh draws", 0, len(drawn))
+        cells = [draw_audit.draw_cells(deployed.path, thresholds, gamma, nominal=1 - self.p.alpha, resamples=2, seed=0)
+                 for _, deployed, _ in drawn]
+        out.update({f"draws.audit_check.{key}": v for key, v in cells[0].items()})
+        if len(cells) > 1:
+            out.update({f"draws.audit.{key}": v for key, v in draw_audit.spread(cells[1:]).items()})
+        fresh = [deployed.path for _, deployed, _ in drawn[1:]]
+        if len(fresh) > 1:  # each fresh draw tested under a calibration on the next one (cyclic): both draws vary
+            self.progress("explain: Table III with fresh calibration draws", 0, len(fresh))
+            pairs = [draw_audit.fresh_calibration_cells(fresh[(i + 1) % len(fresh)], test, sorted(thresholds),
+                                                        alpha=self.p.alpha) for i, test in enumerate(fresh)]
+            out.update({f"draws.audit_fresh_cal.{key}": v for key, v in draw_audit.spread(pairs).items()})
+            self.progress("explain: random-probe gates on fresh draws", 0, len(fresh))
+            gate_cells = [draw_audit.fresh_gate_cells(fresh[(i + 1) % len(fresh)], test, alpha=self.p.alpha)
+                          for i, test in enumerate(fresh)]
+            out.update({f"draws.gates_fresh_cal.{key}": v for key, v in draw_audit.spread(gate_cells).items()})
+
+    def _draw_faults(self, drawn: list[tuple[str, Any, Any]]) -> None:
+        """The fault harness's none, boundary and particle arms replayed on each fresh draw's corrected run
+        (``draw_faults``): the range of Table VIII's cells and Fig. 7's particle signature over draws."""
+        out, p = self.res["instance_generator"], self.p
+        self.progress("explain: fault harness on fresh draws", 0, len(drawn))
+        cells = [draw_faults.draw_cells(corrected, p.faults, p.sigma, p.budgets["random"]) for _, _, corrected in drawn]
+        out.update({f"draws.faults_check.{key}": v for key, v in cells[0].items()})
+        if len(cells) > 1:
+            out.update({f"draws.faults.{key}": v for key, v in draw_faults.nan_spread(cells[1:]).items()})
+
     # ------------------------------------------------------------------ boundary fault and robust filters
     def boundary_fault(self) -> None:
         out, p, b = self.res["boundary_fault"], self.p, self.boot
         kmax = p.budgets["random"]
         edge = self.cfg["stratum_edge_mm"]
         expected = self.res["instance_generator"].get("B_test_random.expected_share", 0.3)
-        episodes = pd.read_parquet(self.root / "insertion" / "results" / "faults_episodes.parquet")
+        episodes = self.fault_episodes()
         fault = episodes[(episodes["fault"] == "boundary") & (episodes["arm"] == "fault")]
         fix = episodes[(episodes["fault"] == "boundary") & (episodes["arm"] == "fix")]
         for k in (1, kmax):
@@ -463,8 +527,9 @@ class Explain:
     def run(self, out: Path) -> Path:
         out.mkdir(parents=True, exist_ok=True)
         self.progress("explain: paper's cover schedule on Split B", 0, 1)
-        paper = runs.schedule_runs(self.p, PAPER["cover.schedule"], self.runs, self.workers)
+        paper = runs.schedule_runs(self.p, COVER_SCHEDULE, self.runs, self.workers)
         steps = [self.missing, self.physx_coverage, lambda: self.committed_pool(paper), lambda: self.margins(paper),
+                 self.resplits_paper_schedule,
                  self.instance_generator, self.draws, self.boundary_fault, self.robust, self.physx, self.gru,
                  lambda: more.run(self)]
         for i, step in enumerate(steps):
