@@ -8,11 +8,11 @@ from __future__ import annotations
 
 from typing import Any
 
-from probecommit.studies.explain import breadth, engines_x, rig, searches
+from probecommit.studies.explain import breadth, engines_x, pybullet_x, rig, searches
 from probecommit.studies.paper_values import PAPER, value
 
 #: Result groups these steps fill (added to ``Explain.res``).
-GROUPS = ("engines_x", "searches", "rig_redraws", "breadth_prior")
+GROUPS = ("engines_x", "searches", "rig_redraws", "breadth_prior", "pybullet_escape")
 
 
 def run(job: Any) -> None:
@@ -28,3 +28,11 @@ def run(job: Any) -> None:
     job.res["rig_redraws"].update(rig.run(job.runs, job.cfg, job.boot, job.quick))
     job.progress("explain: Table II's families over the prior's width", 0, 1)
     job.res["breadth_prior"].update(breadth.run(job.root, job.runs, job.cfg, job.boot, job.quick))
+    run_ex3(job)
+
+
+def run_ex3(job: Any) -> None:
+    """The third helper's steps (E45..)."""
+    job.progress("explain: PyBullet's reported scene properties", 0, 1)
+    draws = job.cfg["pybullet_draws_quick" if job.quick else "pybullet_draws"]
+    job.res["pybullet_escape"].update(pybullet_x.run(job.root, job.runs, job.boot, job.workers, draws=draws))

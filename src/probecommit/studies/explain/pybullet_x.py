@@ -38,9 +38,12 @@ def gamma_scales(mean: float, sd: float, n: int, seed: int) -> np.ndarray:
     return np.random.default_rng(seed).gamma(shape, mean / shape, size=n)
 
 
-def _emulated(source: LoadedRun, runs: Path, name: str, offset: float, scale: float, workers: int) -> LoadedRun:
+def _emulated(source: LoadedRun, runs: Path, name: str, offset: float, scale: float, workers: int,
+              split: str | None = None) -> LoadedRun:
     data = config_data(source.config)
     data["name"] = name
+    if split is not None:
+        data["instances"] = {**data["instances"], "split": split}
     data["simulator"] = {**data["simulator"], "engine": "analytic", "boundary_offset": float(offset),
                          "capture_scale": float(scale)}
     path = runs / name
@@ -53,7 +56,16 @@ def _probe_k(episodes: Any, k: int) -> Any:
     return rows[rows["k"] == k]
 
 
-def run(root: Path, runs: Path, boot: dict[str, Any], workers: int = 1, seed: int = 0) -> dict[str, Any]:
+def draw_range(values: list[float]) -> dict[str, float]:
+    """Mean, SD, min, max and the 2.5 / 97.5 % points (linear interpolation) of per-draw values."""
+    v = np.asarray(values, dtype=float)
+    return {"count": int(v.size), "mean": float(v.mean()), "sd": float(v.std(ddof=1)) if v.size > 1 else 0.0,
+            "min": float(v.min()), "max": float(v.max()), "p025": float(np.quantile(v, 0.025)),
+            "p975": float(np.quantile(v, 0.975))}
+
+
+def run(root: Path, runs: Path, boot: dict[str, Any], workers: int = 1, seed: int = 0,
+        draws: int = 0) -> dict[str, Any]:
     """Keys of ``explain:results.pybullet_escape`` (empty without the engines study's PyBullet run)."""
     path = root / "engines" / "runs" / "pybullet_B_test_random"
     if not (path / "manifest.json").is_file():
@@ -74,7 +86,9 @@ def run(root: Path, runs: Path, boot: dict[str, Any], workers: int = 1, seed: in
     out["capture_moves_readings"] = int(not bool(same.all()))
     e_paper, e_unit = _probe_k(paper.episodes, kmax), _probe_k(unit.episodes, kmax)
     out["capture_moves_escape_k8"] = float(e_paper["escaped"].mean() - e_unit["escaped"].mean())
-    out["readings_equal_stored_share"] = float(np.mean(paper.probes["y"].to_numpy() == stored.probes["y"].to_numpy()))
+    out["same_escape_as_stored_every_k"] = int(all(
+        np.array_equal(_probe_k(paper.episodes, k)["escaped"].to_numpy(), _probe_k(stored.episodes, k)["escaped"].to_numpy())
+        for k in range(1, kmax + 1)))
     inst = paper.instances.set_index("instance_id")
     ids = inst.index.to_numpy()
     scales = dict(zip(ids, gamma_scales(ratio, sd, len(ids), seed)))
@@ -83,5 +97,12 @@ def run(root: Path, runs: Path, boot: dict[str, Any], workers: int = 1, seed: in
                                 np.array([scales[i] for i in e_paper["instance_id"]]))
     out["per_truth_capture.failure_k8"] = float(per_truth.mean())
     out["per_truth_capture.optimism_k8"] = float((per_truth - e_paper["predicted"].to_numpy(float)).mean())
+    escapes = []
+    for i in range(draws):
+        split = f"pybullet_draw_{i:02d}"
+        drawn = _emulated(stored, runs, f"pybullet_emulated_{split}", offset, ratio, workers, split)
+        escapes.append(float(_probe_k(drawn.episodes, kmax)["escaped"].mean()))
+    if escapes:
+        out.update({f"draws.escape_k8.{k}": v for k, v in draw_range(escapes).items()})
     return out
 
