@@ -56,3 +56,53 @@ def test_the_emulated_scene_at_the_stored_runs_boundary_escapes_on_the_same_epis
     assert out["emulated.escape_k8"] == out["stored.escape_k8"]
     assert out["draws.escape_k8.count"] == 2
     assert pybullet_x.run(tmp_path / "nothing", tmp_path / "r", dict(resamples=50, seed=0)) == {}
+
+
+def test_unpaired_differences_by_hand():
+    from probecommit.studies.explain.mixture_x import unpaired_differences
+
+    d = unpaired_differences([0.2, 0.3], [0.1, 0.15])
+    assert sorted(d.tolist()) == pytest.approx([0.05, 0.2])  # 0.2 - 0.15 and 0.3 - 0.1; same-seed pairs left out
+
+
+def test_e46_and_e47_are_wired_and_their_rules_can_fail():
+    by_id = {c.id: c for c in claims.CLAIMS}
+    assert "E46" in by_id["T44-mixture-cost"].explain and "E47" in by_id["T09-grasp"].explain
+    cost = claims._pv("T44-mixture-cost.mixture") - claims._pv("T44-mixture-cost.right")
+    assert claims.EXPERIMENTS["E46"].supports({"uhi": cost + 0.001})
+    assert not claims.EXPERIMENTS["E46"].supports({"uhi": cost - 0.001})
+    assert claims.EXPERIMENTS["E47"].supports({"down": 0}) and not claims.EXPERIMENTS["E47"].supports({"down": 1})
+
+
+def test_reseeded_replay_at_the_same_seed_is_the_stored_run_and_another_seed_differs(tmp_path):
+    """Two paths: a replay of a run under its own seed (via ``reseeded``) gives its stored episodes; the
+    mixture summary at that seed then has zero spread of the right model's failure."""
+    from probecommit.runner.replay import load_run, replay_episodes
+    from probecommit.studies.explain import mixture_x
+
+    p = load_protocol()
+    data = config_data(p.run_config("faults_base", "B", "B_test_random", "random"))
+    data["instances"] = {**data["instances"], "count": 4}
+    data["repeats"], data["unit_instances"] = 2, 2
+    data["belief"] = {**data["belief"], "particles": 64}
+    data["simulator"] = {**data["simulator"], "engine": "analytic"}
+    run_study(parse_config(data), tmp_path / "base", workers=1, threads=1)
+    base = load_run(tmp_path / "base")
+    k = int(base.config.probes.budget)
+    same, _ = replay_episodes(mixture_x.reseeded(base, base.config.seed), None, chunk_instances=48)
+    cols = ["instance_id", "repeat", "k", "action", "realized"]
+    stored = mixture_x._final(base.episodes, k)[cols].reset_index(drop=True)
+    assert mixture_x._final(same, k)[cols].reset_index(drop=True).equals(stored)
+    mix = {"likelihood": "mixture", "epsilon": 0.01, "mixture_low": -17.0, "mixture_high": 2.0}
+    out = mixture_x.run(base, mix, [base.config.seed, base.config.seed], k)
+    assert out["right.failure.sd"] == 0.0 and out["reseeded_changed_aims.mean"] == 0.0
+    assert out["right.failure.mean"] == pytest.approx(float(stored["realized"].mean()))
+
+
+@pytest.mark.slow
+def test_grasp_on_the_model_exact_scene_counts_every_feasible_truth_once(tmp_path):
+    from probecommit.studies.explain import grasp_x
+
+    out = grasp_x.run(tmp_path, quick=True)
+    assert out["analytic.n_truths"] == out["analytic.n_feasible"] <= out["analytic.n_instances"]
+    assert out["analytic.n_improve"] + out["analytic.n_tie"] + out["analytic.n_worse"] == out["analytic.n_truths"]
