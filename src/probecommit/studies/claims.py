@@ -953,9 +953,9 @@ def _experiments_ex3() -> list[Experiment]:
                     "rsd": f"{mx}right.failure.sd", "ulo": f"{mx}unpaired_cost.p025", "uhi": f"{mx}unpaired_cost.p975"},
                    "the paper's mixture is ours term for term; re-inferring the right model's harness run under {n:d} "
                    "other filter seeds, the mixture at the paper's epsilon changes {ch:.3f} of the aims and costs "
-                   "{pc:+.3f} failure on average (paired by seed; at most {pcmax:+.3f}), while another filter seed alone "
-                   "changes {rch:.3f} of the aims and moves failure with SD {rsd:.3f}; between independently seeded "
-                   "runs the mixture's apparent cost spans {ulo:+.3f} to {uhi:+.3f} (2.5-97.5 %).",
+                   "{pc:+.3f} failure on average (paired by seed; at most {pcmax:+.3f}), while another filter seed "
+                   "alone changes {rch:.3f} of the aims and moves failure with SD {rsd:.3f}; between independently "
+                   "seeded runs the mixture's apparent cost spans {ulo:+.3f} to {uhi:+.3f} (2.5-97.5 %).",
                    supports=lambda v: _pv("T44-mixture-cost.mixture") - _pv("T44-mixture-cost.right") <= v["uhi"]),
         Experiment("E47", "grasp's per-truth signs with the model as the scene's truth",
                    {"n": f"{gs}analytic.n_feasible", "up": f"{gs}analytic.n_improve", "tie": f"{gs}analytic.n_tie",

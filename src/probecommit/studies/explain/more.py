@@ -1,4 +1,4 @@
-"""The second helper's explain steps (E30..), run after the others by ``Explain.run``.
+"""The second and third helpers' explain steps (E30..), run after the others by ``Explain.run``.
 
 Each step writes one result group of ``explain:results`` and reads only what ``Explain``
 already holds (the protocol, the root's frozen runs, the bootstrap settings, the config).
@@ -39,8 +39,8 @@ def run_ex3(job: Any) -> None:
     job.progress("explain: the mixture against the filter's own noise", 0, 1)
     r, seeds = job.p.robust, job.cfg["mixture_filter_seeds_quick" if job.quick else "mixture_filter_seeds"]
     base = job.load("faults_base")
-    mixture = {"likelihood": "mixture", "epsilon": value("T42-robust-chosen.mixture"), "mixture_low": r.mixture_range[0],
-               "mixture_high": r.mixture_range[1]}
+    mixture = {"likelihood": "mixture", "epsilon": value("T42-robust-chosen.mixture"),
+               "mixture_low": r.mixture_range[0], "mixture_high": r.mixture_range[1]}
     job.res["mixture_noise"].update(mixture_x.run(base, mixture, [base.config.seed + i for i in range(1, seeds + 1)],
                                                   job.p.budgets["random"]))
     job.progress("explain: grasp on the model-exact scene", 0, 1)

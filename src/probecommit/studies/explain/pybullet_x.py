@@ -87,7 +87,8 @@ def run(root: Path, runs: Path, boot: dict[str, Any], workers: int = 1, seed: in
     e_paper, e_unit = _probe_k(paper.episodes, kmax), _probe_k(unit.episodes, kmax)
     out["capture_moves_escape_k8"] = float(e_paper["escaped"].mean() - e_unit["escaped"].mean())
     out["same_escape_as_stored_every_k"] = int(all(
-        np.array_equal(_probe_k(paper.episodes, k)["escaped"].to_numpy(), _probe_k(stored.episodes, k)["escaped"].to_numpy())
+        np.array_equal(_probe_k(paper.episodes, k)["escaped"].to_numpy(),
+                       _probe_k(stored.episodes, k)["escaped"].to_numpy())
         for k in range(1, kmax + 1)))
     inst = paper.instances.set_index("instance_id")
     ids = inst.index.to_numpy()
