@@ -1,4 +1,4 @@
-"""The second helper's explain steps (E30..), run after the others by ``Explain.run``.
+"""The second and third helpers' explain steps (E30..), run after the others by ``Explain.run``.
 
 Each step writes one result group of ``explain:results`` and reads only what ``Explain``
 already holds (the protocol, the root's frozen runs, the bootstrap settings, the config).
@@ -8,11 +8,11 @@ from __future__ import annotations
 
 from typing import Any
 
-from probecommit.studies.explain import breadth, engines_x, rig, searches
+from probecommit.studies.explain import breadth, engines_x, grasp_x, mixture_x, pybullet_x, rig, searches
 from probecommit.studies.paper_values import PAPER, value
 
 #: Result groups these steps fill (added to ``Explain.res``).
-GROUPS = ("engines_x", "searches", "rig_redraws", "breadth_prior")
+GROUPS = ("engines_x", "searches", "rig_redraws", "breadth_prior", "pybullet_escape", "mixture_noise", "grasp_signs")
 
 
 def run(job: Any) -> None:
@@ -28,3 +28,20 @@ def run(job: Any) -> None:
     job.res["rig_redraws"].update(rig.run(job.runs, job.cfg, job.boot, job.quick))
     job.progress("explain: Table II's families over the prior's width", 0, 1)
     job.res["breadth_prior"].update(breadth.run(job.root, job.runs, job.cfg, job.boot, job.quick))
+    run_ex3(job)
+
+
+def run_ex3(job: Any) -> None:
+    """The third helper's steps (E45..)."""
+    job.progress("explain: PyBullet's reported scene properties", 0, 1)
+    draws = job.cfg["pybullet_draws_quick" if job.quick else "pybullet_draws"]
+    job.res["pybullet_escape"].update(pybullet_x.run(job.root, job.runs, job.boot, job.workers, draws=draws))
+    job.progress("explain: the mixture against the filter's own noise", 0, 1)
+    r, seeds = job.p.robust, job.cfg["mixture_filter_seeds_quick" if job.quick else "mixture_filter_seeds"]
+    base = job.load("faults_base")
+    mixture = {"likelihood": "mixture", "epsilon": value("T42-robust-chosen.mixture"),
+               "mixture_low": r.mixture_range[0], "mixture_high": r.mixture_range[1]}
+    job.res["mixture_noise"].update(mixture_x.run(base, mixture, [base.config.seed + i for i in range(1, seeds + 1)],
+                                                  job.p.budgets["random"]))
+    job.progress("explain: grasp on the model-exact scene", 0, 1)
+    job.res["grasp_signs"].update(grasp_x.run(job.runs, job.quick, job.workers))
