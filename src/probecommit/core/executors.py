@@ -14,8 +14,8 @@ index. The truth is never used.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
-from typing import Any
+from dataclasses import dataclass, field, replace
+from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
 
@@ -174,6 +174,53 @@ def _failure_counts(model: Any, scenarios: np.ndarray, mask: np.ndarray, context
     else:
         return np.sum(model.loss(model.action_grid, scenarios, context) & mask[:, None, :], axis=-1), retained_count
     return retained_count[:, None] - successes, retained_count
+
+
+@dataclass(frozen=True)
+class Belief:
+    """What an executor decides from: a batch of particle beliefs at one budget.
+
+    Attributes:
+        particles: ``[E, N, d]`` latent hypotheses.
+        weights: ``[E, N]`` normalized weights.
+        z: ``[E, N]`` each particle's decision coordinate (``model.decision(particles)``).
+    """
+
+    particles: np.ndarray
+    weights: np.ndarray
+    z: np.ndarray
+
+
+@runtime_checkable
+class Executor(Protocol):
+    """One executor, injected into the runner (Stone Soup style): it holds its model and decides.
+
+    Attributes:
+        method: The label its rows carry in the episode table's ``method`` column.
+        on_prior: True for a blind executor, which commits once on the prior belief (k = 0);
+            False for one that commits after every probe budget.
+    """
+
+    method: str
+    on_prior: bool
+
+    def decide(self, belief: Belief, threshold: float, context: np.ndarray | None = None,
+               memo: dict | None = None) -> "Commitment":
+        """Commit for every episode of ``belief``.
+
+        Args:
+            threshold: Retained mass ``nu`` or conformal threshold ``t`` (set executors).
+            context: ``[E, c]`` observed context, if the family has one.
+            memo: A dict kept by the caller per (executor, budget, threshold) across commits that
+                differ only in the model's margin: what does not depend on the margin goes there.
+        """
+
+    def with_model(self, model: Any) -> "Executor":
+        """This executor deciding with ``model`` (a margin override)."""
+
+    @property
+    def memo_tag(self) -> Any:
+        """What besides method, budget and threshold its memo depends on (a cache key part)."""
 
 
 @dataclass
@@ -345,6 +392,25 @@ class ProbeRobust:
         return Commitment(index, np.take_along_axis(scores, index[:, None], axis=1)[:, 0], retained.mask,
                           retained.lo, retained.hi)
 
+    method = "probe_robust"
+    on_prior = False
+
+    @property
+    def memo_tag(self) -> str:
+        return self.plateau
+
+    def with_model(self, model: Any) -> "ProbeRobust":
+        return replace(self, model=model)
+
+    def decide(self, belief: Belief, threshold: float, context: np.ndarray | None = None,
+               memo: dict | None = None) -> Commitment:
+        """:class:`Executor`'s interface: the retained set (kept in ``memo``: it does not depend
+        on the margin) scored and one action chosen per episode."""
+        memo = {} if memo is None else memo
+        if "retained" not in memo:
+            memo["retained"] = self.retain(belief.particles, belief.weights, threshold)
+        return self.choose(memo["retained"], context)
+
     def act(self, particles: np.ndarray, weights: np.ndarray, threshold: float,
             context: np.ndarray | None = None) -> Commitment:
         """Commit for every episode of a belief batch.
@@ -362,6 +428,9 @@ class ProbeRobust:
 class BlindRobust(ProbeRobust):
     """Blind-Robust: the same set objective applied to the unprobed prior cloud (k = 0)."""
 
+    method = "blind_robust"
+    on_prior = True
+
 
 @dataclass
 class BlindBayes:
@@ -377,6 +446,24 @@ class BlindBayes:
 
     model: Any
     prior_sample: np.ndarray
+
+    method = "blind_bayes"
+    on_prior = True
+    memo_tag = None
+
+    def with_model(self, model: Any) -> "BlindBayes":
+        """Itself: the policy is fixed when built (by the prior sample and the model given then),
+        so a margin override rescoring the set executors leaves Blind-Bayes's actions as they were."""
+        return self
+
+    def decide(self, belief: Belief, threshold: float, context: np.ndarray | None = None,
+               memo: dict | None = None) -> Commitment:
+        """:class:`Executor`'s interface: the prior optimum per context; its "set" is every
+        particle of the belief (the threshold does not apply)."""
+        mask = np.ones_like(belief.weights, dtype=bool)
+        lo, hi = masked_interval(belief.z, mask)
+        index, expected = self.act(belief.weights.shape[0], context)
+        return Commitment(index, expected, mask, lo, hi)
 
     def act_one(self, context: np.ndarray | None = None) -> tuple[int, float]:
         """Action index and its prior expected loss for one context (or none)."""
