@@ -6,41 +6,29 @@ PY := $(VENV)/bin/python
 DEMO_STAMP := $(VENV)/.installed-demo
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test test-fast bench reproduce clean-venv browser system-packages kernels
+.PHONY: demo test test-fast bench reproduce clean-venv browser system-packages
 
 $(VENV)/bin/python:
 	$(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install --quiet --upgrade "pip>=24"
 
 $(DEMO_STAMP): pyproject.toml constraints.txt | $(VENV)/bin/python
-	$(PY) -m pip install --quiet -c constraints.txt -e '.[mujoco,fast]'
+	$(PY) -m pip install --quiet -c constraints.txt -e '.[mujoco]'
 	touch $(DEMO_STAMP)
 
 $(STAMP): pyproject.toml constraints.txt | $(VENV)/bin/python
 	$(PY) -m pip install --quiet -c constraints.txt -e '.[all,test]'
 	touch $(STAMP) $(DEMO_STAMP)
 
-# The numba kernels built ahead of time into a C extension (probecommit._aot_kernels): no numba
-# or LLVM in the processes that run them (~115 MB less). Rebuilt when a kernel source changes;
-# where it cannot be built (no C compiler) the kernels run through numba's JIT instead.
-KERNEL_SOURCES := $(shell find src/probecommit -name kernels.py) src/probecommit/core/compiled.py
-AOT_DIGEST := src/probecommit/_aot_kernels.digest
-
-$(AOT_DIGEST): $(KERNEL_SOURCES) | $(DEMO_STAMP)
-	$(PY) -m probecommit.core.compiled || echo "warning: the ahead-of-time kernels could not be built; numba's JIT runs them"
-
-## Build the compiled kernels ahead of time (make demo and make test do it).
-kernels: $(AOT_DIGEST)
-
 ## Create the venv, install pinned dependencies (MuJoCo and numba only), run the demo study and print its report path.
-demo: $(DEMO_STAMP) $(AOT_DIGEST)
+demo: $(DEMO_STAMP)
 	$(VENV)/bin/probecommit demo
 
 ## Create the venv, install every pinned extra, run the whole test suite (slow tests included).
 ## Two system needs come from Debian's packages, installed here when missing (as root; it says what first):
 ## Chromium (the HTML reports are checked in a real browser) and software OpenGL (Mesa's EGL/llvmpipe
 ## and OSMesa: MuJoCo renders the scenes of Fig. 1 and Fig. 3 on the CPU).
-test: $(STAMP) $(AOT_DIGEST) system-packages
+test: $(STAMP) system-packages
 	$(PY) -m pytest -q
 	@echo "browser screenshots of the reports: $(CURDIR)/build/screenshots/"
 
@@ -61,11 +49,11 @@ system-packages:
 browser: system-packages
 
 ## The suite without tests marked slow.
-test-fast: $(STAMP) $(AOT_DIGEST)
+test-fast: $(STAMP)
 	$(PY) -m pytest -q -m "not slow"
 
 ## Benchmarks: ratios measured side by side in one run.
-bench: $(STAMP) $(AOT_DIGEST)
+bench: $(STAMP)
 	$(PY) benchmarks/belief.py
 	$(PY) benchmarks/calibrate.py
 	$(PY) benchmarks/scale.py
@@ -75,7 +63,7 @@ bench: $(STAMP) $(AOT_DIGEST)
 	$(PY) benchmarks/end_to_end.py
 
 ## Every table and figure of the paper (resumable; see probecommit reproduce --list).
-reproduce: $(STAMP) $(AOT_DIGEST)
+reproduce: $(STAMP)
 	$(VENV)/bin/probecommit reproduce all
 
 clean-venv:

@@ -1,8 +1,8 @@
 """The layer contract of docs/contributing.md holds (import-linter, configured in pyproject.toml).
 
 Dependencies point one way: cli > report > studies > runner > audit > store > tasks >
-engines > core; core, audit, store and every task model import no engine, Ray or
-plotting. A planted violation must be caught, so the check itself can fail.
+engines > accel > core; core, audit, store and every task model import no engine, Ray or
+plotting; the core maths imports no compiled layer (accel, numba). A planted violation must be caught, so the check itself can fail.
 """
 
 from __future__ import annotations
@@ -36,6 +36,18 @@ def test_a_planted_upward_import_is_caught(tmp_path):
     result = lint(tmp_path, copy)
     assert result.returncode != 0
     assert "probecommit.core is not allowed to import probecommit.runner" in result.stdout
+
+
+def test_a_planted_import_of_the_compiled_layer_in_the_core_maths_is_caught(tmp_path):
+    """The core maths (the NumPy reference) never reaches the accelerator-specific code."""
+    copy = tmp_path / "src"
+    shutil.copytree(ROOT / "src" / "probecommit", copy / "probecommit", ignore=shutil.ignore_patterns("__pycache__"))
+    shutil.copy(ROOT / "pyproject.toml", tmp_path / "pyproject.toml")
+    model = copy / "probecommit" / "core" / "belief.py"
+    model.write_text(model.read_text() + "\nfrom probecommit.accel import retained  # planted\n")
+    result = lint(tmp_path, copy)
+    assert result.returncode != 0
+    assert "probecommit.core is not allowed to import probecommit.accel" in result.stdout
 
 
 # ---------------------------------------------------------------------------------- nothing generic names a family

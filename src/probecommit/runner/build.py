@@ -7,6 +7,7 @@ from __future__ import annotations
 
 from typing import Any, Callable, Iterable
 
+from probecommit.accel import production
 from probecommit.core.belief import ParticleFilter
 from probecommit.core.executors import BlindBayes, BlindRobust, Executor, ProbeRobust
 from probecommit.core.likelihood import GaussianLikelihood, MixtureLikelihood, TemperedLikelihood
@@ -21,7 +22,7 @@ def build_model(config: StudyConfig) -> Any:
 
 
 def build_filter(model: Any, cfg: BeliefConfig) -> ParticleFilter:
-    """The particle filter of a config, with its likelihood variant."""
+    """The particle filter of a config, with its likelihood variant and the production kernels."""
     likelihood = GaussianLikelihood(model.sigma)
     if cfg.likelihood == "tempered":
         likelihood = TemperedLikelihood(likelihood, cfg.temperature)
@@ -36,6 +37,7 @@ def build_filter(model: Any, cfg: BeliefConfig) -> ParticleFilter:
         rejuvenation=cfg.rejuvenation,
         move=cfg.move,
         move_steps=cfg.move_steps,
+        kernels=production().filter,
     )
 
 
@@ -58,8 +60,8 @@ def blind_bayes_executor(model: Any, seed: int, n_samples: int) -> BlindBayes:
 #: each builder takes (model, plateau, seed, blind prior samples).
 EXECUTORS: dict[str, Callable[[Any, str, int, int], Executor]] = {
     "blind_bayes": lambda model, plateau, seed, n: blind_bayes_executor(model, seed, n),
-    "blind_robust": lambda model, plateau, seed, n: BlindRobust(model, plateau),
-    "probe_robust": lambda model, plateau, seed, n: ProbeRobust(model, plateau),
+    "blind_robust": lambda model, plateau, seed, n: BlindRobust(model, plateau, production().sets),
+    "probe_robust": lambda model, plateau, seed, n: ProbeRobust(model, plateau, production().sets),
 }
 
 

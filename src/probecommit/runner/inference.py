@@ -18,7 +18,7 @@ import pandas as pd
 
 from probecommit.core.belief import BeliefState, ParticleFilter
 from probecommit.core.executors import Belief, Commitment, Executor
-from probecommit.core.retained import coverage_with_hull, weighted_variance
+from probecommit.accel import production
 from probecommit.runner.seeding import INFERENCE, ROLLOUT, episode_rngs
 from probecommit.store.schema import component_names
 
@@ -354,9 +354,10 @@ def _belief_at(trace: BeliefTrace, model, k: int, z_true: np.ndarray, cache: dic
         state = trace.states[k]
         z = model.decision(state.particles)
         weights = state.weights
-        score_s, hull_lo, hull_hi = coverage_with_hull(z, weights, z_true, model.decision_domain_width)
+        kernels = production()
+        score_s, hull_lo, hull_hi = kernels.coverage_with_hull(z, weights, z_true, model.decision_domain_width)
         belief = cache[("belief", k)] = {"z": z, "weights": weights, "hull_lo": hull_lo, "hull_hi": hull_hi,
-                                         "score_s": score_s, "post_var": weighted_variance(z, weights)}
+                                         "score_s": score_s, "post_var": kernels.weighted_variance(z, weights)}
     return belief
 
 

@@ -1,0 +1,109 @@
+"""Compiled retained sets, coverage score and posterior variance (``core.retained``'s, per episode in one pass).
+
+Both the retained set and the coverage score walk the particles in descending weight (a
+stable sort: ties in index order) and accumulate their mass in that order, one addition at
+a time, as NumPy's ``cumsum`` does: the sets, hulls and scores equal the reference's exactly.
+The weighted means (the tie-break reference, the posterior variance) sum in loop order and
+agree with NumPy's pairwise sums to round-off (``tests/accel``).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from probecommit.accel.jit import kernel
+from probecommit.core.retained import MASS_TOLERANCE
+
+
+@kernel
+def _retained_summary(weights, nu, z, particles, tolerance):  # pragma: no cover - compiled
+    n_e, n = weights.shape
+    d = particles.shape[2]
+    mask = np.zeros((n_e, n), dtype=np.bool_)
+    lo = np.empty(n_e)
+    hi = np.empty(n_e)
+    reference = np.zeros((n_e, d))
+    for e in range(n_e):
+        order = np.argsort(-weights[e], kind="mergesort")
+        count, total = n, 0.0
+        for i in range(n):  # the shortest prefix reaching mass nu
+            total += weights[e, order[i]]
+            if total >= nu[e] - tolerance:
+                count = i + 1
+                break
+        low, high, mass = np.inf, -np.inf, 0.0
+        for i in range(count):
+            p = order[i]
+            mask[e, p] = True
+            low, high = min(low, z[e, p]), max(high, z[e, p])
+            mass += weights[e, p]
+            for j in range(d):
+                reference[e, j] += weights[e, p] * particles[e, p, j]
+        lo[e], hi[e] = low, high
+        if mass > 0:
+            reference[e] /= mass
+        else:  # a set of zero-weight particles only: the unweighted mean
+            reference[e] = 0.0
+            for i in range(count):
+                reference[e] += particles[e, order[i]]
+            reference[e] /= count
+    return mask, lo, hi, reference
+
+
+@kernel
+def _coverage_with_hull(weights, z, z_true, width):  # pragma: no cover - compiled
+    n_e, n = weights.shape
+    score = np.empty(n_e)
+    hull_lo = np.empty(n_e)
+    hull_hi = np.empty(n_e)
+    for e in range(n_e):
+        hull_lo[e], hull_hi[e] = np.min(z[e]), np.max(z[e])
+        truth = z_true[e]
+        if not (hull_lo[e] <= truth <= hull_hi[e]):  # escaped: 1 + distance past the hull / D
+            distance = max(hull_lo[e] - truth, 0.0) + max(truth - hull_hi[e], 0.0)
+            score[e] = 1.0 + distance / width
+            continue
+        order = np.argsort(-weights[e], kind="mergesort")
+        low, high, mass = np.inf, -np.inf, 0.0
+        for i in range(n):  # the mass of the first top-weight prefix whose span covers the truth
+            p = order[i]
+            mass += weights[e, p]
+            low, high = min(low, z[e, p]), max(high, z[e, p])
+            if low <= truth <= high:
+                break
+        score[e] = min(mass, 1.0)
+    return score, hull_lo, hull_hi
+
+
+@kernel
+def _weighted_variance(z, weights):  # pragma: no cover - compiled
+    n_e, n = weights.shape
+    out = np.empty(n_e)
+    for e in range(n_e):
+        mean = 0.0
+        for i in range(n):
+            mean += weights[e, i] * z[e, i]
+        total = 0.0
+        for i in range(n):
+            total += weights[e, i] * (z[e, i] - mean) ** 2
+        out[e] = total
+    return out
+
+
+def retained_summary(weights: np.ndarray, nu, z: np.ndarray, particles: np.ndarray):
+    """``core.retained.retained_summary``, compiled: ``(mask, lo, hi, reference)``."""
+    weights = np.asarray(weights, dtype=np.float64)
+    nu_rows = np.ascontiguousarray(np.broadcast_to(np.asarray(nu, dtype=np.float64), weights.shape[:1]))
+    return _retained_summary(weights, nu_rows, np.asarray(z, dtype=np.float64), np.asarray(particles, dtype=np.float64),
+                             MASS_TOLERANCE)
+
+
+def coverage_with_hull(z: np.ndarray, weights: np.ndarray, z_true: np.ndarray, domain_width: float):
+    """``core.retained.coverage_with_hull``, compiled: ``(score, hull_lo, hull_hi)``."""
+    return _coverage_with_hull(np.asarray(weights, dtype=np.float64), np.asarray(z, dtype=np.float64),
+                               np.asarray(z_true, dtype=np.float64).reshape(-1), float(domain_width))
+
+
+def weighted_variance(z: np.ndarray, weights: np.ndarray) -> np.ndarray:
+    """``core.retained.weighted_variance``, compiled."""
+    return _weighted_variance(np.asarray(z, dtype=np.float64), np.asarray(weights, dtype=np.float64))
