@@ -2,7 +2,8 @@
 
 Dependencies point one way: cli > report > studies > runner > audit > store > tasks >
 engines > accel > core; core, audit, store and every task model import no engine, Ray or
-plotting; the core maths imports no compiled layer (accel, numba). A planted violation must be caught, so the check itself can fail.
+plotting; the core maths imports no compiled layer (accel, numba). A planted violation must
+be caught, so the check itself can fail.
 """
 
 from __future__ import annotations

@@ -174,7 +174,7 @@ def test_restricted_beliefs_equal_beliefs_computed_alone(runs):
 
 
 def test_calibration_of_a_subset_with_the_pools_beliefs_equals_recomputing(runs):
-    from probecommit.report.reproduce import subset_run
+    from probecommit.studies.insertion import subset_run
 
     loaded, test = load_run(runs["cal"]), load_run(runs["test"])
     ids = sorted(set(loaded.instances["instance_id"]))[:5]

@@ -10,8 +10,9 @@ wherever the weights do.
 
 One module per caller: :mod:`.belief` (the filter's update), :mod:`.retained` (retained sets,
 coverage score, posterior variance), :mod:`.executors` (the scenario counts), :mod:`.seeding`
-(the episodes' random streams). numba is imported when a kernel module is, and the runner
-imports them only when it computes: ``probecommit --help`` never loads numba.
+(the episodes' random streams); :mod:`.compiled` says how they run (a module built ahead of
+time from the same source when current, else numba's JIT with its on-disk cache). The runner
+imports them only when it computes: ``probecommit --help`` never loads them.
 
 ``PROBECOMMIT_KERNELS=numpy`` runs the NumPy reference instead (a process-wide choice, so a run
 is computed by one path throughout); ``numba`` (the default) the kernels.
@@ -29,10 +30,13 @@ MODES = ("numba", "numpy")
 
 
 def mode() -> str:
-    """The path this process computes with (``PROBECOMMIT_KERNELS``, default ``numba``)."""
+    """The path this process computes with (``PROBECOMMIT_KERNELS``: ``numpy``, else ``numba``;
+    ``aot`` or ``jit`` pick how the kernels are loaded, :mod:`.compiled`)."""
     choice = os.environ.get("PROBECOMMIT_KERNELS", "").strip().lower() or "numba"
+    if choice in ("aot", "jit"):
+        return "numba"
     if choice not in MODES:
-        raise ValueError(f"PROBECOMMIT_KERNELS={choice!r}: expected one of {', '.join(MODES)}")
+        raise ValueError(f"PROBECOMMIT_KERNELS={choice!r}: expected one of {', '.join(MODES)}, aot or jit")
     return choice
 
 

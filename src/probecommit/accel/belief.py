@@ -12,11 +12,11 @@ import math
 
 import numpy as np
 
-from probecommit.accel.jit import kernel
+from probecommit.accel.compiled import kernel
 from probecommit.core.belief import FilterKernels
 
 
-@kernel
+@kernel("Tuple((f8[:, ::1], f8[::1]))(f8[:, ::1])")
 def _normalize(log_weights):  # pragma: no cover - compiled
     """Normalized log-weights ``[E, N]`` in place and the log normalizer ``[E]`` (-inf: every weight zero)."""
     n_e, n = log_weights.shape
@@ -36,7 +36,7 @@ def _normalize(log_weights):  # pragma: no cover - compiled
     return log_weights, log_norm
 
 
-@kernel
+@kernel("f8[::1](f8[:, ::1])")
 def _sum_of_squares(weights):  # pragma: no cover - compiled
     n_e, n = weights.shape
     out = np.empty(n_e)
@@ -48,7 +48,7 @@ def _sum_of_squares(weights):  # pragma: no cover - compiled
     return out
 
 
-@kernel
+@kernel("i8[:, ::1](f8[:, ::1], f8[::1])")
 def _systematic_resample(weights, offsets):  # pragma: no cover - compiled
     n_rows, n = weights.shape
     out = np.empty((n_rows, n), dtype=np.int64)
@@ -68,7 +68,7 @@ def _systematic_resample(weights, offsets):  # pragma: no cover - compiled
     return out
 
 
-@kernel
+@kernel("f8[:, :, ::1](f8[:, :, ::1], i8[::1], i8[:, ::1], f8[:, :, ::1], f8[::1], f8[::1], f8[::1])")
 def _jitter_resampled(particles, rows, parents, noise, scale, low, high):  # pragma: no cover - compiled
     out = particles.copy()
     n_rows, n = parents.shape

@@ -10,12 +10,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from probecommit.accel.jit import helper, kernel
+from probecommit.accel.compiled import helper, kernel
 from probecommit.accel.retained import retained_summary
 from probecommit.core.executors import SetKernels
 
 
-@helper
+@helper(inline=True)
 def _add_interval(diff, actions, lo, hi):  # pragma: no cover - compiled
     """Add the open interval ``(lo, hi)`` to the difference array of the actions it holds.
     A NaN end holds nothing at the low side and bounds nothing at the high side (NumPy's order)."""
@@ -28,7 +28,7 @@ def _add_interval(diff, actions, lo, hi):  # pragma: no cover - compiled
         diff[last] -= 1
 
 
-@helper
+@helper(inline=True)
 def _take_counts(diff, out_row):  # pragma: no cover - compiled
     """The running sum of a difference array into ``out_row``; the array cleared for the next row."""
     run = 0
@@ -38,7 +38,7 @@ def _take_counts(diff, out_row):  # pragma: no cover - compiled
     diff[:] = 0
 
 
-@kernel
+@kernel("i8[:, ::1](f8[:, ::1], f8[:, ::1], b1[:, ::1], f8[::1])")
 def _interval_counts(lo, hi, mask, actions):  # pragma: no cover - compiled
     n_e, n_s = mask.shape
     out = np.zeros((n_e, actions.shape[0]), dtype=np.int64)
@@ -51,7 +51,7 @@ def _interval_counts(lo, hi, mask, actions):  # pragma: no cover - compiled
     return out
 
 
-@kernel
+@kernel("i8[:, ::1](f8[:, ::1], f8[:, ::1], f8, b1[:, ::1], f8[::1])")
 def _scaled_counts(centre, half, margin, mask, actions):  # pragma: no cover - compiled
     n_e, n_s = mask.shape
     out = np.zeros((n_e, actions.shape[0]), dtype=np.int64)
@@ -65,7 +65,7 @@ def _scaled_counts(centre, half, margin, mask, actions):  # pragma: no cover - c
     return out
 
 
-@kernel
+@kernel("i8[:, ::1](f8[:, :, ::1], i8, i8, f8, f8, f8, b1[:, ::1], f8[::1], i8[::1])")
 def _affine_counts(scenarios, centre_at, width_at, slope, intercept, margin, mask, actions, kept):  # pragma: no cover
     n_e, n_s = mask.shape
     out = np.zeros((n_e, actions.shape[0]), dtype=np.int64)
@@ -89,15 +89,16 @@ def _grid(actions: np.ndarray) -> np.ndarray:
 
 def interval_counts(lo: np.ndarray, hi: np.ndarray, mask: np.ndarray, actions: np.ndarray) -> np.ndarray:
     """``core.executors.interval_success_counts``, compiled."""
-    return _interval_counts(np.asarray(lo, dtype=np.float64), np.asarray(hi, dtype=np.float64),
-                            np.asarray(mask, dtype=np.bool_), _grid(actions))
+    return _interval_counts(np.ascontiguousarray(lo, dtype=np.float64), np.ascontiguousarray(hi, dtype=np.float64),
+                            np.ascontiguousarray(mask, dtype=np.bool_), _grid(actions))
 
 
 def scaled_counts(centre: np.ndarray, half: np.ndarray, margin: float, mask: np.ndarray,
                   actions: np.ndarray) -> np.ndarray:
     """``core.executors.scaled_interval_success_counts``, compiled (the ends made per retained scenario)."""
-    return _scaled_counts(np.asarray(centre, dtype=np.float64), np.asarray(half, dtype=np.float64), float(margin),
-                          np.asarray(mask, dtype=np.bool_), _grid(actions))
+    f64 = np.float64
+    return _scaled_counts(np.ascontiguousarray(centre, dtype=f64), np.ascontiguousarray(half, dtype=f64), float(margin),
+                          np.ascontiguousarray(mask, dtype=np.bool_), _grid(actions))
 
 
 def affine_counts(scenarios: np.ndarray, affine: tuple[int, int, float, float], margin: float, mask: np.ndarray,
@@ -106,8 +107,9 @@ def affine_counts(scenarios: np.ndarray, affine: tuple[int, int, float, float], 
     (``success_interval_affine``), read from ``scenarios[E, N, d]`` in place, and the retained count ``[E]``."""
     centre_at, width_at, slope, intercept = affine
     kept = np.empty(mask.shape[0], dtype=np.int64)
-    counts = _affine_counts(np.asarray(scenarios, dtype=np.float64), int(centre_at), int(width_at), float(slope),
-                            float(intercept), float(margin), np.asarray(mask, dtype=np.bool_), _grid(actions), kept)
+    counts = _affine_counts(np.ascontiguousarray(scenarios, dtype=np.float64), int(centre_at), int(width_at),
+                            float(slope), float(intercept), float(margin), np.ascontiguousarray(mask, dtype=np.bool_),
+                            _grid(actions), kept)
     return counts, kept
 
 

@@ -11,11 +11,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from probecommit.accel.jit import kernel
+from probecommit.accel.compiled import kernel
 from probecommit.core.retained import MASS_TOLERANCE
 
 
-@kernel
+@kernel("Tuple((b1[:, ::1], f8[::1], f8[::1], f8[:, ::1]))(f8[:, ::1], f8[::1], f8[:, ::1], f8[:, :, ::1], f8)")
 def _retained_summary(weights, nu, z, particles, tolerance):  # pragma: no cover - compiled
     n_e, n = weights.shape
     d = particles.shape[2]
@@ -50,7 +50,7 @@ def _retained_summary(weights, nu, z, particles, tolerance):  # pragma: no cover
     return mask, lo, hi, reference
 
 
-@kernel
+@kernel("Tuple((f8[::1], f8[::1], f8[::1]))(f8[:, ::1], f8[:, ::1], f8[::1], f8)")
 def _coverage_with_hull(weights, z, z_true, width):  # pragma: no cover - compiled
     n_e, n = weights.shape
     score = np.empty(n_e)
@@ -75,7 +75,7 @@ def _coverage_with_hull(weights, z, z_true, width):  # pragma: no cover - compil
     return score, hull_lo, hull_hi
 
 
-@kernel
+@kernel("f8[::1](f8[:, ::1], f8[:, ::1])")
 def _weighted_variance(z, weights):  # pragma: no cover - compiled
     n_e, n = weights.shape
     out = np.empty(n_e)
@@ -92,18 +92,18 @@ def _weighted_variance(z, weights):  # pragma: no cover - compiled
 
 def retained_summary(weights: np.ndarray, nu, z: np.ndarray, particles: np.ndarray):
     """``core.retained.retained_summary``, compiled: ``(mask, lo, hi, reference)``."""
-    weights = np.asarray(weights, dtype=np.float64)
+    weights = np.ascontiguousarray(weights, dtype=np.float64)
     nu_rows = np.ascontiguousarray(np.broadcast_to(np.asarray(nu, dtype=np.float64), weights.shape[:1]))
-    return _retained_summary(weights, nu_rows, np.asarray(z, dtype=np.float64), np.asarray(particles, dtype=np.float64),
-                             MASS_TOLERANCE)
+    return _retained_summary(weights, nu_rows, np.ascontiguousarray(z, dtype=np.float64),
+                             np.ascontiguousarray(particles, dtype=np.float64), MASS_TOLERANCE)
 
 
 def coverage_with_hull(z: np.ndarray, weights: np.ndarray, z_true: np.ndarray, domain_width: float):
     """``core.retained.coverage_with_hull``, compiled: ``(score, hull_lo, hull_hi)``."""
-    return _coverage_with_hull(np.asarray(weights, dtype=np.float64), np.asarray(z, dtype=np.float64),
-                               np.asarray(z_true, dtype=np.float64).reshape(-1), float(domain_width))
+    return _coverage_with_hull(np.ascontiguousarray(weights, dtype=np.float64), np.ascontiguousarray(z, dtype=np.float64),
+                               np.ascontiguousarray(z_true, dtype=np.float64).reshape(-1), float(domain_width))
 
 
 def weighted_variance(z: np.ndarray, weights: np.ndarray) -> np.ndarray:
     """``core.retained.weighted_variance``, compiled."""
-    return _weighted_variance(np.asarray(z, dtype=np.float64), np.asarray(weights, dtype=np.float64))
+    return _weighted_variance(np.ascontiguousarray(z, dtype=np.float64), np.ascontiguousarray(weights, dtype=np.float64))

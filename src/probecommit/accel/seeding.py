@@ -9,13 +9,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from probecommit.accel.jit import kernel
+from probecommit.accel.compiled import kernel
 
 _MASK32 = np.uint64(0xFFFFFFFF)
 _SHIFT16 = np.uint64(16)
 
 
-@kernel
+@kernel("u4[:, ::1](u8[:, ::1], i8)")
 def _seed_sequence_words(entropy, n_words):  # pragma: no cover - compiled
     """``SeedSequence`` (pool size 4) of each row of assembled entropy words, then
     ``generate_state(n_words, uint32)``: O'Neill's seed_seq hash, in uint64 arithmetic

@@ -8,10 +8,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from probecommit.accel.jit import kernel
+from probecommit.accel.compiled import kernel
 
 
-@kernel
+@kernel("f8[:, ::1](f8[::1], f8[:, :, ::1], f8[:, ::1], f8[:, ::1], f8)")
 def _slot_tap_log_weights(u, particles, log_weights, level_ll, offset):  # pragma: no cover - compiled
     n_e, n = log_weights.shape
     out = np.empty((n_e, n))
