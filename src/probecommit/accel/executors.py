@@ -1,9 +1,9 @@
 """Compiled scenario counts for the set executors (``core.executors``'s interval fast path).
 
 For a binary loss whose success set is an open interval of a sorted 1-D action grid, the
-executor needs, per episode and action, how many retained scenarios succeed. Each scenario
-adds one to a contiguous run of actions (a difference array). The counts are integers, so
-they equal the NumPy reference exactly.
+executor needs, per episode and action, how many retained scenarios succeed: each action
+inside the retained intervals' span is compared with every retained interval. The counts are
+integers, so they equal the NumPy reference (a difference array) exactly.
 """
 
 from __future__ import annotations
@@ -16,38 +16,41 @@ from probecommit.core.executors import SetKernels
 
 
 @helper(inline=True)
-def _add_interval(diff, actions, lo, hi):  # pragma: no cover - compiled
-    """Add the open interval ``(lo, hi)`` to the difference array of the actions it holds.
-    A NaN end holds nothing at the low side and bounds nothing at the high side (NumPy's order)."""
-    if lo != lo:
-        return
-    first = np.searchsorted(actions, lo, side="right")  # first a > lo
-    last = actions.shape[0] if hi != hi else np.searchsorted(actions, hi, side="left")  # one past the last a < hi
-    if first < last:
-        diff[first] += 1
-        diff[last] -= 1
+def _keep(lo_kept, hi_kept, k, lo, hi):  # pragma: no cover - compiled
+    """Store a retained scenario's open interval at slot ``k``; the next slot. A NaN end holds
+    nothing at the low side and bounds nothing at the high side (NumPy's order: NaN sorts last)."""
+    lo_kept[k] = np.inf if lo != lo else lo
+    hi_kept[k] = np.inf if hi != hi else hi
+    return k + 1
 
 
 @helper(inline=True)
-def _take_counts(diff, out_row):  # pragma: no cover - compiled
-    """The running sum of a difference array into ``out_row``; the array cleared for the next row."""
-    run = 0
-    for a in range(out_row.shape[0]):
-        run += diff[a]
-        out_row[a] = run
-    diff[:] = 0
+def _count_row(lo_kept, hi_kept, k, actions, out_row):  # pragma: no cover - compiled
+    """``out_row[a]`` = how many of the first ``k`` intervals hold ``lo < actions[a] < hi``: every action
+    inside the intervals' span compared with every interval (a loop the compiler vectorizes)."""
+    if k == 0:
+        return
+    first = np.searchsorted(actions, np.min(lo_kept[:k]), side="right")
+    last = np.searchsorted(actions, np.max(hi_kept[:k]), side="left")
+    for a in range(first, last):
+        value = actions[a]
+        count = 0
+        for s in range(k):
+            count += (lo_kept[s] < value) & (value < hi_kept[s])
+        out_row[a] = count
 
 
 @kernel("i8[:, ::1](f8[:, ::1], f8[:, ::1], b1[:, ::1], f8[::1])")
 def _interval_counts(lo, hi, mask, actions):  # pragma: no cover - compiled
     n_e, n_s = mask.shape
     out = np.zeros((n_e, actions.shape[0]), dtype=np.int64)
-    diff = np.zeros(actions.shape[0] + 1, dtype=np.int64)
+    lo_kept, hi_kept = np.empty(n_s), np.empty(n_s)
     for e in range(n_e):
+        k = 0
         for s in range(n_s):
             if mask[e, s]:
-                _add_interval(diff, actions, lo[e, s], hi[e, s])
-        _take_counts(diff, out[e])
+                k = _keep(lo_kept, hi_kept, k, lo[e, s], hi[e, s])
+        _count_row(lo_kept, hi_kept, k, actions, out[e])
     return out
 
 
@@ -55,13 +58,14 @@ def _interval_counts(lo, hi, mask, actions):  # pragma: no cover - compiled
 def _scaled_counts(centre, half, margin, mask, actions):  # pragma: no cover - compiled
     n_e, n_s = mask.shape
     out = np.zeros((n_e, actions.shape[0]), dtype=np.int64)
-    diff = np.zeros(actions.shape[0] + 1, dtype=np.int64)
+    lo_kept, hi_kept = np.empty(n_s), np.empty(n_s)
     for e in range(n_e):
+        k = 0
         for s in range(n_s):
             if mask[e, s]:
                 width = half[e, s] * margin
-                _add_interval(diff, actions, centre[e, s] - width, centre[e, s] + width)
-        _take_counts(diff, out[e])
+                k = _keep(lo_kept, hi_kept, k, centre[e, s] - width, centre[e, s] + width)
+        _count_row(lo_kept, hi_kept, k, actions, out[e])
     return out
 
 
@@ -69,16 +73,15 @@ def _scaled_counts(centre, half, margin, mask, actions):  # pragma: no cover - c
 def _affine_counts(scenarios, centre_at, width_at, slope, intercept, margin, mask, actions, kept):  # pragma: no cover
     n_e, n_s = mask.shape
     out = np.zeros((n_e, actions.shape[0]), dtype=np.int64)
-    diff = np.zeros(actions.shape[0] + 1, dtype=np.int64)
+    lo_kept, hi_kept = np.empty(n_s), np.empty(n_s)
     for e in range(n_e):
         k = 0
         for s in range(n_s):
             if mask[e, s]:
-                k += 1
                 width = (scenarios[e, s, width_at] * slope + intercept) * margin
                 centre = scenarios[e, s, centre_at]
-                _add_interval(diff, actions, centre - width, centre + width)
-        _take_counts(diff, out[e])
+                k = _keep(lo_kept, hi_kept, k, centre - width, centre + width)
+        _count_row(lo_kept, hi_kept, k, actions, out[e])
         kept[e] = k
     return out
 

@@ -1,8 +1,8 @@
 """Compiled retained sets, coverage score and posterior variance (``core.retained``'s, per episode in one pass).
 
-Both the retained set and the coverage score walk the particles in descending weight (a
-stable sort: ties in index order) and accumulate their mass in that order, one addition at
-a time, as NumPy's ``cumsum`` does: the sets, hulls and scores equal the reference's exactly.
+Both the retained set and the coverage score accumulate the particles' mass in descending
+weight (a stable order: ties in index order), one addition at a time, as NumPy's ``cumsum``
+does: the sets, hulls and scores equal the reference's exactly.
 The weighted means (the tie-break reference, the posterior variance) sum in loop order and
 agree with NumPy's pairwise sums to round-off (``tests/accel``).
 """
@@ -11,8 +11,41 @@ from __future__ import annotations
 
 import numpy as np
 
-from probecommit.accel.compiled import kernel
+from probecommit.accel.compiled import helper, kernel
 from probecommit.core.retained import MASS_TOLERANCE
+
+
+#: Extra mass the candidates must hold beyond ``nu`` (their sum is taken in another order than
+#: the prefix's cumulative sum, so it may differ by round-off).
+_SLACK = 1e-9
+
+
+@helper(inline=True)
+def _candidates(row, nu):  # pragma: no cover - compiled
+    """The weights that can lie in the top-weight prefix reaching ``nu``, sorted descending.
+
+    Weights at least ``floor`` whose total surely exceeds ``nu`` hold the whole prefix (every
+    other weight is lighter than each of them), so only they are sorted: the floor starts at the
+    mean weight and is lowered fourfold until it holds enough, else every weight is sorted.
+    """
+    n = row.shape[0]
+    floor = 1.0 / n
+    for _ in range(8):
+        total, m = 0.0, 0
+        for w in row:
+            if w >= floor:
+                total += w
+                m += 1
+        if total >= nu + _SLACK:
+            kept = np.empty(m)
+            m = 0
+            for w in row:
+                if w >= floor:
+                    kept[m] = w
+                    m += 1
+            return np.sort(kept)[::-1]
+        floor *= 0.25
+    return np.sort(row)[::-1]
 
 
 @kernel("Tuple((b1[:, ::1], f8[::1], f8[::1], f8[:, ::1]))(f8[:, ::1], f8[::1], f8[:, ::1], f8[:, :, ::1], f8)")
@@ -24,29 +57,43 @@ def _retained_summary(weights, nu, z, particles, tolerance):  # pragma: no cover
     hi = np.empty(n_e)
     reference = np.zeros((n_e, d))
     for e in range(n_e):
-        order = np.argsort(-weights[e], kind="mergesort")
+        # The stable descending order's cumulative mass is that of the sorted values (tied
+        # particles share a value), so sorting the values finds where the prefix stops; the set is
+        # every heavier particle and the first tied ones in index order. Only the candidates are
+        # sorted (:func:`_candidates`): lighter weights cannot lie in the prefix.
+        values = _candidates(weights[e], nu[e])
         count, total = n, 0.0
-        for i in range(n):  # the shortest prefix reaching mass nu
-            total += weights[e, order[i]]
+        for i in range(values.shape[0]):
+            total += values[i]
             if total >= nu[e] - tolerance:
                 count = i + 1
                 break
+        stop = values[count - 1] if count <= values.shape[0] else np.min(weights[e])
+        ties = count
+        for i in range(n):
+            ties -= weights[e, i] > stop
         low, high, mass = np.inf, -np.inf, 0.0
-        for i in range(count):
-            p = order[i]
+        for p in range(n):
+            w = weights[e, p]
+            if w == stop and ties > 0:
+                ties -= 1
+            elif not w > stop:
+                continue
             mask[e, p] = True
             low, high = min(low, z[e, p]), max(high, z[e, p])
-            mass += weights[e, p]
+            mass += w
             for j in range(d):
-                reference[e, j] += weights[e, p] * particles[e, p, j]
+                reference[e, j] += w * particles[e, p, j]
         lo[e], hi[e] = low, high
         if mass > 0:
             reference[e] /= mass
         else:  # a set of zero-weight particles only: the unweighted mean
-            reference[e] = 0.0
-            for i in range(count):
-                reference[e] += particles[e, order[i]]
-            reference[e] /= count
+            kept = 0
+            for p in range(n):
+                if mask[e, p]:
+                    reference[e] += particles[e, p]
+                    kept += 1
+            reference[e] /= kept
     return mask, lo, hi, reference
 
 
