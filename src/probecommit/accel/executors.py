@@ -16,12 +16,13 @@ from probecommit.core.executors import SetKernels
 
 
 @helper(inline=True)
-def _keep(lo_kept, hi_kept, k, lo, hi):  # pragma: no cover - compiled
-    """Store a retained scenario's open interval at slot ``k``; the next slot. A NaN end holds
-    nothing at the low side and bounds nothing at the high side (NumPy's order: NaN sorts last)."""
+def _keep(lo_kept, hi_kept, k, lo, hi, keep):  # pragma: no cover - compiled
+    """Write a scenario's open interval at slot ``k``; the next slot (``k + 1`` if it is retained).
+    Every scenario is written and only a retained one kept: no branch on the mask. A NaN end
+    holds nothing at the low side and bounds nothing at the high side (NumPy's order: NaN last)."""
     lo_kept[k] = np.inf if lo != lo else lo
     hi_kept[k] = np.inf if hi != hi else hi
-    return k + 1
+    return k + keep
 
 
 @helper(inline=True)
@@ -48,8 +49,7 @@ def _interval_counts(lo, hi, mask, actions):  # pragma: no cover - compiled
     for e in range(n_e):
         k = 0
         for s in range(n_s):
-            if mask[e, s]:
-                k = _keep(lo_kept, hi_kept, k, lo[e, s], hi[e, s])
+            k = _keep(lo_kept, hi_kept, k, lo[e, s], hi[e, s], mask[e, s])
         _count_row(lo_kept, hi_kept, k, actions, out[e])
     return out
 
@@ -62,9 +62,8 @@ def _scaled_counts(centre, half, margin, mask, actions):  # pragma: no cover - c
     for e in range(n_e):
         k = 0
         for s in range(n_s):
-            if mask[e, s]:
-                width = half[e, s] * margin
-                k = _keep(lo_kept, hi_kept, k, centre[e, s] - width, centre[e, s] + width)
+            width = half[e, s] * margin
+            k = _keep(lo_kept, hi_kept, k, centre[e, s] - width, centre[e, s] + width, mask[e, s])
         _count_row(lo_kept, hi_kept, k, actions, out[e])
     return out
 
@@ -77,10 +76,9 @@ def _affine_counts(scenarios, centre_at, width_at, slope, intercept, margin, mas
     for e in range(n_e):
         k = 0
         for s in range(n_s):
-            if mask[e, s]:
-                width = (scenarios[e, s, width_at] * slope + intercept) * margin
-                centre = scenarios[e, s, centre_at]
-                k = _keep(lo_kept, hi_kept, k, centre - width, centre + width)
+            width = (scenarios[e, s, width_at] * slope + intercept) * margin
+            centre = scenarios[e, s, centre_at]
+            k = _keep(lo_kept, hi_kept, k, centre - width, centre + width, mask[e, s])
         _count_row(lo_kept, hi_kept, k, actions, out[e])
         kept[e] = k
     return out

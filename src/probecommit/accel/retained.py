@@ -20,6 +20,46 @@ from probecommit.core.retained import MASS_TOLERANCE
 _SLACK = 1e-9
 
 
+#: Distinct weight values walked from the largest down before the prefix is found by sorting.
+_FEW_VALUES = 16
+
+
+@helper(inline=True)
+def _prefix_stop(row, target):  # pragma: no cover - compiled
+    """``(m, w)``: the length of the shortest descending prefix of ``row``'s values whose running
+    sum reaches ``target`` (all of them if none does), and the value it stops at.
+
+    A belief after taps, or just resampled, holds a few distinct weights: they are walked from the
+    largest down, each added once per particle holding it. Otherwise the values that can lie in
+    the prefix (:func:`_candidates`) are sorted and walked.
+    """
+    n = row.shape[0]
+    total, count, previous = 0.0, 0, np.inf
+    for _ in range(_FEW_VALUES):
+        value, copies = -np.inf, 0
+        for w in row:  # the largest value below the previous one, and how many particles hold it
+            if w < previous:
+                if w > value:
+                    value, copies = w, 1
+                elif w == value:
+                    copies += 1
+        if copies == 0:
+            return n, previous
+        for _ in range(copies):
+            total += value
+            count += 1
+            if total >= target:
+                return count, value
+        previous = value
+    values = _candidates(row, target)
+    total = 0.0
+    for i in range(values.shape[0]):
+        total += values[i]
+        if total >= target:
+            return i + 1, values[i]
+    return n, np.min(row)
+
+
 @helper(inline=True)
 def _candidates(row, nu):  # pragma: no cover - compiled
     """The weights that can lie in the top-weight prefix reaching ``nu``, sorted descending.
@@ -57,18 +97,10 @@ def _retained_summary(weights, nu, z, particles, tolerance):  # pragma: no cover
     hi = np.empty(n_e)
     reference = np.zeros((n_e, d))
     for e in range(n_e):
-        # The stable descending order's cumulative mass is that of the sorted values (tied
-        # particles share a value), so sorting the values finds where the prefix stops; the set is
-        # every heavier particle and the first tied ones in index order. Only the candidates are
-        # sorted (:func:`_candidates`): lighter weights cannot lie in the prefix.
-        values = _candidates(weights[e], nu[e])
-        count, total = n, 0.0
-        for i in range(values.shape[0]):
-            total += values[i]
-            if total >= nu[e] - tolerance:
-                count = i + 1
-                break
-        stop = values[count - 1] if count <= values.shape[0] else np.min(weights[e])
+        # The stable descending order's cumulative mass is that of the weights' values sorted
+        # (tied particles share a value), so the values alone give where the prefix stops; the set
+        # is every heavier particle and the first tied ones in index order.
+        count, stop = _prefix_stop(weights[e], nu[e] - tolerance)
         ties = count
         for i in range(n):
             ties -= weights[e, i] > stop
