@@ -1,7 +1,7 @@
 """Compiled steps of the particle filter's update (``core.belief``'s NumPy reference, per episode in one pass).
 
-The log normalizer is a log-sum-exp in loop order, so it agrees with NumPy's (pairwise) to
-round-off; the weights are then NumPy's own ``exp`` of the normalized log-weights, so a belief
+The log normalizer is a log-sum-exp summed in loop order, so it agrees with NumPy's (pairwise)
+to round-off; the weights are then NumPy's own ``exp`` of the normalized log-weights, so a belief
 whose weights are recomputed later (``BeliefState.weights``) has the same bits as the update's.
 Resampling and jitter are exact transcriptions (one cumulative sum in order, one search).
 """
@@ -16,24 +16,24 @@ from probecommit.accel.compiled import kernel
 from probecommit.core.belief import FilterKernels
 
 
-@kernel("Tuple((f8[:, ::1], f8[::1]))(f8[:, ::1])")
-def _normalize(log_weights):  # pragma: no cover - compiled
-    """Normalized log-weights ``[E, N]`` in place and the log normalizer ``[E]`` (-inf: every weight zero)."""
+@kernel("f8[::1](f8[:, ::1], f8[:, ::1], f8[::1])")
+def _normalize(log_weights, shifted_exps, row_max):  # pragma: no cover - compiled
+    """Normalize log-weights ``[E, N]`` in place, given ``exp(log_weights - row_max)``; the log
+    normalizer ``[E]`` (-inf: every weight zero, the row reset to uniform, "no information left")."""
     n_e, n = log_weights.shape
     log_norm = np.empty(n_e)
     for e in range(n_e):
-        row_max = np.max(log_weights[e])
-        if not math.isfinite(row_max):  # every particle impossible: uniform, "no information left"
+        if not math.isfinite(row_max[e]):
             log_norm[e] = -np.inf
             log_weights[e] = -math.log(n)
             continue
         total = 0.0
         for i in range(n):
-            total += math.exp(log_weights[e, i] - row_max)
-        log_norm[e] = row_max + math.log(total)
+            total += shifted_exps[e, i]
+        log_norm[e] = row_max[e] + math.log(total)
         for i in range(n):
             log_weights[e, i] -= log_norm[e]
-    return log_weights, log_norm
+    return log_norm
 
 
 @kernel("f8[::1](f8[:, ::1])")
@@ -82,8 +82,13 @@ def _jitter_resampled(particles, rows, parents, noise, scale, low, high):  # pra
 
 
 def normalized_weights(log_weights: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """``core.belief.normalized_weights``, compiled: ``(log_w, log_norm, weights, ess)``; ``log_weights`` is overwritten."""
-    log_w, log_norm = _normalize(np.ascontiguousarray(log_weights, dtype=np.float64))
+    """``core.belief.normalized_weights``, compiled: ``(log_w, log_norm, weights, ess)``; ``log_weights``
+    is overwritten. The exponentials are NumPy's (vectorized); the kernel sums and shifts in one pass."""
+    log_w = np.ascontiguousarray(log_weights, dtype=np.float64)
+    row_max = np.max(log_w, axis=1)
+    with np.errstate(invalid="ignore"):  # a row of -inf: reset in the kernel
+        shifted_exps = np.exp(log_w - np.where(np.isfinite(row_max), row_max, 0.0)[:, None])
+    log_norm = _normalize(log_w, shifted_exps, row_max)
     weights = np.exp(log_w)
     return log_w, log_norm, weights, 1.0 / _sum_of_squares(weights)
 
