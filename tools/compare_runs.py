@@ -58,7 +58,6 @@ def make(out: Path) -> None:
 
 def compare(old: Path, new: Path, tolerance: float = 0.0) -> int:
     """Number of differing tables (printed); 0 when every table is equal."""
-    import numpy as np
     import pandas as pd
 
     bad = 0
@@ -85,13 +84,12 @@ def compare(old: Path, new: Path, tolerance: float = 0.0) -> int:
         print("DIFFER  answers.json")
     else:
         print("equal   answers.json")
-    _ = np
     return bad
 
 
 if __name__ == "__main__":
     if sys.argv[1] == "make":
         make(Path(sys.argv[2]))
-    else:
-        tol = float(sys.argv[5]) if len(sys.argv) > 5 else 0.0
+    else:  # compare OLD NEW [--tolerance T]
+        tol = float(sys.argv[sys.argv.index("--tolerance") + 1]) if "--tolerance" in sys.argv else 0.0
         sys.exit(1 if compare(Path(sys.argv[2]), Path(sys.argv[3]), tol) else 0)
