@@ -26,8 +26,9 @@ def baseline_tree(ref: str, where: Path) -> Iterator[Path]:
     subprocess.run(["git", "-C", str(ROOT), "worktree", "add", "--detach", str(where), ref], check=True,
                    capture_output=True)
     try:
-        subprocess.run([sys.executable, "-m", "probecommit.core.compiled"], capture_output=True,
-                       env={**os.environ, "PYTHONPATH": str(where / "src")})
+        for build in ("probecommit.accel.compiled", "probecommit.core.compiled"):  # where the build is, by age
+            subprocess.run([sys.executable, "-m", build], capture_output=True,
+                           env={**os.environ, "PYTHONPATH": str(where / "src")})
         yield where
     finally:
         subprocess.run(["git", "-C", str(ROOT), "worktree", "remove", "--force", str(where)], capture_output=True)

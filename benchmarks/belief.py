@@ -23,6 +23,7 @@ import time
 
 import numpy as np
 
+from probecommit.accel import production
 from probecommit.core.belief import ParticleFilter
 from probecommit.core.executors import ProbeRobust
 from probecommit.core.memory import reuse_freed_arrays
@@ -41,7 +42,7 @@ def make_data(episodes: int, taps: int, seed: int = 0):
 def run_core(pf, model, u, y, seeds):
     rngs = [np.random.default_rng(s) for s in seeds]
     state = pf.initial(rngs)
-    executor = ProbeRobust(model)
+    executor = ProbeRobust(model, kernels=production().sets)  # the production path, as the runner injects it
     actions = []
     for j in range(u.shape[1]):
         state = pf.update(state, u[:, j], y[:, j], rngs)
@@ -135,8 +136,9 @@ def main() -> None:
     model, u, y = make_data(args.episodes, args.taps)
     seeds = list(range(args.episodes))
     steps = args.episodes * args.taps
-    pf = ParticleFilter.gaussian(model, model.sigma, n_particles=args.particles)
-    pf_mh = ParticleFilter.gaussian(model, model.sigma, n_particles=args.particles, move="mh")
+    kernels = production().filter
+    pf = ParticleFilter.gaussian(model, model.sigma, n_particles=args.particles, kernels=kernels)
+    pf_mh = ParticleFilter.gaussian(model, model.sigma, n_particles=args.particles, move="mh", kernels=kernels)
     arms = {
         "core": lambda: run_core(pf, model, u, y, seeds),
         "mh": lambda: run_core(pf_mh, model, u, y, seeds),

@@ -72,7 +72,7 @@ def main() -> None:
         arms = {
             "this tree (reuse + numba kernel)": run_arm(src, tmp / "a", new_import),
             "this tree, reference path (recompute per commit, NumPy)": run_arm(
-                src, tmp / "b", new_import, ", reuse=False", {"PROBECOMMIT_NO_NUMBA": "1"}),
+                src, tmp / "b", new_import, ", reuse=False", {"PROBECOMMIT_KERNELS": "numpy"}),
         }
         if args.against:
             with baseline_tree(args.against, tmp / "baseline") as tree:

@@ -1,8 +1,9 @@
 """The layer contract of docs/contributing.md holds (import-linter, configured in pyproject.toml).
 
 Dependencies point one way: cli > report > studies > runner > audit > store > tasks >
-engines > core; core, audit, store and every task model import no engine, Ray or
-plotting. A planted violation must be caught, so the check itself can fail.
+engines > accel > core; core, audit, store and every task model import no engine, Ray or
+plotting; the core maths imports no compiled layer (accel, numba). A planted violation must
+be caught, so the check itself can fail.
 """
 
 from __future__ import annotations
@@ -36,6 +37,18 @@ def test_a_planted_upward_import_is_caught(tmp_path):
     result = lint(tmp_path, copy)
     assert result.returncode != 0
     assert "probecommit.core is not allowed to import probecommit.runner" in result.stdout
+
+
+def test_a_planted_import_of_the_compiled_layer_in_the_core_maths_is_caught(tmp_path):
+    """The core maths (the NumPy reference) never reaches the accelerator-specific code."""
+    copy = tmp_path / "src"
+    shutil.copytree(ROOT / "src" / "probecommit", copy / "probecommit", ignore=shutil.ignore_patterns("__pycache__"))
+    shutil.copy(ROOT / "pyproject.toml", tmp_path / "pyproject.toml")
+    model = copy / "probecommit" / "core" / "belief.py"
+    model.write_text(model.read_text() + "\nfrom probecommit.accel import retained  # planted\n")
+    result = lint(tmp_path, copy)
+    assert result.returncode != 0
+    assert "probecommit.core is not allowed to import probecommit.accel" in result.stdout
 
 
 # ---------------------------------------------------------------------------------- nothing generic names a family
@@ -112,3 +125,44 @@ def test_a_planted_family_mention_is_caught(tmp_path, target, line):
     path.write_text(path.read_text() + f"\n{line}  # planted\n")
     found = family_mentions(copy)
     assert len(found) == 1 and found[0].startswith(f"{target}:"), found
+
+
+# ---------------------------------------------------------------------------------- no import circle in the CLI
+def cli_import_cycles(src: Path) -> list[list[str]]:
+    """Cycles among ``probecommit.cli`` modules, counting every import (function-level ones too)."""
+    import ast
+
+    root = src / "probecommit" / "cli"
+    names = {p.stem for p in root.glob("*.py")}
+    graph: dict[str, set[str]] = {}
+    for path in root.glob("*.py"):
+        edges = graph.setdefault(path.stem, set())
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.ImportFrom) and node.module:
+                parts = node.module.split(".")
+                if parts[:2] == ["probecommit", "cli"]:
+                    targets = [parts[2]] if len(parts) > 2 else [a.name for a in node.names]
+                    edges.update(t for t in targets if t in names and t != path.stem)
+    cycles, state = [], {}
+
+    def visit(node: str, stack: list[str]) -> None:
+        state[node] = "open"
+        for nxt in sorted(graph.get(node, ())):
+            if state.get(nxt) == "open":
+                cycles.append(stack[stack.index(nxt):] + [nxt])
+            elif nxt not in state:
+                visit(nxt, stack + [nxt])
+        state[node] = "done"
+
+    for node in sorted(graph):
+        if node not in state:
+            visit(node, [node])
+    return cycles
+
+
+def test_the_cli_has_no_import_circle(tmp_path):
+    assert cli_import_cycles(ROOT / "src") == []
+    copy = _planted_copy(tmp_path)  # and a planted circle is caught
+    path = copy / "probecommit" / "cli" / "output.py"
+    path.write_text(path.read_text() + "\nfrom probecommit.cli.audit_commands import audit_command  # planted\n")
+    assert cli_import_cycles(copy) == [["audit_commands", "output", "audit_commands"]]

@@ -11,7 +11,7 @@ from probecommit.core.executors import (
     scenario_scores,
     select_action,
 )
-from probecommit.runner.inference import blind_bayes_executor
+from probecommit.runner.build import blind_bayes_executor
 from probecommit.tasks.insertion.model import InsertionModel
 
 
@@ -120,3 +120,46 @@ def test_probe_robust_scores_are_the_same_with_the_parts_formed_or_read_in_place
     for a, b in zip(in_place, formed):
         np.testing.assert_array_equal(a.index, b.index)
         np.testing.assert_array_equal(a.score, b.score)
+
+
+def test_every_executor_implements_the_injected_interface_and_commit_calls_it():
+    """ProbeRobust, BlindRobust and BlindBayes are ``Executor``s, and ``commit`` calls whatever
+    executor it is given (no dispatch on method names): an injected one labels its own rows."""
+    from dataclasses import dataclass
+
+    from probecommit.core.executors import Belief, BlindBayes, BlindRobust, Commitment, Executor, ProbeRobust
+    from probecommit.runner.build import build_executors, build_filter, build_model, build_simulator
+    from probecommit.runner.inference import build_trace, commit, rollout
+    from probecommit.runner.instances import draw_instances
+    from tests.conftest import small_config
+
+    model = InsertionModel()
+    for executor in build_executors(["blind_bayes", "blind_robust", "probe_robust"], model, blind_prior_samples=50):
+        assert isinstance(executor, Executor)
+    assert [type(e) for e in build_executors(["probe_robust", "blind_bayes", "blind_robust"], model,
+                                              blind_prior_samples=50)] == [BlindBayes, BlindRobust, ProbeRobust]
+
+    @dataclass
+    class FirstAim:
+        """Always the first aim of the grid, on every budget."""
+        model: object
+        method = "first_aim"
+        on_prior = False
+        memo_tag = None
+
+        def with_model(self, model):
+            return FirstAim(model)
+
+        def decide(self, belief: Belief, threshold, context=None, memo=None) -> Commitment:
+            n = belief.weights.shape[0]
+            mask = np.ones_like(belief.weights, dtype=bool)
+            return Commitment(np.zeros(n, dtype=np.int64), np.full(n, 0.5), mask, belief.z.min(axis=1),
+                              belief.z.max(axis=1))
+
+    config = small_config(instances={"count": 2, "seed": 4}, probes={"budget": 2}, belief={"particles": 64}, repeats=1)
+    model, simulator = build_model(config), build_simulator(config)
+    batch = rollout(draw_instances(config, model), 1, "random", 2, model, simulator, config.seed)
+    trace = build_trace(build_filter(model, config.belief), batch, config.seed, [1, 2])
+    table = commit(trace, model, simulator, [FirstAim(model)], thresholds=0.8, margin=0.9)
+    assert set(table["method"]) == {"first_aim"} and list(table["k"]) == [1, 2, 1, 2]
+    assert np.all(table["action"] == model.action_grid[0, 0]) and np.all(table["predicted"] == 0.5)

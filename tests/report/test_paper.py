@@ -76,7 +76,7 @@ def test_publishing_a_target_again_drops_files_it_no_longer_makes(tmp_path):
 def test_with_model_switches_the_model_a_replay_builds():
     """The decisive-tap figure replays the development run under the corrected model: the copy
     must reach the task section (a copy of the study config's ``model`` property changed nothing)."""
-    from probecommit.report.reproduce import with_model
+    from probecommit.studies.insertion import with_model
     from probecommit.runner.config import parse_config
     from probecommit.runner.build import build_model
 
@@ -84,3 +84,20 @@ def test_with_model_switches_the_model_a_replay_builds():
     new = with_model(cfg, boundary="corrected", delta=0.905)
     assert (cfg.model.boundary, new.model.boundary) == ("deployed", "corrected")
     assert build_model(new).variant == "corrected" and build_model(cfg).variant == "deployed"
+
+
+def test_targets_are_registered_once_each_with_their_needs_first():
+    """Reproduction targets come from ``register`` calls (no module-level mutation elsewhere): a
+    second registration of a name or paper item, or a need not yet registered, is refused."""
+    from probecommit.report import paper
+
+    assert list(paper.TARGETS)[:3] == ["insertion", "breadth", "beyond"] and paper.ALIASES["fig-1"] == "figures"
+    for target in paper.TARGETS.values():
+        assert all(list(paper.TARGETS).index(need) < list(paper.TARGETS).index(target.name) for need in target.needs)
+    with pytest.raises(ValueError, match="'insertion' is registered twice"):
+        paper.register(paper.Target("insertion", (), (), lambda *a: None))
+    with pytest.raises(ValueError, match="'tab:audit' is registered twice"):
+        paper.register(paper.Target("other", (), (), lambda *a: None), ("tab:audit",))
+    with pytest.raises(ValueError, match="needs 'later'"):
+        paper.register(paper.Target("other", (), ("later",), lambda *a: None))
+    assert "other" not in paper.TARGETS

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from probecommit.runner.build import build_filter, build_model, build_simulator
+from probecommit.runner.build import build_executors, build_filter, build_model, build_simulator
 from probecommit.runner.inference import build_trace, commit, rollout
 from probecommit.runner.instances import draw_instances
 from tests.conftest import small_config
@@ -22,7 +22,7 @@ def test_rows_are_bit_identical_in_batches_of_1_7_and_all():
 
     def episodes(rows: np.ndarray) -> pd.DataFrame:
         trace = build_trace(pfilter, batch.subset(rows), config.seed, range(1, 9))
-        return commit(trace, model, simulator, thresholds=0.8, methods=("blind_robust", "probe_robust"))
+        return commit(trace, model, simulator, build_executors(("blind_robust", "probe_robust"), model), thresholds=0.8)
 
     everything = episodes(np.arange(batch.n_episodes))
     for size in (1, 7):

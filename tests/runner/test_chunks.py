@@ -7,7 +7,7 @@ import pandas as pd
 import pytest
 
 from probecommit.runner.calibration import calibrate, gates
-from probecommit.runner.build import build_model
+from probecommit.runner.build import build_executors, build_model, config_executors
 from probecommit.runner.replay import (LoadedRun, RunBeliefs, _chunk_slices, load_run, probe_batch, replay_episodes,
                                       trace_for_run)
 from tests.conftest import small_config
@@ -174,7 +174,7 @@ def test_restricted_beliefs_equal_beliefs_computed_alone(runs):
 
 
 def test_calibration_of_a_subset_with_the_pools_beliefs_equals_recomputing(runs):
-    from probecommit.report.reproduce import subset_run
+    from probecommit.studies.insertion import subset_run
 
     loaded, test = load_run(runs["cal"]), load_run(runs["test"])
     ids = sorted(set(loaded.instances["instance_id"]))[:5]
@@ -191,7 +191,7 @@ def test_commit_of_some_columns_equals_those_columns_of_the_whole_table(runs):
 
     beliefs = RunBeliefs.of(runs["cal"], chunk_instances=None)
     trace = beliefs.trace(beliefs.chunks[0])
-    kwargs = dict(thresholds=1.3, margin=0.9, methods=("blind_robust", "probe_robust"))
+    kwargs = dict(thresholds=1.3, margin=0.9, executors=build_executors(("blind_robust", "probe_robust"), beliefs.model))
     whole = commit(trace, beliefs.model, beliefs.simulator, **kwargs)
     for columns in (("k", "status", "predicted", "realized"), ("covered", "instance_id", "action", "n_retained")):
         some = commit(trace, beliefs.model, beliefs.simulator, columns=columns, **kwargs)
@@ -213,7 +213,7 @@ def test_beliefs_kept_at_some_budgets_commit_the_rows_of_the_whole_trace(runs):
     with pytest.raises(ValueError, match=r"budget\(s\) \[7\] not in the run"):
         RunBeliefs.of(runs["cal"], budgets=[2, 7])
     with pytest.raises(ValueError, match=r"prior belief \(k = 0\)"):
-        some.commit([{"thresholds": 0.8, "methods": ("blind_robust",)}])
+        some.commit([{"thresholds": 0.8, "executors": build_executors(("blind_robust",), some.model)}])
 
 
 @pytest.mark.parametrize("budgets", [None, [3]])
@@ -311,7 +311,6 @@ def test_a_chunk_is_given_only_its_instances_engine_answers_and_none_is_asked_tw
     committed (the answers about its instances' truths), keeps the engine's own answers apart,
     and asks the engine exactly the queries the whole-run replay asks; the replay run it writes
     holds the same engine cache."""
-    from probecommit.runner.inference import blind_bayes_executor
     from probecommit.runner.replay import replay_run
 
     loaded = load_run(runs["cal"])
@@ -328,7 +327,7 @@ def test_a_chunk_is_given_only_its_instances_engine_answers_and_none_is_asked_tw
 
     beliefs.simulator.cached_key = asked
     config = beliefs.config
-    request = dict(methods=config.methods, blind=blind_bayes_executor(beliefs.model, config.seed, config.blind_prior_samples))
+    request = dict(executors=config_executors(config, beliefs.model))
     [chunked] = beliefs.commit([{"thresholds": config.belief.nu, "margin": None}], **request)
     pd.testing.assert_frame_equal(chunked, whole, check_exact=True)
     assert beliefs.simulator.engine_calls == whole_sim.engine_calls
@@ -372,10 +371,12 @@ def test_a_chunk_that_raises_leaves_no_stored_answer_in_the_simulator(runs):
         return len(table)
 
     with pytest.raises(RuntimeError, match="a reducer failed"):
-        beliefs.commit([{"thresholds": 0.8, "margin": None}], methods=["probe_robust"], reduce=[failing])
+        beliefs.commit([{"thresholds": 0.8, "margin": None}], executors=build_executors(["probe_robust"], beliefs.model),
+                       reduce=[failing])
     assert len(calls) == 2 and not beliefs.simulator.answered_keys()
     # ... and the run commits again as if nothing had happened.
-    [parts] = beliefs.commit([{"thresholds": 0.8, "margin": None}], methods=["probe_robust"], reduce=[len])
+    [parts] = beliefs.commit([{"thresholds": 0.8, "margin": None}], executors=build_executors(["probe_robust"], beliefs.model),
+                             reduce=[len])
     assert sum(parts) == sum(len(t) for t in [replay_episodes(loaded, chunk_instances=None)[0].query(
         "method == 'probe_robust'")])
 

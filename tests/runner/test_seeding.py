@@ -32,7 +32,7 @@ def test_one_stream_is_the_batched_one():
 
 
 def test_without_the_compiled_kernel_numpy_seeds_each_stream(monkeypatch):
-    monkeypatch.setattr(seeding, "seed_sequence_words_compiled", lambda entropy, n_words: None)
+    monkeypatch.setenv("PROBECOMMIT_KERNELS", "numpy")  # the reference path: NumPy's SeedSequence per stream
     got = episode_rngs(5, "b", [1, 2], [0, 3], INFERENCE)
     assert [g.bit_generator.state for g in got] == [numpy_stream(5, "b", 1, 0, INFERENCE).bit_generator.state,
                                                      numpy_stream(5, "b", 2, 3, INFERENCE).bit_generator.state]

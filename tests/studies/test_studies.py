@@ -155,7 +155,7 @@ def test_replay_refuses_to_change_readings(base_run):
 @pytest.mark.mujoco
 def test_reproduce_insertion_quick_end_to_end(tmp_path):
     pytest.importorskip("mujoco")
-    from probecommit.report.reproduce import reproduce_insertion
+    from probecommit.report.insertion_study import reproduce_insertion
     from probecommit.report.ledger import Ledger
     from probecommit.report.reproduction_md import Doc, insertion_section
 

@@ -200,24 +200,53 @@ def validate_episodes(table: pd.DataFrame, source: str = "episode table", *, csv
         EpisodeTableError: With one message naming the problem.
     """
     df = checked_frame(table, AUDIT_REQUIRED, source, EpisodeTableError, "the audit")
-    # pandas renames a repeated CSV header "x" to "x.1": a column given twice is an error, not a rename.
+    _check_header(df, source)
+    _normalize_keys(df, csv, source)
+    ok = _normalize_status(df, csv, source)
+    notes: list[str] = []
+    df = _normalize_numbers(df, csv, source, notes)
+    _check_values(df, ok, csv, source, notes)
+    for name in GROUP_COLUMNS:
+        if name in df.columns:
+            df[name] = df[name].astype(object).where(df[name].notna(), "").astype(str)
+    if structure:
+        _check_structure(df, [c for c in GROUP_COLUMNS if c in df.columns], csv, source)
+    _check_losses(df, ok, source, csv, loss)
+    _derive_indicators(df, ok, csv, source, notes)
+    if (~ok).any():
+        partial = set(df.loc[~ok, "instance_id"]) & set(df.loc[ok, "instance_id"])
+        if partial:
+            notes.append(f"{len(partial)} instance(s) have failed rows beside successful ones; their cluster coverage "
+                         "is over the remaining repeats only, which can only raise it")
+    df.attrs = {"source": source, "n_total": int(len(df)), "n_failed": int((~ok).sum()), "notes": notes}
+    return df
+
+
+def _check_header(df: pd.DataFrame, source: str) -> None:
+    """pandas renames a repeated CSV header "x" to "x.1": a column given twice is an error, not a rename."""
     renamed = [c for c in df.columns if "." in c and c.rsplit(".", 1)[1].isdigit() and c.rsplit(".", 1)[0] in df.columns]
     if renamed:
         raise EpisodeTableError(f"{source}: column '{renamed[0].rsplit('.', 1)[0]}' appears more than once in the header")
 
+
+def _normalize_keys(df: pd.DataFrame, csv: bool, source: str) -> None:
+    """``instance_id`` as non-empty strings (integer-like ids from a user's log, 1 or 2.0, become
+    '1', '2'); ``repeat`` and ``k`` as int64. In place."""
     ids = df["instance_id"]
     id_na = ids.isna() | ids.astype(str).str.strip().isin(["", "nan", "None"])
     if id_na.any():
         row = int(np.flatnonzero(id_na.to_numpy())[0])
         raise EpisodeTableError(f"{source}: column 'instance_id' is empty at {_where(row, csv)}")
-    # Integer-like ids from a user's log (1, 2.0) become the strings '1', '2'.
     if pd.api.types.is_float_dtype(ids) and np.all(ids == np.round(ids)):
         ids = ids.astype(np.int64)
     df["instance_id"] = ids.astype(str).str.strip()
     for name in ("repeat", "k"):
         df[name] = _integer(df, name, csv, source)
 
-    # Status first: NaN outcomes are allowed on failed episodes.
+
+def _normalize_status(df: pd.DataFrame, csv: bool, source: str) -> np.ndarray:
+    """``status`` as 'ok' or 'failed' ('ok' when absent or blank), in place; the ok rows ``[R]``.
+    Read first: NaN outcomes are allowed on failed episodes."""
     if "status" in df.columns:
         raw = df["status"]
         status = raw.astype(str).str.strip().str.lower()
@@ -230,9 +259,12 @@ def validate_episodes(table: pd.DataFrame, source: str = "episode table", *, csv
         df["status"] = status.astype(str)
     else:
         df["status"] = "ok"
-    ok = (df["status"] == "ok").to_numpy()
+    return (df["status"] == "ok").to_numpy()
 
-    notes: list[str] = []
+
+def _normalize_numbers(df: pd.DataFrame, csv: bool, source: str, notes: list[str]) -> pd.DataFrame:
+    """Every numeric schema column as numbers. A required one must read; an optional column the
+    audit does not need must not block it: an unreadable one is dropped, and said in ``notes``."""
     for c in EPISODE_COLUMNS:
         numeric = c.name in df.columns and (pa.types.is_floating(c.type) or
                                             (pa.types.is_integer(c.type) and c.name not in ("repeat", "k")))
@@ -241,12 +273,17 @@ def validate_episodes(table: pd.DataFrame, source: str = "episode table", *, csv
         if c.name in AUDIT_REQUIRED:
             df[c.name] = _numeric(df, c.name, csv, source)
             continue
-        # An optional column the audit does not need must not block it: unreadable ones are dropped, and said.
         try:
             df[c.name] = _numeric(df, c.name, csv, source)  # optional integer columns stay float if they have gaps
         except EpisodeTableError as exc:
             df = df.drop(columns=[c.name])
             notes.append(f"optional column '{c.name}' ignored: {str(exc).split(': ', 1)[-1]}")
+    return df
+
+
+def _check_values(df: pd.DataFrame, ok: np.ndarray, csv: bool, source: str, notes: list[str]) -> None:
+    """The ok rows' required values are finite and of a possible magnitude, and their intervals
+    ordered; a retained interval wider than the hull is counted in ``notes``."""
     for name in FINITE_REQUIRED:
         bad = ~np.isfinite(df[name].to_numpy()) & ok
         if bad.any():
@@ -277,23 +314,21 @@ def validate_episodes(table: pd.DataFrame, source: str = "episode table", *, csv
         notes.append(f"{int(wider.sum())} row(s) have a retained interval wider than the particle hull (a grown set, "
                      f"conformal threshold t > 1); {int(both.sum())} of them are both covered and escaped")
 
-    for name in GROUP_COLUMNS:
-        if name in df.columns:
-            df[name] = df[name].astype(object).where(df[name].notna(), "").astype(str)
-    groups = [c for c in GROUP_COLUMNS if c in df.columns]
 
-    if structure:
-        dup = df.duplicated(groups + list(KEY_COLUMNS), keep="first")
-        if dup.any():
-            row = int(np.flatnonzero(dup.to_numpy())[0])
-            key = ", ".join(f"{c}={df[c].iloc[row]!r}" for c in groups + list(KEY_COLUMNS))
-            raise EpisodeTableError(f"{source}: duplicate episode ({key}) at {_where(row, csv)}")
-        _check_repeats(df, groups, source)
-        _check_budgets(df, groups, source)
+def _check_structure(df: pd.DataFrame, groups: list[str], csv: bool, source: str) -> None:
+    """No duplicate episode, equal repeats per instance and budget, every instance at every budget."""
+    dup = df.duplicated(groups + list(KEY_COLUMNS), keep="first")
+    if dup.any():
+        row = int(np.flatnonzero(dup.to_numpy())[0])
+        key = ", ".join(f"{c}={df[c].iloc[row]!r}" for c in groups + list(KEY_COLUMNS))
+        raise EpisodeTableError(f"{source}: duplicate episode ({key}) at {_where(row, csv)}")
+    _check_repeats(df, groups, source)
+    _check_budgets(df, groups, source)
 
-    _check_losses(df, ok, source, csv, loss)
-    # Derived indicators are recomputed from the intervals (closed), never trusted: a given
-    # column that contradicts them is replaced by the recomputed value, and that is said.
+
+def _derive_indicators(df: pd.DataFrame, ok: np.ndarray, csv: bool, source: str, notes: list[str]) -> None:
+    """``covered`` and ``escaped`` recomputed from the intervals (closed), never trusted: a given
+    column that contradicts them is replaced by the recomputed value, and that is said. In place."""
     z = df["z_true"]
     derived_cov = (df["retained_lo"] <= z) & (z <= df["retained_hi"])
     derived_esc = (z < df["hull_lo"]) | (z > df["hull_hi"])
@@ -307,13 +342,6 @@ def validate_episodes(table: pd.DataFrame, source: str = "episode table", *, csv
                              f"{_where(row, csv)}: given {bool(given.iloc[row])}, intervals give "
                              f"{bool(derived.iloc[row])}); the value recomputed from the intervals is used")
         df[name] = derived.astype(bool)
-    if (~ok).any():
-        partial = set(df.loc[~ok, "instance_id"]) & set(df.loc[ok, "instance_id"])
-        if partial:
-            notes.append(f"{len(partial)} instance(s) have failed rows beside successful ones; their cluster coverage "
-                         "is over the remaining repeats only, which can only raise it")
-    df.attrs = {"source": source, "n_total": int(len(df)), "n_failed": int((~ok).sum()), "notes": notes}
-    return df
 
 
 def _check_losses(df: pd.DataFrame, ok: np.ndarray, source: str, csv: bool, loss: str | None) -> None:

@@ -265,7 +265,7 @@ def tasks(
             f"{model.probe_dim}/{model.observation_dim}/{model.action_dim}",
             escape(s.get("sigma", f"{model.sigma:g}")), escape(s.get("budgets", "")), escape(s.get("metric", "")),
         )
-    from probecommit.cli.audit_commands import print_table
+    from probecommit.cli.output import print_table
 
     print_table(table)  # whole rows in pipes and CI logs
 

@@ -15,8 +15,9 @@ import typer
 from rich.table import Table
 
 from probecommit.cli.common import console, err_console, safe, user_errors
+from probecommit.cli.output import print_table, write_csv
 from probecommit.errors import UsageError
-from probecommit.store.safefile import output_dir, write_bytes, write_text
+from probecommit.store.safefile import output_dir, write_text
 
 def _f(v, signed: bool = False) -> str:
     try:
@@ -63,37 +64,6 @@ def print_audit_table(table, title: str) -> None:
                         _ci(row, "coverage"), _ci(row, "cluster_coverage"), _ci(row, "escape"),
                         _f(row["realized"]), _f(row["predicted"]), _ci(row, "optimism", True))
         print_table(out)
-
-
-def print_table(table) -> None:
-    """Print a table of intervals whole: in a pipe or a CI log (no terminal) the width is not
-    capped at 80 columns, so an interval is never cut or wrapped mid-number."""
-    if console.is_terminal:
-        console.print(table)
-        return
-    saved = console.width
-    console.width = 400  # the table takes only the width it needs
-    try:
-        console.print(table)
-    finally:
-        console.width = saved
-
-
-def write_csv(frame, path: Path, paper_names: bool = False) -> None:
-    """CSV for spreadsheets: text cells that a spreadsheet would run as a formula
-    (``=``, ``+``, ``-``, ``@``, tab, CR first) are prefixed with a quote (OWASP CSV injection).
-    ``paper_names``: the header in the paper's words (``realized_R_k``, ``optimism_e_k``, ...)."""
-    import pandas as pd
-
-    out = frame.copy()
-    if paper_names:
-        from probecommit.report.vocabulary import csv_name
-
-        out = out.rename(columns=csv_name)
-    for col in out.columns:
-        if pd.api.types.is_object_dtype(out[col]) or pd.api.types.is_string_dtype(out[col]):
-            out[col] = out[col].map(lambda v: "'" + v if isinstance(v, str) and v[:1] in ("=", "+", "-", "@", "\t", "\r") else v)
-    write_bytes(path, out.to_csv(index=False).encode())
 
 
 @user_errors

@@ -9,7 +9,7 @@ import typer
 from rich import box
 from rich.table import Table
 
-from probecommit.cli.audit_commands import print_table
+from probecommit.cli.output import print_table
 from probecommit.cli.common import console, print_warning, progress_bar, safe, user_errors
 from probecommit.errors import UsageError
 
@@ -49,7 +49,7 @@ def audit_session_log(path: Path, out: Optional[Path], resamples: int, seed: int
     """``probecommit audit LOG`` for a session log: Table VII, Fig. 5b, CSVs."""
     import numpy as np
 
-    from probecommit.cli.audit_commands import write_csv
+    from probecommit.cli.output import write_csv
     from probecommit.report.figures import save_figure
     from probecommit.report.robot_figures import aim_error_figure
     from probecommit.robot.session import load_session
@@ -104,7 +104,7 @@ def audit_session_log(path: Path, out: Optional[Path], resamples: int, seed: int
 def replay_session_log(path: Path, fault: Optional[str], sweep: Optional[str], half_width: Optional[float],
                        out: Optional[Path], resamples: int, seed: int) -> None:
     """``probecommit replay LOG [--fault ...]``: as deployed, or a fault sweep (Fig. 5c/5d)."""
-    from probecommit.cli.audit_commands import write_csv
+    from probecommit.cli.output import write_csv
     from probecommit.report.figures import save_figure
     from probecommit.report.robot_figures import fault_sweep_figure
     from probecommit.robot.replay import fault_sweep, parse_sweep, replay_session

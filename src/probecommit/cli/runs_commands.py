@@ -34,7 +34,7 @@ def _text(value) -> str:
 
 
 def _print(table: Table) -> None:
-    from probecommit.cli.audit_commands import print_table
+    from probecommit.cli.output import print_table
 
     print_table(table)
 
@@ -92,7 +92,7 @@ def print_sweep_summary(rows: list[dict], root: Path) -> None:
     also written to ``<root>/sweep.csv``."""
     import pandas as pd
 
-    from probecommit.cli.audit_commands import write_csv
+    from probecommit.cli.output import write_csv
 
     table = Table(title=f"sweep: {len(rows)} runs ({rows[0]['method']} at the last budget)", title_style="bold",
                   box=box.SIMPLE_HEAD)

@@ -8,16 +8,10 @@ episode's result never depends on which other episodes share its batch.
 from __future__ import annotations
 
 from dataclasses import dataclass, field, fields, replace
-from typing import Protocol, Sequence
+from typing import Callable, Protocol, Sequence
 
 import numpy as np
 
-from probecommit.core.kernels import (
-    exp_exact,
-    jitter_resampled_compiled,
-    normalized_weights_compiled,
-    systematic_resample_compiled,
-)
 from probecommit.core.likelihood import GaussianLikelihood, Likelihood
 
 
@@ -53,7 +47,7 @@ def _normalize(log_weights: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     safe_max = np.where(dead, 0.0, row_max)
     with np.errstate(divide="ignore", invalid="ignore"):  # dead rows are replaced below
         shifted = np.subtract(log_weights, safe_max)
-        log_norm = safe_max + np.log(np.sum(exp_exact(shifted), axis=-1, keepdims=True))
+        log_norm = safe_max + np.log(np.sum(np.exp(shifted), axis=-1, keepdims=True))
         out = np.subtract(log_weights, log_norm, out=shifted)  # the shifted values are spent: reuse their array
     if np.any(dead):
         out = np.where(dead, -np.log(log_weights.shape[-1]), out)
@@ -66,15 +60,10 @@ def normalized_weights(log_weights: np.ndarray) -> tuple[np.ndarray, np.ndarray,
     Returns:
         ``(log_w, log_norm, weights, ess)``: :func:`normalize_log_weights`, the log normalizer
         ``[E]`` (``-inf`` for a row whose every weight is zero), ``exp(log_w)`` and
-        :func:`effective_sample_size`. One compiled set of fused passes when numba is there,
-        the same bits as the NumPy path (tested); ``log_weights`` may be overwritten.
+        :func:`effective_sample_size`; ``log_weights`` may be overwritten.
     """
-    compiled = normalized_weights_compiled(log_weights)
-    if compiled is not None:
-        log_w, log_norm, weights, sum_of_squares = compiled
-        return log_w, log_norm, weights, 1.0 / sum_of_squares
     log_w, log_norm = _normalize(log_weights)
-    weights = exp_exact(log_w)
+    weights = np.exp(log_w)
     return log_w, log_norm, weights, effective_sample_size(weights, log_weights)  # log_weights is spent: scratch
 
 
@@ -100,20 +89,7 @@ def systematic_resample(weights: np.ndarray, offsets: np.ndarray) -> np.ndarray:
         parent order, which the retained-set tie rule relies on).
     """
     weights = np.asarray(weights, dtype=float)
-    n_rows, n = weights.shape
     offsets = np.asarray(offsets, dtype=float)
-    compiled = systematic_resample_compiled(weights, offsets)
-    if compiled is not None:
-        return compiled
-    return systematic_resample_numpy(weights, offsets)
-
-
-def systematic_resample_numpy(weights: np.ndarray, offsets: np.ndarray) -> np.ndarray:
-    """NumPy path of :func:`systematic_resample`: one search per row.
-
-    Each row is searched on its own (no row-shifted flattened search), so a row's
-    parents never depend on which other rows share its batch.
-    """
     n_rows, n = weights.shape
     cumulative = np.cumsum(weights, axis=1)
     cumulative[:, -1] = 1.0  # guard against round-off leaving the last point unreachable
@@ -135,9 +111,6 @@ def jitter_resampled(particles: np.ndarray, rows: np.ndarray, parents: np.ndarra
         noise: ``[R, N, d]`` standard normal draws (each episode's from its own generator).
         scale, low, high: ``[d]`` jitter scale and prior box.
     """
-    compiled = jitter_resampled_compiled(particles, rows, parents, noise, scale, low, high)
-    if compiled is not None:
-        return compiled
     out = particles.copy()
     new = np.take_along_axis(particles[rows], parents[:, :, None], axis=1)
     out[rows] = np.clip(new + scale * noise, low, high)
@@ -184,7 +157,7 @@ class BeliefState:
     @property
     def weights(self) -> np.ndarray:
         """Normalized weights ``exp(log_weights)`` ``[E, N]`` (the update's own, or computed now)."""
-        return exp_exact(self.log_weights) if self.fresh_weights is None else self.fresh_weights
+        return np.exp(self.log_weights) if self.fresh_weights is None else self.fresh_weights
 
     @classmethod
     def trace_fields(cls) -> list[str]:
@@ -210,6 +183,17 @@ class BeliefState:
                            maybe(self.y_hist), maybe(self.accepted), maybe(self.lost), maybe(self.log_evidence))
 
 
+@dataclass(frozen=True)
+class FilterKernels:
+    """The update's three hot steps, injected into :class:`ParticleFilter`: the NumPy definitions
+    above by default; the runner injects the compiled ones (``probecommit.accel``), which agree
+    with them to round-off."""
+
+    normalized_weights: Callable[[np.ndarray], tuple[np.ndarray, ...]] = normalized_weights
+    systematic_resample: Callable[[np.ndarray, np.ndarray], np.ndarray] = systematic_resample
+    jitter_resampled: Callable[..., np.ndarray] = jitter_resampled
+
+
 @dataclass
 class ParticleFilter:
     """Bootstrap particle filter over a box prior, batched over episodes.
@@ -228,6 +212,7 @@ class ParticleFilter:
             probability against the prior and the likelihood of every probe seen so
             far, so the posterior is invariant and the belief converges.
         move_steps: MH steps per resampling (``move="mh"`` only).
+        kernels: The update's hot steps (:class:`FilterKernels`; NumPy's by default).
     """
 
     model: ForwardModel
@@ -238,6 +223,7 @@ class ParticleFilter:
     rejuvenation: float = 0.0
     move: str = "jitter"
     move_steps: int = 1
+    kernels: FilterKernels = field(default_factory=FilterKernels)
 
     def __post_init__(self) -> None:
         if self.move not in ("jitter", "mh"):
@@ -286,7 +272,7 @@ class ParticleFilter:
         u = np.asarray(u, dtype=float)
         y = np.asarray(y, dtype=float)
         unnormalized = self._reweighted(state, u, y)
-        log_w, log_evidence, weights, ess = normalized_weights(unnormalized)
+        log_w, log_evidence, weights, ess = self.kernels.normalized_weights(unnormalized)
         lost = ~np.isfinite(log_evidence)
         u_now, y_now = u.reshape(n_e, 1, -1), y.reshape(n_e, 1, -1)
         u_hist = u_now if state.u_hist is None else np.concatenate([state.u_hist, u_now], axis=1)
@@ -297,7 +283,7 @@ class ParticleFilter:
         if np.any(resample):
             rows = np.flatnonzero(resample)
             offsets = np.array([rngs[r].random() for r in rows])
-            parents = systematic_resample(weights[rows], offsets)
+            parents = self.kernels.systematic_resample(weights[rows], offsets)
             low = np.asarray(self.model.prior_low, dtype=float)
             high = np.asarray(self.model.prior_high, dtype=float)
             scale = np.asarray(self.model.jitter_scale, dtype=float)
@@ -305,7 +291,7 @@ class ParticleFilter:
                 noise = np.empty((len(rows), *particles.shape[1:]))
                 for r, row in zip(rows, noise):  # in place: the same draws as standard_normal(shape), no stack copy
                     rngs[r].standard_normal(out=row)
-                particles = jitter_resampled(particles, rows, parents, noise, scale, low, high)
+                particles = self.kernels.jitter_resampled(particles, rows, parents, noise, scale, low, high)
             else:
                 particles = particles.copy()
                 particles[rows], accepted[rows] = self._move(particles[rows], parents, u_hist[rows], y_hist[rows],

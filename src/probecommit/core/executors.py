@@ -14,17 +14,11 @@ index. The truth is never used.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
-from typing import Any
+from dataclasses import dataclass, field, replace
+from typing import Any, Callable, Protocol, runtime_checkable
 
 import numpy as np
 
-from probecommit.core.kernels import (
-    HAVE_KERNELS,
-    affine_interval_success_counts_compiled,
-    interval_success_counts_compiled,
-    scaled_interval_success_counts_compiled,
-)
 from probecommit.core.retained import belief_reference, masked_interval, retained_summary
 
 SCORE_TIE_TOLERANCE = 1e-12
@@ -80,29 +74,6 @@ def interval_success_counts(lo: np.ndarray, hi: np.ndarray, mask: np.ndarray, ac
     Returns:
         ``[E, A]`` integer counts, identical to counting ``lo < a < hi`` directly.
     """
-    compiled = interval_success_counts_compiled(lo, hi, mask, actions)
-    if compiled is not None:
-        return compiled
-    return interval_success_counts_numpy(lo, hi, mask, actions)
-
-
-def scaled_interval_success_counts(centre: np.ndarray, half: np.ndarray, margin: float, mask: np.ndarray,
-                                   actions: np.ndarray) -> np.ndarray:
-    """:func:`interval_success_counts` of the intervals ``centre -+ half * margin`` (a model's
-    ``success_interval_parts``), identical to counting over ``model.success_interval``.
-
-    The compiled kernel forms each retained scenario's ends itself, so a margin search
-    rescoring one retained set under many margins never materializes the ``[E, N]`` ends.
-    """
-    compiled = scaled_interval_success_counts_compiled(centre, half, margin, mask, actions)
-    if compiled is not None:
-        return compiled
-    width = np.multiply(half, margin)
-    return interval_success_counts_numpy(centre - width, centre + width, mask, actions)
-
-
-def interval_success_counts_numpy(lo: np.ndarray, hi: np.ndarray, mask: np.ndarray, actions: np.ndarray) -> np.ndarray:
-    """NumPy path of :func:`interval_success_counts` (the compiled kernel's reference)."""
     actions = np.asarray(actions, dtype=float)
     n_e, n_a = mask.shape[0], actions.shape[0]
     first = np.searchsorted(actions, lo, side="right")  # first a > lo
@@ -116,6 +87,35 @@ def interval_success_counts_numpy(lo: np.ndarray, hi: np.ndarray, mask: np.ndarr
     return np.cumsum(diff, axis=1)[:, :n_a]
 
 
+def scaled_interval_success_counts(centre: np.ndarray, half: np.ndarray, margin: float, mask: np.ndarray,
+                                   actions: np.ndarray) -> np.ndarray:
+    """:func:`interval_success_counts` of the intervals ``centre -+ half * margin`` (a model's
+    ``success_interval_parts``), identical to counting over ``model.success_interval``."""
+    width = np.multiply(half, margin)
+    return interval_success_counts(centre - width, centre + width, mask, actions)
+
+
+@dataclass(frozen=True)
+class SetKernels:
+    """The set executors' hot steps, injected into :class:`ProbeRobust`: the NumPy definitions by
+    default; the runner injects the compiled ones (``probecommit.accel``).
+
+    Attributes:
+        affine_interval_success_counts: ``(scenarios, affine, margin, mask, actions) -> (counts, kept)``
+            for a model whose interval parts are affine in its latents (``success_interval_affine``),
+            read in place; None: the parts are formed and counted by ``scaled_interval_success_counts``.
+    """
+
+    retained_summary: Callable[..., tuple[np.ndarray, ...]] = retained_summary
+    interval_success_counts: Callable[..., np.ndarray] = interval_success_counts
+    scaled_interval_success_counts: Callable[..., np.ndarray] = scaled_interval_success_counts
+    affine_interval_success_counts: Callable[..., tuple[np.ndarray, np.ndarray]] | None = None
+
+
+#: The NumPy reference.
+NUMPY_KERNELS = SetKernels()
+
+
 def scenario_max_loss(losses: np.ndarray, mask: np.ndarray) -> np.ndarray:
     """Scenario minimax score: the maximum loss over retained scenarios ``[E, A]``."""
     return np.max(np.where(mask[:, None, :], losses, -np.inf), axis=-1)
@@ -127,7 +127,8 @@ def prior_expected_loss(losses: np.ndarray) -> np.ndarray:
 
 
 def scenario_scores(model: Any, scenarios: np.ndarray, mask: np.ndarray, context: np.ndarray | None = None,
-                    parts: tuple[np.ndarray, np.ndarray] | None = None) -> np.ndarray:
+                    parts: tuple[np.ndarray, np.ndarray] | None = None,
+                    kernels: SetKernels = NUMPY_KERNELS) -> np.ndarray:
     """Scenario score of every grid action ``[E, A]`` over the retained scenarios.
 
     Binary loss: failure fraction (exact integer counts over a retained count); the
@@ -140,40 +141,85 @@ def scenario_scores(model: Any, scenarios: np.ndarray, mask: np.ndarray, context
             depend on the margin: a margin search passes them for every margin).
     """
     if model.binary_loss:
-        failures, retained = _failure_counts(model, scenarios, mask, context, parts)
+        failures, retained = _failure_counts(model, scenarios, mask, context, parts, kernels)
         return failures / np.maximum(retained, 1)[:, None]
     return scenario_max_loss(model.loss(model.action_grid, scenarios, context), mask)
 
 
-def _compiled_affine(model: Any) -> tuple[int, int, float, float] | None:
-    """The model's affine success-interval parts (``success_interval_affine``) when a compiled
-    kernel can count with them, so the ``[E, N]`` parts need not be formed; else None."""
-    if not HAVE_KERNELS:
+def _in_place_affine(model: Any, kernels: SetKernels) -> tuple[int, int, float, float] | None:
+    """The model's affine success-interval parts (``success_interval_affine``) when the kernels can
+    count with them in place, so the ``[E, N]`` parts need not be formed; else None."""
+    if kernels.affine_interval_success_counts is None:
         return None
     return model.success_interval_affine()
 
 
 def _failure_counts(model: Any, scenarios: np.ndarray, mask: np.ndarray, context: np.ndarray | None,
-                    parts: tuple[np.ndarray, np.ndarray] | None) -> tuple[np.ndarray, np.ndarray]:
+                    parts: tuple[np.ndarray, np.ndarray] | None,
+                    kernels: SetKernels = NUMPY_KERNELS) -> tuple[np.ndarray, np.ndarray]:
     """Retained scenarios that fail under each grid action ``[E, A]`` (integers), binary loss,
     and how many are retained ``[E]``."""
     grid = np.asarray(model.action_grid, dtype=float).reshape(-1)
-    affine = _compiled_affine(model)
+    affine = _in_place_affine(model, kernels)
     if affine is not None and parts is None:  # both parts read from the scenarios inside the kernel
-        retained_count = np.empty(mask.shape[0], dtype=np.int64)
-        counts = affine_interval_success_counts_compiled(np.asarray(scenarios), affine, model.margin, mask, grid,
-                                                         retained_count)
-        if counts is not None:
-            return retained_count[:, None] - counts, retained_count
+        counts, retained_count = kernels.affine_interval_success_counts(scenarios, affine, model.margin, mask, grid)
+        return retained_count[:, None] - counts, retained_count
     retained_count = mask.sum(axis=-1)
     parts = model.success_interval_parts(scenarios) if parts is None else parts
     if parts is not None:
-        successes = scaled_interval_success_counts(*parts, model.margin, mask, grid)
+        successes = kernels.scaled_interval_success_counts(*parts, model.margin, mask, grid)
     elif (interval := model.success_interval(scenarios)) is not None:  # a model with only the interval
-        successes = interval_success_counts(*interval, mask, grid)
+        successes = kernels.interval_success_counts(*interval, mask, grid)
     else:
         return np.sum(model.loss(model.action_grid, scenarios, context) & mask[:, None, :], axis=-1), retained_count
     return retained_count[:, None] - successes, retained_count
+
+
+@dataclass(frozen=True)
+class Belief:
+    """What an executor decides from: a batch of particle beliefs at one budget.
+
+    Attributes:
+        particles: ``[E, N, d]`` latent hypotheses.
+        weights: ``[E, N]`` normalized weights.
+        z: ``[E, N]`` each particle's decision coordinate (``model.decision(particles)``).
+    """
+
+    particles: np.ndarray
+    weights: np.ndarray
+    z: np.ndarray
+
+
+@runtime_checkable
+class Executor(Protocol):
+    """One executor, injected into the runner (Stone Soup style): it holds its model and decides.
+
+    Attributes:
+        method: The label its rows carry in the episode table's ``method`` column.
+        on_prior: True for a blind executor, which commits once on the prior belief (k = 0);
+            False for one that commits after every probe budget.
+    """
+
+    method: str
+    on_prior: bool
+
+    def decide(self, belief: Belief, threshold: float, context: np.ndarray | None = None,
+               memo: dict | None = None) -> "Commitment":
+        """Commit for every episode of ``belief``.
+
+        Args:
+            threshold: Retained mass ``nu`` or conformal threshold ``t`` (set executors).
+            context: ``[E, c]`` observed context, if the family has one.
+            memo: A dict kept by the caller per (executor, budget, threshold) across commits that
+                differ only in the model's margin: what does not depend on the margin goes there.
+        """
+
+    def with_model(self, model: Any) -> "Executor":
+        """This executor deciding with ``model`` (a margin override)."""
+
+    @property
+    def memo_tag(self) -> Any:
+        """What besides method, budget and threshold its memo depends on (a cache key part)."""
 
 
 @dataclass
@@ -270,7 +316,8 @@ class RetainedSet:
         return self._interval_parts[key]
 
 
-def retained_scores(model: Any, retained: RetainedSet, context: np.ndarray | None = None) -> np.ndarray:
+def retained_scores(model: Any, retained: RetainedSet, context: np.ndarray | None = None,
+                    kernels: SetKernels = NUMPY_KERNELS) -> np.ndarray:
     """:func:`scenario_scores` of every grid action ``[E, A]`` over a retained set, block by block.
 
     The same numbers as scoring :attr:`RetainedSet.scenarios` at once: a binary loss sums
@@ -280,14 +327,15 @@ def retained_scores(model: Any, retained: RetainedSet, context: np.ndarray | Non
     """
     blocks = retained.blocks()
     # Parts formed once per set for a margin search, unless a compiled kernel reads them in place.
-    formed = model.binary_loss and _compiled_affine(model) is None
+    formed = model.binary_loss and _in_place_affine(model, kernels) is None
     if len(blocks) == 1:
         scenarios, mask = blocks[0]
         parts = retained.interval_parts(model)[0] if formed else None
-        return scenario_scores(model, scenarios, mask, context, parts)
+        return scenario_scores(model, scenarios, mask, context, parts, kernels)
     if model.binary_loss:
         parts = retained.interval_parts(model) if formed else [None] * len(blocks)
-        counted = [_failure_counts(model, scenarios, mask, context, part) for (scenarios, mask), part in zip(blocks, parts)]
+        counted = [_failure_counts(model, scenarios, mask, context, part, kernels)
+                   for (scenarios, mask), part in zip(blocks, parts)]
         failures = sum(failed for failed, _ in counted)
         kept = np.maximum(sum(n_kept for _, n_kept in counted), 1)
         return failures / kept[:, None]
@@ -314,10 +362,12 @@ class ProbeRobust:
             spanned only by them has score ``s = 1`` and is still not covered (the
             paper's named exception). ``"hull"``: every particle, so ``s <= t`` implies
             coverage for every ``t`` and the split-conformal guarantee has no exception.
+        kernels: The hot steps (:class:`SetKernels`; NumPy's by default).
     """
 
     model: Any
     plateau: str = "prefix"
+    kernels: SetKernels = NUMPY_KERNELS
 
     def __post_init__(self) -> None:
         if self.plateau not in PLATEAU_MODES:
@@ -331,7 +381,8 @@ class ProbeRobust:
             lo, hi = masked_interval(model.decision(particles), mask)
             return RetainedSet(particles, mask, lo, hi, belief_reference(particles, weights))
         if threshold <= 1:
-            mask, lo, hi, reference = retained_summary(weights, threshold, model.decision(particles), particles)
+            mask, lo, hi, reference = self.kernels.retained_summary(weights, threshold, model.decision(particles),
+                                                                    particles)
             return RetainedSet(particles, mask, lo, hi, reference)
         points, lo, hi = grown_points(model, particles, threshold)
         return RetainedSet(particles, np.ones_like(weights, dtype=bool), lo, hi, belief_reference(particles, weights),
@@ -340,10 +391,29 @@ class ProbeRobust:
     def choose(self, retained: RetainedSet, context: np.ndarray | None = None) -> Commitment:
         """Score every grid action over a retained set and pick one per episode."""
         model = self.model
-        scores = retained_scores(model, retained, context)
+        scores = retained_scores(model, retained, context, self.kernels)
         index = select_action(scores, model.tie_break_cost(model.action_grid, retained.reference, context))
         return Commitment(index, np.take_along_axis(scores, index[:, None], axis=1)[:, 0], retained.mask,
                           retained.lo, retained.hi)
+
+    method = "probe_robust"
+    on_prior = False
+
+    @property
+    def memo_tag(self) -> str:
+        return self.plateau
+
+    def with_model(self, model: Any) -> "ProbeRobust":
+        return replace(self, model=model)
+
+    def decide(self, belief: Belief, threshold: float, context: np.ndarray | None = None,
+               memo: dict | None = None) -> Commitment:
+        """:class:`Executor`'s interface: the retained set (kept in ``memo``: it does not depend
+        on the margin) scored and one action chosen per episode."""
+        memo = {} if memo is None else memo
+        if "retained" not in memo:
+            memo["retained"] = self.retain(belief.particles, belief.weights, threshold)
+        return self.choose(memo["retained"], context)
 
     def act(self, particles: np.ndarray, weights: np.ndarray, threshold: float,
             context: np.ndarray | None = None) -> Commitment:
@@ -362,6 +432,9 @@ class ProbeRobust:
 class BlindRobust(ProbeRobust):
     """Blind-Robust: the same set objective applied to the unprobed prior cloud (k = 0)."""
 
+    method = "blind_robust"
+    on_prior = True
+
 
 @dataclass
 class BlindBayes:
@@ -377,6 +450,24 @@ class BlindBayes:
 
     model: Any
     prior_sample: np.ndarray
+
+    method = "blind_bayes"
+    on_prior = True
+    memo_tag = None
+
+    def with_model(self, model: Any) -> "BlindBayes":
+        """Itself: the policy is fixed when built (by the prior sample and the model given then),
+        so a margin override rescoring the set executors leaves Blind-Bayes's actions as they were."""
+        return self
+
+    def decide(self, belief: Belief, threshold: float, context: np.ndarray | None = None,
+               memo: dict | None = None) -> Commitment:
+        """:class:`Executor`'s interface: the prior optimum per context; its "set" is every
+        particle of the belief (the threshold does not apply)."""
+        mask = np.ones_like(belief.weights, dtype=bool)
+        lo, hi = masked_interval(belief.z, mask)
+        index, expected = self.act(belief.weights.shape[0], context)
+        return Commitment(index, expected, mask, lo, hi)
 
     def act_one(self, context: np.ndarray | None = None) -> tuple[int, float]:
         """Action index and its prior expected loss for one context (or none)."""

@@ -10,8 +10,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from probecommit.core.kernels import coverage_score_compiled, retained_summary_compiled, weighted_variance_compiled
-
 # Cumulative sums of float weights may fall a hair short of an exactly reachable
 # mass (e.g. 820 copies of 1/1024 against nu = 0.8); this tolerance absorbs that.
 MASS_TOLERANCE = 1e-12
@@ -84,35 +82,16 @@ def retained_summary(weights: np.ndarray, nu: float | np.ndarray, z: np.ndarray,
     Returns:
         ``(mask, lo, hi, reference)``: :func:`retained_mask`, the decision interval over
         it (:func:`masked_interval`) and the weighted mean of every latent over it
-        (:func:`belief_reference`). The compiled kernel (``core.kernels``) gives the
-        same bits as this NumPy path without sorting whole rows.
+        (:func:`belief_reference`).
     """
     weights = np.asarray(weights, dtype=float)
-    nu_rows = np.broadcast_to(np.asarray(nu, dtype=float), weights.shape[:1])
-    compiled = retained_summary_compiled(weights, nu_rows, z, particles)
-    if compiled is not None:
-        return compiled
-    return retained_summary_numpy(weights, nu_rows, z, particles)
-
-
-def retained_summary_numpy(weights: np.ndarray, nu: np.ndarray, z: np.ndarray,
-                           particles: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """NumPy path of :func:`retained_summary` (the compiled kernel's reference)."""
-    mask = retained_mask(weights, nu)
+    mask = retained_mask(weights, np.broadcast_to(np.asarray(nu, dtype=float), weights.shape[:1]))
     lo, hi = masked_interval(z, mask)
     return mask, lo, hi, belief_reference(particles, weights, mask)
 
 
 def weighted_variance(z: np.ndarray, weights: np.ndarray) -> np.ndarray:
     """Posterior variance of ``z[E, N]`` under normalized ``weights`` ``[E, N]``, per episode ``[E]``."""
-    compiled = weighted_variance_compiled(z, weights)
-    if compiled is not None:
-        return compiled
-    return weighted_variance_numpy(z, weights)
-
-
-def weighted_variance_numpy(z: np.ndarray, weights: np.ndarray) -> np.ndarray:
-    """NumPy path of :func:`weighted_variance` (the compiled kernel's reference)."""
     mean = np.sum(weights * z, axis=-1)
     return np.sum(weights * (z - mean[:, None]) ** 2, axis=-1)
 
@@ -135,20 +114,11 @@ def coverage_score(z: np.ndarray, weights: np.ndarray, z_true: np.ndarray, domai
 
 def coverage_with_hull(z: np.ndarray, weights: np.ndarray, z_true: np.ndarray,
                        domain_width: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """:func:`coverage_score` and the hull ``(min z, max z)`` per episode, from one pass.
+    """:func:`coverage_score` and the hull ``(min z, max z)`` per episode.
 
-    ``z`` may be a strided view (one latent of the particles): the compiled kernel reads it in
-    place and finds the hull on the way (the same bits as NumPy's ``min`` and ``max``).
+    The score is the mass of the shortest top-weight prefix (the retained-set order) whose
+    decision-coordinate span covers the truth; a truth outside the hull scores ``1 + d / D``.
     """
-    compiled = coverage_score_compiled(weights, z, z_true, domain_width)
-    if compiled is not None:
-        return compiled
-    z_rows = np.ascontiguousarray(z)
-    return coverage_score_numpy(z_rows, weights, z_true, domain_width), z_rows.min(axis=1), z_rows.max(axis=1)
-
-
-def coverage_score_numpy(z: np.ndarray, weights: np.ndarray, z_true: np.ndarray, domain_width: float) -> np.ndarray:
-    """NumPy path of :func:`coverage_score` (the compiled kernel's reference): a full stable sort."""
     z = np.asarray(z, dtype=float)
     z_true = np.asarray(z_true, dtype=float)
     order, cum = prefix_mass(np.asarray(weights, dtype=float))
@@ -164,4 +134,4 @@ def coverage_score_numpy(z: np.ndarray, weights: np.ndarray, z_true: np.ndarray,
     s_inside = np.minimum(np.take_along_axis(cum, first[:, None], axis=-1)[:, 0], 1.0)
     hull_lo, hull_hi = run_lo[:, -1], run_hi[:, -1]
     distance = np.maximum(hull_lo - z_true, 0.0) + np.maximum(z_true - hull_hi, 0.0)
-    return np.where(inside, s_inside, 1.0 + distance / float(domain_width))
+    return np.where(inside, s_inside, 1.0 + distance / float(domain_width)), hull_lo, hull_hi

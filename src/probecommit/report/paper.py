@@ -49,6 +49,29 @@ class Target:
     run: Callable[[Path, bool, Progress, int], Path]
 
 
+#: The registered targets, in registration order (``reproduce all`` runs them in this order,
+#: dependencies first), and paper item -> target (the paper's own numbering and its labels:
+#: LaTeX numbers tables and figures in source order, Table I setup, II breadth, III audit, IV
+#: insertion by split, V Test C, VI engines, VII hardware, VIII faults; Fig. 1 overview, 2
+#: pipeline, 3 testbeds, 4 the failure the audit found, 5 hardware, 6 commit decision, 7 fault
+#: signatures). Filled only through :func:`register`.
+TARGETS: dict[str, Target] = {}
+ALIASES: dict[str, str] = {}
+
+
+def register(target: Target, aliases: tuple[str, ...] = ()) -> Target:
+    """Register a reproduction target and the paper items it makes (each name and alias once)."""
+    taken = [name for name in (target.name, *aliases) if name in TARGETS or name in ALIASES]
+    if taken:
+        raise ValueError(f"reproduce target or paper item {taken[0]!r} is registered twice")
+    missing = [need for need in target.needs if need not in TARGETS]
+    if missing:
+        raise ValueError(f"target {target.name!r} needs {missing[0]!r}, which is not registered before it")
+    TARGETS[target.name] = target
+    ALIASES.update(dict.fromkeys(aliases, target.name))
+    return target
+
+
 # ----------------------------------------------------------------------------- tables
 
 
@@ -83,7 +106,7 @@ def write_table(folder: Path, key: str, markdown: str) -> None:
 
 
 def _insertion(root: Path, quick: bool, progress: Progress, workers: int) -> Path:
-    from probecommit.report.reproduce import reproduce_insertion
+    from probecommit.report.insertion_study import reproduce_insertion
 
     folder = root / "insertion"
     rep = reproduce_insertion(folder, quick=quick, progress=progress, workers=workers)
@@ -202,28 +225,18 @@ def _beyond(root: Path, quick: bool, progress: Progress, workers: int) -> Path:
     return results
 
 
-TARGETS: dict[str, Target] = {
-    "insertion": Target("insertion", ("Table III (tab:audit)", "Table IV (tab:insertion)", "Table V (tab:testc)",
-                                      "Table VIII (tab:faults)", "Fig. 4 (fig:teaser)", "Fig. 6 (fig:decision)",
-                                      "Fig. 7 (fig:signatures)", "scan and cover search", "re-splits, robust filters"),
-                        (), _insertion),
-    "breadth": Target("breadth", ("Table II (tab:breadth: insertion A, 1-D push, 2-D push MuJoCo and PyBullet, darts, "
-                                  "hinge, shuffleboard, grasp)", "miss-vs-budget figure", "grasp's sign-flip over truths"),
-                      (), _breadth),
-    "beyond": Target("beyond", ("hull set at t = 1", "resample-move belief", "adaptive probes"),
-                     ("insertion", "breadth"), _beyond),
-}
-
-#: Paper item -> target that makes it, in the paper's own numbering (LaTeX numbers tables and
-#: figures in source order: Table I setup, II breadth, III audit, IV insertion by split, V Test C,
-#: VI engines, VII hardware, VIII faults; Fig. 1 overview, 2 pipeline, 3 testbeds, 4 the failure the
-#: audit found, 5 hardware, 6 commit decision, 7 fault signatures), and by the paper's labels.
-ALIASES = {
-    "table-3": "insertion", "table-4": "insertion", "table-5": "insertion", "table-8": "insertion",
-    "fig-4": "insertion", "fig-6": "insertion", "fig-7": "insertion", "table-2": "breadth",
-    "tab:audit": "insertion", "tab:insertion": "insertion", "tab:testc": "insertion", "tab:faults": "insertion",
-    "fig:teaser": "insertion", "fig:decision": "insertion", "fig:signatures": "insertion", "tab:breadth": "breadth",
-}
+register(Target("insertion", ("Table III (tab:audit)", "Table IV (tab:insertion)", "Table V (tab:testc)",
+                              "Table VIII (tab:faults)", "Fig. 4 (fig:teaser)", "Fig. 6 (fig:decision)",
+                              "Fig. 7 (fig:signatures)", "scan and cover search", "re-splits, robust filters"),
+                (), _insertion),
+         ("table-3", "table-4", "table-5", "table-8", "fig-4", "fig-6", "fig-7", "tab:audit", "tab:insertion",
+          "tab:testc", "tab:faults", "fig:teaser", "fig:decision", "fig:signatures"))
+register(Target("breadth", ("Table II (tab:breadth: insertion A, 1-D push, 2-D push MuJoCo and PyBullet, darts, "
+                            "hinge, shuffleboard, grasp)", "miss-vs-budget figure", "grasp's sign-flip over truths"),
+                (), _breadth),
+         ("table-2", "tab:breadth"))
+register(Target("beyond", ("hull set at t = 1", "resample-move belief", "adaptive probes"), ("insertion", "breadth"),
+                _beyond))
 
 
 def resolve(names: list[str]) -> list[str]:
@@ -411,9 +424,10 @@ def _engines(root: Path, quick: bool, progress: Progress, workers: int) -> Path:
     return results
 
 
-TARGETS["engines"] = Target("engines", ("Table VI (tab:engines: PyBullet and PhysX)", "scanned boundary offsets and capture windows per engine",
-                                        "escape against k per engine"), (), _engines)
-ALIASES["table-6"] = ALIASES["tab:engines"] = "engines"
+register(Target("engines", ("Table VI (tab:engines: PyBullet and PhysX)",
+                            "scanned boundary offsets and capture windows per engine", "escape against k per engine"),
+                (), _engines),
+         ("table-6", "tab:engines"))
 
 
 def _gru(root: Path, quick: bool, progress: Progress, workers: int) -> Path:
@@ -426,8 +440,8 @@ def _gru(root: Path, quick: bool, progress: Progress, workers: int) -> Path:
     return results
 
 
-TARGETS["gru"] = Target("gru", ("the GRU baseline on MuJoCo 2-D pushing, with the pre-registered equivalence test",),
-                        ("breadth",), _gru)
+register(Target("gru", ("the GRU baseline on MuJoCo 2-D pushing, with the pre-registered equivalence test",),
+                ("breadth",), _gru))
 
 
 def _robot(root: Path, quick: bool, progress: Progress, workers: int) -> Path:
@@ -460,11 +474,10 @@ def _robot(root: Path, quick: bool, progress: Progress, workers: int) -> Path:
     return results
 
 
-TARGETS["robot"] = Target("robot", ("Table VII (tab:hardware) on the simulated rig, run as a robot session",
-                                    "Fig. 5b-d (fig:hardware) on the simulated rig: aim error against taps, replays under boundary and prior faults"),
-                          (), _robot)
-ALIASES["table-7"] = ALIASES["tab:hardware"] = "robot"
-ALIASES["fig-5"] = ALIASES["fig:hardware"] = "robot"
+register(Target("robot", ("Table VII (tab:hardware) on the simulated rig, run as a robot session",
+                          "Fig. 5b-d (fig:hardware) on the simulated rig: aim error against taps, replays under boundary "
+                          "and prior faults"), (), _robot),
+         ("table-7", "tab:hardware", "fig-5", "fig:hardware"))
 
 
 #: Table I's row order (the paper's), then the transfer and the rig.
@@ -532,10 +545,9 @@ def _setup(root: Path, quick: bool, progress: Progress, workers: int) -> Path:
     return results
 
 
-TARGETS["setup"] = Target("setup", ("Table I (tab:setup: the task families, from the registry)",
-                                    "Fig. 1b (fig:overview: an insertion belief after taps 1, 3 and 5)"), (), _setup)
-ALIASES["table-1"] = ALIASES["tab:setup"] = "setup"
-ALIASES["fig-1"] = ALIASES["fig:overview"] = "setup"
+register(Target("setup", ("Table I (tab:setup: the task families, from the registry)",
+                          "Fig. 1b (fig:overview: an insertion belief after taps 1, 3 and 5)"), (), _setup),
+         ("table-1", "tab:setup"))  # Fig. 1 is the figures target's, which runs setup first
 
 
 def plot_pricing(table: Any, path: str | Path) -> Path:
@@ -585,8 +597,8 @@ def _cost(root: Path, quick: bool, progress: Progress, workers: int) -> Path:
     return results
 
 
-TARGETS["cost"] = Target("cost", ("probe pricing J(k) = miss(k) + lambda k: break-even prices per family, figure",),
-                         ("breadth",), _cost)
+register(Target("cost", ("probe pricing J(k) = miss(k) + lambda k: break-even prices per family, figure",),
+                ("breadth",), _cost))
 
 
 def _fig1_spec(run_dir: Path) -> dict[str, Any]:
@@ -628,18 +640,16 @@ def _figures(root: Path, quick: bool, progress: Progress, workers: int) -> Path:
     return results
 
 
-TARGETS["figures"] = Target("figures", ("Fig. 1a and 1c (fig:overview: the demo episode's taps and insertion, rendered)",
-                                        "Fig. 2 (fig:pipeline, drawn by code)", "Fig. 3 (fig:testbeds: the scene of every family)"),
-                            ("setup",), _figures)
-ALIASES["fig-2"] = ALIASES["fig:pipeline"] = "figures"
-ALIASES["fig-3"] = ALIASES["fig:testbeds"] = "figures"
-ALIASES["fig-1"] = ALIASES["fig:overview"] = "figures"  # Fig. 1b comes from setup, which figures runs first
+register(Target("figures", ("Fig. 1a and 1c (fig:overview: the demo episode's taps and insertion, rendered)",
+                            "Fig. 2 (fig:pipeline, drawn by code)", "Fig. 3 (fig:testbeds: the scene of every family)"),
+                ("setup",), _figures),
+         ("fig-2", "fig:pipeline", "fig-3", "fig:testbeds", "fig-1", "fig:overview"))  # Fig. 1b: setup, run first
 def _explain(root: Path, quick: bool, progress: Progress, workers: int) -> Path:
     from probecommit.studies.explain import reproduce_explain
 
     return reproduce_explain(root, quick=quick, progress=progress, workers=workers)
 
 
-TARGETS["explain"] = Target("explain", ("the measurements behind each difference from the paper, and the paper's items "
-                                        "computed from stored runs (EXPLAIN_KEYS.md)",),
-                            ("insertion", "engines", "gru"), _explain)
+register(Target("explain", ("the measurements behind each difference from the paper, and the paper's items "
+                            "computed from stored runs (EXPLAIN_KEYS.md)",),
+                ("insertion", "engines", "gru"), _explain))

@@ -49,7 +49,7 @@ def insertion(folder: Path, results: dict[str, Any]) -> Recomputed:
     cover search, re-splits and the fault signatures, from ``episodes.parquet`` and friends."""
     from probecommit.audit.conformal import budget_thresholds, instance_scores
     from probecommit.audit.stats import cluster_bootstrap_mean, paired_bootstrap
-    from probecommit.report.reproduce import episode_metrics, paired
+    from probecommit.studies.insertion import episode_metrics, paired
 
     setup = results["setup"]
     boot = dict(resamples=int(setup["bootstrap"]["resamples"]), seed=int(setup["bootstrap"]["seed"]))
@@ -122,7 +122,7 @@ def _audit_original(test: pd.DataFrame, results: dict[str, Any], out: Recomputed
 
 def _faults(folder: Path, setup: dict[str, Any], boot: dict[str, int], out: Recomputed) -> None:
     from probecommit.audit.surprise import surprise_auc
-    from probecommit.report.reproduce import episode_metrics, paired, probe_rows, signature_points
+    from probecommit.studies.insertion import episode_metrics, paired, probe_rows, signature_points
     from probecommit.studies.faults import FAULTS, signature_table
 
     episodes = pd.read_parquet(folder / "faults_episodes.parquet")

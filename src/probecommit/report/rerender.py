@@ -180,7 +180,7 @@ def _figure_recipes() -> dict[str, dict[str, Callable[[Path, Path], Any]]]:
     """
     from probecommit.report.paper import plot_pricing
     from probecommit.report.pipeline_diagram import pipeline_figure
-    from probecommit.report.reproduce import signature_n
+    from probecommit.studies.insertion import signature_n
     from probecommit.report.study_figures import fault_signatures
     from probecommit.studies.breadth import plot_budget_curves
 

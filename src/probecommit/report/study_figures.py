@@ -123,29 +123,6 @@ def decisive_tap_figure(z_deployed, w_deployed, z_corrected, w_corrected, z_true
     return save_figure(fig, path, caption=caption)
 
 
-def coverage_vs_nominal(cal_episodes: pd.DataFrame, test_episodes: pd.DataFrame, k: int,
-                        levels: np.ndarray | None = None) -> pd.DataFrame:
-    """Fig. 4a's data: held-out cluster coverage against the nominal level 1 - alpha at budget ``k``.
-
-    The threshold is the conformal quantile of the calibration instances' worst-repeat
-    scores; coverage is the score identity ``s <= t`` on the test instances (all repeats).
-    """
-    from probecommit.audit.conformal import conformal_quantile, instance_scores, score_coverage
-
-    levels = np.round(np.arange(0.5, 0.951, 0.05), 2) if levels is None else levels
-    cal = instance_scores(cal_episodes[cal_episodes["method"] == "probe_robust"], k).dropna().to_numpy()
-    test = test_episodes[(test_episodes["method"] == "probe_robust") & (test_episodes["k"] == k)]
-    rows = []
-    for level in levels:
-        t = conformal_quantile(cal, 1 - level)
-        cov = score_coverage(test, min(t, 1e9))
-        # An infinite threshold (q = M + 1: too few calibration instances) is stored as NaN with a flag.
-        rows.append({"nominal": float(level), "threshold": float(t) if np.isfinite(t) else float("nan"),
-                     "threshold_infinite": bool(not np.isfinite(t)),
-                     "cluster_coverage": float(cov["cluster_coverage"].iloc[0])})
-    return pd.DataFrame(rows)
-
-
 def decision_figure(coverage: pd.DataFrame, gates_result, path: str | Path) -> Path:
     """Fig. "commit decision" at one column: (a) cluster coverage vs nominal, (b) failure among
     committed vs commit rate (the oracle dashed), (c) predicted (pale) vs realized (solid) at the operating point."""

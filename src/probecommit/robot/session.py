@@ -28,6 +28,7 @@ from typing import Any, Mapping, Sequence
 import numpy as np
 
 from probecommit import __version__
+from probecommit.accel import production
 from probecommit.core.belief import BeliefState, ParticleFilter
 from probecommit.core.executors import ProbeRobust
 from probecommit.core.retained import masked_interval
@@ -138,7 +139,7 @@ def decide_belief(model: Any, config: StudyConfig, state: BeliefState,
                   context: Sequence[float] | None = None) -> dict[str, Any]:
     """Probe-Robust's commitment on a one-episode belief (with its context, if the family has one),
     as a decide record's fields."""
-    executor = ProbeRobust(model, plateau=config.calibration.plateau)
+    executor = ProbeRobust(model, plateau=config.calibration.plateau, kernels=production().sets)
     ctx = None if context is None else np.asarray(context, dtype=float).reshape(1, -1)
     commit = executor.act(state.particles, state.weights, config.belief.nu, ctx)
     index = int(commit.index[0])

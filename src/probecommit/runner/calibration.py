@@ -50,6 +50,7 @@ from probecommit.audit.stats import (
     resample_counts,
 )
 from probecommit.audit.surprise import surprise_auc
+from probecommit.runner.build import config_executors
 from probecommit.runner.replay import CHUNK_INSTANCES, LoadedRun, RunBeliefs, load_run, require_budgets
 from probecommit.errors import UsageError
 
@@ -165,6 +166,11 @@ class _Run:
     def plateau(self) -> str:
         return self.override_plateau or self.loaded.config.calibration.plateau
 
+    @functools.cached_property
+    def executors(self) -> list:
+        """The probe executor every commit of this run injects (built once)."""
+        return config_executors(self.loaded.config, self.beliefs.model, (PROBE_METHOD,), self.plateau)
+
     def commit(self, *requests: Request, keep: Sequence[Sequence[str] | None] | None = None,
                reduce: Sequence[Reduction | None] | None = None, final: bool = False) -> list[Any]:
         """Episode tables of the probe executor, one per request, in one pass over the run's chunks.
@@ -188,8 +194,7 @@ class _Run:
         per_chunk = [None if reducer is None else self._checked(reducer, columns)
                      for reducer, columns in zip(reduce, keep)]
         tables = self.beliefs.commit([{"thresholds": _executable(t), "margin": g} for t, g in requests], keep=keep,
-                                     reduce=per_chunk, reuse=self.reuse, final=final, methods=(PROBE_METHOD,),
-                                     plateau=self.plateau)
+                                     reduce=per_chunk, reuse=self.reuse, final=final, executors=self.executors)
         out = []
         for table, columns, reducer in zip(tables, keep, reduce):
             if reducer is None:

@@ -17,9 +17,9 @@ import numpy as np
 import pandas as pd
 
 from probecommit.core.belief import BeliefState, ParticleFilter
-from probecommit.core.executors import BlindBayes, BlindRobust, ProbeRobust
-from probecommit.core.retained import coverage_with_hull, masked_interval, weighted_variance
-from probecommit.runner.seeding import INFERENCE, ROLLOUT, blind_rng, episode_rngs
+from probecommit.core.executors import Belief, Commitment, Executor
+from probecommit.accel import production
+from probecommit.runner.seeding import INFERENCE, ROLLOUT, episode_rngs
 from probecommit.store.schema import component_names
 
 
@@ -276,42 +276,35 @@ def build_trace(pfilter: ParticleFilter, batch: ProbeBatch, seed: int, budgets: 
     return BeliefTrace(batch, states, surprise, lost)
 
 
-def blind_bayes_executor(model, seed: int, n_samples: int) -> BlindBayes:
-    """Blind-Bayes over a large fixed prior sample drawn from the study's blind stream."""
-    return BlindBayes(model, model.sample_prior(blind_rng(seed), n_samples))
-
-
 def commit(
     trace: BeliefTrace,
     model,
     simulator,
+    executors: Sequence[Executor],
     thresholds: float | Mapping[int, float] = 0.8,
     margin: float | None = None,
-    methods: Iterable[str] = ("probe_robust",),
-    blind: BlindBayes | None = None,
     cache: dict | None = None,
-    plateau: str = "prefix",
     columns: Sequence[str] | None = None,
     as_columns: bool = False,
 ) -> pd.DataFrame:
-    """Commit once per episode and budget, and score the commit against ground truth.
+    """Commit once per episode, executor and budget, and score the commit against ground truth.
 
     Args:
         trace: Beliefs per budget.
-        model: The model scoring actions (its variant labels the rows).
+        model: The model scoring actions (its variant labels the rows, its decision coordinate
+            gives ``z_true``).
         simulator: Ground truth; ``execute`` is cached per distinct action.
+        executors: The injected executors (``core.executors.Executor``; ``runner.build.build_executors``
+            makes them from a config's ``methods``), in table order: a blind one (``on_prior``)
+            commits once on the prior belief (k = 0), any other after every budget of the trace.
         thresholds: Retained mass ``nu`` (or conformal threshold ``t``), a float for
             every budget or ``{k: t}``; ``t > 1`` uses the grown set.
-        margin: The model's margin ``gamma`` (None keeps the model's).
-        methods: Any of ``probe_robust`` (k >= 1), ``blind_robust`` and
-            ``blind_bayes`` (k = 0).
-        blind: The Blind-Bayes executor, required for that method.
+        margin: The model's margin ``gamma`` (None keeps the model's); every executor is
+            rebound to the model with that margin (``Executor.with_model``).
         cache: Optional dict reused across calls on the same ``trace`` (a margin search):
             what does not depend on the margin (the retained sets, the coverage score,
             the posterior variance, the hull) is computed once per budget and threshold.
             Results are identical with or without it.
-        plateau: The set at ``t = 1`` (``core.executors.ProbeRobust``): ``prefix`` (the
-            paper) or ``hull``.
         columns: Build only these columns, in this order (None: all). A margin search reads
             four columns of dozens of tables; the result equals ``table[list(columns)]``.
         as_columns: Return the table's columns (a dict of arrays, what the DataFrame is made
@@ -323,88 +316,92 @@ def commit(
     cache = {} if cache is None else cache
     if margin is not None:
         model = model.with_margin(margin)
-    methods = list(methods)
-    batch = trace.batch
-    context = batch.episode_context
+        executors = [executor.with_model(model) for executor in executors]
+    plan = _commit_plan(trace, executors, thresholds)
+    z_true = model.decision(trace.batch.truths)
     frames = []
-    plan: list[tuple[str, int]] = []
-    if "blind_bayes" in methods:
-        plan.append(("blind_bayes", 0))
-    if "blind_robust" in methods:
-        plan.append(("blind_robust", 0))
-    if "probe_robust" in methods:
-        # Per-budget thresholds commit only at the budgets they name.
-        budgets = [k for k in trace.budgets if not isinstance(thresholds, Mapping) or k in thresholds]
-        plan += [("probe_robust", k) for k in budgets]
-    executors = {"probe_robust": ProbeRobust(model, plateau), "blind_robust": BlindRobust(model, plateau)}
-    z_true = model.decision(batch.truths)
-    action_names = component_names("action", model.action_dim)
-    grid = np.asarray(model.action_grid, dtype=float).reshape(len(model.action_grid), -1)
+    for executor, k in plan:
+        t = float(thresholds[k] if isinstance(thresholds, Mapping) else thresholds)
+        belief = _belief_at(trace, model, k, z_true, cache)
+        memo = cache.setdefault(("set", executor.method, k, t, executor.memo_tag), {})
+        chosen = executor.decide(Belief(trace.states[k].particles, belief["weights"], belief["z"]), t,
+                                 trace.batch.episode_context, memo)
+        frames.append(_episode_columns(trace, model, simulator, executor.method, k, chosen, belief, z_true,
+                                       cache.setdefault("outcomes", {}), columns))
+    if not frames:
+        return {} if as_columns else pd.DataFrame()
+    out = _interleave_columns(frames, trace.batch.n_episodes)
+    return out if as_columns else pd.DataFrame(out)
+
+
+def _commit_plan(trace: BeliefTrace, executors: Sequence[Executor],
+                 thresholds: float | Mapping[int, float]) -> list[tuple[Executor, int]]:
+    """``(executor, budget)`` of every commit, in table order: each executor's commits in turn, a
+    blind one's on the prior (k = 0); per-budget thresholds commit only at the budgets they name."""
+    budgets = [k for k in trace.budgets if not isinstance(thresholds, Mapping) or k in thresholds]
+    plan = [(executor, k) for executor in executors for k in ([0] if executor.on_prior else budgets)]
     if any(k == 0 for _, k in plan) and 0 not in trace.states:
         raise ValueError("the blind methods commit on the prior belief (k = 0), which this trace does not keep "
                          "(RunBeliefs.of(..., budgets=...) keeps only the budgets it names)")
-    for plan_index, (method, k) in enumerate(plan):
+    return plan
+
+
+def _belief_at(trace: BeliefTrace, model, k: int, z_true: np.ndarray, cache: dict) -> dict[str, np.ndarray]:
+    """What the table reads of budget ``k``'s belief (decision coordinates, weights, hull, coverage
+    score, posterior variance): margin-independent, so computed once per budget in ``cache``."""
+    belief = cache.get(("belief", k))
+    if belief is None:
         state = trace.states[k]
-        particles = state.particles
-        t = float(thresholds[k] if isinstance(thresholds, Mapping) else thresholds)
-        belief = cache.get(("belief", k))
-        if belief is None:
-            z = model.decision(particles)
-            weights = state.weights
-            score_s, hull_lo, hull_hi = coverage_with_hull(z, weights, z_true, model.decision_domain_width)
-            belief = cache[("belief", k)] = {"z": z, "weights": weights, "hull_lo": hull_lo, "hull_hi": hull_hi,
-                                             "score_s": score_s, "post_var": weighted_variance(z, weights)}
-        z, weights = belief["z"], belief["weights"]
-        if method == "blind_bayes":
-            if blind is None:
-                raise ValueError("blind_bayes needs the Blind-Bayes executor")
-            mask = np.ones_like(weights, dtype=bool)
-            lo, hi = masked_interval(z, mask)
-            index, predicted = blind.act(batch.n_episodes, context)
-        else:
-            retained = cache.get(("set", method, k, t, plateau))
-            if retained is None:
-                retained = cache[("set", method, k, t, plateau)] = executors[method].retain(particles, weights, t)
-            chosen = executors[method].choose(retained, context)
-            index, predicted, mask, lo, hi = chosen.index, chosen.score, chosen.mask, chosen.lo, chosen.hi
-        action = grid[index]
-        realized, status, error = _execute(simulator, batch, action, index, len(grid), cache.setdefault("outcomes", {}))
-        hull_lo, hull_hi = belief["hull_lo"], belief["hull_hi"]
-        # Each column made only when asked for (a margin search asks for four).
-        makers = {
-            "instance_id": lambda: batch.instance_id.astype(str),
-            "repeat": lambda: batch.repeat.astype(np.int64),
-            "k": lambda: np.int64(k),
-            "method": lambda: method,
-            "variant": lambda: model.variant,
-            **{name: (lambda i=i: action[:, i]) for i, name in enumerate(action_names)},
-            "predicted": lambda: np.asarray(predicted, dtype=float),
-            "realized": lambda: realized,
-            "z_true": lambda: z_true,
-            "retained_lo": lambda: lo,
-            "retained_hi": lambda: hi,
-            "hull_lo": lambda: hull_lo,
-            "hull_hi": lambda: hull_hi,
-            "covered": lambda: (lo <= z_true) & (z_true <= hi),
-            "escaped": lambda: (z_true < hull_lo) | (z_true > hull_hi),
-            "score_s": lambda: belief["score_s"],
-            "post_var": lambda: belief["post_var"],
-            "max_surprise": lambda: trace.surprise[:, :k].max(axis=1) if k > 0 else np.full(batch.n_episodes, np.nan),
-            "n_retained": lambda: mask.sum(axis=1).astype(np.int64),
-            "belief_resets": lambda: (trace.lost[:, :k].sum(axis=1) if trace.lost is not None
-                                      else np.zeros(batch.n_episodes)).astype(np.int64),
-            "status": lambda: status,
-            "error": lambda: error,
-        }
-        wanted = list(makers) if columns is None else list(columns)
-        unknown = [name for name in wanted if name not in makers]
-        if unknown:
-            raise ValueError(f"commit has no column {unknown[0]!r}; it makes {', '.join(makers)}")
-        frames.append({name: makers[name]() for name in wanted})
-    if not frames:
-        return {} if as_columns else pd.DataFrame()
-    out = _interleave_columns(frames, batch.n_episodes)
-    return out if as_columns else pd.DataFrame(out)
+        z = model.decision(state.particles)
+        weights = state.weights
+        kernels = production()
+        score_s, hull_lo, hull_hi = kernels.coverage_with_hull(z, weights, z_true, model.decision_domain_width)
+        belief = cache[("belief", k)] = {"z": z, "weights": weights, "hull_lo": hull_lo, "hull_hi": hull_hi,
+                                         "score_s": score_s, "post_var": kernels.weighted_variance(z, weights)}
+    return belief
+
+
+def _episode_columns(trace: BeliefTrace, model, simulator, method: str, k: int, chosen: Commitment,
+                     belief: dict[str, np.ndarray], z_true: np.ndarray, outcomes: dict,
+                     columns: Sequence[str] | None) -> dict[str, Any]:
+    """One commit's episode-table columns (those in ``columns``, or all): the action executed
+    through the simulator (``outcomes`` remembers its answers) and scored against the truth."""
+    batch = trace.batch
+    grid = np.asarray(model.action_grid, dtype=float).reshape(len(model.action_grid), -1)
+    action = grid[chosen.index]
+    realized, status, error = _execute(simulator, batch, action, chosen.index, len(grid), outcomes)
+    lo, hi, hull_lo, hull_hi = chosen.lo, chosen.hi, belief["hull_lo"], belief["hull_hi"]
+    # Each column made only when asked for (a margin search asks for four).
+    makers = {
+        "instance_id": lambda: batch.instance_id.astype(str),
+        "repeat": lambda: batch.repeat.astype(np.int64),
+        "k": lambda: np.int64(k),
+        "method": lambda: method,
+        "variant": lambda: model.variant,
+        **{name: (lambda i=i: action[:, i]) for i, name in enumerate(component_names("action", model.action_dim))},
+        "predicted": lambda: np.asarray(chosen.score, dtype=float),
+        "realized": lambda: realized,
+        "z_true": lambda: z_true,
+        "retained_lo": lambda: lo,
+        "retained_hi": lambda: hi,
+        "hull_lo": lambda: hull_lo,
+        "hull_hi": lambda: hull_hi,
+        "covered": lambda: (lo <= z_true) & (z_true <= hi),
+        "escaped": lambda: (z_true < hull_lo) | (z_true > hull_hi),
+        "score_s": lambda: belief["score_s"],
+        "post_var": lambda: belief["post_var"],
+        "max_surprise": lambda: trace.surprise[:, :k].max(axis=1) if k > 0 else np.full(batch.n_episodes, np.nan),
+        "n_retained": lambda: chosen.mask.sum(axis=1).astype(np.int64),
+        "belief_resets": lambda: (trace.lost[:, :k].sum(axis=1) if trace.lost is not None
+                                  else np.zeros(batch.n_episodes)).astype(np.int64),
+        "status": lambda: status,
+        "error": lambda: error,
+    }
+    wanted = list(makers) if columns is None else list(columns)
+    unknown = [name for name in wanted if name not in makers]
+    if unknown:
+        raise ValueError(f"commit has no column {unknown[0]!r}; it makes {', '.join(makers)}")
+    return {name: makers[name]() for name in wanted}
 
 
 def prune_retained_sets(cache: dict, later: Iterable[float | Mapping[int, float]]) -> None:

@@ -20,12 +20,11 @@ import pyarrow as pa
 
 from probecommit.core.belief import BeliefState, ParticleFilter
 from probecommit.core.memory import large_arrays_apart, trim_heap
-from probecommit.runner.build import build_filter, build_model, build_simulator
+from probecommit.runner.build import build_executors, build_filter, build_model, build_simulator, config_executors
 from probecommit.runner.config import StudyConfig, config_data, dump_config, parse_config
 from probecommit.runner.inference import (
     BeliefTrace,
     ProbeBatch,
-    blind_bayes_executor,
     build_trace,
     commit,
     instance_arrays,
@@ -449,7 +448,8 @@ class RunBeliefs:
                 chunk, and between calls when the run is one chunk; False recomputes it per commit.
             final: No later call needs this run's beliefs: a one-chunk run's kept trace is
                 released by this call (as :meth:`release` would after it).
-            **common: Keyword arguments of ``commit`` shared by every request.
+            **common: Keyword arguments of ``commit`` shared by every request; without ``executors``
+                (here or in the requests) the probe executor commits.
 
         Returns:
             Per request, its table in the run's canonical episode order, or with ``reduce``,
@@ -457,6 +457,8 @@ class RunBeliefs:
         """
         keep = list(keep) if keep is not None else [None] * len(requests)
         reduce = list(reduce) if reduce is not None else [None] * len(requests)
+        if not any("executors" in request for request in [common, *requests]):
+            common = {**common, "executors": build_executors(("probe_robust",), self.model)}
         parts: list[list[Any]] = [[] for _ in requests]
         several = len(self.chunks) > 1
         if several:
@@ -622,9 +624,8 @@ def _replay_commit(loaded: LoadedRun, overrides: dict[str, dict[str, Any]] | Non
         )
     config = replay_config(loaded.config, overrides)
     beliefs = RunBeliefs.of(loaded, config, chunk_instances)
-    blind = blind_bayes_executor(beliefs.model, config.seed, config.blind_prior_samples) if "blind_bayes" in config.methods else None
     request = {"thresholds": config.belief.nu if thresholds is None else thresholds, "margin": margin}
-    return beliefs, request, {"methods": config.methods, "blind": blind}
+    return beliefs, request, {"executors": config_executors(config, beliefs.model)}
 
 
 def _failed_rows(loaded: LoadedRun, beliefs: RunBeliefs) -> pd.DataFrame:

@@ -12,7 +12,7 @@ from typing import Sequence
 import numpy as np
 from numpy.random.bit_generator import ISeedSequence
 
-from probecommit.core.kernels import seed_sequence_words_compiled
+from probecommit.accel import production
 
 ROLLOUT = 0  # probe choice and simulator noise
 INFERENCE = 1  # prior particles, resampling offsets, jitter
@@ -51,7 +51,9 @@ def episode_rngs(seed: int, split: str | Sequence[str], instance_indices: Sequen
         # Assembled entropy: the seed's words padded to the pool size (4), then the spawn key's.
         prefix = run_entropy + [0] * max(4 - len(run_entropy), 0)
         entropy = np.array([prefix + list(key) for key in keys], dtype=np.uint64)
-        words = seed_sequence_words_compiled(entropy, 8)  # PCG64 asks for 4 uint64 = 8 uint32 words
+        seed_words = production().seed_words
+        if seed_words is not None:
+            words = seed_words(entropy, 8)  # PCG64 asks for 4 uint64 = 8 uint32 words
     if words is None:
         return [np.random.Generator(np.random.PCG64(np.random.SeedSequence(entropy=seed, spawn_key=key)))
                 for key in keys]

@@ -27,7 +27,6 @@ import pandas as pd
 from probecommit.runner import build
 from probecommit.runner.config import StudyConfig, dump_config, parse_config
 from probecommit.runner.inference import (
-    blind_bayes_executor,
     build_trace,
     commit,
     failed_episode_columns,
@@ -232,8 +231,7 @@ def _episodes(config: StudyConfig, model: Any, instances: pd.DataFrame) -> tuple
     columns: dict[str, Any] = {}
     if np.any(batch.status == "ok"):  # a unit whose every trajectory failed has nothing to infer
         trace = build_trace(pfilter, batch, config.seed, config.probes.commit_budgets, keep_weights=True)
-        blind = blind_bayes_executor(model, config.seed, config.blind_prior_samples) if "blind_bayes" in config.methods else None
-        columns = commit(trace, model, simulator, thresholds=config.belief.nu, methods=config.methods, blind=blind,
+        columns = commit(trace, model, simulator, build.config_executors(config, model), thresholds=config.belief.nu,
                          as_columns=True)
     return batch, columns, simulator
 

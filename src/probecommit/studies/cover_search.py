@@ -13,7 +13,7 @@ from itertools import combinations
 import numpy as np
 import pandas as pd
 
-from probecommit.runner.build import build_filter, build_model
+from probecommit.runner.build import build_executors, build_filter, build_model
 from probecommit.runner.config import StudyConfig
 from probecommit.runner.inference import build_trace, commit, rollout
 from probecommit.runner.instances import draw_instances
@@ -40,7 +40,7 @@ def search_cover_schedule(config: StudyConfig, simulator, limit: int | None = No
     for n, schedule in enumerate(candidates):
         batch = rollout(instances, config.repeats, [(u,) for u in schedule], len(schedule), model, simulator, config.seed)
         trace = build_trace(pfilter, batch, config.seed, [len(schedule)])
-        ep = commit(trace, model, simulator, thresholds=config.belief.nu)
+        ep = commit(trace, model, simulator, build_executors(["probe_robust"], model), thresholds=config.belief.nu)
         rows.append({
             "schedule": list(schedule),
             "failure": float(ep["realized"].mean()),

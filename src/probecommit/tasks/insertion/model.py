@@ -124,17 +124,17 @@ class InsertionModel(TaskModelBase):
 
         A tap predicts one of two readings (:attr:`reading_levels`), so an arithmetic likelihood
         takes one of two values per episode, ``level_ll[E, 2]``; this picks each particle's
-        without forming ``predict``'s ``[E, N, 1]`` array (a compiled pass when numba is there).
+        without forming ``predict``'s ``[E, N, 1]`` array (a compiled pass unless ``PROBECOMMIT_KERNELS=numpy``).
         The same bits as ``log_weights + likelihood.log_likelihood(y, predict(u, theta))``
         (tested).
         """
-        from probecommit.tasks.insertion.kernels import slot_tap_log_weights_compiled
+        from probecommit.accel import mode
 
         # The kernel computes this class's reads_pocket; a subclass with its own (the rig) takes NumPy's.
-        if type(self).reads_pocket is InsertionModel.reads_pocket:
-            compiled = slot_tap_log_weights_compiled(u, theta, log_weights, level_ll, self.boundary_offset)
-            if compiled is not None:
-                return compiled
+        if mode() == "numba" and type(self).reads_pocket is InsertionModel.reads_pocket:
+            from probecommit.tasks.insertion.kernels import slot_tap_log_weights
+
+            return slot_tap_log_weights(u, theta, log_weights, level_ll, self.boundary_offset)
         return log_weights + np.where(self.reads_pocket(u, theta), level_ll[:, :1], level_ll[:, 1:])
 
     def success_interval_parts(self, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -6,6 +6,9 @@ rollouts of every instance set, the replays under the corrected model, calibrati
 the Test C confirmation, the fault harness, the robust filters and the re-split
 study. Each step writes its tables to ``results/`` as Markdown and every number
 into ``results.json``; ``REPRODUCTION.md`` is generated from those.
+
+The study computes; how its tables and figures are drawn is the report layer's, handed in as
+a :class:`Render` (``report.insertion_study`` supplies it), so studies never import report.
 """
 
 from __future__ import annotations
@@ -14,7 +17,7 @@ import json
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Callable
+from typing import Any, Callable, Mapping
 
 import numpy as np
 import pandas as pd
@@ -23,8 +26,6 @@ from probecommit.runner.calibration import calibrate
 from probecommit.audit.stats import cluster_bootstrap_mean, paired_bootstrap
 from probecommit.audit.surprise import surprise_auc
 from probecommit.core.memory import release_free_heap, trim_heap
-from probecommit.report.insertion_tables import RENDERERS
-from probecommit.report.study_figures import decisive_tap_figure, fault_signatures, scan_figure
 from probecommit.runner.build import build_model, build_simulator
 from probecommit.runner.replay import LoadedRun, RunBeliefs, load_run, replay_episodes, replay_run, trace_for_run
 from probecommit.runner.study import run_study
@@ -40,8 +41,25 @@ from probecommit.store.safefile import write_text, write_with
 Progress = Callable[[str, int, int], None]
 
 
-def _noop(step: str, done: int, total: int) -> None:
+def no_progress(step: str, done: int, total: int) -> None:
     return None
+
+
+@dataclass(frozen=True)
+class Render:
+    """How the study's tables and figures are drawn (the report layer's functions).
+
+    Attributes:
+        tables: Table key -> ``(results, out) -> Markdown``.
+        scan_figure, fault_signatures, decisive_tap_figure, decision_figure: Each draws its figure and
+            returns its path.
+    """
+
+    tables: Mapping[str, Callable[[dict, Path], str]]
+    scan_figure: Callable[..., Path]
+    fault_signatures: Callable[..., Path]
+    decisive_tap_figure: Callable[..., Path]
+    decision_figure: Callable[..., Path]
 
 
 def with_model(config: Any, **fields: Any) -> Any:
@@ -120,6 +138,29 @@ def subset_run(loaded: LoadedRun, instance_ids, beliefs: RunBeliefs | None = Non
     )
 
 
+def coverage_vs_nominal(cal_episodes: pd.DataFrame, test_episodes: pd.DataFrame, k: int,
+                        levels: np.ndarray | None = None) -> pd.DataFrame:
+    """Fig. 4a's data: held-out cluster coverage against the nominal level 1 - alpha at budget ``k``.
+
+    The threshold is the conformal quantile of the calibration instances' worst-repeat
+    scores; coverage is the score identity ``s <= t`` on the test instances (all repeats).
+    """
+    from probecommit.audit.conformal import conformal_quantile, instance_scores, score_coverage
+
+    levels = np.round(np.arange(0.5, 0.951, 0.05), 2) if levels is None else levels
+    cal = instance_scores(cal_episodes[cal_episodes["method"] == "probe_robust"], k).dropna().to_numpy()
+    test = test_episodes[(test_episodes["method"] == "probe_robust") & (test_episodes["k"] == k)]
+    rows = []
+    for level in levels:
+        t = conformal_quantile(cal, 1 - level)
+        cov = score_coverage(test, min(t, 1e9))
+        # An infinite threshold (q = M + 1: too few calibration instances) is stored as NaN with a flag.
+        rows.append({"nominal": float(level), "threshold": float(t) if np.isfinite(t) else float("nan"),
+                     "threshold_infinite": bool(not np.isfinite(t)),
+                     "cluster_coverage": float(cov["cluster_coverage"].iloc[0])})
+    return pd.DataFrame(rows)
+
+
 def episode_metrics(episodes: pd.DataFrame, k: int, resamples: int, seed: int) -> dict[str, Any]:
     """Failure, predicted, optimism, coverage and escape at one budget, with cluster intervals."""
     rows = probe_rows(episodes, k)
@@ -157,8 +198,10 @@ class InsertionReproduction:
     #: reproduction's peak under 400 MB (docs/decisions.md).
     CHUNK_INSTANCES = 48
 
-    def __init__(self, protocol: Protocol, root: Path, progress: Progress = _noop, workers: int = 1) -> None:
+    def __init__(self, protocol: Protocol, root: Path, render: Render, progress: Progress = no_progress,
+                 workers: int = 1) -> None:
         self.p = protocol
+        self.render = render
         self.root = Path(root)
         self.runs = self.root / "runs"
         self.out = self.root / "results"
@@ -203,7 +246,7 @@ class InsertionReproduction:
 
     def write_table(self, key: str) -> None:
         """Render table ``key`` from the results so far (``report.insertion_tables``; verify renders it again)."""
-        text = RENDERERS[key](self.rep.results, self.out)
+        text = self.render.tables[key](self.rep.results, self.out)
         write_text(self.out / f"{key}.md", text)
         self.rep.tables[key] = text
 
@@ -219,7 +262,8 @@ class InsertionReproduction:
         summary["frozen_delta"] = p.delta
         self.rep.results["scan"] = summary
         first = str(result.scans["instance_id"].iloc[0])
-        self.rep.figures["scan"] = str(scan_figure(result.grid, result.scans, first, summary["delta"], self.out / "fig_4a_teaser_scan_section.png"))
+        self.rep.figures["scan"] = str(self.render.scan_figure(result.grid, result.scans, first, summary["delta"],
+                                                               self.out / "fig_4a_teaser_scan_section.png"))
         self.write_table("scan")
 
     def cover_search(self, limit: int | None) -> None:
@@ -353,8 +397,8 @@ class InsertionReproduction:
         signatures = signature_table(episodes)
         write_with(self.out / "fault_signatures.parquet", signatures.to_parquet)
         self.rep.results["fault_signatures"] = signature_points(signatures)
-        self.rep.figures["signatures"] = str(fault_signatures(signatures, self.out / "fig_7_signatures.png",
-                                                              n=signature_n(episodes, kmax)))
+        self.rep.figures["signatures"] = str(self.render.fault_signatures(signatures, self.out / "fig_7_signatures.png",
+                                                                          n=signature_n(episodes, kmax)))
         self.rep.results["table_faults"] = res
         self.write_table("table_VIII_faults")
 
@@ -421,14 +465,12 @@ class InsertionReproduction:
         """Commit gates on Split B, cover schedule (paper Fig. "commit decision" b, c)."""
         from probecommit.runner.calibration import gates
 
-        from probecommit.report.study_figures import coverage_vs_nominal, decision_figure
-
         L = self.loaded
         result = gates(L["B_cal_cover"], L["B_test_cover"], alpha=self.p.alpha, **self.boot, **self.chunk)
         k = self.p.budgets["random"]
         coverage = coverage_vs_nominal(L["B_cal_random"].episodes, L["B_test_random"].episodes, k)
         write_with(self.out / "coverage_vs_nominal.parquet", coverage.to_parquet)
-        path = decision_figure(coverage, result, self.out / "fig_6_decision.png")
+        path = self.render.decision_figure(coverage, result, self.out / "fig_6_decision.png")
         self.rep.figures["commit_gates"] = str(path)
         summary = result.summary
         self.rep.results["gates"] = {"summary": summary.to_dict("records"), "info": result.info}
@@ -464,7 +506,7 @@ class InsertionReproduction:
             hits = np.flatnonzero(escaped & was_in & ok_new)
             if len(hits):
                 e = int(hits[0])
-                path = decisive_tap_figure(
+                path = self.render.decisive_tap_figure(
                     z[e], now.weights[e], kept_new[e], trace_new.states[k].weights[e], float(z_true[e]),
                     float(np.ravel(batch.u[e, k - 1])[0]), float(np.ravel(batch.y[e, k - 1])[0]),
                     f"after tap {k}", self.out / "fig_4b_teaser_decisive_tap.png")  # no internal ids in a title
@@ -507,11 +549,12 @@ def _json_default(o: Any) -> Any:
     return str(o)
 
 
-def reproduce_insertion(root: str | Path, quick: bool = False, protocol_path: str | Path = DEFAULT_PROTOCOL,
-                        progress: Progress = _noop, workers: int = 1) -> Reproduction:
-    """Run the whole MuJoCo insertion reproduction into ``root``."""
+def reproduce_insertion(root: str | Path, render: Render, quick: bool = False,
+                        protocol_path: str | Path = DEFAULT_PROTOCOL, progress: Progress = no_progress,
+                        workers: int = 1) -> Reproduction:
+    """Run the whole MuJoCo insertion reproduction into ``root``, drawing with ``render``."""
     protocol = load_protocol(protocol_path)
     if quick:
         protocol = protocol.quick_version()
-    repro = InsertionReproduction(protocol, Path(root), progress, workers)
+    repro = InsertionReproduction(protocol, Path(root), render, progress, workers)
     return repro.run_all(cover_limit=protocol.quick.cover_subsets if quick else None)

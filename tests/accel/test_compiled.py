@@ -10,11 +10,11 @@ import sys
 import numpy as np
 import pytest
 
-from probecommit.core import compiled, kernels
+from probecommit.accel import compiled, executors
 
 
 def _child(code: str, **env: str) -> subprocess.CompletedProcess:
-    full = {k: v for k, v in os.environ.items() if k not in ("PROBECOMMIT_KERNELS", "PROBECOMMIT_NO_NUMBA")}
+    full = {k: v for k, v in os.environ.items() if k != "PROBECOMMIT_KERNELS"}
     return subprocess.run([sys.executable, "-c", code], env={**full, **env}, capture_output=True, text=True, timeout=300)
 
 
@@ -59,22 +59,27 @@ def test_an_edited_kernel_is_never_served_by_a_stale_build(tmp_path, monkeypatch
 
 def test_the_digest_covers_every_kernel_source():
     names = {p.relative_to(compiled.PACKAGE_DIR).as_posix() for p in compiled.kernel_sources()}
-    assert {"core/kernels.py", "tasks/insertion/kernels.py", "core/compiled.py"} <= names
+    assert {"accel/belief.py", "accel/retained.py", "accel/executors.py", "accel/seeding.py",
+            "tasks/insertion/kernels.py", "accel/compiled.py"} <= names
+    assert "accel/__init__.py" not in names
     assert "probecommit.tasks.insertion.kernels" in compiled.kernel_modules()
 
 
 def test_the_mode_can_be_forced_and_a_wrong_one_is_named():
-    out = _child("from probecommit.core import compiled; print(compiled.MODE)", PROBECOMMIT_NO_NUMBA="1")
-    assert out.stdout.strip() == "numpy", out.stderr
-    out = _child("import probecommit.core.compiled", PROBECOMMIT_KERNELS="fast")
-    assert out.returncode != 0 and "PROBECOMMIT_KERNELS='fast': expected one of aot, jit, numpy" in out.stderr
+    out = _child("from probecommit.accel import compiled; print(compiled.MODE)", PROBECOMMIT_KERNELS="jit")
+    assert out.stdout.strip() == "jit", out.stderr
+    out = _child("from probecommit import accel; print(accel.mode(), type(accel.production().filter).__module__)",
+                 PROBECOMMIT_KERNELS="numpy")  # the NumPy reference: no kernel module imported
+    assert out.stdout.split() == ["numpy", "probecommit.core.belief"], out.stderr
+    out = _child("import probecommit.accel.compiled", PROBECOMMIT_KERNELS="fast")
+    assert out.returncode != 0 and "PROBECOMMIT_KERNELS='fast': expected one of aot, jit, numba or numpy" in out.stderr
 
 
 def test_the_build_command_has_help_and_builds_nothing_with_it():
-    out = subprocess.run([sys.executable, "-m", "probecommit.core.compiled", "--help"], capture_output=True, text=True)
+    out = subprocess.run([sys.executable, "-m", "probecommit.accel.compiled", "--help"], capture_output=True, text=True)
     assert out.returncode == 0 and "Build the compiled kernels ahead of time" in out.stdout
     assert "entry points" not in out.stdout  # the build's own line: nothing was built
-    out = subprocess.run([sys.executable, "-m", "probecommit.core.compiled", "--bogus"], capture_output=True, text=True)
+    out = subprocess.run([sys.executable, "-m", "probecommit.accel.compiled", "--bogus"], capture_output=True, text=True)
     assert out.returncode == 2 and "unrecognized arguments: --bogus" in out.stderr
 
 
@@ -83,7 +88,7 @@ aot_only = pytest.mark.skipif(compiled.MODE != "aot", reason="the ahead-of-time 
 
 @aot_only
 def test_the_built_kernels_run_without_numba_or_llvm():
-    out = _child("import sys; from probecommit.core import compiled, kernels; from probecommit.tasks.insertion import kernels;"
+    out = _child("import sys; from probecommit.accel import compiled, executors; from probecommit.tasks.insertion import kernels;"
                  "print(compiled.MODE, sorted(m for m in sys.modules if m.split('.')[0] in ('numba', 'llvmlite')))")
     assert out.stdout.strip() == "aot []", out.stderr
 
@@ -93,17 +98,28 @@ def test_a_built_kernel_refuses_a_strided_array_where_it_needs_a_contiguous_one(
     lo = np.zeros((4, 6))
     mask = np.ones((4, 3), dtype=bool)
     with pytest.raises(TypeError, match="strided"):
-        kernels._interval_success_counts(lo[:, ::2], lo[:, ::2], mask, np.linspace(0.0, 1.0, 5), 0.25)
+        executors._interval_counts(lo[:, ::2], lo[:, ::2], mask, np.linspace(0.0, 1.0, 5))
 
 
 @aot_only
 @pytest.mark.slow
 def test_the_jit_kernels_pass_the_same_tests_as_the_built_ones():
-    """The build is made from the numba functions; both must agree with the NumPy paths."""
-    tests = ["tests/core/test_kernels.py", "tests/core/test_belief.py", "tests/tasks/insertion/test_model.py"]
-    full = {k: v for k, v in os.environ.items() if k != "PROBECOMMIT_NO_NUMBA"}
+    """The build is made from the numba functions; both must agree with the NumPy reference."""
+    tests = ["tests/accel/test_agreement.py", "tests/core/test_belief.py", "tests/tasks/insertion/test_model.py"]
+    full = dict(os.environ)
     out = subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", *tests],
                          env={**full, "PROBECOMMIT_KERNELS": "jit"}, capture_output=True, text=True, timeout=900,
                          cwd=compiled.PACKAGE_DIR.parents[1])
     assert out.returncode == 0, out.stdout[-3000:]
     assert " passed" in out.stdout
+
+
+def test_help_loads_neither_the_kernels_nor_numba():
+    """``probecommit --help`` computes nothing: no kernel module, no numba (its start-up target)."""
+    out = _child("import runpy, sys\n"
+                 "sys.argv = ['probecommit', '--help']\n"
+                 "try:\n    runpy.run_module('probecommit', run_name='__main__')\n"
+                 "except SystemExit:\n    pass\n"
+                 "print('LOADED', sorted(m for m in sys.modules if m.split('.')[0] in ('numba', 'llvmlite')"
+                 " or m.startswith('probecommit.accel.') or m == 'probecommit._aot_kernels'))")
+    assert out.stdout.splitlines()[-1] == "LOADED []", out.stdout[-2000:] + out.stderr[-2000:]

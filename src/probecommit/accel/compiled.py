@@ -1,25 +1,27 @@
-"""Where the compiled kernels come from: a module built ahead of time, numba's JIT, or nowhere.
+"""How the kernels of ``probecommit.accel`` run: a module built ahead of time, or numba's JIT.
 
-Kernels are written once, as numba nopython functions in a family's or the core's
-``kernels.py``, and decorated here: :func:`kernel` marks an entry point (called from
-Python, with the argument types it accepts) and :func:`helper` a function only kernels
-call. How they run is chosen once per process, by :data:`MODE`:
+Kernels are written once, as numba nopython functions (``accel/*.py`` and a family's
+``kernels.py``), and decorated here: :func:`kernel` marks an entry point (called from Python,
+with the argument types it accepts) and :func:`helper` a function only kernels call. How
+they run is chosen once per process, by :data:`MODE`:
 
 ``"aot"``
     A C extension (``probecommit._aot_kernels``) that numba's ahead-of-time compiler built
-    from these same functions (``make kernels``, run by ``make demo`` and ``make test``;
-    or ``python -m probecommit.core.compiled``). It runs without importing numba or
-    LLVM, which are about 115 MB of a process's memory, and compiles nothing at start.
-    Built for this machine's CPU, with the GIL released around each call (as the JIT's
-    ``nogil=True``). Used only while its recorded digest matches the kernel sources and
-    the CPU: an edited kernel is never served by a stale build.
+    from these same functions (``make kernels``, run by ``make demo`` and ``make test``; or
+    ``python -m probecommit.accel.compiled``). It runs without importing numba or LLVM and
+    compiles nothing at start: a process that computes little (a 4-episode run) starts in
+    half the CPU time of the JIT's, whose import and first cached load cost ~0.7 s.
+    Built for this machine's CPU, with the GIL released around each call (as ``nogil=True``).
+    Used only while its recorded digest matches the kernel sources and the CPU: an edited
+    kernel is never served by a stale build. numba has deprecated ``pycc``, the compiler
+    this uses; when it goes, the JIT below is the production path alone.
 ``"jit"``
     numba compiles each kernel on first use and caches it on disk (``cache=True``).
-``"numpy"``
-    No compiled kernels (numba absent, or ``PROBECOMMIT_NO_NUMBA=1``): every caller
-    takes its NumPy path, which gives the same bits.
 
-``PROBECOMMIT_KERNELS=aot|jit|numpy`` forces a mode (``aot`` fails if no current build).
+Both compile the same source, so they are the same production path; ``tests/accel`` checks it
+against the NumPy reference. ``PROBECOMMIT_KERNELS=aot|jit`` forces a mode (``aot`` fails if
+there is no current build); ``numpy`` is handled by :func:`probecommit.accel.production`, which
+then never imports the kernels.
 
 The ahead-of-time wrappers do not check argument types (a strided array passed as
 C-contiguous would be read as garbage), so every entry point here checks each array's
@@ -41,18 +43,19 @@ PACKAGE_DIR = Path(__file__).resolve().parents[1]
 #: The ahead-of-time module's import name, and the file beside it that records its digest.
 AOT_MODULE = "probecommit._aot_kernels"
 AOT_DIGEST = PACKAGE_DIR / "_aot_kernels.digest"
-#: Every module of the package with this name holds kernels (the build imports them all).
+#: A family's kernels live in its own module of this name (the build imports them all).
 KERNEL_FILE = "kernels.py"
-MODES = ("aot", "jit", "numpy")
+MODES = ("aot", "jit")
 
 
 def kernel_files() -> list[Path]:
-    """Every ``kernels.py`` of the package."""
-    return sorted(PACKAGE_DIR.rglob(KERNEL_FILE))
+    """Every kernel module: those of ``accel`` and every family's ``kernels.py``."""
+    accel = [p for p in Path(__file__).resolve().parent.glob("*.py") if p.name not in ("__init__.py", "compiled.py")]
+    return sorted(accel) + sorted(PACKAGE_DIR.rglob(KERNEL_FILE))
 
 
 def kernel_sources() -> list[Path]:
-    """The files the ahead-of-time build compiles from: every ``kernels.py`` and this file."""
+    """The files the ahead-of-time build compiles from: every kernel module and this file."""
     return kernel_files() + [Path(__file__).resolve()]
 
 
@@ -95,33 +98,24 @@ def _current_aot() -> Any | None:
 
 
 def _select() -> tuple[str, Any]:
-    """Pick the mode: the environment's choice, else a current build, else numba, else NumPy."""
+    """Pick the mode: the environment's choice, else a current build, else numba's JIT."""
     choice = os.environ.get("PROBECOMMIT_KERNELS", "").strip().lower()
+    choice = "" if choice in ("numba", "numpy") else choice  # numpy: production() imports no kernel
     if choice and choice not in MODES:
-        raise ValueError(f"PROBECOMMIT_KERNELS={choice!r}: expected one of {', '.join(MODES)}")
-    if os.environ.get("PROBECOMMIT_NO_NUMBA"):
-        return "numpy", None
+        raise ValueError(f"PROBECOMMIT_KERNELS={choice!r}: expected one of {', '.join(MODES)}, numba or numpy")
     if choice in ("", "aot"):
         module = _current_aot()
         if module is not None:
             return "aot", module
         if choice == "aot":
             raise ImportError(f"PROBECOMMIT_KERNELS=aot, but {AOT_MODULE} is not built from the current kernel sources: "
-                              "run `make kernels` (or python -m probecommit.core.compiled)")
-    if choice in ("", "jit"):
-        try:
-            import numba
-        except ImportError:
-            if choice == "jit":
-                raise ImportError("PROBECOMMIT_KERNELS=jit needs numba: pip install 'probecommit[fast]'") from None
-        else:
-            return "jit", numba
-    return "numpy", None
+                              "run `make kernels` (or python -m probecommit.accel.compiled)")
+    import numba
+
+    return "jit", numba
 
 
 MODE, _BACKEND = _select()
-#: Whether compiled kernels run in this process (either way).
-AVAILABLE = MODE != "numpy"
 #: Entry points declared so far, as (function, signatures): what the build exports.
 ENTRIES: list[tuple[Callable[..., Any], tuple[str, ...]]] = []
 
@@ -132,7 +126,7 @@ def helper(inline: bool = False) -> Callable[[Callable[..., Any]], Any]:
     In an ahead-of-time process the build has already compiled it into its callers, so the
     Python function is returned unchanged and never called.
     """
-    if MODE != "jit":
+    if MODE == "aot":
         return lambda func: func
     options = {"inline": "always"} if inline else {}
     return _BACKEND.njit(cache=True, nogil=True, **options)
@@ -147,8 +141,7 @@ def kernel(*signatures: str) -> Callable[[Callable[..., Any]], Any]:
 
     Returns:
         In ``jit`` mode a lazily compiling numba dispatcher; in ``aot`` mode the built
-        function behind a type check; in ``numpy`` mode the Python function (callers
-        check :data:`AVAILABLE` and never call it).
+        function behind a type check.
     """
     if not signatures:
         raise ValueError("a kernel needs at least one signature")
@@ -157,10 +150,8 @@ def kernel(*signatures: str) -> Callable[[Callable[..., Any]], Any]:
         if MODE == "jit":
             ENTRIES.append((func, signatures))
             return _BACKEND.njit(cache=True, nogil=True)(func)
-        if MODE == "aot":
-            variants = [(getattr(_BACKEND, export_name(func, n)), _argument_specs(sig)) for n, sig in enumerate(signatures)]
-            return _checked(func.__qualname__, variants)
-        return func
+        variants = [(getattr(_BACKEND, export_name(func, n)), _argument_specs(sig)) for n, sig in enumerate(signatures)]
+        return _checked(func.__qualname__, variants)
     return wrap
 
 
@@ -309,24 +300,23 @@ def _nogil_flags(flags_class: type) -> type:
 
 
 def main(argv: list[str] | None = None) -> None:
-    """``python -m probecommit.core.compiled``: build the ahead-of-time module (in a JIT-mode child)."""
+    """``python -m probecommit.accel.compiled``: build the ahead-of-time module (in a JIT-mode child)."""
     import argparse
     import subprocess
     import sys
     import time
 
     argparse.ArgumentParser(
-        prog="python -m probecommit.core.compiled",
+        prog="python -m probecommit.accel.compiled",
         description=f"Build the compiled kernels ahead of time into {AOT_MODULE} for this machine's CPU "
                     "(needs numba and a C compiler; `make kernels` runs it). Until it is rebuilt after a "
                     "kernel source changes, numba's JIT runs the kernels.").parse_args(argv)
-    if os.environ.get("PROBECOMMIT_KERNELS") != "jit" or os.environ.get("PROBECOMMIT_NO_NUMBA"):
+    if os.environ.get("PROBECOMMIT_KERNELS") != "jit":
         env = {**os.environ, "PROBECOMMIT_KERNELS": "jit"}
-        env.pop("PROBECOMMIT_NO_NUMBA", None)
-        raise SystemExit(subprocess.call([sys.executable, "-m", "probecommit.core.compiled"], env=env))
+        raise SystemExit(subprocess.call([sys.executable, "-m", "probecommit.accel.compiled"], env=env))
     # Run as __main__, this file is a second copy of the module: the kernels register with the
     # imported one, so build through it.
-    from probecommit.core import compiled
+    from probecommit.accel import compiled
 
     start = time.perf_counter()
     try:

@@ -1,0 +1,119 @@
+"""Compiled scenario counts for the set executors (``core.executors``'s interval fast path).
+
+For a binary loss whose success set is an open interval of a sorted 1-D action grid, the
+executor needs, per episode and action, how many retained scenarios succeed: each action
+inside the retained intervals' span is compared with every retained interval. The counts are
+integers, so they equal the NumPy reference (a difference array) exactly.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from probecommit.accel.compiled import helper, kernel
+from probecommit.accel.retained import retained_summary
+from probecommit.core.executors import SetKernels
+
+
+@helper(inline=True)
+def _keep(lo_kept, hi_kept, k, lo, hi, keep):  # pragma: no cover - compiled
+    """Write a scenario's open interval at slot ``k``; the next slot (``k + 1`` if it is retained).
+    Every scenario is written and only a retained one kept: no branch on the mask. A NaN end
+    holds nothing at the low side and bounds nothing at the high side (NumPy's order: NaN last)."""
+    lo_kept[k] = np.inf if lo != lo else lo
+    hi_kept[k] = np.inf if hi != hi else hi
+    return k + keep
+
+
+@helper(inline=True)
+def _count_row(lo_kept, hi_kept, k, actions, out_row):  # pragma: no cover - compiled
+    """``out_row[a]`` = how many of the first ``k`` intervals hold ``lo < actions[a] < hi``: every action
+    inside the intervals' span compared with every interval (a loop the compiler vectorizes)."""
+    if k == 0:
+        return
+    first = np.searchsorted(actions, np.min(lo_kept[:k]), side="right")
+    last = np.searchsorted(actions, np.max(hi_kept[:k]), side="left")
+    for a in range(first, last):
+        value = actions[a]
+        count = 0
+        for s in range(k):
+            count += (lo_kept[s] < value) & (value < hi_kept[s])
+        out_row[a] = count
+
+
+@kernel("i8[:, ::1](f8[:, ::1], f8[:, ::1], b1[:, ::1], f8[::1])")
+def _interval_counts(lo, hi, mask, actions):  # pragma: no cover - compiled
+    n_e, n_s = mask.shape
+    out = np.zeros((n_e, actions.shape[0]), dtype=np.int64)
+    lo_kept, hi_kept = np.empty(n_s), np.empty(n_s)
+    for e in range(n_e):
+        k = 0
+        for s in range(n_s):
+            k = _keep(lo_kept, hi_kept, k, lo[e, s], hi[e, s], mask[e, s])
+        _count_row(lo_kept, hi_kept, k, actions, out[e])
+    return out
+
+
+@kernel("i8[:, ::1](f8[:, ::1], f8[:, ::1], f8, b1[:, ::1], f8[::1])")
+def _scaled_counts(centre, half, margin, mask, actions):  # pragma: no cover - compiled
+    n_e, n_s = mask.shape
+    out = np.zeros((n_e, actions.shape[0]), dtype=np.int64)
+    lo_kept, hi_kept = np.empty(n_s), np.empty(n_s)
+    for e in range(n_e):
+        k = 0
+        for s in range(n_s):
+            width = half[e, s] * margin
+            k = _keep(lo_kept, hi_kept, k, centre[e, s] - width, centre[e, s] + width, mask[e, s])
+        _count_row(lo_kept, hi_kept, k, actions, out[e])
+    return out
+
+
+@kernel("i8[:, ::1](f8[:, :, ::1], i8, i8, f8, f8, f8, b1[:, ::1], f8[::1], i8[::1])")
+def _affine_counts(scenarios, centre_at, width_at, slope, intercept, margin, mask, actions, kept):  # pragma: no cover
+    n_e, n_s = mask.shape
+    out = np.zeros((n_e, actions.shape[0]), dtype=np.int64)
+    lo_kept, hi_kept = np.empty(n_s), np.empty(n_s)
+    for e in range(n_e):
+        k = 0
+        for s in range(n_s):
+            width = (scenarios[e, s, width_at] * slope + intercept) * margin
+            centre = scenarios[e, s, centre_at]
+            k = _keep(lo_kept, hi_kept, k, centre - width, centre + width, mask[e, s])
+        _count_row(lo_kept, hi_kept, k, actions, out[e])
+        kept[e] = k
+    return out
+
+
+def _grid(actions: np.ndarray) -> np.ndarray:
+    return np.ascontiguousarray(actions, dtype=np.float64).reshape(-1)
+
+
+def interval_counts(lo: np.ndarray, hi: np.ndarray, mask: np.ndarray, actions: np.ndarray) -> np.ndarray:
+    """``core.executors.interval_success_counts``, compiled."""
+    return _interval_counts(np.ascontiguousarray(lo, dtype=np.float64), np.ascontiguousarray(hi, dtype=np.float64),
+                            np.ascontiguousarray(mask, dtype=np.bool_), _grid(actions))
+
+
+def scaled_counts(centre: np.ndarray, half: np.ndarray, margin: float, mask: np.ndarray,
+                  actions: np.ndarray) -> np.ndarray:
+    """``core.executors.scaled_interval_success_counts``, compiled (the ends made per retained scenario)."""
+    f64 = np.float64
+    return _scaled_counts(np.ascontiguousarray(centre, dtype=f64), np.ascontiguousarray(half, dtype=f64), float(margin),
+                          np.ascontiguousarray(mask, dtype=np.bool_), _grid(actions))
+
+
+def affine_counts(scenarios: np.ndarray, affine: tuple[int, int, float, float], margin: float, mask: np.ndarray,
+                  actions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Success counts ``[E, A]`` of a model whose interval parts are affine in its latents
+    (``success_interval_affine``), read from ``scenarios[E, N, d]`` in place, and the retained count ``[E]``."""
+    centre_at, width_at, slope, intercept = affine
+    kept = np.empty(mask.shape[0], dtype=np.int64)
+    counts = _affine_counts(np.ascontiguousarray(scenarios, dtype=np.float64), int(centre_at), int(width_at),
+                            float(slope), float(intercept), float(margin), np.ascontiguousarray(mask, dtype=np.bool_),
+                            _grid(actions), kept)
+    return counts, kept
+
+
+#: The set executors' compiled kernels (``ProbeRobust(kernels=KERNELS)``).
+KERNELS = SetKernels(retained_summary=retained_summary, interval_success_counts=interval_counts,
+                     scaled_interval_success_counts=scaled_counts, affine_interval_success_counts=affine_counts)
