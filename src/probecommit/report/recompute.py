@@ -32,9 +32,16 @@ class Recomputed:
 
     #: The stored table each rebuilt table was derived from (for messages).
     table_sources: dict[str, str] = field(default_factory=dict)
+    #: Stored columns that follow from lower stored tables: (ok, message naming the file and the number).
+    consistency: list[tuple[bool, str]] = field(default_factory=list)
 
     def source(self, key: str) -> str:
-        return self.sources.get(key.split(".")[0], "the stored episode tables")
+        """The stored table a key was recomputed from: the longest source prefix of the key names it."""
+        parts = key.split(".")
+        for n in range(len(parts), 0, -1):
+            if ".".join(parts[:n]) in self.sources:
+                return self.sources[".".join(parts[:n])]
+        return "the stored episode tables"
 
 
 def _triple(iv: Any) -> list[float]:
@@ -76,7 +83,10 @@ def insertion(folder: Path, results: dict[str, Any]) -> Recomputed:
             v[f"table_insertion.thresholds_{kind}"] = {str(k): float(t) for k, t in t_k.items()}
 
     test = runs["B_test_random"]
-    _audit_original(test, results, out)
+    if (folder / COMMITS).is_file():
+        _calibrated(folder, runs, results, boot, out)
+    else:  # a publication from before the commits were stored: the uncalibrated points only
+        _audit_original(test, results, out)
     for k in (1, 8):
         m = episode_metrics(test, k, **boot)
         v[f"text.escape_k{k}"], v[f"text.episode_coverage_k{k}"] = m["escape"], m["episode_coverage"]
@@ -97,8 +107,86 @@ def insertion(folder: Path, results: dict[str, Any]) -> Recomputed:
     _small_tables(folder, out)
     out.sources = {"table_insertion": "episodes.parquet", "table_audit": "episodes.parquet", "text": "episodes.parquet", "table_testc": "episodes.parquet",
                    "table_faults": "faults_episodes.parquet", "fault_signatures": "faults_episodes.parquet", "scan": "scan.parquet", "cover": "cover_search.parquet",
-                   "resplits": "resplits.parquet"}
+                   "resplits": "resplits.parquet", "gates": COMMITS, "coverage": "episodes.parquet"}
+    for key in ("table_insertion.B", "table_insertion.margin_cover", "table_insertion.margin_random",
+                "table_insertion.distribution_free_margin_cover", "table_insertion.simultaneous_cover",
+                "table_insertion.simultaneous_random", "table_audit", "table_testc.failure_cover_k5_setcal_margin"):
+        out.sources[key] = f"{COMMITS} and episodes.parquet"
     return out
+
+
+#: The calibrations' re-executed rows (``report.reproduce.store_commits``).
+COMMITS = "commits.parquet"
+#: Budgets each stored calibration calibrates (``report.reproduce.InsertionReproduction``).
+CALIBRATION_BUDGETS = {"cover": [1, 2, 3, 4, 5], "random": [1, 2, 3, 5, 8], "testc_old": [1, 2, 3, 4, 5],
+                       "testc_corrected": [1, 2, 3, 4, 5]}
+
+
+def _calibrated(folder: Path, runs: dict[str, pd.DataFrame], results: dict[str, Any], boot: dict[str, int],
+                out: Recomputed) -> None:
+    """Table IV Split B, Table III (both halves), the margins, Test C's set + margin row and the commit
+    gates, from the stored re-executed commits and the runs' stored episodes (``runner.calibration``'s
+    ``calibration_from_tables`` and ``gates_from_commits``: the functions ``calibrate`` and ``gates`` end in)."""
+    from probecommit.report.reproduce import CALIBRATIONS
+    from probecommit.runner.calibration import calibration_from_tables
+
+    commits = pd.read_parquet(folder / COMMITS)
+    alpha = float(results["setup"]["alpha"])
+    by_name = {name: part.reset_index(drop=True) for name, part in commits.groupby("calibration", sort=False)}
+    cal = {name: calibration_from_tables(by_name[name], runs[CALIBRATIONS[name][0]], runs[CALIBRATIONS[name][1]],
+                                         alpha, budgets, **boot)
+           for name, budgets in CALIBRATION_BUDGETS.items()}
+    v = out.values
+    v["table_insertion.B.cost_table"] = cal["cover"].cost.to_dict("records")
+    v["table_insertion.B.cost_differences"] = cal["cover"].cost_differences.to_dict("records")
+    v["table_insertion.distribution_free_margin_cover"] = float(cal["cover"].distribution_free_margin)
+    for name in ("cover", "random"):
+        v[f"table_insertion.margin_{name}"] = cal[name].margin.gamma
+        v[f"table_insertion.simultaneous_{name}"] = float(cal[name].simultaneous_threshold)
+    v["table_audit.table"] = cal["random"].table3.to_dict("records")
+    v["table_audit.summary"] = cal["random"].summary
+    setmargin = {name: float(cal[f"testc_{name}"].cost.set_index("setting").loc["set calibration + margin", "failure"])
+                 for name in ("old", "corrected")}
+    v["table_testc.failure_cover_k5_setcal_margin"] = {
+        **setmargin, "simultaneous_threshold": {n: float(cal[f"testc_{n}"].simultaneous_threshold) for n in setmargin}}
+    _gates(by_name["gates"], runs, results, alpha, boot, out)
+
+
+def _gates(commits: pd.DataFrame, runs: dict[str, pd.DataFrame], results: dict[str, Any], alpha: float,
+           boot: dict[str, int], out: Recomputed) -> None:
+    """The commit gates (summary, curves, t and gamma) and Fig. 6's coverage panel, from stored rows; and the
+    stored uncalibrated gate rows against the test run's stored episodes (they are the same commits)."""
+    from probecommit.report.reproduce import CALIBRATIONS
+    from probecommit.report.study_figures import coverage_vs_nominal
+    from probecommit.runner.calibration import gates_from_commits
+
+    cal_run, test_run = CALIBRATIONS["gates"]
+    raw = commits.loc[commits["request"] == "raw"]
+    budgets = sorted(int(k) for k in raw["k"].unique())
+    result = gates_from_commits(commits, runs[cal_run], alpha, budgets, **boot)
+    out.values["gates.summary"] = result.summary.to_dict("records")
+    out.values.update({f"gates.info.{key}": result.info[key] for key in ("threshold", "gamma", "gamma_satisfied", "alpha")})
+    out.tables["gates_curves.parquet"] = result.curves
+    out.table_sources["gates_curves.parquet"] = COMMITS
+    k = int(results["setup"]["k_random"])
+    out.tables["coverage_vs_nominal.parquet"] = coverage_vs_nominal(runs["B_cal_random"], runs["B_test_random"], k)
+    out.table_sources["coverage_vs_nominal.parquet"] = "episodes.parquet (B_cal_random, B_test_random)"
+    stored = runs[test_run]
+    stored = stored[(stored["method"] == "probe_robust") & stored["k"].isin(budgets)]
+    keys = ["instance_id", "repeat", "k"]
+    both = raw.astype({"repeat": "int64"}).merge(stored, on=keys, how="outer", suffixes=("", "_stored"), indicator=True)
+    unmatched = both[both["_merge"] != "both"]
+    out.consistency.append((unmatched.empty, f"insertion/{COMMITS}: gates raw rows and episodes.parquet {test_run} differ "
+                                             f"in their episodes ({len(unmatched)} unmatched, e.g. "
+                                             f"{unmatched[keys].head(1).to_dict('records')})"))
+    for column in ("predicted", "realized", "escaped", "status"):
+        a, b = both[column].to_numpy(), both[f"{column}_stored"].to_numpy()
+        same = [x == y or (x != x and y != y) for x, y in zip(a, b)]
+        bad = [i for i, ok in enumerate(same) if not ok]
+        row = both.iloc[bad[0]] if bad else None
+        out.consistency.append((not bad, f"insertion/{COMMITS}: gates raw {column} = "
+                                         f"{None if row is None else row[column]} at {None if row is None else row[keys].to_dict()}"
+                                         f" but episodes.parquet {test_run} holds {None if row is None else row[column + '_stored']}"))
 
 
 def _audit_original(test: pd.DataFrame, results: dict[str, Any], out: Recomputed) -> None:

@@ -71,8 +71,14 @@ class Reproduction:
 
 
 #: Runs whose episodes the publication stores (``episodes.parquet``): verify recomputes from them.
-RECOMPUTED_RUNS = ("A_cover", "B_cal_cover", "B_cal_random", "B_test_random", "C_random", "C_random_corrected", "C_cover",
-                   "C_cover_corrected")
+RECOMPUTED_RUNS = ("A_cover", "B_cal_cover", "B_cal_random", "B_test_cover", "B_test_random", "C_random",
+                   "C_random_corrected", "C_cover", "C_cover_corrected", "B_cal_cover_corrected")
+#: The re-executed commits verify recomputes the calibrated numbers and the gates from
+#: (``runner.calibration.Recorder``): calibration name -> (calibration run, test run).
+CALIBRATIONS = {"cover": ("B_cal_cover", "B_test_cover"), "random": ("B_cal_random", "B_test_random"),
+                "testc_old": ("B_cal_cover", "C_cover"), "testc_corrected": ("B_cal_cover_corrected", "C_cover_corrected"),
+                "gates": ("B_cal_cover", "B_test_cover")}
+COMMITS_FILE = "commits.parquet"
 #: The episode columns the recomputed numbers read (``z_true``: the explain target stratifies the fault
 #: harness's episodes by where the hole is).
 STORED_COLUMNS = ("instance_id", "repeat", "k", "method", "status", "predicted", "realized", "covered", "escaped",
@@ -82,6 +88,18 @@ STORED_COLUMNS = ("instance_id", "repeat", "k", "method", "status", "predicted",
 def store_episodes(episodes: pd.DataFrame, path: Path, extra: tuple[str, ...] = ()) -> None:
     """Write the columns verify reads, strings as dictionaries (a few bytes an episode)."""
     table = episodes[[*extra, *STORED_COLUMNS]].reset_index(drop=True)
+    write_with(path, lambda buf: table.to_parquet(buf, compression="zstd", index=False))
+
+
+def store_commits(commits: dict[str, list[pd.DataFrame]], path: Path) -> None:
+    """The calibrations' re-executed rows (``runner.calibration.Recorder``), one zstd table with a
+    ``calibration`` column; the columns a request does not read are empty (strings are stored as
+    Parquet dictionaries, a few bytes a row)."""
+    frames = [pd.concat(parts, ignore_index=True).assign(calibration=name) for name, parts in commits.items() if parts]
+    if not frames:
+        return
+    table = pd.concat(frames, ignore_index=True)
+    table = table[["calibration", "request", "gamma", *[c for c in table.columns if c not in ("calibration", "request", "gamma")]]]
     write_with(path, lambda buf: table.to_parquet(buf, compression="zstd", index=False))
 
 
@@ -169,6 +187,8 @@ class InsertionReproduction:
         self.boot = dict(resamples=protocol.bootstrap.resamples, seed=protocol.bootstrap.seed)
         self.chunk = dict(chunk_instances=self.CHUNK_INSTANCES)
         self.loaded: dict[str, LoadedRun] = {}
+        #: Per calibration (``CALIBRATIONS``), the re-executed rows its results read.
+        self.commits: dict[str, list[pd.DataFrame]] = {name: [] for name in CALIBRATIONS}
         # What the tables print about the protocol itself (Table I's row, the fault table's header).
         self.rep.results["setup"] = {
             "engine": protocol.engine, "sigma": protocol.sigma, "k_random": protocol.budgets["random"],
@@ -272,8 +292,10 @@ class InsertionReproduction:
         # Table II's insertion row: Blind-Bayes minus cover k = 5, paired on (instance, repeat).
         cover_a = a[(a.method == "probe_robust") & (a.k == 5) & (a.status == "ok")]
         a_paired = paired_bootstrap(cover_a, blind_a, "realized", keys=("instance_id", "repeat"), **b)
-        self.cal_cover = calibrate(L["B_cal_cover"], L["B_test_cover"], alpha=self.p.alpha, budgets=[1, 2, 3, 4, 5], **b, **self.chunk)
-        self.cal_random = calibrate(L["B_cal_random"], L["B_test_random"], alpha=self.p.alpha, budgets=[1, 2, 3, 5, 8], **b, **self.chunk)
+        self.cal_cover = calibrate(L["B_cal_cover"], L["B_test_cover"], alpha=self.p.alpha, budgets=[1, 2, 3, 4, 5], **b,
+                                   **self.chunk, record=self.commits["cover"])
+        self.cal_random = calibrate(L["B_cal_random"], L["B_test_random"], alpha=self.p.alpha, budgets=[1, 2, 3, 5, 8],
+                                    **b, **self.chunk, record=self.commits["random"])
         res = {
             "A.no_probe": [a_no.estimate, a_no.lo, a_no.hi],
             "A.cover_k5": a_k5,
@@ -313,8 +335,10 @@ class InsertionReproduction:
             name = {"escaped": "escape", "covered": "episode_coverage", "realized": "failure", "optimism": "optimism"}[col]
             d = paired(new, old, k, col, **b)  # old - corrected
             res[key] = {"old": mo[name], "corrected": mn[name], "old_minus_corrected": d}
-        cal_old = calibrate(L["B_cal_cover"], L["C_cover"], alpha=self.p.alpha, budgets=[1, 2, 3, 4, 5], **b, **self.chunk)
-        cal_new = calibrate(L["B_cal_cover_corrected"], L["C_cover_corrected"], alpha=self.p.alpha, budgets=[1, 2, 3, 4, 5], **b, **self.chunk)
+        cal_old = calibrate(L["B_cal_cover"], L["C_cover"], alpha=self.p.alpha, budgets=[1, 2, 3, 4, 5], **b, **self.chunk,
+                            record=self.commits["testc_old"])
+        cal_new = calibrate(L["B_cal_cover_corrected"], L["C_cover_corrected"], alpha=self.p.alpha, budgets=[1, 2, 3, 4, 5],
+                            **b, **self.chunk, record=self.commits["testc_corrected"])
         fo, fn = self._setmargin_failure(cal_old), self._setmargin_failure(cal_new)
         res["failure_cover_k5_setcal_margin"] = {"old": fo, "corrected": fn,
                                                  "simultaneous_threshold": {"old": cal_old.simultaneous_threshold, "corrected": cal_new.simultaneous_threshold}}
@@ -424,7 +448,8 @@ class InsertionReproduction:
         from probecommit.report.study_figures import coverage_vs_nominal, decision_figure
 
         L = self.loaded
-        result = gates(L["B_cal_cover"], L["B_test_cover"], alpha=self.p.alpha, **self.boot, **self.chunk)
+        result = gates(L["B_cal_cover"], L["B_test_cover"], alpha=self.p.alpha, **self.boot, **self.chunk,
+                       record=self.commits["gates"])
         k = self.p.budgets["random"]
         coverage = coverage_vs_nominal(L["B_cal_random"].episodes, L["B_test_random"].episodes, k)
         write_with(self.out / "coverage_vs_nominal.parquet", coverage.to_parquet)
@@ -475,6 +500,7 @@ class InsertionReproduction:
         """The episode tables verify recomputes the summary numbers from, compactly, in one file."""
         frames = [self.loaded[name].episodes.assign(run=name) for name in RECOMPUTED_RUNS if name in self.loaded]
         store_episodes(pd.concat(frames, ignore_index=True), self.out / "episodes.parquet", extra=("run",))
+        store_commits(self.commits, self.out / COMMITS_FILE)
 
     # ---------------------------------------------------------------- all
     def run_all(self, cover_limit: int | None = None) -> Reproduction:

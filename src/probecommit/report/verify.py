@@ -246,6 +246,8 @@ def check_recomputed(study: Path, results: dict[str, Any], report: Report) -> se
         report.check("recomputed", ok, f"{study.name}/results.json: {where} = {a} but {again.source(key)} gives {b}")
     for name, table in again.tables.items():
         _compare_table(study, name, table, again.table_sources.get(name, "the stored episode tables"), report)
+    for ok, message in again.consistency:
+        report.check("recomputed", ok, message)
     return set(again.values)
 
 
