@@ -109,6 +109,14 @@ class Recorder:
         """Keep a whole table's ``columns`` (a commit not reduced chunk by chunk)."""
         self.wrap(request, lambda t: None, columns)(table)
 
+    def keep_margins(self, gammas: Iterable[float]) -> None:
+        """Drop the margin rows of candidates the search committed in a block but never read."""
+        if self.sink is None:
+            return
+        read = {round(float(g), 10) for g in gammas}
+        self.sink[:] = [part for part in self.sink if not len(part) or part["request"].iat[0] != "margin"
+                        or round(float(part["gamma"].iat[0]), 10) in read]
+
     def table(self) -> pd.DataFrame:
         """Every kept row, one table (columns a request does not read are empty)."""
         return pd.concat(self.sink or [], ignore_index=True)
@@ -315,7 +323,9 @@ class _Run:
             return pd.DataFrame({"predicted": predicted, "realized": realized})
 
         # The rows are those at ``budgets`` already (_margin_rows).
-        return select_margin(evaluate, candidates, budgets=None), extras
+        result = select_margin(evaluate, candidates, budgets=None)
+        recorder.keep_margins(result.search["gamma"])
+        return result, extras
 
     def release(self) -> None:
         """Drop the beliefs kept between commits (the run's last commit is done)."""
@@ -530,7 +540,7 @@ def calibrate(cal_run, test_run, alpha: float = DEFAULT_ALPHA, budgets: Sequence
         (test.nu, None), (t_k, None), (t_k, margin.gamma), (t_sim, None), keep=[None] + [AUDIT_COLUMNS] * 3,
         reduce=[audited, rec.wrap("set", functools.partial(_cost_rows, k=cost_budget), SET_COLUMNS),
                 rec.wrap("set_margin", audited, AUDIT_COLUMNS),
-                rec.wrap("simultaneous", functools.partial(_all_covered, budgets=budgets), COVERED_COLUMNS)],
+                functools.partial(_all_covered, budgets=budgets)],
         final=True)
     blind = ok_episodes(test.loaded.table("episodes", where=("method", ["blind_robust"]), columns=FAILURE_COLUMNS))
     return _summarize(CalibrationParts(scores, margin, optimism, orig, set_rows, full, covered, blind),
@@ -540,7 +550,6 @@ def calibrate(cal_run, test_run, alpha: float = DEFAULT_ALPHA, budgets: Sequence
 #: The columns a publication stores of each recorded request (``Recorder``): what its reduction reads.
 OPTIMISM_COLUMNS = ("instance_id", "k", "status", "predicted", "realized")
 SET_COLUMNS = ("instance_id", "repeat", "k", "status", "realized")
-COVERED_COLUMNS = ("instance_id", "k", "status", "covered")
 RAW_GATE_COLUMNS = ("instance_id", "repeat", "k", "status", "predicted", "realized", "escaped", "post_var",
                     "max_surprise")
 ADJUSTED_GATE_COLUMNS = ("instance_id", "repeat", "k", "status", "predicted", "realized")
@@ -564,7 +573,8 @@ class CalibrationParts:
     orig: tuple[pd.DataFrame, pd.DataFrame, pd.DataFrame]
     set_rows: pd.DataFrame
     full: tuple[pd.DataFrame, pd.DataFrame, pd.DataFrame]
-    covered: pd.Series
+    #: Per test instance, covered at every budget at ``t`` (None: not recorded, no simultaneous coverage).
+    covered: pd.Series | None
     blind: pd.DataFrame
 
 
@@ -611,15 +621,18 @@ def _summarize(parts: CalibrationParts, *, alpha: float, budgets: list[int], cos
                       "n_pairs": pdiff.n_pairs, "n_clusters": pdiff.n_clusters})
 
     # Simultaneous coverage on test, measured on the sets as constructed at t.
-    per_inst = parts.covered.sort_index().astype(float)
-    sim_iv = cluster_bootstrap_mean(per_inst.to_numpy(), per_inst.index.to_numpy(), resamples=resamples,
-                                    seed=seed, level=level)
+    simultaneous = {"cluster_coverage": math.nan, "lo": math.nan, "hi": math.nan}
+    if parts.covered is not None:
+        per_inst = parts.covered.sort_index().astype(float)
+        sim_iv = cluster_bootstrap_mean(per_inst.to_numpy(), per_inst.index.to_numpy(), resamples=resamples,
+                                        seed=seed, level=level)
+        simultaneous = {"cluster_coverage": sim_iv.estimate, "lo": sim_iv.lo, "hi": sim_iv.hi}
     return CalibrationResult(
         alpha=alpha, budgets=budgets, n_calibration=n_calibration,
         thresholds=t_k, simultaneous_threshold=t_sim, margin=parts.margin, distribution_free_margin=df_margin,
         table3=table3, summary=summary, cost=pd.DataFrame(cost_rows), cost_differences=pd.DataFrame(diffs),
         cost_budget=cost_budget,
-        simultaneous_coverage={"cluster_coverage": sim_iv.estimate, "lo": sim_iv.lo, "hi": sim_iv.hi},
+        simultaneous_coverage=simultaneous,
         audit_original=a_orig, audit_calibrated=a_cal,
     )
 
@@ -665,7 +678,8 @@ def calibration_from_tables(commits: pd.DataFrame, cal_episodes: pd.DataFrame, t
         alpha, budgets, cost_budget, margin_grid, resamples, seed, level: As :func:`calibrate`'s.
 
     Returns:
-        The result :func:`calibrate` returned, when the stored rows are the ones it committed.
+        The result :func:`calibrate` returned, when the stored rows are the ones it committed; its
+        simultaneous coverage is NaN (its rows are not stored).
     """
     budgets = sorted(int(k) for k in budgets)
     cost_budget = max(budgets) if cost_budget is None else int(cost_budget)
@@ -677,7 +691,7 @@ def calibration_from_tables(commits: pd.DataFrame, cal_episodes: pd.DataFrame, t
         scores, margin, optimism, _audited(probe(test_episodes), cost_budget),
         _cost_rows(_request(commits, "set", SET_COLUMNS), cost_budget),
         _audited(_request(commits, "set_margin", AUDIT_COLUMNS), cost_budget),
-        _all_covered(_request(commits, "simultaneous", COVERED_COLUMNS), budgets),
+        None,  # a publication prints no simultaneous coverage, so it stores no rows for it
         ok_episodes(test_episodes.loc[test_episodes["method"] == "blind_robust", list(FAILURE_COLUMNS)]))
     return _summarize(parts, alpha=alpha, budgets=budgets, cost_budget=cost_budget, resamples=resamples, seed=seed,
                       level=level)
