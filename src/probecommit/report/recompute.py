@@ -105,9 +105,11 @@ def insertion(folder: Path, results: dict[str, Any]) -> Recomputed:
 
     _faults(folder, setup, boot, out)
     _small_tables(folder, out)
+    if (folder / "robust_episodes.parquet").is_file():
+        _robust(folder, setup, boot, out)
     out.sources = {"table_insertion": "episodes.parquet", "table_audit": "episodes.parquet", "text": "episodes.parquet", "table_testc": "episodes.parquet",
                    "table_faults": "faults_episodes.parquet", "fault_signatures": "faults_episodes.parquet", "scan": "scan.parquet", "cover": "cover_search.parquet",
-                   "resplits": "resplits.parquet", "gates": COMMITS, "coverage": "episodes.parquet"}
+                   "resplits": "resplits.parquet", "gates": COMMITS, "robust": "robust_episodes.parquet", "coverage": "episodes.parquet"}
     for key in ("table_insertion.B", "table_insertion.margin_cover", "table_insertion.margin_random",
                 "table_insertion.distribution_free_margin_cover", "table_insertion.simultaneous_cover",
                 "table_insertion.simultaneous_random", "table_audit", "table_testc.failure_cover_k5_setcal_margin"):
@@ -237,6 +239,20 @@ def _faults(folder: Path, setup: dict[str, Any], boot: dict[str, int], out: Reco
     out.values["fault_signatures"] = signature_points(signatures)
 
 
+def _robust(folder: Path, setup: dict[str, Any], boot: dict[str, int], out: Recomputed) -> None:
+    """The robust filters: the tuning table tuned again from each candidate's stored final-budget rows on the
+    development run, and every arm's metrics and paired difference from its stored rows (``robust_summary``)."""
+    from probecommit.report.reproduce import robust_summary
+    from probecommit.studies.robust import final_failure, mark_chosen
+
+    rows = pd.read_parquet(folder / "robust_episodes.parquet")
+    tuning = rows[rows["part"] == "tuning"]
+    table = pd.DataFrame([{"family": family, "value": float(value), "failure": final_failure(part)}
+                          for (family, value), part in tuning.groupby(["family", "value"], sort=False)])
+    arms = {name: part.reset_index(drop=True) for name, part in rows[rows["part"] != "tuning"].groupby("part", sort=False)}
+    out.values["robust"] = robust_summary(mark_chosen(table), arms, int(setup["k_random"]), boot)
+
+
 def _small_tables(folder: Path, out: Recomputed) -> None:
     """Scan, cover search and re-split summaries from their stored per-scan / per-split tables."""
     off = pd.read_parquet(folder / "scan.parquet")["offset"]
@@ -332,9 +348,24 @@ def robot(folder: Path, results: dict[str, Any]) -> Recomputed:
     return out
 
 
+def gru(folder: Path, results: dict[str, Any]) -> Recomputed:
+    """The GRU table from the per-episode misses of the pipeline and of each GRU seed (``studies.gru``);
+    the bootstrap settings are the stored ones (the frozen config's for a publication that predates them)."""
+    from probecommit.studies.gru import load_gru_config, summarize_gru
+
+    cfg = load_gru_config()
+    bootstrap = results.get("bootstrap") or cfg["bootstrap"]
+    per_episode = pd.read_parquet(folder / "gru_episodes.parquet")
+    summary = summarize_gru(per_episode, bootstrap, float(results.get("equivalence_margin", cfg["equivalence_margin"])))
+    summary.pop("equivalence_margin")  # a setting, not a result
+    out = Recomputed(values=summary)
+    out.sources = dict.fromkeys(summary, "gru_episodes.parquet")
+    return out
+
+
 #: Study folder -> its recomputation.
 STUDIES: dict[str, Callable[[Path, dict[str, Any]], Recomputed]] = {
-    "insertion": insertion, "breadth": breadth, "cost": cost, "engines": engines, "robot": robot}
+    "insertion": insertion, "breadth": breadth, "cost": cost, "engines": engines, "robot": robot, "gru": gru}
 
 #: What each study's recomputation covers, and what is traced only (for the report and the docs).
 RECOMPUTED = {

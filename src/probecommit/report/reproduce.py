@@ -91,6 +91,28 @@ def store_episodes(episodes: pd.DataFrame, path: Path, extra: tuple[str, ...] = 
     write_with(path, lambda buf: table.to_parquet(buf, compression="zstd", index=False))
 
 
+#: The robust filters' rows (``robust_summary`` reads them): each tuning candidate's final-budget rows
+#: on the development run and each arm's rows at the final budget.
+ROBUST_FILE = "robust_episodes.parquet"
+ROBUST_COLUMNS = ("instance_id", "repeat", "k", "method", "status", "predicted", "realized", "covered", "escaped")
+
+
+def robust_summary(tuning: pd.DataFrame, arms: dict[str, pd.DataFrame], kmax: int, boot: dict[str, int]) -> dict[str, Any]:
+    """The robust-filter results: the tuning table, the chosen values, the deployed filter's metrics and each
+    chosen filter's with its paired failure difference, and the mixture's cost when the model is right
+    (one function for the study and for verify, which passes the stored rows)."""
+    chosen = {row.family: row.value for row in tuning[tuning.chosen].itertuples()}
+    res = {"tuning": tuning.to_dict("records"), "chosen": chosen,
+           "deployed": episode_metrics(arms["deployed"], kmax, **boot)}
+    for family, value in chosen.items():
+        m = episode_metrics(arms[family], kmax, **boot)
+        res[family] = {"value": value, **m, "failure_diff": paired(arms["deployed"], arms[family], kmax, "realized", **boot)}
+    if "mixture" in chosen:
+        res["mixture_cost_when_right"] = [float(probe_rows(arms["base"], kmax)["realized"].mean()),
+                                          float(probe_rows(arms["mixture_right"], kmax)["realized"].mean())]
+    return res
+
+
 def store_commits(commits: dict[str, list[pd.DataFrame]], path: Path) -> None:
     """The calibrations' re-executed rows (``runner.calibration.Recorder``), one zstd table with a
     ``calibration`` column; the columns a request does not read are empty (strings are stored as
@@ -386,23 +408,24 @@ class InsertionReproduction:
         p, L, b = self.p, self.loaded, self.boot
         r = p.robust
         cands = robust_candidates(r.temperatures, r.epsilons, r.rejuvenation, r.mixture_range)
-        tuning = tune_robust_filters(L["dev_random"], cands, progress=lambda d, t: self.progress("robust tuning", d, t), **self.chunk)
+        record: list[pd.DataFrame] = []
+        tuning = tune_robust_filters(L["dev_random"], cands, progress=lambda d, t: self.progress("robust tuning", d, t),
+                                     record=record, **self.chunk)
         chosen = {row.family: (row.value, row.belief) for row in tuning[tuning.chosen].itertuples()}
         base = L["faults_base"]
         kmax = p.budgets["random"]
-        deployed, _ = replay_episodes(base, {"model": {"boundary": "deployed"}}, **self.chunk)
-        res = {"tuning": tuning.drop(columns="belief").to_dict("records"), "chosen": {k: v[0] for k, v in chosen.items()},
-               "deployed": episode_metrics(deployed, kmax, **b)}
+        arms = {"deployed": replay_episodes(base, {"model": {"boundary": "deployed"}}, **self.chunk)[0]}
         for family, (value, belief) in chosen.items():
-            ep, _ = replay_episodes(base, {"model": {"boundary": "deployed"}, "belief": belief}, **self.chunk)
-            m = episode_metrics(ep, kmax, **b)
-            d = paired(deployed, ep, kmax, "realized", **b)
-            res[family] = {"value": value, **m, "failure_diff": d}
+            arms[family] = replay_episodes(base, {"model": {"boundary": "deployed"}, "belief": belief}, **self.chunk)[0]
         if "mixture" in chosen:
-            right = probe_rows(base.episodes, kmax)["realized"].mean()
-            mix, _ = replay_episodes(base, {"belief": chosen["mixture"][1]}, **self.chunk)
-            res["mixture_cost_when_right"] = [float(right), float(probe_rows(mix, kmax)["realized"].mean())]
-        self.rep.results["robust"] = res
+            arms["base"] = base.episodes
+            arms["mixture_right"] = replay_episodes(base, {"belief": chosen["mixture"][1]}, **self.chunk)[0]
+        tuning = tuning.drop(columns="belief")
+        self.rep.results["robust"] = robust_summary(tuning, arms, kmax, b)
+        stored = [part.assign(part="tuning") for part in record]
+        stored += [probe_rows(episodes, kmax).assign(part=name) for name, episodes in arms.items()]
+        table = pd.concat(stored, ignore_index=True)[["part", "family", "value", *ROBUST_COLUMNS]]
+        write_with(self.out / ROBUST_FILE, lambda buf: table.to_parquet(buf, compression="zstd", index=False))
         self.write_table("robust")
 
     def resplits(self) -> None:
