@@ -444,6 +444,8 @@ def _robot(root: Path, quick: bool, progress: Progress, workers: int) -> Path:
     write_with(results / "table_robot.parquet", study.table.to_parquet)
     write_with(results / "fault_boundary.parquet", study.boundary.to_parquet)
     write_with(results / "fault_prior.parquet", study.prior.to_parquet)
+    write_with(results / "fault_sweep_episodes.parquet",
+               lambda buf: study.sweep_episodes.to_parquet(buf, compression="zstd", index=False))
     write_table(results, "table_VII_hardware_simulated_rig", table_markdown(study.table))
     write_table(results, "fault_boundary_simulated_rig", sweep_markdown(study.boundary, "boundary pulled in (mm)"))
     write_table(results, "fault_prior_simulated_rig", sweep_markdown(study.prior, "prior half-width (mm)"))

@@ -345,7 +345,44 @@ def robot(folder: Path, results: dict[str, Any]) -> Recomputed:
     out.values["boundary_holds_to_mm"] = boundary_holds_to(boundary)
     out.sources["boundary_holds_to_mm"] = "fault_boundary.parquet"
     out.table_sources = {"table_robot.parquet": "robot_episodes.parquet"}
+    if (folder / SWEEPS).is_file():
+        _sweeps(folder, results, rows, out)
     return out
+
+
+#: The robot fault sweeps' replay rows (``robot.replay.fault_sweep``'s record).
+SWEEPS = "fault_sweep_episodes.parquet"
+
+
+def _sweeps(folder: Path, results: dict[str, Any], session: pd.DataFrame, out: Recomputed) -> None:
+    """Both fault sweeps computed again from their stored replay rows (``robot.replay.sweep_rows``), the first
+    resolved boundary size from them; and the deployed replay's rows against the session's stored episodes
+    (the session reproduces under replay: ``replay_reproduced_fraction`` 1)."""
+    from probecommit.audit.stats import DEFAULT_RESAMPLES, DEFAULT_SEED
+    from probecommit.robot.replay import sweep_rows
+
+    stored = pd.read_parquet(folder / SWEEPS)
+    resamples = int(results.get("sweep_resamples", DEFAULT_RESAMPLES))
+    for fault in ("boundary", "prior"):
+        table = sweep_rows(stored[stored["fault"] == fault], resamples=resamples, seed=DEFAULT_SEED)
+        out.tables[f"fault_{fault}.parquet"] = table
+        out.table_sources[f"fault_{fault}.parquet"] = SWEEPS
+        if fault == "boundary":
+            resolved = table[table["optimism_resolved"] & (table["size"] > 0)]
+            out.values["boundary_first_resolved_mm"] = float(resolved["size"].min()) if len(resolved) else None
+            out.sources["boundary_first_resolved_mm"] = SWEEPS
+    if results.get("replay_reproduced_fraction") != 1.0:
+        return
+    for fault, part in stored[stored["size"].isna()].groupby("fault", sort=False):
+        joined = part.merge(session, on="episode", suffixes=("", "_session"))
+        for column in ("predicted", "realized", "covered", "escaped"):
+            bad = joined[joined[column].astype(float) != joined[f"{column}_session"].astype(float)]
+            first = bad.iloc[0] if len(bad) else None
+            out.consistency.append((bad.empty and len(joined) == len(session) == len(part),
+                                    f"robot/{SWEEPS}: the deployed replay ({fault} sweep) has {len(part)} rows, "
+                                    f"{len(joined)} matching robot_episodes.parquet's {len(session)}" if first is None else
+                                    f"robot/{SWEEPS}: the deployed replay ({fault} sweep) episode {first['episode']} "
+                                    f"{column} = {first[column]} but robot_episodes.parquet holds {first[column + '_session']}"))
 
 
 def gru(folder: Path, results: dict[str, Any]) -> Recomputed:
