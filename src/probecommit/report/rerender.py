@@ -173,10 +173,10 @@ def _robot_figures() -> dict[str, Callable[[Path, Path], Any]]:
 def _figure_recipes() -> dict[str, dict[str, Callable[[Path, Path], Any]]]:
     """Study -> figure stem -> ``draw(folder, out_png)``: the same call that drew the figure, on the stored data.
 
-    Fig. 2 (the pipeline) is drawn from code alone. Figures drawn from data the publication does not
-    hold (the scan section needs the scan grid,
-    the commit gates the calibration result, Fig. 1b and the decisive tap the run directories) are
-    bound to their data by digest only.
+    Fig. 2 (the pipeline) is drawn from code alone. Fig. 6 (the commit decision) is drawn from the
+    coverage table, the gate curves and the gates' summary, each recomputed from stored rows. Figures
+    drawn from data the publication does not hold (the scan section needs the scan grid, Fig. 1b and
+    the decisive tap the run directories) are bound to their data by digest only.
     """
     from probecommit.report.paper import plot_pricing
     from probecommit.report.pipeline_diagram import pipeline_figure
@@ -189,8 +189,18 @@ def _figure_recipes() -> dict[str, dict[str, Callable[[Path, Path], Any]]]:
         n = signature_n(pd.read_parquet(folder / "faults_episodes.parquet"), k)
         return fault_signatures(pd.read_parquet(folder / "fault_signatures.parquet"), out, n=n)
 
+    def decision(folder: Path, out: Path) -> Any:
+        # Panel (b) and (c) from the gate curves and summary verify recomputes from the stored commits.
+        from types import SimpleNamespace
+
+        from probecommit.report.study_figures import decision_figure
+
+        summary = pd.DataFrame(json.loads((folder / "results.json").read_text())["results"]["gates"]["summary"])
+        gates = SimpleNamespace(curves=pd.read_parquet(folder / "gates_curves.parquet"), summary=summary)
+        return decision_figure(pd.read_parquet(folder / "coverage_vs_nominal.parquet"), gates, out)
+
     return {
-        "insertion": {"fig_7_signatures": signatures},
+        "insertion": {"fig_7_signatures": signatures, "fig_6_decision": decision},
         "breadth": {"fig_breadth_budget": lambda folder, out: plot_budget_curves(
             pd.read_parquet(folder / "budget_curves.parquet"), out)},
         "cost": {"fig_pricing": lambda folder, out: plot_pricing(pd.read_parquet(folder / "pricing.parquet"), out)},
