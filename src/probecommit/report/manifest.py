@@ -116,6 +116,12 @@ def figure_bindings(study_dir: Path) -> dict[str, dict[str, Any]]:
     return out
 
 
+def study_files(study_dir: Path) -> list[str]:
+    """The files a study manifest lists: every file of the folder but the manifest itself, by name
+    (one list for writing the manifest and for ``verify``'s check that it lists them all)."""
+    return sorted(p.name for p in study_dir.iterdir() if p.is_file() and p.name != MANIFEST)
+
+
 def write_manifest(study_dir: str | Path) -> Path:
     """Stamp each figure with its data digest, then hash every file of the study folder."""
     study_dir = Path(study_dir)
@@ -123,8 +129,7 @@ def write_manifest(study_dir: str | Path) -> Path:
     for name, binding in figures.items():
         if binding["data_sha256"]:
             stamp_png(study_dir / name, binding["data_sha256"])
-    files = sorted(p for p in study_dir.iterdir() if p.is_file() and p.name != MANIFEST)
-    manifest = {"sha256": {p.name: sha256_file(p) for p in files}, "figures": figures}
+    manifest = {"sha256": {name: sha256_file(study_dir / name) for name in study_files(study_dir)}, "figures": figures}
     path = study_dir / MANIFEST
     write_text(path, json.dumps(manifest, indent=1, sort_keys=True) + "\n")
     return path

@@ -396,6 +396,8 @@ def _engines(root: Path, quick: bool, progress: Progress, workers: int) -> Path:
     write_with(results / "escape_by_budget.parquet", escape.to_parquet)
     write_with(results / "engine_episodes.parquet",
                lambda buf: study["episodes"].to_parquet(buf, compression="zstd", index=False))
+    write_with(results / "engine_scans.parquet",
+               lambda buf: study["scan_rows"].to_parquet(buf, compression="zstd", index=False))
     payload = {"results": {
         "settings": study["bootstrap"],
         "table": {f"{e}/{v}": dict(zip([r.replace(" ", "_") for r in table.index], map(float, table[(e, v)])))

@@ -324,6 +324,13 @@ def engines(folder: Path, results: dict[str, Any]) -> Recomputed:
     out.values["table"] = {f"{e}/{v}": dict(zip([r.replace(" ", "_") for r in table.index], map(float, table[(e, v)])))
                            for e, v in table.columns}
     out.sources = dict.fromkeys(out.values, "engine_episodes.parquet")
+    if (folder / "engine_scans.parquet").is_file():
+        from probecommit.studies.engines import scan_summaries
+
+        for engine, summary in scan_summaries(pd.read_parquet(folder / "engine_scans.parquet")).items():
+            for kind, values in summary.items():
+                out.values[f"scans.{engine}.{kind}"] = values
+        out.sources["scans"] = "engine_scans.parquet"
     out.table_sources = {"table_VI_engines.parquet": "engine_episodes.parquet",
                          "escape_by_budget.parquet": "engine_episodes.parquet"}
     return out

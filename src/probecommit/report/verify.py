@@ -112,8 +112,6 @@ def _json(path: Path, default: Any = None) -> Any:
 def _read(path: Path, report: Report, what: str, manifest_file: bool = False) -> Any:
     """A manifest or results file under the store's rule set; a malformed one is one failure naming it
     (the file, the field or the line), never a traceback. None when missing or malformed."""
-    from probecommit.store.manifest_rules import ManifestError, read_json, read_manifest
-
     if not path.is_file():
         return None
     try:
@@ -159,8 +157,7 @@ def check_study_files(study: Path, report: Report) -> None:
     path = study / MANIFEST
     report.check("file", path.is_file(), f"{path}: no study manifest")
     listed = _read(path, report, "study manifest", manifest_file=True) or {}
-    _hashes(study, listed.get("sha256", {}), sorted(p.name for p in study.iterdir() if p.is_file() and p.name != MANIFEST),
-            report)
+    _hashes(study, listed.get("sha256", {}), manifest.study_files(study), report)
     for sub in sorted(p for p in study.iterdir() if p.is_dir()):
         report.check("file", False, f"{sub}: a folder inside a study folder (a publication holds files only)")
     for png in sorted(study.glob("fig_*.png")):  # a paper figure is published as PNG and PDF
@@ -445,9 +442,9 @@ def verify(results_root: str | Path, reproduction_md: str | Path | None = None, 
                 report.check("file", False, f"{path}: unreadable ({type(exc).__name__})")
                 continue
             checks.parquet_invariants(study.name, path.name, frame, report)
-        recomputed = check_recomputed(study, results, report)
-        report.verified_numbers += sum(_leaves(_get(results, k)) for k in recomputed)
-        report.traced_only_numbers += max(_leaves(results) - sum(_leaves(_get(results, k)) for k in recomputed), 0)
+        recomputed = sum(_leaves(_get(results, k)) for k in check_recomputed(study, results, report))
+        report.verified_numbers += recomputed
+        report.traced_only_numbers += max(_leaves(results) - recomputed, 0)
         check_twins(study, results, report)
         check_json_twins(study, results, report)
         check_texts(study, report)
