@@ -220,7 +220,8 @@ def _leaves(value: Any) -> int:
 
 
 def check_recomputed(study: Path, results: dict[str, Any], report: Report) -> set[str]:
-    """Recompute the study's numbers from its episode tables; return the keys recomputed."""
+    """Recompute the study's numbers from its episode tables; return the keys recomputed (a results.json
+    copy of a rebuilt Parquet table, ``TWINS``, counts as recomputed: ``check_twins`` compares the two)."""
     from probecommit.report.ledger import walk_dotted
     from probecommit.report.recompute import STUDIES
 
@@ -245,7 +246,8 @@ def check_recomputed(study: Path, results: dict[str, Any], report: Report) -> se
         _compare_table(study, name, table, again.table_sources.get(name, "the stored episode tables"), report)
     for ok, message in again.consistency:
         report.check("recomputed", ok, message)
-    return set(again.values)
+    twins = {key for key, name in TWINS.get(study.name, {}).items() if name in again.tables and key in results}
+    return set(again.values) | twins
 
 
 def _compare_table(study: Path, name: str, expected: pd.DataFrame, source: str, report: Report) -> None:
