@@ -71,3 +71,56 @@ def test_beyond_moves_and_adaptive_tables_by_hand():
     assert moves.loc["jitter", "optimism"] == 0.5 - 0.375 and moves.loc["mh", "escape"] == 0.0
     adaptive = adaptive_table(rows.rename(columns={"move": "schedule"}))
     assert list(adaptive["schedule"]) == ["jitter", "mh"] and list(adaptive["post_var"]) == [2.0, 2.0]
+
+
+def test_scan_rows_give_the_scans_own_summaries():
+    from probecommit.studies.engines import CaptureResult, scan_rows, scan_summaries
+    from probecommit.studies.scan import ScanResult
+
+    boundary = ScanResult(pd.DataFrame({"instance_id": ["a", "a", "b"], "side": [-1, 1, 1], "offset": [0.91, 0.93, 0.9]}),
+                          pd.DataFrame())
+    capture = CaptureResult(pd.DataFrame({"instance_id": ["a", "a"], "side": [-1, 1], "half_width": [2.0, 2.1],
+                                          "enters_beyond": [False, True]}),
+                            pd.DataFrame({"instance_id": ["a"], "window": [2.05], "ratio": [1.01]}))
+    rows = pd.concat([scan_rows("x", boundary, capture), scan_rows("y", boundary, capture)], ignore_index=True)
+    rows = pd.read_parquet(_roundtrip(rows))
+    got = scan_summaries(rows)
+    assert list(got) == ["x", "y"]
+    assert got["x"] == {"boundary": boundary.summary(), "capture": capture.summary()}
+
+
+def _roundtrip(frame: pd.DataFrame):
+    import io
+
+    buf = io.BytesIO()
+    frame.to_parquet(buf, compression="zstd", index=False)
+    buf.seek(0)
+    return buf
+
+
+def test_beyond_comparisons_recompute_from_their_records(tmp_path):
+    """The moves and the plateau comparison on two small runs: their tables again from the stored rows."""
+    from probecommit.runner.calibration import calibration_from_tables
+    from probecommit.runner.replay import load_run
+    from probecommit.runner.study import run_study
+    from probecommit.studies.beyond import move_comparison, move_table, plateau_comparison, plateau_rows
+    from tests.conftest import small_config
+
+    paths = {}
+    for split, seed in (("cal", 3), ("test", 4)):
+        cfg = small_config(name=split, instances={"split": split, "count": 6, "seed": seed},
+                           methods=["blind_robust", "probe_robust"])
+        paths[split] = run_study(cfg, tmp_path / split).run_dir
+    moved: list = []
+    moves = move_comparison({"T": paths["test"]}, budget=5, record=moved)
+    pd.testing.assert_frame_equal(move_table(pd.read_parquet(_roundtrip(pd.concat(moved, ignore_index=True)))), moves)
+    commits: list = []
+    plateau = plateau_comparison(paths["cal"], paths["test"], resamples=100, record=commits)
+    stored = pd.read_parquet(_roundtrip(pd.concat(commits, ignore_index=True)))
+    episodes = {n: load_run(p).episodes for n, p in paths.items()}
+    again = []
+    for mode, part in stored.groupby("plateau", sort=False):
+        budgets = sorted(int(k) for k in part.loc[part.request == "set_margin", "k"].unique())
+        again.append(plateau_rows(calibration_from_tables(part.reset_index(drop=True), episodes["cal"], episodes["test"],
+                                                          0.2, budgets, resamples=100), mode))
+    pd.testing.assert_frame_equal(pd.concat(again, ignore_index=True), plateau)
