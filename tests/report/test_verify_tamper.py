@@ -177,7 +177,7 @@ def copy_restamped(src: str, dst: str) -> Edit:
 
 #: Cases that need the figures drawn again (the rest run verify without, for time).
 FIGURE_CASES = {"figure-pdf-copied-from-another-study", "figure-png-copied-with-its-stamp-rewritten",
-                "figure-decision-redrawn"}
+                "figure-decision-redrawn", "figure-scan-section-redrawn"}
 
 
 def nan_rate(pub: Path) -> list[str]:
@@ -359,6 +359,11 @@ CASES: list[tuple[str, Edit, bool]] = [
     ("parquet-robot-deployed-replay", edit_rows("robot/fault_sweep_episodes.parquet", lambda t: t["size"].isna(),
                                                 "predicted", bump), True),
     ("figure-decision-redrawn", copy_restamped("insertion/fig_7_signatures.png", "insertion/fig_6_decision.png"), True),
+    ("figure-scan-section-redrawn", copy_restamped("insertion/fig_7_signatures.png",
+                                                   "insertion/fig_4a_teaser_scan_section.png"), True),
+    ("parquet-scan-grid-cell", edit_parquet("insertion/scan_grid.parquet", "reading", 0, lambda v: v + 3.0), True),
+    ("deleted-stored-commits-rehashed", delete("insertion/commits.parquet"), True),
+    ("deleted-stored-sweeps-rehashed", delete("robot/fault_sweep_episodes.parquet"), True),
     ("deleted-file", delete("insertion/table_III_audit.tex"), False),
     ("deleted-table-rehashed", delete("insertion/table_V_testc.md"), True),
     ("added-file", add_file("insertion/extra_table.md"), False),

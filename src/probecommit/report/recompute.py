@@ -85,10 +85,8 @@ def insertion(folder: Path, results: dict[str, Any]) -> Recomputed:
             v[f"table_insertion.thresholds_{kind}"] = {str(k): float(t) for k, t in t_k.items()}
 
     test = runs["B_test_random"]
-    if (folder / COMMITS).is_file():
+    if (folder / COMMITS).is_file():  # a missing stored table is a failure of its own (``STORED_TABLES``)
         _calibrated(folder, runs, results, boot, out)
-    else:  # a publication from before the commits were stored: the uncalibrated points only
-        _audit_original(test, results, out)
     for k in (1, 8):
         m = episode_metrics(test, k, **boot)
         v[f"text.escape_k{k}"], v[f"text.episode_coverage_k{k}"] = m["escape"], m["episode_coverage"]
@@ -195,25 +193,6 @@ def _gates(commits: pd.DataFrame, runs: dict[str, pd.DataFrame], results: dict[s
         out.consistency.append((not bad, f"insertion/{COMMITS}: gates raw {column} = "
                                          f"{None if row is None else row[column]} at {None if row is None else row[keys].to_dict()}"
                                          f" but episodes.parquet {test_run} holds {None if row is None else row[column + '_stored']}"))
-
-
-def _audit_original(test: pd.DataFrame, results: dict[str, Any], out: Recomputed) -> None:
-    """Table III's uncalibrated columns (point estimates) and their summary, from the stored test episodes.
-
-    The intervals are traced only: calibration bootstraps the re-committed episodes' per-instance
-    sums in its own instance order, which the stored table does not record.
-    """
-    from probecommit.audit.metrics import audit_table, summary_row
-
-    records = results["table_audit"]["table"]
-    budgets = [int(r["k"]) for r in records]
-    audit = audit_table(test[test.method == "probe_robust"], budgets=budgets)
-    nominal = 1.0 - float(results["setup"]["alpha"])
-    for i, row in enumerate(audit.itertuples(index=False)):
-        for metric in ("cluster_coverage", "coverage", "optimism"):
-            out.values[f"table_audit.table.{i}.{metric}_original"] = float(getattr(row, metric))
-    for key, value in summary_row(audit, nominal).items():
-        out.values[f"table_audit.summary.{key}_original"] = value
 
 
 def _faults(folder: Path, setup: dict[str, Any], boot: dict[str, int], out: Recomputed) -> None:
@@ -444,6 +423,18 @@ def beyond(folder: Path, results: dict[str, Any]) -> Recomputed:
                          "plateau.parquet": f"{EPISODES_FILE} and insertion/episodes.parquet"}
     return out
 
+
+#: The stored tables each study's numbers are recomputed from: a publication without one fails verify
+#: (deleting a table and re-hashing the manifest would otherwise turn its numbers into traced ones).
+STORED_TABLES: dict[str, tuple[str, ...]] = {
+    "insertion": ("episodes.parquet", "faults_episodes.parquet", COMMITS, "robust_episodes.parquet",
+                  "scan.parquet", "scan_grid.parquet", "cover_search.parquet", "resplits.parquet"),
+    "breadth": ("breadth_episodes.parquet",),
+    "engines": ("engine_episodes.parquet", "engine_scans.parquet"),
+    "robot": ("robot_episodes.parquet", SWEEPS),
+    "gru": ("gru_episodes.parquet",),
+    "beyond": ("beyond_episodes.parquet",),
+}
 
 #: Study folder -> its recomputation.
 STUDIES: dict[str, Callable[[Path, dict[str, Any]], Recomputed]] = {

@@ -79,6 +79,8 @@ CALIBRATIONS = {"cover": ("B_cal_cover", "B_test_cover"), "random": ("B_cal_rand
                 "testc_old": ("B_cal_cover", "C_cover"), "testc_corrected": ("B_cal_cover_corrected", "C_cover_corrected"),
                 "gates": ("B_cal_cover", "B_test_cover")}
 COMMITS_FILE = "commits.parquet"
+#: The scan readings of the instance Fig. 4a draws.
+SCAN_GRID = "scan_grid.parquet"
 #: The episode columns the recomputed numbers read (``z_true``: the explain target stratifies the fault
 #: harness's episodes by where the hole is).
 STORED_COLUMNS = ("instance_id", "repeat", "k", "method", "status", "predicted", "realized", "covered", "escaped",
@@ -261,7 +263,10 @@ class InsertionReproduction:
         summary["frozen_delta"] = p.delta
         self.rep.results["scan"] = summary
         first = str(result.scans["instance_id"].iloc[0])
-        self.rep.figures["scan"] = str(scan_figure(result.grid, result.scans, first, summary["delta"], self.out / "fig_4a_teaser_scan_section.png"))
+        # The readings of the instance the section draws (verify draws Fig. 4a again from them and scan.parquet).
+        grid = result.grid[result.grid["instance_id"] == first].reset_index(drop=True)
+        write_with(self.out / SCAN_GRID, grid.to_parquet)
+        self.rep.figures["scan"] = str(scan_figure(grid, result.scans, first, summary["delta"], self.out / "fig_4a_teaser_scan_section.png"))
         self.write_table("scan")
 
     def cover_search(self, limit: int | None) -> None:

@@ -174,9 +174,9 @@ def _figure_recipes() -> dict[str, dict[str, Callable[[Path, Path], Any]]]:
     """Study -> figure stem -> ``draw(folder, out_png)``: the same call that drew the figure, on the stored data.
 
     Fig. 2 (the pipeline) is drawn from code alone. Fig. 6 (the commit decision) is drawn from the
-    coverage table, the gate curves and the gates' summary, each recomputed from stored rows. Figures
-    drawn from data the publication does not hold (the scan section needs the scan grid, Fig. 1b and
-    the decisive tap the run directories) are bound to their data by digest only.
+    coverage table, the gate curves and the gates' summary, each recomputed from stored rows; Fig. 4a
+    (the scan section) from the scans and the drawn instance's stored readings. Figures drawn from
+    run directories (Fig. 1b, the decisive tap) are bound to no stored data.
     """
     from probecommit.report.paper import plot_pricing
     from probecommit.report.pipeline_diagram import pipeline_figure
@@ -199,8 +199,16 @@ def _figure_recipes() -> dict[str, dict[str, Callable[[Path, Path], Any]]]:
         gates = SimpleNamespace(curves=pd.read_parquet(folder / "gates_curves.parquet"), summary=summary)
         return decision_figure(pd.read_parquet(folder / "coverage_vs_nominal.parquet"), gates, out)
 
+    def scan_section(folder: Path, out: Path) -> Any:
+        from probecommit.report.study_figures import scan_figure
+
+        scans = pd.read_parquet(folder / "scan.parquet")
+        return scan_figure(pd.read_parquet(folder / "scan_grid.parquet"), scans, str(scans["instance_id"].iloc[0]),
+                           float(scans["offset"].mean()), out)
+
     return {
-        "insertion": {"fig_7_signatures": signatures, "fig_6_decision": decision},
+        "insertion": {"fig_7_signatures": signatures, "fig_6_decision": decision,
+                      "fig_4a_teaser_scan_section": scan_section},
         "breadth": {"fig_breadth_budget": lambda folder, out: plot_budget_curves(
             pd.read_parquet(folder / "budget_curves.parquet"), out)},
         "cost": {"fig_pricing": lambda folder, out: plot_pricing(pd.read_parquet(folder / "pricing.parquet"), out)},

@@ -223,8 +223,11 @@ def check_recomputed(study: Path, results: dict[str, Any], report: Report) -> se
     """Recompute the study's numbers from its episode tables; return the keys recomputed (a results.json
     copy of a rebuilt Parquet table, ``TWINS``, counts as recomputed: ``check_twins`` compares the two)."""
     from probecommit.report.ledger import walk_dotted
-    from probecommit.report.recompute import STUDIES
+    from probecommit.report.recompute import STORED_TABLES, STUDIES
 
+    for name in STORED_TABLES.get(study.name, ()):
+        report.check("file", (study / name).is_file(),
+                     f"{study.name}/{name}: missing (the stored rows the study's numbers are recomputed from)")
     if study.name not in STUDIES:
         return set()
     try:
