@@ -177,7 +177,7 @@ def copy_restamped(src: str, dst: str) -> Edit:
 
 #: Cases that need the figures drawn again (the rest run verify without, for time).
 FIGURE_CASES = {"figure-pdf-copied-from-another-study", "figure-png-copied-with-its-stamp-rewritten",
-                "figure-decision-redrawn", "figure-scan-section-redrawn"}
+                "figure-decision-redrawn", "figure-scan-section-redrawn", "figure-decisive-tap-redrawn"}
 
 
 def nan_rate(pub: Path) -> list[str]:
@@ -361,6 +361,9 @@ CASES: list[tuple[str, Edit, bool]] = [
     ("figure-decision-redrawn", copy_restamped("insertion/fig_7_signatures.png", "insertion/fig_6_decision.png"), True),
     ("figure-scan-section-redrawn", copy_restamped("insertion/fig_7_signatures.png",
                                                    "insertion/fig_4a_teaser_scan_section.png"), True),
+    ("figure-decisive-tap-redrawn", copy_restamped("insertion/fig_7_signatures.png",
+                                                   "insertion/fig_4b_teaser_decisive_tap.png"), True),
+    ("parquet-decisive-tap-cell", edit_parquet("insertion/decisive_tap.parquet", "z", 0, lambda v: v + 3.0), True),
     ("parquet-scan-grid-cell", edit_parquet("insertion/scan_grid.parquet", "reading", 0, lambda v: v + 3.0), True),
     ("deleted-stored-commits-rehashed", delete("insertion/commits.parquet"), True),
     ("deleted-stored-sweeps-rehashed", delete("robot/fault_sweep_episodes.parquet"), True),

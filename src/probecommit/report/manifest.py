@@ -39,7 +39,8 @@ PNG_KEY = b"probecommit-data"
 FIGURE_DATA: dict[str, dict[str, tuple[str, ...]]] = {
     "insertion": {"fig_7_signatures": ("fault_signatures.parquet",),
                   "fig_6_decision": ("coverage_vs_nominal.parquet", "gates_curves.parquet"),
-                  "fig_4a_teaser_scan_section": ("scan.parquet", "scan_grid.parquet")},
+                  "fig_4a_teaser_scan_section": ("scan.parquet", "scan_grid.parquet"),
+                  "fig_4b_teaser_decisive_tap": ("decisive_tap.parquet",)},
     "breadth": {"fig_breadth_budget": ("budget_curves.parquet",)},
     "cost": {"fig_pricing": ("pricing.parquet",)},
     "robot": {"fig_5b_hardware_simulated_rig_aim_error": ("robot_episodes.parquet",),

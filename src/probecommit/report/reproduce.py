@@ -115,6 +115,28 @@ def robust_summary(tuning: pd.DataFrame, arms: dict[str, pd.DataFrame], kmax: in
     return res
 
 
+#: Fig. 4b's data: both beliefs' particles after the decisive tap, with the truth, the tap and its reading.
+DECISIVE_TAP = "decisive_tap.parquet"
+
+
+def decisive_tap_series(z_deployed, w_deployed, z_corrected, w_corrected, z_true: float, tap: float, reading: float,
+                        k: int) -> pd.DataFrame:
+    """Fig. 4b's data series, one table: each model's particles and weights (``model``), the scalars on every row."""
+    parts = [pd.DataFrame({"model": name, "z": np.asarray(z, float), "weight": np.asarray(w, float)})
+             for name, z, w in (("deployed", z_deployed, w_deployed), ("corrected", z_corrected, w_corrected))]
+    return pd.concat(parts, ignore_index=True).assign(z_true=z_true, tap=tap, reading=reading, k=int(k))
+
+
+def draw_decisive_tap(series: pd.DataFrame, path: Path) -> Path:
+    """Fig. 4b from its data series (the study and verify draw it by this call)."""
+    part = {name: rows for name, rows in series.groupby("model", sort=False)}
+    first = series.iloc[0]
+    return decisive_tap_figure(part["deployed"]["z"].to_numpy(), part["deployed"]["weight"].to_numpy(),
+                               part["corrected"]["z"].to_numpy(), part["corrected"]["weight"].to_numpy(),
+                               float(first["z_true"]), float(first["tap"]), float(first["reading"]),
+                               f"after tap {int(first['k'])}", path)  # no internal ids in a title
+
+
 def store_commits(commits: dict[str, list[pd.DataFrame]], path: Path) -> None:
     """The calibrations' re-executed rows (``runner.calibration.Recorder``), one zstd table with a
     ``calibration`` column; the columns a request does not read are empty (strings are stored as
@@ -517,10 +539,11 @@ class InsertionReproduction:
             hits = np.flatnonzero(escaped & was_in & ok_new)
             if len(hits):
                 e = int(hits[0])
-                path = decisive_tap_figure(
-                    z[e], now.weights[e], kept_new[e], trace_new.states[k].weights[e], float(z_true[e]),
-                    float(np.ravel(batch.u[e, k - 1])[0]), float(np.ravel(batch.y[e, k - 1])[0]),
-                    f"after tap {k}", self.out / "fig_4b_teaser_decisive_tap.png")  # no internal ids in a title
+                series = decisive_tap_series(z[e], now.weights[e], kept_new[e], trace_new.states[k].weights[e],
+                                             float(z_true[e]), float(np.ravel(batch.u[e, k - 1])[0]),
+                                             float(np.ravel(batch.y[e, k - 1])[0]), k)
+                write_with(self.out / DECISIVE_TAP, lambda buf: series.to_parquet(buf, compression="zstd", index=False))
+                path = draw_decisive_tap(series, self.out / "fig_4b_teaser_decisive_tap.png")
                 self.rep.figures["decisive_tap"] = str(path)
                 return
 

@@ -175,8 +175,9 @@ def _figure_recipes() -> dict[str, dict[str, Callable[[Path, Path], Any]]]:
 
     Fig. 2 (the pipeline) is drawn from code alone. Fig. 6 (the commit decision) is drawn from the
     coverage table, the gate curves and the gates' summary, each recomputed from stored rows; Fig. 4a
-    (the scan section) from the scans and the drawn instance's stored readings. Figures drawn from
-    run directories (Fig. 1b, the decisive tap) are bound to no stored data.
+    (the scan section) from the scans and the drawn instance's stored readings; Fig. 4b (the decisive
+    tap) from both beliefs' stored particles. Figures drawn from run directories (Fig. 1b) are bound
+    to no stored data.
     """
     from probecommit.report.paper import plot_pricing
     from probecommit.report.pipeline_diagram import pipeline_figure
@@ -206,9 +207,14 @@ def _figure_recipes() -> dict[str, dict[str, Callable[[Path, Path], Any]]]:
         return scan_figure(pd.read_parquet(folder / "scan_grid.parquet"), scans, str(scans["instance_id"].iloc[0]),
                            float(scans["offset"].mean()), out)
 
+    def decisive_tap(folder: Path, out: Path) -> Any:
+        from probecommit.report.reproduce import DECISIVE_TAP, draw_decisive_tap
+
+        return draw_decisive_tap(pd.read_parquet(folder / DECISIVE_TAP), out)
+
     return {
         "insertion": {"fig_7_signatures": signatures, "fig_6_decision": decision,
-                      "fig_4a_teaser_scan_section": scan_section},
+                      "fig_4a_teaser_scan_section": scan_section, "fig_4b_teaser_decisive_tap": decisive_tap},
         "breadth": {"fig_breadth_budget": lambda folder, out: plot_budget_curves(
             pd.read_parquet(folder / "budget_curves.parquet"), out)},
         "cost": {"fig_pricing": lambda folder, out: plot_pricing(pd.read_parquet(folder / "pricing.parquet"), out)},
