@@ -124,3 +124,28 @@ def test_beyond_comparisons_recompute_from_their_records(tmp_path):
         again.append(plateau_rows(calibration_from_tables(part.reset_index(drop=True), episodes["cal"], episodes["test"],
                                                           0.2, budgets, resamples=100), mode))
     pd.testing.assert_frame_equal(pd.concat(again, ignore_index=True), plateau)
+
+
+def test_fig_1b_is_drawn_again_from_its_series(tmp_path):
+    """Fig. 1b from a stored series: drawn again, the same bytes; a particle moved in the series, not."""
+    from probecommit.report.figures import draw_belief_snapshots
+    from probecommit.report.verify import check_figures
+
+    rng = np.random.default_rng(2)
+    beliefs = [pd.DataFrame({"part": "belief", "k": k, "z": rng.normal(0, 3.0 / k, 64), "weight": np.full(64, 1 / 64)})
+               for k in (1, 3)]
+    rest = pd.DataFrame({"part": ["aim", "aim", "tap", "tap", "tap"], "k": [1, 3, 1, 2, 3],
+                         "z": [0.5, 0.1, -3.0, 3.0, 0.0], "weight": [0.0, 1.0, 0.0, 0.0, -15.0]})
+    series = pd.concat([*beliefs, rest], ignore_index=True).assign(z_true=0.2, low=-10.0, high=10.0)
+    folder = tmp_path / "setup"
+    folder.mkdir()
+    series.to_parquet(folder / "fig_1b_data.parquet")
+    draw_belief_snapshots(series, folder / "fig_1b_overview_belief.png")
+    report = Report()
+    check_figures(folder, report)
+    assert report.ok and report.counts["recomputed"] == 2, (report.counts, report.failures)
+    series.loc[3, "z"] += 4.0
+    series.to_parquet(folder / "fig_1b_data.parquet")
+    report = Report()
+    check_figures(folder, report)
+    assert any("fig_1b_overview_belief" in f and "drawn again" in f for f in report.failures), report.failures

@@ -46,7 +46,8 @@ FIGURE_DATA: dict[str, dict[str, tuple[str, ...]]] = {
     "robot": {"fig_5b_hardware_simulated_rig_aim_error": ("robot_episodes.parquet",),
               "fig_5c_hardware_simulated_rig_boundary_fault": ("fault_boundary.parquet",),
               "fig_5d_hardware_simulated_rig_prior_fault": ("fault_prior.parquet",)},
-    "engines": {}, "beyond": {}, "gru": {}, "setup": {}, "figures": {},
+    "setup": {"fig_1b_overview_belief": ("fig_1b_data.parquet",)},
+    "engines": {}, "beyond": {}, "gru": {}, "figures": {},
 }
 #: Figures drawn from code alone (no data): verify draws them again and compares the bytes.
 CODE_FIGURES: dict[str, tuple[str, ...]] = {"figures": ("fig_2_pipeline",)}

@@ -526,7 +526,7 @@ def _setup(root: Path, quick: bool, progress: Progress, workers: int) -> Path:
     if quick:
         data["instances"]["count"] = 2
     run = run_study(parse_config(data), root / "setup" / "runs" / ("demo-quick" if quick else "demo"), workers=workers)
-    figure = belief_figure(run.run_dir, results)
+    figure = belief_figure(run.run_dir, results, series=results / "fig_1b_data.parquet")
     figure.rename(results / "fig_1b_overview_belief.png")
     pdf = figure.with_suffix(".pdf")
     if pdf.is_file():

@@ -465,5 +465,5 @@ TRACED_ONLY = {
     "explain": "every number (they re-commit or replay from run directories the publication does not hold); "
                "explain.md is rendered again from results.json",
     "figures": "Fig. 1a/1c and Fig. 3 (scene renders from run directories); Fig. 2 is drawn again from code",
-    "setup": "Table I (rendered again from the registry); Fig. 1b (a demo run's beliefs, not stored)",
+    "setup": "Table I (rendered again from the registry)",
 }

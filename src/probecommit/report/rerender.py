@@ -176,9 +176,10 @@ def _figure_recipes() -> dict[str, dict[str, Callable[[Path, Path], Any]]]:
     Fig. 2 (the pipeline) is drawn from code alone. Fig. 6 (the commit decision) is drawn from the
     coverage table, the gate curves and the gates' summary, each recomputed from stored rows; Fig. 4a
     (the scan section) from the scans and the drawn instance's stored readings; Fig. 4b (the decisive
-    tap) from both beliefs' stored particles. Figures drawn from run directories (Fig. 1b) are bound
-    to no stored data.
+    tap) from both beliefs' stored particles; Fig. 1b from its stored series (each budget's particles,
+    aims and the taps). Scene renders (Fig. 1a, 1c, 3) are bound to no stored data.
     """
+    from probecommit.report.figures import draw_belief_snapshots
     from probecommit.report.paper import plot_pricing
     from probecommit.report.pipeline_diagram import pipeline_figure
     from probecommit.report.reproduce import signature_n
@@ -219,6 +220,8 @@ def _figure_recipes() -> dict[str, dict[str, Callable[[Path, Path], Any]]]:
             pd.read_parquet(folder / "budget_curves.parquet"), out)},
         "cost": {"fig_pricing": lambda folder, out: plot_pricing(pd.read_parquet(folder / "pricing.parquet"), out)},
         "robot": _robot_figures(),
+        "setup": {"fig_1b_overview_belief": lambda folder, out: draw_belief_snapshots(
+            pd.read_parquet(folder / "fig_1b_data.parquet"), out)},
         "figures": {"fig_2_pipeline": lambda folder, out: pipeline_figure(out)},  # drawn from code alone
     }
 
