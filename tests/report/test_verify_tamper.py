@@ -176,7 +176,8 @@ def copy_restamped(src: str, dst: str) -> Edit:
 
 
 #: Cases that need the figures drawn again (the rest run verify without, for time).
-FIGURE_CASES = {"figure-pdf-copied-from-another-study", "figure-png-copied-with-its-stamp-rewritten"}
+FIGURE_CASES = {"figure-pdf-copied-from-another-study", "figure-png-copied-with-its-stamp-rewritten",
+                "figure-decision-redrawn", "figure-scan-section-redrawn", "figure-decisive-tap-redrawn"}
 
 
 def nan_rate(pub: Path) -> list[str]:
@@ -184,8 +185,37 @@ def nan_rate(pub: Path) -> list[str]:
 
 
 def nan_traced(pub: Path) -> list[str]:
-    """NaN in a number that is traced only (Table IV's calibrated rows)."""
-    return edit_results("insertion", ["table_insertion", "B.cost_table", 1, "failure_hi"], math.inf)(pub)
+    """Inf in a number that is traced only (the re-split pool's size)."""
+    return edit_results("insertion", ["resplits", "pool"], math.inf)(pub)
+
+
+def edit_rows(rel: str, where: Callable[[pd.DataFrame], pd.Series], column: str, value, every: bool = False) -> Edit:
+    """Change ``column`` in the first stored row ``where`` selects (or in every one: an edit consistent across
+    the rows of one margin, say); the failure names the file."""
+    def edit(pub: Path) -> list[str]:
+        f = paper_root(pub) / rel
+        table = pd.read_parquet(f)
+        rows = table.index[where(table)]
+        assert len(rows), f"no row of {rel} to edit"
+        rows = rows if every else rows[:1]
+        table.loc[rows, column] = [value(v) if callable(value) else value for v in table.loc[rows, column]]
+        table.to_parquet(f, index=False)
+        return [Path(rel).name]
+    return edit
+
+
+def first_margin(calibration: str) -> Callable[[pd.DataFrame], pd.Series]:
+    """The stored margin rows of the largest margin the search read (its first): predicted set to 1 there, the
+    search stops at it, so the published margin no longer follows."""
+    def where(t: pd.DataFrame) -> pd.Series:
+        rows = (t.calibration == calibration) & (t.request == "margin")
+        return rows & (t.gamma == t.loc[rows, "gamma"].max())
+    return where
+
+
+def request(calibration: str, name: str, k: int | None = None) -> Callable[[pd.DataFrame], pd.Series]:
+    return lambda t: ((t.calibration == calibration) & (t.request == name) & (t.status == "ok")
+                      & (t.k == (k if k is not None else t.k)))
 
 
 def reproduction_json(field: str) -> Edit:
@@ -294,6 +324,49 @@ CASES: list[tuple[str, Edit, bool]] = [
     ("figure-pdf-copied-from-another-study", copy_figure("cost/fig_pricing.pdf", "breadth/fig_breadth_budget.pdf"), True),
     ("figure-png-copied-with-its-stamp-rewritten", copy_restamped("cost/fig_pricing.png", "breadth/fig_breadth_budget.png"),
      True),
+    ("json-calibrated-cost", edit_results("insertion", ["table_insertion", "B.cost_table", 2, "failure"], bump), True),
+    ("json-calibrated-difference", edit_results("insertion", ["table_insertion", "B.cost_differences", 0, "lo"], bump), True),
+    ("json-table3-calibrated-interval", edit_results("insertion", ["table_audit", "table", 0, "optimism_lo_calibrated"],
+                                                     lambda v: v - 0.01), True),
+    ("json-table3-original-interval", edit_results("insertion", ["table_audit", "table", 0, "coverage_hi_original"],
+                                                   lambda v: v - 0.01), True),
+    ("json-margin", edit_results("insertion", ["table_insertion", "margin_cover"], bump), True),
+    ("json-simultaneous-threshold", edit_results("insertion", ["table_insertion", "simultaneous_random"], bump), True),
+    ("json-testc-set-margin", edit_results("insertion", ["table_testc", "failure_cover_k5_setcal_margin", "old"], bump), True),
+    ("json-gates-area", edit_results("insertion", ["gates", "summary", 0, "area"], bump), True),
+    ("json-gates-pool", edit_results("insertion", ["gates", "summary", 1, "n_committed"], lambda n: n + 1), True),
+    ("json-gates-gamma", edit_results("insertion", ["gates", "info", "gamma"], bump), True),
+    ("json-robust-arm", edit_results("insertion", ["robust", "deployed", "failure", 0], bump), True),
+    ("json-robust-tuning", edit_results("insertion", ["robust", "tuning", 0, "failure"], bump), True),
+    ("json-robot-first-resolved", edit_results("robot", ["boundary_first_resolved_mm"], lambda v: (v or 0.0) + 1.0), True),
+    ("parquet-commits-set-margin", edit_rows("insertion/commits.parquet", request("cover", "set_margin", 5), "realized",
+                                             lambda v: 1.0 - v), True),
+    ("parquet-commits-margin-consistent", edit_rows("insertion/commits.parquet", first_margin("random"), "predicted", 1.0,
+                                                    every=True), True),
+    ("parquet-commits-optimism", edit_rows("insertion/commits.parquet", request("cover", "optimism"), "realized",
+                                           lambda v: 1.0 - v, every=True), True),
+    ("parquet-commits-gates-raw", edit_rows("insertion/commits.parquet", request("gates", "raw"), "predicted", bump), True),
+    ("parquet-commits-gates-adjusted", edit_rows("insertion/commits.parquet", request("gates", "adjusted"), "predicted",
+                                                 lambda v: 0.0, every=True), True),
+    ("parquet-gates-curve-cell", edit_parquet("insertion/gates_curves.parquet", "failure", 0, bump), True),
+    ("parquet-coverage-vs-nominal", edit_parquet("insertion/coverage_vs_nominal.parquet", "cluster_coverage", 0, bump), True),
+    ("parquet-robust-tuning-row", edit_rows("insertion/robust_episodes.parquet", lambda t: t.part == "tuning", "realized",
+                                            lambda v: 1.0 - v), True),
+    ("parquet-robust-arm-row", edit_rows("insertion/robust_episodes.parquet", lambda t: t.part == "deployed", "realized",
+                                         lambda v: 1.0 - v), True),
+    ("parquet-robot-sweep-replay", edit_rows("robot/fault_sweep_episodes.parquet", lambda t: t["size"].notna(),
+                                             "covered", lambda v: not v), True),
+    ("parquet-robot-deployed-replay", edit_rows("robot/fault_sweep_episodes.parquet", lambda t: t["size"].isna(),
+                                                "predicted", bump), True),
+    ("figure-decision-redrawn", copy_restamped("insertion/fig_7_signatures.png", "insertion/fig_6_decision.png"), True),
+    ("figure-scan-section-redrawn", copy_restamped("insertion/fig_7_signatures.png",
+                                                   "insertion/fig_4a_teaser_scan_section.png"), True),
+    ("figure-decisive-tap-redrawn", copy_restamped("insertion/fig_7_signatures.png",
+                                                   "insertion/fig_4b_teaser_decisive_tap.png"), True),
+    ("parquet-decisive-tap-cell", edit_parquet("insertion/decisive_tap.parquet", "z", 0, lambda v: v + 3.0), True),
+    ("parquet-scan-grid-cell", edit_parquet("insertion/scan_grid.parquet", "reading", 0, lambda v: v + 3.0), True),
+    ("deleted-stored-commits-rehashed", delete("insertion/commits.parquet"), True),
+    ("deleted-stored-sweeps-rehashed", delete("robot/fault_sweep_episodes.parquet"), True),
     ("deleted-file", delete("insertion/table_III_audit.tex"), False),
     ("deleted-table-rehashed", delete("insertion/table_V_testc.md"), True),
     ("added-file", add_file("insertion/extra_table.md"), False),

@@ -155,3 +155,55 @@ def test_runs_with_a_failed_trajectory(tmp_path, runs, monkeypatch):
 def test_in_sample_calibration_is_refused(runs):
     with pytest.raises(ValueError, match="share 8 instance"):
         calibrate(runs["test"], runs["test"])
+
+
+def _stored_all(run_dir):
+    from probecommit.runner.replay import load_run
+
+    return load_run(run_dir).episodes
+
+
+@pytest.mark.parametrize("chunk", [None, 3])
+def test_calibration_recomputes_from_its_recorded_rows(runs, chunk):
+    """What verify does: the result again from the recorded rows and the runs' stored episodes, equal to the
+    last bit (chunked commits record the same rows as one pass); an edited recorded row moves a number."""
+    from probecommit.runner.calibration import Recorder, calibration_from_tables
+
+    record: list = []
+    res = calibrate(runs["cal"], runs["test"], alpha=0.2, resamples=200, seed=5, chunk_instances=chunk, record=record)
+    commits = Recorder(record).table()
+    assert set(commits["request"]) == {"margin", "optimism", "set", "set_margin"}
+    # Only the margins the search read are kept.
+    assert sorted(commits.loc[commits.request == "margin", "gamma"].unique()) == sorted(res.margin.search["gamma"])
+    again = calibration_from_tables(commits, _stored_all(runs["cal"]), _stored_all(runs["test"]), 0.2,
+                                    res.budgets, resamples=200, seed=5)
+    pd.testing.assert_frame_equal(again.table3, res.table3)
+    pd.testing.assert_frame_equal(again.cost, res.cost)
+    pd.testing.assert_frame_equal(again.cost_differences, res.cost_differences)
+    assert (again.margin.gamma, again.distribution_free_margin, again.thresholds, again.simultaneous_threshold,
+            again.summary) == (res.margin.gamma, res.distribution_free_margin, res.thresholds,
+                               res.simultaneous_threshold, res.summary)
+    edited = commits.copy()
+    row = edited.index[(edited.request == "set_margin") & (edited.k == 5)][0]
+    edited.loc[row, "realized"] = 1.0 - edited.loc[row, "realized"]
+    moved = calibration_from_tables(edited, _stored_all(runs["cal"]), _stored_all(runs["test"]), 0.2, res.budgets,
+                                    resamples=200, seed=5)
+    assert not moved.table3["optimism_calibrated"].equals(res.table3["optimism_calibrated"])
+
+
+def test_gates_recompute_from_their_recorded_rows(runs):
+    from probecommit.runner.calibration import Recorder, gates_from_commits
+
+    record: list = []
+    res = gates(runs["cal"], runs["test"], alpha=0.2, resamples=200, seed=5, record=record)
+    commits = Recorder(record).table()
+    again = gates_from_commits(commits, _stored_all(runs["cal"]), 0.2, res.budgets, resamples=200, seed=5)
+    pd.testing.assert_frame_equal(again.curves, res.curves)
+    pd.testing.assert_frame_equal(again.summary, res.summary)
+    assert {k: again.info[k] for k in ("threshold", "gamma", "gamma_satisfied")} == \
+        {k: res.info[k] for k in ("threshold", "gamma", "gamma_satisfied")}
+    # The uncalibrated gate rows are the test run's own stored commits.
+    stored = _stored_all(runs["test"])
+    stored = stored[(stored.method == "probe_robust") & stored.k.isin(res.budgets)].set_index(["instance_id", "repeat", "k"])
+    raw = commits[commits.request == "raw"].astype({"repeat": "int64"}).set_index(["instance_id", "repeat", "k"])
+    np.testing.assert_array_equal(raw.loc[stored.index, "predicted"], stored["predicted"])

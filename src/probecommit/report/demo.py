@@ -7,6 +7,7 @@ from pathlib import Path
 import numpy as np
 
 from probecommit.report.figures import belief_snapshots
+from probecommit.store.safefile import write_with
 from probecommit.report.tables import budget_summary, to_markdown
 from probecommit.runner.replay import load_run, trace_for_run
 from probecommit.store.safefile import write_text
@@ -29,13 +30,21 @@ def illustrative_episode(trace, episodes) -> int:
     return 0
 
 
-def belief_figure(run_dir: str | Path, out: str | Path | None = None) -> Path:
-    """The belief snapshot (Fig. 1b style) of a run's illustrative episode; returns the PNG path."""
+def belief_figure(run_dir: str | Path, out: str | Path | None = None, series: str | Path | None = None) -> Path:
+    """The belief snapshot (Fig. 1b style) of a run's illustrative episode; returns the PNG path.
+
+    ``series``: where to write the figure's data series too (``report.figures.belief_series``), for a
+    publication to store and ``verify`` to draw the figure again from."""
+    from probecommit.report.figures import belief_series, draw_belief_snapshots
+
     loaded = load_run(run_dir)
     trace, model, _ = trace_for_run(loaded)
     row = illustrative_episode(trace, loaded.episodes)
     budgets = tuple(k for k in FIGURE_BUDGETS if k in trace.states) or tuple(trace.budgets[:3])
-    return belief_snapshots(trace, model, loaded.episodes, row, budgets, Path(out or run_dir) / "belief.png")
+    data = belief_series(trace, model, loaded.episodes, row, budgets)
+    if series is not None:
+        write_with(Path(series), lambda buf: data.to_parquet(buf, compression="zstd", index=False))
+    return draw_belief_snapshots(data, Path(out or run_dir) / "belief.png")
 
 
 def _trend(first: float, last: float, signed: bool = False) -> str:

@@ -99,28 +99,57 @@ def belief_snapshots(
         budgets: Budgets to draw, e.g. ``(1, 3, 5)``.
         path: Output PNG.
     """
+    return draw_belief_snapshots(belief_series(trace, model, episodes, episode_row, budgets), path, title)
+
+
+def belief_series(trace, model, episodes: pd.DataFrame, episode_row: int, budgets: Sequence[int]) -> pd.DataFrame:
+    """Fig. 1b's data series, one table (what a publication stores and ``verify`` draws again):
+    ``part`` ``belief`` (each budget's particles ``z`` and ``weight``), ``aim`` (each budget's committed
+    aim and whether it entered), ``tap`` (each tap ``u`` and its reading ``y``, in order); the truth and
+    the prior's bounds on every row."""
     batch = trace.batch
     iid, rep = str(batch.instance_id[episode_row]), int(batch.repeat[episode_row])
-    z_true = float(model.decision(batch.truths[episode_row]))
-    lo, hi = float(model.prior_low[0]), float(model.prior_high[0])
+    parts = []
+    for k in budgets:
+        state = trace.states[k]
+        parts.append(pd.DataFrame({"part": "belief", "k": int(k), "z": np.asarray(model.decision(state.particles[episode_row]), float),
+                                   "weight": np.asarray(state.weights[episode_row], float)}))
+        row = episodes[(episodes.instance_id == iid) & (episodes.repeat == rep) & (episodes.k == k) & (episodes.method == "probe_robust")]
+        if len(row):
+            parts.append(pd.DataFrame({"part": ["aim"], "k": [int(k)], "z": [float(row["action"].iloc[0])],
+                                       "weight": [float(float(row["realized"].iloc[0]) == 0)]}))
+    taps = batch.u[episode_row, : max(budgets)].reshape(-1)
+    readings = batch.y[episode_row, : max(budgets)].reshape(len(taps), -1)[:, 0]
+    parts.append(pd.DataFrame({"part": "tap", "k": np.arange(1, len(taps) + 1), "z": taps.astype(float),
+                               "weight": readings.astype(float)}))
+    return pd.concat(parts, ignore_index=True).assign(
+        z_true=float(model.decision(batch.truths[episode_row])), low=float(model.prior_low[0]),
+        high=float(model.prior_high[0]))
+
+
+def draw_belief_snapshots(series: pd.DataFrame, path: str | Path, title: str | None = None) -> Path:
+    """Fig. 1b from its data series (:func:`belief_series`): a belief per budget, its aim on top (filled:
+    the peg entered), the taps below, numbered in order."""
+    first = series.iloc[0]
+    lo, hi, z_true = float(first["low"]), float(first["high"]), float(first["z_true"])
+    beliefs = series[series["part"] == "belief"]
+    aims = series[series["part"] == "aim"]
+    budgets = list(dict.fromkeys(int(k) for k in beliefs["k"]))
     grid = np.linspace(lo - 1, hi + 1, 600)
     colors = plt.cm.viridis(np.linspace(0.15, 0.85, len(budgets)))
     fig, ax = plt.subplots(figsize=(COLUMN, 3.1))
     for color, k in zip(colors, budgets):
-        state = trace.states[k]
-        z = model.decision(state.particles[episode_row])
-        ax.plot(grid, belief_density(z, state.weights[episode_row], grid, 0.3), color=color, label=f"after tap {k}")
-        row = episodes[(episodes.instance_id == iid) & (episodes.repeat == rep) & (episodes.k == k) & (episodes.method == "probe_robust")]
-        if len(row):
-            aim = float(row["action"].iloc[0])
-            ok = float(row["realized"].iloc[0]) == 0
-            ax.plot([aim], [1.08], marker="v", ms=5, color=color, markerfacecolor=color if ok else "white")
+        b = beliefs[beliefs["k"] == k]
+        ax.plot(grid, belief_density(b["z"].to_numpy(), b["weight"].to_numpy(), grid, 0.3), color=color, label=f"after tap {k}")
+        aim = aims[aims["k"] == k]
+        if len(aim):
+            ok = bool(aim["weight"].iloc[0])
+            ax.plot([float(aim["z"].iloc[0])], [1.08], marker="v", ms=5, color=color, markerfacecolor=color if ok else "white")
     ax.axvline(z_true, color="crimson", ls="--", lw=1.0, label="true hole")
     # Each tap: its order and what it read (top of the plate or the pocket floor).
-    taps = batch.u[episode_row, : max(budgets)].reshape(-1)
-    readings = batch.y[episode_row, : max(budgets)].reshape(len(taps), -1)[:, 0]
+    taps = series[series["part"] == "tap"]
     seen: dict[float, int] = {}
-    for j, (u, y) in enumerate(zip(taps, readings), start=1):
+    for j, (u, y) in enumerate(zip(taps["z"].to_numpy(), taps["weight"].to_numpy()), start=1):
         level = seen.get(float(u), 0)
         seen[float(u)] = level + 1
         pocket = y < -7.5

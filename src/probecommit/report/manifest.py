@@ -39,13 +39,15 @@ PNG_KEY = b"probecommit-data"
 FIGURE_DATA: dict[str, dict[str, tuple[str, ...]]] = {
     "insertion": {"fig_7_signatures": ("fault_signatures.parquet",),
                   "fig_6_decision": ("coverage_vs_nominal.parquet", "gates_curves.parquet"),
-                  "fig_4a_teaser_scan_section": ("scan.parquet",)},
+                  "fig_4a_teaser_scan_section": ("scan.parquet", "scan_grid.parquet"),
+                  "fig_4b_teaser_decisive_tap": ("decisive_tap.parquet",)},
     "breadth": {"fig_breadth_budget": ("budget_curves.parquet",)},
     "cost": {"fig_pricing": ("pricing.parquet",)},
     "robot": {"fig_5b_hardware_simulated_rig_aim_error": ("robot_episodes.parquet",),
               "fig_5c_hardware_simulated_rig_boundary_fault": ("fault_boundary.parquet",),
               "fig_5d_hardware_simulated_rig_prior_fault": ("fault_prior.parquet",)},
-    "engines": {}, "beyond": {}, "gru": {}, "setup": {}, "figures": {},
+    "setup": {"fig_1b_overview_belief": ("fig_1b_data.parquet",)},
+    "engines": {}, "beyond": {}, "gru": {}, "figures": {},
 }
 #: Figures drawn from code alone (no data): verify draws them again and compares the bytes.
 CODE_FIGURES: dict[str, tuple[str, ...]] = {"figures": ("fig_2_pipeline",)}
@@ -116,6 +118,12 @@ def figure_bindings(study_dir: Path) -> dict[str, dict[str, Any]]:
     return out
 
 
+def study_files(study_dir: Path) -> list[str]:
+    """The files a study manifest lists: every file of the folder but the manifest itself, by name
+    (one list for writing the manifest and for ``verify``'s check that it lists them all)."""
+    return sorted(p.name for p in study_dir.iterdir() if p.is_file() and p.name != MANIFEST)
+
+
 def write_manifest(study_dir: str | Path) -> Path:
     """Stamp each figure with its data digest, then hash every file of the study folder."""
     study_dir = Path(study_dir)
@@ -123,8 +131,7 @@ def write_manifest(study_dir: str | Path) -> Path:
     for name, binding in figures.items():
         if binding["data_sha256"]:
             stamp_png(study_dir / name, binding["data_sha256"])
-    files = sorted(p for p in study_dir.iterdir() if p.is_file() and p.name != MANIFEST)
-    manifest = {"sha256": {p.name: sha256_file(p) for p in files}, "figures": figures}
+    manifest = {"sha256": {name: sha256_file(study_dir / name) for name in study_files(study_dir)}, "figures": figures}
     path = study_dir / MANIFEST
     write_text(path, json.dumps(manifest, indent=1, sort_keys=True) + "\n")
     return path

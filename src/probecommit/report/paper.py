@@ -409,6 +409,8 @@ def _engines(root: Path, quick: bool, progress: Progress, workers: int) -> Path:
     write_with(results / "escape_by_budget.parquet", escape.to_parquet)
     write_with(results / "engine_episodes.parquet",
                lambda buf: study["episodes"].to_parquet(buf, compression="zstd", index=False))
+    write_with(results / "engine_scans.parquet",
+               lambda buf: study["scan_rows"].to_parquet(buf, compression="zstd", index=False))
     payload = {"results": {
         "settings": study["bootstrap"],
         "table": {f"{e}/{v}": dict(zip([r.replace(" ", "_") for r in table.index], map(float, table[(e, v)])))
@@ -458,6 +460,8 @@ def _robot(root: Path, quick: bool, progress: Progress, workers: int) -> Path:
     write_with(results / "table_robot.parquet", study.table.to_parquet)
     write_with(results / "fault_boundary.parquet", study.boundary.to_parquet)
     write_with(results / "fault_prior.parquet", study.prior.to_parquet)
+    write_with(results / "fault_sweep_episodes.parquet",
+               lambda buf: study.sweep_episodes.to_parquet(buf, compression="zstd", index=False))
     write_table(results, "table_VII_hardware_simulated_rig", table_markdown(study.table))
     write_table(results, "fault_boundary_simulated_rig", sweep_markdown(study.boundary, "boundary pulled in (mm)"))
     write_table(results, "fault_prior_simulated_rig", sweep_markdown(study.prior, "prior half-width (mm)"))
@@ -535,7 +539,7 @@ def _setup(root: Path, quick: bool, progress: Progress, workers: int) -> Path:
     if quick:
         data["instances"]["count"] = 2
     run = run_study(parse_config(data), root / "setup" / "runs" / ("demo-quick" if quick else "demo"), workers=workers)
-    figure = belief_figure(run.run_dir, results)
+    figure = belief_figure(run.run_dir, results, series=results / "fig_1b_data.parquet")
     figure.rename(results / "fig_1b_overview_belief.png")
     pdf = figure.with_suffix(".pdf")
     if pdf.is_file():

@@ -157,3 +157,13 @@ def decision_figure(coverage: pd.DataFrame, gates_result, path: str | Path) -> P
                + (f"At {rate:.0%} commitment, " if rate is not None else "At the operating point, ")
                + "mean predicted score (pale) against realized failure (solid); posterior variance makes no probability claim.")
     return save_figure(fig, path, caption=caption)
+
+
+def draw_decisive_tap(series: pd.DataFrame, path: Path) -> Path:
+    """Fig. 4b from its data series (the study and verify draw it by this call)."""
+    part = {name: rows for name, rows in series.groupby("model", sort=False)}
+    first = series.iloc[0]
+    return decisive_tap_figure(part["deployed"]["z"].to_numpy(), part["deployed"]["weight"].to_numpy(),
+                               part["corrected"]["z"].to_numpy(), part["corrected"]["weight"].to_numpy(),
+                               float(first["z_true"]), float(first["tap"]), float(first["reading"]),
+                               f"after tap {int(first['k'])}", path)  # no internal ids in a title

@@ -112,8 +112,6 @@ def _json(path: Path, default: Any = None) -> Any:
 def _read(path: Path, report: Report, what: str, manifest_file: bool = False) -> Any:
     """A manifest or results file under the store's rule set; a malformed one is one failure naming it
     (the file, the field or the line), never a traceback. None when missing or malformed."""
-    from probecommit.store.manifest_rules import ManifestError, read_json, read_manifest
-
     if not path.is_file():
         return None
     try:
@@ -159,8 +157,7 @@ def check_study_files(study: Path, report: Report) -> None:
     path = study / MANIFEST
     report.check("file", path.is_file(), f"{path}: no study manifest")
     listed = _read(path, report, "study manifest", manifest_file=True) or {}
-    _hashes(study, listed.get("sha256", {}), sorted(p.name for p in study.iterdir() if p.is_file() and p.name != MANIFEST),
-            report)
+    _hashes(study, listed.get("sha256", {}), manifest.study_files(study), report)
     for sub in sorted(p for p in study.iterdir() if p.is_dir()):
         report.check("file", False, f"{sub}: a folder inside a study folder (a publication holds files only)")
     for png in sorted(study.glob("fig_*.png")):  # a paper figure is published as PNG and PDF
@@ -223,10 +220,14 @@ def _leaves(value: Any) -> int:
 
 
 def check_recomputed(study: Path, results: dict[str, Any], report: Report) -> set[str]:
-    """Recompute the study's numbers from its episode tables; return the keys recomputed."""
+    """Recompute the study's numbers from its episode tables; return the keys recomputed (a results.json
+    copy of a rebuilt Parquet table, ``TWINS``, counts as recomputed: ``check_twins`` compares the two)."""
     from probecommit.report.ledger import walk_dotted
-    from probecommit.report.recompute import STUDIES
+    from probecommit.report.recompute import STORED_TABLES, STUDIES
 
+    for name in STORED_TABLES.get(study.name, ()):
+        report.check("file", (study / name).is_file(),
+                     f"{study.name}/{name}: missing (the stored rows the study's numbers are recomputed from)")
     if study.name not in STUDIES:
         return set()
     try:
@@ -246,7 +247,10 @@ def check_recomputed(study: Path, results: dict[str, Any], report: Report) -> se
         report.check("recomputed", ok, f"{study.name}/results.json: {where} = {a} but {again.source(key)} gives {b}")
     for name, table in again.tables.items():
         _compare_table(study, name, table, again.table_sources.get(name, "the stored episode tables"), report)
-    return set(again.values)
+    for ok, message in again.consistency:
+        report.check("recomputed", ok, message)
+    twins = {key for key, name in TWINS.get(study.name, {}).items() if name in again.tables and key in results}
+    return set(again.values) | twins
 
 
 def _compare_table(study: Path, name: str, expected: pd.DataFrame, source: str, report: Report) -> None:
@@ -443,9 +447,9 @@ def verify(results_root: str | Path, reproduction_md: str | Path | None = None, 
                 report.check("file", False, f"{path}: unreadable ({type(exc).__name__})")
                 continue
             checks.parquet_invariants(study.name, path.name, frame, report)
-        recomputed = check_recomputed(study, results, report)
-        report.verified_numbers += sum(_leaves(_get(results, k)) for k in recomputed)
-        report.traced_only_numbers += max(_leaves(results) - sum(_leaves(_get(results, k)) for k in recomputed), 0)
+        recomputed = sum(_leaves(_get(results, k)) for k in check_recomputed(study, results, report))
+        report.verified_numbers += recomputed
+        report.traced_only_numbers += max(_leaves(results) - recomputed, 0)
         check_twins(study, results, report)
         check_json_twins(study, results, report)
         check_texts(study, report)

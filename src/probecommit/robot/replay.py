@@ -131,9 +131,19 @@ def parse_sweep(text: str) -> list[float]:
     return values
 
 
+#: The replay columns a sweep row is computed from (:func:`sweep_row`), stored per size by a publication.
+SWEEP_COLUMNS = ("episode", "instance_id", "predicted", "realized", "covered", "escaped")
+
+
 def fault_sweep(path: str | Path, fault: str, sizes: Iterable[float], *, resamples: int = DEFAULT_RESAMPLES,
-                seed: int = DEFAULT_SEED, progress: Any = None) -> tuple[pd.DataFrame, float]:
+                seed: int = DEFAULT_SEED, progress: Any = None,
+                record: list[pd.DataFrame] | None = None) -> tuple[pd.DataFrame, float]:
     """Replay a log at each fault size; paired differences against the deployed replay.
+
+    Args:
+        record: A list the deployed replay's rows (``size`` NaN) and each faulted replay's rows
+            (:data:`SWEEP_COLUMNS`, with ``fault`` and ``size``) are appended to, for a publication
+            to store and verify to compute the rows again from (:func:`sweep_rows`).
 
     Returns:
         One row per size (``size``, the faulted ``coverage``, ``escape``, ``optimism``,
@@ -142,12 +152,26 @@ def fault_sweep(path: str | Path, fault: str, sizes: Iterable[float], *, resampl
     """
     config, *_ = load_session(path)
     base, reproduced = replay_session(path)
-    b = base.rows.set_index("episode")
-    out = []
-    sizes = list(sizes)
-    for size in sizes:
+    kept = [base.rows[list(SWEEP_COLUMNS)].assign(fault=fault, size=float("nan"))]
+    for size in list(sizes):
         faulted, _ = replay_session(path, fault_overrides(config, fault, size), variant=f"{fault}={size:g}")
-        f = faulted.rows.set_index("episode").loc[b.index]
+        kept.append(faulted.rows[list(SWEEP_COLUMNS)].assign(fault=fault, size=float(size)))
+        if progress is not None:
+            progress(size)
+    stored = pd.concat(kept, ignore_index=True)
+    if record is not None:
+        record.append(stored)
+    return sweep_rows(stored, resamples=resamples, seed=seed), reproduced
+
+
+def sweep_rows(stored: pd.DataFrame, *, resamples: int = DEFAULT_RESAMPLES, seed: int = DEFAULT_SEED) -> pd.DataFrame:
+    """A sweep's table from its replays' rows (the deployed replay's ``size`` is NaN), in the order stored:
+    one function for :func:`fault_sweep` and ``probecommit verify``."""
+    base = stored[stored["size"].isna()]
+    b = base.set_index("episode")
+    out = []
+    for (fault, size), faulted in stored[stored["size"].notna()].groupby(["fault", "size"], sort=False):
+        f = faulted.set_index("episode").loc[b.index]
         clusters = b["instance_id"].to_numpy()
         d_opt = (f["realized"] - f["predicted"]) - (b["realized"] - b["predicted"])
         d_cov = f["covered"].astype(float) - b["covered"].astype(float)
@@ -162,6 +186,4 @@ def fault_sweep(path: str | Path, fault: str, sizes: Iterable[float], *, resampl
             "delta_coverage": cov.estimate, "delta_coverage_lo": cov.lo, "delta_coverage_hi": cov.hi,
             "coverage_resolved": bool(cov.lo > 0 or cov.hi < 0),
         })
-        if progress is not None:
-            progress(size)
-    return pd.DataFrame(out), reproduced
+    return pd.DataFrame(out)

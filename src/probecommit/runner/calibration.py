@@ -82,6 +82,47 @@ Request = tuple[float | dict[int, float], float | None]
 Reduction = Callable[[pd.DataFrame], Any]
 
 
+class Recorder:
+    """The re-executed episode rows a calibration's results are computed from, kept for publishing.
+
+    Why: calibrated commits come from beliefs recomputed from stored probes, which a publication
+    does not hold; storing the few columns each result reads (``COMMIT_COLUMNS``) lets
+    ``probecommit verify`` recompute the calibrated numbers (``calibration_from_tables``,
+    ``gates_from_commits``) from the published table. ``Recorder(None)`` keeps nothing.
+    """
+
+    def __init__(self, sink: list[pd.DataFrame] | None) -> None:
+        self.sink = sink
+
+    def wrap(self, request: str, reducer: Reduction, columns: Sequence[str], gamma: float | None = None) -> Reduction:
+        """``reducer``, keeping each table's ``columns`` labelled with the request (and margin) first."""
+        if self.sink is None:
+            return reducer
+
+        def keep(table: pd.DataFrame) -> Any:
+            rows = table[list(columns)].reset_index(drop=True)
+            self.sink.append(rows.assign(request=request, gamma=float("nan") if gamma is None else float(gamma)))
+            return reducer(table)
+
+        return keep
+
+    def keep(self, request: str, table: pd.DataFrame, columns: Sequence[str]) -> None:
+        """Keep a whole table's ``columns`` (a commit not reduced chunk by chunk)."""
+        self.wrap(request, lambda t: None, columns)(table)
+
+    def keep_margins(self, gammas: Iterable[float]) -> None:
+        """Drop the margin rows of candidates the search committed in a block but never read."""
+        if self.sink is None:
+            return
+        read = {round(float(g), 10) for g in gammas}
+        self.sink[:] = [part for part in self.sink if not len(part) or part["request"].iat[0] != "margin"
+                        or round(float(part["gamma"].iat[0]), 10) in read]
+
+    def table(self) -> pd.DataFrame:
+        """Every kept row, one table (columns a request does not read are empty)."""
+        return pd.concat(self.sink or [], ignore_index=True)
+
+
 def _concat_parts(parts: Sequence[Any]) -> Any:
     """The reductions of a run's parts joined: DataFrames concatenated (their index kept), arrays
     concatenated, tuples element by element; None parts (nothing kept) skipped, and None when every part is."""
@@ -241,7 +282,8 @@ class _Run:
         return table
 
     def search_margin(self, thresholds: float | dict[int, float], grid: Iterable[float], budgets: Sequence[int],
-                      *extra: tuple[Request, Reduction | None]) -> tuple[MarginResult, list[Any]]:
+                      *extra: tuple[Request, Reduction | None],
+                      record: "Recorder | None" = None) -> tuple[MarginResult, list[Any]]:
         """The validation-tuned margin under ``thresholds`` (``audit.margin.select_margin``).
 
         A run of one chunk keeps its beliefs, so each margin is committed when the scan
@@ -256,6 +298,8 @@ class _Run:
             budgets: Budgets the margin rule averages over.
             *extra: Further requests with their reductions (see :meth:`commit`), committed in
                 the first pass.
+            record: Where each evaluated margin's rows are kept (``Recorder``, request ``margin``),
+                so a publication can store them and ``verify`` search the margin again.
 
         Returns:
             The margin and what :meth:`commit` returns for ``extra``.
@@ -268,6 +312,7 @@ class _Run:
         rows = self.beliefs.batch.n_episodes * max(len(self.beliefs.budgets), 1)
         per_pass = max(1, MARGIN_BLOCK_ROWS // max(rows, 1))
         margin_rows = functools.partial(_margin_rows, budgets=list(budgets))
+        recorder = record or Recorder(None)
 
         def evaluate(gamma: float) -> pd.DataFrame:
             if gamma not in tables:
@@ -275,14 +320,17 @@ class _Run:
                 first = [] if extras else list(extra)
                 out = self.commit(*[(thresholds, g) for g in block], *[request for request, _ in first],
                                   keep=[MARGIN_COLUMNS] * len(block) + [None] * len(first),
-                                  reduce=[margin_rows] * len(block) + [reducer for _, reducer in first])
+                                  reduce=[recorder.wrap("margin", margin_rows, MARGIN_COLUMNS, gamma=g) for g in block]
+                                  + [reducer for _, reducer in first])
                 tables.update(zip(block, out[:len(block)]))
                 extras.extend(out[len(block):])
             predicted, realized = tables.pop(gamma)  # the scan reads each margin once
             return pd.DataFrame({"predicted": predicted, "realized": realized})
 
         # The rows are those at ``budgets`` already (_margin_rows).
-        return select_margin(evaluate, candidates, budgets=None), extras
+        result = select_margin(evaluate, candidates, budgets=None)
+        recorder.keep_margins(result.search["gamma"])
+        return result, extras
 
     def release(self) -> None:
         """Drop the beliefs kept between commits (the run's last commit is done)."""
@@ -437,7 +485,8 @@ def calibrate(cal_run, test_run, alpha: float = DEFAULT_ALPHA, budgets: Sequence
               cost_budget: int | None = None, margin_grid: Iterable[float] = GAMMA_GRID,
               resamples: int = DEFAULT_RESAMPLES, seed: int = DEFAULT_SEED, level: float = DEFAULT_LEVEL,
               reuse: bool = True, plateau: str | None = None,
-              chunk_instances: int | None = CHUNK_INSTANCES) -> CalibrationResult:
+              chunk_instances: int | None = CHUNK_INSTANCES,
+              record: list[pd.DataFrame] | None = None) -> CalibrationResult:
     """Calibrate the executor on one run and report its effect on another.
 
     Steps: beliefs of both runs are recomputed from stored probes; worst-repeat
@@ -464,6 +513,8 @@ def calibrate(cal_run, test_run, alpha: float = DEFAULT_ALPHA, budgets: Sequence
             to the guarantee); default the runs' ``calibration.plateau``.
         chunk_instances: Instances whose beliefs are held at once (None: a whole run), so
             memory does not grow with the runs' size. Identical results.
+        record: A list the re-executed rows each result reads are appended to (``Recorder``),
+            for a publication to store and :func:`calibration_from_tables` to read.
 
     Returns:
         The calibration result.
@@ -476,26 +527,69 @@ def calibrate(cal_run, test_run, alpha: float = DEFAULT_ALPHA, budgets: Sequence
     cost_budget = max(budgets) if cost_budget is None else int(cost_budget)
     if cost_budget not in budgets:
         raise UsageError(f"cost budget {cost_budget} is not among the calibrated budgets {budgets}")
+    rec = Recorder(record)
 
     # Of each table, only what the results read is kept, chunk by chunk: per-instance scores, sums and
     # optimism, the rows at the cost budget and the margin rows, so memory does not grow with the runs.
     scores = _calibration_scores(cal)
-    t_k = budget_thresholds(scores, alpha, budgets)
-    simultaneous = worst_budget_scores(scores, budgets)
-    t_sim, n_calibration = conformal_quantile(simultaneous.to_numpy(), alpha), int(simultaneous.size)
-    margin, [optimism] = cal.search_margin(t_k, margin_grid, budgets,
-                                           ((t_k, None), functools.partial(_optimism, budgets=budgets)))
-    df_margin = optimism_margin(optimism.sort_index(), alpha)
+    t_k, t_sim, _ = _thresholds(scores, alpha, budgets)
+    optimism_of = rec.wrap("optimism", functools.partial(_optimism, budgets=budgets), OPTIMISM_COLUMNS)
+    margin, [optimism] = cal.search_margin(t_k, margin_grid, budgets, ((t_k, None), optimism_of), record=rec)
     # The calibration run is done: its tables, beliefs and engine cache go before the test run's commits.
     cal.release()
-    del cal, scores, optimism
+    del cal
 
     # Every test commit in one pass over the test run's chunks.
     audited = functools.partial(_audited, k=cost_budget)
     orig, set_rows, full, covered = test.commit(
         (test.nu, None), (t_k, None), (t_k, margin.gamma), (t_sim, None), keep=[None] + [AUDIT_COLUMNS] * 3,
-        reduce=[audited, functools.partial(_cost_rows, k=cost_budget), audited,
-                functools.partial(_all_covered, budgets=budgets)], final=True)
+        reduce=[audited, rec.wrap("set", functools.partial(_cost_rows, k=cost_budget), SET_COLUMNS),
+                rec.wrap("set_margin", audited, AUDIT_COLUMNS),
+                functools.partial(_all_covered, budgets=budgets)],
+        final=True)
+    blind = ok_episodes(test.loaded.table("episodes", where=("method", ["blind_robust"]), columns=FAILURE_COLUMNS))
+    return _summarize(CalibrationParts(scores, margin, optimism, orig, set_rows, full, covered, blind),
+                      alpha=alpha, budgets=budgets, cost_budget=cost_budget, resamples=resamples, seed=seed, level=level)
+
+
+#: The columns a publication stores of each recorded request (``Recorder``): what its reduction reads.
+OPTIMISM_COLUMNS = ("instance_id", "k", "status", "predicted", "realized")
+SET_COLUMNS = ("instance_id", "repeat", "k", "status", "realized")
+RAW_GATE_COLUMNS = ("instance_id", "repeat", "k", "status", "predicted", "realized", "escaped", "post_var",
+                    "max_surprise")
+ADJUSTED_GATE_COLUMNS = ("instance_id", "repeat", "k", "status", "predicted", "realized")
+
+
+def _thresholds(scores: pd.DataFrame, alpha: float, budgets: list[int]) -> tuple[dict[int, float], float, int]:
+    """Fixed-budget thresholds ``t_k``, the budget-simultaneous ``t`` and the calibration instances ``M``."""
+    simultaneous = worst_budget_scores(scores, budgets)
+    return (budget_thresholds(scores, alpha, budgets), conformal_quantile(simultaneous.to_numpy(), alpha),
+            int(simultaneous.size))
+
+
+@dataclass
+class CalibrationParts:
+    """What a calibration's results are computed from: the calibration scores, the margin search, and
+    the reductions of each commit (``_optimism``, ``_audited``, ``_cost_rows``, ``_all_covered``)."""
+
+    scores: pd.DataFrame
+    margin: MarginResult
+    optimism: pd.DataFrame
+    orig: tuple[pd.DataFrame, pd.DataFrame, pd.DataFrame]
+    set_rows: pd.DataFrame
+    full: tuple[pd.DataFrame, pd.DataFrame, pd.DataFrame]
+    #: Per test instance, covered at every budget at ``t`` (None: not recorded, no simultaneous coverage).
+    covered: pd.Series | None
+    blind: pd.DataFrame
+
+
+def _summarize(parts: CalibrationParts, *, alpha: float, budgets: list[int], cost_budget: int, resamples: int,
+               seed: int, level: float) -> CalibrationResult:
+    """The calibration result from its parts: one function for ``calibrate`` (parts reduced chunk by chunk
+    from re-executed commits) and ``calibration_from_tables`` (parts reduced from a publication's stored rows)."""
+    t_k, t_sim, n_calibration = _thresholds(parts.scores, alpha, budgets)
+    df_margin = optimism_margin(parts.optimism.sort_index(), alpha)
+    orig, full = parts.orig, parts.full
     a_orig = audit_from_sums(*orig[:2], budgets=budgets, resamples=resamples, seed=seed, level=level)
     a_cal = audit_from_sums(*full[:2], budgets=budgets, resamples=resamples, seed=seed, level=level)
     table3 = pd.DataFrame({"k": a_orig["k"]})
@@ -511,9 +605,9 @@ def calibrate(cal_run, test_run, alpha: float = DEFAULT_ALPHA, budgets: Sequence
     # Cost of calibration (Table IV): failure at the cost budget, paired over identical episodes.
     names = np.unique(orig[0]["instance_id"].to_numpy().astype(str))
     counts = resample_counts(names.size, resamples, seed)
-    arms = {"no calibration": orig[2], "set calibration": set_rows, "set calibration + margin": full[2]}
+    arms = {"no calibration": orig[2], "set calibration": parts.set_rows, "set calibration + margin": full[2]}
     cost_rows = []
-    blind = ok_episodes(test.loaded.table("episodes", where=("method", ["blind_robust"]), columns=FAILURE_COLUMNS))
+    blind = parts.blind
     if len(blind):
         iv, n = _failure_at(blind, int(blind["k"].iloc[0]), counts, names, level)
         cost_rows.append({"setting": "blind_robust", "k": int(blind["k"].iloc[0]), "n_episodes": n,
@@ -532,17 +626,80 @@ def calibrate(cal_run, test_run, alpha: float = DEFAULT_ALPHA, budgets: Sequence
                       "n_pairs": pdiff.n_pairs, "n_clusters": pdiff.n_clusters})
 
     # Simultaneous coverage on test, measured on the sets as constructed at t.
-    per_inst = covered.sort_index().astype(float)
-    sim_iv = cluster_bootstrap_mean(per_inst.to_numpy(), per_inst.index.to_numpy(), resamples=resamples,
-                                    seed=seed, level=level)
+    simultaneous = {"cluster_coverage": math.nan, "lo": math.nan, "hi": math.nan}
+    if parts.covered is not None:
+        per_inst = parts.covered.sort_index().astype(float)
+        sim_iv = cluster_bootstrap_mean(per_inst.to_numpy(), per_inst.index.to_numpy(), resamples=resamples,
+                                        seed=seed, level=level)
+        simultaneous = {"cluster_coverage": sim_iv.estimate, "lo": sim_iv.lo, "hi": sim_iv.hi}
     return CalibrationResult(
         alpha=alpha, budgets=budgets, n_calibration=n_calibration,
-        thresholds=t_k, simultaneous_threshold=t_sim, margin=margin, distribution_free_margin=df_margin,
+        thresholds=t_k, simultaneous_threshold=t_sim, margin=parts.margin, distribution_free_margin=df_margin,
         table3=table3, summary=summary, cost=pd.DataFrame(cost_rows), cost_differences=pd.DataFrame(diffs),
         cost_budget=cost_budget,
-        simultaneous_coverage={"cluster_coverage": sim_iv.estimate, "lo": sim_iv.lo, "hi": sim_iv.hi},
+        simultaneous_coverage=simultaneous,
         audit_original=a_orig, audit_calibrated=a_cal,
     )
+
+
+def _stored_margin(rows: pd.DataFrame, grid: Iterable[float], budgets: list[int]) -> MarginResult:
+    """The margin search again, each candidate's table read from the stored ``margin`` rows.
+
+    Raises:
+        KeyError: The search asks for a margin the publication did not store.
+    """
+    by_gamma = {round(float(g), 10): part for g, part in rows.groupby("gamma", sort=False)}
+
+    def evaluate(gamma: float) -> pd.DataFrame:
+        if round(gamma, 10) not in by_gamma:
+            raise KeyError(f"the margin search evaluates gamma = {gamma}, whose rows are not stored")
+        predicted, realized = _margin_rows(by_gamma[round(gamma, 10)], budgets)
+        return pd.DataFrame({"predicted": predicted, "realized": realized})
+
+    return select_margin(evaluate, margin_candidates(grid), budgets=None)
+
+
+def _request(commits: pd.DataFrame, request: str, columns: Sequence[str]) -> pd.DataFrame:
+    """One request's stored rows and columns, with the dtypes it was committed with (a column other
+    requests lack is stored nullable: integers and flags are restored here)."""
+    rows = commits.loc[commits["request"] == request, [c for c in columns if c in commits.columns]]
+    rows = rows.reset_index(drop=True)
+    for column, dtype in (("repeat", "int64"), ("k", "int64"), ("covered", bool), ("escaped", bool)):
+        if column in rows.columns and not rows[column].isna().any():
+            rows[column] = rows[column].astype(dtype)
+    return rows
+
+
+def calibration_from_tables(commits: pd.DataFrame, cal_episodes: pd.DataFrame, test_episodes: pd.DataFrame,
+                            alpha: float, budgets: Sequence[int], *, cost_budget: int | None = None,
+                            margin_grid: Iterable[float] = GAMMA_GRID, resamples: int = DEFAULT_RESAMPLES,
+                            seed: int = DEFAULT_SEED, level: float = DEFAULT_LEVEL) -> CalibrationResult:
+    """:func:`calibrate`'s result from stored tables, for ``probecommit verify``.
+
+    Args:
+        commits: The rows :func:`calibrate` recorded (``record=``) of one calibration.
+        cal_episodes: The calibration run's stored episodes (its uncalibrated ``nu`` commits).
+        test_episodes: The test run's stored episodes (its ``nu`` commits and Blind-Robust rows).
+        alpha, budgets, cost_budget, margin_grid, resamples, seed, level: As :func:`calibrate`'s.
+
+    Returns:
+        The result :func:`calibrate` returned, when the stored rows are the ones it committed; its
+        simultaneous coverage is NaN (its rows are not stored).
+    """
+    budgets = sorted(int(k) for k in budgets)
+    cost_budget = max(budgets) if cost_budget is None else int(cost_budget)
+    probe = lambda t: t.loc[t["method"] == PROBE_METHOD]  # noqa: E731
+    scores = _scores(probe(cal_episodes)).sort_index()
+    margin = _stored_margin(_request(commits, "margin", (*MARGIN_COLUMNS, "gamma")), margin_grid, budgets)
+    optimism = _optimism(_request(commits, "optimism", OPTIMISM_COLUMNS), budgets)
+    parts = CalibrationParts(
+        scores, margin, optimism, _audited(probe(test_episodes), cost_budget),
+        _cost_rows(_request(commits, "set", SET_COLUMNS), cost_budget),
+        _audited(_request(commits, "set_margin", AUDIT_COLUMNS), cost_budget),
+        None,  # a publication prints no simultaneous coverage, so it stores no rows for it
+        ok_episodes(test_episodes.loc[test_episodes["method"] == "blind_robust", list(FAILURE_COLUMNS)]))
+    return _summarize(parts, alpha=alpha, budgets=budgets, cost_budget=cost_budget, resamples=resamples, seed=seed,
+                      level=level)
 
 
 # ----------------------------------------------------------------------------- gates
@@ -552,7 +709,7 @@ def gates(cal_run, test_run, alpha: float = DEFAULT_ALPHA, budgets: Sequence[int
           target_rate: float = DEFAULT_TARGET_RATE, margin_grid: Iterable[float] = GAMMA_GRID,
           post_var_executor: str = "raw", resamples: int = DEFAULT_RESAMPLES, seed: int = DEFAULT_SEED,
           reuse: bool = True, plateau: str | None = None,
-          chunk_instances: int | None = CHUNK_INSTANCES) -> GatesResult:
+          chunk_instances: int | None = CHUNK_INSTANCES, record: list[pd.DataFrame] | None = None) -> GatesResult:
     """Commit gates on the test run with the decision layer calibrated on the calibration run.
 
     The decision layer uses the budget-simultaneous threshold ``t`` over the
@@ -576,6 +733,8 @@ def gates(cal_run, test_run, alpha: float = DEFAULT_ALPHA, budgets: Sequence[int
         plateau: The set at ``t = 1``: ``prefix`` (the paper) or ``hull`` (no exception
             to the guarantee); default the runs' ``calibration.plateau``.
         chunk_instances: Instances whose beliefs are held at once (None: a whole run).
+        record: A list the re-executed rows the gates read are appended to (``Recorder``), for a
+            publication to store and :func:`gates_from_commits` to read.
 
     Returns:
         Curves, areas and the committed pools; ``info`` holds ``t``, ``gamma``
@@ -586,14 +745,44 @@ def gates(cal_run, test_run, alpha: float = DEFAULT_ALPHA, budgets: Sequence[int
     _check_pair(cal, test)
     budgets = _budgets(cal, budgets)
     _budgets(test, budgets)
+    rec = Recorder(record)
     t_sim = conformal_quantile(worst_budget_scores(_calibration_scores(cal), budgets).to_numpy(), alpha)
-    margin, _ = cal.search_margin(t_sim, margin_grid, budgets)
+    margin, _ = cal.search_margin(t_sim, margin_grid, budgets, record=rec)
     cal.release()
     del cal  # the calibration run is done before the test run's commits
     raw, adjusted = test.commit((test.nu, None), (t_sim, margin.gamma), final=True)
+    rec.keep("raw", raw, [c for c in RAW_GATE_COLUMNS if c in raw.columns])
+    rec.keep("adjusted", adjusted, ADJUSTED_GATE_COLUMNS)
+    return _gates_result(raw, adjusted, t_sim, margin, alpha=alpha, budgets=budgets, target_rate=target_rate,
+                         post_var_executor=post_var_executor, resamples=resamples, seed=seed)
+
+
+def _gates_result(raw: pd.DataFrame, adjusted: pd.DataFrame, t_sim: float, margin: MarginResult, *, alpha: float,
+                  budgets: list[int], target_rate: float, post_var_executor: str, resamples: int,
+                  seed: int) -> GatesResult:
+    """The gates and their provenance from the two executors' test tables (one function for
+    :func:`gates` and :func:`gates_from_commits`)."""
     result = gates_from_tables(raw, adjusted, budgets=budgets, target_rate=target_rate,
                                post_var_executor=post_var_executor)
     raw_b = raw.loc[raw["k"].isin(budgets)]
     result.info.update(threshold=t_sim, gamma=margin.gamma, gamma_satisfied=margin.satisfied, alpha=alpha,
                        surprise=surprise_auc(raw_b, resamples=resamples, seed=seed))
     return result
+
+
+def gates_from_commits(commits: pd.DataFrame, cal_episodes: pd.DataFrame, alpha: float, budgets: Sequence[int], *,
+                       target_rate: float = DEFAULT_TARGET_RATE, margin_grid: Iterable[float] = GAMMA_GRID,
+                       post_var_executor: str = "raw", resamples: int = DEFAULT_RESAMPLES,
+                       seed: int = DEFAULT_SEED) -> GatesResult:
+    """:func:`gates`'s result from the rows it recorded (``record=``) and the calibration run's stored
+    episodes, for ``probecommit verify``: ``t`` from the stored scores, the margin searched again over
+    the stored margin rows, the gates swept again over the stored test rows."""
+    budgets = sorted(int(k) for k in budgets)
+    cal = cal_episodes.loc[cal_episodes["method"] == PROBE_METHOD]
+    t_sim = conformal_quantile(worst_budget_scores(_scores(cal).sort_index(), budgets).to_numpy(), alpha)
+    margin = _stored_margin(_request(commits, "margin", (*MARGIN_COLUMNS, "gamma")), margin_grid, budgets)
+    raw = _request(commits, "raw", RAW_GATE_COLUMNS)
+    adjusted = _request(commits, "adjusted", ADJUSTED_GATE_COLUMNS)
+    return _gates_result(raw, adjusted, t_sim, margin, alpha=alpha, budgets=budgets,
+                         target_rate=target_rate, post_var_executor=post_var_executor, resamples=resamples,
+                         seed=seed)

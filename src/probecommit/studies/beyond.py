@@ -17,39 +17,67 @@ from probecommit.runner.replay import load_run, replay_episodes
 from probecommit.store.safefile import write_text, write_with
 
 
-def move_comparison(runs: Mapping[str, str | Path], budget: int = 8) -> pd.DataFrame:
+#: The episode columns a publication stores of the moves' replays and the adaptive comparison's runs.
+STORED_COLUMNS = ("instance_id", "repeat", "k", "method", "status", "predicted", "realized", "covered", "escaped",
+                  "post_var")
+
+
+def move_comparison(runs: Mapping[str, str | Path], budget: int = 8,
+                    record: list[pd.DataFrame] | None = None) -> pd.DataFrame:
     """Escape, coverage, optimism and failure at ``budget`` under the paper's jitter and under MH.
 
     Args:
         runs: Label -> run directory (random probes; both arms replay the stored taps).
         budget: The probe budget compared.
+        record: A list each replay's rows at ``budget`` are appended to (``run``, ``move``), for a
+            publication to store and verify to compute the table again from (:func:`move_table`).
 
     Returns:
         One row per (run, move).
     """
-    rows = []
+    kept = []
     for label, path in runs.items():
         loaded = load_run(path)
         for move in ("jitter", "mh"):
             episodes, _ = replay_episodes(loaded, {"belief": {"move": move}})
             p = episodes[(episodes["method"] == "probe_robust") & (episodes["k"] == budget) & (episodes["status"] == "ok")]
-            rows.append({
-                "run": label, "move": move, "n": len(p), "escape": p["escaped"].mean(),
-                "episode_coverage": p["covered"].mean(), "optimism": p["realized"].mean() - p["predicted"].mean(),
-                "failure": p["realized"].mean(),
-            })
-    return pd.DataFrame(rows)
+            kept.append(p[[c for c in STORED_COLUMNS if c in p.columns]].assign(run=label, move=move))
+    if record is not None:
+        record.extend(kept)
+    return move_table(pd.concat(kept, ignore_index=True))
 
 
-def plateau_comparison(cal_run: str | Path, test_run: str | Path, resamples: int = 2000) -> pd.DataFrame:
-    """Calibrated cluster coverage and optimism per budget with the paper's prefix set and the hull set at t = 1."""
+def move_table(rows: pd.DataFrame) -> pd.DataFrame:
+    """The moves table from each replay's ok probe-robust rows at the compared budget, in the order stored."""
+    out = []
+    for (label, move), p in rows.groupby(["run", "move"], sort=False):
+        out.append({"run": label, "move": move, "n": len(p), "escape": p["escaped"].mean(),
+                    "episode_coverage": p["covered"].mean(), "optimism": p["realized"].mean() - p["predicted"].mean(),
+                    "failure": p["realized"].mean()})
+    return pd.DataFrame(out)
+
+
+def plateau_comparison(cal_run: str | Path, test_run: str | Path, resamples: int = 2000,
+                       record: list[pd.DataFrame] | None = None) -> pd.DataFrame:
+    """Calibrated cluster coverage and optimism per budget with the paper's prefix set and the hull set at t = 1.
+
+    ``record``: a list each calibration's recorded rows (``runner.calibration.Recorder``, with ``plateau``)
+    are appended to, for a publication to store and verify to recalibrate from."""
     parts = []
     for mode in ("prefix", "hull"):
-        result = calibrate(cal_run, test_run, plateau=mode, resamples=resamples)
-        table = result.table3[["k", "threshold", "cluster_coverage_calibrated", "optimism_calibrated"]].copy()
-        table.insert(0, "plateau", mode)
-        parts.append(table)
+        kept: list[pd.DataFrame] = []
+        result = calibrate(cal_run, test_run, plateau=mode, resamples=resamples, record=kept)
+        if record is not None:
+            record.extend(part.assign(plateau=mode) for part in kept)
+        parts.append(plateau_rows(result, mode))
     return pd.concat(parts, ignore_index=True)
+
+
+def plateau_rows(result, mode: str) -> pd.DataFrame:
+    """One plateau's rows of the table from its calibration result."""
+    table = result.table3[["k", "threshold", "cluster_coverage_calibrated", "optimism_calibrated"]].copy()
+    table.insert(0, "plateau", mode)
+    return table
 
 
 def budget_summary(episodes: pd.DataFrame) -> pd.DataFrame:
@@ -67,7 +95,8 @@ def budget_summary(episodes: pd.DataFrame) -> pd.DataFrame:
     }).reset_index()
 
 
-def adaptive_comparison(runs: Mapping[str, str | Path], out: str | Path, workers: int = 1) -> pd.DataFrame:
+def adaptive_comparison(runs: Mapping[str, str | Path], out: str | Path, workers: int = 1,
+                        record: list[pd.DataFrame] | None = None) -> pd.DataFrame:
     """Run each given run's config again with ``schedule: adaptive`` and compare per budget.
 
     Args:
@@ -75,6 +104,8 @@ def adaptive_comparison(runs: Mapping[str, str | Path], out: str | Path, workers
             config, instances and seeds are reused; only the schedule changes).
         out: Folder for the adaptive runs (``<out>/<label>-adaptive``).
         workers: Local worker processes.
+        record: A list each run's and schedule's ok probe-robust rows (:func:`summary_rows`, with
+            ``run`` and ``schedule``) are appended to, for a publication to store.
 
     Returns:
         One row per (label, schedule, k).
@@ -92,11 +123,32 @@ def adaptive_comparison(runs: Mapping[str, str | Path], out: str | Path, workers
         schedule = loaded.config.probes.schedule
         for name, episodes in ((schedule if isinstance(schedule, str) else "cover", loaded.episodes),
                                ("adaptive", adaptive.episodes)):
-            table = budget_summary(episodes)
-            table.insert(0, "schedule", name)
-            table.insert(0, "run", label)
-            rows.append(table)
-    return pd.concat(rows, ignore_index=True)
+            rows.append(summary_rows(episodes).assign(run=label, schedule=name))
+    if record is not None:
+        record.extend(rows)
+    return adaptive_table(pd.concat(rows, ignore_index=True))
+
+
+def summary_rows(episodes: pd.DataFrame) -> pd.DataFrame:
+    """The rows :func:`budget_summary` reads (ok probe-robust rows), what a publication stores per run and schedule."""
+    p = episodes[(episodes["method"] == "probe_robust") & (episodes["status"] == "ok")]
+    return p[[c for c in STORED_COLUMNS if c in p.columns]].reset_index(drop=True)
+
+
+def adaptive_table(rows: pd.DataFrame) -> pd.DataFrame:
+    """The adaptive comparison's table from the stored rows of each run and schedule, in the order stored."""
+    parts = []
+    for (label, name), part in rows.groupby(["run", "schedule"], sort=False):
+        table = budget_summary(part)
+        table.insert(0, "schedule", name)
+        table.insert(0, "run", label)
+        parts.append(table)
+    return pd.concat(parts, ignore_index=True)
+
+
+#: The rows verify recomputes beyond's three tables from (``part``: plateau, moves, adaptive).
+EPISODES_FILE = "beyond_episodes.parquet"
+PLATEAU_RESAMPLES = 2000
 
 
 def _records(frame: pd.DataFrame) -> list[dict]:
@@ -125,25 +177,31 @@ def reproduce_beyond(insertion_runs: str | Path, out: str | Path, push1d_run: st
     out.mkdir(parents=True, exist_ok=True)
     step = progress or (lambda *a: None)
     step("plateau: prefix vs hull", 0, 1)
-    plateau = plateau_comparison(runs / "B_cal_random", runs / "B_test_random")
+    commits: list[pd.DataFrame] = []
+    plateau = plateau_comparison(runs / "B_cal_random", runs / "B_test_random", resamples=PLATEAU_RESAMPLES,
+                                 record=commits)
     step("move: jitter vs mh", 0, 1)
+    moved: list[pd.DataFrame] = []
     moves = move_comparison({"B_test": runs / "B_test_random", "C": runs / "C_random",
-                             "C_corrected": runs / "C_random_corrected"})
+                             "C_corrected": runs / "C_random_corrected"}, record=moved)
     step("adaptive probes", 0, 1)
     adaptive_runs = {"B_test": runs / "B_test_random", "C": runs / "C_random"}
     if push1d_run is not None:
         adaptive_runs["push1d"] = Path(push1d_run)
-    adaptive = adaptive_comparison(adaptive_runs, out / "runs", workers=workers)
-    cover = []
+    kept_rows: list[pd.DataFrame] = []
+    adaptive_comparison(adaptive_runs, out / "runs", workers=workers, record=kept_rows)
     for label, run in (("B_test", "B_test_cover"), ("C", "C_cover")):
         if (runs / run).is_dir():
-            table = budget_summary(load_run(runs / run).episodes)
-            table.insert(0, "schedule", "cover")
-            table.insert(0, "run", label)
-            cover.append(table)
-    adaptive = pd.concat([adaptive, *cover], ignore_index=True)
+            kept_rows.append(summary_rows(load_run(runs / run).episodes).assign(run=label, schedule="cover"))
+    stored = pd.concat(kept_rows, ignore_index=True)
+    adaptive = adaptive_table(stored)
     for name, frame in (("plateau", plateau), ("moves", moves), ("adaptive", adaptive)):
         write_with(out / f"{name}.parquet", frame.to_parquet)
-    results = {"plateau": _records(plateau), "moves": _records(moves), "adaptive": _records(adaptive)}
+    kept = pd.concat([pd.concat(commits, ignore_index=True).assign(part="plateau"),
+                      pd.concat(moved, ignore_index=True).assign(part="moves"), stored.assign(part="adaptive")],
+                     ignore_index=True)
+    write_with(out / EPISODES_FILE, lambda buf: kept.to_parquet(buf, compression="zstd", index=False))
+    results = {"plateau": _records(plateau), "moves": _records(moves), "adaptive": _records(adaptive),
+               "settings": {"plateau_resamples": PLATEAU_RESAMPLES}}
     write_text(out / "results.json", json.dumps({"results": results}, indent=1, default=float))
     return results

@@ -284,6 +284,27 @@ TABLE_ROWS = (("support escape", "escape"), ("episode coverage", "coverage"),
 TABLE_VARIANTS = ("deployed", "mj_offset", "own_scan")
 
 
+def scan_rows(engine: str, boundary: Any, capture: CaptureResult) -> pd.DataFrame:
+    """One engine's scans as one table (``kind``: ``boundary``, ``capture`` per truth, ``capture_side``),
+    what a publication stores (``engine_scans.parquet``) and :func:`scan_summaries` reads."""
+    sides = capture.sides.assign(enters_beyond=capture.sides["enters_beyond"].astype(float))
+    return pd.concat([boundary.scans.assign(kind="boundary"), capture.truths.assign(kind="capture"),
+                      sides.assign(kind="capture_side")], ignore_index=True).assign(engine=engine)
+
+
+def scan_summaries(rows: pd.DataFrame) -> dict[str, dict[str, dict[str, float]]]:
+    """Per engine, the boundary scan's and the capture scan's summaries from the stored scan rows (one function
+    for the study and for ``probecommit verify``)."""
+    from probecommit.studies.scan import ScanResult
+
+    out = {}
+    for engine, part in rows.groupby("engine", sort=False):
+        kind = lambda name: part[part["kind"] == name].reset_index(drop=True)  # noqa: E731
+        out[engine] = {"boundary": ScanResult(kind("boundary"), pd.DataFrame()).summary(),
+                       "capture": CaptureResult(kind("capture_side"), kind("capture")).summary()}
+    return out
+
+
 def table_variants(own_delta: float, mujoco_delta: float = PAPER_DELTA_MM) -> dict[str, float]:
     """The three tap-boundary offsets Table VIII runs in one engine.
 
@@ -396,15 +417,17 @@ def run_engine_study(protocol: Any, root: str | Path, engines: Iterable[str] = (
     dev = draw_instances(dev_config, build_model(dev_config))
     stored: list[pd.DataFrame] = []
     scans: dict[str, Any] = {}
+    scan_tables: list[pd.DataFrame] = []
     for engine in engines:
         sim = make_simulator(engine, noise_sigma=protocol.noise_sigma)
         step(f"{engine}: boundary scan", 0, 1)
         boundary = scan_boundary(sim, dev, protocol.scan["step"], protocol.scan["half_range"], protocol.scan["tolerance"])
         step(f"{engine}: capture-window scan", 0, 1)
         capture = scan_capture_window(sim, dev)
-        own = boundary.summary()["delta"]
-        scans[engine] = {"boundary": boundary.summary(), "capture": capture.summary(),
-                         "engine_calls": dict(sim.engine_calls)}
+        rows = scan_rows(engine, boundary, capture)
+        scan_tables.append(rows)
+        scans[engine] = {**scan_summaries(rows)[engine], "engine_calls": dict(sim.engine_calls)}
+        own = scans[engine]["boundary"]["delta"]
         base_cfg = protocol.run_config(f"{engine}_B_test_random", "B", "B_test", "random")
         data = config_data(base_cfg)
         data["simulator"] = {**data["simulator"], "engine": engine}
@@ -422,4 +445,5 @@ def run_engine_study(protocol: Any, root: str | Path, engines: Iterable[str] = (
     episodes = pd.concat(stored, ignore_index=True)
     table, paired_rows, escape = summarize_engine_runs(episodes, **boot)
     return {"table": table, "paired": paired_rows, "escape": escape, "scans": scans, "episodes": episodes,
+            "scan_rows": pd.concat(scan_tables, ignore_index=True),
             "bootstrap": boot}

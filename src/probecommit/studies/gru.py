@@ -70,32 +70,44 @@ def reproduce_gru(out: str | Path, pipeline_run: str | Path, quick: bool = False
     episodes = loaded.episodes
     pipe = episodes[(episodes["method"] == "probe_robust") & (episodes["k"] == k) & (episodes["status"] == "ok")]
     keys = pd.DataFrame({"instance_id": batch.instance_id.astype(str), "repeat": batch.repeat, "k": k})
-    gru = keys.assign(realized=per_seed.mean(axis=0))
     pipe = keys.merge(pipe[["instance_id", "repeat", "realized"]], on=["instance_id", "repeat"], how="left")
-    diff = paired_bootstrap(pipe, gru, "realized", **cfg["bootstrap"]).difference
-    difference = [diff.estimate, diff.lo, diff.hi]
-    seed_means = per_seed.mean(axis=1)
-    results = {
-        "pipeline_miss": float(pipe["realized"].mean()),
-        "gru_miss": float(gru["realized"].mean()),
-        "gru_minus_pipeline": difference,
-        "equivalence_margin": cfg["equivalence_margin"],
-        "equivalent": equivalent(tuple(difference), cfg["equivalence_margin"]),
-        "seeds": int(seeds),
-        "seed_miss_mean": float(seed_means.mean()), "seed_miss_sd": float(seed_means.std(ddof=1)) if seeds > 1 else 0.0,
-        "seed_miss_min": float(seed_means.min()), "seed_miss_max": float(seed_means.max()),
-        "episodes": int(batch.n_episodes),
-        "training_loss_last_mean": float(np.mean([m["loss_last"] for m in meta])),
-        "k": int(k),
-    }
+    # Per episode: the pipeline's miss and each seed's GRU miss (what `reproduce explain` reads
+    # to split the interval's width into instance and seed variation, and verify recomputes the table from).
+    per_episode = pipe.assign(**{f"gru_seed_{s}": per_seed[s] for s in range(len(per_seed))})
+    results = {**summarize_gru(per_episode, cfg["bootstrap"], cfg["equivalence_margin"]),
+               "training_loss_last_mean": float(np.mean([m["loss_last"] for m in meta])),
+               "bootstrap": dict(cfg["bootstrap"])}
     out.mkdir(parents=True, exist_ok=True)
     write_text(out / "results.json", json.dumps({"results": results}, indent=1))
-    # Per episode: the pipeline's miss and each seed's GRU miss (what `reproduce explain` reads
-    # to split the interval's width into instance and seed variation).
-    per_episode = pipe.assign(**{f"gru_seed_{s}": per_seed[s] for s in range(len(per_seed))})
     write_with(out / "gru_episodes.parquet", per_episode.to_parquet)
     write_text(out / "table_gru.md", gru_markdown(results))
     return results
+
+
+def summarize_gru(per_episode: pd.DataFrame, bootstrap: dict[str, Any], margin: float) -> dict[str, Any]:
+    """The GRU table's numbers from the per-episode misses (``gru_episodes.parquet``): one function for
+    the study and for ``probecommit verify``. The GRU's miss per episode is its mean over the seeds."""
+    seeds = sorted((c for c in per_episode.columns if c.startswith("gru_seed_")), key=lambda c: int(c.rsplit("_", 1)[1]))
+    per_seed = per_episode[seeds].to_numpy(float).T
+    keys = per_episode[["instance_id", "repeat", "k"]].reset_index(drop=True)
+    pipe = keys.assign(realized=per_episode["realized"].to_numpy(float))
+    gru = keys.assign(realized=per_seed.mean(axis=0))
+    diff = paired_bootstrap(pipe, gru, "realized", **bootstrap).difference
+    difference = [diff.estimate, diff.lo, diff.hi]
+    seed_means = per_seed.mean(axis=1)
+    return {
+        "pipeline_miss": float(pipe["realized"].mean()),
+        "gru_miss": float(gru["realized"].mean()),
+        "gru_minus_pipeline": difference,
+        "equivalence_margin": margin,
+        "equivalent": equivalent(tuple(difference), margin),
+        "seeds": len(seeds),
+        "seed_miss_mean": float(seed_means.mean()),
+        "seed_miss_sd": float(seed_means.std(ddof=1)) if len(seeds) > 1 else 0.0,
+        "seed_miss_min": float(seed_means.min()), "seed_miss_max": float(seed_means.max()),
+        "episodes": int(len(per_episode)),
+        "k": int(keys["k"].iloc[0]),
+    }
 
 
 def gru_markdown(results: dict) -> str:

@@ -52,6 +52,7 @@ class Render:
     Attributes:
         tables: Table key -> ``(results, out) -> Markdown``.
         scan_figure, fault_signatures, decisive_tap_figure, decision_figure: Each draws its figure and
+            returns its path (``decisive_tap_figure`` from Fig. 4b's data series, :func:`decisive_tap_series`);
             returns its path.
     """
 
@@ -89,8 +90,16 @@ class Reproduction:
 
 
 #: Runs whose episodes the publication stores (``episodes.parquet``): verify recomputes from them.
-RECOMPUTED_RUNS = ("A_cover", "B_cal_cover", "B_cal_random", "B_test_random", "C_random", "C_random_corrected", "C_cover",
-                   "C_cover_corrected")
+RECOMPUTED_RUNS = ("A_cover", "B_cal_cover", "B_cal_random", "B_test_cover", "B_test_random", "C_random",
+                   "C_random_corrected", "C_cover", "C_cover_corrected", "B_cal_cover_corrected")
+#: The re-executed commits verify recomputes the calibrated numbers and the gates from
+#: (``runner.calibration.Recorder``): calibration name -> (calibration run, test run).
+CALIBRATIONS = {"cover": ("B_cal_cover", "B_test_cover"), "random": ("B_cal_random", "B_test_random"),
+                "testc_old": ("B_cal_cover", "C_cover"), "testc_corrected": ("B_cal_cover_corrected", "C_cover_corrected"),
+                "gates": ("B_cal_cover", "B_test_cover")}
+COMMITS_FILE = "commits.parquet"
+#: The scan readings of the instance Fig. 4a draws.
+SCAN_GRID = "scan_grid.parquet"
 #: The episode columns the recomputed numbers read (``z_true``: the explain target stratifies the fault
 #: harness's episodes by where the hole is).
 STORED_COLUMNS = ("instance_id", "repeat", "k", "method", "status", "predicted", "realized", "covered", "escaped",
@@ -100,6 +109,52 @@ STORED_COLUMNS = ("instance_id", "repeat", "k", "method", "status", "predicted",
 def store_episodes(episodes: pd.DataFrame, path: Path, extra: tuple[str, ...] = ()) -> None:
     """Write the columns verify reads, strings as dictionaries (a few bytes an episode)."""
     table = episodes[[*extra, *STORED_COLUMNS]].reset_index(drop=True)
+    write_with(path, lambda buf: table.to_parquet(buf, compression="zstd", index=False))
+
+
+#: The robust filters' rows (``robust_summary`` reads them): each tuning candidate's final-budget rows
+#: on the development run and each arm's rows at the final budget.
+ROBUST_FILE = "robust_episodes.parquet"
+ROBUST_COLUMNS = ("instance_id", "repeat", "k", "method", "status", "predicted", "realized", "covered", "escaped")
+
+
+def robust_summary(tuning: pd.DataFrame, arms: dict[str, pd.DataFrame], kmax: int, boot: dict[str, int]) -> dict[str, Any]:
+    """The robust-filter results: the tuning table, the chosen values, the deployed filter's metrics and each
+    chosen filter's with its paired failure difference, and the mixture's cost when the model is right
+    (one function for the study and for verify, which passes the stored rows)."""
+    chosen = {row.family: row.value for row in tuning[tuning.chosen].itertuples()}
+    res = {"tuning": tuning.to_dict("records"), "chosen": chosen,
+           "deployed": episode_metrics(arms["deployed"], kmax, **boot)}
+    for family, value in chosen.items():
+        m = episode_metrics(arms[family], kmax, **boot)
+        res[family] = {"value": value, **m, "failure_diff": paired(arms["deployed"], arms[family], kmax, "realized", **boot)}
+    if "mixture" in chosen:
+        res["mixture_cost_when_right"] = [float(probe_rows(arms["base"], kmax)["realized"].mean()),
+                                          float(probe_rows(arms["mixture_right"], kmax)["realized"].mean())]
+    return res
+
+
+#: Fig. 4b's data: both beliefs' particles after the decisive tap, with the truth, the tap and its reading.
+DECISIVE_TAP = "decisive_tap.parquet"
+
+
+def decisive_tap_series(z_deployed, w_deployed, z_corrected, w_corrected, z_true: float, tap: float, reading: float,
+                        k: int) -> pd.DataFrame:
+    """Fig. 4b's data series, one table: each model's particles and weights (``model``), the scalars on every row."""
+    parts = [pd.DataFrame({"model": name, "z": np.asarray(z, float), "weight": np.asarray(w, float)})
+             for name, z, w in (("deployed", z_deployed, w_deployed), ("corrected", z_corrected, w_corrected))]
+    return pd.concat(parts, ignore_index=True).assign(z_true=z_true, tap=tap, reading=reading, k=int(k))
+
+
+def store_commits(commits: dict[str, list[pd.DataFrame]], path: Path) -> None:
+    """The calibrations' re-executed rows (``runner.calibration.Recorder``), one zstd table with a
+    ``calibration`` column; the columns a request does not read are empty (strings are stored as
+    Parquet dictionaries, a few bytes a row)."""
+    frames = [pd.concat(parts, ignore_index=True).assign(calibration=name) for name, parts in commits.items() if parts]
+    if not frames:
+        return
+    table = pd.concat(frames, ignore_index=True)
+    table = table[["calibration", "request", "gamma", *[c for c in table.columns if c not in ("calibration", "request", "gamma")]]]
     write_with(path, lambda buf: table.to_parquet(buf, compression="zstd", index=False))
 
 
@@ -212,6 +267,8 @@ class InsertionReproduction:
         self.boot = dict(resamples=protocol.bootstrap.resamples, seed=protocol.bootstrap.seed)
         self.chunk = dict(chunk_instances=self.CHUNK_INSTANCES)
         self.loaded: dict[str, LoadedRun] = {}
+        #: Per calibration (``CALIBRATIONS``), the re-executed rows its results read.
+        self.commits: dict[str, list[pd.DataFrame]] = {name: [] for name in CALIBRATIONS}
         # What the tables print about the protocol itself (Table I's row, the fault table's header).
         self.rep.results["setup"] = {
             "engine": protocol.engine, "sigma": protocol.sigma, "k_random": protocol.budgets["random"],
@@ -262,8 +319,10 @@ class InsertionReproduction:
         summary["frozen_delta"] = p.delta
         self.rep.results["scan"] = summary
         first = str(result.scans["instance_id"].iloc[0])
-        self.rep.figures["scan"] = str(self.render.scan_figure(result.grid, result.scans, first, summary["delta"],
-                                                               self.out / "fig_4a_teaser_scan_section.png"))
+        # The readings of the instance the section draws (verify draws Fig. 4a again from them and scan.parquet).
+        grid = result.grid[result.grid["instance_id"] == first].reset_index(drop=True)
+        write_with(self.out / SCAN_GRID, grid.to_parquet)
+        self.rep.figures["scan"] = str(self.render.scan_figure(grid, result.scans, first, summary["delta"], self.out / "fig_4a_teaser_scan_section.png"))
         self.write_table("scan")
 
     def cover_search(self, limit: int | None) -> None:
@@ -316,8 +375,10 @@ class InsertionReproduction:
         # Table II's insertion row: Blind-Bayes minus cover k = 5, paired on (instance, repeat).
         cover_a = a[(a.method == "probe_robust") & (a.k == 5) & (a.status == "ok")]
         a_paired = paired_bootstrap(cover_a, blind_a, "realized", keys=("instance_id", "repeat"), **b)
-        self.cal_cover = calibrate(L["B_cal_cover"], L["B_test_cover"], alpha=self.p.alpha, budgets=[1, 2, 3, 4, 5], **b, **self.chunk)
-        self.cal_random = calibrate(L["B_cal_random"], L["B_test_random"], alpha=self.p.alpha, budgets=[1, 2, 3, 5, 8], **b, **self.chunk)
+        self.cal_cover = calibrate(L["B_cal_cover"], L["B_test_cover"], alpha=self.p.alpha, budgets=[1, 2, 3, 4, 5], **b,
+                                   **self.chunk, record=self.commits["cover"])
+        self.cal_random = calibrate(L["B_cal_random"], L["B_test_random"], alpha=self.p.alpha, budgets=[1, 2, 3, 5, 8],
+                                    **b, **self.chunk, record=self.commits["random"])
         res = {
             "A.no_probe": [a_no.estimate, a_no.lo, a_no.hi],
             "A.cover_k5": a_k5,
@@ -357,8 +418,10 @@ class InsertionReproduction:
             name = {"escaped": "escape", "covered": "episode_coverage", "realized": "failure", "optimism": "optimism"}[col]
             d = paired(new, old, k, col, **b)  # old - corrected
             res[key] = {"old": mo[name], "corrected": mn[name], "old_minus_corrected": d}
-        cal_old = calibrate(L["B_cal_cover"], L["C_cover"], alpha=self.p.alpha, budgets=[1, 2, 3, 4, 5], **b, **self.chunk)
-        cal_new = calibrate(L["B_cal_cover_corrected"], L["C_cover_corrected"], alpha=self.p.alpha, budgets=[1, 2, 3, 4, 5], **b, **self.chunk)
+        cal_old = calibrate(L["B_cal_cover"], L["C_cover"], alpha=self.p.alpha, budgets=[1, 2, 3, 4, 5], **b, **self.chunk,
+                            record=self.commits["testc_old"])
+        cal_new = calibrate(L["B_cal_cover_corrected"], L["C_cover_corrected"], alpha=self.p.alpha, budgets=[1, 2, 3, 4, 5],
+                            **b, **self.chunk, record=self.commits["testc_corrected"])
         fo, fn = self._setmargin_failure(cal_old), self._setmargin_failure(cal_new)
         res["failure_cover_k5_setcal_margin"] = {"old": fo, "corrected": fn,
                                                  "simultaneous_threshold": {"old": cal_old.simultaneous_threshold, "corrected": cal_new.simultaneous_threshold}}
@@ -406,23 +469,24 @@ class InsertionReproduction:
         p, L, b = self.p, self.loaded, self.boot
         r = p.robust
         cands = robust_candidates(r.temperatures, r.epsilons, r.rejuvenation, r.mixture_range)
-        tuning = tune_robust_filters(L["dev_random"], cands, progress=lambda d, t: self.progress("robust tuning", d, t), **self.chunk)
+        record: list[pd.DataFrame] = []
+        tuning = tune_robust_filters(L["dev_random"], cands, progress=lambda d, t: self.progress("robust tuning", d, t),
+                                     record=record, **self.chunk)
         chosen = {row.family: (row.value, row.belief) for row in tuning[tuning.chosen].itertuples()}
         base = L["faults_base"]
         kmax = p.budgets["random"]
-        deployed, _ = replay_episodes(base, {"model": {"boundary": "deployed"}}, **self.chunk)
-        res = {"tuning": tuning.drop(columns="belief").to_dict("records"), "chosen": {k: v[0] for k, v in chosen.items()},
-               "deployed": episode_metrics(deployed, kmax, **b)}
+        arms = {"deployed": replay_episodes(base, {"model": {"boundary": "deployed"}}, **self.chunk)[0]}
         for family, (value, belief) in chosen.items():
-            ep, _ = replay_episodes(base, {"model": {"boundary": "deployed"}, "belief": belief}, **self.chunk)
-            m = episode_metrics(ep, kmax, **b)
-            d = paired(deployed, ep, kmax, "realized", **b)
-            res[family] = {"value": value, **m, "failure_diff": d}
+            arms[family] = replay_episodes(base, {"model": {"boundary": "deployed"}, "belief": belief}, **self.chunk)[0]
         if "mixture" in chosen:
-            right = probe_rows(base.episodes, kmax)["realized"].mean()
-            mix, _ = replay_episodes(base, {"belief": chosen["mixture"][1]}, **self.chunk)
-            res["mixture_cost_when_right"] = [float(right), float(probe_rows(mix, kmax)["realized"].mean())]
-        self.rep.results["robust"] = res
+            arms["base"] = base.episodes
+            arms["mixture_right"] = replay_episodes(base, {"belief": chosen["mixture"][1]}, **self.chunk)[0]
+        tuning = tuning.drop(columns="belief")
+        self.rep.results["robust"] = robust_summary(tuning, arms, kmax, b)
+        stored = [part.assign(part="tuning") for part in record]
+        stored += [probe_rows(episodes, kmax).assign(part=name) for name, episodes in arms.items()]
+        table = pd.concat(stored, ignore_index=True)[["part", "family", "value", *ROBUST_COLUMNS]]
+        write_with(self.out / ROBUST_FILE, lambda buf: table.to_parquet(buf, compression="zstd", index=False))
         self.write_table("robust")
 
     def resplits(self) -> None:
@@ -466,7 +530,8 @@ class InsertionReproduction:
         from probecommit.runner.calibration import gates
 
         L = self.loaded
-        result = gates(L["B_cal_cover"], L["B_test_cover"], alpha=self.p.alpha, **self.boot, **self.chunk)
+        result = gates(L["B_cal_cover"], L["B_test_cover"], alpha=self.p.alpha, **self.boot, **self.chunk,
+                       record=self.commits["gates"])
         k = self.p.budgets["random"]
         coverage = coverage_vs_nominal(L["B_cal_random"].episodes, L["B_test_random"].episodes, k)
         write_with(self.out / "coverage_vs_nominal.parquet", coverage.to_parquet)
@@ -506,10 +571,11 @@ class InsertionReproduction:
             hits = np.flatnonzero(escaped & was_in & ok_new)
             if len(hits):
                 e = int(hits[0])
-                path = self.render.decisive_tap_figure(
-                    z[e], now.weights[e], kept_new[e], trace_new.states[k].weights[e], float(z_true[e]),
-                    float(np.ravel(batch.u[e, k - 1])[0]), float(np.ravel(batch.y[e, k - 1])[0]),
-                    f"after tap {k}", self.out / "fig_4b_teaser_decisive_tap.png")  # no internal ids in a title
+                series = decisive_tap_series(z[e], now.weights[e], kept_new[e], trace_new.states[k].weights[e],
+                                             float(z_true[e]), float(np.ravel(batch.u[e, k - 1])[0]),
+                                             float(np.ravel(batch.y[e, k - 1])[0]), k)
+                write_with(self.out / DECISIVE_TAP, lambda buf: series.to_parquet(buf, compression="zstd", index=False))
+                path = self.render.decisive_tap_figure(series, self.out / "fig_4b_teaser_decisive_tap.png")
                 self.rep.figures["decisive_tap"] = str(path)
                 return
 
@@ -517,6 +583,7 @@ class InsertionReproduction:
         """The episode tables verify recomputes the summary numbers from, compactly, in one file."""
         frames = [self.loaded[name].episodes.assign(run=name) for name in RECOMPUTED_RUNS if name in self.loaded]
         store_episodes(pd.concat(frames, ignore_index=True), self.out / "episodes.parquet", extra=("run",))
+        store_commits(self.commits, self.out / COMMITS_FILE)
 
     # ---------------------------------------------------------------- all
     def run_all(self, cover_limit: int | None = None) -> Reproduction:

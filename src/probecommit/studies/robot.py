@@ -92,6 +92,9 @@ class RobotStudy:
     reproduced: float
     boundary: pd.DataFrame
     prior: pd.DataFrame
+    #: The sweeps' replay rows (``robot.replay.fault_sweep``'s record): what verify computes the sweeps from.
+    sweep_episodes: pd.DataFrame | None = None
+    resamples: int = DEFAULT_RESAMPLES
 
     def payload(self) -> dict[str, Any]:
         rows = self.episodes.rows
@@ -111,6 +114,7 @@ class RobotStudy:
                 "optimism_pooled": float((rows["realized"] - rows["predicted"]).mean()),
                 "boundary_by_mm": sweep_by_size(self.boundary), "prior_by_mm": sweep_by_size(self.prior),
                 "unscored": self.episodes.unscored,
+                "sweep_resamples": int(self.resamples),
             },
         }
 
@@ -145,6 +149,9 @@ def run_robot_study(runs: Path, *, quick: bool = False, progress: Callable[[str,
             return None
         return lambda size: progress(name, sizes.index(size) + 1, len(sizes))
 
-    boundary, _ = fault_sweep(log, "boundary", boundary_sizes, resamples=resamples, progress=tick("boundary fault", boundary_sizes))
-    prior, _ = fault_sweep(log, "prior", prior_sizes, resamples=resamples, progress=tick("prior fault", prior_sizes))
-    return RobotStudy(config, episodes, table, reproduced, boundary, prior)
+    kept: list[pd.DataFrame] = []
+    boundary, _ = fault_sweep(log, "boundary", boundary_sizes, resamples=resamples, progress=tick("boundary fault", boundary_sizes),
+                              record=kept)
+    prior, _ = fault_sweep(log, "prior", prior_sizes, resamples=resamples, progress=tick("prior fault", prior_sizes),
+                           record=kept)
+    return RobotStudy(config, episodes, table, reproduced, boundary, prior, pd.concat(kept, ignore_index=True), resamples)

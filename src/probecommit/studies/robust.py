@@ -27,15 +27,30 @@ def robust_candidates(temperatures, epsilons, rejuvenation, mixture_range) -> di
 
 
 def final_failure(episodes: pd.DataFrame) -> float:
+    return float(final_rows(episodes)["realized"].mean())
+
+
+def final_rows(episodes: pd.DataFrame) -> pd.DataFrame:
+    """The rows :func:`final_failure` averages: ok probe-executor rows at the final budget."""
     probe = episodes[(episodes.method == "probe_robust") & (episodes.status == "ok")]
-    return float(probe[probe.k == probe.k.max()]["realized"].mean())
+    return probe[probe.k == probe.k.max()]
+
+
+def mark_chosen(table: pd.DataFrame) -> pd.DataFrame:
+    """``chosen``: per family, the candidate of lowest failure; ties to the first grid value (idxmin
+    returns the first minimum)."""
+    winners = table.groupby("family", sort=False)["failure"].idxmin()
+    return table.assign(chosen=table.index.isin(winners.values))
 
 
 def tune_robust_filters(development: LoadedRun, candidates, progress=None,
-                        chunk_instances: int | None = CHUNK_INSTANCES) -> pd.DataFrame:
+                        chunk_instances: int | None = CHUNK_INSTANCES,
+                        record: list[pd.DataFrame] | None = None) -> pd.DataFrame:
     """Final-budget failure of every candidate on the development run; ``chosen`` marks the winners.
 
-    ``chunk_instances``: instances whose beliefs a replay holds at once.
+    ``chunk_instances``: instances whose beliefs a replay holds at once. ``record``: a list each
+    candidate's final-budget rows (:func:`final_rows`, with ``family`` and ``value``) are appended to,
+    for a publication to store and verify to tune again from.
     """
     rows = []
     total = sum(len(v) for v in candidates.values())
@@ -43,10 +58,8 @@ def tune_robust_filters(development: LoadedRun, candidates, progress=None,
         for value, belief in grid:
             episodes, _ = replay_episodes(development, {"belief": belief}, chunk_instances=chunk_instances)
             rows.append({"family": family, "value": value, "failure": final_failure(episodes), "belief": belief})
+            if record is not None:
+                record.append(final_rows(episodes).assign(family=family, value=value))
             if progress:
                 progress(len(rows), total)
-    table = pd.DataFrame(rows)
-    # Lowest failure; ties to the first grid value (idxmin returns the first minimum).
-    winners = table.groupby("family", sort=False)["failure"].idxmin()
-    table["chosen"] = table.index.isin(winners.values)
-    return table
+    return mark_chosen(pd.DataFrame(rows))

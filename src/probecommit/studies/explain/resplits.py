@@ -1,7 +1,7 @@
 """The re-split study (Sec. V-B, 50 re-splits of Split B's 192-instance cover pool) under the paper's
 cover schedule, on the same instances and tap-noise streams as ours.
 
-The insertion study's re-splits (``report.reproduce``) run on our frozen schedule; the paper's
+The insertion study's re-splits (``studies.insertion``) run on our frozen schedule; the paper's
 schedule changes which trajectories escape (E13), hence the fixed-budget level t_5 and its
 held-out coverage. The same splits (the protocol's seed) are calibrated here on the paper's
 schedule's pool.
