@@ -50,6 +50,7 @@ from probecommit.audit.stats import (
     resample_counts,
 )
 from probecommit.audit.surprise import surprise_auc
+from probecommit.runner.margin_search import sweep_margins
 from probecommit.runner.replay import CHUNK_INSTANCES, LoadedRun, RunBeliefs, load_run, require_budgets
 from probecommit.errors import UsageError
 
@@ -187,7 +188,7 @@ class _Run:
         reduce = list(reduce) if reduce is not None else [None] * len(requests)
         per_chunk = [None if reducer is None else self._checked(reducer, columns)
                      for reducer, columns in zip(reduce, keep)]
-        tables = self.beliefs.commit([{"thresholds": _executable(t), "margin": g} for t, g in requests], keep=keep,
+        tables = self.beliefs.commit([_request(request) for request in requests], keep=keep,
                                      reduce=per_chunk, reuse=self.reuse, final=final, methods=(PROBE_METHOD,),
                                      plateau=self.plateau)
         out = []
@@ -256,6 +257,8 @@ class _Run:
             The margin and what :meth:`commit` returns for ``extra``.
         """
         candidates = margin_candidates(grid)
+        if self.reuse and candidates and candidates[-1] > 0:
+            return self._sweep_margin(thresholds, candidates, budgets, *extra)
         tables: dict[float, tuple[np.ndarray, np.ndarray]] = {}
         extras: list[Any] = []
         # Margins committed in one pass: as many as MARGIN_BLOCK_ROWS rows of their tables allow,
@@ -279,9 +282,41 @@ class _Run:
         # The rows are those at ``budgets`` already (_margin_rows).
         return select_margin(evaluate, candidates, budgets=None), extras
 
+    def _sweep_margin(self, thresholds: float | dict[int, float], candidates: list[float], budgets: Sequence[int],
+                      *extra: tuple[Request, Reduction | None]) -> tuple[MarginResult, list[Any]]:
+        """:meth:`search_margin` in one pass over the run: every margin's rows at once
+        (``runner.margin_search.sweep_margins``: the margin-free work done once), with ``extra``."""
+        sweep = {"thresholds": _executable(thresholds), "margins": candidates, "rule_budgets": list(budgets),
+                 "via": sweep_margins}
+        swept, *extras = self.commit(sweep, *[request for request, _ in extra],
+                                     keep=[MARGIN_COLUMNS] + [None] * len(extra),
+                                     reduce=[_swept_rows] + [reducer for _, reducer in extra])
+        position = {gamma: 2 * m for m, gamma in enumerate(candidates)}
+
+        def evaluate(gamma: float) -> pd.DataFrame:
+            if swept is None:  # no ok episode: the rule says so
+                return pd.DataFrame({"predicted": [], "realized": []})
+            at = position[gamma]
+            return pd.DataFrame({"predicted": swept[at], "realized": swept[at + 1]})
+
+        return select_margin(evaluate, candidates, budgets=None), extras
+
     def release(self) -> None:
         """Drop the beliefs kept between commits (the run's last commit is done)."""
         self.beliefs.release()
+
+
+def _request(request: Request | dict[str, Any]) -> dict[str, Any]:
+    """``RunBeliefs.commit``'s keyword arguments of a ``(thresholds, margin)`` request (a dict is one already)."""
+    if isinstance(request, dict):
+        return request
+    thresholds, margin = request
+    return {"thresholds": _executable(thresholds), "margin": margin}
+
+
+def _swept_rows(part: Any) -> tuple[np.ndarray, ...] | None:
+    """A chunk's margin-sweep rows as they are; nothing of the run's failed rollout rows (never ok)."""
+    return part if isinstance(part, tuple) else None
 
 
 def _executable(thresholds: float | dict[int, float]) -> float | dict[int, float]:

@@ -1,0 +1,124 @@
+"""Compiled kernel of the margin search: every margin's success counts in one visit of a retained set.
+
+A margin search scores the same retained scenarios under dozens of margins ``gamma``; a
+scenario's success interval under ``gamma`` is ``centre -+ half * gamma`` (the model's
+``success_interval_parts``). Counting each margin on its own reads every scenario once per
+margin. The predicate ``lo < a < hi`` is monotone in ``gamma`` for every scenario and
+action (the width ``half * gamma`` grows with ``gamma``; a NaN end behaves as the counting
+kernels treat it, see below), so the margins under which an action succeeds are a prefix of
+the margins sorted from the largest down. This kernel finds that prefix's length for each
+retained scenario and each action inside its widest interval (a binary search over the
+margins, each test the same IEEE operations as the per-margin count) and turns the lengths
+into counts with a histogram: the same integers as the per-margin count, for every margin
+(tested against ``core.executors``' count, margin by margin).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from probecommit.core.compiled import AVAILABLE as HAVE_KERNELS
+from probecommit.core.compiled import helper, kernel
+
+if HAVE_KERNELS:
+
+    @helper(inline=True)
+    def _ends(centre, half, margin):  # pragma: no cover - compiled
+        """The interval ``centre -+ half * margin`` with a NaN end read as +inf (as the counting
+        kernels of ``core.kernels`` keep their intervals): the same IEEE operations."""
+        width = half * margin
+        low = centre - width
+        high = centre + width
+        if low != low:
+            low = np.inf
+        if high != high:
+            high = np.inf
+        return low, high
+
+    @helper(inline=True)
+    def _succeeds(centre, half, margin, value):  # pragma: no cover - compiled
+        """``lo < value < hi`` of :func:`_ends`."""
+        low, high = _ends(centre, half, margin)
+        return (low < value) and (value < high)
+
+    @helper(inline=True)
+    def _first_above(actions, value, strict):  # pragma: no cover - compiled
+        """The first index whose action is ``> value`` (``strict``) or ``>= value``, by bisection
+        (``searchsorted`` right or left); NaN sorts last."""
+        lo, hi = 0, actions.shape[0]
+        while lo < hi:
+            mid = (lo + hi) // 2
+            if (actions[mid] <= value) if strict else (actions[mid] < value):
+                lo = mid + 1
+            else:
+                hi = mid
+        return lo
+
+    @kernel("i8[:, :, ::1](f8[:, ::1], f8[:, ::1], b1[:, ::1], f8[::1], f8[::1], i8[::1])")
+    def _margin_success_counts(centre, half, mask, margins, actions, kept):  # pragma: no cover - compiled
+        """``out[m, e, a]``: retained scenarios of row ``e`` under which action ``a`` succeeds at
+        ``margins[m]`` (sorted from the largest down); ``kept[e]`` takes each row's retained count."""
+        n_e, n_s = mask.shape
+        n_m, n_a = margins.shape[0], actions.shape[0]
+        out = np.zeros((n_m, n_e, n_a), dtype=np.int64)
+        hist = np.zeros((n_a, n_m + 1), dtype=np.int64)  # hist[a, j]: scenarios succeeding at the first j margins
+        spread = margins[0] - margins[n_m - 1]
+        per_spacing = (n_m - 1) / spread if n_m > 1 and spread > 0.0 else 0.0  # 1 / the mean spacing
+        for e in range(n_e):
+            count = 0
+            for s in range(n_s):
+                if not mask[e, s]:
+                    continue
+                count += 1
+                c, h = centre[e, s], half[e, s]
+                # The actions that succeed at the widest margin (an interval of the sorted grid):
+                # only they can succeed at any.
+                low, high = _ends(c, h, margins[0])
+                stop = _first_above(actions, high, False)
+                scale = 1.0 / h if 0.0 < h < np.inf and c == c and abs(c) < np.inf else 0.0
+                for a in range(_first_above(actions, low, True), stop):
+                    value = actions[a]
+                    # succeeds at the first j margins: a guess from the margins' mean spacing (the
+                    # margin at which the width reaches the action), then walked to the exact j
+                    # with the predicate itself (it holds at margins[0], so j >= 1)
+                    j = n_m
+                    if scale > 0.0 and per_spacing > 0.0:
+                        guess = (margins[0] - abs(value - c) * scale) * per_spacing + 1.0
+                        j = 1 if guess < 1.0 else n_m if guess > n_m else int(guess)
+                    while j < n_m and _succeeds(c, h, margins[j], value):
+                        j += 1
+                    while j > 1 and not _succeeds(c, h, margins[j - 1], value):
+                        j -= 1
+                    hist[a, j] += 1
+            kept[e] = count
+            for a in range(n_a):
+                run = 0
+                for m in range(n_m - 1, -1, -1):
+                    run += hist[a, m + 1]
+                    out[m, e, a] = run
+                hist[a, :] = 0
+        return out
+
+
+def margin_success_counts(centre: np.ndarray, half: np.ndarray, mask: np.ndarray, margins: np.ndarray,
+                          actions: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
+    """Success counts ``[M, E, A]`` of every margin and the retained counts ``[E]``, or None without
+    compiled kernels (the caller counts margin by margin then).
+
+    Args:
+        centre, half: ``[E, S]`` the scenarios' success-interval parts (margin one).
+        mask: ``[E, S]`` retained scenarios.
+        margins: ``[M]`` margins, each > 0, sorted from the largest down.
+        actions: ``[A]`` the sorted action grid.
+    """
+    if not HAVE_KERNELS:
+        return None
+    margins = np.ascontiguousarray(margins, dtype=np.float64)
+    if margins.size == 0 or np.any(margins <= 0) or np.any(np.diff(margins) >= 0):
+        raise ValueError("margins must be positive and strictly decreasing")
+    kept = np.empty(mask.shape[0], dtype=np.int64)
+    counts = _margin_success_counts(np.ascontiguousarray(centre, dtype=np.float64),
+                                    np.ascontiguousarray(half, dtype=np.float64),
+                                    np.ascontiguousarray(mask, dtype=np.bool_), margins,
+                                    np.ascontiguousarray(actions, dtype=np.float64), kept)
+    return counts, kept
