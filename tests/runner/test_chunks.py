@@ -113,7 +113,8 @@ def test_margin_search_in_passes_of_few_margins_equals_the_whole_scan(runs, monk
     for per_pass in (1, 2):
         passes.clear()
         monkeypatch.setattr(calibration, "MARGIN_BLOCK_ROWS", per_pass * rows)
-        chunked = calibrate(runs["cal"], runs["test"], resamples=50, margin_grid=grid, chunk_instances=2)
+        # The margin-by-margin reference path (reuse=False); the default sweeps every margin in one pass.
+        chunked = calibrate(runs["cal"], runs["test"], resamples=50, margin_grid=grid, chunk_instances=2, reuse=False)
         pd.testing.assert_frame_equal(chunked.margin.search, whole.margin.search, check_exact=True)
         assert chunked.to_dict() == whole.to_dict()
         # The calibration run's uncalibrated pass, then its margin passes (the first also commits the set table).

@@ -44,7 +44,7 @@ def test_every_margin_counted_in_one_visit_equals_each_count(seed):
         centre[rng.random((n_e, n_s)) < share / 2] = value
     mask = rng.random((n_e, n_s)) < 0.8
     margins = np.array(margin_candidates(np.r_[GAMMA_GRID, 1.5, 0.25]))
-    counts, kept = kernels.margin_success_counts(centre, half, mask, margins, actions)
+    counts, kept = kernels.margin_success_counts(centre, half, mask, margins, actions)  # one block
     np.testing.assert_array_equal(kept, mask.sum(axis=1))
     for m, gamma in enumerate(margins):
         width = half * gamma
@@ -68,7 +68,7 @@ def test_margins_must_decrease():
 def test_sweep_equals_each_margins_commit(runs, thresholds, compiled, monkeypatch):
     """Per margin, the sweep's rows are the margin rule's rows of that margin's commit (grown sets included)."""
     if not compiled:  # the margin-by-margin fallback (no kernels, or a model without interval parts)
-        monkeypatch.setattr(margin_search, "margin_success_counts", lambda *args: None)
+        monkeypatch.setattr(margin_search, "margin_choices", lambda *args: None)
     beliefs = RunBeliefs.of(load_run(runs["cal"]), chunk_instances=None)
     trace = beliefs.trace(beliefs.chunks[0])
     margins = margin_candidates(GAMMA_GRID)
@@ -97,3 +97,26 @@ def test_calibrate_and_gates_equal_the_reference_path(runs, chunk):
     pd.testing.assert_frame_equal(g_fast.summary, g_slow.summary, check_exact=True)
     pd.testing.assert_frame_equal(g_fast.curves, g_slow.curves, check_exact=True)
     assert g_fast.info["gamma"] == g_slow.info["gamma"]
+
+
+@needs_kernels
+@pytest.mark.parametrize("seed", range(3))
+def test_compiled_choice_equals_select_action(seed):
+    """Ties within the tolerance, equal tie costs, NaN and infinite costs, rows with nothing retained."""
+    from probecommit.core.executors import SCORE_TIE_TOLERANCE, select_action
+
+    rng = np.random.default_rng(seed)
+    n_m, n_e, n_a = 5, 40, 12
+    kept = rng.integers(0, 6, n_e)
+    successes = np.minimum(rng.integers(0, 6, (n_m, n_e, n_a)), kept[None, :, None])
+    tie = rng.choice([0.0, 0.5, 1.0, 1.5], size=(n_e, n_a))
+    tie[rng.random((n_e, n_a)) < 0.05] = np.nan
+    tie[rng.random((n_e, n_a)) < 0.05] = np.inf
+    tie[:3] = np.inf  # rows whose every cost is infinite
+    score = np.empty((n_m, n_e))
+    index = kernels._choose_by_counts(np.ascontiguousarray(successes), kept, tie, SCORE_TIE_TOLERANCE, score)
+    for m in range(n_m):
+        fractions = (kept[:, None] - successes[m]) / np.maximum(kept, 1)[:, None]
+        expected = select_action(fractions, tie)
+        np.testing.assert_array_equal(index[m], expected)
+        np.testing.assert_array_equal(score[m], np.take_along_axis(fractions, expected[:, None], axis=1)[:, 0])

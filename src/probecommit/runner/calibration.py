@@ -70,8 +70,12 @@ MARGIN_COLUMNS = ("k", "status", "predicted", "realized")
 AUDIT_COLUMNS = ("instance_id", "repeat", "k", "method", "variant", "status", "predicted", "realized", "covered",
                  "escaped")
 
-#: Rows of margin-search tables (episodes x budgets, per margin) one pass over a run of several
-#: chunks commits at most: a pass recomputes the run's beliefs, so it commits several margins,
+#: The columns the calibration run's optimism is computed from (``audit.margin.instance_optimism``).
+OPTIMISM_COLUMNS = ("instance_id", "k", "status", "predicted", "realized")
+
+#: Rows of margin-search tables (episodes x budgets, per margin) one pass of the margin-by-margin
+#: reference path (``reuse=False``) over a run of several chunks commits at most (the default
+#: path sweeps every margin in one pass, holding 16 bytes a row and margin): a pass recomputes the run's beliefs, so it commits several margins,
 #: but not so many that their tables grow with the run (16 bytes a row, :func:`_margin_rows`:
 #: 4 MB; E = 3072 at k = 1..8: ten margins a pass, E = 12288: two).
 MARGIN_BLOCK_ROWS = 2**18
@@ -251,7 +255,8 @@ class _Run:
             grid: Margin candidates.
             budgets: Budgets the margin rule averages over.
             *extra: Further requests with their reductions (see :meth:`commit`), committed in
-                the first pass.
+                the first pass; a third item names the columns the reduction reads (default:
+                the whole table, validated).
 
         Returns:
             The margin and what :meth:`commit` returns for ``extra``.
@@ -271,9 +276,9 @@ class _Run:
             if gamma not in tables:
                 block = [gamma] if len(self.beliefs.chunks) == 1 else [g for g in candidates if g <= gamma][:per_pass]
                 first = [] if extras else list(extra)
-                out = self.commit(*[(thresholds, g) for g in block], *[request for request, _ in first],
-                                  keep=[MARGIN_COLUMNS] * len(block) + [None] * len(first),
-                                  reduce=[margin_rows] * len(block) + [reducer for _, reducer in first])
+                out = self.commit(*[(thresholds, g) for g in block], *[request for request, *_ in first],
+                                  keep=[MARGIN_COLUMNS] * len(block) + [_columns(item) for item in first],
+                                  reduce=[margin_rows] * len(block) + [reducer for _, reducer, *_ in first])
                 tables.update(zip(block, out[:len(block)]))
                 extras.extend(out[len(block):])
             predicted, realized = tables.pop(gamma)  # the scan reads each margin once
@@ -288,9 +293,9 @@ class _Run:
         (``runner.margin_search.sweep_margins``: the margin-free work done once), with ``extra``."""
         sweep = {"thresholds": _executable(thresholds), "margins": candidates, "rule_budgets": list(budgets),
                  "via": sweep_margins}
-        swept, *extras = self.commit(sweep, *[request for request, _ in extra],
-                                     keep=[MARGIN_COLUMNS] + [None] * len(extra),
-                                     reduce=[_swept_rows] + [reducer for _, reducer in extra])
+        swept, *extras = self.commit(sweep, *[request for request, *_ in extra],
+                                     keep=[MARGIN_COLUMNS] + [_columns(item) for item in extra],
+                                     reduce=[_swept_rows] + [reducer for _, reducer, *_ in extra])
         position = {gamma: 2 * m for m, gamma in enumerate(candidates)}
 
         def evaluate(gamma: float) -> pd.DataFrame:
@@ -312,6 +317,11 @@ def _request(request: Request | dict[str, Any]) -> dict[str, Any]:
         return request
     thresholds, margin = request
     return {"thresholds": _executable(thresholds), "margin": margin}
+
+
+def _columns(extra: tuple) -> Sequence[str] | None:
+    """The columns an extra request of :meth:`_Run.search_margin` keeps (its third item; None: all)."""
+    return extra[2] if len(extra) > 2 else None
 
 
 def _swept_rows(part: Any) -> tuple[np.ndarray, ...] | None:
@@ -513,8 +523,10 @@ def calibrate(cal_run, test_run, alpha: float = DEFAULT_ALPHA, budgets: Sequence
     t_k = budget_thresholds(scores, alpha, budgets)
     simultaneous = worst_budget_scores(scores, budgets)
     t_sim, n_calibration = conformal_quantile(simultaneous.to_numpy(), alpha), int(simultaneous.size)
+    # The calibration run's table at nu was validated whole above; the optimism reads five columns.
     margin, [optimism] = cal.search_margin(t_k, margin_grid, budgets,
-                                           ((t_k, None), functools.partial(_optimism, budgets=budgets)))
+                                           ((t_k, None), functools.partial(_optimism, budgets=budgets),
+                                            OPTIMISM_COLUMNS))
     df_margin = optimism_margin(optimism.sort_index(), alpha)
     # The calibration run is done: its tables, beliefs and engine cache go before the test run's commits.
     cal.release()

@@ -347,15 +347,16 @@ def commit(
         state = trace.states[k]
         particles = state.particles
         t = float(thresholds[k] if isinstance(thresholds, Mapping) else thresholds)
+        # The belief's coverage score, hull and variance only when a column (or Blind-Bayes) reads them.
         belief = cache.get(("belief", k))
-        if belief is None:
+        if belief is None and (method == "blind_bayes" or columns is None or not BELIEF_COLUMNS.isdisjoint(columns)):
             z = model.decision(particles)
             weights = state.weights
             score_s, hull_lo, hull_hi = coverage_with_hull(z, weights, z_true, model.decision_domain_width)
             belief = cache[("belief", k)] = {"z": z, "weights": weights, "hull_lo": hull_lo, "hull_hi": hull_hi,
                                              "score_s": score_s, "post_var": weighted_variance(z, weights)}
-        z, weights = belief["z"], belief["weights"]
         if method == "blind_bayes":
+            z, weights = belief["z"], belief["weights"]
             if blind is None:
                 raise ValueError("blind_bayes needs the Blind-Bayes executor")
             mask = np.ones_like(weights, dtype=bool)
@@ -364,12 +365,12 @@ def commit(
         else:
             retained = cache.get(("set", method, k, t, plateau))
             if retained is None:
-                retained = cache[("set", method, k, t, plateau)] = executors[method].retain(particles, weights, t)
+                retained = cache[("set", method, k, t, plateau)] = executors[method].retain(particles, state.weights, t)
             chosen = executors[method].choose(retained, context)
             index, predicted, mask, lo, hi = chosen.index, chosen.score, chosen.mask, chosen.lo, chosen.hi
         action = grid[index]
         realized, status, error = _execute(simulator, batch, action, index, len(grid), cache.setdefault("outcomes", {}))
-        hull_lo, hull_hi = belief["hull_lo"], belief["hull_hi"]
+        hull_lo, hull_hi = (belief["hull_lo"], belief["hull_hi"]) if belief is not None else (None, None)
         # Each column made only when asked for (a margin search asks for four).
         makers = {
             "instance_id": lambda: batch.instance_id.astype(str),
@@ -405,6 +406,10 @@ def commit(
         return {} if as_columns else pd.DataFrame()
     out = _interleave_columns(frames, batch.n_episodes)
     return out if as_columns else pd.DataFrame(out)
+
+
+#: The columns of :func:`commit` read from the belief's coverage score, hull and variance.
+BELIEF_COLUMNS = frozenset({"hull_lo", "hull_hi", "escaped", "score_s", "post_var"})
 
 
 def prune_retained_sets(cache: dict, later: Iterable[float | Mapping[int, float]]) -> None:

@@ -54,13 +54,12 @@ if HAVE_KERNELS:
                 hi = mid
         return lo
 
-    @kernel("i8[:, :, ::1](f8[:, ::1], f8[:, ::1], b1[:, ::1], f8[::1], f8[::1], i8[::1])")
-    def _margin_success_counts(centre, half, mask, margins, actions, kept):  # pragma: no cover - compiled
-        """``out[m, e, a]``: retained scenarios of row ``e`` under which action ``a`` succeeds at
-        ``margins[m]`` (sorted from the largest down); ``kept[e]`` takes each row's retained count."""
+    @kernel("i8[::1](f8[:, ::1], f8[:, ::1], b1[:, ::1], f8[::1], f8[::1], i8[:, :, ::1], i8[::1])")
+    def _margin_success_counts(centre, half, mask, margins, actions, out, kept):  # pragma: no cover - compiled
+        """Add to ``out[m, e, a]`` the retained scenarios of row ``e`` under which action ``a`` succeeds
+        at ``margins[m]`` (sorted from the largest down), and to ``kept[e]`` each row's retained count."""
         n_e, n_s = mask.shape
         n_m, n_a = margins.shape[0], actions.shape[0]
-        out = np.zeros((n_m, n_e, n_a), dtype=np.int64)
         hist = np.zeros((n_a, n_m + 1), dtype=np.int64)  # hist[a, j]: scenarios succeeding at the first j margins
         spread = margins[0] - margins[n_m - 1]
         per_spacing = (n_m - 1) / spread if n_m > 1 and spread > 0.0 else 0.0  # 1 / the mean spacing
@@ -90,35 +89,93 @@ if HAVE_KERNELS:
                     while j > 1 and not _succeeds(c, h, margins[j - 1], value):
                         j -= 1
                     hist[a, j] += 1
-            kept[e] = count
+            kept[e] += count
             for a in range(n_a):
                 run = 0
                 for m in range(n_m - 1, -1, -1):
                     run += hist[a, m + 1]
-                    out[m, e, a] = run
+                    out[m, e, a] += run
                 hist[a, :] = 0
-        return out
+        return kept
+
+    @kernel("i8[:, ::1](i8[:, :, ::1], i8[::1], f8[:, ::1], f8, f8[:, ::1])")
+    def _choose_by_counts(successes, kept, tie_cost, tolerance, score):  # pragma: no cover - compiled
+        """Per margin and row, ``core.executors.select_action`` of the failure fractions
+        ``(kept - successes) / max(kept, 1)`` (NumPy's int-to-float division), writing the chosen
+        action's fraction into ``score[m, e]``: the lowest fraction, ties within ``tolerance``
+        broken by the lowest ``tie_cost``, then the lowest index (``np.argmin``, a NaN cost first)."""
+        n_m, n_e, n_a = successes.shape
+        index = np.empty((n_m, n_e), dtype=np.int64)
+        fractions = np.empty(n_a)
+        for m in range(n_m):
+            for e in range(n_e):
+                denominator = max(kept[e], 1)
+                best = np.inf
+                for a in range(n_a):
+                    fractions[a] = (kept[e] - successes[m, e, a]) / denominator
+                    best = min(best, fractions[a])
+                bound = best + tolerance
+                chosen, lowest = -1, np.inf
+                for a in range(n_a):
+                    if fractions[a] <= bound:
+                        cost = tie_cost[e, a]
+                        if cost != cost:
+                            chosen = a
+                            break
+                        if chosen < 0 or cost < lowest:
+                            chosen, lowest = a, cost
+                if lowest == np.inf and tie_cost[e, chosen] == tie_cost[e, chosen]:
+                    chosen = 0  # every cost of the row is +inf where it counts: argmin takes the first
+                index[m, e] = chosen
+                score[m, e] = fractions[chosen]
+        return index
 
 
-def margin_success_counts(centre: np.ndarray, half: np.ndarray, mask: np.ndarray, margins: np.ndarray,
-                          actions: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
-    """Success counts ``[M, E, A]`` of every margin and the retained counts ``[E]``, or None without
-    compiled kernels (the caller counts margin by margin then).
+def margin_choices(blocks: list[tuple[np.ndarray, np.ndarray, np.ndarray]], margins: np.ndarray, actions: np.ndarray,
+                   tie_cost: np.ndarray, tolerance: float) -> tuple[np.ndarray, np.ndarray] | None:
+    """Per margin, the action each row's executor chooses ``[M, E]`` and its failure fraction ``[M, E]``,
+    or None without compiled kernels (the caller chooses margin by margin then).
+
+    The same as ``core.executors.retained_scores`` of the margin's model followed by
+    ``select_action`` (a grown set's blocks counted together, as there).
 
     Args:
-        centre, half: ``[E, S]`` the scenarios' success-interval parts (margin one).
-        mask: ``[E, S]`` retained scenarios.
+        blocks: ``(centre, half, mask)`` of each block of the retained set: its scenarios'
+            success-interval parts (margin one) and which are retained, each ``[E, S]``.
         margins: ``[M]`` margins, each > 0, sorted from the largest down.
         actions: ``[A]`` the sorted action grid.
+        tie_cost: ``[E, A]`` the tie-break cost (``model.tie_break_cost``).
+        tolerance: ``core.executors.SCORE_TIE_TOLERANCE``.
     """
     if not HAVE_KERNELS:
         return None
     margins = np.ascontiguousarray(margins, dtype=np.float64)
     if margins.size == 0 or np.any(margins <= 0) or np.any(np.diff(margins) >= 0):
         raise ValueError("margins must be positive and strictly decreasing")
-    kept = np.empty(mask.shape[0], dtype=np.int64)
-    counts = _margin_success_counts(np.ascontiguousarray(centre, dtype=np.float64),
-                                    np.ascontiguousarray(half, dtype=np.float64),
-                                    np.ascontiguousarray(mask, dtype=np.bool_), margins,
-                                    np.ascontiguousarray(actions, dtype=np.float64), kept)
-    return counts, kept
+    actions = np.ascontiguousarray(actions, dtype=np.float64)
+    n_e = blocks[0][2].shape[0]
+    successes = np.zeros((margins.size, n_e, actions.size), dtype=np.int64)
+    kept = np.zeros(n_e, dtype=np.int64)
+    for centre, half, mask in blocks:
+        _margin_success_counts(np.ascontiguousarray(centre, dtype=np.float64), np.ascontiguousarray(half, dtype=np.float64),
+                               np.ascontiguousarray(mask, dtype=np.bool_), margins, actions, successes, kept)
+    score = np.empty((margins.size, n_e))
+    index = _choose_by_counts(successes, kept, np.ascontiguousarray(tie_cost, dtype=np.float64), float(tolerance), score)
+    return index, score
+
+
+def margin_success_counts(centre: np.ndarray, half: np.ndarray, mask: np.ndarray, margins: np.ndarray,
+                          actions: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
+    """Success counts ``[M, E, A]`` of every margin over one block and the retained counts ``[E]``
+    (what :func:`margin_choices` chooses from), or None without compiled kernels."""
+    if not HAVE_KERNELS:
+        return None
+    margins = np.ascontiguousarray(margins, dtype=np.float64)
+    if margins.size == 0 or np.any(margins <= 0) or np.any(np.diff(margins) >= 0):
+        raise ValueError("margins must be positive and strictly decreasing")
+    actions = np.ascontiguousarray(actions, dtype=np.float64)
+    successes = np.zeros((margins.size, mask.shape[0], actions.size), dtype=np.int64)
+    kept = np.zeros(mask.shape[0], dtype=np.int64)
+    _margin_success_counts(np.ascontiguousarray(centre, dtype=np.float64), np.ascontiguousarray(half, dtype=np.float64),
+                           np.ascontiguousarray(mask, dtype=np.bool_), margins, actions, successes, kept)
+    return successes, kept

@@ -5,7 +5,8 @@ for the sums of predicted and realized failure of the calibration commits. What 
 depend on the margin — the beliefs, the retained sets, their success-interval parts and
 the tie-break costs — is computed once here, for every margin; what does — the
 failure counts, the chosen aims and their outcomes — is computed for each margin, the
-counts of all margins in one compiled visit of each retained set (``runner.kernels``).
+counts of all margins in one compiled visit of each retained set, and every margin's choice
+in the same compiled code (``runner.kernels``).
 
 :func:`sweep_margins` has ``runner.inference.commit``'s calling convention, so a run's
 chunk pass (``RunBeliefs.commit``, a request with ``via``) runs it beside other commits on
@@ -20,9 +21,9 @@ from typing import Any, Mapping, Sequence
 
 import numpy as np
 
-from probecommit.core.executors import ProbeRobust, select_action
+from probecommit.core.executors import SCORE_TIE_TOLERANCE, ProbeRobust
 from probecommit.runner.inference import BeliefTrace, _execute
-from probecommit.runner.kernels import margin_success_counts
+from probecommit.runner.kernels import margin_choices
 
 #: The executor whose commits the margin search re-executes.
 METHOD = "probe_robust"
@@ -67,14 +68,43 @@ def sweep_margins(trace: BeliefTrace, model: Any, simulator: Any, *, thresholds:
             state = trace.states[k]
             cache[key] = ProbeRobust(model, plateau).retain(state.particles, state.weights, t)
         index, score = choose_every_margin(model, cache[key], batch.episode_context, margins, plateau)
-        for m in range(n_m):
-            outcome, status, _ = _execute(simulator, batch, grid[index[m]], index[m], len(grid), outcomes)
-            predicted[m, :, p], realized[m, :, p], ok[m, :, p] = score[m], outcome, status != "failed"
+        predicted[:, :, p] = score
+        realized[:, :, p], ok[:, :, p] = execute_every_margin(simulator, batch, grid, index, outcomes)
     ok &= np.isin(budgets, list(rule_budgets))[None, None, :]
     out: list[np.ndarray] = []
     for m in range(n_m):
         out += [predicted[m][ok[m]], realized[m][ok[m]]]
     return tuple(out)
+
+
+def execute_every_margin(simulator: Any, batch: Any, grid: np.ndarray, index: np.ndarray,
+                         outcomes: dict) -> tuple[np.ndarray, np.ndarray]:
+    """Realized failure ``[M, E]`` of each margin's aims ``index[M, E]``, and which are ok (not failed).
+
+    ``runner.inference._execute`` of every margin at once: one engine query per distinct
+    (instance, aim) of all margins, remembered in ``outcomes`` as it does, so each value and
+    failure is the one that margin's commit gets.
+    """
+    n_m, n_e = index.shape
+    rows = np.broadcast_to(np.arange(n_e), (n_m, n_e)).reshape(-1)
+    flat = index.reshape(-1)
+    keys = batch.instance_index.astype(np.int64)[rows] * len(grid) + flat
+    unique, first, inverse = np.unique(keys, return_index=True, return_inverse=True)
+    missing = [u for u, key in enumerate(unique.tolist()) if key not in outcomes]
+    if missing:  # the aims no commit on this batch asked for yet: inference's own call, on those rows
+        chosen = first[missing]
+        one = _execute(simulator, batch.subset(rows[chosen]), grid[flat[chosen]], flat[chosen], len(grid), outcomes)
+        del one
+    values = np.empty(len(unique))
+    failed = np.zeros(len(unique), dtype=bool)
+    for u, key in enumerate(unique.tolist()):
+        value = outcomes[key]
+        if isinstance(value, str):
+            values[u], failed[u] = np.nan, True
+        else:
+            values[u] = value
+    inverse = np.asarray(inverse).reshape(-1)
+    return values[inverse].reshape(n_m, n_e), ~failed[inverse].reshape(n_m, n_e)
 
 
 def choose_every_margin(model: Any, retained: Any, context: np.ndarray | None, margins: Sequence[float],
@@ -85,34 +115,24 @@ def choose_every_margin(model: Any, retained: Any, context: np.ndarray | None, m
     each margin: one compiled count of every margin where the model's loss is binary with
     success-interval parts, else that call margin by margin.
     """
-    counted = _failure_fractions(model, retained, margins)
-    if counted is None:
-        chosen = [ProbeRobust(model.with_margin(g), plateau).choose(retained, context) for g in margins]
-        return np.stack([c.index for c in chosen]), np.stack([np.asarray(c.score, dtype=float) for c in chosen])
-    n_m, n_e, n_a = counted.shape
-    tie = np.asarray(model.tie_break_cost(model.action_grid, retained.reference, context), dtype=float)
-    index = select_action(counted.reshape(n_m * n_e, n_a), np.broadcast_to(tie, counted.shape).reshape(n_m * n_e, n_a))
-    index = index.reshape(n_m, n_e)
-    return index, np.take_along_axis(counted, index[..., None], axis=2)[..., 0]
+    chosen = _compiled_choices(model, retained, context, margins)
+    if chosen is not None:
+        return chosen
+    chosen = [ProbeRobust(model.with_margin(g), plateau).choose(retained, context) for g in margins]
+    return np.stack([c.index for c in chosen]), np.stack([np.asarray(c.score, dtype=float) for c in chosen])
 
 
-def _failure_fractions(model: Any, retained: Any, margins: Sequence[float]) -> np.ndarray | None:
-    """``core.executors.retained_scores`` of every margin ``[M, E, A]`` from one compiled count per
-    block, or None (no compiled kernels, a continuous loss, or a block without interval parts)."""
+def _compiled_choices(model: Any, retained: Any, context: np.ndarray | None,
+                      margins: Sequence[float]) -> tuple[np.ndarray, np.ndarray] | None:
+    """:func:`choose_every_margin` by one compiled count of every margin per block
+    (``runner.kernels.margin_choices``), or None (no compiled kernels, a continuous loss, or a
+    block without interval parts)."""
     if not model.binary_loss:
         return None
     parts = retained.interval_parts(model)
     if any(part is None for part in parts):
         return None
     actions = np.asarray(model.action_grid, dtype=float).reshape(-1)
-    failures = None
-    kept = None
-    for (_, mask), (centre, half) in zip(retained.blocks(), parts):
-        counted = margin_success_counts(centre, half, mask, np.asarray(margins), actions)
-        if counted is None:
-            return None
-        successes, n_kept = counted
-        block = n_kept[None, :, None] - successes
-        failures = block if failures is None else failures + block
-        kept = n_kept if kept is None else kept + n_kept
-    return failures / np.maximum(kept, 1)[None, :, None]
+    tie = model.tie_break_cost(model.action_grid, retained.reference, context)
+    blocks = [(centre, half, mask) for (_, mask), (centre, half) in zip(retained.blocks(), parts)]
+    return margin_choices(blocks, np.asarray(margins, dtype=float), actions, tie, SCORE_TIE_TOLERANCE)
