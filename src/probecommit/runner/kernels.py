@@ -42,17 +42,28 @@ if HAVE_KERNELS:
         return (low < value) and (value < high)
 
     @helper(inline=True)
-    def _first_above(actions, value, strict):  # pragma: no cover - compiled
-        """The first index whose action is ``> value`` (``strict``) or ``>= value``, by bisection
-        (``searchsorted`` right or left); NaN sorts last."""
-        lo, hi = 0, actions.shape[0]
-        while lo < hi:
-            mid = (lo + hi) // 2
-            if (actions[mid] <= value) if strict else (actions[mid] < value):
-                lo = mid + 1
-            else:
-                hi = mid
-        return lo
+    def _first_above(actions, value, strict, inv_step):  # pragma: no cover - compiled
+        """The first index whose action is ``> value`` (``strict``) or ``>= value`` (``searchsorted``
+        right or left; NaN sorts last): a first guess from the grid's mean spacing (``inv_step``,
+        1 / spacing, or 0), walked to the exact answer with the grid's own comparisons."""
+        n = actions.shape[0]
+        if value != value:
+            return n
+        i = n // 2
+        if inv_step > 0.0:
+            guess = (value - actions[0]) * inv_step
+            i = 0 if guess < 0.0 else n if guess > n else int(guess)
+        if strict:
+            while i < n and actions[i] <= value:
+                i += 1
+            while i > 0 and actions[i - 1] > value:
+                i -= 1
+        else:
+            while i < n and actions[i] < value:
+                i += 1
+            while i > 0 and actions[i - 1] >= value:
+                i -= 1
+        return i
 
     @kernel("i8[::1](f8[:, ::1], f8[:, ::1], b1[:, ::1], f8[::1], f8[::1], i8[:, :, ::1], i8[::1])")
     def _margin_success_counts(centre, half, mask, margins, actions, out, kept):  # pragma: no cover - compiled
@@ -62,6 +73,7 @@ if HAVE_KERNELS:
         n_m, n_a = margins.shape[0], actions.shape[0]
         hist = np.zeros((n_a, n_m + 1), dtype=np.int64)  # hist[a, j]: scenarios succeeding at the first j margins
         spread = margins[0] - margins[n_m - 1]
+        inv_step = (n_a - 1) / (actions[n_a - 1] - actions[0]) if n_a > 1 and actions[n_a - 1] > actions[0] else 0.0
         per_spacing = (n_m - 1) / spread if n_m > 1 and spread > 0.0 else 0.0  # 1 / the mean spacing
         for e in range(n_e):
             count = 0
@@ -73,9 +85,9 @@ if HAVE_KERNELS:
                 # The actions that succeed at the widest margin (an interval of the sorted grid):
                 # only they can succeed at any.
                 low, high = _ends(c, h, margins[0])
-                stop = _first_above(actions, high, False)
+                stop = _first_above(actions, high, False, inv_step)
                 scale = 1.0 / h if 0.0 < h < np.inf and c == c and abs(c) < np.inf else 0.0
-                for a in range(_first_above(actions, low, True), stop):
+                for a in range(_first_above(actions, low, True, inv_step), stop):
                     value = actions[a]
                     # succeeds at the first j margins: a guess from the margins' mean spacing (the
                     # margin at which the width reaches the action), then walked to the exact j
