@@ -13,7 +13,7 @@ from probecommit.report.schedule import side_by_side
 def _fake_target(name: str, log: str, fail: bool) -> tuple[str, float]:
     """A target that records when it ran (in a spawned process)."""
     start = time.time()
-    time.sleep(0.3)
+    time.sleep(1.5 if name.startswith("slow") else 0.3)
     Path(log, name).write_text(json.dumps([start, time.time()]))
     if fail:
         raise RuntimeError(f"{name} failed")
@@ -56,3 +56,23 @@ def test_side_by_side_gives_the_numbers_of_one_after_the_other(tmp_path):
         a = json.loads((Path(one["targets"][name]) / "results.json").read_text())
         b = json.loads((Path(two["targets"][name]) / "results.json").read_text())
         assert a == b, name
+
+
+def test_a_target_that_read_results_not_yet_made_runs_again_after_them(tmp_path):
+    """breadth reads insertion's results when they are there: finished first, it is made again after."""
+    import shutil
+
+    log = tmp_path / "log"
+    log.mkdir()
+    runs = []
+
+    def launch(pool, name):
+        runs.append(name)
+        return pool.submit(_fake_target, name if runs.count(name) == 1 else f"{name}-again", str(log), False)
+
+    done = side_by_side(["slow", "reader"], {}, 2, launch, lambda *args: None, {"reader": ("slow",)})
+    assert runs.count("reader") == 2 and runs.count("slow") == 1
+    spans = {p.name: json.loads(p.read_text()) for p in log.iterdir()}
+    assert spans["reader"][1] < spans["slow"][1] <= spans["reader-again"][0]  # ran beside it, then after it
+    assert done["reader"][1] == pytest.approx(0.6)
+    shutil.rmtree(log)

@@ -294,6 +294,12 @@ def machine() -> dict[str, Any]:
             "python": platform.python_version(), "numpy": np.__version__}
 
 
+#: Targets that read another target's results when that has run under the same root, without
+#: needing it: breadth puts the insertion study's Split A row into Table II (``insertion_row``).
+#: Side by side, such a target is made again once what it reads is done (``report.schedule``).
+READS_IF_RUN: dict[str, tuple[str, ...]] = {"breadth": ("insertion",)}
+
+
 def side_by_side_lanes(workers: int, targets: int) -> int:
     """Targets run at once for ``--workers``: up to ``workers`` (at most the CPUs and the targets), 1 for one worker."""
     import os
@@ -326,7 +332,7 @@ def reproduce(names: list[str], root: str | Path, quick: bool = False, progress:
         inner = max(1, workers // lanes)
         results = side_by_side(order, {t: TARGETS[t].needs for t in order}, lanes,
                                lambda pool, name: pool.submit(run_target, name, str(root), quick, inner, dict(OPTIONS)),
-                               progress)
+                               progress, READS_IF_RUN)
         out["side_by_side"] = lanes
         for name in order:
             out["targets"][name], out["wall_s"][name] = results[name]

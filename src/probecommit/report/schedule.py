@@ -38,7 +38,8 @@ def run_target(name: str, root: str, quick: bool, workers: int, options: dict[st
 
 def side_by_side(order: Sequence[str], needs: dict[str, tuple[str, ...]], lanes: int,
                  launch: Callable[[ProcessPoolExecutor, str], Future],
-                 progress: Callable[[str, int, int], None]) -> dict[str, tuple[str, float]]:
+                 progress: Callable[[str, int, int], None],
+                 rereads: dict[str, tuple[str, ...]] | None = None) -> dict[str, tuple[str, float]]:
     """Run ``order``'s targets ``lanes`` at a time, each once its ``needs`` (among ``order``) are done.
 
     Args:
@@ -47,23 +48,32 @@ def side_by_side(order: Sequence[str], needs: dict[str, tuple[str, ...]], lanes:
         lanes: Targets at once.
         launch: Submits one target to the pool, returning its future (of ``run_target``'s result).
         progress: ``progress(step, done, total)``.
+        rereads: Targets that read another's results when they are there (``paper.READS_IF_RUN``)
+            without waiting for it: one that finished before what it reads (in ``order``) is run
+            again once that is done (its run directories resume; its tables are made again), so
+            its results are those of one after the other. What needs it starts after its first run.
 
     Returns:
-        Per target, its results folder and wall seconds. The first failure is raised once the
-        targets already running have finished (their run directories resume).
+        Per target, its results folder and wall seconds (both runs). The first failure is raised
+        once the targets already running have finished (their run directories resume).
     """
+    rereads = rereads or {}
     waiting = list(order)
     running: dict[Future, str] = {}
     done: dict[str, tuple[str, float]] = {}
+    stale: set[str] = set()  # finished before what they read: to run again
     failure: BaseException | None = None
     context = multiprocessing.get_context("spawn")  # no fork of a process whose progress bar runs a thread
     with ProcessPoolExecutor(max_workers=lanes, mp_context=context, max_tasks_per_child=1) as pool:
-        while waiting or running:
+        while waiting or running or stale:
             ready = [t for t in waiting if all(n in done or n not in order for n in needs.get(t, ()))]
+            ready += [t for t in stale if t not in running.values() and all(r in done for r in rereads[t] if r in order)]
             ready.sort(key=lambda t: -EXPECTED_S.get(t, 0.0))
             while failure is None and ready and len(running) < lanes:
                 target = ready.pop(0)
-                waiting.remove(target)
+                if target in waiting:
+                    waiting.remove(target)
+                stale.discard(target)
                 running[launch(pool, target)] = target
                 progress(f"targets side by side (running: {', '.join(sorted(running.values()))})", len(done), len(order))
             if not running:
@@ -72,9 +82,13 @@ def side_by_side(order: Sequence[str], needs: dict[str, tuple[str, ...]], lanes:
             for future in finished:
                 target = running.pop(future)
                 try:
-                    done[target] = future.result()
+                    folder, seconds = future.result()
                 except BaseException as exc:  # noqa: BLE001 - re-raised after the others finish
                     failure = failure or exc
+                    continue
+                done[target] = (folder, seconds + (done[target][1] if target in done else 0.0))
+                if any(r in order and r not in done for r in rereads.get(target, ())):
+                    stale.add(target)
                 progress("targets side by side", len(done), len(order))
     if failure is not None:
         raise failure
