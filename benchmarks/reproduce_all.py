@@ -84,7 +84,9 @@ def compare(root: Path, reference: Path) -> list[str]:
         if not mine.is_file():
             lines.append(f"{target}: no results.json here")
             continue
-        a, b = flatten(json.loads(mine.read_text())), flatten(json.loads(results.read_text()))
+        # The numbers (``results``): not the figure paths, wall times or engine-query counts beside them.
+        a = flatten(json.loads(mine.read_text()).get("results", {}))
+        b = flatten(json.loads(results.read_text()).get("results", {}))
         differ = sorted(k for k in set(a) | set(b) if k not in a or k not in b or not same(a[k], b[k]))
         shown = ", ".join(differ[:5]) + (" ..." if len(differ) > 5 else "")
         lines.append(f"{target}: {len(b)} numbers, {len(differ)} differ" + (f" ({shown})" if differ else ""))
