@@ -53,6 +53,7 @@ def sweep_margins(trace: BeliefTrace, model: Any, simulator: Any, *, thresholds:
         raise ValueError(f"a margin sweep commits {METHOD} alone, not {list(methods)}")
     cache = {} if cache is None else cache
     margins = [float(g) for g in margins]
+    model.with_margin(margins[0])  # a model with no margin refuses the search, as each margin's commit would
     budgets = [k for k in trace.budgets if not isinstance(thresholds, Mapping) or k in thresholds]
     batch = trace.batch
     grid = np.asarray(model.action_grid, dtype=float).reshape(len(model.action_grid), -1)
