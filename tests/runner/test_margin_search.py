@@ -120,3 +120,16 @@ def test_compiled_choice_equals_select_action(seed):
         expected = select_action(fractions, tie)
         np.testing.assert_array_equal(index[m], expected)
         np.testing.assert_array_equal(score[m], np.take_along_axis(fractions, expected[:, None], axis=1)[:, 0])
+
+
+def test_beliefs_computed_a_chunk_ahead_give_the_same_results(runs, monkeypatch):
+    """The next chunk's trace built in a second thread while one is committed: the same tables."""
+    monkeypatch.setenv("PROBECOMMIT_ENGINE_THREADS", "1")
+    one = calibrate(runs["cal"], runs["test"], resamples=100, chunk_instances=2)
+    monkeypatch.setenv("PROBECOMMIT_ENGINE_THREADS", "2")
+    beliefs = RunBeliefs.of(load_run(runs["cal"]), chunk_instances=2)
+    with beliefs._traces_ahead() as upcoming:
+        assert upcoming(beliefs.chunks[0]) is not None  # the second thread is used
+    ahead = calibrate(runs["cal"], runs["test"], resamples=100, chunk_instances=2)
+    assert json.dumps(one.to_dict(), sort_keys=True, default=str) == json.dumps(ahead.to_dict(), sort_keys=True, default=str)
+    pd.testing.assert_frame_equal(one.audit_calibrated, ahead.audit_calibrated, check_exact=True)
