@@ -65,15 +65,27 @@ browser: system-packages
 test-fast: $(STAMP) $(AOT_DIGEST)
 	$(PY) -m pytest -q -m "not slow"
 
-## Benchmarks: ratios measured side by side in one run.
+## Benchmarks: ratios measured side by side in one run, each printing its target (issue 42's first):
+## end to end, MuJoCo overhead, calibrate at E = 3072 and 12288, reproduce all, --workers and Ray,
+## aborts at exit; then the belief core, the audit, start-up, writes, sessions. Long (an hour idle).
+## BENCH_AGAINST=<git ref> also times that ref where a benchmark can (calibrate, memory, reproduce).
+BENCH_AGAINST ?=
+AGAINST := $(if $(BENCH_AGAINST),--against $(BENCH_AGAINST),)
 bench: $(STAMP) $(AOT_DIGEST)
-	$(PY) benchmarks/belief.py
-	$(PY) benchmarks/calibrate.py
+	$(PY) benchmarks/end_to_end.py
+	$(PY) benchmarks/mujoco_overhead.py
+	$(PY) benchmarks/calibrate.py $(AGAINST)
+	$(PY) benchmarks/calibrate.py --instances 3072
+	$(PY) benchmarks/reproduce_all.py
 	$(PY) benchmarks/scale.py
-	$(PY) benchmarks/session.py
+	$(PY) benchmarks/replay_aborts.py
 	$(PY) benchmarks/startup.py
 	$(PY) benchmarks/writes.py
-	$(PY) benchmarks/end_to_end.py
+	$(PY) benchmarks/belief.py
+	$(PY) benchmarks/audit.py
+	$(PY) benchmarks/memory.py $(AGAINST)
+	$(PY) benchmarks/reproduce.py $(AGAINST)
+	$(PY) benchmarks/session.py
 
 ## Every table and figure of the paper (resumable; see probecommit reproduce --list).
 reproduce: $(STAMP) $(AOT_DIGEST)

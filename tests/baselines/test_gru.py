@@ -53,3 +53,19 @@ def test_history_encoding_is_order_sensitive_and_handles_budget_zero():
     assert forward.shape == (1, 2, 6) and not np.array_equal(forward, backward)
     empty = encode_history(u[:, :0], y[:, :0], ctx, 3.0, 1.0)
     assert empty.shape == (1, 1, 6) and empty[0, 0, -1] == 0 and np.allclose(empty[0, 0, 3:5], ctx[0])
+
+
+def test_seeds_trained_in_parallel_processes_equal_those_trained_here(tmp_path):
+    """``reproduce gru --workers N``: each seed trained in a spawned process, checkpointed; the one-by-one
+    loop reads back the same weights and loss it would have trained itself."""
+    from probecommit.studies.gru import train_in_parallel
+
+    model, contexts, data_seed = Push2DModel(), np.array([[0.5, 0.2], [1.0, -0.3]]), 3
+    train_in_parallel(tmp_path / "parallel", model, contexts, TINY, data_seed, 2, 2, lambda *args: None)
+    for seed in range(2):
+        here, meta_here = train_or_resume(tmp_path / "here", make_training_set(model, contexts, TINY, data_seed + seed),
+                                          model, TINY, seed)
+        read, meta_read = train_or_resume(tmp_path / "parallel", make_training_set(model, contexts, TINY, data_seed + seed),
+                                          model, TINY, seed)
+        assert all(torch.equal(here[k], read[k]) for k in here)
+        assert meta_here == meta_read

@@ -42,7 +42,8 @@ def alive(pid: int) -> bool:
 @pytest.mark.skipif(not Path("/proc").is_dir(), reason="needs /proc (Linux)")
 def test_workers_exit_when_the_parent_is_killed(tmp_path):
     (tmp_path / "c.yaml").write_text(yaml.safe_dump(CONFIG))
-    proc = subprocess.Popen([sys.executable, "-m", "probecommit", "run", "c.yaml", "--workers", "2"], cwd=tmp_path,
+    proc = subprocess.Popen([sys.executable, "-m", "probecommit", "run", "c.yaml", "--workers", "2", "--threads", "1"],
+                            cwd=tmp_path,
                             stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     deadline = time.time() + 60
     workers: list[int] = []

@@ -64,9 +64,13 @@ def print_budget_table(episodes, title: str) -> None:
 
 
 def _run(config, out: Path, workers: int, ray: Optional[str], threads: Optional[int] = None):
-    from probecommit.runner.study import preflight, run_concurrency, run_study
+    from probecommit.runner.study import choose_backend, preflight, run_concurrency, run_study
     from probecommit.store.rundir import RunDir
     from probecommit.runner.config import dump_config
+
+    workers, threads, why = choose_backend(config, workers, ray, threads)
+    if why:
+        err_console.print(safe(why), highlight=False)
 
     # Fail on a bad config, too little memory for the run at its concurrency, or an incompatible
     # directory before drawing a progress bar.

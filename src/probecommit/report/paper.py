@@ -307,11 +307,27 @@ def machine() -> dict[str, Any]:
             "python": platform.python_version(), "numpy": np.__version__}
 
 
+#: Targets that read another target's results when that has run under the same root, without
+#: needing it: breadth puts the insertion study's Split A row into Table II (``insertion_row``).
+#: Side by side, such a target is made again once what it reads is done (``report.schedule``).
+READS_IF_RUN: dict[str, tuple[str, ...]] = {"breadth": ("insertion",)}
+
+
+def side_by_side_lanes(workers: int, targets: int) -> int:
+    """Targets run at once for ``--workers``: up to ``workers`` (at most the CPUs and the targets), 1 for one worker."""
+    import os
+
+    return max(1, min(int(workers), os.cpu_count() or 1, int(targets)))
+
+
 def reproduce(names: list[str], root: str | Path, quick: bool = False, progress: Progress = _noop,
               workers: int = 1, options: dict[str, Any] | None = None) -> dict[str, Any]:
     """Run the named targets (dependencies first) into ``root``.
 
     ``options``: target options, e.g. ``{"families": ["push1d", "darts"]}`` for breadth.
+    With ``workers`` >= 2 (and as many CPUs), independent targets run side by side in
+    processes of their own (``report.schedule``), each given ``workers // lanes`` workers;
+    the numbers are the same as one after the other.
 
     Returns:
         ``{"targets": {name: results folder}, "wall_s": {name: seconds},
@@ -321,8 +337,24 @@ def reproduce(names: list[str], root: str | Path, quick: bool = False, progress:
     OPTIONS.clear()
     OPTIONS.update(options or {})
     out: dict[str, Any] = {"targets": {}, "wall_s": {}, "engine_calls": {}, "machine": machine()}
+    order = resolve(names)
+    lanes = side_by_side_lanes(workers, len(order))
+    if lanes > 1:  # independent targets in processes of their own, each with its share of the workers
+        from probecommit.report.schedule import run_target, side_by_side
+
+        inner = max(1, workers // lanes)
+        results = side_by_side(order, {t: TARGETS[t].needs for t in order}, lanes,
+                               lambda pool, name: pool.submit(run_target, name, str(root), quick, inner, dict(OPTIONS)),
+                               progress, READS_IF_RUN)
+        out["side_by_side"] = lanes
+        for name in order:
+            out["targets"][name], out["wall_s"][name] = results[name]
+            out["engine_calls"][name] = engine_calls_under(root / name)
+        root.mkdir(parents=True, exist_ok=True)
+        write_text(root / "reproduction.json", json.dumps(out, indent=1))
+        return out
     with shared_engine_answers():  # one engine cache for every run and replay: no query twice
-        for name in resolve(names):
+        for name in order:
             start = time.perf_counter()
             out["targets"][name] = str(TARGETS[name].run(root, quick, progress, workers))
             out["wall_s"][name] = time.perf_counter() - start
@@ -438,7 +470,7 @@ def _gru(root: Path, quick: bool, progress: Progress, workers: int) -> Path:
     runs = root / "breadth" / "runs"
     pipeline = runs / ("push2d-quick" if quick and (runs / "push2d-quick").is_dir() else "push2d")
     results = root / "gru" / "results"
-    reproduce_gru(results, pipeline, quick=quick, progress=progress)
+    reproduce_gru(results, pipeline, quick=quick, progress=progress, workers=workers)
     return results
 
 

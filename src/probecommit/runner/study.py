@@ -282,6 +282,26 @@ def unit_threads(config: StudyConfig, threads: int | None = None) -> int:
     return wanted
 
 
+def choose_backend(config: StudyConfig, workers: int, ray: str | None = None,
+                   threads: int | None = None) -> tuple[int, int | None, str | None]:
+    """What ``--workers`` runs as: ``(workers, threads, why)``, ``why`` a line for the user when it differs.
+
+    Worker processes each start an interpreter, import the package and build the model and
+    kernels again (seconds, and hundreds of MB each), and on a machine whose CPUs the
+    threads of one process already fill they only add that cost: ``--workers 2`` measured
+    0.72x one worker on 2 cores. So when the study's simulator is thread-safe, ``--workers N``
+    runs the units in N threads of this process (the same tables: results never depend on
+    the backend) and says why. ``--threads`` or ``--ray`` given (``--workers 2 --threads 1``:
+    processes), or a simulator that is not thread-safe, keep the processes.
+    """
+    if workers <= 1 or ray is not None or threads is not None or not build.simulator_class(config).thread_safe:
+        return workers, threads, None
+    return 1, workers, (f"--workers {workers}: running the units in {workers} threads of this process instead of "
+                        f"{workers} worker processes: the {config.simulator.engine} simulator is thread-safe, and threads "
+                        "share one interpreter, its imports, model and compiled kernels (each process would load its own). "
+                        "Same results. (--threads 1 keeps the worker processes.)")
+
+
 def _init_worker(parent_pid: int, poll_s: float = 0.5, engine_threads: int | None = None) -> None:
     """Pool-worker initializer: exit as soon as the parent is gone (even after SIGKILL).
 

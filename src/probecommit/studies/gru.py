@@ -35,9 +35,37 @@ def load_gru_config(path: str | Path | None = None) -> dict[str, Any]:
     return load_yaml(Path(path or CONFIG_DIR / "gru.yaml").read_bytes(), str(path or CONFIG_DIR / "gru.yaml"))
 
 
+def train_seed(checkpoints: str, model: Any, contexts: np.ndarray, tcfg: TrainingConfig, data_seed: int,
+               seed: int) -> int:
+    """Train seed ``seed`` into ``checkpoints`` (in a worker process; the loop below reads it back)."""
+    data = make_training_set(model, contexts, tcfg, data_seed + seed)
+    train_or_resume(Path(checkpoints), data, model, tcfg, seed)
+    return seed
+
+
+def train_in_parallel(checkpoints: Path, model: Any, contexts: np.ndarray, tcfg: TrainingConfig, data_seed: int,
+                      seeds: int, workers: int, step: Callable[[str, int, int], None]) -> None:
+    """Train the seeds ``workers`` at a time in spawned processes, each checkpointed as the one-by-one
+    loop would (one torch thread, seeded, deterministic: the same weights), so that loop only reads them."""
+    import multiprocessing
+    from concurrent.futures import ProcessPoolExecutor, as_completed
+
+    context = multiprocessing.get_context("spawn")
+    with ProcessPoolExecutor(max_workers=min(workers, seeds), mp_context=context) as pool:
+        futures = [pool.submit(train_seed, str(checkpoints), model, contexts, tcfg, data_seed, seed)
+                   for seed in range(seeds)]
+        for done, future in enumerate(as_completed(futures), start=1):
+            future.result()
+            step(f"gru: training {min(workers, seeds)} seeds at a time", done, seeds)
+
+
 def reproduce_gru(out: str | Path, pipeline_run: str | Path, quick: bool = False,
-                  progress: Callable[[str, int, int], None] | None = None, config_path: str | Path | None = None) -> dict:
-    """Train, evaluate and test equivalence; writes ``out/results.json`` and ``out/table_gru.md``."""
+                  progress: Callable[[str, int, int], None] | None = None, config_path: str | Path | None = None,
+                  workers: int = 1) -> dict:
+    """Train, evaluate and test equivalence; writes ``out/results.json`` and ``out/table_gru.md``.
+
+    With ``workers`` > 1 the seeds are trained that many at a time in processes of their own
+    (identical weights: each seed's training is seeded and single-threaded)."""
     out = Path(out)
     step = progress or (lambda *a: None)
     cfg = load_gru_config(config_path)
@@ -54,6 +82,8 @@ def reproduce_gru(out: str | Path, pipeline_run: str | Path, quick: bool = False
     k = cfg["budget"]
     x = encode_history(batch.u[:, :k], batch.y[:, :k], batch.context, *feature_scales(model))
     simulator = simulator_for_run(loaded)
+    if workers > 1 and seeds > 1:
+        train_in_parallel(out / "checkpoints", model, contexts, tcfg, cfg["data_seed"], seeds, workers, step)
     per_seed, meta = [], []
     for i, seed in enumerate(range(seeds)):
         data = make_training_set(model, contexts, tcfg, cfg["data_seed"] + seed)
