@@ -7,7 +7,6 @@ a self-contained HTML report, its PNG figures and machine-readable tables.
 from __future__ import annotations
 
 import json
-import math
 from pathlib import Path
 from typing import Optional
 
@@ -15,20 +14,12 @@ import typer
 from rich.table import Table
 
 from probecommit.cli.common import console, err_console, safe, user_errors
-from probecommit.cli.output import print_table, write_csv
+from probecommit.cli.output import number, print_table, write_csv
 from probecommit.errors import UsageError
 from probecommit.store.safefile import output_dir, write_text
 
 def _f(v, signed: bool = False) -> str:
-    try:
-        v = float(v)
-    except (TypeError, ValueError):
-        return str(v)
-    if math.isnan(v):
-        return "–"
-    if math.isinf(v):
-        return "inf"
-    return f"{v:+.3f}" if signed else f"{v:.3f}"
+    return number(v, signed)
 
 
 def _ci(row, name: str, signed: bool = False) -> str:

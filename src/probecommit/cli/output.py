@@ -2,10 +2,23 @@
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 from probecommit.cli.common import console
 from probecommit.store.safefile import write_bytes
+
+
+def number(value, signed: bool = False, missing: str = "–") -> str:
+    """A result number as every command prints it: three decimals (a sign with ``signed``);
+    ``missing`` for None and NaN (a metric the data leave undefined); other text as it is."""
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        return missing if value is None else str(value)
+    if math.isnan(v):
+        return missing
+    return f"{v:+.3f}" if signed else f"{v:.3f}"
 
 
 def print_table(table) -> None:

@@ -12,6 +12,7 @@ from rich import box
 from rich.table import Table
 
 from probecommit.cli.common import console, safe, user_errors
+from probecommit.cli.output import number
 from probecommit.errors import UsageError
 
 #: Written into a run directory made with overrides: the source file and the override list
@@ -20,13 +21,7 @@ OVERRIDES_FILE = "overrides.yaml"
 
 
 def _num(value, signed: bool = False) -> str:
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        return "-"
-    if math.isnan(v):
-        return "-"
-    return f"{v:+.3f}" if signed else f"{v:.3f}"
+    return number(value, signed, missing="-")
 
 
 def _text(value) -> str:
