@@ -275,3 +275,20 @@ def test_a_units_tables_equal_those_built_through_pandas(monkeypatch, family):
     _, expected, _ = study.compute_unit(data, instances, "unit-00000")
     for name in built:
         assert built[name].equals(expected[name], check_metadata=True), name
+
+
+def test_run_files_and_result_files_refuse_a_planted_symlink_by_one_rule(tmp_path):
+    """Run files (``rundir.atomic_write_bytes``) and result files (``safefile.write_bytes``) are
+    written by the same ``safefile.atomic_file``: a symlink at the path is never followed."""
+    from probecommit.store.rundir import atomic_write_bytes
+    from probecommit.store.safefile import UnsafePathError, write_bytes
+
+    target = tmp_path / "elsewhere.txt"
+    target.write_bytes(b"keep")
+    for write in (atomic_write_bytes, write_bytes):
+        link = tmp_path / f"{write.__name__}.parquet"
+        link.symlink_to(target)
+        with pytest.raises(UnsafePathError):
+            write(link, b"new")
+        assert target.read_bytes() == b"keep" and link.is_symlink()
+        assert not list(tmp_path.glob(".*.tmp"))  # nothing left behind

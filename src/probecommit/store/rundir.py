@@ -32,10 +32,9 @@ import io
 import json
 import os
 import subprocess
-import tempfile
 import time
 from pathlib import Path
-from typing import Any, BinaryIO, Iterator, Sequence
+from typing import Any, Iterator, Sequence
 
 import numpy as np
 import pandas as pd
@@ -45,6 +44,7 @@ import pyarrow.parquet as pq
 
 from probecommit import __version__
 from probecommit.store.manifest_rules import ManifestError, read_manifest, sha256_file
+from probecommit.store.safefile import atomic_file
 from probecommit.store.yamlsafe import YamlError, load_yaml
 from probecommit.store import batches
 from probecommit.store.schema import (EPISODE_COLUMNS, INSTANCE_COLUMNS, PROBE_COLUMNS, Column, float_matrix,
@@ -69,38 +69,9 @@ class RunDirError(UserError, RuntimeError):
     """A run directory is incomplete, incompatible or corrupt."""
 
 
-def _read_umask() -> int:
-    mask = os.umask(0)
-    os.umask(mask)
-    return mask
-
-
-#: Read once at import: ``os.umask`` can only be read by setting it, which is process-global.
-_UMASK = _read_umask()
-
-
-@contextlib.contextmanager
-def _atomic_file(path: Path) -> Iterator[BinaryIO]:
-    """A file to write whose content replaces ``path`` atomically (a temporary file, then a
-    rename) when the block ends; nothing is left behind when it raises."""
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    try:
-        # mkstemp creates 0600; a run file gets the mode any new file would (the umask's).
-        os.fchmod(fd, 0o666 & ~_UMASK)
-        with os.fdopen(fd, "wb") as fh:
-            yield fh
-            fh.flush()
-            os.fsync(fh.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
-
-
 def atomic_write_bytes(path: Path, data: bytes) -> None:
     """Write ``data`` to ``path`` via a temporary file and an atomic rename."""
-    with _atomic_file(path) as fh:
+    with atomic_file(path) as fh:
         fh.write(data)
 
 
@@ -755,7 +726,7 @@ class EpisodeStream:
                 atomic_write_parquet(path, pd.DataFrame(), EPISODE_COLUMNS)
                 return
             schema = pa.unify_schemas([pq.read_schema(part) for part in self._parts], promote_options="permissive")
-            with _atomic_file(path) as fh, pq.ParquetWriter(fh, schema) as writer:
+            with atomic_file(path) as fh, pq.ParquetWriter(fh, schema) as writer:
                 for part in self._parts:
                     writer.write_table(_conformed(pq.read_table(part), schema))
         finally:

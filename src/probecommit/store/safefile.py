@@ -11,11 +11,12 @@ a file. Frames, figures and text are rendered to bytes in memory first.
 
 from __future__ import annotations
 
+import contextlib
 import io
 import os
 import tempfile
 from pathlib import Path
-from typing import Any, Callable
+from typing import Any, BinaryIO, Callable, Iterator
 
 
 def _read_umask() -> int:
@@ -55,6 +56,26 @@ def output_dir(chosen: str | Path | None, default: str | Path) -> Path:
     return path
 
 
+@contextlib.contextmanager
+def atomic_file(path: Path) -> Iterator[BinaryIO]:
+    """A file to write whose content replaces ``path`` atomically when the block ends (a
+    temporary file beside it, fsync, rename); nothing is left behind when it raises. The file
+    gets the mode any new file would (the umask's), not mkstemp's 0600."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    try:
+        os.fchmod(fd, 0o666 & ~_UMASK)
+        with os.fdopen(fd, "wb") as fh:
+            yield fh
+            fh.flush()
+            os.fsync(fh.fileno())
+        refuse_symlink(path)  # planted between a caller's check and now: not followed by the rename, and said
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
 def write_bytes(path: str | Path, data: bytes) -> Path:
     """Write ``data`` to ``path``: refuse a symlink there, write a temporary file, fsync, rename.
 
@@ -63,24 +84,13 @@ def write_bytes(path: str | Path, data: bytes) -> Path:
         OSError: the write failed (the message names ``path``); nothing is left behind.
     """
     path = refuse_symlink(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
     try:
-        os.fchmod(fd, 0o666 & ~_UMASK)  # mkstemp makes 0600; a result file gets a new file's usual mode
-        with os.fdopen(fd, "wb") as fh:
+        with atomic_file(path) as fh:
             fh.write(data)
-            fh.flush()
-            os.fsync(fh.fileno())
-        refuse_symlink(path)  # planted between the check and now: still not followed by the rename, but said
-        os.replace(tmp, path)
     except OSError as exc:
-        Path(tmp).unlink(missing_ok=True)
         if isinstance(exc, UnsafePathError) or exc.filename:
             raise
         raise OSError(exc.errno, exc.strerror, str(path)) from None
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
     return path
 
 
