@@ -20,47 +20,8 @@ The attributes load on first use, so ``import probecommit`` stays light.
 from __future__ import annotations
 
 import logging as _logging
-import os as _os
-import sys as _sys
 from pathlib import Path as _Path
 
-
-def _distribution_version(name: str) -> str | None:
-    """The ``Version:`` of the first distribution ``name`` on ``sys.path``, as
-    ``importlib.metadata.version`` finds it, read from its ``*.dist-info/METADATA`` headers
-    directly: importing ``importlib.metadata`` (and its e-mail parser) costs every command,
-    ``--help`` included, about 50 ms. None when it is not installed."""
-    wanted = name.lower().replace("-", "_")
-    for folder in _sys.path:
-        try:
-            entries = sorted(e.name for e in _os.scandir(folder or "."))
-        except OSError:
-            continue
-        for entry in entries:
-            stem, dot, suffix = entry.rpartition(".")
-            if suffix != "dist-info" or stem.rpartition("-")[0].lower().replace("-", "_").replace(".", "_") != wanted:
-                continue
-            try:
-                with open(_os.path.join(folder or ".", entry, "METADATA"), encoding="utf-8") as fh:
-                    for line in fh:
-                        if not line.strip():
-                            break
-                        if line.startswith("Version:"):
-                            return line[len("Version:"):].strip()
-            except OSError:
-                continue
-    return None
-
-
-# One source for the version: the installed distribution's metadata (pyproject.toml).
-__version__ = _distribution_version("probecommit")
-if __version__ is None:  # pragma: no cover - an egg or an unusual installer: ask importlib
-    from importlib import metadata as _metadata
-
-    try:
-        __version__ = _metadata.version("probecommit")
-    except _metadata.PackageNotFoundError:  # running from a source tree without install
-        __version__ = "0.0.0+unknown"
 
 _logging.getLogger(__name__).addHandler(_logging.NullHandler())
 
@@ -95,7 +56,21 @@ def paper_config(name: str) -> _Path:
     return path
 
 
+def _version() -> str:
+    """The installed distribution's version (pyproject.toml, one source), read on first use:
+    ``importlib.metadata`` costs about 50 ms, which ``--help`` need not pay."""
+    from importlib import metadata as _metadata
+
+    try:
+        return _metadata.version("probecommit")
+    except _metadata.PackageNotFoundError:  # running from a source tree without install
+        return "0.0.0+unknown"
+
+
 def __getattr__(name: str):
+    if name == "__version__":
+        globals()["__version__"] = version = _version()  # once: later reads find the attribute
+        return version
     if name in _LAZY:
         import importlib
 

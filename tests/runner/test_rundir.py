@@ -130,13 +130,22 @@ def test_the_merge_of_kept_shard_tables_equals_the_merge_of_the_files(tmp_path, 
 def test_manifest_engine_versions_are_the_installed_distributions():
     from importlib import metadata
 
-    from probecommit.store.rundir import _header_version, engine_versions
+    from probecommit.store.rundir import engine_versions
 
     versions = engine_versions()
     for name in ("numpy", "pandas", "pyarrow"):
         assert versions[name] == metadata.version(name)
-    assert _header_version("Metadata-Version: 2.1\nName: x\nVersion: 1.2.3\n\nVersion: 9") == "1.2.3"
-    assert _header_version("Name: x\n\nVersion: 9") is None  # a body line is not the header
+    assert set(versions) >= {"python", "mujoco", "pybullet", "sapien", "ray", "numba"}
+
+
+def test_the_package_version_is_read_on_first_use_from_the_distribution():
+    import subprocess
+    import sys
+    from importlib import metadata
+
+    code = "import probecommit; v = probecommit.__version__; from probecommit import __version__ as w; print(v == w, v)"
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.split()
+    assert out == ["True", metadata.version("probecommit")]
 
 
 def test_merged_tables_equal_concatenating_each_table_converted_by_pandas(tmp_path):

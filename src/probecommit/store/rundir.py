@@ -249,26 +249,18 @@ def git_dirty() -> bool | None:
 
 
 def engine_versions() -> dict[str, str | None]:
-    """Python's version and those of the engines and the data stack, as the manifest records them."""
+    """Python's version and those of the engines and the data stack, as the manifest records them
+    (None: not installed)."""
     import platform
-
-    from probecommit import _distribution_version
+    from importlib import metadata
 
     out: dict[str, str | None] = {"python": platform.python_version()}
     for name in ("mujoco", "pybullet", "sapien", "ray", "numpy", "pandas", "pyarrow", "numba"):
-        out[name] = _distribution_version(name)
+        try:
+            out[name] = metadata.version(name)
+        except metadata.PackageNotFoundError:
+            out[name] = None
     return out
-
-
-def _header_version(text: str) -> str | None:
-    """The ``Version:`` field of a distribution's metadata headers, read without parsing the whole
-    file as an e-mail message (``metadata.version`` does: 1 ms a package, per run)."""
-    for line in text.splitlines():
-        if not line:  # the headers end at the first blank line
-            break
-        if line.startswith("Version:"):
-            return line[len("Version:"):].strip()
-    return None
 
 
 class RunDir:
