@@ -207,3 +207,29 @@ def test_sigkilled_cli_run_resumes_to_identical_tables(tmp_path):
     assert_same_tables(reference, out)
     tables = lambda m: {k: v for k, v in m["sha256"].items() if k.endswith(".parquet")}  # noqa: E731 - configs differ in unit_instances
     assert tables(manifest) == tables(RunDir(reference).manifest())
+
+
+def test_a_resumed_run_decodes_each_stored_batch_once(tmp_path, make_config, monkeypatch):
+    """On resume ``done_units`` decodes every batch to check it; the merge then uses those tables
+    instead of decoding the batches a second time (within ``KEEP_WRITTEN_BYTES``)."""
+    from probecommit.store import batches
+
+    cfg = tiny(make_config)
+    monkeypatch.setattr(RunDir, "batch_units", 1)
+    monkeypatch.setattr(study, "GROUP_EPISODES", 1)
+    reference = run_study(cfg, tmp_path / "ref").run_dir
+    run = tmp_path / "resumed"
+    run_study(cfg, run)
+    for name in (*TABLES, "manifest"):  # killed after the last batch, before the merge
+        for path in run.glob(f"{name}.*"):
+            path.unlink()
+    real_read, reads = batches.read, []
+
+    def counting(path):
+        reads.append(Path(path).name)
+        return real_read(path)
+
+    monkeypatch.setattr(batches, "read", counting)
+    run_study(cfg, run)
+    assert reads and len(reads) == len(set(reads)), reads
+    assert_same_tables(reference, run)

@@ -454,7 +454,7 @@ class RunDir:
             raise self._other_code(legacy[0], "unrecorded (a shard of the earlier per-unit layout)")
         for path in self._batch_paths():
             try:
-                header, _ = batches.read(path)
+                header, stored = batches.read(path)
             except (batches.BatchError, OSError, pa.ArrowException, KeyError, TypeError, ValueError):
                 path.unlink(missing_ok=True)  # cut short or altered: its units run again
                 continue
@@ -464,6 +464,7 @@ class RunDir:
                 if entry["unit"] not in self._batches:
                     self._batches[entry["unit"]] = path
                     self._stats[entry["unit"]] = entry["stats"]
+                    self._keep(entry["unit"], stored[entry["unit"]])  # finalize need not decode it again
         code = self.shards / CODE
         if self.shards.is_dir() and (not code.is_file() or code.read_text().strip() != code_identity()):
             # Only a complete run gets here with another CODE (an unfinished one is refused by
@@ -528,11 +529,18 @@ class RunDir:
         self._next_batch += 1
         for unit, tables, stats in self._pending:
             self._batches[unit], self._stats[unit] = path, stats
-            size = sum(t.nbytes for t in tables.values())
-            if self._kept_bytes + size <= self.KEEP_WRITTEN_BYTES:
-                self._kept[unit] = tables
-                self._kept_bytes += size
+            self._keep(unit, tables)
         self._pending, self._pending_bytes, self._last_commit = [], 0, time.monotonic()
+
+    def _keep(self, unit: str, tables: dict[str, pa.Table]) -> None:
+        """Hold a stored unit's tables for the merge while they fit ``KEEP_WRITTEN_BYTES`` (written
+        by this object, or decoded by :meth:`done_units` on resume), so no batch is decoded twice."""
+        if unit in self._kept:
+            return
+        size = sum(t.nbytes for t in tables.values())
+        if self._kept_bytes + size <= self.KEEP_WRITTEN_BYTES:
+            self._kept[unit] = tables
+            self._kept_bytes += size
 
     def unit_stats(self, unit: str) -> dict[str, Any]:
         return self._stats[unit]
