@@ -163,7 +163,7 @@ def _gates(commits: pd.DataFrame, runs: dict[str, pd.DataFrame], results: dict[s
     """The commit gates (summary, curves, t and gamma) and Fig. 6's coverage panel, from stored rows; and the
     stored uncalibrated gate rows against the test run's stored episodes (they are the same commits)."""
     from probecommit.studies.insertion import CALIBRATIONS
-    from probecommit.report.study_figures import coverage_vs_nominal
+    from probecommit.studies.insertion import coverage_vs_nominal
     from probecommit.runner.calibration import gates_from_commits
 
     cal_run, test_run = CALIBRATIONS["gates"]

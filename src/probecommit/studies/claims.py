@@ -900,7 +900,7 @@ def _experiments_more() -> list[Experiment]:
                     "hlo": f"{rr}boundary.coverage_holds_to_mm.p025", "hhi": f"{rr}boundary.coverage_holds_to_mm.p975",
                     "end": f"{rr}boundary.coverage_holds_to_mm.share_at_sweep_end"},
                    "replaying {n:d} fresh draws of the rig's block positions (simulated rig) with the tap boundary pulled "
-                   "inward, optimism first resolves at a median {f:g} mm (2.5-97.5 % of sessions: {flo:g} to {fhi:g} mm) "
+                   "inward, optimism first resolves at a median {f:g} mm (central 95 % of sessions: {flo:g} to {fhi:g} mm) "
                    "and coverage holds to a median {h:g} mm ({hlo:g} to {hhi:g} mm; {end:.3f} of sessions hold through the "
                    "whole sweep).",
                    supports=lambda v: v["flo"] <= _pv("T28-replay-boundary.first_mm") <= v["fhi"]
@@ -1109,7 +1109,7 @@ def _experiments_ex3() -> list[Experiment]:
                    "{hi:.3f}; the same at every budget as our PyBullet run: {same:d} = yes); the capture window "
                    "moves escape by {cap:+.3f}, since a tap reading does not read it (a per-truth spread with the "
                    "paper's SD changes failure to {pf:.3f}, not escape); over {n:d} fresh draws of the generator "
-                   "escape at k = 8 spans {dlo:.3f} to {dhi:.3f} (2.5-97.5 %; highest {dmax:.3f}).",
+                   "escape at k = 8 spans {dlo:.3f} to {dhi:.3f} (central 95 %; highest {dmax:.3f}).",
                    supports=lambda v: v["lo"] <= _pv("T19-pybullet-escape.k8") <= v["hi"]
                    or v["dlo"] <= _pv("T19-pybullet-escape.k8") <= v["dhi"]),
         Experiment("E46", "the mixture when the model is right, against the particle filter's own noise",
@@ -1120,7 +1120,7 @@ def _experiments_ex3() -> list[Experiment]:
                    "other filter seeds, the mixture at the paper's epsilon changes {ch:.3f} of the aims and costs "
                    "{pc:+.3f} failure on average (paired by seed; at most {pcmax:+.3f}), while another filter seed "
                    "alone changes {rch:.3f} of the aims and moves failure with SD {rsd:.3f}; between independently "
-                   "seeded runs the mixture's apparent cost spans {ulo:+.3f} to {uhi:+.3f} (2.5-97.5 %).",
+                   "seeded runs the mixture's apparent cost spans {ulo:+.3f} to {uhi:+.3f} (central 95 %).",
                    supports=lambda v: _pv("T44-mixture-cost.mixture") - _pv("T44-mixture-cost.right") <= v["uhi"]),
         Experiment("E47", "grasp's per-truth signs with the model as the scene's truth",
                    {"n": f"{gs}analytic.n_feasible", "up": f"{gs}analytic.n_improve", "tie": f"{gs}analytic.n_tie",

@@ -14,11 +14,9 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from probecommit.runner.build import build_filter, build_model, build_simulator
-from probecommit.runner.inference import build_trace, commit, rollout
-from probecommit.runner.instances import draw_instances
+from probecommit.runner.build import build_simulator
 from probecommit.runner.replay import LoadedRun, replay_episodes
-from probecommit.studies.cover_search import candidate_schedules
+from probecommit.studies.cover_search import candidate_episodes
 from probecommit.studies.explain.choice import choice_stability
 from probecommit.studies.robust import robust_candidates
 
@@ -32,15 +30,9 @@ def cover_episodes(protocol: Any,
     instance id as a column ``instance_id``.
     """
     cfg = protocol.run_config("cover-search", "development", "development", "cover")
-    sim = build_simulator(cfg)
-    model = build_model(cfg)
-    pfilter = build_filter(model, cfg.belief)
-    instances = draw_instances(cfg, model)
-    candidates = candidate_schedules(model.probe_grid)[:limit]
-    fail, aim, ids = {}, {}, None
-    for n, schedule in enumerate(candidates):
-        batch = rollout(instances, cfg.repeats, [(u,) for u in schedule], len(schedule), model, sim, cfg.seed)
-        ep = commit(build_trace(pfilter, batch, cfg.seed, [len(schedule)]), model, sim, thresholds=cfg.belief.nu)
+    candidates, fail, aim, ids = [], {}, {}, None
+    for n, schedule, ep in candidate_episodes(cfg, build_simulator(cfg), limit):
+        candidates.append(schedule)
         ep = ep.sort_values(["instance_id", "repeat"], kind="stable")
         ids = ep["instance_id"].to_numpy() if ids is None else ids
         fail[n] = ep["realized"].to_numpy(float)
