@@ -316,7 +316,7 @@ def use_system_arrow_pool() -> None:
 
 
 def main() -> None:  # pragma: no cover - entry point
-    from probecommit.core.memory import reuse_freed_arrays
+    from probecommit.process.memory import reuse_freed_arrays
 
     use_system_arrow_pool()
     reuse_freed_arrays()

@@ -550,7 +550,7 @@ def preflight(config: StudyConfig, concurrency: int = 1, parts: RunParts | None 
     host's and the container's memory; the output's size is bounded.
     """
     model = (parts or RunParts.build(config)).model
-    from probecommit.core.memory import check_fits
+    from probecommit.process.memory import check_fits
 
     # A unit keeps every budget's belief ([E, N, d] particles + [E, N] weights) and scores
     # [E, A, N] losses for continuous families: estimate before anything is drawn.
