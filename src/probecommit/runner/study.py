@@ -175,42 +175,55 @@ def compute_units(parts: "RunParts | dict", instances: pd.DataFrame, units: list
     if len(units) == 1:
         return one_by_one()
     start = time.perf_counter()
-    config, model = parts.config, parts.model
-    truths, _ = instance_arrays(instances, model)
-    owner: dict[tuple[float, ...], int] = {}  # each truth's unit
+    owner = _truth_owners(instance_arrays(instances, parts.model)[0], units)
+    if owner is None:  # a truth shared by two instances: whose engine answer is it?
+        return one_by_one()
+    batch, columns, simulator = _episodes(parts, instances)
+    if np.any(batch.status != "ok"):  # failed rollouts: their rows are joined unit by unit
+        return one_by_one()
+    by_unit: list[list[dict]] = [[] for _ in units]
+    for record in simulator.cache_records():
+        u = owner.get(tuple(record["theta"]))
+        if u is None:  # an answer keyed otherwise than by an instance's truth: no owner to give it
+            return one_by_one()
+        by_unit[u].append(record)
+    return _split_group(parts, instances, units, batch, columns, simulator, by_unit, start)
+
+
+def _truth_owners(truths: np.ndarray, units: list[tuple[str, int]]) -> dict[tuple[float, ...], int] | None:
+    """Each instance truth's unit (the units in order, ``n`` instances each), or None when two
+    instances share a truth: an engine answer is keyed by the truth, so it would have two owners."""
+    owner: dict[tuple[float, ...], int] = {}
     at = 0
     for u, (_, n) in enumerate(units):
         for theta in truths[at:at + n]:
             owner.setdefault(tuple(theta.astype(float).tolist()), u)
         at += n
-    if len(owner) < len(truths):  # a truth shared by two instances: whose engine answer is it?
-        return one_by_one()
-    batch, columns, simulator = _episodes(parts, instances)
-    if np.any(batch.status != "ok"):  # failed rollouts: their rows are joined unit by unit
-        return one_by_one()
-    records = simulator.cache_records()
-    by_unit: list[list[dict]] = [[] for _ in units]
-    for record in records:
-        u = owner.get(tuple(record["theta"]))
-        if u is None:  # an answer keyed otherwise than by an instance's truth: no owner to give it
-            return one_by_one()
-        by_unit[u].append(record)
+    return owner if len(owner) == len(truths) else None
+
+
+def _split_group(parts: RunParts, instances: pd.DataFrame, units: list[tuple[str, int]], batch: Any,
+                 columns: dict[str, Any], simulator: Any, by_unit: list[list[dict]], start: float) -> list[tuple]:
+    """A group's results cut into its units' ``(unit, tables, stats)``.
+
+    Each table is built once for the group and sliced per unit (a slice shares the group's
+    buffers; its types and pandas metadata are those a unit's own table gets: tested on the
+    final tables). The group's engine calls and times go on its first unit.
+    """
     n_rows = len(next(iter(columns.values()))) if columns else 0
     per_episode = n_rows // max(batch.n_episodes, 1)
     budget = batch.u.shape[1]
     probes = batch.probes_columns()
-    # Each table built once for the group and sliced per unit (a slice shares the group's buffers;
-    # its types and pandas metadata are those a unit's own table gets: tested on the final tables).
     whole = {"instances": arrow_table(instances.reset_index(drop=True), INSTANCE_COLUMNS),
              "probes": arrow_from_columns(probes, batch.n_episodes * budget, PROBE_COLUMNS),
              "episodes": arrow_from_columns(columns, n_rows, EPISODE_COLUMNS)}
     out, first_episode, first_instance = [], 0, 0
     for u, (name, n) in enumerate(units):
-        episodes = n * config.repeats
+        episodes = n * parts.config.repeats
         rows = slice(first_episode * per_episode, (first_episode + episodes) * per_episode)
         taps = slice(first_episode * budget, (first_episode + episodes) * budget)
         unit_columns = {"status": columns["status"][rows]} if columns else {}
-        cache = cache_columns(by_unit[u], model.latent_names)
+        cache = cache_columns(by_unit[u], parts.model.latent_names)
         lead = u == 0
         stats = {
             "unit": name,
