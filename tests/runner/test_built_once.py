@@ -62,3 +62,24 @@ def test_a_worker_process_builds_the_parts_once_for_all_its_units(make_config, c
     assert received[0] is received[1] is received[2] and received[0] is not parts
     assert counts == {"model builds": 2, "validations": 2}  # once in the driver, once in the worker
     assert received[0].config == parts.config
+
+
+def test_overrides_on_the_files_mapping_keep_each_errors_blame(tmp_path, counts):
+    """Overrides go into the file's mapping before its one validation; the nested ``task`` form is
+    validated then overridden; a bad file is named alone, a bad override with the overrides."""
+    from probecommit.runner.config import ConfigError
+    from probecommit.runner.overrides import load_with_overrides, parse_override
+
+    flat = tmp_path / "flat.yaml"
+    flat.write_text("name: f\ntask: insertion\nsimulator: {engine: analytic}\ninstances: {count: 2}\n")
+    assert load_with_overrides(flat, [parse_override("model.sigma=0.4")]).model.sigma == 0.4
+    assert counts["validations"] == 1
+    nested = tmp_path / "nested.yaml"
+    nested.write_text("name: n\ntask: {family: insertion, model: {sigma: 0.5}, simulator: {engine: analytic}}\n")
+    assert load_with_overrides(nested, [parse_override("model.sigma=0.4")]).model.sigma == 0.4
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("name: b\nrepeats: 0\n")
+    with pytest.raises(ConfigError, match=r"^.*bad\.yaml: invalid config field 'repeats'"):
+        load_with_overrides(bad, [parse_override("model.sigma=0.4")])
+    with pytest.raises(ConfigError, match=r"flat\.yaml with model\.sigma=-1: invalid config field 'model\.sigma'"):
+        load_with_overrides(flat, [parse_override("model.sigma=-1")])
