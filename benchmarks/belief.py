@@ -9,7 +9,7 @@ both run once as a warm-up (numba compilation, allocator). Then the arms take tu
 ``--rounds`` rounds (a shared virtual machine's speed drifts by 10-30 % within a minute,
 so one timing per arm is not a ratio): each arm's median is printed, and the ratio of
 the medians with the smallest and largest ratio of a single round. The process keeps freed
-arrays in its heap as the ``probecommit`` command does (``core.memory.reuse_freed_arrays``;
+arrays in its heap as the ``probecommit`` command does (``process.memory.reuse_freed_arrays``;
 the plain loop's arrays are too small to be affected); ``--default-heap`` leaves glibc's defaults.
 
     python benchmarks/belief.py [--episodes 384] [--particles 1024] [--taps 8] [--rounds 5] [--default-heap]
@@ -26,7 +26,7 @@ import numpy as np
 from probecommit.accel import production
 from probecommit.core.belief import ParticleFilter
 from probecommit.core.executors import ProbeRobust
-from probecommit.core.memory import reuse_freed_arrays
+from probecommit.process.memory import reuse_freed_arrays
 from probecommit.tasks.insertion.model import InsertionModel, capture_half_width, half_gap
 
 
@@ -94,7 +94,7 @@ def add_heap_option(parser: argparse.ArgumentParser) -> None:
 
 
 def heap_setting(args: argparse.Namespace) -> str:
-    """Set the command's heap thresholds (``core.memory.reuse_freed_arrays``) unless ``--default-heap``; say which."""
+    """Set the command's heap thresholds (``process.memory.reuse_freed_arrays``) unless ``--default-heap``; say which."""
     return "glibc's default heap" if args.default_heap or not reuse_freed_arrays() else "the command's heap thresholds"
 
 

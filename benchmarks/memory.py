@@ -42,7 +42,7 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from baseline import baseline_tree  # noqa: E402
 
-from probecommit.core.memory import heap_environment  # noqa: E402
+from probecommit.process.memory import heap_environment  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 SIZES = (384, 3072)  # episodes (4 repeats of each instance)
@@ -93,7 +93,7 @@ t0 = time.perf_counter()
 runs = [load_run(cal)] + ([load_run(test)] if case == "calibrate" else [])  # the input, which grows with E
 gc.collect()
 try:
-    from probecommit.core.memory import trim_heap
+    from probecommit.process.memory import trim_heap
     trim_heap()
 except ImportError:
     pass
@@ -148,7 +148,7 @@ def make_runs(src: Path, out: Path, sizes: list[int]) -> None:
 #: The Arrow memory pool of the cases: the one the ``probecommit`` command sets (``cli.app.use_system_arrow_pool``),
 #: unless the caller's environment chose one.
 ARROW_POOL = {"ARROW_DEFAULT_MEMORY_POOL": os.environ.get("ARROW_DEFAULT_MEMORY_POOL", "system")}
-#: The heap thresholds the command sets (``core.memory.reuse_freed_arrays``), unless the caller's
+#: The heap thresholds the command sets (``process.memory.reuse_freed_arrays``), unless the caller's
 #: environment chose them: every arm, a baseline's too, runs with the same allocator.
 HEAP = heap_environment()
 

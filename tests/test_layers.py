@@ -1,7 +1,7 @@
 """The layer contract of docs/contributing.md holds (import-linter, configured in pyproject.toml).
 
 Dependencies point one way: cli > report > studies > runner > audit > store > tasks >
-engines > accel > core; core, audit, store and every task model import no engine, Ray or
+engines > accel > core > process (process plumbing: memory estimates, the heap); core, audit, store and every task model import no engine, Ray or
 plotting; the core maths imports no compiled layer (accel, numba). A planted violation must
 be caught, so the check itself can fail.
 """
@@ -51,11 +51,23 @@ def test_a_planted_import_of_the_compiled_layer_in_the_core_maths_is_caught(tmp_
     assert "probecommit.core is not allowed to import probecommit.accel" in result.stdout
 
 
+def test_a_planted_import_of_the_maths_in_the_process_plumbing_is_caught(tmp_path):
+    """``process/`` (memory estimates, the heap) sits below the maths: every layer may use it, it uses none."""
+    copy = tmp_path / "src"
+    shutil.copytree(ROOT / "src" / "probecommit", copy / "probecommit", ignore=shutil.ignore_patterns("__pycache__"))
+    shutil.copy(ROOT / "pyproject.toml", tmp_path / "pyproject.toml")
+    plumbing = copy / "probecommit" / "process" / "memory.py"
+    plumbing.write_text(plumbing.read_text() + "\nfrom probecommit.core import belief  # planted\n")
+    result = lint(tmp_path, copy)
+    assert result.returncode != 0
+    assert "probecommit.process is not allowed to import probecommit.core" in result.stdout
+
+
 # ---------------------------------------------------------------------------------- nothing generic names a family
 #: Generic packages: they serve every family, so none may import a family's package or name one in a
 #: string (the family supplies what they need through its spec and model: the default family, replay
 #: shorthands, figure guides, observation range).
-GENERIC = ("core", "engines", "store", "audit", "runner", "robot", "cli")
+GENERIC = ("core", "process", "engines", "store", "audit", "runner", "robot", "cli")
 #: Files of generic packages that drive the paper's own studies (reproduce, scan), which name their
 #: families by design, like everything in studies/ and report/.
 PAPER_DRIVERS = {"cli/study_commands.py"}

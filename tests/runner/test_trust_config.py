@@ -172,7 +172,7 @@ def test_unsafe_tags_are_refused_in_one_line():
 
 
 def test_the_cgroup_limit_is_read(tmp_path):
-    from probecommit.core import memory
+    from probecommit.process import memory
 
     (tmp_path / "grp").mkdir()
     (tmp_path / "grp" / "memory.max").write_text("1073741824\n")
@@ -190,7 +190,7 @@ def test_the_cgroup_limit_is_read(tmp_path):
 
 
 def test_the_guard_counts_the_units_held_at_once_and_the_output(monkeypatch):
-    from probecommit.core import memory
+    from probecommit.process import memory
     from probecommit.runner.study import output_rows, preflight, run_concurrency
 
     cfg = small_config(belief={"particles": 4096})

@@ -101,7 +101,7 @@ def resample_counts(n_clusters: int, resamples: int = DEFAULT_RESAMPLES,
         raise ValueError("cluster bootstrap needs at least one cluster")
     if resamples < 1:
         raise ValueError("resamples must be positive")
-    from probecommit.core.memory import check_fits
+    from probecommit.process.memory import check_fits
 
     check_fits(8.0 * resamples * n_clusters, f"a cluster bootstrap of {n_clusters} clusters x {resamples} resamples",
                "the number of resamples (--resamples)")

@@ -64,7 +64,7 @@ def print_budget_table(episodes, title: str) -> None:
 
 
 def _run(config, out: Path, workers: int, ray: Optional[str], threads: Optional[int] = None):
-    from probecommit.runner.study import choose_backend, preflight, run_concurrency, run_study
+    from probecommit.runner.study import RunParts, choose_backend, preflight, run_concurrency, run_study
     from probecommit.store.rundir import RunDir
     from probecommit.runner.config import dump_config
 
@@ -73,12 +73,14 @@ def _run(config, out: Path, workers: int, ray: Optional[str], threads: Optional[
         err_console.print(safe(why), highlight=False)
 
     # Fail on a bad config, too little memory for the run at its concurrency, or an incompatible
-    # directory before drawing a progress bar.
-    preflight(config, run_concurrency(config, workers, ray, threads))
+    # directory before drawing a progress bar; the model and executors built for it are the run's.
+    parts = RunParts.build(config)
+    instances = preflight(config, run_concurrency(config, workers, ray, threads), parts)
     RunDir(out).check_writable(dump_config(config))
     bar, update = progress_bar(f"{config.name}: units")
     with bar:
-        return run_study(config, out, workers=workers, ray_address=ray, progress=update, threads=threads)
+        return run_study(config, out, workers=workers, ray_address=ray, progress=update, threads=threads,
+                         parts=parts, instances=instances)
 
 
 def warn_failed(result) -> None:
@@ -314,7 +316,7 @@ def use_system_arrow_pool() -> None:
 
 
 def main() -> None:  # pragma: no cover - entry point
-    from probecommit.core.memory import reuse_freed_arrays
+    from probecommit.process.memory import reuse_freed_arrays
 
     use_system_arrow_pool()
     reuse_freed_arrays()

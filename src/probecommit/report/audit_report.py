@@ -395,6 +395,28 @@ def write_html_report(path: str | Path, audit_result=None, *, title: str = "prob
         The written path.
     """
     path = Path(path)
+    parts = _header_html(title, notes, warnings)
+    if audit_result is not None:
+        parts += _audit_html(audit_result, nominal)
+    parts += _extras_html(images, tables)
+    if calibration is not None:
+        parts += _calibration_html(calibration)
+    if gates is not None:
+        parts += _gates_html(gates)
+    doc = (f"<!DOCTYPE html><html><head><meta charset='utf-8'>"
+           "<meta name='viewport' content='width=device-width, initial-scale=1'>"
+           f"<title>{html.escape(title)}</title>"
+           f"<style>{_CSS}</style></head><body>{''.join(parts)}</body></html>")
+    write_text(path, doc)
+    return path
+
+
+# One function per section of the report: each section is optional (an audit alone, a calibration, the gates),
+# and each reads as the part of the page it writes.
+
+
+def _header_html(title: str, notes: str, warnings: list[str] | None) -> list[str]:
+    """The title, the version and date line with the interval convention, the notes and the caller's warnings."""
     parts = [f"<h1>{html.escape(title)}</h1>",
              f"<p class='note'>probecommit {__version__}, written "
              f"{datetime.now(timezone.utc).strftime('%Y-%m-%d %H:%M UTC')}. Intervals: cluster bootstrap over "
@@ -403,21 +425,32 @@ def write_html_report(path: str | Path, audit_result=None, *, title: str = "prob
         parts.append(f"<p class='note'>{html.escape(notes)}</p>")
     for text in warnings or []:
         parts.append(f"<div class='warn'>{html.escape(text)}</div>")
-    if audit_result is not None:
-        table = audit_result if isinstance(audit_result, pd.DataFrame) else audit_result.table
-        parts.append("<h2>Audit: coverage, support escape, optimism</h2>")
-        if not isinstance(audit_result, pd.DataFrame):
-            parts.append(f"<p class='note'>source: {html.escape(str(audit_result.source))}; "
-                         f"{audit_result.n_total} rows, {audit_result.n_failed} failed (excluded).</p>")
-        for text in _warnings(table, audit_result):
-            parts.append(f"<div class='warn'>{html.escape(text)}</div>")
-        parts.append(figure_html(audit_figure(table, nominal), "audit: coverage, support escape, optimism, realized vs "
-                                 "predicted per budget", audit_figure(table, nominal, width=COLUMN)))
-        parts.append(table_html(table))
-        surprise = getattr(audit_result, "surprise", None)
-        if surprise is not None and len(surprise):
-            parts.append("<h3>Prequential surprise: rank AUC for final-budget escape</h3>")
-            parts.append(table_html(surprise))
+    return parts
+
+
+def _audit_html(audit_result, nominal: float) -> list[str]:
+    """The audit: its source and row counts (an ``AuditResult``; a bare table has none), its warnings,
+    figure and table, and the surprise AUCs when the audit computed them."""
+    table = audit_result if isinstance(audit_result, pd.DataFrame) else audit_result.table
+    parts = ["<h2>Audit: coverage, support escape, optimism</h2>"]
+    if not isinstance(audit_result, pd.DataFrame):
+        parts.append(f"<p class='note'>source: {html.escape(str(audit_result.source))}; "
+                     f"{audit_result.n_total} rows, {audit_result.n_failed} failed (excluded).</p>")
+    for text in _warnings(table, audit_result):
+        parts.append(f"<div class='warn'>{html.escape(text)}</div>")
+    parts.append(figure_html(audit_figure(table, nominal), "audit: coverage, support escape, optimism, realized vs "
+                             "predicted per budget", audit_figure(table, nominal, width=COLUMN)))
+    parts.append(table_html(table))
+    surprise = getattr(audit_result, "surprise", None)
+    if surprise is not None and len(surprise):
+        parts.append("<h3>Prequential surprise: rank AUC for final-budget escape</h3>")
+        parts.append(table_html(surprise))
+    return parts
+
+
+def _extras_html(images: list[tuple[str, Path]] | None, tables: list[tuple[str, pd.DataFrame]] | None) -> list[str]:
+    """The caller's images (embedded as data, so the page stays one self-contained file) and tables."""
+    parts = []
     for caption, image in images or []:
         from probecommit.report.figures import min_font_px
 
@@ -426,34 +459,36 @@ def write_html_report(path: str | Path, audit_result=None, *, title: str = "prob
     for heading, frame in tables or []:
         parts.append(f"<h2>{html.escape(heading)}</h2>")
         parts.append(table_html(frame))
-    if calibration is not None:
-        c = calibration
-        parts.append("<h2>Calibration</h2>")
-        thr = ", ".join(f"t<sub>{k}</sub> = {_fmt(v)}" for k, v in c.thresholds.items())
-        parts.append(f"<p>1 − α = {1 - c.alpha:.2f}, M = {c.n_calibration} calibration instances. "
-                     f"Fixed-budget thresholds: {thr}. Simultaneous t = {_fmt(c.simultaneous_threshold)}. "
-                     f"Margin γ = {c.margin.gamma:.2f}{'' if c.margin.satisfied else ' (rule not met on the grid)'}; "
-                     f"distribution-free margin {_fmt(c.distribution_free_margin)}.</p>")
-        parts.append(figure_html(calibration_figure(c.table3, 1 - c.alpha), "calibration: cluster coverage and optimism per budget"))
-        parts.append(table_html(c.table3))
-        parts.append(table_html(pd.DataFrame([c.summary]), intervals=False))
-        parts.append(f"<h3>Cost of calibration (failure at k = {c.cost_budget})</h3>")
-        parts.append(table_html(c.cost))
-        parts.append(table_html(c.cost_differences.rename(columns={"difference": "difference"})))
-    if gates is not None:
-        parts.append("<h2>Commit gates (first passage over nested budgets)</h2>")
-        info = ", ".join(f"{k} = {_fmt(v)}" for k, v in gates.info.items() if not isinstance(v, pd.DataFrame))
-        if info:
-            parts.append(f"<p class='note'>{info}; {gates.n_trajectories} trajectories, {gates.n_dropped} dropped.</p>")
-        parts.append(figure_html(gates_figure(gates), "commit gates: failure among committed vs commit rate"))
-        parts.append(table_html(gates.summary, intervals=False))
-        surprise = gates.info.get("surprise")
-        if isinstance(surprise, pd.DataFrame) and len(surprise):
-            parts.append("<h3>Prequential surprise: rank AUC for final-budget escape</h3>")
-            parts.append(table_html(surprise))
-    doc = (f"<!DOCTYPE html><html><head><meta charset='utf-8'>"
-           "<meta name='viewport' content='width=device-width, initial-scale=1'>"
-           f"<title>{html.escape(title)}</title>"
-           f"<style>{_CSS}</style></head><body>{''.join(parts)}</body></html>")
-    write_text(path, doc)
-    return path
+    return parts
+
+
+def _calibration_html(c) -> list[str]:
+    """A ``CalibrationResult``: its thresholds and margins in one line, Table III and the cost of calibration."""
+    parts = ["<h2>Calibration</h2>"]
+    thr = ", ".join(f"t<sub>{k}</sub> = {_fmt(v)}" for k, v in c.thresholds.items())
+    parts.append(f"<p>1 − α = {1 - c.alpha:.2f}, M = {c.n_calibration} calibration instances. "
+                 f"Fixed-budget thresholds: {thr}. Simultaneous t = {_fmt(c.simultaneous_threshold)}. "
+                 f"Margin γ = {c.margin.gamma:.2f}{'' if c.margin.satisfied else ' (rule not met on the grid)'}; "
+                 f"distribution-free margin {_fmt(c.distribution_free_margin)}.</p>")
+    parts.append(figure_html(calibration_figure(c.table3, 1 - c.alpha), "calibration: cluster coverage and optimism per budget"))
+    parts.append(table_html(c.table3))
+    parts.append(table_html(pd.DataFrame([c.summary]), intervals=False))
+    parts.append(f"<h3>Cost of calibration (failure at k = {c.cost_budget})</h3>")
+    parts.append(table_html(c.cost))
+    parts.append(table_html(c.cost_differences.rename(columns={"difference": "difference"})))
+    return parts
+
+
+def _gates_html(gates) -> list[str]:
+    """A ``GatesResult``: its settings, the failure-vs-commit-rate figure and summary, and its surprise AUCs."""
+    parts = ["<h2>Commit gates (first passage over nested budgets)</h2>"]
+    info = ", ".join(f"{k} = {_fmt(v)}" for k, v in gates.info.items() if not isinstance(v, pd.DataFrame))
+    if info:
+        parts.append(f"<p class='note'>{info}; {gates.n_trajectories} trajectories, {gates.n_dropped} dropped.</p>")
+    parts.append(figure_html(gates_figure(gates), "commit gates: failure among committed vs commit rate"))
+    parts.append(table_html(gates.summary, intervals=False))
+    surprise = gates.info.get("surprise")
+    if isinstance(surprise, pd.DataFrame) and len(surprise):
+        parts.append("<h3>Prequential surprise: rank AUC for final-budget escape</h3>")
+        parts.append(table_html(surprise))
+    return parts

@@ -337,6 +337,20 @@ def load_config(path: str | Path) -> StudyConfig:
         ConfigError: One line naming the file (unreadable, not YAML, duplicate key)
             or, from :func:`parse_config`, the bad field.
     """
+    data = read_config_data(path)
+    try:
+        return parse_config(data)
+    except ConfigError as exc:
+        raise ConfigError(f"{path}: {exc}") from None
+
+
+def read_config_data(path: str | Path) -> dict:
+    """A YAML config file's mapping, read but not validated (:func:`load_config` validates it;
+    ``runner.overrides`` applies the overrides first, so a run validates its config once).
+
+    Raises:
+        ConfigError: One line naming the file (a folder, missing, unreadable, not YAML, not a mapping).
+    """
     path = Path(path)
     if path.is_dir():
         raise ConfigError(f"{path} is a directory, not a config file (give the YAML file inside it)")
@@ -354,10 +368,7 @@ def load_config(path: str | Path) -> StudyConfig:
         data = {}
     if not isinstance(data, dict):
         raise ConfigError(f"{path}: a config must be a mapping of fields, got a YAML {type(data).__name__}")
-    try:
-        return parse_config(data)
-    except ConfigError as exc:
-        raise ConfigError(f"{path}: {exc}") from None
+    return data
 
 
 def config_data(config: StudyConfig) -> dict[str, Any]:

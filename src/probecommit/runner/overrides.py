@@ -19,7 +19,8 @@ import yaml
 
 from probecommit.errors import UsageError
 from probecommit.store.yamlsafe import YamlError, load_yaml
-from probecommit.runner.config import ConfigError, StudyConfig, config_data, load_config, parse_config
+from probecommit.runner.config import (ConfigError, StudyConfig, config_data, load_config, parse_config,
+                                       read_config_data)
 
 _KEY = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*(\.[A-Za-z_][A-Za-z0-9_]*)*$")
 
@@ -68,13 +69,26 @@ def apply_overrides(data: dict[str, Any], overrides: Sequence[Override]) -> dict
 
 
 def load_with_overrides(path: str | Path, overrides: Sequence[Override]) -> StudyConfig:
-    """The config file, then the overrides, validated together (one-line errors naming the field)."""
-    config = load_config(path)
+    """The config file, then the overrides, validated together (one-line errors naming the field).
+
+    The file's mapping takes the overrides before it is validated, so a run validates its
+    config once; where that mapping cannot take them as written (the nested ``task: {...}``
+    form, a section that is not a mapping), the file is validated first and the overrides
+    applied to its flat form, as is every error's blame: a bad file is named alone.
+    """
     if not overrides:
-        return config
+        return load_config(path)
+    data = read_config_data(path)
     try:
-        return parse_config(apply_overrides(config_data(config), overrides))
+        merged = None if isinstance(data.get("task"), dict) else apply_overrides(data, overrides)
+    except UsageError:
+        merged = None
+    if merged is None:
+        merged = apply_overrides(config_data(load_config(path)), overrides)
+    try:
+        return parse_config(merged)
     except ConfigError as exc:
+        load_config(path)  # only on this error path: a bad file is named as the file's own error
         raise ConfigError(f"{path} with {' '.join(format_override(o) for o in overrides)}: {exc}") from None
 
 

@@ -19,7 +19,7 @@ import pandas as pd
 import pyarrow as pa
 
 from probecommit.core.belief import BeliefState, ParticleFilter
-from probecommit.core.memory import large_arrays_apart, trim_heap
+from probecommit.process.memory import large_arrays_apart, trim_heap
 from probecommit.runner.build import build_executors, build_filter, build_model, build_simulator, config_executors
 from probecommit.runner.config import StudyConfig, config_data, dump_config, parse_config
 from probecommit.runner.inference import (
@@ -127,7 +127,7 @@ def probe_batch(loaded: LoadedRun, model: Any) -> ProbeBatch:
     """Rebuild the stored probe trajectories (successful episodes) as a batch.
 
     The table is read, validated and reshaped with every array above glibc's default 128 KiB
-    threshold on pages of its own (:func:`~probecommit.core.memory.large_arrays_apart`): the
+    threshold on pages of its own (:func:`~probecommit.process.memory.large_arrays_apart`): the
     table's temporaries (columns of E * K rows) then go back to the system when freed, instead of
     staying as heap fragments beside the batch, which grew what a replay of E = 3072 episodes
     holds afterwards by about 2 MB more than one of 384 did (``benchmarks/memory.py``).

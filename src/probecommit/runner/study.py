@@ -61,14 +61,47 @@ def unit_names(n_instances: int, unit_instances: int) -> list[tuple[str, slice]]
     ]
 
 
+@dataclass(frozen=True, eq=False)
+class RunParts:
+    """What a run builds once from its validated config and hands down to every unit: the
+    config, the model, the particle filter and the executors.
+
+    None of them changes while episodes are computed, so the units of one process (serial or
+    threads) share one instance. A simulator is not a part: each unit builds its own, which
+    counts that unit's engine calls and holds its answers. Sent to a worker process or a Ray
+    task, a ``RunParts`` travels as the config's data (:meth:`__reduce__`) and is rebuilt there
+    once per process (:func:`_parts_of_data`), not once per unit.
+    """
+
+    config: StudyConfig
+    model: Any
+    pfilter: Any
+    executors: list
+
+    @classmethod
+    def build(cls, config: StudyConfig) -> "RunParts":
+        """Model, filter and executors of a validated config (built here, once)."""
+        model = build.build_model(config)
+        return cls(config, model, build.build_filter(model, config.belief), build.config_executors(config, model))
+
+    def __reduce__(self) -> tuple:
+        # The built model, filter and executors stay in their process; the config travels as data.
+        return _parts_of_data, (json.dumps(self.config.model_dump(mode="json"), sort_keys=True),)
+
+
 @functools.lru_cache(maxsize=4)
-def _parsed(config_json: str) -> StudyConfig:
-    """The validated config of a unit's config data, validated once per process (every unit of a
-    study sends the same data; validating it cost about 5 ms a unit)."""
-    return parse_config(json.loads(config_json))
+def _parts_of_data(config_json: str) -> RunParts:
+    """The parts of a config's data, validated and built once per process (a worker process or
+    a Ray worker receives the same data with every group of units it computes)."""
+    return RunParts.build(parse_config(json.loads(config_json)))
 
 
-def compute_unit(config_data: dict, instances: pd.DataFrame, unit: str) -> tuple[str, dict[str, Any], dict[str, Any]]:
+def _parts(given: "RunParts | dict") -> RunParts:
+    """``given`` itself, or the (per-process) parts of config data (a caller holding only the data)."""
+    return given if isinstance(given, RunParts) else _parts_of_data(json.dumps(given, sort_keys=True))
+
+
+def compute_unit(parts: "RunParts | dict", instances: pd.DataFrame, unit: str) -> tuple[str, dict[str, Any], dict[str, Any]]:
     """Run one unit end to end in memory; returns ``(unit, tables, stats)``, the tables as
     the Arrow tables the run stores (converted here, in the worker, so the driver that
     writes them converts nothing).
@@ -78,9 +111,9 @@ def compute_unit(config_data: dict, instances: pd.DataFrame, unit: str) -> tuple
     writes the run directory.
     """
     start = time.perf_counter()
-    config = _parsed(json.dumps(config_data, sort_keys=True))
-    model = build.build_model(config)
-    batch, columns, simulator = _episodes(config, model, instances)
+    parts = _parts(parts)
+    model = parts.model
+    batch, columns, simulator = _episodes(parts, instances)
     n_rows = len(next(iter(columns.values()))) if columns else 0
     if np.any(batch.status != "ok"):  # rare: through pandas, as the rows were always joined
         failed = pd.DataFrame(failed_episode_columns(batch, model.variant))
@@ -119,7 +152,7 @@ GROUP_EPISODES = int(os.environ.get("PROBECOMMIT_GROUP_EPISODES", "256"))
 GROUP_PARTICLES = 1024
 
 
-def compute_units(config_data: dict, instances: pd.DataFrame, units: list[tuple[str, int]]) -> list[tuple]:
+def compute_units(parts: "RunParts | dict", instances: pd.DataFrame, units: list[tuple[str, int]]) -> list[tuple]:
     """Several units computed as one batch of episodes and returned unit by unit: the
     ``(unit, tables, stats)`` of :func:`compute_unit` for each, with identical tables.
 
@@ -133,51 +166,64 @@ def compute_units(config_data: dict, instances: pd.DataFrame, units: list[tuple[
     calls and times are recorded on its first unit (the run's manifest sums them).
 
     Args:
-        config_data: The study config (JSON data).
+        parts: The run's :class:`RunParts` (or its config's JSON data: then built once per process).
         instances: The units' instances, in unit order.
         units: ``(name, number of instances)`` of each unit, in order.
     """
-    one_by_one = functools.partial(_units_one_by_one, config_data, instances, units)
+    parts = _parts(parts)
+    one_by_one = functools.partial(_units_one_by_one, parts, instances, units)
     if len(units) == 1:
         return one_by_one()
     start = time.perf_counter()
-    config = _parsed(json.dumps(config_data, sort_keys=True))
-    model = build.build_model(config)
-    truths, _ = instance_arrays(instances, model)
-    owner: dict[tuple[float, ...], int] = {}  # each truth's unit
+    owner = _truth_owners(instance_arrays(instances, parts.model)[0], units)
+    if owner is None:  # a truth shared by two instances: whose engine answer is it?
+        return one_by_one()
+    batch, columns, simulator = _episodes(parts, instances)
+    if np.any(batch.status != "ok"):  # failed rollouts: their rows are joined unit by unit
+        return one_by_one()
+    by_unit: list[list[dict]] = [[] for _ in units]
+    for record in simulator.cache_records():
+        u = owner.get(tuple(record["theta"]))
+        if u is None:  # an answer keyed otherwise than by an instance's truth: no owner to give it
+            return one_by_one()
+        by_unit[u].append(record)
+    return _split_group(parts, instances, units, batch, columns, simulator, by_unit, start)
+
+
+def _truth_owners(truths: np.ndarray, units: list[tuple[str, int]]) -> dict[tuple[float, ...], int] | None:
+    """Each instance truth's unit (the units in order, ``n`` instances each), or None when two
+    instances share a truth: an engine answer is keyed by the truth, so it would have two owners."""
+    owner: dict[tuple[float, ...], int] = {}
     at = 0
     for u, (_, n) in enumerate(units):
         for theta in truths[at:at + n]:
             owner.setdefault(tuple(theta.astype(float).tolist()), u)
         at += n
-    if len(owner) < len(truths):  # a truth shared by two instances: whose engine answer is it?
-        return one_by_one()
-    batch, columns, simulator = _episodes(config, model, instances)
-    if np.any(batch.status != "ok"):  # failed rollouts: their rows are joined unit by unit
-        return one_by_one()
-    records = simulator.cache_records()
-    by_unit: list[list[dict]] = [[] for _ in units]
-    for record in records:
-        u = owner.get(tuple(record["theta"]))
-        if u is None:  # an answer keyed otherwise than by an instance's truth: no owner to give it
-            return one_by_one()
-        by_unit[u].append(record)
+    return owner if len(owner) == len(truths) else None
+
+
+def _split_group(parts: RunParts, instances: pd.DataFrame, units: list[tuple[str, int]], batch: Any,
+                 columns: dict[str, Any], simulator: Any, by_unit: list[list[dict]], start: float) -> list[tuple]:
+    """A group's results cut into its units' ``(unit, tables, stats)``.
+
+    Each table is built once for the group and sliced per unit (a slice shares the group's
+    buffers; its types and pandas metadata are those a unit's own table gets: tested on the
+    final tables). The group's engine calls and times go on its first unit.
+    """
     n_rows = len(next(iter(columns.values()))) if columns else 0
     per_episode = n_rows // max(batch.n_episodes, 1)
     budget = batch.u.shape[1]
     probes = batch.probes_columns()
-    # Each table built once for the group and sliced per unit (a slice shares the group's buffers;
-    # its types and pandas metadata are those a unit's own table gets: tested on the final tables).
     whole = {"instances": arrow_table(instances.reset_index(drop=True), INSTANCE_COLUMNS),
              "probes": arrow_from_columns(probes, batch.n_episodes * budget, PROBE_COLUMNS),
              "episodes": arrow_from_columns(columns, n_rows, EPISODE_COLUMNS)}
     out, first_episode, first_instance = [], 0, 0
     for u, (name, n) in enumerate(units):
-        episodes = n * config.repeats
+        episodes = n * parts.config.repeats
         rows = slice(first_episode * per_episode, (first_episode + episodes) * per_episode)
         taps = slice(first_episode * budget, (first_episode + episodes) * budget)
         unit_columns = {"status": columns["status"][rows]} if columns else {}
-        cache = cache_columns(by_unit[u], model.latent_names)
+        cache = cache_columns(by_unit[u], parts.model.latent_names)
         lead = u == 0
         stats = {
             "unit": name,
@@ -202,18 +248,19 @@ def compute_units(config_data: dict, instances: pd.DataFrame, units: list[tuple[
     return out
 
 
-def _units_one_by_one(config_data: dict, instances: pd.DataFrame, units: list[tuple[str, int]]) -> list[tuple]:
+def _units_one_by_one(parts: RunParts, instances: pd.DataFrame, units: list[tuple[str, int]]) -> list[tuple]:
     out, at = [], 0
     for name, n in units:
-        out.append(compute_unit(config_data, instances.iloc[at:at + n], name))
+        out.append(compute_unit(parts, instances.iloc[at:at + n], name))
         at += n
     return out
 
 
-def _episodes(config: StudyConfig, model: Any, instances: pd.DataFrame) -> tuple[Any, dict[str, Any], Any]:
+def _episodes(parts: RunParts, instances: pd.DataFrame) -> tuple[Any, dict[str, Any], Any]:
     """Rollouts, beliefs and commits of ``instances``: the probe batch, the episode table's
-    columns (``commit(..., as_columns=True)``; empty when every rollout failed) and the simulator."""
-    pfilter = build.build_filter(model, config.belief)
+    columns (``commit(..., as_columns=True)``; empty when every rollout failed) and the simulator
+    (built here: one per unit or group, as it counts their engine calls)."""
+    config, model, pfilter = parts.config, parts.model, parts.pfilter
     simulator = build.build_simulator(config)
     schedule = config.probes.schedule
     if schedule == "adaptive":
@@ -231,12 +278,12 @@ def _episodes(config: StudyConfig, model: Any, instances: pd.DataFrame) -> tuple
     columns: dict[str, Any] = {}
     if np.any(batch.status == "ok"):  # a unit whose every trajectory failed has nothing to infer
         trace = build_trace(pfilter, batch, config.seed, config.probes.commit_budgets, keep_weights=True)
-        columns = commit(trace, model, simulator, build.config_executors(config, model), thresholds=config.belief.nu,
+        columns = commit(trace, model, simulator, parts.executors, thresholds=config.belief.nu,
                          as_columns=True)
     return batch, columns, simulator
 
 
-Job = tuple[dict, pd.DataFrame, list[tuple[str, int]]]
+Job = tuple[RunParts, pd.DataFrame, list[tuple[str, int]]]
 Result = list[tuple[str, dict[str, Any], dict[str, Any]]]
 
 
@@ -507,17 +554,16 @@ MAX_EPISODE_ROWS = 50_000_000
 EPISODE_ROW_BYTES = 400
 
 
-def preflight(config: StudyConfig, concurrency: int = 1) -> pd.DataFrame:
+def preflight(config: StudyConfig, concurrency: int = 1, parts: RunParts | None = None) -> pd.DataFrame:
     """Everything that can fail on a bad config, before anything is written.
 
-    Builds the model, filter and simulator (which imports the engine) and draws the
-    instances; returns the instances. The memory estimate is of the whole run: the units
+    Builds the model, filter and executors (or takes them from ``parts``, the run's own) and
+    the simulator (which imports the engine), and draws the instances; returns the instances. The memory estimate is of the whole run: the units
     held at once at the chosen ``concurrency``, and the final tables, read against the
     host's and the container's memory; the output's size is bounded.
     """
-    model = build.build_model(config)
-    build.build_filter(model, config.belief)
-    from probecommit.core.memory import check_fits
+    model = (parts or RunParts.build(config)).model
+    from probecommit.process.memory import check_fits
 
     # A unit keeps every budget's belief ([E, N, d] particles + [E, N] weights) and scores
     # [E, A, N] losses for continuous families: estimate before anything is drawn.
@@ -563,6 +609,8 @@ def run_study(
     ray_address: str | None = None,
     progress: Callable[[int, int], None] | None = None,
     threads: int | None = None,
+    parts: RunParts | None = None,
+    instances: pd.DataFrame | None = None,
 ) -> StudyResult:
     """Run (or resume) a study into ``out``.
 
@@ -582,10 +630,15 @@ def run_study(
         threads: With ``workers=1`` and no Ray, units run in this many threads of this
             process when the simulator is thread-safe (:func:`unit_threads`; None: the CPUs,
             at most 4, or ``$PROBECOMMIT_ENGINE_THREADS``; 1: one after the other).
+        parts: The config's :class:`RunParts` when the caller built them (the CLI, for its own
+            :func:`preflight`); else built here. Either way once per run, handed to every unit.
+        instances: What :func:`preflight` returned for ``parts`` when the caller ran it; else run here.
     """
     start = time.perf_counter()
-    # A bad config fails here, the memory of the whole run at its concurrency too: no directory is created.
-    instances = preflight(config, run_concurrency(config, workers, ray_address, threads))
+    parts = RunParts.build(config) if parts is None else parts
+    if instances is None:
+        # A bad config fails here, the memory of the whole run at its concurrency too: no directory is created.
+        instances = preflight(config, run_concurrency(config, workers, ray_address, threads), parts)
     run = RunDir(out)
     config_yaml = dump_config(config)
     run.check_writable(config_yaml)  # an incompatible directory too
@@ -608,10 +661,10 @@ def run_study(
         stack.enter_context(run.writing(config_yaml))
         if (done := complete()) is not None:  # finished by another process meanwhile
             return done
-        return _run_units(config, run, instances, workers, ray, ray_address, timing, progress, start, threads)
+        return _run_units(parts, run, instances, workers, ray, ray_address, timing, progress, start, threads)
 
 
-def _groups(config_data: dict, instances: pd.DataFrame, todo: list[tuple[str, slice]], repeats: int,
+def _groups(parts: "RunParts | dict", instances: pd.DataFrame, todo: list[tuple[str, slice]], repeats: int,
             parallel: int, particles: int = GROUP_PARTICLES) -> list[Job]:
     """The jobs: consecutive units to compute, in groups of about :data:`GROUP_EPISODES` episodes
     (:func:`compute_units`), and with several workers or threads, at least two groups each."""
@@ -625,21 +678,21 @@ def _groups(config_data: dict, instances: pd.DataFrame, todo: list[tuple[str, sl
     for first in range(0, len(todo), size):
         group = todo[first:first + size]
         rows = np.concatenate([np.arange(sl.start, sl.stop) for _, sl in group])
-        jobs.append((config_data, instances.iloc[rows], [(name, sl.stop - sl.start) for name, sl in group]))
+        jobs.append((parts, instances.iloc[rows], [(name, sl.stop - sl.start) for name, sl in group]))
     return jobs
 
 
-def _run_units(config, run: RunDir, instances, workers, ray, ray_address, timing, progress, start,
+def _run_units(parts: RunParts, run: RunDir, instances, workers, ray, ray_address, timing, progress, start,
                threads: int | None = None) -> StudyResult:
+    config = parts.config
     units = unit_names(len(instances), config.unit_instances)
-    config_data = config.model_dump(mode="json")
     stored = run.done_units()  # refuses batches of other code: a run never mixes two builds
     todo = [(name, sl) for name, sl in units if name not in stored]
     done = len(units) - len(todo)
     if progress:
         progress(done, len(units))
     n_threads = unit_threads(config, threads) if ray is None and workers <= 1 else 1
-    jobs = _groups(config_data, instances, todo, config.repeats, max(workers, n_threads), config.belief.particles)
+    jobs = _groups(parts, instances, todo, config.repeats, max(workers, n_threads), config.belief.particles)
     if ray is not None:
         results: Iterable[Result] = _run_ray(jobs, ray)
         backend = f"ray:{ray_address}"

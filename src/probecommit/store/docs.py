@@ -14,6 +14,14 @@ from probecommit.store.yamlsafe import MAX_YAML_BYTES, MAX_YAML_DEPTH, MAX_YAML_
 
 
 def record_schema_markdown() -> str:
+    """docs/record-schema.md: generated from the schema module, one function per part, so the
+    page's column tables and limits come from the code they document and cannot drift from it."""
+    return "".join(part() for part in (_introduction, _episode_table, _episode_rules, _session_log_rules,
+                                       _config_manifest_output_rules, _other_tables))
+
+
+def _introduction() -> str:
+    """The title and the vector-column convention every table follows."""
     return f"""# Record schema
 
 The run directory's tables (Parquet, written with pyarrow; pandas or polars read them).
@@ -25,7 +33,12 @@ This page is generated from `src/probecommit/store/schema.py`; a test fails if t
 (`u_0`, `u_1`, ...; `action_0`, `action_1`), all float64. Insertion's tables therefore
 keep their scalar columns; a 2-D push stores `action_0, action_1`.
 
-## episodes.parquet
+"""
+
+
+def _episode_table() -> str:
+    """The episode table and the columns an audit of a robot's own log needs (the data contract users see first)."""
+    return f"""## episodes.parquet
 
 One row per (instance, repeat, budget k, method). Budget 0 rows are the blind
 baselines. Trajectories are nested: the budget-k row of a repeat used the first k
@@ -43,7 +56,12 @@ needs all of them). `realized` is 0/1 failure for binary tasks, the miss otherwi
 `predicted` is the executor's modeled score of the action it took. The rules below
 are checked on every row, whichever path reads it.
 
-## Validation rule sets
+"""
+
+
+def _episode_rules() -> str:
+    """Why records are refused, not repaired, and the episode rows' rules (every audit path applies them)."""
+    return f"""## Validation rule sets
 
 One rule set per record kind, applied when a record is written and again on every path
 that reads it. A record that breaks a rule is refused with one line naming the file, the
@@ -73,7 +91,12 @@ audit and replay (their rows go through it too), calibration and gates.
 - Intervals: a bootstrap over fewer than 2 clusters gives no interval (printed as `–`);
   under 10 clusters the audit warns that the intervals are unreliable.
 
-### Session-log records (`robot.log.check_record`, `robot.session.Session._apply`)
+"""
+
+
+def _session_log_rules() -> str:
+    """The session log's per-record rules and episode state machine (a log is checked on read as on write)."""
+    return f"""### Session-log records (`robot.log.check_record`, `robot.session.Session._apply`)
 
 One JSON object per line, standard JSON only (`NaN`, `Infinity` refused). Field rules per
 type (numbers finite and at most 1e12 in magnitude, booleans never numbers):
@@ -103,7 +126,12 @@ later. The writer's lock is an advisory lock on the log file itself (deleting
 a symlink at the log or the lock note is refused. A replay reproduces a decision only
 when the action, `predicted`, the retained interval and the hull all match.
 
-### Configs (`runner.config.load_config`, `store.yamlsafe.load_yaml`)
+"""
+
+
+def _config_manifest_output_rules() -> str:
+    """The rules for configs, manifests and output files (the inputs and outputs beside the tables)."""
+    return f"""### Configs (`runner.config.load_config`, `store.yamlsafe.load_yaml`)
 
 Every YAML the package reads (a config file, a `--set` value, a run's `config.yaml`,
 a protocol) is read by one loader: at most {MAX_YAML_BYTES:,} characters, at most
@@ -135,7 +163,12 @@ it and are renamed over it. A default output folder inside a run (`calibration/`
 reaches the terminal through one console that interprets no markup and no emoji codes
 and shows every control character as `?`.
 
-## probes.parquet
+"""
+
+
+def _other_tables() -> str:
+    """The probe, instance and engine-answer tables and the manifest."""
+    return f"""## probes.parquet
 
 {markdown_table(PROBE_COLUMNS)}
 

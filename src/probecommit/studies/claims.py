@@ -455,7 +455,17 @@ def _figure_claims() -> list[Claim]:
     ]
 
 
-def _text_claims() -> list[Claim]:  # noqa: PLR0915 - one entry per claim, in the paper's order
+def _text_claims() -> list[Claim]:
+    """The paper's numbered text claims in its order, one function per paper section (each reads
+    beside its section, and a claim is found by the section that states it)."""
+    sections = (_claims_protocol_and_score, _claims_instances_and_comparisons, _claims_audit_and_calibration,
+                _claims_correction_and_engines, _claims_hardware, _claims_commit_decision, _claims_fault_classes,
+                _claims_robust_filters)
+    return [claim for section in sections for claim in section()]
+
+
+def _claims_protocol_and_score() -> list[Claim]:
+    """The claims of Sec. III-IV (probe protocol and cost, the episode score, the margin)."""
     c: list[Claim] = []
     add = c.append
     price = [Near(f"{kind} {fam}", f"T01-pricing.{kind}.{fam}", f"cost:results.prices.{fam}.{kind}",
@@ -474,6 +484,13 @@ def _text_claims() -> list[Claim]:  # noqa: PLR0915 - one entry per claim, in th
     add(Claim("T04-distribution-free-margin", "Sec. IV, The margin", "Distribution-free margin, cover schedule",
               (Near("cover", "T04-distribution-free-margin.cover", f"{I}table_insertion.distribution_free_margin_cover",
                     POINT_TOL),), explain=("E10",)))
+    return c
+
+
+def _claims_instances_and_comparisons() -> list[Claim]:
+    """The claims of Sec. V-A (instance sets, the cover schedule, comparisons)."""
+    c: list[Claim] = []
+    add = c.append
     add(Claim("T05-escape-realizations", "Sec. V-A, Instance sets", "Random k = 8 support escape on three realizations",
               (Inside("Split B audit", "T05-escape-realizations.audit", f"{I}text.escape_k8"),
                Inside("fault harness", "T05-escape-realizations.faults", f"{I}robust.deployed.escape"),
@@ -505,6 +522,13 @@ def _text_claims() -> list[Claim]:  # noqa: PLR0915 - one entry per claim, in th
               (Holds("equivalent", "difference's interval inside the margin", {"eq": "gru:results.equivalent"},
                      lambda v: bool(v["eq"])),
                Inside("difference", "T10-gru.diff", "gru:results.gru_minus_pipeline")), explain=("E5",)))
+    return c
+
+
+def _claims_audit_and_calibration() -> list[Claim]:
+    """The claims of Sec. V-B (the audit's trend, calibration and its cost)."""
+    c: list[Claim] = []
+    add = c.append
     add(Claim("T11-audit-trend", "Sec. V-B", "Episode coverage falls and support escape rises from k = 1 to 8; "
               "e_8 optimistic",
               (Inside("coverage k=1", "T11-audit-trend.coverage_k1", f"{I}text.episode_coverage_k1"),
@@ -539,6 +563,13 @@ def _text_claims() -> list[Claim]:  # noqa: PLR0915 - one entry per claim, in th
               explain=(("E3", ("margin optimistic",)),
                        *((f"E25[{label}]", (label,)) for label in ("level mean", "held-out cluster coverage",
                                                                    "margin optimistic")))))
+    return c
+
+
+def _claims_correction_and_engines() -> list[Claim]:
+    """The claims of Sec. V-C (audit-guided correction, across engines)."""
+    c: list[Claim] = []
+    add = c.append
     add(Claim("T15-scan", "Sec. V-C, Audit-guided correction", "The scan: the simulator's boundary outside the "
               "model's, identical on every scan",
               (Near("delta", "T15-scan.delta", f"{I}scan.delta", 0.01),
@@ -585,6 +616,13 @@ def _text_claims() -> list[Claim]:  # noqa: PLR0915 - one entry per claim, in th
                       f"{E}paired.sapien/mj_offset"),
                Paired("own scan", _p("T22-physx-paired", "own_scan", "own_scan_lo", "own_scan_hi"),
                       f"{E}paired.sapien/own_scan")), explain=("E6",)))
+    return c
+
+
+def _claims_hardware() -> list[Claim]:
+    """The claims of Sec. V-D (the hardware study and its fault injection; the simulated rig)."""
+    c: list[Claim] = []
+    add = c.append
     add(Claim("T23-hardware-guards", "Sec. V-D", "12 of 14 block positions pass the stated guards", (),
               physical=True))
     add(Claim("T24-hardware-coverage", "Sec. V-D", "The truth stayed in the retained set on every episode",
@@ -618,6 +656,13 @@ def _text_claims() -> list[Claim]:  # noqa: PLR0915 - one entry per claim, in th
                      lambda v: v["c"] < 1),
                Holds("optimism", "optimism positive at +-12 mm", {"o": f"{R}prior_by_mm.12.optimism"},
                      lambda v: v["o"] > 0)), simulated_rig=True))
+    return c
+
+
+def _claims_commit_decision() -> list[Claim]:
+    """The claims of Sec. VI, The commit decision (thresholds, gates, surprise)."""
+    c: list[Claim] = []
+    add = c.append
     add(Claim("T30-original-thresholds", "Sec. VI, The commit decision", "Shared budget-simultaneous threshold, "
               "original model",
               (Near("cover", "T30-original-thresholds.cover", f"{I}table_insertion.simultaneous_cover", POINT_TOL),
@@ -655,6 +700,13 @@ def _text_claims() -> list[Claim]:  # noqa: PLR0915 - one entry per claim, in th
               (Inside("k=1", "T36-surprise.auc_k1", f"{X}missing.surprise_auc_cover_k1"),
                Inside("k=5", "T36-surprise.auc_k5", f"{X}missing.surprise_auc_cover_k5")),
               explain=(("E15", ("k=5",)), ("E16", ("k=1",)))))
+    return c
+
+
+def _claims_fault_classes() -> list[Claim]:
+    """The claims of Sec. VI, Fault classes (the signatures and their paired fixes)."""
+    c: list[Claim] = []
+    add = c.append
     add(Claim("T37-prior-signature", "Sec. VI, Fault classes", "The prior fault escapes from the first tap and "
               "fails all four repeats at once",
               (Near("escape k=1", "T37-prior-signature.escape", f"{sig_key('prior', 1)}.escape", 0.05),
@@ -690,6 +742,13 @@ def _text_claims() -> list[Claim]:  # noqa: PLR0915 - one entry per claim, in th
               "prior resolved; particles not",
               tuple(Paired(f, _p("T41-paired-fixes", f, f"{f}_lo", f"{f}_hi"), f"{I}table_faults.{f}.paired_fix")
                     for f in ("boundary", "frame", "prior", "particles")), explain=(("E7", ("boundary",)),)))
+    return c
+
+
+def _claims_robust_filters() -> list[Claim]:
+    """The claims of Sec. VI, Robust filters."""
+    c: list[Claim] = []
+    add = c.append
     add(Claim("T42-robust-chosen", "Sec. VI, Robust filters", "Development tuning's choice of temperature, "
               "mixture weight and rejuvenation fraction",
               tuple(Near(f, f"T42-robust-chosen.{f}", f"{I}robust.chosen.{f}", 0.0)
@@ -734,8 +793,16 @@ def _in(v: dict[str, Any], point: str, lo: str, hi: str) -> bool:
 
 
 def _experiments() -> list[Experiment]:
-    pool, gen, bf = f"{X}committed_pool.", f"{X}instance_generator.", f"{X}boundary_fault."
-    g, t, px, gru, rb = f"{X}margin_per_gamma.", f"{X}thresholds.", f"{X}physx_capture.", f"{X}gru.", f"{X}robust."
+    """The experiments that test a stated cause of a difference, E1 to E12 by theme, then the
+    commit-gate, audit-cell and redraw experiments (each theme a function: it reads beside its results)."""
+    return [*_pool_and_threshold_experiments(), *_engine_and_fault_experiments(), *_margin_and_filter_experiments(),
+            *_commit_experiments(), *_audit_cell_experiments(), *_draw_experiments()]
+
+
+def _pool_and_threshold_experiments() -> list[Experiment]:
+    """E1-E4: the committed pool, the instance generator, the margin search and the conformal threshold."""
+    pool, gen = f"{X}committed_pool.", f"{X}instance_generator."
+    g, t = f"{X}margin_per_gamma.", f"{X}thresholds."
     return [
         Experiment("E1", "the committed pool under the paper's definitions and schedule",
                    {"rate_c": f"{pool}ours.final_hull.committed_rate", "rate_r": f"{pool}ours.final_hull.rejected_rate",
@@ -774,6 +841,14 @@ def _experiments() -> list[Experiment]:
                    "to the paper's value or below; {above:.3f} of calibration instances' worst-repeat score at k = 5 "
                    "exceeds the paper's value and {esc:.3f} escape the hull.",
                    supports=lambda v: v["lo"] <= _pv("T02-t5-cover.t5") <= v["hi"]),
+    ]
+
+
+def _engine_and_fault_experiments() -> list[Experiment]:
+    """E5-E9: the GRU interval, PhysX's capture window, the boundary fault and the paper's cover schedule."""
+    pool, bf = f"{X}committed_pool.", f"{X}boundary_fault."
+    px, gru = f"{X}physx_capture.", f"{X}gru."
+    return [
         Experiment("E5", "the GRU interval's width and the equivalence test's power",
                    {"se": f"{gru}se_implied", "pse": f"{gru}se_paper_implied", "ratio": f"{gru}se_ratio",
                     "pw": f"{gru}power_at_estimate", "pwp": f"{gru}power_at_estimate_with_paper_se",
@@ -814,6 +889,13 @@ def _experiments() -> list[Experiment]:
                    "run on the same instances and repeats, the paper's schedule fails {pb:.3f} at k = 5 on Split B test "
                    "(ours {ob:.3f}; paired paper - ours {d:+.3f}) and {pa:.3f} on Split A.",
                    supports=lambda v: v["pb_lo"] <= _pv("tab:insertion.B_cover_k5.est") <= v["pb_hi"]),
+    ]
+
+
+def _margin_and_filter_experiments() -> list[Experiment]:
+    """E10-E12: the distribution-free margin's interval and the mixture filter, with the model right and wrong."""
+    t, rb = f"{X}thresholds.", f"{X}robust."
+    return [
         Experiment("E10", "the distribution-free margin's sampling interval",
                    {"df": f"{t}ours.distribution_free_margin_interval",
                     "lo": f"{t}ours.distribution_free_margin_interval.1",
@@ -835,11 +917,7 @@ def _experiments() -> list[Experiment]:
                    "on Test C, another draw of the generator, the chosen mixture under the boundary error leaves "
                    "optimism {to:+.3f} (deployed {td:+.3f}); on the harness draw {hm:+.3f}.",
                    supports=lambda v: v["to"] > _pv("T43-robust-filters.optimism_floor")),
-        *_commit_experiments(),
-        *_audit_cell_experiments(),
-        *_draw_experiments(),
     ]
-
 
 #: A development search cannot tell two candidates apart when the paper's wins in at least this share of
 #: cluster-bootstrap resamples of the development instances (and their paired gap's interval covers zero).

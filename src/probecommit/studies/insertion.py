@@ -25,7 +25,7 @@ import pandas as pd
 from probecommit.runner.calibration import calibrate
 from probecommit.audit.stats import cluster_bootstrap_mean, paired_bootstrap
 from probecommit.audit.surprise import surprise_auc
-from probecommit.core.memory import release_free_heap, trim_heap
+from probecommit.process.memory import release_free_heap, trim_heap
 from probecommit.runner.build import build_model, build_simulator
 from probecommit.runner.replay import LoadedRun, RunBeliefs, load_run, replay_episodes, replay_run, trace_for_run
 from probecommit.runner.study import run_study

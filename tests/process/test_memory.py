@@ -6,7 +6,7 @@ import sys
 import numpy as np
 import pytest
 
-from probecommit.core import memory
+from probecommit.process import memory
 
 
 def test_check_fits_refuses_with_the_estimate_and_the_setting(monkeypatch):
@@ -46,7 +46,7 @@ def test_release_free_heap_without_malloc_trim(monkeypatch):
 _STEPS = """
 import os, resource, sys
 import numpy as np
-from probecommit.core import memory
+from probecommit.process import memory
 taken = memory.reuse_freed_arrays() if sys.argv[1] == "reuse" else None
 def step():
     arrays = [np.ones(750_000) for _ in range(3)]
@@ -97,7 +97,7 @@ def test_reuse_freed_arrays_without_mallopt(monkeypatch):
 _APART = """
 import ctypes, sys
 import numpy as np
-from probecommit.core import memory
+from probecommit.process import memory
 if sys.argv[1] == "reuse":
     memory.reuse_freed_arrays()
 class Info(ctypes.Structure):
