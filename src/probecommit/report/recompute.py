@@ -424,6 +424,27 @@ def beyond(folder: Path, results: dict[str, Any]) -> Recomputed:
     return out
 
 
+# ----------------------------------------------------------------------------- explain
+
+
+def explain(folder: Path, results: dict[str, Any]) -> Recomputed:
+    """The explain keys that summarize stored rows (``studies.explain.stored``: the functions the explain step
+    fills them with): the margin curves' cells, the fresh draws' summaries, Table III's and the fault
+    harness's cells over fresh draws."""
+    from probecommit.studies.explain import stored
+
+    out = Recomputed()
+    for group, name, summarize in (("margin_per_gamma", stored.MARGINS, stored.margin_keys),
+                                   ("instance_generator", stored.DRAWS, stored.draws_keys),
+                                   ("instance_generator", stored.CELLS, stored.cells_keys)):
+        if not (folder / name).is_file():  # a missing stored table is a failure of its own (``STORED_TABLES``)
+            continue
+        for key, value in summarize(pd.read_parquet(folder / name)).items():
+            out.values[f"{group}.{key}"] = value
+            out.sources[f"{group}.{key}"] = name
+    return out
+
+
 #: The stored tables each study's numbers are recomputed from: a publication without one fails verify
 #: (deleting a table and re-hashing the manifest would otherwise turn its numbers into traced ones).
 STORED_TABLES: dict[str, tuple[str, ...]] = {
@@ -434,11 +455,13 @@ STORED_TABLES: dict[str, tuple[str, ...]] = {
     "robot": ("robot_episodes.parquet", SWEEPS),
     "gru": ("gru_episodes.parquet",),
     "beyond": ("beyond_episodes.parquet",),
+    "explain": ("margin_per_gamma.parquet", "fresh_draws.parquet", "draw_cells.parquet"),
 }
 
 #: Study folder -> its recomputation.
 STUDIES: dict[str, Callable[[Path, dict[str, Any]], Recomputed]] = {
-    "insertion": insertion, "breadth": breadth, "cost": cost, "engines": engines, "robot": robot, "gru": gru, "beyond": beyond}
+    "insertion": insertion, "breadth": breadth, "cost": cost, "engines": engines, "robot": robot, "gru": gru, "beyond": beyond,
+    "explain": explain}
 
 #: What each study's recomputation covers, and what is traced only (for the report and the docs).
 RECOMPUTED = {

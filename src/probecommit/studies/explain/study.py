@@ -22,7 +22,7 @@ from probecommit.audit.conformal import simultaneous_threshold
 from probecommit.audit.stats import cluster_bootstrap_mean, paired_bootstrap, percentile_interval, resample_counts
 from probecommit.audit.surprise import surprise_auc
 from probecommit.runner.replay import load_run, replay_episodes
-from probecommit.studies.explain import draw_audit, draw_faults, generator, more, resplits, runs, surprise_variants
+from probecommit.studies.explain import draw_audit, draw_faults, generator, more, resplits, runs, stored, surprise_variants
 from probecommit.studies.explain import gru as gru_study
 from probecommit.studies.explain.margin import margin_curve
 from probecommit.studies.explain.pool import gate_pools, pool_variants
@@ -248,16 +248,9 @@ class Explain:
             table = curve["table"]
             kept = [c for c in table.columns if not c.startswith("sum_")]  # sums are the rule's; the means are published
             self.tables[f"margin_{label}"] = table[kept].assign(schedule=label)
-            for row in table.itertuples():
-                g[f"{label}.g{row.gamma:.2f}.predicted"] = row.mean_predicted
-                g[f"{label}.g{row.gamma:.2f}.realized"] = row.mean_realized
-                g[f"{label}.g{row.gamma:.2f}.predicted_covered"] = row.mean_predicted_covered
-                g[f"{label}.g{row.gamma:.2f}.realized_covered"] = row.mean_realized_covered
+            g.update(stored.margin_keys(self.tables[f"margin_{label}"]))  # what verify recomputes from the stored curve
             g[f"{label}.gamma"] = curve["gamma"]
             g[f"{label}.gamma_covered_only"] = curve["gamma_covered_only"]
-            first = table.iloc[0]
-            g[f"{label}.optimism_at_gamma_1"] = first.mean_realized - first.mean_predicted
-            g[f"{label}.optimism_at_gamma_1_covered"] = first.mean_realized_covered - first.mean_predicted_covered
             g[f"{label}.escaped_share_cal"] = float(_final_escape(run.episodes, k).mean())
             t[f"{label}.t_{k}"] = curve["thresholds"][k]
             t[f"{label}.simultaneous"] = curve["simultaneous_threshold"]
@@ -342,55 +335,47 @@ class Explain:
                          "failure_k8": float(old[old["k"] == kmax]["realized"].mean()),
                          "optimism_k8": float((old[old["k"] == kmax]["realized"] - old[old["k"] == kmax]["predicted"]).mean()),
                          "paired_fix_k8": float(fix.difference.estimate)})
-        self._draw_audit(drawn)
-        self._draw_faults(drawn)
+        cells: dict[str, list[dict[str, float]]] = {}
+        self._draw_audit(drawn, cells)
+        self._draw_faults(drawn, cells)
         table = pd.DataFrame(rows)
-        check, fresh = table.iloc[0], table.iloc[1:]
         mujoco = _probe(self.load("B_test_random").episodes, kmax)
-        out["draws.analytic_B_test_random.escape_k8"] = float(check["escape_k8"])
-        out["draws.analytic_equals_mujoco_escape_k8"] = int(abs(check["escape_k8"] - mujoco["escaped"].mean()) < 1e-12)
-        out["draws.count"] = int(len(fresh))
-        for col in ("share_beyond", "escape_k1", "escape_k8", "failure_k8", "optimism_k8", "paired_fix_k8"):
-            values = fresh[col].to_numpy(float)
-            out[f"draws.{col}.mean"] = float(values.mean())
-            out[f"draws.{col}.sd"] = float(values.std(ddof=1)) if len(values) > 1 else float("nan")
-            out[f"draws.{col}.min"], out[f"draws.{col}.max"] = float(values.min()), float(values.max())
-        if len(fresh) > 2:
-            out["draws.corr_share_beyond_escape_k8"] = float(np.corrcoef(fresh["share_beyond"], fresh["escape_k8"])[0, 1])
+        out.update(stored.draws_keys(table))  # the summaries verify recomputes from the stored rows
+        out["draws.analytic_equals_mujoco_escape_k8"] = int(
+            abs(table.iloc[0]["escape_k8"] - mujoco["escaped"].mean()) < 1e-12)
         self.tables["draws"] = table.assign(schedule="draws")
+        first = {"audit": 0, "faults": 0, "audit_fresh_cal": 1, "gates_fresh_cal": 1}
+        self.tables["cells"] = stored.cells_table(cells, first)
+        out.update(stored.cells_keys(self.tables["cells"]))
 
-    def _draw_audit(self, drawn: list[tuple[str, Any, Any]]) -> None:
+    def _draw_audit(self, drawn: list[tuple[str, Any, Any]], parts: dict[str, list[dict[str, float]]]) -> None:
         """Table III's cells on each fresh draw under the frozen Split B calibration (t_k and gamma of our
         calibration run): the range over draws that a paper cell is compared with (``draw_audit``)."""
-        out, res = self.res["instance_generator"], self.insertion_results()
+        res = self.insertion_results()
         thresholds = {int(r["k"]): float(r["threshold"]) for r in res["table_audit"]["table"]}
         gamma = float(res["table_insertion"]["margin_random"])
         self.progress("explain: Table III on fresh draws", 0, len(drawn))
         cells = [draw_audit.draw_cells(deployed.path, thresholds, gamma, nominal=1 - self.p.alpha, resamples=2, seed=0)
                  for _, deployed, _ in drawn]
-        out.update({f"draws.audit_check.{key}": v for key, v in cells[0].items()})
-        if len(cells) > 1:
-            out.update({f"draws.audit.{key}": v for key, v in draw_audit.spread(cells[1:]).items()})
+        parts["audit"] = cells
         fresh = [deployed.path for _, deployed, _ in drawn[1:]]
         if len(fresh) > 1:  # each fresh draw tested under a calibration on the next one (cyclic): both draws vary
             self.progress("explain: Table III with fresh calibration draws", 0, len(fresh))
             pairs = [draw_audit.fresh_calibration_cells(fresh[(i + 1) % len(fresh)], test, sorted(thresholds),
                                                         alpha=self.p.alpha) for i, test in enumerate(fresh)]
-            out.update({f"draws.audit_fresh_cal.{key}": v for key, v in draw_audit.spread(pairs).items()})
+            parts["audit_fresh_cal"] = pairs
             self.progress("explain: random-probe gates on fresh draws", 0, len(fresh))
             gate_cells = [draw_audit.fresh_gate_cells(fresh[(i + 1) % len(fresh)], test, alpha=self.p.alpha)
                           for i, test in enumerate(fresh)]
-            out.update({f"draws.gates_fresh_cal.{key}": v for key, v in draw_audit.spread(gate_cells).items()})
+            parts["gates_fresh_cal"] = gate_cells
 
-    def _draw_faults(self, drawn: list[tuple[str, Any, Any]]) -> None:
+    def _draw_faults(self, drawn: list[tuple[str, Any, Any]], parts: dict[str, list[dict[str, float]]]) -> None:
         """The fault harness's none, boundary and particle arms replayed on each fresh draw's corrected run
         (``draw_faults``): the range of Table VIII's cells and Fig. 7's particle signature over draws."""
-        out, p = self.res["instance_generator"], self.p
+        p = self.p
         self.progress("explain: fault harness on fresh draws", 0, len(drawn))
         cells = [draw_faults.draw_cells(corrected, p.faults, p.sigma, p.budgets["random"]) for _, _, corrected in drawn]
-        out.update({f"draws.faults_check.{key}": v for key, v in cells[0].items()})
-        if len(cells) > 1:
-            out.update({f"draws.faults.{key}": v for key, v in draw_faults.nan_spread(cells[1:]).items()})
+        parts["faults"] = cells
 
     # ------------------------------------------------------------------ boundary fault and robust filters
     def boundary_fault(self) -> None:
@@ -539,7 +524,9 @@ class Explain:
         if margins:
             write_with(out / "margin_per_gamma.parquet", pd.concat(margins, ignore_index=True).to_parquet)
         if "draws" in self.tables:
-            write_with(out / "fresh_draws.parquet", self.tables["draws"].drop(columns="schedule").to_parquet)
+            write_with(out / stored.DRAWS, self.tables["draws"].drop(columns="schedule").to_parquet)
+        if "cells" in self.tables:
+            write_with(out / stored.CELLS, lambda f: self.tables["cells"].to_parquet(f, compression="zstd"))
         payload = {"results": _plain(self.res)}
         write_text(out / "results.json", json.dumps(payload, indent=1, allow_nan=False))
         write_text(out / "explain.md", summary_markdown(payload["results"]))

@@ -1,0 +1,90 @@
+"""The explain target's stored rows and the summaries that read them: one function per table, shared.
+
+Why: most published explain keys are summaries (a curve's cells, min / max / mean over fresh draws)
+of rows that come from re-commits and replays the publication cannot hold. The explain step stores
+those rows (compact Parquet beside ``results.json``) and fills the keys by calling the functions
+here on the very tables it writes; ``verify`` (``report.recompute.explain``) calls the same
+functions on the stored tables. A consistent edit of a published key, or of a stored row, fails.
+"""
+
+from __future__ import annotations
+
+from typing import Any, Mapping, Sequence
+
+import numpy as np
+import pandas as pd
+
+#: Stored file names (``explain/results/``).
+MARGINS = "margin_per_gamma.parquet"
+DRAWS = "fresh_draws.parquet"
+CELLS = "draw_cells.parquet"
+
+#: The margin curve's published columns, by the key suffix they are printed under.
+MARGIN_COLUMNS = {"predicted": "mean_predicted", "realized": "mean_realized",
+                  "predicted_covered": "mean_predicted_covered", "realized_covered": "mean_realized_covered"}
+#: The fresh-draw columns summarized over the fresh draws (``Explain.draws``).
+DRAW_COLUMNS = ("share_beyond", "escape_k1", "escape_k8", "failure_k8", "optimism_k8", "paired_fix_k8")
+
+
+def margin_keys(table: pd.DataFrame) -> dict[str, float]:
+    """``margin_per_gamma`` keys of one or more schedules' margin curves (one row per gamma, in the
+    search's order, the first at gamma = 1): each gamma's mean predicted and realized failure (all
+    episodes, and covered ones only) and the optimism at gamma = 1."""
+    out: dict[str, float] = {}
+    for label, part in table.groupby("schedule", sort=False):
+        for row in part.to_dict("records"):
+            out.update({f"{label}.g{row['gamma']:.2f}.{key}": float(row[col]) for key, col in MARGIN_COLUMNS.items()})
+        first = part.iloc[0]
+        out[f"{label}.optimism_at_gamma_1"] = float(first["mean_realized"] - first["mean_predicted"])
+        out[f"{label}.optimism_at_gamma_1_covered"] = float(first["mean_realized_covered"] - first["mean_predicted_covered"])
+    return out
+
+
+def draws_keys(table: pd.DataFrame) -> dict[str, float]:
+    """``instance_generator.draws.*`` from the fresh-draw rows: the first row is the frozen run redrawn
+    (the analytic check), the others fresh draws; per column mean, SD, min and max over the fresh ones."""
+    check, fresh = table.iloc[0], table.iloc[1:]
+    out: dict[str, float] = {"draws.analytic_B_test_random.escape_k8": float(check["escape_k8"]),
+                             "draws.count": int(len(fresh))}
+    for col in DRAW_COLUMNS:
+        values = fresh[col].to_numpy(float)
+        out[f"draws.{col}.mean"] = float(values.mean())
+        out[f"draws.{col}.sd"] = float(values.std(ddof=1)) if len(values) > 1 else float("nan")
+        out[f"draws.{col}.min"], out[f"draws.{col}.max"] = float(values.min()), float(values.max())
+    if len(fresh) > 2:
+        out["draws.corr_share_beyond_escape_k8"] = float(np.corrcoef(fresh["share_beyond"], fresh["escape_k8"])[0, 1])
+    return out
+
+
+def cells_table(parts: Mapping[str, Sequence[Mapping[str, float]]], first: Mapping[str, int]) -> pd.DataFrame:
+    """The per-draw cells of each part as long rows (``part``, ``draw``, ``cell``, ``value``), cells in the
+    order computed; ``first[part]`` numbers the part's first draw (0: the frozen run's check)."""
+    rows = [{"part": part, "draw": first[part] + i, "cell": cell, "value": float(v)}
+            for part, cells in parts.items() for i, one in enumerate(cells) for cell, v in one.items()]
+    return pd.DataFrame(rows, columns=["part", "draw", "cell", "value"]).astype({"draw": "int32"})
+
+
+def _per_draw(table: pd.DataFrame, part: str, fresh_only: bool) -> list[dict[str, float]]:
+    rows = table[(table["part"] == part) & ((table["draw"] > 0) if fresh_only else True)]
+    return [dict(zip(p["cell"], p["value"].astype(float))) for _, p in rows.groupby("draw", sort=True)]
+
+
+def cells_keys(table: pd.DataFrame) -> dict[str, Any]:
+    """``instance_generator.draws.{audit,faults}_check`` (draw 0's cells), ``draws.audit`` and
+    ``draws.faults`` (the spread over fresh draws), ``draws.audit_fresh_cal`` and
+    ``draws.gates_fresh_cal`` (the spread over fresh draw pairs), from the stored cells."""
+    from probecommit.studies.explain.draw_audit import spread
+    from probecommit.studies.explain.draw_faults import nan_spread
+
+    out: dict[str, Any] = {}
+    for part, summarize in (("audit", spread), ("faults", nan_spread)):
+        check = table[(table["part"] == part) & (table["draw"] == 0)]
+        out.update({f"draws.{part}_check.{c}": float(v) for c, v in zip(check["cell"], check["value"])})
+        fresh = _per_draw(table, part, fresh_only=True)
+        if fresh:
+            out.update({f"draws.{part}.{k}": v for k, v in summarize(fresh).items()})
+    for part in ("audit_fresh_cal", "gates_fresh_cal"):
+        pairs = _per_draw(table, part, fresh_only=False)
+        if pairs:
+            out.update({f"draws.{part}.{k}": v for k, v in spread(pairs).items()})
+    return out
