@@ -442,7 +442,31 @@ def explain(folder: Path, results: dict[str, Any]) -> Recomputed:
         for key, value in summarize(pd.read_parquet(folder / name)).items():
             out.values[f"{group}.{key}"] = value
             out.sources[f"{group}.{key}"] = name
+    if (folder / EXPLAIN_BREADTH).is_file():
+        _breadth_prior(folder, results, out)
     return out
+
+
+def _breadth_prior(folder: Path, results: dict[str, Any], out: Recomputed) -> None:
+    """Table II's rows and prices at each prior width from the stored sweep rows, with the frozen row (s = 1)
+    from the published breadth and cost studies where the explain step used it (a full run), and the span
+    summary (``studies.explain.breadth.sweep_keys``); the bootstrap settings are the insertion study's (the
+    protocol's, which the explain step uses)."""
+    from probecommit.studies.explain.breadth import frozen_row_from, sweep_keys
+
+    setup = json.loads((folder.parent / "insertion" / "results.json").read_text())["results"]["setup"]["bootstrap"]
+    stored = pd.read_parquet(folder / EXPLAIN_BREADTH)
+    published = results.get("breadth_prior", {})
+    frozen = {str(f): frozen_row_from(folder.parent / "breadth" / "results.json", folder.parent / "cost" / "results.json",
+                                      str(f)) if f"{f}.s1.blind_bayes" in published else None
+              for f in stored["family"].unique()}
+    for key, value in sweep_keys(stored, frozen, dict(resamples=int(setup["resamples"]), seed=int(setup["seed"]))).items():
+        out.values[f"breadth_prior.{key}"] = value
+    out.sources["breadth_prior"] = f"{EXPLAIN_BREADTH} (and breadth/, cost/results.json for s = 1)"
+
+
+#: The explain step's stored prior-sweep rows (``studies.explain.breadth.STORED``).
+EXPLAIN_BREADTH = "breadth_prior_episodes.parquet"
 
 
 #: The stored tables each study's numbers are recomputed from: a publication without one fails verify
@@ -455,7 +479,7 @@ STORED_TABLES: dict[str, tuple[str, ...]] = {
     "robot": ("robot_episodes.parquet", SWEEPS),
     "gru": ("gru_episodes.parquet",),
     "beyond": ("beyond_episodes.parquet",),
-    "explain": ("margin_per_gamma.parquet", "fresh_draws.parquet", "draw_cells.parquet"),
+    "explain": ("margin_per_gamma.parquet", "fresh_draws.parquet", "draw_cells.parquet", EXPLAIN_BREADTH),
 }
 
 #: Study folder -> its recomputation.

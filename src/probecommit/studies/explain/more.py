@@ -27,7 +27,8 @@ def run(job: Any) -> None:
     job.progress("explain: the simulated rig redrawn", 0, 1)
     job.res["rig_redraws"].update(rig.run(job.runs, job.cfg, job.boot, job.quick))
     job.progress("explain: Table II's families over the prior's width", 0, 1)
-    job.res["breadth_prior"].update(breadth.run(job.root, job.runs, job.cfg, job.boot, job.quick))
+    keys, job.tables["breadth_prior"] = breadth.run(job.root, job.runs, job.cfg, job.boot, job.quick)
+    job.res["breadth_prior"].update(keys)
     run_ex3(job)
 
 

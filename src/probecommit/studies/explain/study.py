@@ -525,6 +525,8 @@ class Explain:
             write_with(out / "margin_per_gamma.parquet", pd.concat(margins, ignore_index=True).to_parquet)
         if "draws" in self.tables:
             write_with(out / stored.DRAWS, self.tables["draws"].drop(columns="schedule").to_parquet)
+        if "breadth_prior" in self.tables:
+            write_with(out / more.breadth.STORED, lambda f: self.tables["breadth_prior"].to_parquet(f, compression="zstd"))
         if "cells" in self.tables:
             write_with(out / stored.CELLS, lambda f: self.tables["cells"].to_parquet(f, compression="zstd"))
         payload = {"results": _plain(self.res)}
