@@ -442,6 +442,11 @@ def explain(folder: Path, results: dict[str, Any]) -> Recomputed:
         for key, value in summarize(pd.read_parquet(folder / name)).items():
             out.values[f"{group}.{key}"] = value
             out.sources[f"{group}.{key}"] = name
+    if (folder / stored.SCHEDULES).is_file():
+        setup = json.loads((folder.parent / "insertion" / "results.json").read_text())["results"]["setup"]
+        for group, values in stored.pool_keys(pd.read_parquet(folder / stored.SCHEDULES), setup["bootstrap"]).items():
+            out.values.update({f"{group}.{key}": v for key, v in values.items()})
+            out.sources.update(dict.fromkeys((f"{group}.{key}" for key in values), stored.SCHEDULES))
     if (folder / EXPLAIN_BREADTH).is_file():
         _breadth_prior(folder, results, out)
     return out
@@ -479,7 +484,8 @@ STORED_TABLES: dict[str, tuple[str, ...]] = {
     "robot": ("robot_episodes.parquet", SWEEPS),
     "gru": ("gru_episodes.parquet",),
     "beyond": ("beyond_episodes.parquet",),
-    "explain": ("margin_per_gamma.parquet", "fresh_draws.parquet", "draw_cells.parquet", EXPLAIN_BREADTH),
+    "explain": ("margin_per_gamma.parquet", "fresh_draws.parquet", "draw_cells.parquet", EXPLAIN_BREADTH,
+                "schedule_episodes.parquet"),
 }
 
 #: Study folder -> its recomputation.

@@ -88,3 +88,60 @@ def cells_keys(table: pd.DataFrame) -> dict[str, Any]:
         if pairs:
             out.update({f"draws.{part}.{k}": v for k, v in spread(pairs).items()})
     return out
+
+
+#: The schedules' stored Probe-Robust rows (``committed_pool``): one ``run`` per trajectory set.
+SCHEDULES = "schedule_episodes.parquet"
+#: Columns of the cover and random test runs' rows (the gates, the pool labels, the surprise AUC).
+TRAJECTORY_COLUMNS = ("instance_id", "repeat", "k", "predicted", "realized", "covered", "escaped", "post_var",
+                      "max_surprise")
+#: Columns of Split A's rows (final budget only: the schedules' failures).
+FINAL_COLUMNS = ("instance_id", "repeat", "k", "realized", "escaped")
+
+
+def schedule_table(runs: Mapping[str, pd.DataFrame], k_cover: int) -> pd.DataFrame:
+    """The stored rows of ``committed_pool``: ``ours_B_test``, ``paper_B_test`` (cover schedules) and
+    ``random_B_test`` whole (every budget), ``ours_A`` and ``paper_A`` at the cover's final budget.
+    ``runs`` holds each run's Probe-Robust episodes (status ok)."""
+    parts = []
+    for name, rows in runs.items():
+        if name.endswith("_A"):
+            rows = rows.loc[rows["k"] == k_cover, list(FINAL_COLUMNS)]
+        else:
+            rows = rows[[c for c in TRAJECTORY_COLUMNS if c in rows]]
+        parts.append(rows.assign(run=name))
+    return pd.concat(parts, ignore_index=True).astype({"repeat": "int32", "k": "int16"})
+
+
+def pool_keys(table: pd.DataFrame, boot: Mapping[str, int]) -> dict[str, dict[str, Any]]:
+    """``committed_pool`` (each schedule's raw-gate pool under every escape label, both schedules' failures
+    at the cover's final budget on Split B test and A, paired) and ``missing``'s surprise AUCs on both cover
+    schedules, from the stored rows (``schedule_table``); budgets are the runs' own (1..max k)."""
+    from probecommit.audit.stats import cluster_bootstrap_mean, paired_bootstrap
+    from probecommit.audit.surprise import surprise_auc
+    from probecommit.studies.explain.pool import pool_variants
+
+    run = {name: part.drop(columns="run").reset_index(drop=True) for name, part in table.groupby("run", sort=False)}
+    k, kr = int(run["ours_B_test"]["k"].max()), int(run["random_B_test"]["k"].max())
+    b = dict(resamples=int(boot["resamples"]), seed=int(boot["seed"]))
+    pool: dict[str, Any] = {}
+    missing: dict[str, Any] = {}
+    for label, name, budgets in (("ours", "ours_B_test", k), ("paper_schedule", "paper_B_test", k),
+                                 ("random_schedule", "random_B_test", kr)):
+        pool.update({f"{label}.{key}": v for key, v in pool_variants(run[name], list(range(1, budgets + 1)), **b).items()})
+    for label, name in (("", "ours_B_test"), ("_paper_schedule", "paper_B_test")):
+        auc = surprise_auc(run[name], budgets=[1, k], final_k=k, **b).set_index("k")
+        for kk in (1, k):
+            missing[f"surprise_auc_cover{label}_k{kk}"] = [float(auc.loc[kk, c]) for c in ("auc", "auc_lo", "auc_hi")]
+        missing[f"surprise{label}.n_escaped"] = int(auc.loc[k, "n_escaped"])
+        if not label:
+            missing["surprise.n_covered"] = int(auc.loc[k, "n_covered"])
+    for split in ("B_test", "A"):
+        mine, theirs = (run[f"{who}_{split}"][lambda r: r["k"] == k] for who in ("ours", "paper"))
+        for label, rows in (("ours", mine), ("paper_schedule", theirs)):
+            pool[f"schedule.{split}.{label}.failure_k{k}"] = [float(x) for x in (lambda iv: (iv.estimate, iv.lo, iv.hi))(
+                cluster_bootstrap_mean(rows["realized"].to_numpy(float), rows["instance_id"].to_numpy(), **b))]
+            pool[f"schedule.{split}.{label}.escape_k{k}"] = float(rows["escaped"].mean())
+        d = paired_bootstrap(mine, theirs, "realized", keys=("instance_id", "repeat"), **b).difference
+        pool[f"schedule.{split}.paper_minus_ours_failure_k{k}"] = [float(d.estimate), float(d.lo), float(d.hi)]
+    return {"committed_pool": pool, "missing": missing}

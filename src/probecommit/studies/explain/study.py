@@ -20,12 +20,11 @@ import yaml
 
 from probecommit.audit.conformal import simultaneous_threshold
 from probecommit.audit.stats import cluster_bootstrap_mean, paired_bootstrap, percentile_interval, resample_counts
-from probecommit.audit.surprise import surprise_auc
 from probecommit.runner.replay import load_run, replay_episodes
 from probecommit.studies.explain import draw_audit, draw_faults, generator, more, resplits, runs, stored, surprise_variants
 from probecommit.studies.explain import gru as gru_study
 from probecommit.studies.explain.margin import margin_curve
-from probecommit.studies.explain.pool import gate_pools, pool_variants
+from probecommit.studies.explain.pool import gate_pools
 from probecommit.studies.explain.stats import (capture_failure, conformal_quantile_draws, equivalence_power, interval_se,
                                                 margin_draws)
 from probecommit.studies.paper_values import PRINTED
@@ -100,20 +99,10 @@ class Explain:
 
     # ------------------------------------------------------------------ part 3: missing items
     def missing(self) -> None:
-        self._surprise()
         self._random_gates()
         self._corrected_thresholds()
         self._cost_and_testc()
         self._prior_all_four(self.res["missing"])
-
-    def _surprise(self) -> None:
-        """Surprise AUC for final-budget escape on the cover schedule, at k = 1 and the final budget."""
-        m, k = self.res["missing"], self.p.budgets["cover"]
-        auc = surprise_auc(_probe(self.load("B_test_cover").episodes), budgets=[1, k], final_k=k, **self.boot).set_index("k")
-        for kk in (1, k):
-            m[f"surprise_auc_cover_k{kk}"] = [float(auc.loc[kk, c]) for c in ("auc", "auc_lo", "auc_hi")]
-        m["surprise.n_escaped"] = int(auc.loc[k, "n_escaped"])
-        m["surprise.n_covered"] = int(auc.loc[k, "n_covered"])
 
     def _random_gates(self) -> None:
         """Every commit gate under random probes (the paper reports only that posterior variance is lowest)."""
@@ -183,19 +172,13 @@ class Explain:
     # ------------------------------------------------------------------ committed pool
     def committed_pool(self, paper_schedule: dict[str, Any]) -> None:
         """The raw gate's pool under each escape definition, per schedule; then the schedules' failures."""
-        c, b, k = self.res["committed_pool"], self.boot, self.p.budgets["cover"]
-        budgets = list(range(1, k + 1))
-        for label, run in (("ours", self.load("B_test_cover")), ("paper_schedule", paper_schedule["test"])):
-            c.update({f"{label}.{key}": v for key, v in pool_variants(_probe(run.episodes), budgets, **b).items()})
-        auc = surprise_auc(_probe(paper_schedule["test"].episodes), budgets=[1, k], final_k=k, **b).set_index("k")
-        for kk in (1, k):
-            self.res["missing"][f"surprise_auc_cover_paper_schedule_k{kk}"] = [
-                float(auc.loc[kk, col]) for col in ("auc", "auc_lo", "auc_hi")]
-        self.res["missing"]["surprise_paper_schedule.n_escaped"] = int(auc.loc[k, "n_escaped"])
+        k = self.p.budgets["cover"]
+        runs = {"ours_B_test": self.load("B_test_cover"), "paper_B_test": paper_schedule["test"],
+                "random_B_test": self.load("B_test_random"), "ours_A": self.load("A_cover"), "paper_A": paper_schedule["A"]}
+        self.tables["schedules"] = stored.schedule_table({n: _probe(r.episodes) for n, r in runs.items()}, k)
+        for group, values in stored.pool_keys(self.tables["schedules"], self.boot).items():  # what verify recomputes
+            self.res[group].update(values)
         self._surprise_variants(paper_schedule["test"], k)
-        rb = list(range(1, self.p.budgets["random"] + 1))
-        c.update({f"random_schedule.{key}": v for key, v in
-                  pool_variants(_probe(self.load("B_test_random").episodes), rb, **b).items()})
         self._schedule_failure(paper_schedule)
 
     def _surprise_variants(self, paper_test: Any, k: int) -> None:
@@ -207,19 +190,11 @@ class Explain:
             self.res["missing"].update({f"surprise_variants.{label}.{key}": v for key, v in aucs.items()})
 
     def _schedule_failure(self, paper_schedule: dict[str, Any]) -> None:
-        """Cover k = 5 failure under each schedule on the same instances (paired), and Table IV's
-        calibrated rows and the cost of calibration under the paper's schedule."""
+        """Table IV's calibrated rows and the cost of calibration under the paper's schedule (the schedules'
+        failures on the same instances are ``stored.pool_keys``')."""
         from probecommit.runner.calibration import calibrate
 
         c, b, k = self.res["committed_pool"], self.boot, self.p.budgets["cover"]
-        for split, ours in (("B_test", self.load("B_test_cover")), ("A", self.load("A_cover"))):
-            mine, theirs = _probe(ours.episodes, k), _probe(paper_schedule["test" if split == "B_test" else "A"].episodes, k)
-            for label, rows in (("ours", mine), ("paper_schedule", theirs)):
-                c[f"schedule.{split}.{label}.failure_k{k}"] = _triple(cluster_bootstrap_mean(
-                    rows["realized"].to_numpy(float), rows["instance_id"].to_numpy(), **b))
-                c[f"schedule.{split}.{label}.escape_k{k}"] = float(rows["escaped"].mean())
-            c[f"schedule.{split}.paper_minus_ours_failure_k{k}"] = _triple(paired_bootstrap(
-                mine, theirs, "realized", keys=("instance_id", "repeat"), **b).difference)
         self.progress("explain: calibration under the paper's schedule", 0, 1)
         cal = calibrate(paper_schedule["cal"], paper_schedule["test"], alpha=self.p.alpha, budgets=list(range(1, k + 1)),
                         **b, chunk_instances=48)
@@ -527,6 +502,8 @@ class Explain:
             write_with(out / stored.DRAWS, self.tables["draws"].drop(columns="schedule").to_parquet)
         if "breadth_prior" in self.tables:
             write_with(out / more.breadth.STORED, lambda f: self.tables["breadth_prior"].to_parquet(f, compression="zstd"))
+        if "schedules" in self.tables:
+            write_with(out / stored.SCHEDULES, lambda f: self.tables["schedules"].to_parquet(f, compression="zstd"))
         if "cells" in self.tables:
             write_with(out / stored.CELLS, lambda f: self.tables["cells"].to_parquet(f, compression="zstd"))
         payload = {"results": _plain(self.res)}
