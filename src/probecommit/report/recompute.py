@@ -443,13 +443,37 @@ def explain(folder: Path, results: dict[str, Any]) -> Recomputed:
             out.values[f"{group}.{key}"] = value
             out.sources[f"{group}.{key}"] = name
     if (folder / stored.SCHEDULES).is_file():
-        setup = json.loads((folder.parent / "insertion" / "results.json").read_text())["results"]["setup"]
-        for group, values in stored.pool_keys(pd.read_parquet(folder / stored.SCHEDULES), setup["bootstrap"]).items():
-            out.values.update({f"{group}.{key}": v for key, v in values.items()})
-            out.sources.update(dict.fromkeys((f"{group}.{key}" for key in values), stored.SCHEDULES))
+        _schedules(folder, results, out)
     if (folder / EXPLAIN_BREADTH).is_file():
         _breadth_prior(folder, results, out)
     return out
+
+
+def _schedules(folder: Path, results: dict[str, Any], out: Recomputed) -> None:
+    """The schedules' pools, failures and surprise AUCs from the stored schedule rows (``stored.pool_keys``); the
+    boundary fault, whole-cluster and Test C escapes and the test runs' strata from the insertion study's
+    stored episodes and fault episodes (``stored.harness_keys``), with the generator's expected share as
+    published (traced: it is a property of fresh instance draws)."""
+    from probecommit.studies.explain import stored
+    from probecommit.studies.explain.study import load_explain_config
+
+    insertion = folder.parent / "insertion"
+    setup = json.loads((insertion / "results.json").read_text())["results"]["setup"]
+    schedules = pd.read_parquet(folder / stored.SCHEDULES)
+    for group, values in stored.pool_keys(schedules, setup["bootstrap"]).items():
+        out.values.update({f"{group}.{key}": v for key, v in values.items()})
+        out.sources.update(dict.fromkeys((f"{group}.{key}" for key in values), stored.SCHEDULES))
+    ep = pd.read_parquet(insertion / "episodes.parquet")
+    runs = {name: part.drop(columns="run").reset_index(drop=True) for name, part in ep.groupby("run", sort=False)}
+    expected = results.get("instance_generator", {}).get("B_test_random.expected_share")
+    keys = stored.harness_keys(pd.read_parquet(insertion / "faults_episodes.parquet"), runs, schedules,
+                               k_cover=len(setup["cover_schedule"]), k_random=int(setup["k_random"]),
+                               edge=float(load_explain_config()["stratum_edge_mm"]), boot=setup["bootstrap"],
+                               expected=0.3 if expected is None else float(expected))
+    for group, values in keys.items():
+        out.values.update({f"{group}.{key}": v for key, v in values.items()})
+        out.sources.update(dict.fromkeys((f"{group}.{key}" for key in values),
+                                         f"insertion/episodes.parquet, faults_episodes.parquet and {stored.SCHEDULES}"))
 
 
 def _breadth_prior(folder: Path, results: dict[str, Any], out: Recomputed) -> None:

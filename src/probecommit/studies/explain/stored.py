@@ -94,7 +94,7 @@ def cells_keys(table: pd.DataFrame) -> dict[str, Any]:
 SCHEDULES = "schedule_episodes.parquet"
 #: Columns of the cover and random test runs' rows (the gates, the pool labels, the surprise AUC).
 TRAJECTORY_COLUMNS = ("instance_id", "repeat", "k", "predicted", "realized", "covered", "escaped", "post_var",
-                      "max_surprise")
+                      "max_surprise", "z_true")
 #: Columns of Split A's rows (final budget only: the schedules' failures).
 FINAL_COLUMNS = ("instance_id", "repeat", "k", "realized", "escaped")
 
@@ -145,3 +145,58 @@ def pool_keys(table: pd.DataFrame, boot: Mapping[str, int]) -> dict[str, dict[st
         d = paired_bootstrap(mine, theirs, "realized", keys=("instance_id", "repeat"), **b).difference
         pool[f"schedule.{split}.paper_minus_ours_failure_k{k}"] = [float(d.estimate), float(d.lo), float(d.hi)]
     return {"committed_pool": pool, "missing": missing}
+
+
+def _probe(rows: pd.DataFrame, k: int | None = None) -> pd.DataFrame:
+    rows = rows[(rows["method"] == "probe_robust") & (rows["status"] == "ok")]
+    return rows if k is None else rows[rows["k"] == k]
+
+
+def harness_keys(faults: pd.DataFrame, runs: Mapping[str, pd.DataFrame], schedules: pd.DataFrame, *, k_cover: int,
+                 k_random: int, edge: float, expected: float, boot: Mapping[str, int]) -> dict[str, dict[str, Any]]:
+    """``boundary_fault`` (the fault harness's boundary arm by stratum, its fix, Test C's escape and fix),
+    ``missing``'s whole-cluster escapes and Test C's final escapes, and ``instance_generator.stratified``,
+    from the insertion study's stored fault episodes and run episodes (``runs``: by run name) and the
+    stored cover test rows (``schedules``). ``expected`` is the generator's share beyond ``edge``."""
+    from probecommit.audit.stats import cluster_bootstrap_mean, paired_bootstrap
+    from probecommit.studies.explain.generator import stratified_metrics
+
+    b = dict(resamples=int(boot["resamples"]), seed=int(boot["seed"]))
+    triple = lambda iv: [float(iv.estimate), float(iv.lo), float(iv.hi)]  # noqa: E731
+    out: dict[str, Any] = {}
+    fault = faults[(faults["fault"] == "boundary") & (faults["arm"] == "fault")]
+    fix = faults[(faults["fault"] == "boundary") & (faults["arm"] == "fix")]
+    for k in (1, k_random):
+        s = stratified_metrics(fault, k, edge, expected)
+        out.update({f"harness.k{k}.{key}": v for key, v in s.items() if key.startswith(("escape", "share", "optimism", "failure"))})
+    f8, x8 = _probe(fault, k_random), _probe(fix, k_random)
+    out["harness.paired_fix"] = triple(paired_bootstrap(f8, x8, "realized", **b).difference)
+    beyond = np.abs(f8.set_index(["instance_id", "repeat"])["z_true"]) > edge
+    diff = (x8.set_index(["instance_id", "repeat"])["realized"] - f8.set_index(["instance_id", "repeat"])["realized"])
+    inside_fix, beyond_fix = float(diff[~beyond].mean()), float(diff[beyond].mean())
+    out["harness.paired_fix.inside"], out["harness.paired_fix.beyond"] = inside_fix, beyond_fix
+    out["harness.paired_fix.standardized"] = (1 - expected) * inside_fix + expected * beyond_fix
+    old, new = runs["C_random"], runs["C_random_corrected"]
+    for k in (1, k_random):
+        out[f"testc.k{k}.escape"] = triple(cluster_bootstrap_mean(
+            _probe(old, k)["escaped"].to_numpy(float), _probe(old, k)["instance_id"].to_numpy(), **b))
+    out["testc.paired_fix"] = triple(paired_bootstrap(_probe(old, k_random), _probe(new, k_random), "realized", **b).difference)
+    missing: dict[str, Any] = {}
+    for name, k in (("C_cover_corrected", k_cover), ("C_random_corrected", k_random), ("C_cover", k_cover),
+                    ("C_random", k_random)):
+        missing[f"testc_final_escapes.{name}"] = int(_probe(runs[name], k)["escaped"].sum())
+    for name in ("prior", "boundary"):
+        rows = _probe(faults[(faults["fault"] == name) & (faults["arm"] == "fault")])
+        for k in (1, k_random):
+            at = rows[rows["k"] == k].groupby("instance_id")["escaped"].agg(["sum", "count"])
+            any_ = at["sum"] > 0
+            missing[f"all_repeats_escape.{name}.k{k}.escape"] = float(rows[rows["k"] == k]["escaped"].mean())
+            missing[f"all_repeats_escape.{name}.k{k}.clusters_all"] = float((at["sum"] == at["count"]).mean())
+            missing[f"all_repeats_escape.{name}.k{k}.of_escaping_clusters"] = float(
+                (at["sum"] == at["count"])[any_].mean()) if any_.any() else float("nan")
+    cover = schedules[schedules["run"] == "ours_B_test"].drop(columns="run").assign(method="probe_robust", status="ok")
+    strata: dict[str, Any] = {}
+    for name, rows, k in (("B_test_random", runs["B_test_random"], k_random), ("C_random", runs["C_random"], k_random),
+                          ("B_test_cover", cover, k_cover), ("C_cover", runs["C_cover"], k_cover)):
+        strata.update({f"stratified.{name}.k{k}.{key}": v for key, v in stratified_metrics(rows, k, edge, expected).items()})
+    return {"boundary_fault": out, "missing": missing, "instance_generator": strata}

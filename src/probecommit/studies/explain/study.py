@@ -102,7 +102,6 @@ class Explain:
         self._random_gates()
         self._corrected_thresholds()
         self._cost_and_testc()
-        self._prior_all_four(self.res["missing"])
 
     def _random_gates(self) -> None:
         """Every commit gate under random probes (the paper reports only that posterior variance is lowest)."""
@@ -136,26 +135,10 @@ class Explain:
             _probe(self.load("B_cal_cover_corrected").episodes), list(range(1, p.budgets["cover"] + 1)), p.alpha)
 
     def _cost_and_testc(self) -> None:
-        """The cost-of-calibration differences as keys; Test C escapes at the final budget."""
-        m, p = self.res["missing"], self.p
+        """The cost-of-calibration differences as keys (Test C's final escapes are ``stored.harness_keys``')."""
+        m = self.res["missing"]
         for row in self.insertion_results()["table_insertion"]["B.cost_differences"]:
             m[f"cost_of_calibration.{COST_LABELS[(row['baseline'], row['treatment'])]}"] = [row["difference"], row["lo"], row["hi"]]
-        for name, k in (("C_cover_corrected", p.budgets["cover"]), ("C_random_corrected", p.budgets["random"]),
-                        ("C_cover", p.budgets["cover"]), ("C_random", p.budgets["random"])):
-            m[f"testc_final_escapes.{name}"] = int(_probe(self.load(name).episodes, k)["escaped"].sum())
-
-    def _prior_all_four(self, m: dict[str, Any]) -> None:
-        """How often a fault's escapes come in whole clusters (all repeats of an instance at once)."""
-        episodes = self.fault_episodes()
-        for fault in ("prior", "boundary"):
-            rows = _probe(episodes[(episodes["fault"] == fault) & (episodes["arm"] == "fault")])
-            for k in (1, self.p.budgets["random"]):
-                at = rows[rows["k"] == k].groupby("instance_id")["escaped"].agg(["sum", "count"])
-                any_ = at["sum"] > 0
-                m[f"all_repeats_escape.{fault}.k{k}.escape"] = float(rows[rows["k"] == k]["escaped"].mean())
-                m[f"all_repeats_escape.{fault}.k{k}.clusters_all"] = float((at["sum"] == at["count"]).mean())
-                m[f"all_repeats_escape.{fault}.k{k}.of_escaping_clusters"] = float(
-                    (at["sum"] == at["count"])[any_].mean()) if any_.any() else float("nan")
 
     def physx_coverage(self) -> None:
         """Cluster and episode coverage of our PhysX runs at the final random budget."""
@@ -276,7 +259,7 @@ class Explain:
 
     # ------------------------------------------------------------------ instance draws
     def instance_generator(self) -> None:
-        out, p = self.res["instance_generator"], self.p
+        out = self.res["instance_generator"]
         edge, seeds = self.cfg["stratum_edge_mm"], self.cfg["generator_seeds_quick" if self.quick else "generator_seeds"]
         low, high = -10.0, 10.0
         for name in ("A_cover", "B_cal_cover", "B_test_cover", "B_cal_random", "B_test_random", "C_cover", "C_random"):
@@ -286,11 +269,6 @@ class Explain:
                 continue
             test = generator.generator_test(run.instances, cfg.split, cfg.seed, low, high, edge, seeds)
             out.update({f"{name}.{k}": v for k, v in test.items()})
-        expected = out.get("B_test_random.expected_share", 0.3)
-        for name, k in (("B_test_random", p.budgets["random"]), ("C_random", p.budgets["random"]),
-                        ("B_test_cover", p.budgets["cover"]), ("C_cover", p.budgets["cover"])):
-            strat = generator.stratified_metrics(self.load(name).episodes, k, edge, expected)
-            out.update({f"stratified.{name}.k{k}.{key}": v for key, v in strat.items()})
 
     def draws(self) -> None:
         """Escape, failure and the boundary fix across fresh draws of the generator (analytic scene)."""
@@ -354,29 +332,15 @@ class Explain:
 
     # ------------------------------------------------------------------ boundary fault and robust filters
     def boundary_fault(self) -> None:
-        out, p, b = self.res["boundary_fault"], self.p, self.boot
-        kmax = p.budgets["random"]
-        edge = self.cfg["stratum_edge_mm"]
-        expected = self.res["instance_generator"].get("B_test_random.expected_share", 0.3)
-        episodes = self.fault_episodes()
-        fault = episodes[(episodes["fault"] == "boundary") & (episodes["arm"] == "fault")]
-        fix = episodes[(episodes["fault"] == "boundary") & (episodes["arm"] == "fix")]
-        for k in (1, kmax):
-            s = generator.stratified_metrics(fault, k, edge, expected)
-            out.update({f"harness.k{k}.{key}": v for key, v in s.items() if key.startswith(("escape", "share", "optimism", "failure"))})
-        f8, x8 = _probe(fault, kmax), _probe(fix, kmax)
-        out["harness.paired_fix"] = _triple(paired_bootstrap(f8, x8, "realized", **b).difference)
-        beyond = np.abs(f8.set_index(["instance_id", "repeat"])["z_true"]) > edge
-        diff = (x8.set_index(["instance_id", "repeat"])["realized"] - f8.set_index(["instance_id", "repeat"])["realized"])
-        inside_fix, beyond_fix = float(diff[~beyond].mean()), float(diff[beyond].mean())
-        out["harness.paired_fix.inside"], out["harness.paired_fix.beyond"] = inside_fix, beyond_fix
-        out["harness.paired_fix.standardized"] = (1 - expected) * inside_fix + expected * beyond_fix
-        # The same fault and fix on another draw of the same generator: Test C, old vs corrected model.
-        old, new = self.load("C_random").episodes, self.load("C_random_corrected").episodes
-        for k in (1, kmax):
-            out[f"testc.k{k}.escape"] = _triple(cluster_bootstrap_mean(
-                _probe(old, k)["escaped"].to_numpy(float), _probe(old, k)["instance_id"].to_numpy(), **b))
-        out["testc.paired_fix"] = _triple(paired_bootstrap(_probe(old, kmax), _probe(new, kmax), "realized", **b).difference)
+        """The boundary fault by stratum, its fix, Test C; the whole-cluster escapes and the strata of the test
+        runs: ``stored.harness_keys`` of the insertion study's stored rows (what verify recomputes)."""
+        names = ("C_random", "C_random_corrected", "C_cover", "C_cover_corrected", "B_test_random")
+        keys = stored.harness_keys(self.fault_episodes(), {n: self.load(n).episodes for n in names}, self.tables["schedules"],
+                                   k_cover=self.p.budgets["cover"], k_random=self.p.budgets["random"],
+                                   edge=self.cfg["stratum_edge_mm"], boot=self.boot,
+                                   expected=self.res["instance_generator"].get("B_test_random.expected_share", 0.3))
+        for group, values in keys.items():
+            self.res[group].update(values)
 
     def robust(self) -> None:
         """The mixture's cost when the model is right, at every epsilon; its optimism on Test C."""
