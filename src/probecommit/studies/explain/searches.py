@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from probecommit.runner.build import build_filter, build_model, build_simulator
+from probecommit.runner.build import build_executors, build_filter, build_model, build_simulator
 from probecommit.runner.inference import build_trace, commit, rollout
 from probecommit.runner.instances import draw_instances
 from probecommit.runner.replay import LoadedRun, replay_episodes
@@ -40,7 +40,8 @@ def cover_episodes(protocol: Any,
     fail, aim, ids = {}, {}, None
     for n, schedule in enumerate(candidates):
         batch = rollout(instances, cfg.repeats, [(u,) for u in schedule], len(schedule), model, sim, cfg.seed)
-        ep = commit(build_trace(pfilter, batch, cfg.seed, [len(schedule)]), model, sim, thresholds=cfg.belief.nu)
+        ep = commit(build_trace(pfilter, batch, cfg.seed, [len(schedule)]), model, sim, build_executors(["probe_robust"], model),
+                    thresholds=cfg.belief.nu)
         ep = ep.sort_values(["instance_id", "repeat"], kind="stable")
         ids = ep["instance_id"].to_numpy() if ids is None else ids
         fail[n] = ep["realized"].to_numpy(float)
