@@ -172,6 +172,7 @@ def _gates(commits: pd.DataFrame, runs: dict[str, pd.DataFrame], results: dict[s
     result = gates_from_commits(commits, runs[cal_run], alpha, budgets, **boot)
     out.values["gates.summary"] = result.summary.to_dict("records")
     out.values.update({f"gates.info.{key}": result.info[key] for key in ("threshold", "gamma", "gamma_satisfied", "alpha")})
+    out.values["gates.info.surprise"] = result.info["surprise"].to_dict("records")
     out.tables["gates_curves.parquet"] = result.curves
     out.table_sources["gates_curves.parquet"] = COMMITS
     k = int(results["setup"]["k_random"])
