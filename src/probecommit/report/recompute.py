@@ -163,7 +163,7 @@ def _gates(commits: pd.DataFrame, runs: dict[str, pd.DataFrame], results: dict[s
     """The commit gates (summary, curves, t and gamma) and Fig. 6's coverage panel, from stored rows; and the
     stored uncalibrated gate rows against the test run's stored episodes (they are the same commits)."""
     from probecommit.studies.insertion import CALIBRATIONS
-    from probecommit.report.study_figures import coverage_vs_nominal
+    from probecommit.studies.insertion import coverage_vs_nominal
     from probecommit.runner.calibration import gates_from_commits
 
     cal_run, test_run = CALIBRATIONS["gates"]
@@ -447,6 +447,9 @@ def explain(folder: Path, results: dict[str, Any]) -> Recomputed:
         _schedules(folder, results, out)
     if (folder / EXPLAIN_BREADTH).is_file():
         _breadth_prior(folder, results, out)
+    from probecommit.studies.explain.study import plain
+
+    out.values = {key: plain(value) for key, value in out.values.items()}  # as the explain step publishes it
     return out
 
 

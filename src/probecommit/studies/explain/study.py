@@ -470,22 +470,22 @@ class Explain:
             write_with(out / stored.SCHEDULES, lambda f: self.tables["schedules"].to_parquet(f, compression="zstd"))
         if "cells" in self.tables:
             write_with(out / stored.CELLS, lambda f: self.tables["cells"].to_parquet(f, compression="zstd"))
-        payload = {"results": _plain(self.res)}
+        payload = {"results": plain(self.res)}
         write_text(out / "results.json", json.dumps(payload, indent=1, allow_nan=False))
         write_text(out / "explain.md", summary_markdown(payload["results"]))
         return out
 
 
-def _plain(o: Any) -> Any:
+def plain(o: Any) -> Any:
     """JSON-ready values. A value the data leave undefined (NaN: no escapes to rank, one draw for an SD, an
     empty stratum; a quick run has many) is ``null``, an interval with an undefined end wholly so: verify
     refuses an undeclared NaN, and a claim reading ``null`` is unresolved, not compared."""
     if isinstance(o, dict):
-        return {str(k): _plain(v) for k, v in o.items()}
+        return {str(k): plain(v) for k, v in o.items()}
     if isinstance(o, (list, tuple)):
         if len(o) == 3 and all(isinstance(v, (float, np.floating)) for v in o) and any(np.isnan(v) for v in o):
             return None
-        return [_plain(v) for v in o]
+        return [plain(v) for v in o]
     if isinstance(o, (np.integer,)):
         return int(o)
     if isinstance(o, (np.floating, float)):
