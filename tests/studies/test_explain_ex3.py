@@ -94,7 +94,8 @@ def test_reseeded_replay_at_the_same_seed_is_the_stored_run_and_another_seed_dif
     stored = mixture_x._final(base.episodes, k)[cols].reset_index(drop=True)
     assert mixture_x._final(same, k)[cols].reset_index(drop=True).equals(stored)
     mix = {"likelihood": "mixture", "epsilon": 0.01, "mixture_low": -17.0, "mixture_high": 2.0}
-    out = mixture_x.run(base, mix, [base.config.seed, base.config.seed], k)
+    out, rows = mixture_x.run(base, mix, [base.config.seed, base.config.seed], k)
+    assert mixture_x.summary(rows) == out and len(rows) == 2
     assert out["right.failure.sd"] == 0.0 and out["reseeded_changed_aims.mean"] == 0.0
     assert out["right.failure.mean"] == pytest.approx(float(stored["realized"].mean()))
 

@@ -447,6 +447,12 @@ def explain(folder: Path, results: dict[str, Any]) -> Recomputed:
         _schedules(folder, results, out)
     if (folder / EXPLAIN_BREADTH).is_file():
         _breadth_prior(folder, results, out)
+    if (folder / EXPLAIN_MIXTURE).is_file():
+        from probecommit.studies.explain.mixture_x import summary
+
+        for key, value in summary(pd.read_parquet(folder / EXPLAIN_MIXTURE)).items():
+            out.values[f"mixture_noise.{key}"] = value
+        out.sources["mixture_noise"] = EXPLAIN_MIXTURE
     from probecommit.studies.explain.study import plain
 
     out.values = {key: plain(value) for key, value in out.values.items()}  # as the explain step publishes it
@@ -500,6 +506,8 @@ def _breadth_prior(folder: Path, results: dict[str, Any], out: Recomputed) -> No
 
 #: The explain step's stored prior-sweep rows (``studies.explain.breadth.STORED``).
 EXPLAIN_BREADTH = "breadth_prior_episodes.parquet"
+#: The explain step's stored per-seed mixture rows (``studies.explain.mixture_x.STORED``).
+EXPLAIN_MIXTURE = "mixture_noise_seeds.parquet"
 
 
 #: The stored tables each study's numbers are recomputed from: a publication without one fails verify
@@ -513,7 +521,7 @@ STORED_TABLES: dict[str, tuple[str, ...]] = {
     "gru": ("gru_episodes.parquet",),
     "beyond": ("beyond_episodes.parquet",),
     "explain": ("margin_per_gamma.parquet", "fresh_draws.parquet", "draw_cells.parquet", EXPLAIN_BREADTH,
-                "schedule_episodes.parquet"),
+                "schedule_episodes.parquet", EXPLAIN_MIXTURE),
 }
 
 #: Study folder -> its recomputation.

@@ -42,7 +42,8 @@ def run_ex3(job: Any) -> None:
     base = job.load("faults_base")
     mixture = {"likelihood": "mixture", "epsilon": value("T42-robust-chosen.mixture"),
                "mixture_low": r.mixture_range[0], "mixture_high": r.mixture_range[1]}
-    job.res["mixture_noise"].update(mixture_x.run(base, mixture, [base.config.seed + i for i in range(1, seeds + 1)],
-                                                  job.p.budgets["random"]))
+    keys, job.tables["mixture_noise"] = mixture_x.run(base, mixture, [base.config.seed + i for i in range(1, seeds + 1)],
+                                                      job.p.budgets["random"])
+    job.res["mixture_noise"].update(keys)
     job.progress("explain: grasp on the model-exact scene", 0, 1)
     job.res["grasp_signs"].update(grasp_x.run(job.runs, job.quick, job.workers))

@@ -464,12 +464,10 @@ class Explain:
             write_with(out / "margin_per_gamma.parquet", pd.concat(margins, ignore_index=True).to_parquet)
         if "draws" in self.tables:
             write_with(out / stored.DRAWS, self.tables["draws"].drop(columns="schedule").to_parquet)
-        if "breadth_prior" in self.tables:
-            write_with(out / more.breadth.STORED, lambda f: self.tables["breadth_prior"].to_parquet(f, compression="zstd"))
-        if "schedules" in self.tables:
-            write_with(out / stored.SCHEDULES, lambda f: self.tables["schedules"].to_parquet(f, compression="zstd"))
-        if "cells" in self.tables:
-            write_with(out / stored.CELLS, lambda f: self.tables["cells"].to_parquet(f, compression="zstd"))
+        for name, file in (("breadth_prior", more.breadth.STORED), ("schedules", stored.SCHEDULES),
+                           ("cells", stored.CELLS), ("mixture_noise", more.mixture_x.STORED)):
+            if name in self.tables:  # the rows verify recomputes the summaries from (``stored``)
+                write_with(out / file, lambda f, t=self.tables[name]: t.to_parquet(f, compression="zstd"))
         payload = {"results": plain(self.res)}
         write_text(out / "results.json", json.dumps(payload, indent=1, allow_nan=False))
         write_text(out / "explain.md", summary_markdown(payload["results"]))
