@@ -88,3 +88,27 @@ def test_sweep_keys_on_the_compact_rows_equal_those_on_the_whole_episodes():
     assert {k: keys[f"push1d.s0.5.{k}"] for k in expected} == expected
     assert keys["scales"] == [0.5, 0.25] and keys["push1d.widths"] == 2
     assert keys["push1d.min_paired_lo"] == min(keys["push1d.s0.5.paired_lo"], keys["push1d.s0.25.paired_lo"])
+
+
+def test_rig_boundary_summary_by_hand():
+    from probecommit.studies.explain.rig import boundary_summary
+
+    rows = pd.DataFrame({"session": [1, 2, 3], "first_resolved_mm": [8.0, math.nan, 10.0],
+                         "holds_to_mm": [14.0, 14.0, 20.0], "sweep_end_mm": 20.0})
+    out = boundary_summary(rows)
+    assert out["sessions"] == 3 and out["share_never_resolved"] == pytest.approx(1 / 3)
+    assert (out["first_resolved_mm.median"], out["first_resolved_mm.min"], out["first_resolved_mm.max"]) == (9.0, 8.0, 10.0)
+    assert out["coverage_holds_to_mm.median"] == 14.0
+    assert out["coverage_holds_to_mm.share_at_sweep_end"] == pytest.approx(1 / 3)
+
+
+def test_mixture_summary_pairs_seeds_and_crosses_them_by_hand():
+    from probecommit.studies.explain.mixture_x import summary
+
+    rows = pd.DataFrame({"seed": [1, 2], "epsilon": 0.01, "right": [0.1, 0.2], "mixed": [0.2, 0.2],
+                         "changed": [0.0, 0.5], "changed_seed": [0.25, 0.25]})
+    out = summary(rows)
+    assert (out["seeds"], out["epsilon"]) == (2, 0.01)
+    assert out["paired_cost.mean"] == pytest.approx(0.05) and out["paired_cost.max"] == pytest.approx(0.1)
+    assert (out["unpaired_cost.min"], out["unpaired_cost.max"]) == pytest.approx((0.0, 0.1))  # 0.2 - 0.2, 0.2 - 0.1
+    assert (out["paired_changed_aims.mean"], out["reseeded_changed_aims.mean"]) == (0.25, 0.25)

@@ -447,6 +447,14 @@ def explain(folder: Path, results: dict[str, Any]) -> Recomputed:
         _schedules(folder, results, out)
     if (folder / EXPLAIN_BREADTH).is_file():
         _breadth_prior(folder, results, out)
+    if (folder / EXPLAIN_RIG[0]).is_file() and (folder / EXPLAIN_RIG[1]).is_file():
+        from probecommit.studies.explain import rig
+
+        setup = json.loads((folder.parent / "insertion" / "results.json").read_text())["results"]["setup"]["bootstrap"]
+        boot = dict(resamples=int(setup["resamples"]), seed=int(setup["seed"]))
+        for key, value in rig.keys(*(pd.read_parquet(folder / name) for name in EXPLAIN_RIG), boot).items():
+            out.values[f"rig_redraws.{key}"] = value
+        out.sources["rig_redraws"] = " and ".join(EXPLAIN_RIG)
     if (folder / EXPLAIN_MIXTURE).is_file():
         from probecommit.studies.explain.mixture_x import summary
 
@@ -508,6 +516,8 @@ def _breadth_prior(folder: Path, results: dict[str, Any], out: Recomputed) -> No
 EXPLAIN_BREADTH = "breadth_prior_episodes.parquet"
 #: The explain step's stored per-seed mixture rows (``studies.explain.mixture_x.STORED``).
 EXPLAIN_MIXTURE = "mixture_noise_seeds.parquet"
+#: The explain step's stored rig redraws (``studies.explain.rig.STORED_SESSIONS``, ``STORED_BOUNDARY``).
+EXPLAIN_RIG = ("rig_redraws_sessions.parquet", "rig_redraws_boundary.parquet")
 
 
 #: The stored tables each study's numbers are recomputed from: a publication without one fails verify
@@ -521,7 +531,7 @@ STORED_TABLES: dict[str, tuple[str, ...]] = {
     "gru": ("gru_episodes.parquet",),
     "beyond": ("beyond_episodes.parquet",),
     "explain": ("margin_per_gamma.parquet", "fresh_draws.parquet", "draw_cells.parquet", EXPLAIN_BREADTH,
-                "schedule_episodes.parquet", EXPLAIN_MIXTURE),
+                "schedule_episodes.parquet", EXPLAIN_MIXTURE, *EXPLAIN_RIG),
 }
 
 #: Study folder -> its recomputation.

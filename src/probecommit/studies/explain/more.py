@@ -25,7 +25,9 @@ def run(job: Any) -> None:
     s.update({f"robust.{k}": v for k, v in searches.robust_stability(job.load("dev_random"), job.p.robust, paper,
                                                                       job.boot).items()})
     job.progress("explain: the simulated rig redrawn", 0, 1)
-    job.res["rig_redraws"].update(rig.run(job.runs, job.cfg, job.boot, job.quick))
+    keys, tables = rig.run(job.runs, job.cfg, job.boot, job.quick)
+    job.res["rig_redraws"].update(keys)
+    job.stored.update(tables)
     job.progress("explain: Table II's families over the prior's width", 0, 1)
     keys, job.tables["breadth_prior"] = breadth.run(job.root, job.runs, job.cfg, job.boot, job.quick)
     job.res["breadth_prior"].update(keys)

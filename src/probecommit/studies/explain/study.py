@@ -77,6 +77,8 @@ class Explain:
             "missing", "committed_pool", "instance_generator", "margin_per_gamma", "thresholds", "gru", "physx_capture",
             "boundary_fault", "robust", *more.GROUPS)}
         self.tables: dict[str, pd.DataFrame] = {}
+        #: Stored rows written beside results.json as they are, by file name (``more``'s steps).
+        self.stored: dict[str, pd.DataFrame] = {}
         self._loaded: dict[str, Any] = {}
 
     def load(self, name: str) -> Any:
@@ -468,6 +470,8 @@ class Explain:
                            ("cells", stored.CELLS), ("mixture_noise", more.mixture_x.STORED)):
             if name in self.tables:  # the rows verify recomputes the summaries from (``stored``)
                 write_with(out / file, lambda f, t=self.tables[name]: t.to_parquet(f, compression="zstd"))
+        for file, table in self.stored.items():
+            write_with(out / file, lambda f, t=table: t.to_parquet(f, compression="zstd"))
         payload = {"results": plain(self.res)}
         write_text(out / "results.json", json.dumps(payload, indent=1, allow_nan=False))
         write_text(out / "explain.md", summary_markdown(payload["results"]))
