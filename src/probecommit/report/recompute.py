@@ -447,6 +447,7 @@ def explain(folder: Path, results: dict[str, Any]) -> Recomputed:
         _schedules(folder, results, out)
     if (folder / EXPLAIN_BREADTH).is_file():
         _breadth_prior(folder, results, out)
+    _cost_copies(folder, out)
     if (folder / EXPLAIN_RIG[0]).is_file() and (folder / EXPLAIN_RIG[1]).is_file():
         from probecommit.studies.explain import rig
 
@@ -492,6 +493,32 @@ def _schedules(folder: Path, results: dict[str, Any], out: Recomputed) -> None:
         out.values.update({f"{group}.{key}": v for key, v in values.items()})
         out.sources.update(dict.fromkeys((f"{group}.{key}" for key in values),
                                          f"insertion/episodes.parquet, faults_episodes.parquet and {stored.SCHEDULES}"))
+
+
+def _cost_copies(folder: Path, out: Recomputed) -> None:
+    """``missing.cost_of_calibration.*``: Table IV's paired differences recomputed from the insertion study's
+    stored commits and episodes (``_calibrated``), keyed as the explain step keys its copy (``cost_keys``)."""
+    from probecommit.studies.explain.study import cost_keys
+
+    insertion = folder.parent / "insertion"
+    if not (insertion / COMMITS).is_file():
+        return
+    from probecommit.runner.calibration import calibration_from_tables
+    from probecommit.studies.insertion import CALIBRATIONS
+
+    setup = json.loads((insertion / "results.json").read_text())["results"]["setup"]
+    ep = pd.read_parquet(insertion / "episodes.parquet")
+    runs = {name: part.drop(columns="run").reset_index(drop=True) for name, part in ep.groupby("run", sort=False)}
+    commits = pd.read_parquet(insertion / COMMITS)
+    cal_run, test_run = CALIBRATIONS["cover"]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # a margin search that settles on the grid's end (quick runs)
+        cal = calibration_from_tables(commits[commits["calibration"] == "cover"].reset_index(drop=True), runs[cal_run],
+                                      runs[test_run], float(setup["alpha"]), CALIBRATION_BUDGETS["cover"],
+                                      resamples=int(setup["bootstrap"]["resamples"]), seed=int(setup["bootstrap"]["seed"]))
+    for key, value in cost_keys(cal.cost_differences.to_dict("records")).items():
+        out.values[f"missing.{key}"] = value
+    out.sources["missing.cost_of_calibration"] = f"insertion/{COMMITS} and insertion/episodes.parquet"
 
 
 def _breadth_prior(folder: Path, results: dict[str, Any], out: Recomputed) -> None:

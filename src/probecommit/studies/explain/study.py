@@ -41,6 +41,13 @@ COST_LABELS = {("no calibration", "set calibration + margin"): "full", ("no cali
                ("set calibration", "set calibration + margin"): "margin"}
 
 
+def cost_keys(differences: list[dict[str, Any]]) -> dict[str, list[float]]:
+    """``missing.cost_of_calibration.*`` from the insertion study's Table IV paired differences (records; verify
+    passes the ones it recomputed)."""
+    return {f"cost_of_calibration.{COST_LABELS[(row['baseline'], row['treatment'])]}": [row["difference"], row["lo"], row["hi"]]
+            for row in differences}
+
+
 def load_explain_config(path: str | Path | None = None) -> dict[str, Any]:
     return yaml.safe_load(Path(path or CONFIG).read_text())
 
@@ -138,9 +145,7 @@ class Explain:
 
     def _cost_and_testc(self) -> None:
         """The cost-of-calibration differences as keys (Test C's final escapes are ``stored.harness_keys``')."""
-        m = self.res["missing"]
-        for row in self.insertion_results()["table_insertion"]["B.cost_differences"]:
-            m[f"cost_of_calibration.{COST_LABELS[(row['baseline'], row['treatment'])]}"] = [row["difference"], row["lo"], row["hi"]]
+        self.res["missing"].update(cost_keys(self.insertion_results()["table_insertion"]["B.cost_differences"]))
 
     def physx_coverage(self) -> None:
         """Cluster and episode coverage of our PhysX runs at the final random budget."""
