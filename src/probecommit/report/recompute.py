@@ -448,6 +448,13 @@ def explain(folder: Path, results: dict[str, Any]) -> Recomputed:
     if (folder / EXPLAIN_BREADTH).is_file():
         _breadth_prior(folder, results, out)
     _cost_copies(folder, out)
+    engines = folder.parent / "engines" / "engine_episodes.parquet"
+    if engines.is_file():
+        ep = pd.read_parquet(engines)
+        k = int(json.loads((folder.parent / "insertion" / "results.json").read_text())["results"]["setup"]["k_random"])
+        for key, value in stored.physx_coverage_keys(ep[ep["engine"] == "sapien"], k).items():
+            out.values[f"missing.{key}"] = value
+            out.sources[f"missing.{key}"] = "engines/engine_episodes.parquet"
     if (folder / EXPLAIN_RIG[0]).is_file() and (folder / EXPLAIN_RIG[1]).is_file():
         from probecommit.studies.explain import rig
 

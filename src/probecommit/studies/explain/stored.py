@@ -200,3 +200,15 @@ def harness_keys(faults: pd.DataFrame, runs: Mapping[str, pd.DataFrame], schedul
                           ("B_test_cover", cover, k_cover), ("C_cover", runs["C_cover"], k_cover)):
         strata.update({f"stratified.{name}.k{k}.{key}": v for key, v in stratified_metrics(rows, k, edge, expected).items()})
     return {"boundary_fault": out, "missing": missing, "instance_generator": strata}
+
+
+def physx_coverage_keys(episodes: pd.DataFrame, k: int) -> dict[str, float]:
+    """``missing.physx_{cluster,episode}_coverage.<variant>`` at budget ``k`` from the SAPIEN B_test_random runs'
+    episodes (a ``variant`` column: the run directories' in the explain step, the engines study's stored
+    ``engine_episodes.parquet`` in verify)."""
+    out: dict[str, float] = {}
+    for variant, part in episodes.groupby("variant", sort=False):
+        rows = _probe(part, k)
+        out[f"physx_cluster_coverage.{variant}"] = float(rows.groupby("instance_id")["covered"].all().mean())
+        out[f"physx_episode_coverage.{variant}"] = float(rows["covered"].mean())
+    return out

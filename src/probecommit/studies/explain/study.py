@@ -149,15 +149,13 @@ class Explain:
 
     def physx_coverage(self) -> None:
         """Cluster and episode coverage of our PhysX runs at the final random budget."""
-        m = self.res["missing"]
         engines = self.root / "engines" / "runs"
-        for variant, suffix in (("deployed", ""), ("mj_offset", "_mj_offset"), ("own_scan", "_own_scan")):
-            path = engines / f"sapien_B_test_random{suffix}"
-            if not path.is_dir():
-                continue
-            rows = _probe(load_run(path).episodes, self.p.budgets["random"])
-            m[f"physx_cluster_coverage.{variant}"] = float(rows.groupby("instance_id")["covered"].all().mean())
-            m[f"physx_episode_coverage.{variant}"] = float(rows["covered"].mean())
+        paths = {variant: engines / f"sapien_B_test_random{suffix}"
+                 for variant, suffix in (("deployed", ""), ("mj_offset", "_mj_offset"), ("own_scan", "_own_scan"))}
+        frames = [load_run(path).episodes.assign(variant=v) for v, path in paths.items() if path.is_dir()]
+        if frames:
+            self.res["missing"].update(stored.physx_coverage_keys(pd.concat(frames, ignore_index=True),
+                                                                  self.p.budgets["random"]))
 
     # ------------------------------------------------------------------ committed pool
     def committed_pool(self, paper_schedule: dict[str, Any]) -> None:
