@@ -591,7 +591,7 @@ RECOMPUTED = {
     "explain": "the margin curves' cells; the fresh draws' summaries; Table III's and the fault harness's cells over "
                "fresh draws; the schedules' pools, failures and cover surprise AUCs; the boundary fault, Test C, "
                "whole-cluster escapes and strata; the prior sweep's rows, prices and spans; the mixture against the "
-               "filter's noise; the simulated rig redrawn",
+               "filter's noise; the simulated rig redrawn; the PhysX coverage; the cost of calibration",
 }
 TRACED_ONLY = {
     "insertion": "the stored rows themselves (episodes, re-executed commits, replays); the re-split rows; the cover "
@@ -600,7 +600,7 @@ TRACED_ONLY = {
     "robot": "the replay reproduction fraction",
     "gru": "the training loss",
     "explain": "the stored rows themselves; the random gates, thresholds and margins (re-commits), the calibration "
-               "and re-splits under the paper's schedule, surprise variants, PhysX coverage, the generator redraws, "
+               "and re-splits under the paper's schedule, surprise variants, the generator redraws, "
                "and the groups gru, physx_capture, robust, engines_x, searches, pybullet_escape, grasp_signs "
                "(docs/verify.md lists each); explain.md is rendered again from results.json",
     "figures": "Fig. 1a/1c and Fig. 3 (scene renders from run directories); Fig. 2 is drawn again from code",
