@@ -75,6 +75,9 @@ CASES: list[tuple[str, Edit]] = [
     ("json-whole-cluster-escape", edit_results("explain", ["missing", "all_repeats_escape.boundary.k8.clusters_all"], bump)),
     ("json-pool-count", edit_results("explain", ["committed_pool", "ours.final_hull.escaped_committed"], lambda n: n + 1)),
     ("json-prior-span", edit_results("explain", ["breadth_prior", "push1d.span.blind_bayes.lo"], bump)),
+    ("json-physx-coverage", edit_results("explain", ["missing", "physx_episode_coverage.deployed"], lambda v: v - 0.01)),
+    ("json-cost-of-calibration", edit_results("explain", ["missing", "cost_of_calibration.set"],
+                                              lambda v: [v[0] + 0.0123, *v[1:]])),
     ("deleted-draw-cells-rehashed", delete_stored("draw_cells.parquet")),
     ("deleted-schedules-rehashed", delete_stored("schedule_episodes.parquet")),
 ]
