@@ -19,7 +19,7 @@ import pandas as pd
 import yaml
 
 from probecommit.audit.conformal import simultaneous_threshold
-from probecommit.audit.stats import cluster_bootstrap_mean, paired_bootstrap, percentile_interval, resample_counts
+from probecommit.audit.stats import paired_bootstrap, percentile_interval, resample_counts
 from probecommit.runner.replay import load_run, replay_episodes
 from probecommit.studies.explain import draw_audit, draw_faults, generator, more, resplits, runs, stored, surprise_variants
 from probecommit.studies.explain import gru as gru_study
