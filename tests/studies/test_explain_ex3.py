@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 from probecommit.runner.config import config_data, parse_config
+from probecommit.runner.replay import load_run
 from probecommit.runner.study import run_study
 from probecommit.studies import claims
 from probecommit.studies.explain import pybullet_x
@@ -50,8 +51,12 @@ def test_the_emulated_scene_at_the_stored_runs_boundary_escapes_on_the_same_epis
     data["belief"] = {**data["belief"], "particles": 128}
     data["simulator"] = {**data["simulator"], "engine": "analytic", "boundary_offset": 0.929, "capture_scale": 1.0}
     run_study(parse_config(data), tmp_path / "engines" / "runs" / "pybullet_B_test_random", workers=1, threads=1)
-    out = pybullet_x.run(tmp_path, tmp_path / "explain" / "runs", dict(resamples=50, seed=0), draws=2)
+    rows: dict = {}
+    out = pybullet_x.run(tmp_path, tmp_path / "explain" / "runs", dict(resamples=50, seed=0), draws=2, stored_rows=rows)
     assert out["same_escape_as_stored_every_k"] == 1
+    stored = load_run(tmp_path / "engines" / "runs" / "pybullet_B_test_random").episodes
+    again = pybullet_x.stored_keys(stored, rows[pybullet_x.STORED], int(load_run(tmp_path / "engines" / "runs" / "pybullet_B_test_random").config.probes.budget), dict(resamples=50, seed=0))
+    assert again == {k: out[k] for k in again} and len(rows[pybullet_x.STORED]) == 2
     assert out["capture_moves_readings"] == 0 and out["capture_moves_escape_k8"] == 0.0
     assert out["emulated.escape_k8"] == out["stored.escape_k8"]
     assert out["draws.escape_k8.count"] == 2

@@ -450,11 +450,7 @@ def explain(folder: Path, results: dict[str, Any]) -> Recomputed:
     _cost_copies(folder, out)
     engines = folder.parent / "engines" / "engine_episodes.parquet"
     if engines.is_file():
-        ep = pd.read_parquet(engines)
-        k = int(json.loads((folder.parent / "insertion" / "results.json").read_text())["results"]["setup"]["k_random"])
-        for key, value in stored.physx_coverage_keys(ep[ep["engine"] == "sapien"], k).items():
-            out.values[f"missing.{key}"] = value
-            out.sources[f"missing.{key}"] = "engines/engine_episodes.parquet"
+        _engine_keys(folder, results, pd.read_parquet(engines), out)
     if (folder / EXPLAIN_RIG[0]).is_file() and (folder / EXPLAIN_RIG[1]).is_file():
         from probecommit.studies.explain import rig
 
@@ -500,6 +496,28 @@ def _schedules(folder: Path, results: dict[str, Any], out: Recomputed) -> None:
         out.values.update({f"{group}.{key}": v for key, v in values.items()})
         out.sources.update(dict.fromkeys((f"{group}.{key}" for key in values),
                                          f"insertion/episodes.parquet, faults_episodes.parquet and {stored.SCHEDULES}"))
+
+
+def _engine_keys(folder: Path, results: dict[str, Any], ep: pd.DataFrame, out: Recomputed) -> None:
+    """The PhysX coverage (``stored.physx_coverage_keys``) and PyBullet's stored escapes with the spread of the
+    stored per-draw escapes (``pybullet_x.stored_keys``), from the engines study's stored episodes."""
+    from probecommit.studies.explain import pybullet_x, stored
+
+    setup = json.loads((folder.parent / "insertion" / "results.json").read_text())["results"]["setup"]
+    k = int(setup["k_random"])
+    for key, value in stored.physx_coverage_keys(ep[ep["engine"] == "sapien"], k).items():
+        out.values[f"missing.{key}"] = value
+        out.sources[f"missing.{key}"] = "engines/engine_episodes.parquet"
+    deployed = ep[(ep["engine"] == "pybullet") & (ep["variant"] == "deployed")]
+    published = "draws.escape_k8.count" in results.get("pybullet_escape", {})
+    if published and not (folder / pybullet_x.STORED).is_file():  # published draws need their stored rows
+        out.consistency.append((False, f"explain/{pybullet_x.STORED}: missing (the per-draw escapes "
+                                       "pybullet_escape.draws.escape_k8.* are recomputed from)"))
+    if len(deployed) and (folder / pybullet_x.STORED).is_file():
+        boot = dict(resamples=int(setup["bootstrap"]["resamples"]), seed=int(setup["bootstrap"]["seed"]))
+        for key, value in pybullet_x.stored_keys(deployed, pd.read_parquet(folder / pybullet_x.STORED), k, boot).items():
+            out.values[f"pybullet_escape.{key}"] = value
+        out.sources["pybullet_escape"] = f"engines/engine_episodes.parquet and {pybullet_x.STORED}"
 
 
 def _cost_copies(folder: Path, out: Recomputed) -> None:
@@ -591,7 +609,8 @@ RECOMPUTED = {
     "explain": "the margin curves' cells; the fresh draws' summaries; Table III's and the fault harness's cells over "
                "fresh draws; the schedules' pools, failures and cover surprise AUCs; the boundary fault, Test C, "
                "whole-cluster escapes and strata; the prior sweep's rows, prices and spans; the mixture against the "
-               "filter's noise; the simulated rig redrawn; the PhysX coverage; the cost of calibration",
+               "filter's noise; the simulated rig redrawn; the PhysX coverage; the cost of calibration; PyBullet's stored "
+               "escapes and the emulated scene's escape over fresh draws",
 }
 TRACED_ONLY = {
     "insertion": "the stored rows themselves (episodes, re-executed commits, replays); the re-split rows; the cover "
@@ -601,7 +620,7 @@ TRACED_ONLY = {
     "gru": "the training loss",
     "explain": "the stored rows themselves; the random gates, thresholds and margins (re-commits), the calibration "
                "and re-splits under the paper's schedule, surprise variants, the generator redraws, "
-               "and the groups gru, physx_capture, robust, engines_x, searches, pybullet_escape, grasp_signs "
+               "PyBullet's emulated-scene keys, and the groups gru, physx_capture, robust, engines_x, searches, grasp_signs "
                "(docs/verify.md lists each); explain.md is rendered again from results.json",
     "figures": "Fig. 1a/1c and Fig. 3 (scene renders from run directories); Fig. 2 is drawn again from code",
     "setup": "Table I (rendered again from the registry and frozen configs; its counts are the configs', not a "

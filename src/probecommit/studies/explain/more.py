@@ -38,7 +38,8 @@ def run_ex3(job: Any) -> None:
     """The third helper's steps (E45..)."""
     job.progress("explain: PyBullet's reported scene properties", 0, 1)
     draws = job.cfg["pybullet_draws_quick" if job.quick else "pybullet_draws"]
-    job.res["pybullet_escape"].update(pybullet_x.run(job.root, job.runs, job.boot, job.workers, draws=draws))
+    job.res["pybullet_escape"].update(pybullet_x.run(job.root, job.runs, job.boot, job.workers, draws=draws,
+                                                         stored_rows=job.stored))
     job.progress("explain: the mixture against the filter's own noise", 0, 1)
     r, seeds = job.p.robust, job.cfg["mixture_filter_seeds_quick" if job.quick else "mixture_filter_seeds"]
     base = job.load("faults_base")
