@@ -17,3 +17,16 @@ def publication(tmp_path_factory) -> Path:
     done = paper.reproduce(["insertion", "breadth", "cost", "robot"], base / "runs", quick=True)
     publish(done["targets"], base / "pub", timing=done)
     return base / "pub"
+
+
+@pytest.fixture(scope="session")
+def explain_publication(tmp_path_factory) -> Path:
+    """``reproduce insertion breadth cost explain --quick`` (engines and GRU come with explain) published into a
+    scratch folder: the explain step's stored tables beside its results."""
+    from probecommit.report import paper
+    from probecommit.report.publish import publish
+
+    base = tmp_path_factory.mktemp("scratch_explain")
+    done = paper.reproduce(["insertion", "breadth", "cost", "explain"], base / "runs", quick=True)
+    publish(done["targets"], base / "pub", timing=done)
+    return base / "pub"

@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 from probecommit.runner.config import config_data, parse_config
+from probecommit.runner.replay import load_run
 from probecommit.runner.study import run_study
 from probecommit.studies import claims
 from probecommit.studies.explain import pybullet_x
@@ -50,8 +51,12 @@ def test_the_emulated_scene_at_the_stored_runs_boundary_escapes_on_the_same_epis
     data["belief"] = {**data["belief"], "particles": 128}
     data["simulator"] = {**data["simulator"], "engine": "analytic", "boundary_offset": 0.929, "capture_scale": 1.0}
     run_study(parse_config(data), tmp_path / "engines" / "runs" / "pybullet_B_test_random", workers=1, threads=1)
-    out = pybullet_x.run(tmp_path, tmp_path / "explain" / "runs", dict(resamples=50, seed=0), draws=2)
+    rows: dict = {}
+    out = pybullet_x.run(tmp_path, tmp_path / "explain" / "runs", dict(resamples=50, seed=0), draws=2, stored_rows=rows)
     assert out["same_escape_as_stored_every_k"] == 1
+    stored = load_run(tmp_path / "engines" / "runs" / "pybullet_B_test_random").episodes
+    again = pybullet_x.stored_keys(stored, rows[pybullet_x.STORED], int(load_run(tmp_path / "engines" / "runs" / "pybullet_B_test_random").config.probes.budget), dict(resamples=50, seed=0))
+    assert again == {k: out[k] for k in again} and len(rows[pybullet_x.STORED]) == 2
     assert out["capture_moves_readings"] == 0 and out["capture_moves_escape_k8"] == 0.0
     assert out["emulated.escape_k8"] == out["stored.escape_k8"]
     assert out["draws.escape_k8.count"] == 2
@@ -94,7 +99,8 @@ def test_reseeded_replay_at_the_same_seed_is_the_stored_run_and_another_seed_dif
     stored = mixture_x._final(base.episodes, k)[cols].reset_index(drop=True)
     assert mixture_x._final(same, k)[cols].reset_index(drop=True).equals(stored)
     mix = {"likelihood": "mixture", "epsilon": 0.01, "mixture_low": -17.0, "mixture_high": 2.0}
-    out = mixture_x.run(base, mix, [base.config.seed, base.config.seed], k)
+    out, rows = mixture_x.run(base, mix, [base.config.seed, base.config.seed], k)
+    assert mixture_x.summary(rows) == out and len(rows) == 2
     assert out["right.failure.sd"] == 0.0 and out["reseeded_changed_aims.mean"] == 0.0
     assert out["right.failure.mean"] == pytest.approx(float(stored["realized"].mean()))
 

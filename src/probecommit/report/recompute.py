@@ -172,6 +172,7 @@ def _gates(commits: pd.DataFrame, runs: dict[str, pd.DataFrame], results: dict[s
     result = gates_from_commits(commits, runs[cal_run], alpha, budgets, **boot)
     out.values["gates.summary"] = result.summary.to_dict("records")
     out.values.update({f"gates.info.{key}": result.info[key] for key in ("threshold", "gamma", "gamma_satisfied", "alpha")})
+    out.values["gates.info.surprise"] = result.info["surprise"].to_dict("records")
     out.tables["gates_curves.parquet"] = result.curves
     out.table_sources["gates_curves.parquet"] = COMMITS
     k = int(results["setup"]["k_random"])
@@ -424,6 +425,153 @@ def beyond(folder: Path, results: dict[str, Any]) -> Recomputed:
     return out
 
 
+# ----------------------------------------------------------------------------- explain
+
+
+def explain(folder: Path, results: dict[str, Any]) -> Recomputed:
+    """The explain keys that summarize stored rows (``studies.explain.stored``: the functions the explain step
+    fills them with): the margin curves' cells, the fresh draws' summaries, Table III's and the fault
+    harness's cells over fresh draws."""
+    from probecommit.studies.explain import stored
+
+    out = Recomputed()
+    for group, name, summarize in (("margin_per_gamma", stored.MARGINS, stored.margin_keys),
+                                   ("instance_generator", stored.DRAWS, stored.draws_keys),
+                                   ("instance_generator", stored.CELLS, stored.cells_keys)):
+        if not (folder / name).is_file():  # a missing stored table is a failure of its own (``STORED_TABLES``)
+            continue
+        for key, value in summarize(pd.read_parquet(folder / name)).items():
+            out.values[f"{group}.{key}"] = value
+            out.sources[f"{group}.{key}"] = name
+    if (folder / stored.SCHEDULES).is_file():
+        _schedules(folder, results, out)
+    if (folder / EXPLAIN_BREADTH).is_file():
+        _breadth_prior(folder, results, out)
+    _cost_copies(folder, out)
+    engines = folder.parent / "engines" / "engine_episodes.parquet"
+    if engines.is_file():
+        _engine_keys(folder, results, pd.read_parquet(engines), out)
+    if (folder / EXPLAIN_RIG[0]).is_file() and (folder / EXPLAIN_RIG[1]).is_file():
+        from probecommit.studies.explain import rig
+
+        setup = json.loads((folder.parent / "insertion" / "results.json").read_text())["results"]["setup"]["bootstrap"]
+        boot = dict(resamples=int(setup["resamples"]), seed=int(setup["seed"]))
+        for key, value in rig.keys(*(pd.read_parquet(folder / name) for name in EXPLAIN_RIG), boot).items():
+            out.values[f"rig_redraws.{key}"] = value
+        out.sources["rig_redraws"] = " and ".join(EXPLAIN_RIG)
+    if (folder / EXPLAIN_MIXTURE).is_file():
+        from probecommit.studies.explain.mixture_x import summary
+
+        for key, value in summary(pd.read_parquet(folder / EXPLAIN_MIXTURE)).items():
+            out.values[f"mixture_noise.{key}"] = value
+        out.sources["mixture_noise"] = EXPLAIN_MIXTURE
+    from probecommit.studies.explain.study import plain
+
+    out.values = {key: plain(value) for key, value in out.values.items()}  # as the explain step publishes it
+    return out
+
+
+def _schedules(folder: Path, results: dict[str, Any], out: Recomputed) -> None:
+    """The schedules' pools, failures and surprise AUCs from the stored schedule rows (``stored.pool_keys``); the
+    boundary fault, whole-cluster and Test C escapes and the test runs' strata from the insertion study's
+    stored episodes and fault episodes (``stored.harness_keys``), with the generator's expected share as
+    published (traced: it is a property of fresh instance draws)."""
+    from probecommit.studies.explain import stored
+    from probecommit.studies.explain.study import load_explain_config
+
+    insertion = folder.parent / "insertion"
+    setup = json.loads((insertion / "results.json").read_text())["results"]["setup"]
+    schedules = pd.read_parquet(folder / stored.SCHEDULES)
+    for group, values in stored.pool_keys(schedules, setup["bootstrap"]).items():
+        out.values.update({f"{group}.{key}": v for key, v in values.items()})
+        out.sources.update(dict.fromkeys((f"{group}.{key}" for key in values), stored.SCHEDULES))
+    ep = pd.read_parquet(insertion / "episodes.parquet")
+    runs = {name: part.drop(columns="run").reset_index(drop=True) for name, part in ep.groupby("run", sort=False)}
+    expected = results.get("instance_generator", {}).get("B_test_random.expected_share")
+    keys = stored.harness_keys(pd.read_parquet(insertion / "faults_episodes.parquet"), runs, schedules,
+                               k_cover=len(setup["cover_schedule"]), k_random=int(setup["k_random"]),
+                               edge=float(load_explain_config()["stratum_edge_mm"]), boot=setup["bootstrap"],
+                               expected=0.3 if expected is None else float(expected))
+    for group, values in keys.items():
+        out.values.update({f"{group}.{key}": v for key, v in values.items()})
+        out.sources.update(dict.fromkeys((f"{group}.{key}" for key in values),
+                                         f"insertion/episodes.parquet, faults_episodes.parquet and {stored.SCHEDULES}"))
+
+
+def _engine_keys(folder: Path, results: dict[str, Any], ep: pd.DataFrame, out: Recomputed) -> None:
+    """The PhysX coverage (``stored.physx_coverage_keys``) and PyBullet's stored escapes with the spread of the
+    stored per-draw escapes (``pybullet_x.stored_keys``), from the engines study's stored episodes."""
+    from probecommit.studies.explain import pybullet_x, stored
+
+    setup = json.loads((folder.parent / "insertion" / "results.json").read_text())["results"]["setup"]
+    k = int(setup["k_random"])
+    for key, value in stored.physx_coverage_keys(ep[ep["engine"] == "sapien"], k).items():
+        out.values[f"missing.{key}"] = value
+        out.sources[f"missing.{key}"] = "engines/engine_episodes.parquet"
+    deployed = ep[(ep["engine"] == "pybullet") & (ep["variant"] == "deployed")]
+    published = "draws.escape_k8.count" in results.get("pybullet_escape", {})
+    if published and not (folder / pybullet_x.STORED).is_file():  # published draws need their stored rows
+        out.consistency.append((False, f"explain/{pybullet_x.STORED}: missing (the per-draw escapes "
+                                       "pybullet_escape.draws.escape_k8.* are recomputed from)"))
+    if len(deployed) and (folder / pybullet_x.STORED).is_file():
+        boot = dict(resamples=int(setup["bootstrap"]["resamples"]), seed=int(setup["bootstrap"]["seed"]))
+        for key, value in pybullet_x.stored_keys(deployed, pd.read_parquet(folder / pybullet_x.STORED), k, boot).items():
+            out.values[f"pybullet_escape.{key}"] = value
+        out.sources["pybullet_escape"] = f"engines/engine_episodes.parquet and {pybullet_x.STORED}"
+
+
+def _cost_copies(folder: Path, out: Recomputed) -> None:
+    """``missing.cost_of_calibration.*``: Table IV's paired differences recomputed from the insertion study's
+    stored commits and episodes (``_calibrated``), keyed as the explain step keys its copy (``cost_keys``)."""
+    from probecommit.studies.explain.study import cost_keys
+
+    insertion = folder.parent / "insertion"
+    if not (insertion / COMMITS).is_file():
+        return
+    from probecommit.runner.calibration import calibration_from_tables
+    from probecommit.studies.insertion import CALIBRATIONS
+
+    setup = json.loads((insertion / "results.json").read_text())["results"]["setup"]
+    ep = pd.read_parquet(insertion / "episodes.parquet")
+    runs = {name: part.drop(columns="run").reset_index(drop=True) for name, part in ep.groupby("run", sort=False)}
+    commits = pd.read_parquet(insertion / COMMITS)
+    cal_run, test_run = CALIBRATIONS["cover"]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # a margin search that settles on the grid's end (quick runs)
+        cal = calibration_from_tables(commits[commits["calibration"] == "cover"].reset_index(drop=True), runs[cal_run],
+                                      runs[test_run], float(setup["alpha"]), CALIBRATION_BUDGETS["cover"],
+                                      resamples=int(setup["bootstrap"]["resamples"]), seed=int(setup["bootstrap"]["seed"]))
+    for key, value in cost_keys(cal.cost_differences.to_dict("records")).items():
+        out.values[f"missing.{key}"] = value
+    out.sources["missing.cost_of_calibration"] = f"insertion/{COMMITS} and insertion/episodes.parquet"
+
+
+def _breadth_prior(folder: Path, results: dict[str, Any], out: Recomputed) -> None:
+    """Table II's rows and prices at each prior width from the stored sweep rows, with the frozen row (s = 1)
+    from the published breadth and cost studies where the explain step used it (a full run), and the span
+    summary (``studies.explain.breadth.sweep_keys``); the bootstrap settings are the insertion study's (the
+    protocol's, which the explain step uses)."""
+    from probecommit.studies.explain.breadth import frozen_row_from, sweep_keys
+
+    setup = json.loads((folder.parent / "insertion" / "results.json").read_text())["results"]["setup"]["bootstrap"]
+    stored = pd.read_parquet(folder / EXPLAIN_BREADTH)
+    published = results.get("breadth_prior", {})
+    frozen = {str(f): frozen_row_from(folder.parent / "breadth" / "results.json", folder.parent / "cost" / "results.json",
+                                      str(f)) if f"{f}.s1.blind_bayes" in published else None
+              for f in stored["family"].unique()}
+    for key, value in sweep_keys(stored, frozen, dict(resamples=int(setup["resamples"]), seed=int(setup["seed"]))).items():
+        out.values[f"breadth_prior.{key}"] = value
+    out.sources["breadth_prior"] = f"{EXPLAIN_BREADTH} (and breadth/, cost/results.json for s = 1)"
+
+
+#: The explain step's stored prior-sweep rows (``studies.explain.breadth.STORED``).
+EXPLAIN_BREADTH = "breadth_prior_episodes.parquet"
+#: The explain step's stored per-seed mixture rows (``studies.explain.mixture_x.STORED``).
+EXPLAIN_MIXTURE = "mixture_noise_seeds.parquet"
+#: The explain step's stored rig redraws (``studies.explain.rig.STORED_SESSIONS``, ``STORED_BOUNDARY``).
+EXPLAIN_RIG = ("rig_redraws_sessions.parquet", "rig_redraws_boundary.parquet")
+
+
 #: The stored tables each study's numbers are recomputed from: a publication without one fails verify
 #: (deleting a table and re-hashing the manifest would otherwise turn its numbers into traced ones).
 STORED_TABLES: dict[str, tuple[str, ...]] = {
@@ -434,11 +582,14 @@ STORED_TABLES: dict[str, tuple[str, ...]] = {
     "robot": ("robot_episodes.parquet", SWEEPS),
     "gru": ("gru_episodes.parquet",),
     "beyond": ("beyond_episodes.parquet",),
+    "explain": ("margin_per_gamma.parquet", "fresh_draws.parquet", "draw_cells.parquet", EXPLAIN_BREADTH,
+                "schedule_episodes.parquet", EXPLAIN_MIXTURE, *EXPLAIN_RIG),
 }
 
 #: Study folder -> its recomputation.
 STUDIES: dict[str, Callable[[Path, dict[str, Any]], Recomputed]] = {
-    "insertion": insertion, "breadth": breadth, "cost": cost, "engines": engines, "robot": robot, "gru": gru, "beyond": beyond}
+    "insertion": insertion, "breadth": breadth, "cost": cost, "engines": engines, "robot": robot, "gru": gru, "beyond": beyond,
+    "explain": explain}
 
 #: What each study's recomputation covers, and what is traced only (for the report and the docs).
 RECOMPUTED = {
@@ -455,15 +606,23 @@ RECOMPUTED = {
              "resolved and holds-to boundary sizes",
     "gru": "every number of the GRU table but the training loss",
     "beyond": "the plateau, moves and adaptive tables",
+    "explain": "the margin curves' cells; the fresh draws' summaries; Table III's and the fault harness's cells over "
+               "fresh draws; the schedules' pools, failures and cover surprise AUCs; the boundary fault, Test C, "
+               "whole-cluster escapes and strata; the prior sweep's rows, prices and spans; the mixture against the "
+               "filter's noise; the simulated rig redrawn; the PhysX coverage; the cost of calibration; PyBullet's stored "
+               "escapes and the emulated scene's escape over fresh draws",
 }
 TRACED_ONLY = {
     "insertion": "the stored rows themselves (episodes, re-executed commits, replays); the re-split rows; the cover "
-                 "search's candidates; the scan offsets; the gates' surprise table",
+                 "search's candidates; the scan offsets",
     "engines": "the engine-query counts",
     "robot": "the replay reproduction fraction",
     "gru": "the training loss",
-    "explain": "every number (they re-commit or replay from run directories the publication does not hold); "
-               "explain.md is rendered again from results.json",
+    "explain": "the stored rows themselves; the random gates, thresholds and margins (re-commits), the calibration "
+               "and re-splits under the paper's schedule, surprise variants, the generator redraws, "
+               "PyBullet's emulated-scene keys, and the groups gru, physx_capture, robust, engines_x, searches, grasp_signs "
+               "(docs/verify.md lists each); explain.md is rendered again from results.json",
     "figures": "Fig. 1a/1c and Fig. 3 (scene renders from run directories); Fig. 2 is drawn again from code",
-    "setup": "Table I (rendered again from the registry)",
+    "setup": "Table I (rendered again from the registry and frozen configs; its counts are the configs', not a "
+             "quick run's stored rows)",
 }

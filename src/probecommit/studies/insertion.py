@@ -538,7 +538,7 @@ class InsertionReproduction:
         path = self.render.decision_figure(coverage, result, self.out / "fig_6_decision.png")
         self.rep.figures["commit_gates"] = str(path)
         summary = result.summary
-        self.rep.results["gates"] = {"summary": summary.to_dict("records"), "info": result.info}
+        self.rep.results["gates"] = {"summary": summary.to_dict("records"), "info": gates_info(result.info)}
         write_with(self.out / "gates_curves.parquet", result.curves.to_parquet)
         self.write_table("gates")
 
@@ -600,6 +600,15 @@ class InsertionReproduction:
                    "figures": self.rep.figures}
         write_text(self.out / "results.json", json.dumps(payload, indent=2, default=_json_default))
         return self.rep
+
+
+def gates_info(info: dict[str, Any]) -> dict[str, Any]:
+    """The gates' ``info`` as published: the surprise AUC table (one row per budget) as records, an AUC the
+    data leave undefined (no escape at a budget) ``None`` (a DataFrame used to reach results.json as ``{}``)."""
+    table = info["surprise"]
+    records = [{k: (None if isinstance(v, float) and v != v else v) for k, v in row.items()}
+               for row in table.to_dict("records")]
+    return {**info, "surprise": records}
 
 
 def _json_default(o: Any) -> Any:

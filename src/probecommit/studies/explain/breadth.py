@@ -19,6 +19,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+import pandas as pd
 
 from probecommit.runner.config import config_data, parse_config
 from probecommit.studies.breadth import FAMILY_K, breadth_row, budget_curve, paper_config, quick_config
@@ -65,20 +66,36 @@ def row_and_prices(episodes: Any, family: str, boot: dict[str, Any]) -> dict[str
     return out
 
 
-def sweep_family(family: str, scales: list[float], runs: Path, boot: dict[str, Any], *, engine: str | None,
-                 repeats: int, quick: bool) -> dict[float, dict[str, float]]:
-    """Each scale's row for one family (runs under ``runs/breadth_prior/``, resumed when complete)."""
+#: The stored sweep rows (``explain/results/``): what each scale's row and prices are computed from.
+STORED = "breadth_prior_episodes.parquet"
+#: The episode columns a Table II row and its prices read (``breadth_row``, ``budget_curve``).
+ROW_COLUMNS = ("instance_id", "repeat", "k", "method", "realized", "status")
+
+
+def compact(episodes: pd.DataFrame, family: str, scale: float) -> pd.DataFrame:
+    """The rows a Table II row and its prices read: the blind arms at k = 0, Probe-Robust at the row's
+    budget and at k = 2 and 5 (the prices), the columns ``ROW_COLUMNS``, tagged with family and scale."""
+    probe_k = {2, 5, FAMILY_K.get(family, 5)}
+    keep = ((episodes["method"].isin(["blind_bayes", "blind_robust"]) & (episodes["k"] == 0))
+            | ((episodes["method"] == "probe_robust") & episodes["k"].isin(probe_k)))
+    rows = episodes.loc[keep, [c for c in ROW_COLUMNS if c in episodes]].reset_index(drop=True)
+    return rows.assign(family=family, scale=float(scale))
+
+
+def sweep_family(family: str, scales: list[float], runs: Path, *, engine: str | None, repeats: int,
+                 quick: bool) -> pd.DataFrame:
+    """Each scale's stored rows for one family (runs under ``runs/breadth_prior/``, resumed when complete)."""
     from probecommit.runner.study import run_study
 
     base = paper_config(family)
     if quick:
         base = quick_config(base)
-    out = {}
+    out = []
     for s in scales:
         config = scaled_config(base, s, engine=engine, repeats=None if quick else repeats)
         result = run_study(config, runs / "breadth_prior" / config.name, workers=1, threads=1)
-        out[s] = row_and_prices(result.episodes, family, boot)
-    return out
+        out.append(compact(result.episodes, family, s))
+    return pd.concat(out, ignore_index=True)
 
 
 def span_summary(rows: dict[float, dict[str, float]], paper: dict[str, float]) -> dict[str, float]:
@@ -121,10 +138,16 @@ def paper_cells(family: str) -> dict[str, float]:
 
 
 def frozen_row(root: Path, family: str) -> dict[str, float] | None:
-    """The frozen study's row (s = 1, the paper's instance counts) and prices, when published under ``root``."""
+    """The frozen study's row (s = 1, the paper's instance counts) and prices, when reproduced under ``root``."""
+    return frozen_row_from(root / "breadth" / "results" / "results.json", root / "cost" / "results" / "results.json",
+                           family)
+
+
+def frozen_row_from(table: Path, cost: Path, family: str) -> dict[str, float] | None:
+    """The frozen study's row and prices from the breadth and cost studies' ``results.json`` (a reproduction's
+    or a publication's), or None when the breadth study has no such row."""
     import json
 
-    table, cost = root / "breadth" / "results" / "results.json", root / "cost" / "results" / "results.json"
     if not table.is_file():
         return None
     row = json.loads(table.read_text())["results"]["table_II"].get(family)
@@ -137,20 +160,31 @@ def frozen_row(root: Path, family: str) -> dict[str, float] | None:
     return out
 
 
-def run(root: Path, runs: Path, cfg: dict[str, Any], boot: dict[str, Any], quick: bool) -> dict[str, Any]:
-    """Every family's prior sweep and its span summary; keys of ``explain:results.breadth_prior``."""
+def sweep_keys(stored: pd.DataFrame, frozen: dict[str, dict[str, float] | None], boot: dict[str, Any]) -> dict[str, Any]:
+    """Keys of ``explain:results.breadth_prior`` from the stored sweep rows (``STORED``) and each family's
+    frozen row (None: none, as in a quick run): each scale's row and prices, the span summary, the widths.
+    The explain step and ``verify`` both call this."""
+    out: dict[str, Any] = {"scales": [float(s) for s in stored["scale"].unique()]}
+    for family, part in stored.groupby("family", sort=False):
+        rows = {float(s): row_and_prices(one, str(family), boot) for s, one in part.groupby("scale", sort=False)}
+        if frozen.get(str(family)) is not None:
+            rows[1.0] = frozen[str(family)]
+        for s, row in rows.items():
+            out.update({f"{family}.s{s:g}.{k}": v for k, v in row.items()})
+        out.update({f"{family}.{k}": v for k, v in span_summary(rows, paper_cells(str(family))).items()})
+        out[f"{family}.widths"] = len(rows)
+    return out
+
+
+def run(root: Path, runs: Path, cfg: dict[str, Any], boot: dict[str, Any], quick: bool) -> tuple[dict[str, Any], pd.DataFrame]:
+    """Every family's prior sweep and its span summary: the keys of ``explain:results.breadth_prior`` and the
+    stored rows they are computed from (``STORED``)."""
     suffix = "_quick" if quick else ""
     scales = [float(s) for s in cfg[f"breadth_prior_scales{suffix}"]]
     engines = cfg.get("breadth_prior_engines", {})
-    out: dict[str, Any] = {"scales": scales}
-    for family in cfg[f"breadth_prior_families{suffix}"]:
-        rows = sweep_family(family, scales, runs, boot, engine=engines.get(family),
-                            repeats=int(cfg["breadth_prior_repeats"]), quick=quick)
-        frozen = None if quick else frozen_row(root, family)
-        if frozen is not None:
-            rows[1.0] = frozen
-        for s, row in rows.items():
-            out.update({f"{family}.s{s:g}.{k}": v for k, v in row.items()})
-        out.update({f"{family}.{k}": v for k, v in span_summary(rows, paper_cells(family)).items()})
-        out[f"{family}.widths"] = len(rows)
-    return out
+    families = cfg[f"breadth_prior_families{suffix}"]
+    stored = pd.concat([sweep_family(family, scales, runs, engine=engines.get(family),
+                                     repeats=int(cfg["breadth_prior_repeats"]), quick=quick) for family in families],
+                       ignore_index=True)
+    frozen = {family: None if quick else frozen_row(root, family) for family in families}
+    return sweep_keys(stored, frozen, boot), stored

@@ -41,24 +41,36 @@ def _summary(prefix: str, values: np.ndarray) -> dict[str, float]:
             f"{prefix}.p025": float(np.quantile(values, 0.025)), f"{prefix}.p975": float(np.quantile(values, 0.975))}
 
 
-def run(base: LoadedRun, mixture: dict[str, Any], seeds: list[int], k: int) -> dict[str, Any]:
-    """Keys of ``explain:results.mixture_noise``: the right model and the mixture under each filter seed."""
-    right, mixed, changed, changed_seed = [], [], [], []
+#: The stored per-seed rows (``explain/results/``): what the summary is computed from.
+STORED = "mixture_noise_seeds.parquet"
+
+
+def run(base: LoadedRun, mixture: dict[str, Any], seeds: list[int], k: int) -> tuple[dict[str, Any], pd.DataFrame]:
+    """Keys of ``explain:results.mixture_noise`` (``summary``) and the per-seed rows they summarize: the right
+    model and the mixture under each filter seed."""
+    rows = []
     frozen = _final(base.episodes, k)
     for seed in seeds:
         loaded = reseeded(base, seed)
         r = _final(replay_episodes(loaded, None, chunk_instances=48)[0], k)
         m = _final(replay_episodes(loaded, {"belief": mixture}, chunk_instances=48)[0], k)
-        right.append(float(r["realized"].mean()))
-        mixed.append(float(m["realized"].mean()))
-        changed.append(float((r["action"].to_numpy() != m["action"].to_numpy()).mean()))
-        changed_seed.append(float((r["action"].to_numpy() != frozen["action"].to_numpy()).mean()))
-    paired = np.array(mixed) - np.array(right)
-    out: dict[str, Any] = {"seeds": len(seeds), "epsilon": float(mixture["epsilon"])}
-    out.update(_summary("right.failure", np.array(right)))
-    out.update(_summary("mixture.failure", np.array(mixed)))
-    out.update(_summary("paired_cost", paired))
-    out.update(_summary("unpaired_cost", unpaired_differences(mixed, right)))
-    out["paired_changed_aims.mean"] = float(np.mean(changed))
-    out["reseeded_changed_aims.mean"] = float(np.mean(changed_seed))
+        rows.append({"seed": int(seed), "epsilon": float(mixture["epsilon"]), "right": float(r["realized"].mean()),
+                     "mixed": float(m["realized"].mean()),
+                     "changed": float((r["action"].to_numpy() != m["action"].to_numpy()).mean()),
+                     "changed_seed": float((r["action"].to_numpy() != frozen["action"].to_numpy()).mean())})
+    table = pd.DataFrame(rows, columns=["seed", "epsilon", "right", "mixed", "changed", "changed_seed"])
+    return summary(table), table
+
+
+def summary(table: pd.DataFrame) -> dict[str, Any]:
+    """The per-seed rows summarized (the explain step and ``verify`` both call this): each arm's failure, the
+    paired and the unpaired cost over seeds, and the shares of changed aims."""
+    right, mixed = table["right"].to_numpy(float), table["mixed"].to_numpy(float)
+    out: dict[str, Any] = {"seeds": len(table), "epsilon": float(table["epsilon"].iloc[0])}
+    out.update(_summary("right.failure", right))
+    out.update(_summary("mixture.failure", mixed))
+    out.update(_summary("paired_cost", mixed - right))
+    out.update(_summary("unpaired_cost", unpaired_differences(list(mixed), list(right))))
+    out["paired_changed_aims.mean"] = float(np.mean(table["changed"].to_numpy(float)))
+    out["reseeded_changed_aims.mean"] = float(np.mean(table["changed_seed"].to_numpy(float)))
     return out

@@ -25,9 +25,12 @@ def run(job: Any) -> None:
     s.update({f"robust.{k}": v for k, v in searches.robust_stability(job.load("dev_random"), job.p.robust, paper,
                                                                       job.boot).items()})
     job.progress("explain: the simulated rig redrawn", 0, 1)
-    job.res["rig_redraws"].update(rig.run(job.runs, job.cfg, job.boot, job.quick))
+    keys, tables = rig.run(job.runs, job.cfg, job.boot, job.quick)
+    job.res["rig_redraws"].update(keys)
+    job.stored.update(tables)
     job.progress("explain: Table II's families over the prior's width", 0, 1)
-    job.res["breadth_prior"].update(breadth.run(job.root, job.runs, job.cfg, job.boot, job.quick))
+    keys, job.tables["breadth_prior"] = breadth.run(job.root, job.runs, job.cfg, job.boot, job.quick)
+    job.res["breadth_prior"].update(keys)
     run_ex3(job)
 
 
@@ -35,13 +38,15 @@ def run_ex3(job: Any) -> None:
     """The third helper's steps (E45..)."""
     job.progress("explain: PyBullet's reported scene properties", 0, 1)
     draws = job.cfg["pybullet_draws_quick" if job.quick else "pybullet_draws"]
-    job.res["pybullet_escape"].update(pybullet_x.run(job.root, job.runs, job.boot, job.workers, draws=draws))
+    job.res["pybullet_escape"].update(pybullet_x.run(job.root, job.runs, job.boot, job.workers, draws=draws,
+                                                         stored_rows=job.stored))
     job.progress("explain: the mixture against the filter's own noise", 0, 1)
     r, seeds = job.p.robust, job.cfg["mixture_filter_seeds_quick" if job.quick else "mixture_filter_seeds"]
     base = job.load("faults_base")
     mixture = {"likelihood": "mixture", "epsilon": value("T42-robust-chosen.mixture"),
                "mixture_low": r.mixture_range[0], "mixture_high": r.mixture_range[1]}
-    job.res["mixture_noise"].update(mixture_x.run(base, mixture, [base.config.seed + i for i in range(1, seeds + 1)],
-                                                  job.p.budgets["random"]))
+    keys, job.tables["mixture_noise"] = mixture_x.run(base, mixture, [base.config.seed + i for i in range(1, seeds + 1)],
+                                                      job.p.budgets["random"])
+    job.res["mixture_noise"].update(keys)
     job.progress("explain: grasp on the model-exact scene", 0, 1)
     job.res["grasp_signs"].update(grasp_x.run(job.runs, job.quick, job.workers))

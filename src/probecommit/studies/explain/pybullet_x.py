@@ -23,6 +23,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+import pandas as pd
 
 from probecommit.audit.stats import cluster_bootstrap_mean
 from probecommit.runner.config import config_data, parse_config
@@ -64,9 +65,27 @@ def draw_range(values: list[float]) -> dict[str, float]:
             "p975": float(np.quantile(v, 0.975))}
 
 
+#: The stored per-draw escapes (``explain/results/``): what the draws' spread is computed from.
+STORED = "pybullet_draws.parquet"
+
+
+def stored_keys(deployed: Any, draws: Any, kmax: int, boot: dict[str, Any]) -> dict[str, Any]:
+    """``stored.escape_k{1,kmax}`` (the engines study's PyBullet B_test_random rows) and ``draws.escape_k8.*``
+    (the per-draw escapes, ``STORED``): the explain step and ``verify`` both call this."""
+    out: dict[str, Any] = {}
+    for k in (1, kmax):
+        rows = _probe_k(deployed, k)
+        iv = cluster_bootstrap_mean(rows["escaped"].to_numpy(float), rows["instance_id"].to_numpy(), **boot)
+        out[f"stored.escape_k{k}"] = [float(iv.estimate), float(iv.lo), float(iv.hi)]
+    if len(draws):
+        out.update({f"draws.escape_k8.{k}": v for k, v in draw_range(list(draws["escape_k8"])).items()})
+    return out
+
+
 def run(root: Path, runs: Path, boot: dict[str, Any], workers: int = 1, seed: int = 0,
-        draws: int = 0) -> dict[str, Any]:
-    """Keys of ``explain:results.pybullet_escape`` (empty without the engines study's PyBullet run)."""
+        draws: int = 0, stored_rows: dict[str, Any] | None = None) -> dict[str, Any]:
+    """Keys of ``explain:results.pybullet_escape`` (empty without the engines study's PyBullet run); the per-draw
+    escapes go into ``stored_rows[STORED]`` when given."""
     path = root / "engines" / "runs" / "pybullet_B_test_random"
     if not (path / "manifest.json").is_file():
         return {}
@@ -78,10 +97,9 @@ def run(root: Path, runs: Path, boot: dict[str, Any], workers: int = 1, seed: in
     unit = _emulated(stored, runs, "pybullet_emulated_paper_boundary_unit_capture", offset, 1.0, workers)
     out: dict[str, Any] = {"paper_offset": offset, "paper_ratio": ratio, "paper_ratio_sd": sd}
     for k in (1, kmax):
-        for name, run_ in (("emulated", paper), ("stored", stored)):
-            rows = _probe_k(run_.episodes, k)
-            iv = cluster_bootstrap_mean(rows["escaped"].to_numpy(float), rows["instance_id"].to_numpy(), **boot)
-            out[f"{name}.escape_k{k}"] = [float(iv.estimate), float(iv.lo), float(iv.hi)]
+        rows = _probe_k(paper.episodes, k)
+        iv = cluster_bootstrap_mean(rows["escaped"].to_numpy(float), rows["instance_id"].to_numpy(), **boot)
+        out[f"emulated.escape_k{k}"] = [float(iv.estimate), float(iv.lo), float(iv.hi)]
     same = paper.probes["y"].to_numpy() == unit.probes["y"].to_numpy()
     out["capture_moves_readings"] = int(not bool(same.all()))
     e_paper, e_unit = _probe_k(paper.episodes, kmax), _probe_k(unit.episodes, kmax)
@@ -103,7 +121,9 @@ def run(root: Path, runs: Path, boot: dict[str, Any], workers: int = 1, seed: in
         split = f"pybullet_draw_{i:02d}"
         drawn = _emulated(stored, runs, f"pybullet_emulated_{split}", offset, ratio, workers, split)
         escapes.append(float(_probe_k(drawn.episodes, kmax)["escaped"].mean()))
-    if escapes:
-        out.update({f"draws.escape_k8.{k}": v for k, v in draw_range(escapes).items()})
+    table = pd.DataFrame({"draw": np.arange(len(escapes), dtype="int32"), "escape_k8": np.asarray(escapes, float)})
+    if stored_rows is not None:
+        stored_rows[STORED] = table
+    out.update(stored_keys(stored.episodes, table, kmax, boot))
     return out
 

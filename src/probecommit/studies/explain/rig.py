@@ -36,23 +36,40 @@ def redrawn_sessions(runs: Path, seeds: list[int], quick: bool = False) -> list[
     return out
 
 
+#: The stored rows (``explain/results/``): every redrawn session's episodes (the columns Table IX reads) and each
+#: session's boundary sweep summary; ``optimism_summary`` and ``boundary_summary`` read them (explain and verify).
+STORED_SESSIONS = "rig_redraws_sessions.parquet"
+STORED_BOUNDARY = "rig_redraws_boundary.parquet"
+SESSION_COLUMNS = ("session", "instance_id", "k", "predicted", "realized", "covered", "escaped", "entered", "aim_error")
+
+
+def session_rows(sessions: list[tuple[int, Path]]) -> pd.DataFrame:
+    """Every session's episode rows (``SESSION_COLUMNS``), sessions in order."""
+    rows = [session_episodes(path).rows.assign(session=seed) for seed, path in sessions]
+    pooled = pd.concat(rows, ignore_index=True)
+    return pooled[[c for c in SESSION_COLUMNS if c in pooled]]
+
+
 def optimism_redraws(sessions: list[tuple[int, Path]], boot: dict[str, Any]) -> tuple[dict[str, Any], pd.DataFrame]:
     """Per session, which budgets' optimism intervals exclude zero; pooled over sessions, optimism per budget."""
-    tables, rows = [], []
-    for seed, path in sessions:
-        ep = session_episodes(path).rows.assign(session=seed)
-        rows.append(ep)
-        t = robot_table(ep, **boot).assign(session=seed)
+    return optimism_summary(session_rows(sessions), boot)
+
+
+def optimism_summary(pooled: pd.DataFrame, boot: dict[str, Any]) -> tuple[dict[str, Any], pd.DataFrame]:
+    """``optimism_redraws`` from the sessions' stored rows: each session's Table IX optimism intervals, the
+    shares excluding zero, and the pooled optimism per budget (clusters: session and position)."""
+    tables = []
+    for seed, ep in pooled.groupby("session", sort=False):
+        t = robot_table(ep.reset_index(drop=True), **boot).assign(session=seed)
         tables.append(t[["session", "taps", "optimism", "optimism_lo", "optimism_hi"]])
     table = pd.concat(tables, ignore_index=True)
     table["excludes_zero"] = (table["optimism_lo"] > 0) | (table["optimism_hi"] < 0)
     per_session = table.groupby("session")["excludes_zero"].agg(["sum"])
-    out: dict[str, Any] = {"sessions": len(sessions),
+    out: dict[str, Any] = {"sessions": int(pooled["session"].nunique()),
                            "share_sessions_any_interval_excluding_zero": float((per_session["sum"] >= 1).mean()),
                            "share_sessions_two_or_more_excluding_zero": float((per_session["sum"] >= 2).mean()),
                            "share_intervals_excluding_zero": float(table["excludes_zero"].mean())}
-    pooled = pd.concat(rows, ignore_index=True)
-    pooled["cluster"] = pooled["session"].astype(str) + "/" + pooled["instance_id"].astype(str)
+    pooled = pooled.assign(cluster=pooled["session"].astype(str) + "/" + pooled["instance_id"].astype(str))
     worst = 0.0
     for k, g in pooled.groupby("k", sort=True):
         iv = cluster_bootstrap_mean((g["realized"] - g["predicted"]).to_numpy(float), g["cluster"].to_numpy(), **boot)
@@ -62,32 +79,48 @@ def optimism_redraws(sessions: list[tuple[int, Path]], boot: dict[str, Any]) -> 
     return out, table
 
 
-def boundary_redraws(sessions: list[tuple[int, Path]], boot: dict[str, Any], sizes: list[float]) -> dict[str, Any]:
-    """Per session, the boundary fault's first resolved size and the size coverage holds to; their spread."""
-    first, holds = [], []
-    for _, path in sessions:
+def boundary_rows(sessions: list[tuple[int, Path]], boot: dict[str, Any], sizes: list[float]) -> pd.DataFrame:
+    """Per session, the boundary fault's first resolved size (NaN: never) and the size coverage holds to."""
+    rows = []
+    for seed, path in sessions:
         sweep, _ = fault_sweep(path, "boundary", sizes, **boot)
         resolved = sweep[sweep["optimism_resolved"].astype(bool) & (sweep["size"] > 0)]
-        first.append(float(resolved["size"].min()) if len(resolved) else float("nan"))
-        holds.append(boundary_holds_to(sweep))
-    f, h = np.asarray(first), np.asarray(holds)
-    out: dict[str, Any] = {"sessions": len(sessions), "share_never_resolved": float(np.mean(np.isnan(f)))}
+        rows.append({"session": int(seed), "first_resolved_mm": float(resolved["size"].min()) if len(resolved) else float("nan"),
+                     "holds_to_mm": float(boundary_holds_to(sweep)), "sweep_end_mm": float(max(sizes))})
+    return pd.DataFrame(rows, columns=["session", "first_resolved_mm", "holds_to_mm", "sweep_end_mm"])
+
+
+def boundary_redraws(sessions: list[tuple[int, Path]], boot: dict[str, Any], sizes: list[float]) -> dict[str, Any]:
+    """Per session, the boundary fault's first resolved size and the size coverage holds to; their spread."""
+    return boundary_summary(boundary_rows(sessions, boot, sizes))
+
+
+def boundary_summary(rows: pd.DataFrame) -> dict[str, Any]:
+    """``boundary_redraws`` from the per-session rows: the share never resolved, and the spread of each size."""
+    f, h = rows["first_resolved_mm"].to_numpy(float), rows["holds_to_mm"].to_numpy(float)
+    out: dict[str, Any] = {"sessions": len(rows), "share_never_resolved": float(np.mean(np.isnan(f)))}
     for name, v in (("first_resolved_mm", f[~np.isnan(f)]), ("coverage_holds_to_mm", h)):
         if len(v):
             out[f"{name}.median"] = float(np.median(v))
             out[f"{name}.p025"], out[f"{name}.p975"] = (float(x) for x in np.percentile(v, [2.5, 97.5]))
             out[f"{name}.min"], out[f"{name}.max"] = float(v.min()), float(v.max())
-    out["coverage_holds_to_mm.share_at_sweep_end"] = float(np.mean(h >= max(sizes)))
+    out["coverage_holds_to_mm.share_at_sweep_end"] = float(np.mean(h >= float(rows["sweep_end_mm"].iloc[0])))
     return out
 
 
-def run(runs: Path, cfg: dict[str, Any], boot: dict[str, Any], quick: bool) -> dict[str, Any]:
-    """Both redraw experiments; keys of ``explain:results.rig_redraws``."""
+def keys(sessions: pd.DataFrame, boundary: pd.DataFrame, boot: dict[str, Any]) -> dict[str, Any]:
+    """Keys of ``explain:results.rig_redraws`` from the stored rows (the explain step and verify both call this)."""
+    opt, _ = optimism_summary(sessions, boot)
+    out = {f"optimism.{k}": v for k, v in opt.items()}
+    out.update({f"boundary.{k}": v for k, v in boundary_summary(boundary).items()})
+    return out
+
+
+def run(runs: Path, cfg: dict[str, Any], boot: dict[str, Any], quick: bool) -> tuple[dict[str, Any], dict[str, pd.DataFrame]]:
+    """Both redraw experiments: the keys of ``explain:results.rig_redraws`` and the stored rows by file name."""
     count = int(cfg["rig_redraws_quick" if quick else "rig_redraws"])
     seeds = [int(cfg["rig_redraw_seed"]) + i for i in range(count)]
     sessions = redrawn_sessions(runs, seeds, quick)
-    opt, _ = optimism_redraws(sessions, boot)
-    out = {f"optimism.{k}": v for k, v in opt.items()}
     sizes = BOUNDARY_SWEEP[::7] if quick else BOUNDARY_SWEEP
-    out.update({f"boundary.{k}": v for k, v in boundary_redraws(sessions, boot, sizes).items()})
-    return out
+    tables = {STORED_SESSIONS: session_rows(sessions), STORED_BOUNDARY: boundary_rows(sessions, boot, sizes)}
+    return keys(tables[STORED_SESSIONS], tables[STORED_BOUNDARY], boot), tables

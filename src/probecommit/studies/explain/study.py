@@ -19,13 +19,12 @@ import pandas as pd
 import yaml
 
 from probecommit.audit.conformal import simultaneous_threshold
-from probecommit.audit.stats import cluster_bootstrap_mean, paired_bootstrap, percentile_interval, resample_counts
-from probecommit.audit.surprise import surprise_auc
+from probecommit.audit.stats import paired_bootstrap, percentile_interval, resample_counts
 from probecommit.runner.replay import load_run, replay_episodes
-from probecommit.studies.explain import draw_audit, draw_faults, generator, more, resplits, runs, surprise_variants
+from probecommit.studies.explain import draw_audit, draw_faults, generator, more, resplits, runs, stored, surprise_variants
 from probecommit.studies.explain import gru as gru_study
 from probecommit.studies.explain.margin import margin_curve
-from probecommit.studies.explain.pool import gate_pools, pool_variants
+from probecommit.studies.explain.pool import gate_pools
 from probecommit.studies.explain.stats import (capture_failure, conformal_quantile_draws, equivalence_power, interval_se,
                                                 margin_draws)
 from probecommit.studies.paper_values import PRINTED
@@ -40,6 +39,13 @@ COVER_SCHEDULE = [float(u) for u in PRINTED["T07-cover-schedule.schedule"].strip
 #: The cost-of-calibration comparisons (baseline, treatment) and their key names.
 COST_LABELS = {("no calibration", "set calibration + margin"): "full", ("no calibration", "set calibration"): "set",
                ("set calibration", "set calibration + margin"): "margin"}
+
+
+def cost_keys(differences: list[dict[str, Any]]) -> dict[str, list[float]]:
+    """``missing.cost_of_calibration.*`` from the insertion study's Table IV paired differences (records; verify
+    passes the ones it recomputed)."""
+    return {f"cost_of_calibration.{COST_LABELS[(row['baseline'], row['treatment'])]}": [row["difference"], row["lo"], row["hi"]]
+            for row in differences}
 
 
 def load_explain_config(path: str | Path | None = None) -> dict[str, Any]:
@@ -78,6 +84,8 @@ class Explain:
             "missing", "committed_pool", "instance_generator", "margin_per_gamma", "thresholds", "gru", "physx_capture",
             "boundary_fault", "robust", *more.GROUPS)}
         self.tables: dict[str, pd.DataFrame] = {}
+        #: Stored rows written beside results.json as they are, by file name (``more``'s steps).
+        self.stored: dict[str, pd.DataFrame] = {}
         self._loaded: dict[str, Any] = {}
 
     def load(self, name: str) -> Any:
@@ -100,20 +108,9 @@ class Explain:
 
     # ------------------------------------------------------------------ part 3: missing items
     def missing(self) -> None:
-        self._surprise()
         self._random_gates()
         self._corrected_thresholds()
         self._cost_and_testc()
-        self._prior_all_four(self.res["missing"])
-
-    def _surprise(self) -> None:
-        """Surprise AUC for final-budget escape on the cover schedule, at k = 1 and the final budget."""
-        m, k = self.res["missing"], self.p.budgets["cover"]
-        auc = surprise_auc(_probe(self.load("B_test_cover").episodes), budgets=[1, k], final_k=k, **self.boot).set_index("k")
-        for kk in (1, k):
-            m[f"surprise_auc_cover_k{kk}"] = [float(auc.loc[kk, c]) for c in ("auc", "auc_lo", "auc_hi")]
-        m["surprise.n_escaped"] = int(auc.loc[k, "n_escaped"])
-        m["surprise.n_covered"] = int(auc.loc[k, "n_covered"])
 
     def _random_gates(self) -> None:
         """Every commit gate under random probes (the paper reports only that posterior variance is lowest)."""
@@ -147,55 +144,29 @@ class Explain:
             _probe(self.load("B_cal_cover_corrected").episodes), list(range(1, p.budgets["cover"] + 1)), p.alpha)
 
     def _cost_and_testc(self) -> None:
-        """The cost-of-calibration differences as keys; Test C escapes at the final budget."""
-        m, p = self.res["missing"], self.p
-        for row in self.insertion_results()["table_insertion"]["B.cost_differences"]:
-            m[f"cost_of_calibration.{COST_LABELS[(row['baseline'], row['treatment'])]}"] = [row["difference"], row["lo"], row["hi"]]
-        for name, k in (("C_cover_corrected", p.budgets["cover"]), ("C_random_corrected", p.budgets["random"]),
-                        ("C_cover", p.budgets["cover"]), ("C_random", p.budgets["random"])):
-            m[f"testc_final_escapes.{name}"] = int(_probe(self.load(name).episodes, k)["escaped"].sum())
-
-    def _prior_all_four(self, m: dict[str, Any]) -> None:
-        """How often a fault's escapes come in whole clusters (all repeats of an instance at once)."""
-        episodes = self.fault_episodes()
-        for fault in ("prior", "boundary"):
-            rows = _probe(episodes[(episodes["fault"] == fault) & (episodes["arm"] == "fault")])
-            for k in (1, self.p.budgets["random"]):
-                at = rows[rows["k"] == k].groupby("instance_id")["escaped"].agg(["sum", "count"])
-                any_ = at["sum"] > 0
-                m[f"all_repeats_escape.{fault}.k{k}.escape"] = float(rows[rows["k"] == k]["escaped"].mean())
-                m[f"all_repeats_escape.{fault}.k{k}.clusters_all"] = float((at["sum"] == at["count"]).mean())
-                m[f"all_repeats_escape.{fault}.k{k}.of_escaping_clusters"] = float(
-                    (at["sum"] == at["count"])[any_].mean()) if any_.any() else float("nan")
+        """The cost-of-calibration differences as keys (Test C's final escapes are ``stored.harness_keys``')."""
+        self.res["missing"].update(cost_keys(self.insertion_results()["table_insertion"]["B.cost_differences"]))
 
     def physx_coverage(self) -> None:
         """Cluster and episode coverage of our PhysX runs at the final random budget."""
-        m = self.res["missing"]
         engines = self.root / "engines" / "runs"
-        for variant, suffix in (("deployed", ""), ("mj_offset", "_mj_offset"), ("own_scan", "_own_scan")):
-            path = engines / f"sapien_B_test_random{suffix}"
-            if not path.is_dir():
-                continue
-            rows = _probe(load_run(path).episodes, self.p.budgets["random"])
-            m[f"physx_cluster_coverage.{variant}"] = float(rows.groupby("instance_id")["covered"].all().mean())
-            m[f"physx_episode_coverage.{variant}"] = float(rows["covered"].mean())
+        paths = {variant: engines / f"sapien_B_test_random{suffix}"
+                 for variant, suffix in (("deployed", ""), ("mj_offset", "_mj_offset"), ("own_scan", "_own_scan"))}
+        frames = [load_run(path).episodes.assign(variant=v) for v, path in paths.items() if path.is_dir()]
+        if frames:
+            self.res["missing"].update(stored.physx_coverage_keys(pd.concat(frames, ignore_index=True),
+                                                                  self.p.budgets["random"]))
 
     # ------------------------------------------------------------------ committed pool
     def committed_pool(self, paper_schedule: dict[str, Any]) -> None:
         """The raw gate's pool under each escape definition, per schedule; then the schedules' failures."""
-        c, b, k = self.res["committed_pool"], self.boot, self.p.budgets["cover"]
-        budgets = list(range(1, k + 1))
-        for label, run in (("ours", self.load("B_test_cover")), ("paper_schedule", paper_schedule["test"])):
-            c.update({f"{label}.{key}": v for key, v in pool_variants(_probe(run.episodes), budgets, **b).items()})
-        auc = surprise_auc(_probe(paper_schedule["test"].episodes), budgets=[1, k], final_k=k, **b).set_index("k")
-        for kk in (1, k):
-            self.res["missing"][f"surprise_auc_cover_paper_schedule_k{kk}"] = [
-                float(auc.loc[kk, col]) for col in ("auc", "auc_lo", "auc_hi")]
-        self.res["missing"]["surprise_paper_schedule.n_escaped"] = int(auc.loc[k, "n_escaped"])
+        k = self.p.budgets["cover"]
+        runs = {"ours_B_test": self.load("B_test_cover"), "paper_B_test": paper_schedule["test"],
+                "random_B_test": self.load("B_test_random"), "ours_A": self.load("A_cover"), "paper_A": paper_schedule["A"]}
+        self.tables["schedules"] = stored.schedule_table({n: _probe(r.episodes) for n, r in runs.items()}, k)
+        for group, values in stored.pool_keys(self.tables["schedules"], self.boot).items():  # what verify recomputes
+            self.res[group].update(values)
         self._surprise_variants(paper_schedule["test"], k)
-        rb = list(range(1, self.p.budgets["random"] + 1))
-        c.update({f"random_schedule.{key}": v for key, v in
-                  pool_variants(_probe(self.load("B_test_random").episodes), rb, **b).items()})
         self._schedule_failure(paper_schedule)
 
     def _surprise_variants(self, paper_test: Any, k: int) -> None:
@@ -207,19 +178,11 @@ class Explain:
             self.res["missing"].update({f"surprise_variants.{label}.{key}": v for key, v in aucs.items()})
 
     def _schedule_failure(self, paper_schedule: dict[str, Any]) -> None:
-        """Cover k = 5 failure under each schedule on the same instances (paired), and Table IV's
-        calibrated rows and the cost of calibration under the paper's schedule."""
+        """Table IV's calibrated rows and the cost of calibration under the paper's schedule (the schedules'
+        failures on the same instances are ``stored.pool_keys``')."""
         from probecommit.runner.calibration import calibrate
 
         c, b, k = self.res["committed_pool"], self.boot, self.p.budgets["cover"]
-        for split, ours in (("B_test", self.load("B_test_cover")), ("A", self.load("A_cover"))):
-            mine, theirs = _probe(ours.episodes, k), _probe(paper_schedule["test" if split == "B_test" else "A"].episodes, k)
-            for label, rows in (("ours", mine), ("paper_schedule", theirs)):
-                c[f"schedule.{split}.{label}.failure_k{k}"] = _triple(cluster_bootstrap_mean(
-                    rows["realized"].to_numpy(float), rows["instance_id"].to_numpy(), **b))
-                c[f"schedule.{split}.{label}.escape_k{k}"] = float(rows["escaped"].mean())
-            c[f"schedule.{split}.paper_minus_ours_failure_k{k}"] = _triple(paired_bootstrap(
-                mine, theirs, "realized", keys=("instance_id", "repeat"), **b).difference)
         self.progress("explain: calibration under the paper's schedule", 0, 1)
         cal = calibrate(paper_schedule["cal"], paper_schedule["test"], alpha=self.p.alpha, budgets=list(range(1, k + 1)),
                         **b, chunk_instances=48)
@@ -248,16 +211,9 @@ class Explain:
             table = curve["table"]
             kept = [c for c in table.columns if not c.startswith("sum_")]  # sums are the rule's; the means are published
             self.tables[f"margin_{label}"] = table[kept].assign(schedule=label)
-            for row in table.itertuples():
-                g[f"{label}.g{row.gamma:.2f}.predicted"] = row.mean_predicted
-                g[f"{label}.g{row.gamma:.2f}.realized"] = row.mean_realized
-                g[f"{label}.g{row.gamma:.2f}.predicted_covered"] = row.mean_predicted_covered
-                g[f"{label}.g{row.gamma:.2f}.realized_covered"] = row.mean_realized_covered
+            g.update(stored.margin_keys(self.tables[f"margin_{label}"]))  # what verify recomputes from the stored curve
             g[f"{label}.gamma"] = curve["gamma"]
             g[f"{label}.gamma_covered_only"] = curve["gamma_covered_only"]
-            first = table.iloc[0]
-            g[f"{label}.optimism_at_gamma_1"] = first.mean_realized - first.mean_predicted
-            g[f"{label}.optimism_at_gamma_1_covered"] = first.mean_realized_covered - first.mean_predicted_covered
             g[f"{label}.escaped_share_cal"] = float(_final_escape(run.episodes, k).mean())
             t[f"{label}.t_{k}"] = curve["thresholds"][k]
             t[f"{label}.simultaneous"] = curve["simultaneous_threshold"]
@@ -308,7 +264,7 @@ class Explain:
 
     # ------------------------------------------------------------------ instance draws
     def instance_generator(self) -> None:
-        out, p = self.res["instance_generator"], self.p
+        out = self.res["instance_generator"]
         edge, seeds = self.cfg["stratum_edge_mm"], self.cfg["generator_seeds_quick" if self.quick else "generator_seeds"]
         low, high = -10.0, 10.0
         for name in ("A_cover", "B_cal_cover", "B_test_cover", "B_cal_random", "B_test_random", "C_cover", "C_random"):
@@ -318,11 +274,6 @@ class Explain:
                 continue
             test = generator.generator_test(run.instances, cfg.split, cfg.seed, low, high, edge, seeds)
             out.update({f"{name}.{k}": v for k, v in test.items()})
-        expected = out.get("B_test_random.expected_share", 0.3)
-        for name, k in (("B_test_random", p.budgets["random"]), ("C_random", p.budgets["random"]),
-                        ("B_test_cover", p.budgets["cover"]), ("C_cover", p.budgets["cover"])):
-            strat = generator.stratified_metrics(self.load(name).episodes, k, edge, expected)
-            out.update({f"stratified.{name}.k{k}.{key}": v for key, v in strat.items()})
 
     def draws(self) -> None:
         """Escape, failure and the boundary fix across fresh draws of the generator (analytic scene)."""
@@ -342,81 +293,59 @@ class Explain:
                          "failure_k8": float(old[old["k"] == kmax]["realized"].mean()),
                          "optimism_k8": float((old[old["k"] == kmax]["realized"] - old[old["k"] == kmax]["predicted"]).mean()),
                          "paired_fix_k8": float(fix.difference.estimate)})
-        self._draw_audit(drawn)
-        self._draw_faults(drawn)
+        cells: dict[str, list[dict[str, float]]] = {}
+        self._draw_audit(drawn, cells)
+        self._draw_faults(drawn, cells)
         table = pd.DataFrame(rows)
-        check, fresh = table.iloc[0], table.iloc[1:]
         mujoco = _probe(self.load("B_test_random").episodes, kmax)
-        out["draws.analytic_B_test_random.escape_k8"] = float(check["escape_k8"])
-        out["draws.analytic_equals_mujoco_escape_k8"] = int(abs(check["escape_k8"] - mujoco["escaped"].mean()) < 1e-12)
-        out["draws.count"] = int(len(fresh))
-        for col in ("share_beyond", "escape_k1", "escape_k8", "failure_k8", "optimism_k8", "paired_fix_k8"):
-            values = fresh[col].to_numpy(float)
-            out[f"draws.{col}.mean"] = float(values.mean())
-            out[f"draws.{col}.sd"] = float(values.std(ddof=1)) if len(values) > 1 else float("nan")
-            out[f"draws.{col}.min"], out[f"draws.{col}.max"] = float(values.min()), float(values.max())
-        if len(fresh) > 2:
-            out["draws.corr_share_beyond_escape_k8"] = float(np.corrcoef(fresh["share_beyond"], fresh["escape_k8"])[0, 1])
+        out.update(stored.draws_keys(table))  # the summaries verify recomputes from the stored rows
+        out["draws.analytic_equals_mujoco_escape_k8"] = int(
+            abs(table.iloc[0]["escape_k8"] - mujoco["escaped"].mean()) < 1e-12)
         self.tables["draws"] = table.assign(schedule="draws")
+        first = {"audit": 0, "faults": 0, "audit_fresh_cal": 1, "gates_fresh_cal": 1}
+        self.tables["cells"] = stored.cells_table(cells, first)
+        out.update(stored.cells_keys(self.tables["cells"]))
 
-    def _draw_audit(self, drawn: list[tuple[str, Any, Any]]) -> None:
+    def _draw_audit(self, drawn: list[tuple[str, Any, Any]], parts: dict[str, list[dict[str, float]]]) -> None:
         """Table III's cells on each fresh draw under the frozen Split B calibration (t_k and gamma of our
         calibration run): the range over draws that a paper cell is compared with (``draw_audit``)."""
-        out, res = self.res["instance_generator"], self.insertion_results()
+        res = self.insertion_results()
         thresholds = {int(r["k"]): float(r["threshold"]) for r in res["table_audit"]["table"]}
         gamma = float(res["table_insertion"]["margin_random"])
         self.progress("explain: Table III on fresh draws", 0, len(drawn))
         cells = [draw_audit.draw_cells(deployed.path, thresholds, gamma, nominal=1 - self.p.alpha, resamples=2, seed=0)
                  for _, deployed, _ in drawn]
-        out.update({f"draws.audit_check.{key}": v for key, v in cells[0].items()})
-        if len(cells) > 1:
-            out.update({f"draws.audit.{key}": v for key, v in draw_audit.spread(cells[1:]).items()})
+        parts["audit"] = cells
         fresh = [deployed.path for _, deployed, _ in drawn[1:]]
         if len(fresh) > 1:  # each fresh draw tested under a calibration on the next one (cyclic): both draws vary
             self.progress("explain: Table III with fresh calibration draws", 0, len(fresh))
             pairs = [draw_audit.fresh_calibration_cells(fresh[(i + 1) % len(fresh)], test, sorted(thresholds),
                                                         alpha=self.p.alpha) for i, test in enumerate(fresh)]
-            out.update({f"draws.audit_fresh_cal.{key}": v for key, v in draw_audit.spread(pairs).items()})
+            parts["audit_fresh_cal"] = pairs
             self.progress("explain: random-probe gates on fresh draws", 0, len(fresh))
             gate_cells = [draw_audit.fresh_gate_cells(fresh[(i + 1) % len(fresh)], test, alpha=self.p.alpha)
                           for i, test in enumerate(fresh)]
-            out.update({f"draws.gates_fresh_cal.{key}": v for key, v in draw_audit.spread(gate_cells).items()})
+            parts["gates_fresh_cal"] = gate_cells
 
-    def _draw_faults(self, drawn: list[tuple[str, Any, Any]]) -> None:
+    def _draw_faults(self, drawn: list[tuple[str, Any, Any]], parts: dict[str, list[dict[str, float]]]) -> None:
         """The fault harness's none, boundary and particle arms replayed on each fresh draw's corrected run
         (``draw_faults``): the range of Table VIII's cells and Fig. 7's particle signature over draws."""
-        out, p = self.res["instance_generator"], self.p
+        p = self.p
         self.progress("explain: fault harness on fresh draws", 0, len(drawn))
         cells = [draw_faults.draw_cells(corrected, p.faults, p.sigma, p.budgets["random"]) for _, _, corrected in drawn]
-        out.update({f"draws.faults_check.{key}": v for key, v in cells[0].items()})
-        if len(cells) > 1:
-            out.update({f"draws.faults.{key}": v for key, v in draw_faults.nan_spread(cells[1:]).items()})
+        parts["faults"] = cells
 
     # ------------------------------------------------------------------ boundary fault and robust filters
     def boundary_fault(self) -> None:
-        out, p, b = self.res["boundary_fault"], self.p, self.boot
-        kmax = p.budgets["random"]
-        edge = self.cfg["stratum_edge_mm"]
-        expected = self.res["instance_generator"].get("B_test_random.expected_share", 0.3)
-        episodes = self.fault_episodes()
-        fault = episodes[(episodes["fault"] == "boundary") & (episodes["arm"] == "fault")]
-        fix = episodes[(episodes["fault"] == "boundary") & (episodes["arm"] == "fix")]
-        for k in (1, kmax):
-            s = generator.stratified_metrics(fault, k, edge, expected)
-            out.update({f"harness.k{k}.{key}": v for key, v in s.items() if key.startswith(("escape", "share", "optimism", "failure"))})
-        f8, x8 = _probe(fault, kmax), _probe(fix, kmax)
-        out["harness.paired_fix"] = _triple(paired_bootstrap(f8, x8, "realized", **b).difference)
-        beyond = np.abs(f8.set_index(["instance_id", "repeat"])["z_true"]) > edge
-        diff = (x8.set_index(["instance_id", "repeat"])["realized"] - f8.set_index(["instance_id", "repeat"])["realized"])
-        inside_fix, beyond_fix = float(diff[~beyond].mean()), float(diff[beyond].mean())
-        out["harness.paired_fix.inside"], out["harness.paired_fix.beyond"] = inside_fix, beyond_fix
-        out["harness.paired_fix.standardized"] = (1 - expected) * inside_fix + expected * beyond_fix
-        # The same fault and fix on another draw of the same generator: Test C, old vs corrected model.
-        old, new = self.load("C_random").episodes, self.load("C_random_corrected").episodes
-        for k in (1, kmax):
-            out[f"testc.k{k}.escape"] = _triple(cluster_bootstrap_mean(
-                _probe(old, k)["escaped"].to_numpy(float), _probe(old, k)["instance_id"].to_numpy(), **b))
-        out["testc.paired_fix"] = _triple(paired_bootstrap(_probe(old, kmax), _probe(new, kmax), "realized", **b).difference)
+        """The boundary fault by stratum, its fix, Test C; the whole-cluster escapes and the strata of the test
+        runs: ``stored.harness_keys`` of the insertion study's stored rows (what verify recomputes)."""
+        names = ("C_random", "C_random_corrected", "C_cover", "C_cover_corrected", "B_test_random")
+        keys = stored.harness_keys(self.fault_episodes(), {n: self.load(n).episodes for n in names}, self.tables["schedules"],
+                                   k_cover=self.p.budgets["cover"], k_random=self.p.budgets["random"],
+                                   edge=self.cfg["stratum_edge_mm"], boot=self.boot,
+                                   expected=self.res["instance_generator"].get("B_test_random.expected_share", 0.3))
+        for group, values in keys.items():
+            self.res[group].update(values)
 
     def robust(self) -> None:
         """The mixture's cost when the model is right, at every epsilon; its optimism on Test C."""
@@ -539,23 +468,29 @@ class Explain:
         if margins:
             write_with(out / "margin_per_gamma.parquet", pd.concat(margins, ignore_index=True).to_parquet)
         if "draws" in self.tables:
-            write_with(out / "fresh_draws.parquet", self.tables["draws"].drop(columns="schedule").to_parquet)
-        payload = {"results": _plain(self.res)}
+            write_with(out / stored.DRAWS, self.tables["draws"].drop(columns="schedule").to_parquet)
+        for name, file in (("breadth_prior", more.breadth.STORED), ("schedules", stored.SCHEDULES),
+                           ("cells", stored.CELLS), ("mixture_noise", more.mixture_x.STORED)):
+            if name in self.tables:  # the rows verify recomputes the summaries from (``stored``)
+                write_with(out / file, lambda f, t=self.tables[name]: t.to_parquet(f, compression="zstd"))
+        for file, table in self.stored.items():
+            write_with(out / file, lambda f, t=table: t.to_parquet(f, compression="zstd"))
+        payload = {"results": plain(self.res)}
         write_text(out / "results.json", json.dumps(payload, indent=1, allow_nan=False))
         write_text(out / "explain.md", summary_markdown(payload["results"]))
         return out
 
 
-def _plain(o: Any) -> Any:
+def plain(o: Any) -> Any:
     """JSON-ready values. A value the data leave undefined (NaN: no escapes to rank, one draw for an SD, an
     empty stratum; a quick run has many) is ``null``, an interval with an undefined end wholly so: verify
     refuses an undeclared NaN, and a claim reading ``null`` is unresolved, not compared."""
     if isinstance(o, dict):
-        return {str(k): _plain(v) for k, v in o.items()}
+        return {str(k): plain(v) for k, v in o.items()}
     if isinstance(o, (list, tuple)):
         if len(o) == 3 and all(isinstance(v, (float, np.floating)) for v in o) and any(np.isnan(v) for v in o):
             return None
-        return [_plain(v) for v in o]
+        return [plain(v) for v in o]
     if isinstance(o, (np.integer,)):
         return int(o)
     if isinstance(o, (np.floating, float)):
