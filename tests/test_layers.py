@@ -28,37 +28,32 @@ def test_layers_hold():
     assert "BROKEN" not in result.stdout
 
 
-def test_a_planted_upward_import_is_caught(tmp_path):
+def planted(tmp_path: Path, module: str, line: str) -> subprocess.CompletedProcess:
+    """The layer check on a copy of the package with ``line`` appended to ``module`` (a path under probecommit/)."""
     copy = tmp_path / "src"
     shutil.copytree(ROOT / "src" / "probecommit", copy / "probecommit", ignore=shutil.ignore_patterns("__pycache__"))
     shutil.copy(ROOT / "pyproject.toml", tmp_path / "pyproject.toml")
-    model = copy / "probecommit" / "core" / "retained.py"
-    model.write_text(model.read_text() + "\nfrom probecommit.runner import study  # planted\n")
-    result = lint(tmp_path, copy)
+    target = copy / "probecommit" / module
+    target.write_text(target.read_text() + f"\n{line}  # planted\n")
+    return lint(tmp_path, copy)
+
+
+def test_a_planted_upward_import_is_caught(tmp_path):
+    result = planted(tmp_path, "core/retained.py", "from probecommit.runner import study")
     assert result.returncode != 0
     assert "probecommit.core is not allowed to import probecommit.runner" in result.stdout
 
 
 def test_a_planted_import_of_the_compiled_layer_in_the_core_maths_is_caught(tmp_path):
     """The core maths (the NumPy reference) never reaches the accelerator-specific code."""
-    copy = tmp_path / "src"
-    shutil.copytree(ROOT / "src" / "probecommit", copy / "probecommit", ignore=shutil.ignore_patterns("__pycache__"))
-    shutil.copy(ROOT / "pyproject.toml", tmp_path / "pyproject.toml")
-    model = copy / "probecommit" / "core" / "belief.py"
-    model.write_text(model.read_text() + "\nfrom probecommit.accel import retained  # planted\n")
-    result = lint(tmp_path, copy)
+    result = planted(tmp_path, "core/belief.py", "from probecommit.accel import retained")
     assert result.returncode != 0
     assert "probecommit.core is not allowed to import probecommit.accel" in result.stdout
 
 
 def test_a_planted_import_of_the_maths_in_the_process_plumbing_is_caught(tmp_path):
     """``process/`` (memory estimates, the heap) sits below the maths: every layer may use it, it uses none."""
-    copy = tmp_path / "src"
-    shutil.copytree(ROOT / "src" / "probecommit", copy / "probecommit", ignore=shutil.ignore_patterns("__pycache__"))
-    shutil.copy(ROOT / "pyproject.toml", tmp_path / "pyproject.toml")
-    plumbing = copy / "probecommit" / "process" / "memory.py"
-    plumbing.write_text(plumbing.read_text() + "\nfrom probecommit.core import belief  # planted\n")
-    result = lint(tmp_path, copy)
+    result = planted(tmp_path, "process/memory.py", "from probecommit.core import belief")
     assert result.returncode != 0
     assert "probecommit.process is not allowed to import probecommit.core" in result.stdout
 
@@ -67,7 +62,7 @@ def test_a_planted_import_of_the_maths_in_the_process_plumbing_is_caught(tmp_pat
 #: Generic packages: they serve every family, so none may import a family's package or name one in a
 #: string (the family supplies what they need through its spec and model: the default family, replay
 #: shorthands, figure guides, observation range).
-GENERIC = ("core", "process", "engines", "store", "audit", "runner", "robot", "cli")
+GENERIC = ("core", "accel", "process", "engines", "store", "audit", "runner", "robot", "cli")
 #: Files of generic packages that drive the paper's own studies (reproduce, scan), which name their
 #: families by design, like everything in studies/ and report/.
 PAPER_DRIVERS = {"cli/study_commands.py"}
