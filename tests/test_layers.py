@@ -13,6 +13,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 ROOT = Path(__file__).resolve().parents[1]
 
 
@@ -28,13 +30,24 @@ def test_layers_hold():
     assert "BROKEN" not in result.stdout
 
 
-def planted(tmp_path: Path, module: str, line: str) -> subprocess.CompletedProcess:
-    """The layer check on a copy of the package with ``line`` appended to ``module`` (a path under probecommit/)."""
+def _planted_copy(tmp_path: Path) -> Path:
+    """A copy of the package's source under ``tmp_path / "src"`` to plant violations in."""
     copy = tmp_path / "src"
     shutil.copytree(ROOT / "src" / "probecommit", copy / "probecommit", ignore=shutil.ignore_patterns("__pycache__"))
+    return copy
+
+
+def _plant(copy: Path, module: str, line: str) -> None:
+    """Append ``line`` to ``module`` (a path under probecommit/) of a planted copy."""
+    path = copy / "probecommit" / module
+    path.write_text(path.read_text() + f"\n{line}  # planted\n")
+
+
+def planted(tmp_path: Path, module: str, line: str) -> subprocess.CompletedProcess:
+    """The layer check on a copy of the package with ``line`` planted in ``module``."""
+    copy = _planted_copy(tmp_path)
     shutil.copy(ROOT / "pyproject.toml", tmp_path / "pyproject.toml")
-    target = copy / "probecommit" / module
-    target.write_text(target.read_text() + f"\n{line}  # planted\n")
+    _plant(copy, module, line)
     return lint(tmp_path, copy)
 
 
@@ -108,15 +121,6 @@ def test_nothing_generic_names_a_family():
     assert family_mentions(ROOT / "src") == []
 
 
-def _planted_copy(tmp_path: Path) -> Path:
-    copy = tmp_path / "src"
-    shutil.copytree(ROOT / "src" / "probecommit", copy / "probecommit", ignore=shutil.ignore_patterns("__pycache__"))
-    return copy
-
-
-import pytest  # noqa: E402
-
-
 @pytest.mark.parametrize("target,line", [
     ("runner/study.py", "from probecommit.tasks.insertion.model import InsertionModel"),
     ("audit/metrics.py", "import probecommit.tasks.push1d"),
@@ -128,8 +132,7 @@ import pytest  # noqa: E402
 ])
 def test_a_planted_family_mention_is_caught(tmp_path, target, line):
     copy = _planted_copy(tmp_path)
-    path = copy / "probecommit" / target
-    path.write_text(path.read_text() + f"\n{line}  # planted\n")
+    _plant(copy, target, line)
     found = family_mentions(copy)
     assert len(found) == 1 and found[0].startswith(f"{target}:"), found
 
@@ -170,6 +173,5 @@ def cli_import_cycles(src: Path) -> list[list[str]]:
 def test_the_cli_has_no_import_circle(tmp_path):
     assert cli_import_cycles(ROOT / "src") == []
     copy = _planted_copy(tmp_path)  # and a planted circle is caught
-    path = copy / "probecommit" / "cli" / "output.py"
-    path.write_text(path.read_text() + "\nfrom probecommit.cli.audit_commands import audit_command  # planted\n")
+    _plant(copy, "cli/output.py", "from probecommit.cli.audit_commands import audit_command")
     assert cli_import_cycles(copy) == [["audit_commands", "output", "audit_commands"]]
