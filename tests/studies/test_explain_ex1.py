@@ -12,6 +12,7 @@ from probecommit.studies import claims as C
 from probecommit.studies import paper_values as P
 from probecommit.studies.explain.draw_audit import spread
 from probecommit.studies.explain.surprise_variants import class_surprise
+from tests.studies.test_claims import _lookup
 
 
 def test_class_surprise_is_minus_log_of_the_weight_predicting_the_class_read():
@@ -26,14 +27,6 @@ def test_class_surprise_is_minus_log_of_the_weight_predicting_the_class_read():
 def test_spread_is_min_max_mean_per_cell():
     out = spread([{"a": 1.0, "b": 0.0}, {"a": 3.0, "b": -1.0}, {"a": 2.0, "b": 4.0}])
     assert out == {"a.min": 1.0, "a.max": 3.0, "a.mean": 2.0, "b.min": -1.0, "b.max": 4.0, "b.mean": 1.0}
-
-
-def _lookup(values):
-    def lookup(key):
-        if key not in values:
-            raise KeyError(key)
-        return values[key]
-    return lookup
 
 
 def test_each_table_III_cell_is_explained_only_by_its_own_range():
