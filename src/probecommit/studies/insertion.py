@@ -193,6 +193,39 @@ def subset_run(loaded: LoadedRun, instance_ids, beliefs: RunBeliefs | None = Non
     )
 
 
+def setmargin_failure(cal: Any) -> float:
+    """A calibration's failure with set calibration and the margin (its cost table's row)."""
+    row = cal.cost[cal.cost["setting"] == "set calibration + margin"]
+    return float(row["failure"].iloc[0])
+
+
+def resplit_table(pool: LoadedRun, alpha: float, count: int, seed: int, k: int, boot_seed: int,
+                  progress: Callable[[int], None] | None = None) -> pd.DataFrame:
+    """The re-split study's rows: ``count`` random halves of one pool, each calibrated on one half at
+    budget ``k`` and tested on the other (level t_k, set+margin failure, held-out cluster coverage,
+    whether the margin is optimistic, gamma). The pool's beliefs at ``k`` are computed once for every
+    split; the explain target runs the same study on the paper's schedule's pool."""
+    ids = pool.instances["instance_id"].to_numpy()
+    rng = np.random.default_rng(seed)
+    beliefs = RunBeliefs.of(pool, chunk_instances=None, budgets=[k])
+    rows = []
+    for n in range(count):
+        perm = rng.permutation(len(ids))
+        half = len(ids) // 2
+        cal = subset_run(pool, ids[perm[:half]], beliefs)
+        test = subset_run(pool, ids[perm[half:]], beliefs)
+        res = calibrate(cal, test, alpha=alpha, budgets=[k], resamples=50, seed=boot_seed + n)
+        t3 = res.table3
+        rows.append({"split": n, "level": float(res.thresholds[k]), "failure": setmargin_failure(res),
+                     "heldout_cluster_coverage": float(t3["cluster_coverage_calibrated"].iloc[0]),
+                     "margin_optimistic": bool(t3["optimism_calibrated"].iloc[0] > 0), "gamma": res.margin.gamma})
+        if progress:
+            progress(n + 1)
+        del cal, test, res
+        trim_heap()  # a split's copies go back before the next split copies its halves
+    return pd.DataFrame(rows)
+
+
 def coverage_vs_nominal(cal_episodes: pd.DataFrame, test_episodes: pd.DataFrame, k: int,
                         levels: np.ndarray | None = None) -> pd.DataFrame:
     """Fig. 4a's data: held-out cluster coverage against the nominal level 1 - alpha at budget ``k``.
@@ -422,16 +455,12 @@ class InsertionReproduction:
                             record=self.commits["testc_old"])
         cal_new = calibrate(L["B_cal_cover_corrected"], L["C_cover_corrected"], alpha=self.p.alpha, budgets=[1, 2, 3, 4, 5],
                             **b, **self.chunk, record=self.commits["testc_corrected"])
-        fo, fn = self._setmargin_failure(cal_old), self._setmargin_failure(cal_new)
+        fo, fn = setmargin_failure(cal_old), setmargin_failure(cal_new)
         res["failure_cover_k5_setcal_margin"] = {"old": fo, "corrected": fn,
                                                  "simultaneous_threshold": {"old": cal_old.simultaneous_threshold, "corrected": cal_new.simultaneous_threshold}}
         self.rep.results["table_testc"] = res
         self.write_table("table_V_testc")
 
-    @staticmethod
-    def _setmargin_failure(cal) -> float:
-        row = cal.cost[cal.cost["setting"] == "set calibration + margin"]
-        return float(row["failure"].iloc[0])
 
     def faults(self) -> None:
         p, L, b = self.p, self.loaded, self.boot
@@ -492,36 +521,16 @@ class InsertionReproduction:
     def resplits(self) -> None:
         p = self.p
         pool = self.loaded["B_pool_cover"]
-        ids = pool.instances["instance_id"].to_numpy()
-        rng = np.random.default_rng(p.resplits["seed"])
-        rows = []
         count = p.resplits["count"]
-        k = 5  # the re-split study calibrates the cover schedule's last budget only
-        # The pool's beliefs at k, computed once for every split (no other budget is kept or committed).
-        beliefs = RunBeliefs.of(pool, chunk_instances=None, budgets=[k])
-        for n in range(count):
-            perm = rng.permutation(len(ids))
-            half = len(ids) // 2
-            cal = subset_run(pool, ids[perm[:half]], beliefs)
-            test = subset_run(pool, ids[perm[half:]], beliefs)
-            res = calibrate(cal, test, alpha=p.alpha, budgets=[k], resamples=50, seed=p.bootstrap.seed + n)
-            t3 = res.table3
-            rows.append({
-                "split": n, "level": float(res.thresholds[k]), "failure": self._setmargin_failure(res),
-                "heldout_cluster_coverage": float(t3["cluster_coverage_calibrated"].iloc[0]),
-                "margin_optimistic": bool(t3["optimism_calibrated"].iloc[0] > 0),
-                "gamma": res.margin.gamma,
-            })
-            self.progress("re-splits", n + 1, count)
-            del cal, test, res
-            trim_heap()  # a split's copies go back before the next split copies its halves
-        table = pd.DataFrame(rows)
+        # The re-split study calibrates the cover schedule's last budget only.
+        table = resplit_table(pool, p.alpha, count, p.resplits["seed"], 5, p.bootstrap.seed,
+                              lambda n: self.progress("re-splits", n, count))
         write_with(self.out / "resplits.parquet", table.to_parquet)
         summary = {"level_mean_sd": [float(table.level.mean()), float(table.level.std(ddof=1))],
                    "failure_mean_sd": [float(table.failure.mean()), float(table.failure.std(ddof=1))],
                    "heldout_cluster_coverage": float(table.heldout_cluster_coverage.mean()),
                    "margin_optimistic_fraction": float(table.margin_optimistic.mean()),
-                   "splits": count, "pool": int(len(ids))}
+                   "splits": count, "pool": int(len(pool.instances))}
         self.rep.results["resplits"] = summary
         self.write_table("resplits")
 
