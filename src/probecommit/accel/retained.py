@@ -129,6 +129,49 @@ def _retained_summary(weights, nu, z, particles, tolerance):  # pragma: no cover
     return mask, lo, hi, reference
 
 
+@helper(inline=True)
+def _ranks_before(w, p, w_q, q):  # pragma: no cover - compiled
+    """Whether particle ``p`` (weight ``w``) comes before ``q`` (weight ``w_q``) in the stable
+    descending-weight order: heavier first, ties in index order."""
+    return w > w_q or (w == w_q and p < q)
+
+
+@helper(inline=True)
+def _covering_mass(weights, z, truth):  # pragma: no cover - compiled
+    """The mass of the shortest top-weight prefix whose span covers ``truth`` (inside the hull);
+    -1 when a weight is NaN.
+
+    The span covers the truth once the prefix holds a particle at or above it and one at or
+    below it, so the prefix ends at the later of the first of each in the stable descending
+    order: two scans find them, without sorting. Its mass is the sum of its weights in that
+    order (the reference's cumulative sum), so only the prefix's values are sorted and added,
+    largest first: tied particles share a value, so the sum is the reference's exactly.
+    """
+    n = weights.shape[0]
+    above, below = -1, -1
+    for p in range(n):
+        w = weights[p]
+        if w != w:  # NaN: no total order (the caller sorts as the reference does)
+            return -1.0
+        if z[p] >= truth and (above < 0 or _ranks_before(w, p, weights[above], above)):
+            above = p
+        if z[p] <= truth and (below < 0 or _ranks_before(w, p, weights[below], below)):
+            below = p
+    stop = below if _ranks_before(weights[above], above, weights[below], below) else above
+    w_stop = weights[stop]
+    values = np.empty(n)
+    m = 0
+    for p in range(n):
+        if weights[p] > w_stop or (weights[p] == w_stop and p <= stop):
+            values[m] = weights[p]
+            m += 1
+    prefix = np.sort(values[:m])
+    mass = 0.0
+    for i in range(m - 1, -1, -1):
+        mass += prefix[i]
+    return mass
+
+
 @kernel("Tuple((f8[::1], f8[::1], f8[::1]))(f8[:, ::1], f8[:, ::1], f8[::1], f8)")
 def _coverage_with_hull(weights, z, z_true, width):  # pragma: no cover - compiled
     n_e, n = weights.shape
@@ -142,14 +185,16 @@ def _coverage_with_hull(weights, z, z_true, width):  # pragma: no cover - compil
             distance = max(hull_lo[e] - truth, 0.0) + max(truth - hull_hi[e], 0.0)
             score[e] = 1.0 + distance / width
             continue
-        order = np.argsort(-weights[e], kind="mergesort")
-        low, high, mass = np.inf, -np.inf, 0.0
-        for i in range(n):  # the mass of the first top-weight prefix whose span covers the truth
-            p = order[i]
-            mass += weights[e, p]
-            low, high = min(low, z[e, p]), max(high, z[e, p])
-            if low <= truth <= high:
-                break
+        mass = _covering_mass(weights[e], z[e], truth)
+        if mass < 0:  # a NaN weight, no total order: the stable sort decides, as the reference's
+            order = np.argsort(-weights[e], kind="mergesort")
+            low, high, mass = np.inf, -np.inf, 0.0
+            for i in range(n):  # the mass of the first top-weight prefix whose span covers the truth
+                p = order[i]
+                mass += weights[e, p]
+                low, high = min(low, z[e, p]), max(high, z[e, p])
+                if low <= truth <= high:
+                    break
         score[e] = min(mass, 1.0)
     return score, hull_lo, hull_hi
 

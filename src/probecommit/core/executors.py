@@ -373,16 +373,18 @@ class ProbeRobust:
         if self.plateau not in PLATEAU_MODES:
             raise ValueError(f"plateau must be one of {', '.join(PLATEAU_MODES)}, got {self.plateau!r}")
 
-    def retain(self, particles: np.ndarray, weights: np.ndarray, threshold: float) -> RetainedSet:
-        """The retained set at mass ``nu`` (``<= 1``) or the grown set of a threshold ``t > 1``."""
+    def retain(self, particles: np.ndarray, weights: np.ndarray, threshold: float,
+               z: np.ndarray | None = None) -> RetainedSet:
+        """The retained set at mass ``nu`` (``<= 1``) or the grown set of a threshold ``t > 1``;
+        ``z`` is ``model.decision(particles)`` when the caller has it (not computed, or copied, again)."""
         model = self.model
         if self.plateau == "hull" and 1 - PLATEAU_EPSILON <= threshold <= 1:
             mask = np.ones_like(weights, dtype=bool)
             lo, hi = masked_interval(model.decision(particles), mask)
             return RetainedSet(particles, mask, lo, hi, belief_reference(particles, weights))
         if threshold <= 1:
-            mask, lo, hi, reference = self.kernels.retained_summary(weights, threshold, model.decision(particles),
-                                                                    particles)
+            mask, lo, hi, reference = self.kernels.retained_summary(
+                weights, threshold, model.decision(particles) if z is None else z, particles)
             return RetainedSet(particles, mask, lo, hi, reference)
         points, lo, hi = grown_points(model, particles, threshold)
         return RetainedSet(particles, np.ones_like(weights, dtype=bool), lo, hi, belief_reference(particles, weights),
@@ -412,7 +414,7 @@ class ProbeRobust:
         on the margin) scored and one action chosen per episode."""
         memo = {} if memo is None else memo
         if "retained" not in memo:
-            memo["retained"] = self.retain(belief.particles, belief.weights, threshold)
+            memo["retained"] = self.retain(belief.particles, belief.weights, threshold, belief.z)
         return self.choose(memo["retained"], context)
 
     def act(self, particles: np.ndarray, weights: np.ndarray, threshold: float,

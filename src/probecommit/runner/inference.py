@@ -352,7 +352,10 @@ def _belief_at(trace: BeliefTrace, model, k: int, z_true: np.ndarray, cache: dic
     belief = cache.get(("belief", k))
     if belief is None:
         state = trace.states[k]
-        z = model.decision(state.particles)
+        # Contiguous once here: the decision coordinate is a strided view of the particles, and
+        # every kernel reading it (coverage, variance, the executor's retained set) copied it.
+        z = np.ascontiguousarray(model.decision(state.particles), dtype=np.float64)
+        z_true = np.ascontiguousarray(z_true, dtype=np.float64)
         weights = state.weights
         kernels = production()
         score_s, hull_lo, hull_hi = kernels.coverage_with_hull(z, weights, z_true, model.decision_domain_width)
