@@ -11,9 +11,11 @@ every budget; it runs in a process of its own too, but only its loop is timed (i
 and data are not counted: a conservative anchor). ``run`` is timed as shipped (units in
 threads, one per CPU up to 4) and with ``--threads 1``. The arms take turns for ``--rounds``
 rounds after a warm-up; medians, ratios of the medians and the range of per-round ratios are
-printed, with the load average.
+printed, with the load average. With ``--against REF`` the two ``run`` arms of a git ref (checked
+out beside this tree, its kernels built) take turns with this tree's too, and the ratios ref / this
+tree are printed: a change measured side by side on the same loaded machine.
 
-    python benchmarks/end_to_end.py [--instances 480] [--repeats 4] [--rounds 3] [--unit-instances 4]
+    python benchmarks/end_to_end.py [--instances 480] [--repeats 4] [--rounds 3] [--unit-instances 4] [--against REF]
 
 Target: plain / run >= 3 (the run at least three times as fast) on an idle 2-core machine.
 """
@@ -21,6 +23,7 @@ Target: plain / run >= 3 (the run at least three times as fast) on an idle 2-cor
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import os
 import resource
@@ -31,6 +34,9 @@ import sys
 import tempfile
 import time
 from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from baseline import baseline_tree  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 HERE = Path(__file__).resolve().parent
@@ -65,13 +71,13 @@ def _children_cpu() -> float:
     return usage.ru_utime + usage.ru_stime
 
 
-def run_command(config: Path, out: Path, threads: int | None) -> tuple[float, float]:
-    """Wall and CPU seconds of ``probecommit run`` as a process, into a fresh ``out``."""
+def run_command(config: Path, out: Path, threads: int | None, src: Path = ROOT / "src") -> tuple[float, float]:
+    """Wall and CPU seconds of ``probecommit run`` (the package under ``src``) as a process, into a fresh ``out``."""
     shutil.rmtree(out, ignore_errors=True)
     cmd = [sys.executable, "-m", "probecommit", "run", str(config), "--out", str(out)]
     if threads is not None:
         cmd += ["--threads", str(threads)]
-    env = {**os.environ, "PYTHONPATH": str(ROOT / "src"), "COLUMNS": "120"}
+    env = {**os.environ, "PYTHONPATH": str(src), "COLUMNS": "120"}
     t0, c0 = time.perf_counter(), _children_cpu()
     subprocess.run(cmd, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, check=True)
     return time.perf_counter() - t0, _children_cpu() - c0
@@ -92,6 +98,7 @@ def main() -> None:
     ap.add_argument("--repeats", type=int, default=4)
     ap.add_argument("--unit-instances", type=int, default=4)
     ap.add_argument("--rounds", type=int, default=3)
+    ap.add_argument("--against", help="a git ref whose run arms take turns with this tree's")
     args = ap.parse_args()
     episodes = args.instances * args.repeats
     with tempfile.TemporaryDirectory() as tmp_name:
@@ -104,14 +111,11 @@ def main() -> None:
             "run1": lambda: run_command(config, tmp / "run1", 1),
             "plain": lambda: plain_loop(episodes),
         }
-        for arm in arms.values():  # warm-up: file cache, bytecode
-            arm()
-        times: dict[str, list[tuple[float, float]]] = {name: [] for name in arms}
-        load = []
-        for _ in range(args.rounds):
-            for name, arm in arms.items():
-                load.append(os.getloadavg()[0])
-                times[name].append(arm())
+        with (baseline_tree(args.against, tmp / "ref") if args.against else contextlib.nullcontext()) as ref:
+            if ref is not None:
+                arms["run@ref"] = lambda: run_command(config, tmp / "run-ref", None, ref / "src")
+                arms["run1@ref"] = lambda: run_command(config, tmp / "run1-ref", 1, ref / "src")
+            times, load = _interleaved(arms, args.rounds)
     print(f"{episodes} episodes x 8 taps, N = 1024, analytic insertion, {args.instances // args.unit_instances} units "
           f"(median of {args.rounds} interleaved rounds; load average {min(load):.1f}-{max(load):.1f} on "
           f"{os.cpu_count()} CPUs)")
@@ -125,7 +129,24 @@ def main() -> None:
             print(f"  {what} time: {label + ':':56s} {t_run:6.2f} s   plain / run = {t_plain / t_run:.2f}x "
                   f"(rounds {min(per_round):.2f}-{max(per_round):.2f})  (target: >= 3 in wall time, idle)")
     print("  (on a loaded machine wall times measure the share of the CPUs each process got; CPU times do not)")
+    for arm in ("run", "run1"):
+        if f"{arm}@ref" in times:
+            for what, i in (("wall", 0), ("CPU", 1)):
+                ratio = statistics.median(t[i] for t in times[f"{arm}@ref"]) / statistics.median(t[i] for t in times[arm])
+                print(f"  {what} time: {arm} at {args.against} / this tree = {ratio:.2f}x")
 
+
+def _interleaved(arms: dict, rounds: int) -> tuple[dict[str, list[tuple[float, float]]], list[float]]:
+    """Each arm once to warm up (file cache, bytecode), then ``rounds`` rounds of every arm in turn."""
+    for arm in arms.values():
+        arm()
+    times: dict[str, list[tuple[float, float]]] = {name: [] for name in arms}
+    load = []
+    for _ in range(rounds):
+        for name, arm in arms.items():
+            load.append(os.getloadavg()[0])
+            times[name].append(arm())
+    return times, load
 
 if __name__ == "__main__":
     main()
