@@ -70,7 +70,15 @@ def _systematic_resample(weights, offsets):  # pragma: no cover - compiled
 
 @kernel("f8[:, :, ::1](f8[:, :, ::1], i8[::1], i8[:, ::1], f8[:, :, ::1], f8[::1], f8[::1], f8[::1])")
 def _jitter_resampled(particles, rows, parents, noise, scale, low, high):  # pragma: no cover - compiled
-    out = particles.copy()
+    # Only the rows that do not resample are copied (most rows resample after a tap): each
+    # resampled row is written below, whole.
+    out = np.empty_like(particles)
+    resampled = np.zeros(particles.shape[0], dtype=np.bool_)
+    for i in range(rows.shape[0]):
+        resampled[rows[i]] = True
+    for e in range(particles.shape[0]):
+        if not resampled[e]:
+            out[e] = particles[e]
     n_rows, n = parents.shape
     for i in range(n_rows):
         r = rows[i]
