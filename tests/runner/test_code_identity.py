@@ -115,3 +115,20 @@ def test_shards_of_the_earlier_per_unit_layout_are_refused(tmp_path, monkeypatch
     (out / "shards" / "unit-00000.episodes.parquet").write_bytes(b"PAR1")
     with pytest.raises(RunDirError, match="unrecorded"):
         run_study(config, out)
+
+
+def test_the_manifest_provenance_is_looked_up_while_the_run_computes(tmp_path, monkeypatch):
+    """git commit, uncommitted changes and versions come from a thread started with the run (the
+    values are the same as looked up at the end), and the thread has ended when the run returns."""
+    import threading
+
+    from probecommit.store import rundir
+
+    started = []
+    monkeypatch.setattr(rundir, "provenance", lambda: (started.append(threading.current_thread().name)
+                                                       or ("abc123", False, {"python": "3"})))
+    result = run_study(small_config(instances={"count": 2}, belief={"particles": 16}), tmp_path / "run")
+    assert started == ["probecommit-provenance"]
+    assert (result.manifest["git_commit"], result.manifest["git_dirty"]) == ("abc123", False)
+    assert result.manifest["engine_versions"] == {"python": "3"}
+    assert not any(t.name == "probecommit-provenance" for t in threading.enumerate())

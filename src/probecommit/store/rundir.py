@@ -248,6 +248,40 @@ def git_dirty() -> bool | None:
         return None
 
 
+def provenance() -> tuple[str | None, bool | None, dict[str, str | None]]:
+    """What a manifest records of where a run came from: git commit, uncommitted changes, versions."""
+    return git_commit(), git_dirty(), engine_versions()
+
+
+class _InBackground:
+    """A function's value computed in a thread of its own, taken (the thread joined) when needed.
+
+    A run's provenance (two ``git`` processes and a scan of the installed packages' metadata:
+    tens of milliseconds) is looked up while its units compute, not after them.
+    """
+
+    def __init__(self, fn: Any) -> None:
+        import threading
+
+        self._value: Any = None
+        self._error: BaseException | None = None
+
+        def target() -> None:
+            try:
+                self._value = fn()
+            except BaseException as exc:  # noqa: BLE001 - raised where the value is taken
+                self._error = exc
+
+        self._thread = threading.Thread(target=target, name="probecommit-provenance", daemon=True)
+        self._thread.start()
+
+    def result(self) -> Any:
+        self._thread.join()
+        if self._error is not None:
+            raise self._error
+        return self._value
+
+
 def engine_versions() -> dict[str, str | None]:
     """Python's version and those of the engines and the data stack, as the manifest records them
     (None: not installed)."""
@@ -285,6 +319,7 @@ class RunDir:
         self._last_commit = time.monotonic()
         self._batches: dict[str, Path] = {}
         self._stats: dict[str, dict[str, Any]] = {}
+        self._provenance: _InBackground | None = None
 
     @property
     def shards(self) -> Path:
@@ -388,7 +423,13 @@ class RunDir:
         self.check_writable(config_yaml)
         with self.lock():
             self.prepare(config_yaml)
-            yield
+            self._provenance = _InBackground(provenance)  # for the manifest, looked up meanwhile
+            try:
+                yield
+            finally:
+                with contextlib.suppress(Exception):  # its thread ends with the run, not after it
+                    self._provenance.result()
+                self._provenance = None
 
     def remove_stale_temporaries(self) -> None:
         """Delete temporary files a killed writer left behind (call with the lock held)."""
@@ -586,12 +627,13 @@ class RunDir:
         """The manifest, written last: versions and the sha256 of every final table and the config."""
         digests = {f"{name}.parquet": sha256_file(self.table_path(name)) for name in TABLES}
         digests[CONFIG] = sha256_file(self.path / CONFIG)  # a hand-edited config is caught on read
+        commit, dirty, versions = provenance() if self._provenance is None else self._provenance.result()
         manifest = {
             "probecommit_version": __version__,
-            "git_commit": git_commit(),
-            "git_dirty": git_dirty(),
+            "git_commit": commit,
+            "git_dirty": dirty,
             "code_sha256": code_identity(),
-            "engine_versions": engine_versions(),
+            "engine_versions": versions,
             "sha256": digests,
             **manifest_extra,
         }
