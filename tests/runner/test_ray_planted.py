@@ -63,35 +63,3 @@ def test_ray_local_starts_its_own_instance_beside_a_recorded_cluster(tmp_path, m
     print(f"--ray local started its instance in {manifest['timing']['backend_start_s']:.2f} s")
     threads = run_study(config, tmp_path / "threads", threads=2)
     assert_same_tables(threads.run_dir, tmp_path / "ray")
-
-
-@pytest.mark.parametrize("address", ["local", "auto"])
-def test_only_a_local_start_skips_the_dashboard_and_ray_is_restored_after(monkeypatch, address):
-    from ray._private import services, utils
-
-    before = (services.start_api_server, utils.get_dashboard_dependency_error)
-    seen = {}
-
-    class FakeRay:
-        def is_initialized(self):
-            return False
-
-        def init(self, **kwargs):
-            seen["patched"] = (services.start_api_server, utils.get_dashboard_dependency_error) != before
-            if seen["patched"]:
-                seen["api"] = services.start_api_server(False, True, "127.0.0.1", "gcs:1")
-                seen["minimal"] = utils.get_dashboard_dependency_error() is not None
-
-        def shutdown(self):
-            pass
-
-    monkeypatch.setattr("probecommit.engines.require", lambda name: FakeRay())
-    from probecommit.runner.study import ray_session
-
-    with ray_session(address, 2, {}):
-        pass
-    assert (services.start_api_server, utils.get_dashboard_dependency_error) == before
-    if address == "local":
-        assert seen == {"patched": True, "api": (None, None), "minimal": True}
-    else:
-        assert seen == {"patched": False}

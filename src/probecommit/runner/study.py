@@ -512,38 +512,6 @@ def _without_recorded_address(address: str) -> Iterator[None]:
 
 
 @contextlib.contextmanager
-def _without_dashboard(address: str) -> Iterator[None]:
-    """For ``local``: Ray starts without its dashboard processes (the instance is this run's own).
-
-    ``include_dashboard=False`` still starts a dashboard process (usage statistics) and
-    ``ray.init`` waits for it, and the driver imports the dashboard's optional packages to
-    decide how to start the node's agents: measured 27 s -> 18 s for ``ray.init`` on a loaded
-    2-core machine. While the instance starts, the dashboard process is not started and the
-    agents start minimal (as in a ``ray`` installed without its extras); both are restored
-    after. Ray's internals are looked up, not assumed: where they differ, Ray starts as usual.
-    """
-    try:
-        from ray._private import services, utils
-    except ImportError:  # pragma: no cover - another Ray layout: start as usual
-        services = utils = None
-    names = ("start_api_server", "get_dashboard_dependency_error")
-    if address != "local" or not all(callable(getattr(m, n, None)) for m, n in zip((services, utils), names)):
-        yield
-        return
-    start_api_server, dependency_error = services.start_api_server, utils.get_dashboard_dependency_error
-
-    def no_dashboard(include_dashboard, *args, **kwargs):
-        return (None, None) if include_dashboard is False else start_api_server(include_dashboard, *args, **kwargs)
-
-    services.start_api_server = no_dashboard
-    utils.get_dashboard_dependency_error = lambda: ImportError("probecommit --ray local: no dashboard")
-    try:
-        yield
-    finally:
-        services.start_api_server, utils.get_dashboard_dependency_error = start_api_server, dependency_error
-
-
-@contextlib.contextmanager
 def ray_session(address: str, workers: int, timing: dict[str, float],
                 timeout_s: float | None = None) -> Iterator[Any]:
     """Connect to (or, for ``"local"``, start a fresh) Ray; shut down on exit what was started here.
@@ -560,7 +528,7 @@ def ray_session(address: str, workers: int, timing: dict[str, float],
     started_here = not ray.is_initialized()
     t0 = time.perf_counter()
     if started_here:
-        with _without_recorded_address(address), _without_dashboard(address):
+        with _without_recorded_address(address):
             _init_within(ray, ray_init_kwargs(address, workers), address,
                          RAY_START_TIMEOUT_S if timeout_s is None else timeout_s)
     timing["backend_start_s"] = time.perf_counter() - t0
