@@ -445,6 +445,10 @@ def explain(folder: Path, results: dict[str, Any]) -> Recomputed:
             out.sources[f"{group}.{key}"] = name
     if (folder / stored.SCHEDULES).is_file():
         _schedules(folder, results, out)
+    _calibration_rows(folder, out)
+    _scan_copies(folder, results, out)
+    _gru_copies(folder, results, out)
+    _replays(folder, out)
     if (folder / EXPLAIN_BREADTH).is_file():
         _breadth_prior(folder, results, out)
     _cost_copies(folder, out)
@@ -496,6 +500,127 @@ def _schedules(folder: Path, results: dict[str, Any], out: Recomputed) -> None:
         out.values.update({f"{group}.{key}": v for key, v in values.items()})
         out.sources.update(dict.fromkeys((f"{group}.{key}" for key in values),
                                          f"insertion/episodes.parquet, faults_episodes.parquet and {stored.SCHEDULES}"))
+
+
+def _calibration_rows(folder: Path, out: Recomputed) -> None:
+    """The margins, thresholds, their intervals and strata from the stored per-instance calibration rows
+    (``calibration_rows.margin_rule_keys``); the random-probe gates and the calibration under the paper's schedule
+    from the explain step's stored commits (``gates_from_commits``, ``calibration_from_tables``: the functions
+    ``gates`` and ``calibrate`` end in) and runs; the simultaneous thresholds from the stored episodes."""
+    from probecommit.runner.calibration import calibration_from_tables, gates_from_commits
+    from probecommit.studies.explain import calibration_rows as cr
+    from probecommit.studies.explain.study import load_explain_config
+
+    insertion = folder.parent / "insertion"
+    setup = json.loads((insertion / "results.json").read_text())["results"]["setup"]
+    boot = dict(resamples=int(setup["bootstrap"]["resamples"]), seed=int(setup["bootstrap"]["seed"]))
+    alpha, cfg = float(setup["alpha"]), load_explain_config()
+    keys: dict[str, tuple[dict[str, dict[str, Any]], str]] = {}
+    names = ("margin_per_gamma.parquet", cr.MARGIN_INSTANCES, cr.MARGIN_SUMS)
+    if all((folder / name).is_file() for name in names):
+        keys["margins"] = (cr.margin_rule_keys(*(pd.read_parquet(folder / name) for name in names), alpha=alpha,
+                                               edge=float(cfg["stratum_edge_mm"]), boot=boot), ", ".join(names))
+    if (folder / cr.COMMITS).is_file() and (folder / cr.EPISODES).is_file():
+        commits = {name: part.reset_index(drop=True) for name, part in pd.read_parquet(folder / cr.COMMITS).groupby("calibration")}
+        ep = pd.concat([pd.read_parquet(insertion / "episodes.parquet"), pd.read_parquet(folder / cr.EPISODES)], ignore_index=True)
+        runs = {name: part.drop(columns="run").reset_index(drop=True) for name, part in ep.groupby("run", sort=False)}
+        cover = list(range(1, len(setup["cover_schedule"]) + 1))
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)  # a margin search that settles on the grid's end (quick runs)
+            raw = commits["gates_random"]
+            budgets = sorted(int(k) for k in raw.loc[raw["request"] == "raw", "k"].unique())
+            gates = gates_from_commits(raw, runs["B_cal_random"], alpha, budgets, **boot)
+            cal = calibration_from_tables(commits["paper_schedule"], runs[cr.PAPER_CAL], runs[cr.PAPER_TEST], alpha, cover, **boot)
+        source = f"{cr.COMMITS} and {cr.EPISODES} (with insertion/episodes.parquet)"
+        keys["gates"] = (cr.random_gate_keys(gates), source)
+        keys["paper"] = (cr.paper_calibration_keys(cal), source)
+        keys["thresholds"] = (cr.threshold_keys(runs, list(cfg["random_budgets"]), cover, alpha), source)
+    for values, source in keys.values():
+        for group, part in values.items():
+            out.values.update({f"{group}.{key}": v for key, v in part.items()})
+            out.sources.update(dict.fromkeys((f"{group}.{key}" for key in part), source))
+
+
+def _replays(folder: Path, out: Recomputed) -> None:
+    """``missing.surprise_variants.*`` from the stored surprise readings and schedule rows; ``robust.*`` from the
+    stored mixture replays (``robust_rows.keys``: Test C's deployed rows from the insertion
+    study's stored episodes, the harness's optimism from its robust filters recomputed from their stored rows, as
+    ``_robust``); ``committed_pool.resplits.paper_schedule.*`` from the stored re-split rows (``resplits.summary``)."""
+    from probecommit.studies.explain import resplits, robust_rows
+
+    insertion = folder.parent / "insertion"
+    setup = json.loads((insertion / "results.json").read_text())["results"]["setup"]
+    boot = dict(resamples=int(setup["bootstrap"]["resamples"]), seed=int(setup["bootstrap"]["seed"]))
+    if (folder / robust_rows.STORED).is_file() and (insertion / "robust_episodes.parquet").is_file():
+        harness = Recomputed()
+        _robust(insertion, setup, boot, harness)
+        ep = pd.read_parquet(insertion / "episodes.parquet")
+        k = int(setup["k_random"])
+        dep = ep[(ep["run"] == "C_random") & (ep["method"] == "probe_robust") & (ep["status"] == "ok") & (ep["k"] == k)]
+        keys = robust_rows.keys(pd.read_parquet(folder / robust_rows.STORED), dep.drop(columns="run").reset_index(drop=True),
+                                harness.values["robust"], boot)
+        out.values.update({f"robust.{key}": v for key, v in keys.items()})
+        out.sources["robust"] = f"{robust_rows.STORED}, insertion/episodes.parquet and insertion/robust_episodes.parquet"
+    from probecommit.studies.explain import surprise_variants
+    from probecommit.studies.explain.study import surprise_variant_keys
+
+    if (folder / surprise_variants.STORED).is_file() and (folder / "schedule_episodes.parquet").is_file():
+        keys = surprise_variant_keys(pd.read_parquet(folder / surprise_variants.STORED),
+                                     pd.read_parquet(folder / "schedule_episodes.parquet"), len(setup["cover_schedule"]), boot)
+        out.values.update({f"missing.{key}": v for key, v in keys.items()})
+        out.sources["missing.surprise_variants"] = f"{surprise_variants.STORED} and schedule_episodes.parquet"
+    if (folder / resplits.STORED).is_file():
+        for key, value in resplits.summary(pd.read_parquet(folder / resplits.STORED)).items():
+            out.values[f"committed_pool.resplits.paper_schedule.{key}"] = value
+        out.sources["committed_pool.resplits"] = resplits.STORED
+
+
+def _gru_copies(folder: Path, results: dict[str, Any], out: Recomputed) -> None:
+    """``gru.*`` but the retrained seed's tolerance: the GRU study's summary recomputed from its stored
+    ``gru_episodes.parquet`` (``summarize_gru``, as ``gru`` above) and the explain step's ``summary_keys`` of it."""
+    from probecommit.studies.explain.gru import summary_keys
+    from probecommit.studies.explain.study import load_explain_config
+    from probecommit.studies.gru import load_gru_config, summarize_gru
+
+    study = folder.parent / "gru"
+    if not results.get("gru", {}).get("available") or not (study / "gru_episodes.parquet").is_file():
+        return
+    published = json.loads((study / "results.json").read_text())["results"]
+    cfg = load_gru_config()
+    per_episode = pd.read_parquet(study / "gru_episodes.parquet")
+    summary = summarize_gru(per_episode, published.get("bootstrap") or cfg["bootstrap"],
+                            float(published.get("equivalence_margin", cfg["equivalence_margin"])))
+    setup = json.loads((folder.parent / "insertion" / "results.json").read_text())["results"]["setup"]["bootstrap"]
+    boot = dict(resamples=int(setup["resamples"]), seed=int(setup["seed"]))
+    for key, value in summary_keys(summary, per_episode, boot, load_explain_config()["gru_paper_interval"]).items():
+        out.values[f"gru.{key}"] = value
+    out.sources["gru"] = "gru/gru_episodes.parquet"
+
+
+def _scan_copies(folder: Path, results: dict[str, Any], out: Recomputed) -> None:
+    """``engines_x`` and ``physx_capture.ours.*`` from the engines study's scan summaries, recomputed from its stored
+    ``engine_scans.parquet`` (``studies.engines.scan_summaries``), and ``physx_capture.emulated.*`` from the stored
+    emulated-scene rows, through the explain step's functions."""
+    from probecommit.studies.engines import scan_summaries
+    from probecommit.studies.explain import engines_x
+
+    path = folder.parent / "engines" / "engine_scans.parquet"
+    if (folder / engines_x.EMULATED).is_file():
+        from probecommit.studies.explain.study import load_explain_config
+
+        setup = json.loads((folder.parent / "insertion" / "results.json").read_text())["results"]["setup"]["bootstrap"]
+        scale = float(load_explain_config()["physx_emulation"]["capture_scale"])
+        keys = engines_x.emulated_keys(pd.read_parquet(folder / engines_x.EMULATED), scale, setup)
+        out.values.update({f"physx_capture.{key}": v for key, v in keys.items()})
+        out.sources["physx_capture.emulated"] = engines_x.EMULATED
+    if not path.is_file():
+        return
+    scans = scan_summaries(pd.read_parquet(path))
+    groups = {"engines_x": engines_x.keys(scans) if results.get("engines_x") else {},
+              "physx_capture": engines_x.physx_ours(scans) if results.get("physx_capture") else {}}
+    for group, values in groups.items():
+        out.values.update({f"{group}.{key}": v for key, v in values.items()})
+        out.sources.update(dict.fromkeys((f"{group}.{key}" for key in values), "engines/engine_scans.parquet"))
 
 
 def _engine_keys(folder: Path, results: dict[str, Any], ep: pd.DataFrame, out: Recomputed) -> None:
@@ -583,7 +708,9 @@ STORED_TABLES: dict[str, tuple[str, ...]] = {
     "gru": ("gru_episodes.parquet",),
     "beyond": ("beyond_episodes.parquet",),
     "explain": ("margin_per_gamma.parquet", "fresh_draws.parquet", "draw_cells.parquet", EXPLAIN_BREADTH,
-                "schedule_episodes.parquet", EXPLAIN_MIXTURE, *EXPLAIN_RIG),
+                "schedule_episodes.parquet", EXPLAIN_MIXTURE, *EXPLAIN_RIG, "margin_instances.parquet",
+                "margin_instance_sums.parquet", "commits.parquet", "episodes.parquet", "physx_emulated_episodes.parquet",
+                "robust_replays.parquet", "resplits_paper_schedule.parquet", "surprise_variants.parquet"),
 }
 
 #: Study folder -> its recomputation.
