@@ -449,6 +449,7 @@ def explain(folder: Path, results: dict[str, Any]) -> Recomputed:
     _scan_copies(folder, results, out)
     _gru_copies(folder, results, out)
     _replays(folder, out)
+    _generator(folder, out)
     if (folder / EXPLAIN_BREADTH).is_file():
         _breadth_prior(folder, results, out)
     _cost_copies(folder, out)
@@ -569,10 +570,39 @@ def _replays(folder: Path, out: Recomputed) -> None:
                                      pd.read_parquet(folder / "schedule_episodes.parquet"), len(setup["cover_schedule"]), boot)
         out.values.update({f"missing.{key}": v for key, v in keys.items()})
         out.sources["missing.surprise_variants"] = f"{surprise_variants.STORED} and schedule_episodes.parquet"
+    from probecommit.studies.explain import searches
+    from probecommit.studies.explain.more import search_keys
+
+    if (folder / searches.COVER_STORED).is_file() and (insertion / "robust_episodes.parquet").is_file():
+        keys = search_keys(pd.read_parquet(folder / searches.COVER_STORED), pd.read_parquet(insertion / "robust_episodes.parquet"),
+                           boot)
+        out.values.update({f"searches.{key}": v for key, v in keys.items()})
+        out.sources["searches"] = f"{searches.COVER_STORED} and insertion/robust_episodes.parquet (tuning rows)"
     if (folder / resplits.STORED).is_file():
         for key, value in resplits.summary(pd.read_parquet(folder / resplits.STORED)).items():
             out.values[f"committed_pool.resplits.paper_schedule.{key}"] = value
         out.sources["committed_pool.resplits"] = resplits.STORED
+
+
+def _generator(folder: Path, out: Recomputed) -> None:
+    """``instance_generator.<run>.*`` from the stored frozen draws (``generator.generator_keys``: the redraws are made
+    again from the seeds) and ``draws.analytic_equals_mujoco_escape_k8`` from the fresh draws and the stored
+    B_test_random episodes."""
+    from probecommit.studies.explain import generator, stored
+    from probecommit.studies.explain.study import load_explain_config
+
+    if (folder / generator.STORED).is_file():
+        keys = generator.generator_keys(pd.read_parquet(folder / generator.STORED), float(load_explain_config()["stratum_edge_mm"]))
+        out.values.update({f"instance_generator.{key}": v for key, v in keys.items()})
+        out.sources.update(dict.fromkeys((f"instance_generator.{key}" for key in keys), generator.STORED))
+    insertion = folder.parent / "insertion"
+    if (folder / stored.DRAWS).is_file():
+        k = int(json.loads((insertion / "results.json").read_text())["results"]["setup"]["k_random"])
+        ep = pd.read_parquet(insertion / "episodes.parquet")
+        mujoco = ep[(ep["run"] == "B_test_random") & (ep["method"] == "probe_robust") & (ep["status"] == "ok") & (ep["k"] == k)]
+        for key, value in generator.analytic_equals_mujoco(pd.read_parquet(folder / stored.DRAWS), mujoco).items():
+            out.values[f"instance_generator.{key}"] = value
+            out.sources[f"instance_generator.{key}"] = f"{stored.DRAWS} and insertion/episodes.parquet"
 
 
 def _gru_copies(folder: Path, results: dict[str, Any], out: Recomputed) -> None:
@@ -710,7 +740,8 @@ STORED_TABLES: dict[str, tuple[str, ...]] = {
     "explain": ("margin_per_gamma.parquet", "fresh_draws.parquet", "draw_cells.parquet", EXPLAIN_BREADTH,
                 "schedule_episodes.parquet", EXPLAIN_MIXTURE, *EXPLAIN_RIG, "margin_instances.parquet",
                 "margin_instance_sums.parquet", "commits.parquet", "episodes.parquet", "physx_emulated_episodes.parquet",
-                "robust_replays.parquet", "resplits_paper_schedule.parquet", "surprise_variants.parquet"),
+                "robust_replays.parquet", "resplits_paper_schedule.parquet", "surprise_variants.parquet",
+                "cover_search_episodes.parquet", "generator_instances.parquet"),
 }
 
 #: Study folder -> its recomputation.

@@ -239,16 +239,18 @@ class Explain:
 
     # ------------------------------------------------------------------ instance draws
     def instance_generator(self) -> None:
-        out = self.res["instance_generator"]
+        """Each uniform run's frozen draw against redraws of its generator, from the stored draws (``generator``)."""
         edge, seeds = self.cfg["stratum_edge_mm"], self.cfg["generator_seeds_quick" if self.quick else "generator_seeds"]
-        low, high = -10.0, 10.0
+        frozen = {}
         for name in ("A_cover", "B_cal_cover", "B_test_cover", "B_cal_random", "B_test_random", "C_cover", "C_random"):
             run = self.load(name)
             cfg = run.config.instances
-            if cfg.sampling != "uniform":
-                continue
-            test = generator.generator_test(run.instances, cfg.split, cfg.seed, low, high, edge, seeds)
-            out.update({f"{name}.{k}": v for k, v in test.items()})
+            if cfg.sampling == "uniform":
+                frozen[name] = (run.instances, cfg.split, cfg.seed)
+        if not frozen:
+            return
+        self.stored[generator.STORED] = generator.generator_table(frozen, seeds)
+        self.res["instance_generator"].update(generator.generator_keys(self.stored[generator.STORED], edge))
 
     def draws(self) -> None:
         """Escape, failure and the boundary fix across fresh draws of the generator (analytic scene)."""
@@ -274,8 +276,7 @@ class Explain:
         table = pd.DataFrame(rows)
         mujoco = _probe(self.load("B_test_random").episodes, kmax)
         out.update(stored.draws_keys(table))  # the summaries verify recomputes from the stored rows
-        out["draws.analytic_equals_mujoco_escape_k8"] = int(
-            abs(table.iloc[0]["escape_k8"] - mujoco["escaped"].mean()) < 1e-12)
+        out.update(generator.analytic_equals_mujoco(table, mujoco))
         self.tables["draws"] = table.assign(schedule="draws")
         first = {"audit": 0, "faults": 0, "audit_fresh_cal": 1, "gates_fresh_cal": 1}
         self.tables["cells"] = stored.cells_table(cells, first)
