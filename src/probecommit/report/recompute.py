@@ -578,6 +578,11 @@ def _replays(folder: Path, out: Recomputed) -> None:
                            boot)
         out.values.update({f"searches.{key}": v for key, v in keys.items()})
         out.sources["searches"] = f"{searches.COVER_STORED} and insertion/robust_episodes.parquet (tuning rows)"
+    from probecommit.studies.explain import grasp_x
+
+    if (folder / grasp_x.STORED).is_file():
+        out.values.update({f"grasp_signs.{key}": v for key, v in grasp_x.keys(pd.read_parquet(folder / grasp_x.STORED)).items()})
+        out.sources["grasp_signs"] = grasp_x.STORED
     if (folder / resplits.STORED).is_file():
         for key, value in resplits.summary(pd.read_parquet(folder / resplits.STORED)).items():
             out.values[f"committed_pool.resplits.paper_schedule.{key}"] = value
@@ -741,7 +746,8 @@ STORED_TABLES: dict[str, tuple[str, ...]] = {
                 "schedule_episodes.parquet", EXPLAIN_MIXTURE, *EXPLAIN_RIG, "margin_instances.parquet",
                 "margin_instance_sums.parquet", "commits.parquet", "episodes.parquet", "physx_emulated_episodes.parquet",
                 "robust_replays.parquet", "resplits_paper_schedule.parquet", "surprise_variants.parquet",
-                "cover_search_episodes.parquet", "generator_instances.parquet"),
+                "cover_search_episodes.parquet", "generator_instances.parquet",
+                "grasp_analytic_episodes.parquet"),
 }
 
 #: Study folder -> its recomputation.

@@ -60,4 +60,5 @@ def run_ex3(job: Any) -> None:
                                                       job.p.budgets["random"])
     job.res["mixture_noise"].update(keys)
     job.progress("explain: grasp on the model-exact scene", 0, 1)
-    job.res["grasp_signs"].update(grasp_x.run(job.runs, job.quick, job.workers))
+    job.stored[grasp_x.STORED] = grasp_x.run(job.runs, job.quick, job.workers)
+    job.res["grasp_signs"].update(grasp_x.keys(job.stored[grasp_x.STORED]))  # what verify recomputes
