@@ -597,7 +597,13 @@ def _generator(folder: Path, out: Recomputed) -> None:
     from probecommit.studies.explain.study import load_explain_config
 
     if (folder / generator.STORED).is_file():
-        keys = generator.generator_keys(pd.read_parquet(folder / generator.STORED), float(load_explain_config()["stratum_edge_mm"]))
+        try:
+            keys = generator.generator_keys(pd.read_parquet(folder / generator.STORED),
+                                            float(load_explain_config()["stratum_edge_mm"]))
+        except AssertionError:  # a stored hole that is not its generator's draw for the stored seed
+            out.consistency.append((False, f"explain/{generator.STORED}: the stored holes are not the generator's draws "
+                                           "for their stored seeds (instance_generator.<run>.* are computed from them)"))
+            keys = {}
         out.values.update({f"instance_generator.{key}": v for key, v in keys.items()})
         out.sources.update(dict.fromkeys((f"instance_generator.{key}" for key in keys), generator.STORED))
     insertion = folder.parent / "insertion"
@@ -790,3 +796,42 @@ TRACED_ONLY = {
     "setup": "Table I (rendered again from the registry and frozen configs; its counts are the configs', not a "
              "quick run's stored rows)",
 }
+
+
+#: Why a results.json number is traced only (hashed, range-checked, rendered again into every text that prints it,
+#: but not recomputed), by kind; ``verify``'s headline counts the traced-only numbers by these kinds.
+TRACED_KINDS = {
+    "measured": "a measurement of the run itself (engine-query count, a replay's agreement with the log's "
+                "decisions, the frozen scan offset): no stored table implies it",
+    "training": "needs a training run (the GRU's training loss, a retrained seed's parameters)",
+    "engine rows": "the frozen choice a search over engine rollouts made, beside its stored per-candidate rows "
+                   "(the frozen cover schedule and its rank, the re-split pool's size)",
+    "scene render": "the numbers of a scene render drawn from run directories (Fig. 1a/1c, Fig. 3)",
+    "setting": "a setting printed beside the results (alpha, sigma, budgets, seeds, resamples, the frozen config)",
+    "paper value": "the paper's value printed beside ours (checked against the seed text by the paper-values test)",
+    "not stored": "a summary of rows the publication does not store (docs/verify.md lists each)",
+}
+#: (study, regular expression on the dotted results.json key, kind): the first match names a traced number's kind;
+#: a number no pattern matches is "not stored".
+TRACED_PATTERNS: tuple[tuple[str, str, str], ...] = (
+    ("gru", r"^training_", "training"),
+    ("explain", r"^gru\.(retrain_|threads_)", "training"),
+    ("explain", r"^pybullet_escape\.paper_", "paper value"),
+    ("robot", r"^replay_reproduced_fraction$", "measured"),
+    ("engines", r"\.engine_calls$", "measured"),
+    ("insertion", r"^scan\.frozen_delta$", "measured"),
+    ("insertion", r"^(cover\.frozen|resplits\.pool)", "engine rows"),
+    ("figures", r"^(fig1|scenes)\.", "scene render"),
+    ("*", r"^(setup|settings|bootstrap|config)\.|^(sweep_resamples|equivalence_margin)$|^instance_generator\.\w+\.seeds$",
+     "setting"),
+)
+
+
+def traced_kind(study: str, key: str) -> str:
+    """Why a traced-only results.json number (``key`` dotted) is not recomputed (a ``TRACED_KINDS`` key)."""
+    import re
+
+    for where, pattern, kind in TRACED_PATTERNS:
+        if where in (study, "*") and re.search(pattern, key):
+            return kind
+    return "not stored"
