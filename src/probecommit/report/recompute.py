@@ -277,7 +277,20 @@ def breadth(folder: Path, results: dict[str, Any]) -> Recomputed:
     out.tables["budget_curves.parquet"] = budget_curves(runs)
     out.table_sources = {"table_II_breadth.parquet": "breadth_episodes.parquet",
                          "budget_curves.parquet": "breadth_episodes.parquet"}
+    if (folder / SIGN_FLIP_ROWS).is_file():  # each success family's per-truth sign count (``sign_flip_summary``)
+        from probecommit.studies.breadth import FAMILY_K, sign_flip_summary
+
+        for family, part in pd.read_parquet(folder / SIGN_FLIP_ROWS).groupby("family", sort=False):
+            out.values[f"sign_flip_over_truths.{family}"] = sign_flip_summary(part.drop(columns="family"), FAMILY_K[family])
+        out.sources["sign_flip_over_truths"] = SIGN_FLIP_ROWS
+    elif results.get("sign_flip_over_truths"):  # published sign counts need their stored rows
+        out.consistency.append((False, f"breadth/{SIGN_FLIP_ROWS}: missing (the rows sign_flip_over_truths.* are "
+                                       "recomputed from)"))
     return out
+
+
+#: Success families' episodes with each instance's feasibility and truth (``studies.breadth.SIGN_FLIP_ROWS``).
+SIGN_FLIP_ROWS = "sign_flip_rows.parquet"
 
 
 def cost(folder: Path, results: dict[str, Any]) -> Recomputed:
@@ -776,11 +789,16 @@ RECOMPUTED = {
              "resolved and holds-to boundary sizes",
     "gru": "every number of the GRU table but the training loss",
     "beyond": "the plateau, moves and adaptive tables",
-    "explain": "the margin curves' cells; the fresh draws' summaries; Table III's and the fault harness's cells over "
-               "fresh draws; the schedules' pools, failures and cover surprise AUCs; the boundary fault, Test C, "
-               "whole-cluster escapes and strata; the prior sweep's rows, prices and spans; the mixture against the "
-               "filter's noise; the simulated rig redrawn; the PhysX coverage; the cost of calibration; PyBullet's stored "
-               "escapes and the emulated scene's escape over fresh draws",
+    "explain": "the margin curves' cells; the margins, thresholds, their intervals, shares and strata (per-instance "
+               "calibration rows); the random-probe gates and the calibration under the paper's schedule (re-executed "
+               "commits); the simultaneous thresholds; the fresh draws' summaries; Table III's and the fault harness's "
+               "cells over fresh draws; the schedules' pools, failures and cover surprise AUCs; the surprise variants; "
+               "the boundary fault, Test C, whole-cluster escapes and strata; the generator test; the prior sweep's "
+               "rows, prices and spans; the mixture against the filter's noise and the mixture replays (robust); the "
+               "simulated rig redrawn; the PhysX coverage, capture scans and emulated scene; the cost of calibration; "
+               "PyBullet's stored escapes and the emulated scene's escape over fresh draws; the re-splits under the "
+               "paper's schedule; the development searches; grasp on the model-exact scene; the GRU's spread and power; "
+               "the PyBullet capture interval",
 }
 TRACED_ONLY = {
     "insertion": "the stored rows themselves (episodes, re-executed commits, replays); the re-split rows; the cover "
@@ -788,10 +806,10 @@ TRACED_ONLY = {
     "engines": "the engine-query counts",
     "robot": "the replay reproduction fraction",
     "gru": "the training loss",
-    "explain": "the stored rows themselves; the random gates, thresholds and margins (re-commits), the calibration "
-               "and re-splits under the paper's schedule, surprise variants, the generator redraws, "
-               "PyBullet's emulated-scene keys, and the groups gru, physx_capture, robust, engines_x, searches, grasp_signs "
-               "(docs/verify.md lists each); explain.md is rendered again from results.json",
+    "explain": "the stored rows themselves (re-commits, replays, redraws, emulated scenes: run directories a "
+               "publication does not hold); the retrained GRU seed's parameter differences (a training run); "
+               "PyBullet's emulated-scene keys and the paper's PyBullet values (docs/verify.md); explain.md is "
+               "rendered again from results.json",
     "figures": "Fig. 1a/1c and Fig. 3 (scene renders from run directories); Fig. 2 is drawn again from code",
     "setup": "Table I (rendered again from the registry and frozen configs; its counts are the configs', not a "
              "quick run's stored rows)",
@@ -818,7 +836,7 @@ TRACED_PATTERNS: tuple[tuple[str, str, str], ...] = (
     ("explain", r"^gru\.(retrain_|threads_)", "training"),
     ("explain", r"^pybullet_escape\.paper_", "paper value"),
     ("robot", r"^replay_reproduced_fraction$", "measured"),
-    ("engines", r"\.engine_calls$", "measured"),
+    ("engines", r"\.engine_calls(\.|$)", "measured"),
     ("insertion", r"^scan\.frozen_delta$", "measured"),
     ("insertion", r"^(cover\.frozen|resplits\.pool)", "engine rows"),
     ("figures", r"^(fig1|scenes)\.", "scene render"),

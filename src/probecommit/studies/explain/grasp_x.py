@@ -19,35 +19,19 @@ import pandas as pd
 
 from probecommit.runner.config import config_data, parse_config
 from probecommit.runner.study import run_study
-from probecommit.studies.breadth import FAMILY_K, feasible_instances, paper_config, quick_config, truth_sign_flip
+from probecommit.studies.breadth import FAMILY_K, paper_config, quick_config, sign_flip_summary, truth_rows
 
 
 #: The model-exact grasp run's rows Table II's sign count reads, with each instance's feasibility and truth label.
 STORED = "grasp_analytic_episodes.parquet"
 
 
-def stored_rows(config: Any, run_dir: Path) -> pd.DataFrame:
-    """The run's episodes (the columns the sign count reads) with ``feasible`` and ``truth`` per instance."""
-    feasible = feasible_instances(config, run_dir)
-    episodes = pd.read_parquet(run_dir / "episodes.parquet")
-    instances = pd.read_parquet(run_dir / "instances.parquet")
-    truth_cols = [c for c in instances.columns if c.startswith("true_")]
-    truth_of = dict(zip(instances["instance_id"], instances[truth_cols].astype(str).agg(",".join, axis=1)))
-    rows = episodes[["instance_id", "repeat", "method", "k", "status", "realized"]].reset_index(drop=True)
-    ids = pd.DataFrame({"instance_id": list(feasible), "feasible": list(feasible.values()),
-                        "truth": [truth_of[i] for i in feasible]})
-    return rows.merge(ids, on="instance_id", how="left", sort=False)
-
-
 def sign_counts(rows: pd.DataFrame) -> dict[str, Any]:
     """Feasible truths and their per-truth signs (Probe-Robust(k) - Blind-Bayes success), as Table II reads them,
-    from ``stored_rows`` (one function for the explain step and verify)."""
-    per_instance = rows.drop_duplicates("instance_id")
-    feasible = dict(zip(per_instance["instance_id"], per_instance["feasible"].astype(bool)))
-    episodes = rows[rows["instance_id"].map(feasible).fillna(False).astype(bool)]
-    out = truth_sign_flip(episodes, dict(zip(per_instance["instance_id"], per_instance["truth"])), FAMILY_K["grasp"])
+    from the stored rows (``breadth.truth_rows``; one function for the explain step and verify)."""
+    out = sign_flip_summary(rows, FAMILY_K["grasp"])
     out.pop("differences")
-    return {**out, "n_feasible": int(sum(feasible.values())), "n_instances": len(feasible)}
+    return out
 
 
 def keys(rows: pd.DataFrame) -> dict[str, Any]:
@@ -65,4 +49,4 @@ def run(runs: Path, quick: bool, workers: int = 1) -> pd.DataFrame:
     config = parse_config(data)
     path = runs / "grasp_analytic_scene"
     run_study(config, path, workers=workers, threads=1)
-    return stored_rows(config, path)
+    return truth_rows(config, path)
