@@ -689,6 +689,9 @@ def _engine_keys(folder: Path, results: dict[str, Any], ep: pd.DataFrame, out: R
         out.sources[f"missing.{key}"] = "engines/engine_episodes.parquet"
     deployed = ep[(ep["engine"] == "pybullet") & (ep["variant"] == "deployed")]
     published = "draws.escape_k8.count" in results.get("pybullet_escape", {})
+    if "emulated.escape_k1" in results.get("pybullet_escape", {}) and not (folder / pybullet_x.EMULATED).is_file():
+        out.consistency.append((False, f"explain/{pybullet_x.EMULATED}: missing (the rows pybullet_escape.emulated.* "
+                                       "are recomputed from)"))
     if published and not (folder / pybullet_x.STORED).is_file():  # published draws need their stored rows
         out.consistency.append((False, f"explain/{pybullet_x.STORED}: missing (the per-draw escapes "
                                        "pybullet_escape.draws.escape_k8.* are recomputed from)"))
@@ -697,6 +700,11 @@ def _engine_keys(folder: Path, results: dict[str, Any], ep: pd.DataFrame, out: R
         for key, value in pybullet_x.stored_keys(deployed, pd.read_parquet(folder / pybullet_x.STORED), k, boot).items():
             out.values[f"pybullet_escape.{key}"] = value
         out.sources["pybullet_escape"] = f"engines/engine_episodes.parquet and {pybullet_x.STORED}"
+    if len(deployed) and (folder / pybullet_x.EMULATED).is_file():
+        boot = dict(resamples=int(setup["bootstrap"]["resamples"]), seed=int(setup["bootstrap"]["seed"]))
+        for key, value in pybullet_x.emulated_keys(pd.read_parquet(folder / pybullet_x.EMULATED), deployed, k, boot).items():
+            out.values[f"pybullet_escape.{key}"] = value
+            out.sources[f"pybullet_escape.{key}"] = f"{pybullet_x.EMULATED} and engines/engine_episodes.parquet"
 
 
 def _cost_copies(folder: Path, out: Recomputed) -> None:
@@ -767,6 +775,7 @@ STORED_TABLES: dict[str, tuple[str, ...]] = {
                 "robust_replays.parquet", "resplits_paper_schedule.parquet", "surprise_variants.parquet",
                 "cover_search_episodes.parquet", "generator_instances.parquet",
                 "grasp_analytic_episodes.parquet"),
+    # ``pybullet_x.EMULATED`` is required where the engines study's PyBullet run was there (``_engine_keys``).
 }
 
 #: Study folder -> its recomputation.
@@ -796,7 +805,7 @@ RECOMPUTED = {
                "the boundary fault, Test C, whole-cluster escapes and strata; the generator test; the prior sweep's "
                "rows, prices and spans; the mixture against the filter's noise and the mixture replays (robust); the "
                "simulated rig redrawn; the PhysX coverage, capture scans and emulated scene; the cost of calibration; "
-               "PyBullet's stored escapes and the emulated scene's escape over fresh draws; the re-splits under the "
+               "PyBullet's stored escapes, its emulated scene and that scene's escape over fresh draws; the re-splits under the "
                "paper's schedule; the development searches; grasp on the model-exact scene; the GRU's spread and power; "
                "the PyBullet capture interval",
 }
@@ -808,7 +817,7 @@ TRACED_ONLY = {
     "gru": "the training loss",
     "explain": "the stored rows themselves (re-commits, replays, redraws, emulated scenes: run directories a "
                "publication does not hold); the retrained GRU seed's parameter differences (a training run); "
-               "PyBullet's emulated-scene keys and the paper's PyBullet values (docs/verify.md); explain.md is "
+               "the paper's PyBullet values (docs/verify.md); explain.md is "
                "rendered again from results.json",
     "figures": "Fig. 1a/1c and Fig. 3 (scene renders from run directories); Fig. 2 is drawn again from code",
     "setup": "Table I (rendered again from the registry and frozen configs; its counts are the configs', not a "
