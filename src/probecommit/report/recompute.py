@@ -587,8 +587,10 @@ def _replays(folder: Path, out: Recomputed) -> None:
     from probecommit.studies.explain.more import search_keys
 
     if (folder / searches.COVER_STORED).is_file() and (insertion / "robust_episodes.parquet").is_file():
-        keys = search_keys(pd.read_parquet(folder / searches.COVER_STORED), pd.read_parquet(insertion / "robust_episodes.parquet"),
-                           boot)
+        cover = pd.read_parquet(folder / searches.COVER_STORED)
+        keys = search_keys(cover, pd.read_parquet(insertion / "robust_episodes.parquet"), boot)
+        if (insertion / "cover_search.parquet").is_file():
+            out.consistency.extend(_cover_candidates(pd.read_parquet(insertion / "cover_search.parquet"), cover))
         out.values.update({f"searches.{key}": v for key, v in keys.items()})
         out.sources["searches"] = f"{searches.COVER_STORED} and insertion/robust_episodes.parquet (tuning rows)"
     from probecommit.studies.explain import grasp_x
@@ -627,6 +629,22 @@ def _generator(folder: Path, out: Recomputed) -> None:
         for key, value in generator.analytic_equals_mujoco(pd.read_parquet(folder / stored.DRAWS), mujoco).items():
             out.values[f"instance_generator.{key}"] = value
             out.sources[f"instance_generator.{key}"] = f"{stored.DRAWS} and insertion/episodes.parquet"
+
+
+def _cover_candidates(frozen: pd.DataFrame, rows: pd.DataFrame) -> list[tuple[bool, str]]:
+    """The insertion study's cover-search candidates (failure and aim error per schedule) against the explain step's
+    stored per-episode rows of the same search (``studies.cover_search.candidate_episodes``), candidate by candidate."""
+    means = rows.groupby("schedule", sort=False)[["failure", "aim_error"]].mean()
+    out = []
+    for row in frozen.to_dict("records"):
+        schedule = json.dumps([float(u) for u in json.loads(str(row["schedule"]))])
+        if schedule not in means.index:
+            continue  # a quick search scores the first candidates only
+        for column in ("failure", "aim_error"):
+            mine = float(means.loc[schedule, column])
+            out.append((abs(mine - float(row[column])) <= 1e-12, f"insertion/cover_search.parquet: {schedule} {column} = "
+                        f"{row[column]} but explain/cover_search_episodes.parquet's rows give {mine}"))
+    return out
 
 
 def _gru_copies(folder: Path, results: dict[str, Any], out: Recomputed) -> None:
