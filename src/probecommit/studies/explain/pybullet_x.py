@@ -124,7 +124,7 @@ def emulated_keys(rows: pd.DataFrame, stored: pd.DataFrame, kmax: int, boot: dic
                                                and bool((both["escaped"].astype(bool) == both["escaped_stored"].astype(bool)).all()))
     scales = gamma_scales(ratio, sd, int(paper["instances"].iloc[0]), seed)  # one scale per instance, in instance order
     per_truth = capture_failure(e_paper["action"].to_numpy(), e_paper["z_true"].to_numpy(), e_paper["true_c"].to_numpy(float),
-                                scales[e_paper["instance_index"].to_numpy()])
+                                scales[e_paper["instance_index"].to_numpy().astype(int)])
     out["per_truth_capture.failure_k8"] = float(per_truth.mean())
     out["per_truth_capture.optimism_k8"] = float((per_truth - e_paper["predicted"].to_numpy(float)).mean())
     return out

@@ -58,8 +58,9 @@ def cover_stability(table: pd.DataFrame, paper_schedule: list[float], boot: dict
     ``explain:results.searches.cover.*``."""
     order = table.drop_duplicates("candidate").sort_values("candidate")
     candidates = [tuple(float(u) for u in json.loads(sched)) for sched in order["schedule"]]
-    fail = table.pivot(columns="candidate", values="failure", index=table.groupby("candidate").cumcount())
-    aim = table.pivot(columns="candidate", values="aim_error", index=table.groupby("candidate").cumcount())
+    table = table.assign(row=table.groupby("candidate").cumcount())  # the episode's position in its candidate's rows
+    fail = table.pivot(index="row", columns="candidate", values="failure")
+    aim = table.pivot(index="row", columns="candidate", values="aim_error")
     ids = table[table["candidate"] == order["candidate"].iloc[0]]["instance_id"].to_numpy()
     paper = tuple(float(u) for u in paper_schedule)
     out: dict[str, Any] = {"candidates": len(candidates), "paper_in_candidates": int(paper in candidates)}
