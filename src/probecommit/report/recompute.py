@@ -442,9 +442,9 @@ def beyond(folder: Path, results: dict[str, Any]) -> Recomputed:
 
 
 def explain(folder: Path, results: dict[str, Any]) -> Recomputed:
-    """The explain keys that summarize stored rows (``studies.explain.stored``: the functions the explain step
-    fills them with): the margin curves' cells, the fresh draws' summaries, Table III's and the fault
-    harness's cells over fresh draws."""
+    """The explain keys, each from the stored rows it summarizes through the function the explain step fills it
+    with (``studies.explain.stored``, ``calibration_rows``, ``robust_rows`` and each step's key function; the
+    list is ``RECOMPUTED["explain"]``): every explain key but a retrained seed's parameters and the paper's values."""
     from probecommit.studies.explain import stored
 
     out = Recomputed()
@@ -462,6 +462,7 @@ def explain(folder: Path, results: dict[str, Any]) -> Recomputed:
     _scan_copies(folder, results, out)
     _gru_copies(folder, results, out)
     _replays(folder, out)
+    _searches(folder, out)
     _generator(folder, out)
     if (folder / EXPLAIN_BREADTH).is_file():
         _breadth_prior(folder, results, out)
@@ -555,53 +556,59 @@ def _calibration_rows(folder: Path, out: Recomputed) -> None:
             out.sources.update(dict.fromkeys((f"{group}.{key}" for key in part), source))
 
 
+def _protocol(folder: Path) -> tuple[dict[str, Any], dict[str, int]]:
+    """The insertion study's ``setup`` and its bootstrap settings (the protocol's, which the explain step uses)."""
+    setup = json.loads((folder.parent / "insertion" / "results.json").read_text())["results"]["setup"]
+    return setup, dict(resamples=int(setup["bootstrap"]["resamples"]), seed=int(setup["bootstrap"]["seed"]))
+
+
+def _publish(out: Recomputed, group: str, keys: dict[str, Any], source: str) -> None:
+    out.values.update({f"{group}.{key}": v for key, v in keys.items()})
+    out.sources.update(dict.fromkeys((f"{group}.{key}" for key in keys), source))
+
+
 def _replays(folder: Path, out: Recomputed) -> None:
-    """``missing.surprise_variants.*`` from the stored surprise readings and schedule rows; ``robust.*`` from the
-    stored mixture replays (``robust_rows.keys``: Test C's deployed rows from the insertion
+    """``robust.*`` from the stored mixture replays (``robust_rows.keys``: Test C's deployed rows from the insertion
     study's stored episodes, the harness's optimism from its robust filters recomputed from their stored rows, as
-    ``_robust``); ``committed_pool.resplits.paper_schedule.*`` from the stored re-split rows (``resplits.summary``)."""
-    from probecommit.studies.explain import resplits, robust_rows
+    ``_robust``); ``missing.surprise_variants.*`` from the stored surprise readings and schedule rows."""
+    from probecommit.studies.explain import robust_rows, surprise_variants
+    from probecommit.studies.explain.study import surprise_variant_keys
 
     insertion = folder.parent / "insertion"
-    setup = json.loads((insertion / "results.json").read_text())["results"]["setup"]
-    boot = dict(resamples=int(setup["bootstrap"]["resamples"]), seed=int(setup["bootstrap"]["seed"]))
+    setup, boot = _protocol(folder)
     if (folder / robust_rows.STORED).is_file() and (insertion / "robust_episodes.parquet").is_file():
         harness = Recomputed()
         _robust(insertion, setup, boot, harness)
         ep = pd.read_parquet(insertion / "episodes.parquet")
-        k = int(setup["k_random"])
-        dep = ep[(ep["run"] == "C_random") & (ep["method"] == "probe_robust") & (ep["status"] == "ok") & (ep["k"] == k)]
-        keys = robust_rows.keys(pd.read_parquet(folder / robust_rows.STORED), dep.drop(columns="run").reset_index(drop=True),
-                                harness.values["robust"], boot)
-        out.values.update({f"robust.{key}": v for key, v in keys.items()})
-        out.sources["robust"] = f"{robust_rows.STORED}, insertion/episodes.parquet and insertion/robust_episodes.parquet"
-    from probecommit.studies.explain import surprise_variants
-    from probecommit.studies.explain.study import surprise_variant_keys
-
+        dep = ep[(ep["run"] == "C_random") & (ep["method"] == "probe_robust") & (ep["status"] == "ok")
+                 & (ep["k"] == int(setup["k_random"]))].drop(columns="run").reset_index(drop=True)
+        _publish(out, "robust", robust_rows.keys(pd.read_parquet(folder / robust_rows.STORED), dep, harness.values["robust"], boot),
+                 f"{robust_rows.STORED}, insertion/episodes.parquet and insertion/robust_episodes.parquet")
     if (folder / surprise_variants.STORED).is_file() and (folder / "schedule_episodes.parquet").is_file():
         keys = surprise_variant_keys(pd.read_parquet(folder / surprise_variants.STORED),
                                      pd.read_parquet(folder / "schedule_episodes.parquet"), len(setup["cover_schedule"]), boot)
-        out.values.update({f"missing.{key}": v for key, v in keys.items()})
-        out.sources["missing.surprise_variants"] = f"{surprise_variants.STORED} and schedule_episodes.parquet"
-    from probecommit.studies.explain import searches
+        _publish(out, "missing", keys, f"{surprise_variants.STORED} and schedule_episodes.parquet")
+
+
+def _searches(folder: Path, out: Recomputed) -> None:
+    """``searches.*`` (``more.search_keys`` of the stored cover-search rows and the insertion study's stored tuning
+    rows), with the insertion study's cover-search candidates checked against the same rows; ``grasp_signs.*`` and
+    ``committed_pool.resplits.paper_schedule.*`` from their stored rows."""
+    from probecommit.studies.explain import grasp_x, resplits, searches
     from probecommit.studies.explain.more import search_keys
 
+    insertion = folder.parent / "insertion"
     if (folder / searches.COVER_STORED).is_file() and (insertion / "robust_episodes.parquet").is_file():
         cover = pd.read_parquet(folder / searches.COVER_STORED)
-        keys = search_keys(cover, pd.read_parquet(insertion / "robust_episodes.parquet"), boot)
+        keys = search_keys(cover, pd.read_parquet(insertion / "robust_episodes.parquet"), _protocol(folder)[1])
+        _publish(out, "searches", keys, f"{searches.COVER_STORED} and insertion/robust_episodes.parquet (tuning rows)")
         if (insertion / "cover_search.parquet").is_file():
             out.consistency.extend(_cover_candidates(pd.read_parquet(insertion / "cover_search.parquet"), cover))
-        out.values.update({f"searches.{key}": v for key, v in keys.items()})
-        out.sources["searches"] = f"{searches.COVER_STORED} and insertion/robust_episodes.parquet (tuning rows)"
-    from probecommit.studies.explain import grasp_x
-
     if (folder / grasp_x.STORED).is_file():
-        out.values.update({f"grasp_signs.{key}": v for key, v in grasp_x.keys(pd.read_parquet(folder / grasp_x.STORED)).items()})
-        out.sources["grasp_signs"] = grasp_x.STORED
+        _publish(out, "grasp_signs", grasp_x.keys(pd.read_parquet(folder / grasp_x.STORED)), grasp_x.STORED)
     if (folder / resplits.STORED).is_file():
-        for key, value in resplits.summary(pd.read_parquet(folder / resplits.STORED)).items():
-            out.values[f"committed_pool.resplits.paper_schedule.{key}"] = value
-        out.sources["committed_pool.resplits"] = resplits.STORED
+        _publish(out, "committed_pool", {f"resplits.paper_schedule.{k}": v for k, v in
+                                         resplits.summary(pd.read_parquet(folder / resplits.STORED)).items()}, resplits.STORED)
 
 
 def _generator(folder: Path, out: Recomputed) -> None:
