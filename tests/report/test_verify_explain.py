@@ -110,9 +110,8 @@ CASES: list[tuple[str, Edit]] = [
                                                  lambda v: 1.0 - v,
                                                  "committed_pool.schedule.B_test.paper_schedule.cost_table."
                                                  "set_calibration_margin")),
-    ("stored-paper-schedule-blind-row", edit_stored("episodes.parquet", lambda t: (t.run == "paper_B_test")
-                                                    & (t.method == "blind_robust"), "realized", lambda v: 1.0 - v,
-                                                    "cost_table.blind_robust")),
+    ("stored-paper-schedule-test-row", edit_stored("episodes.parquet", lambda t: (t.run == "paper_B_test") & (t.k == 5),
+                                                   "realized", lambda v: 1.0 - v, "cost_table.no_calibration")),
     ("stored-corrected-calibration-score", edit_stored("episodes.parquet", lambda t: t.run == "B_cal_random_corrected",
                                                        "score_s", lambda v: 50.0,
                                                        "missing.simultaneous_threshold_random_corrected")),
@@ -122,10 +121,13 @@ CASES: list[tuple[str, Edit]] = [
                                               lambda v: 1.0 - v, "robust.right_model.failure")),
     ("stored-resplit-row", edit_stored("resplits_paper_schedule.parquet", first, "level", bump,
                                        "committed_pool.resplits.paper_schedule.level_mean")),
-    ("stored-surprise-reading", edit_stored("surprise_variants.parquet", lambda t: t.schedule == "ours", "density_k1",
-                                            lambda v: 1e9, "missing.surprise_variants.ours.density")),
+    ("stored-surprise-reading", edit_stored("surprise_variants.parquet", lambda t: t.schedule == "paper_schedule",
+                                            "density_k1", lambda v: 1e9,
+                                            "missing.surprise_variants.paper_schedule.density.final_retained.k1")),
     ("stored-cover-search-row", edit_stored("cover_search_episodes.parquet", first, "aim_error", lambda v: v + 100.0,
-                                            "searches.cover.")),
+                                            "aim_error")),  # the insertion study's candidate no longer follows
+    ("stored-cover-search-instance", edit_stored("cover_search_episodes.parquet", first, "instance_id", "another",
+                                                 "searches.cover.instances")),
     ("stored-generator-seed", edit_stored("generator_instances.parquet", first, "seed", lambda s: s + 1,
                                           "generator_instances.parquet")),
     ("stored-grasp-feasibility", edit_stored("grasp_analytic_episodes.parquet", lambda t: t.feasible, "feasible",
