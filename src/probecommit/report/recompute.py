@@ -836,7 +836,8 @@ RECOMPUTED = {
 }
 TRACED_ONLY = {
     "insertion": "the stored rows themselves (episodes, re-executed commits, replays); the re-split rows; the cover "
-                 "search's candidates; the scan offsets",
+                 "search's candidates (checked against the explain target's stored rows of the same search when it is "
+                 "published); the scan offsets",
     "engines": "the engine-query counts",
     "robot": "the replay reproduction fraction",
     "gru": "the training loss",
