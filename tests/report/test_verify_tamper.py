@@ -267,6 +267,16 @@ def ledger_entry(change: str) -> Edit:
     return edit
 
 
+def infeasible_truth(pub: Path) -> list[str]:
+    """One feasible grasp instance of the sign count's stored rows marked infeasible (all its rows)."""
+    f = paper_root(pub) / "breadth" / "sign_flip_rows.parquet"
+    table = pd.read_parquet(f)
+    instance = table.loc[table["feasible"], "instance_id"].iloc[0]
+    table.loc[table["instance_id"] == instance, "feasible"] = False
+    table.to_parquet(f, index=False)
+    return ["breadth/results.json", "sign_flip_over_truths.grasp", "sign_flip_rows.parquet"]
+
+
 # Each case: (id, edit, rehash). ``rehash`` False: the attacker left the manifests alone.
 CASES: list[tuple[str, Edit, bool]] = [
     ("json-recomputed-point", edit_results("insertion", ["table_testc", "escape_random_k8", "old", 0], bump), True),
@@ -299,6 +309,8 @@ CASES: list[tuple[str, Edit, bool]] = [
     ("parquet-breadth-episode", edit_parquet("breadth/breadth_episodes.parquet", "realized", 0, bump), True),
     ("parquet-table2-cell", edit_parquet("breadth/table_II_breadth.parquet", "blind_bayes", 1, bump), True),
     ("parquet-curve-cell", edit_parquet("breadth/budget_curves.parquet", "mean", 0, bump), True),
+    ("parquet-sign-flip-feasibility", infeasible_truth, True),
+    ("json-sign-flip-count", edit_results("breadth", ["sign_flip_over_truths", "grasp", "n_improve"], lambda n: n + 1), True),
     ("parquet-scan-cell", edit_parquet("insertion/scan.parquet", "offset", 0, bump), True),
     ("md-cell", md_number("insertion/table_V_testc.md", "| escape_random_k8 | ", plus), True),
     ("tex-cell", md_number("insertion/table_V_testc.tex", "escape\\_random\\_k8 & ", plus), True),

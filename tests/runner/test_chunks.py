@@ -284,7 +284,7 @@ def test_calibration_of_runs_with_failed_episodes_keeps_what_the_whole_tables_gi
     """Failed commits inside the chunks and rollout rows after them: the kept reductions (per-instance
     sums, scores and optimism, rows at the cost budget) give the whole tables' audit, in chunks or not."""
     from probecommit.audit.metrics import audit_table
-    from probecommit.runner.calibration import _load
+    from probecommit.runner.calibration import load_for_commit
     from probecommit.runner.study import run_study
     from tests.runner.faults import inject, pick_faults
 
@@ -299,7 +299,7 @@ def test_calibration_of_runs_with_failed_episodes_keeps_what_the_whole_tables_gi
     whole = calibrate(cal, test, resamples=100, chunk_instances=None)
     for chunk in (2, 3):
         assert calibrate(cal, test, resamples=100, chunk_instances=chunk).to_dict() == whole.to_dict()
-    run = _load(test)
+    run = load_for_commit(test)
     [table] = run.commit((run.nu, None))  # the whole validated table, as calibrate audited it before
     pd.testing.assert_frame_equal(whole.audit_original, audit_table(table, budgets=whole.budgets, resamples=100),
                                   check_exact=True)

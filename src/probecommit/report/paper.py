@@ -142,9 +142,9 @@ def _breadth(root: Path, quick: bool, progress: Progress, workers: int) -> Path:
     import pandas as pd
 
     from probecommit.audit.stats import DEFAULT_RESAMPLES
-    from probecommit.studies.breadth import (BREADTH_FAMILIES, FAMILY_K, SUCCESS_FAMILIES, breadth_markdown,
-                                             budget_curves, feasible_instances, paper_config, plot_budget_curves,
-                                             quick_config, run_breadth, truth_sign_flip)
+    from probecommit.studies.breadth import (BREADTH_FAMILIES, FAMILY_K, SIGN_FLIP_ROWS, SUCCESS_FAMILIES,
+                                             breadth_markdown, budget_curves, paper_config, plot_budget_curves,
+                                             quick_config, run_breadth, sign_flip_summary, truth_rows)
 
     families = tuple(OPTIONS.get("families") or BREADTH_FAMILIES)
     unknown = [f for f in families if f not in BREADTH_FAMILIES]
@@ -164,17 +164,16 @@ def _breadth(root: Path, quick: bool, progress: Progress, workers: int) -> Path:
     progress("breadth: families", len(families), len(families))
     sign_flips = {}
     store_breadth_episodes(episodes_of, results / "breadth_episodes.parquet")
+    flip_rows = []
     for family in (f for f in families if f in SUCCESS_FAMILIES):
         config = paper_config(family)
         config = quick_config(config) if quick else config
-        feasible = feasible_instances(config, runs[family])
-        episodes = pd.read_parquet(runs[family] / "episodes.parquet")
-        episodes = episodes[episodes["instance_id"].map(feasible).fillna(False).astype(bool)]
-        instances = pd.read_parquet(runs[family] / "instances.parquet")
-        truth_cols = [c for c in instances.columns if c.startswith("true_")]
-        truth_of = dict(zip(instances["instance_id"], instances[truth_cols].astype(str).agg(",".join, axis=1)))
-        sign_flips[family] = {**truth_sign_flip(episodes, truth_of, FAMILY_K[family]),
-                              "n_feasible": int(sum(feasible.values())), "n_instances": len(feasible)}
+        rows = truth_rows(config, runs[family])  # stored: verify recomputes the sign count from them
+        sign_flips[family] = sign_flip_summary(rows, FAMILY_K[family])
+        flip_rows.append(rows.assign(family=family))
+    if flip_rows:
+        table_rows = pd.concat(flip_rows, ignore_index=True)
+        write_with(results / SIGN_FLIP_ROWS, lambda f: table_rows.to_parquet(f, compression="zstd", index=False))
     row = insertion_row(root)
     if row is not None:
         table = pd.concat([pd.DataFrame([row]), table], ignore_index=True)

@@ -277,7 +277,20 @@ def breadth(folder: Path, results: dict[str, Any]) -> Recomputed:
     out.tables["budget_curves.parquet"] = budget_curves(runs)
     out.table_sources = {"table_II_breadth.parquet": "breadth_episodes.parquet",
                          "budget_curves.parquet": "breadth_episodes.parquet"}
+    if (folder / SIGN_FLIP_ROWS).is_file():  # each success family's per-truth sign count (``sign_flip_summary``)
+        from probecommit.studies.breadth import FAMILY_K, sign_flip_summary
+
+        for family, part in pd.read_parquet(folder / SIGN_FLIP_ROWS).groupby("family", sort=False):
+            out.values[f"sign_flip_over_truths.{family}"] = sign_flip_summary(part.drop(columns="family"), FAMILY_K[family])
+        out.sources["sign_flip_over_truths"] = SIGN_FLIP_ROWS
+    elif results.get("sign_flip_over_truths"):  # published sign counts need their stored rows
+        out.consistency.append((False, f"breadth/{SIGN_FLIP_ROWS}: missing (the rows sign_flip_over_truths.* are "
+                                       "recomputed from)"))
     return out
+
+
+#: Success families' episodes with each instance's feasibility and truth (``studies.breadth.SIGN_FLIP_ROWS``).
+SIGN_FLIP_ROWS = "sign_flip_rows.parquet"
 
 
 def cost(folder: Path, results: dict[str, Any]) -> Recomputed:
@@ -429,9 +442,9 @@ def beyond(folder: Path, results: dict[str, Any]) -> Recomputed:
 
 
 def explain(folder: Path, results: dict[str, Any]) -> Recomputed:
-    """The explain keys that summarize stored rows (``studies.explain.stored``: the functions the explain step
-    fills them with): the margin curves' cells, the fresh draws' summaries, Table III's and the fault
-    harness's cells over fresh draws."""
+    """The explain keys, each from the stored rows it summarizes through the function the explain step fills it
+    with (``studies.explain.stored``, ``calibration_rows``, ``robust_rows`` and each step's key function; the
+    list is ``RECOMPUTED["explain"]``): every explain key but a retrained seed's parameters and the paper's values."""
     from probecommit.studies.explain import stored
 
     out = Recomputed()
@@ -445,6 +458,12 @@ def explain(folder: Path, results: dict[str, Any]) -> Recomputed:
             out.sources[f"{group}.{key}"] = name
     if (folder / stored.SCHEDULES).is_file():
         _schedules(folder, results, out)
+    _calibration_rows(folder, out)
+    _scan_copies(folder, results, out)
+    _gru_copies(folder, results, out)
+    _replays(folder, out)
+    _searches(folder, out)
+    _generator(folder, out)
     if (folder / EXPLAIN_BREADTH).is_file():
         _breadth_prior(folder, results, out)
     _cost_copies(folder, out)
@@ -498,6 +517,191 @@ def _schedules(folder: Path, results: dict[str, Any], out: Recomputed) -> None:
                                          f"insertion/episodes.parquet, faults_episodes.parquet and {stored.SCHEDULES}"))
 
 
+def _calibration_rows(folder: Path, out: Recomputed) -> None:
+    """The margins, thresholds, their intervals and strata from the stored per-instance calibration rows
+    (``calibration_rows.margin_rule_keys``); the random-probe gates and the calibration under the paper's schedule
+    from the explain step's stored commits (``gates_from_commits``, ``calibration_from_tables``: the functions
+    ``gates`` and ``calibrate`` end in) and runs; the simultaneous thresholds from the stored episodes."""
+    from probecommit.runner.calibration import calibration_from_tables, gates_from_commits
+    from probecommit.studies.explain import calibration_rows as cr
+    from probecommit.studies.explain.study import load_explain_config
+
+    insertion = folder.parent / "insertion"
+    setup = json.loads((insertion / "results.json").read_text())["results"]["setup"]
+    boot = dict(resamples=int(setup["bootstrap"]["resamples"]), seed=int(setup["bootstrap"]["seed"]))
+    alpha, cfg = float(setup["alpha"]), load_explain_config()
+    keys: dict[str, tuple[dict[str, dict[str, Any]], str]] = {}
+    names = ("margin_per_gamma.parquet", cr.MARGIN_INSTANCES, cr.MARGIN_SUMS)
+    if all((folder / name).is_file() for name in names):
+        keys["margins"] = (cr.margin_rule_keys(*(pd.read_parquet(folder / name) for name in names), alpha=alpha,
+                                               edge=float(cfg["stratum_edge_mm"]), boot=boot), ", ".join(names))
+    if (folder / cr.COMMITS).is_file() and (folder / cr.EPISODES).is_file():
+        commits = {name: part.reset_index(drop=True) for name, part in pd.read_parquet(folder / cr.COMMITS).groupby("calibration")}
+        ep = pd.concat([pd.read_parquet(insertion / "episodes.parquet"), pd.read_parquet(folder / cr.EPISODES)], ignore_index=True)
+        runs = {name: part.drop(columns="run").reset_index(drop=True) for name, part in ep.groupby("run", sort=False)}
+        cover = list(range(1, len(setup["cover_schedule"]) + 1))
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)  # a margin search that settles on the grid's end (quick runs)
+            raw = commits["gates_random"]
+            budgets = sorted(int(k) for k in raw.loc[raw["request"] == "raw", "k"].unique())
+            gates = gates_from_commits(raw, runs["B_cal_random"], alpha, budgets, **boot)
+            cal = calibration_from_tables(commits["paper_schedule"], runs[cr.PAPER_CAL], runs[cr.PAPER_TEST], alpha, cover, **boot)
+        source = f"{cr.COMMITS} and {cr.EPISODES} (with insertion/episodes.parquet)"
+        keys["gates"] = (cr.random_gate_keys(gates), source)
+        keys["paper"] = (cr.paper_calibration_keys(cal), source)
+        keys["thresholds"] = (cr.threshold_keys(runs, list(cfg["random_budgets"]), cover, alpha), source)
+    for values, source in keys.values():
+        for group, part in values.items():
+            out.values.update({f"{group}.{key}": v for key, v in part.items()})
+            out.sources.update(dict.fromkeys((f"{group}.{key}" for key in part), source))
+
+
+def _protocol(folder: Path) -> tuple[dict[str, Any], dict[str, int]]:
+    """The insertion study's ``setup`` and its bootstrap settings (the protocol's, which the explain step uses)."""
+    setup = json.loads((folder.parent / "insertion" / "results.json").read_text())["results"]["setup"]
+    return setup, dict(resamples=int(setup["bootstrap"]["resamples"]), seed=int(setup["bootstrap"]["seed"]))
+
+
+def _publish(out: Recomputed, group: str, keys: dict[str, Any], source: str) -> None:
+    out.values.update({f"{group}.{key}": v for key, v in keys.items()})
+    out.sources.update(dict.fromkeys((f"{group}.{key}" for key in keys), source))
+
+
+def _replays(folder: Path, out: Recomputed) -> None:
+    """``robust.*`` from the stored mixture replays (``robust_rows.keys``: Test C's deployed rows from the insertion
+    study's stored episodes, the harness's optimism from its robust filters recomputed from their stored rows, as
+    ``_robust``); ``missing.surprise_variants.*`` from the stored surprise readings and schedule rows."""
+    from probecommit.studies.explain import robust_rows, surprise_variants
+    from probecommit.studies.explain.study import surprise_variant_keys
+
+    insertion = folder.parent / "insertion"
+    setup, boot = _protocol(folder)
+    if (folder / robust_rows.STORED).is_file() and (insertion / "robust_episodes.parquet").is_file():
+        harness = Recomputed()
+        _robust(insertion, setup, boot, harness)
+        ep = pd.read_parquet(insertion / "episodes.parquet")
+        dep = ep[(ep["run"] == "C_random") & (ep["method"] == "probe_robust") & (ep["status"] == "ok")
+                 & (ep["k"] == int(setup["k_random"]))].drop(columns="run").reset_index(drop=True)
+        _publish(out, "robust", robust_rows.keys(pd.read_parquet(folder / robust_rows.STORED), dep, harness.values["robust"], boot),
+                 f"{robust_rows.STORED}, insertion/episodes.parquet and insertion/robust_episodes.parquet")
+    if (folder / surprise_variants.STORED).is_file() and (folder / "schedule_episodes.parquet").is_file():
+        keys = surprise_variant_keys(pd.read_parquet(folder / surprise_variants.STORED),
+                                     pd.read_parquet(folder / "schedule_episodes.parquet"), len(setup["cover_schedule"]), boot)
+        _publish(out, "missing", keys, f"{surprise_variants.STORED} and schedule_episodes.parquet")
+
+
+def _searches(folder: Path, out: Recomputed) -> None:
+    """``searches.*`` (``more.search_keys`` of the stored cover-search rows and the insertion study's stored tuning
+    rows), with the insertion study's cover-search candidates checked against the same rows; ``grasp_signs.*`` and
+    ``committed_pool.resplits.paper_schedule.*`` from their stored rows."""
+    from probecommit.studies.explain import grasp_x, resplits, searches
+    from probecommit.studies.explain.more import search_keys
+
+    insertion = folder.parent / "insertion"
+    if (folder / searches.COVER_STORED).is_file() and (insertion / "robust_episodes.parquet").is_file():
+        cover = pd.read_parquet(folder / searches.COVER_STORED)
+        keys = search_keys(cover, pd.read_parquet(insertion / "robust_episodes.parquet"), _protocol(folder)[1])
+        _publish(out, "searches", keys, f"{searches.COVER_STORED} and insertion/robust_episodes.parquet (tuning rows)")
+        if (insertion / "cover_search.parquet").is_file():
+            out.consistency.extend(_cover_candidates(pd.read_parquet(insertion / "cover_search.parquet"), cover))
+    if (folder / grasp_x.STORED).is_file():
+        _publish(out, "grasp_signs", grasp_x.keys(pd.read_parquet(folder / grasp_x.STORED)), grasp_x.STORED)
+    if (folder / resplits.STORED).is_file():
+        _publish(out, "committed_pool", {f"resplits.paper_schedule.{k}": v for k, v in
+                                         resplits.summary(pd.read_parquet(folder / resplits.STORED)).items()}, resplits.STORED)
+
+
+def _generator(folder: Path, out: Recomputed) -> None:
+    """``instance_generator.<run>.*`` from the stored frozen draws (``generator.generator_keys``: the redraws are made
+    again from the seeds) and ``draws.analytic_equals_mujoco_escape_k8`` from the fresh draws and the stored
+    B_test_random episodes."""
+    from probecommit.studies.explain import generator, stored
+    from probecommit.studies.explain.study import load_explain_config
+
+    if (folder / generator.STORED).is_file():
+        try:
+            keys = generator.generator_keys(pd.read_parquet(folder / generator.STORED),
+                                            float(load_explain_config()["stratum_edge_mm"]))
+        except AssertionError:  # a stored hole that is not its generator's draw for the stored seed
+            out.consistency.append((False, f"explain/{generator.STORED}: the stored holes are not the generator's draws "
+                                           "for their stored seeds (instance_generator.<run>.* are computed from them)"))
+            keys = {}
+        out.values.update({f"instance_generator.{key}": v for key, v in keys.items()})
+        out.sources.update(dict.fromkeys((f"instance_generator.{key}" for key in keys), generator.STORED))
+    insertion = folder.parent / "insertion"
+    if (folder / stored.DRAWS).is_file():
+        k = int(json.loads((insertion / "results.json").read_text())["results"]["setup"]["k_random"])
+        ep = pd.read_parquet(insertion / "episodes.parquet")
+        mujoco = ep[(ep["run"] == "B_test_random") & (ep["method"] == "probe_robust") & (ep["status"] == "ok") & (ep["k"] == k)]
+        for key, value in generator.analytic_equals_mujoco(pd.read_parquet(folder / stored.DRAWS), mujoco).items():
+            out.values[f"instance_generator.{key}"] = value
+            out.sources[f"instance_generator.{key}"] = f"{stored.DRAWS} and insertion/episodes.parquet"
+
+
+def _cover_candidates(frozen: pd.DataFrame, rows: pd.DataFrame) -> list[tuple[bool, str]]:
+    """The insertion study's cover-search candidates (failure and aim error per schedule) against the explain step's
+    stored per-episode rows of the same search (``studies.cover_search.candidate_episodes``), candidate by candidate."""
+    means = rows.groupby("schedule", sort=False)[["failure", "aim_error"]].mean()
+    out = []
+    for row in frozen.to_dict("records"):
+        schedule = json.dumps([float(u) for u in json.loads(str(row["schedule"]))])
+        if schedule not in means.index:
+            continue  # a quick search scores the first candidates only
+        for column in ("failure", "aim_error"):
+            mine = float(means.loc[schedule, column])
+            out.append((abs(mine - float(row[column])) <= 1e-12, f"insertion/cover_search.parquet: {schedule} {column} = "
+                        f"{row[column]} but explain/cover_search_episodes.parquet's rows give {mine}"))
+    return out
+
+
+def _gru_copies(folder: Path, results: dict[str, Any], out: Recomputed) -> None:
+    """``gru.*`` but the retrained seed's tolerance: the GRU study's summary recomputed from its stored
+    ``gru_episodes.parquet`` (``summarize_gru``, as ``gru`` above) and the explain step's ``summary_keys`` of it."""
+    from probecommit.studies.explain.gru import summary_keys
+    from probecommit.studies.explain.study import load_explain_config
+    from probecommit.studies.gru import load_gru_config, summarize_gru
+
+    study = folder.parent / "gru"
+    if not results.get("gru", {}).get("available") or not (study / "gru_episodes.parquet").is_file():
+        return
+    published = json.loads((study / "results.json").read_text())["results"]
+    cfg = load_gru_config()
+    per_episode = pd.read_parquet(study / "gru_episodes.parquet")
+    summary = summarize_gru(per_episode, published.get("bootstrap") or cfg["bootstrap"],
+                            float(published.get("equivalence_margin", cfg["equivalence_margin"])))
+    setup = json.loads((folder.parent / "insertion" / "results.json").read_text())["results"]["setup"]["bootstrap"]
+    boot = dict(resamples=int(setup["resamples"]), seed=int(setup["seed"]))
+    for key, value in summary_keys(summary, per_episode, boot, load_explain_config()["gru_paper_interval"]).items():
+        out.values[f"gru.{key}"] = value
+    out.sources["gru"] = "gru/gru_episodes.parquet"
+
+
+def _scan_copies(folder: Path, results: dict[str, Any], out: Recomputed) -> None:
+    """``engines_x`` and ``physx_capture.ours.*`` from the engines study's scan summaries, recomputed from its stored
+    ``engine_scans.parquet`` (``studies.engines.scan_summaries``), and ``physx_capture.emulated.*`` from the stored
+    emulated-scene rows, through the explain step's functions."""
+    from probecommit.studies.engines import scan_summaries
+    from probecommit.studies.explain import engines_x
+
+    path = folder.parent / "engines" / "engine_scans.parquet"
+    if (folder / engines_x.EMULATED).is_file():
+        from probecommit.studies.explain.study import load_explain_config
+
+        setup = json.loads((folder.parent / "insertion" / "results.json").read_text())["results"]["setup"]["bootstrap"]
+        scale = float(load_explain_config()["physx_emulation"]["capture_scale"])
+        keys = engines_x.emulated_keys(pd.read_parquet(folder / engines_x.EMULATED), scale, setup)
+        out.values.update({f"physx_capture.{key}": v for key, v in keys.items()})
+        out.sources["physx_capture.emulated"] = engines_x.EMULATED
+    if not path.is_file():
+        return
+    scans = scan_summaries(pd.read_parquet(path))
+    groups = {"engines_x": engines_x.keys(scans) if results.get("engines_x") else {},
+              "physx_capture": engines_x.physx_ours(scans) if results.get("physx_capture") else {}}
+    for group, values in groups.items():
+        out.values.update({f"{group}.{key}": v for key, v in values.items()})
+        out.sources.update(dict.fromkeys((f"{group}.{key}" for key in values), "engines/engine_scans.parquet"))
+
+
 def _engine_keys(folder: Path, results: dict[str, Any], ep: pd.DataFrame, out: Recomputed) -> None:
     """The PhysX coverage (``stored.physx_coverage_keys``) and PyBullet's stored escapes with the spread of the
     stored per-draw escapes (``pybullet_x.stored_keys``), from the engines study's stored episodes."""
@@ -510,6 +714,9 @@ def _engine_keys(folder: Path, results: dict[str, Any], ep: pd.DataFrame, out: R
         out.sources[f"missing.{key}"] = "engines/engine_episodes.parquet"
     deployed = ep[(ep["engine"] == "pybullet") & (ep["variant"] == "deployed")]
     published = "draws.escape_k8.count" in results.get("pybullet_escape", {})
+    if "emulated.escape_k1" in results.get("pybullet_escape", {}) and not (folder / pybullet_x.EMULATED).is_file():
+        out.consistency.append((False, f"explain/{pybullet_x.EMULATED}: missing (the rows pybullet_escape.emulated.* "
+                                       "are recomputed from)"))
     if published and not (folder / pybullet_x.STORED).is_file():  # published draws need their stored rows
         out.consistency.append((False, f"explain/{pybullet_x.STORED}: missing (the per-draw escapes "
                                        "pybullet_escape.draws.escape_k8.* are recomputed from)"))
@@ -518,6 +725,11 @@ def _engine_keys(folder: Path, results: dict[str, Any], ep: pd.DataFrame, out: R
         for key, value in pybullet_x.stored_keys(deployed, pd.read_parquet(folder / pybullet_x.STORED), k, boot).items():
             out.values[f"pybullet_escape.{key}"] = value
         out.sources["pybullet_escape"] = f"engines/engine_episodes.parquet and {pybullet_x.STORED}"
+    if len(deployed) and (folder / pybullet_x.EMULATED).is_file():
+        boot = dict(resamples=int(setup["bootstrap"]["resamples"]), seed=int(setup["bootstrap"]["seed"]))
+        for key, value in pybullet_x.emulated_keys(pd.read_parquet(folder / pybullet_x.EMULATED), deployed, k, boot).items():
+            out.values[f"pybullet_escape.{key}"] = value
+            out.sources[f"pybullet_escape.{key}"] = f"{pybullet_x.EMULATED} and engines/engine_episodes.parquet"
 
 
 def _cost_copies(folder: Path, out: Recomputed) -> None:
@@ -583,7 +795,12 @@ STORED_TABLES: dict[str, tuple[str, ...]] = {
     "gru": ("gru_episodes.parquet",),
     "beyond": ("beyond_episodes.parquet",),
     "explain": ("margin_per_gamma.parquet", "fresh_draws.parquet", "draw_cells.parquet", EXPLAIN_BREADTH,
-                "schedule_episodes.parquet", EXPLAIN_MIXTURE, *EXPLAIN_RIG),
+                "schedule_episodes.parquet", EXPLAIN_MIXTURE, *EXPLAIN_RIG, "margin_instances.parquet",
+                "margin_instance_sums.parquet", "commits.parquet", "episodes.parquet", "physx_emulated_episodes.parquet",
+                "robust_replays.parquet", "resplits_paper_schedule.parquet", "surprise_variants.parquet",
+                "cover_search_episodes.parquet", "generator_instances.parquet",
+                "grasp_analytic_episodes.parquet"),
+    # ``pybullet_x.EMULATED`` is required where the engines study's PyBullet run was there (``_engine_keys``).
 }
 
 #: Study folder -> its recomputation.
@@ -606,23 +823,68 @@ RECOMPUTED = {
              "resolved and holds-to boundary sizes",
     "gru": "every number of the GRU table but the training loss",
     "beyond": "the plateau, moves and adaptive tables",
-    "explain": "the margin curves' cells; the fresh draws' summaries; Table III's and the fault harness's cells over "
-               "fresh draws; the schedules' pools, failures and cover surprise AUCs; the boundary fault, Test C, "
-               "whole-cluster escapes and strata; the prior sweep's rows, prices and spans; the mixture against the "
-               "filter's noise; the simulated rig redrawn; the PhysX coverage; the cost of calibration; PyBullet's stored "
-               "escapes and the emulated scene's escape over fresh draws",
+    "explain": "the margin curves' cells; the margins, thresholds, their intervals, shares and strata (per-instance "
+               "calibration rows); the random-probe gates and the calibration under the paper's schedule (re-executed "
+               "commits); the simultaneous thresholds; the fresh draws' summaries; Table III's and the fault harness's "
+               "cells over fresh draws; the schedules' pools, failures and cover surprise AUCs; the surprise variants; "
+               "the boundary fault, Test C, whole-cluster escapes and strata; the generator test; the prior sweep's "
+               "rows, prices and spans; the mixture against the filter's noise and the mixture replays (robust); the "
+               "simulated rig redrawn; the PhysX coverage, capture scans and emulated scene; the cost of calibration; "
+               "PyBullet's stored escapes, its emulated scene and that scene's escape over fresh draws; the re-splits under the "
+               "paper's schedule; the development searches; grasp on the model-exact scene; the GRU's spread and power; "
+               "the PyBullet capture interval",
 }
 TRACED_ONLY = {
     "insertion": "the stored rows themselves (episodes, re-executed commits, replays); the re-split rows; the cover "
-                 "search's candidates; the scan offsets",
+                 "search's candidates (checked against the explain target's stored rows of the same search when it is "
+                 "published); the scan offsets",
     "engines": "the engine-query counts",
     "robot": "the replay reproduction fraction",
     "gru": "the training loss",
-    "explain": "the stored rows themselves; the random gates, thresholds and margins (re-commits), the calibration "
-               "and re-splits under the paper's schedule, surprise variants, the generator redraws, "
-               "PyBullet's emulated-scene keys, and the groups gru, physx_capture, robust, engines_x, searches, grasp_signs "
-               "(docs/verify.md lists each); explain.md is rendered again from results.json",
+    "explain": "the stored rows themselves (re-commits, replays, redraws, emulated scenes: run directories a "
+               "publication does not hold); the retrained GRU seed's parameter differences (a training run); "
+               "the paper's PyBullet values (docs/verify.md); explain.md is "
+               "rendered again from results.json",
     "figures": "Fig. 1a/1c and Fig. 3 (scene renders from run directories); Fig. 2 is drawn again from code",
     "setup": "Table I (rendered again from the registry and frozen configs; its counts are the configs', not a "
              "quick run's stored rows)",
 }
+
+
+#: Why a results.json number is traced only (hashed, range-checked, rendered again into every text that prints it,
+#: but not recomputed), by kind; ``verify``'s headline counts the traced-only numbers by these kinds.
+TRACED_KINDS = {
+    "measured": "a measurement of the run itself (engine-query count, a replay's agreement with the log's "
+                "decisions, the frozen scan offset): no stored table implies it",
+    "training": "needs a training run (the GRU's training loss, a retrained seed's parameters)",
+    "engine rows": "the frozen choice a search over engine rollouts made, beside its stored per-candidate rows "
+                   "(the frozen cover schedule and its rank, the re-split pool's size)",
+    "scene render": "the numbers of a scene render drawn from run directories (Fig. 1a/1c, Fig. 3)",
+    "setting": "a setting printed beside the results (alpha, sigma, budgets, seeds, resamples, the frozen config)",
+    "paper value": "the paper's value printed beside ours (checked against the seed text by the paper-values test)",
+    "not stored": "a summary of rows the publication does not store (docs/verify.md lists each)",
+}
+#: (study, regular expression on the dotted results.json key, kind): the first match names a traced number's kind;
+#: a number no pattern matches is "not stored".
+TRACED_PATTERNS: tuple[tuple[str, str, str], ...] = (
+    ("gru", r"^training_", "training"),
+    ("explain", r"^gru\.(retrain_|threads_)", "training"),
+    ("explain", r"^pybullet_escape\.paper_", "paper value"),
+    ("robot", r"^replay_reproduced_fraction$", "measured"),
+    ("engines", r"\.engine_calls(\.|$)", "measured"),
+    ("insertion", r"^scan\.frozen_delta$", "measured"),
+    ("insertion", r"^(cover\.frozen|resplits\.pool)", "engine rows"),
+    ("figures", r"^(fig1|scenes)\.", "scene render"),
+    ("*", r"^(setup|settings|bootstrap|config)\.|^(sweep_resamples|equivalence_margin)$|^instance_generator\.\w+\.seeds$",
+     "setting"),
+)
+
+
+def traced_kind(study: str, key: str) -> str:
+    """Why a traced-only results.json number (``key`` dotted) is not recomputed (a ``TRACED_KINDS`` key)."""
+    import re
+
+    for where, pattern, kind in TRACED_PATTERNS:
+        if where in (study, "*") and re.search(pattern, key):
+            return kind
+    return "not stored"

@@ -66,6 +66,8 @@ class Report:
     failures: list[str] = field(default_factory=list)
     verified_numbers: int = 0
     traced_only_numbers: int = 0
+    #: Traced-only results.json numbers by why they are not recomputed (``recompute.TRACED_KINDS``).
+    traced_only_kinds: Counter = field(default_factory=Counter)
     notes: list[str] = field(default_factory=list)
 
     def check(self, kind: str, ok: bool, message: str) -> None:
@@ -84,8 +86,10 @@ class Report:
     def summary(self) -> str:
         kinds = ", ".join(f"{self.counts[k]} {k}" for k in ("recomputed", "traced", "identity", "range", "file")
                           if self.counts[k])
+        why = ", ".join(f"{n} {kind}" for kind, n in sorted(self.traced_only_kinds.items(), key=lambda kv: -kv[1]))
         return (f"{self.verified_numbers} published numbers verified ({kinds} checks); "
-                f"{self.traced_only_numbers} results.json numbers traced only; {len(self.failures)} failed")
+                f"{self.traced_only_numbers} results.json numbers traced only{f' ({why})' if why else ''}; "
+                f"{len(self.failures)} failed")
 
 
 # ----------------------------------------------------------------------------- layout
@@ -447,9 +451,9 @@ def verify(results_root: str | Path, reproduction_md: str | Path | None = None, 
                 report.check("file", False, f"{path}: unreadable ({type(exc).__name__})")
                 continue
             checks.parquet_invariants(study.name, path.name, frame, report)
-        recomputed = sum(_leaves(_get(results, k)) for k in check_recomputed(study, results, report))
-        report.verified_numbers += recomputed
-        report.traced_only_numbers += max(_leaves(results) - recomputed, 0)
+        keys = check_recomputed(study, results, report)
+        report.verified_numbers += sum(_leaves(_get(results, k)) for k in keys)
+        _count_traced(study.name, results, keys, report)
         check_twins(study, results, report)
         check_json_twins(study, results, report)
         check_texts(study, report)
@@ -458,6 +462,27 @@ def verify(results_root: str | Path, reproduction_md: str | Path | None = None, 
     check_publication_texts(root, report)
     check_ledger(root, report)
     return report
+
+
+def _count_traced(study: str, results: dict[str, Any], recomputed: set[str], report: Report) -> None:
+    """Count each results.json number no recomputed key covers by why it is traced only (``recompute.traced_kind``),
+    and note each study's traced keys by kind (``verify --notes``)."""
+    from probecommit.report.recompute import traced_kind
+
+    by_kind: dict[str, list[str]] = {}
+    for path, value in checks.walk(results):
+        if not checks.is_number(value):
+            continue
+        parts = path.split(".")
+        if any(".".join(parts[:n]) in recomputed for n in range(1, len(parts) + 1)):
+            continue
+        by_kind.setdefault(traced_kind(study, path), []).append(path)
+    for kind, paths in by_kind.items():
+        report.traced_only_numbers += len(paths)
+        report.traced_only_kinds[kind] += len(paths)
+        groups = sorted({".".join(p.split(".")[:2]) for p in paths})
+        report.notes.append(f"{study}/results.json: {len(paths)} numbers, {kind}: {', '.join(groups[:12])}"
+                            f"{f' and {len(groups) - 12} more' if len(groups) > 12 else ''}")
 
 
 def _get(results: dict[str, Any], key: str) -> Any:

@@ -136,8 +136,9 @@ def _concat_parts(parts: Sequence[Any]) -> Any:
     return pd.concat(parts) if len(parts) > 1 else parts[0]
 
 
-def _calibration_scores(cal: "_Run") -> pd.DataFrame:
-    """The uncalibrated commit's worst-repeat scores, instances (sorted) x budgets, kept chunk by chunk.
+def calibration_scores(cal: "_Run") -> pd.DataFrame:
+    """The uncalibrated commit's worst-repeat scores, instances (sorted) x budgets, kept chunk by chunk
+    (of a run from :func:`load_for_commit`).
 
     Raises:
         ValueError: No episode of the run committed.
@@ -348,10 +349,19 @@ def _executable(thresholds: float | dict[int, float]) -> float | dict[int, float
     return 2.0 if math.isinf(thresholds) else float(thresholds)
 
 
-def _load(run, reuse: bool = True, plateau: str | None = None, chunk_instances: int | None = CHUNK_INSTANCES,
-          budgets: Iterable[int] | None = None) -> _Run:
-    """A run ready for re-execution; with ``budgets``, only those budgets' beliefs are kept and
-    committed (the results read no other budget, so they are the same, in a fraction of the work)."""
+def load_for_commit(run, reuse: bool = True, plateau: str | None = None, chunk_instances: int | None = CHUNK_INSTANCES,
+                    budgets: Iterable[int] | None = None) -> _Run:
+    """A run ready for re-execution (``commit``, ``search_margin``); with ``budgets``, only those budgets'
+    beliefs are kept and committed (the results read no other budget, so they are the same, in a fraction
+    of the work). Public: the explain target re-commits runs under its own thresholds and margins.
+
+    Args:
+        run: Run directory or ``LoadedRun``.
+        reuse: Build each retained set and coverage score once per threshold (see :func:`calibrate`).
+        plateau: The set at ``t = 1`` (default the run's ``calibration.plateau``).
+        chunk_instances: Instances whose beliefs are held at once (None: a whole run).
+        budgets: The budgets to keep (default every budget).
+    """
     loaded = run if isinstance(run, LoadedRun) else load_run(run)
     beliefs = loaded.beliefs or RunBeliefs.of(loaded, chunk_instances=chunk_instances, budgets=budgets)
     return _Run(loaded, beliefs, reuse, plateau)
@@ -519,8 +529,8 @@ def calibrate(cal_run, test_run, alpha: float = DEFAULT_ALPHA, budgets: Sequence
     Returns:
         The calibration result.
     """
-    cal = _load(cal_run, reuse, plateau, chunk_instances, budgets)
-    test = _load(test_run, reuse, plateau, chunk_instances, budgets)
+    cal = load_for_commit(cal_run, reuse, plateau, chunk_instances, budgets)
+    test = load_for_commit(test_run, reuse, plateau, chunk_instances, budgets)
     _check_pair(cal, test)
     budgets = _budgets(cal, budgets)
     _budgets(test, budgets)
@@ -531,7 +541,7 @@ def calibrate(cal_run, test_run, alpha: float = DEFAULT_ALPHA, budgets: Sequence
 
     # Of each table, only what the results read is kept, chunk by chunk: per-instance scores, sums and
     # optimism, the rows at the cost budget and the margin rows, so memory does not grow with the runs.
-    scores = _calibration_scores(cal)
+    scores = calibration_scores(cal)
     t_k, t_sim, _ = _thresholds(scores, alpha, budgets)
     optimism_of = rec.wrap("optimism", functools.partial(_optimism, budgets=budgets), OPTIMISM_COLUMNS)
     margin, [optimism] = cal.search_margin(t_k, margin_grid, budgets, ((t_k, None), optimism_of), record=rec)
@@ -740,13 +750,13 @@ def gates(cal_run, test_run, alpha: float = DEFAULT_ALPHA, budgets: Sequence[int
         Curves, areas and the committed pools; ``info`` holds ``t``, ``gamma``
         and the surprise AUC table of the raw test episodes.
     """
-    cal = _load(cal_run, reuse, plateau, chunk_instances, budgets)
-    test = _load(test_run, reuse, plateau, chunk_instances, budgets)
+    cal = load_for_commit(cal_run, reuse, plateau, chunk_instances, budgets)
+    test = load_for_commit(test_run, reuse, plateau, chunk_instances, budgets)
     _check_pair(cal, test)
     budgets = _budgets(cal, budgets)
     _budgets(test, budgets)
     rec = Recorder(record)
-    t_sim = conformal_quantile(worst_budget_scores(_calibration_scores(cal), budgets).to_numpy(), alpha)
+    t_sim = conformal_quantile(worst_budget_scores(calibration_scores(cal), budgets).to_numpy(), alpha)
     margin, _ = cal.search_margin(t_sim, margin_grid, budgets, record=rec)
     cal.release()
     del cal  # the calibration run is done before the test run's commits

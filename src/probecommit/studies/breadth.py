@@ -164,6 +164,35 @@ def truth_sign_flip(episodes: pd.DataFrame, truth_of: Mapping[str, str], k: int)
             "differences": {str(t): float(v) for t, v in diff.items()}}
 
 
+#: A success family's rows its per-truth sign count reads (``truth_rows``), stored beside Table II's episodes.
+SIGN_FLIP_ROWS = "sign_flip_rows.parquet"
+
+
+def truth_rows(config: Any, run_dir: str | Path) -> pd.DataFrame:
+    """A run's episodes (the columns the sign count reads) with each instance's ``feasible`` and ``truth`` label:
+    what :func:`sign_flip_summary` reads, in the run directory or stored in a publication."""
+    run_dir = Path(run_dir)
+    feasible = feasible_instances(config, run_dir)
+    episodes = pd.read_parquet(run_dir / "episodes.parquet")
+    instances = pd.read_parquet(run_dir / "instances.parquet")
+    truth_cols = [c for c in instances.columns if c.startswith("true_")]
+    truth_of = dict(zip(instances["instance_id"], instances[truth_cols].astype(str).agg(",".join, axis=1)))
+    rows = episodes[["instance_id", "repeat", "method", "k", "status", "realized"]].reset_index(drop=True)
+    ids = pd.DataFrame({"instance_id": list(feasible), "feasible": list(feasible.values()),
+                        "truth": [truth_of[i] for i in feasible]})
+    return rows.merge(ids, on="instance_id", how="left", sort=False)
+
+
+def sign_flip_summary(rows: pd.DataFrame, k: int) -> dict[str, Any]:
+    """:func:`truth_sign_flip` over the feasible truths of :func:`truth_rows`, with the feasible and total instance
+    counts (one function for the breadth study, the explain step's model-exact grasp and verify)."""
+    per_instance = rows.drop_duplicates("instance_id")
+    feasible = dict(zip(per_instance["instance_id"], per_instance["feasible"].astype(bool)))
+    episodes = rows[rows["instance_id"].map(feasible).fillna(False).astype(bool)]
+    out = truth_sign_flip(episodes, dict(zip(per_instance["instance_id"], per_instance["truth"])), k)
+    return {**out, "n_feasible": int(sum(feasible.values())), "n_instances": len(feasible)}
+
+
 def breadth_table(runs: Mapping[str, str | Path | pd.DataFrame], k: int = 5, *, resamples: int = DEFAULT_RESAMPLES,
                   seed: int = 0) -> pd.DataFrame:
     """Table II rows for ``{family: run directory or episode table}``, in the given order."""

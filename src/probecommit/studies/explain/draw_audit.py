@@ -17,7 +17,7 @@ import numpy as np
 import pandas as pd
 
 from probecommit.audit.metrics import audit_table, summary_row
-from probecommit.runner.calibration import _load as load_for_commit
+from probecommit.runner.calibration import load_for_commit
 from probecommit.runner.calibration import calibrate
 
 #: Table III's columns, as the insertion results name them.

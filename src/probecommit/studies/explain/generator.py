@@ -56,6 +56,36 @@ def generator_test(instances: pd.DataFrame, split: str, seed: int, low: float, h
             "percentile": percentile_of(realized, shares), "seeds": int(seeds), "count": count}
 
 
+#: The frozen draws the generator test reads: per run its split, seed, redraw count and holes in instance order.
+STORED = "generator_instances.parquet"
+#: The instance box of the uniform generator (mm).
+BOX = (-10.0, 10.0)
+
+
+def generator_table(runs: dict[str, tuple[pd.DataFrame, str, int]], seeds: int) -> pd.DataFrame:
+    """The stored rows: per run name ``(instances, split, seed)``, one row per instance in the run's order."""
+    parts = [pd.DataFrame({"run": name, "split": split, "seed": int(seed), "seeds": int(seeds),
+                           "true_x_hole": instances["true_x_hole"].to_numpy(float)})
+             for name, (instances, split, seed) in runs.items()]
+    return pd.concat(parts, ignore_index=True)
+
+
+def generator_keys(table: pd.DataFrame, edge: float) -> dict[str, Any]:
+    """``instance_generator.<run>.*``: each run's frozen draw against redraws of its generator (``generator_test``)."""
+    out: dict[str, Any] = {}
+    for name, rows in table.groupby("run", sort=False):
+        first = rows.iloc[0]
+        test = generator_test(rows, str(first["split"]), int(first["seed"]), *BOX, edge, int(first["seeds"]))
+        out.update({f"{name}.{k}": v for k, v in test.items()})
+    return out
+
+
+def analytic_equals_mujoco(draws: pd.DataFrame, mujoco: pd.DataFrame) -> dict[str, int]:
+    """``draws.analytic_equals_mujoco_escape_k8``: the frozen run redrawn on the analytic scene (the fresh draws'
+    first row) escapes as the stored MuJoCo run does (``mujoco``: its final-budget Probe-Robust rows)."""
+    return {"draws.analytic_equals_mujoco_escape_k8": int(abs(draws.iloc[0]["escape_k8"] - mujoco["escaped"].mean()) < 1e-12)}
+
+
 def stratified_metrics(episodes: pd.DataFrame, k: int, edge: float, expected_share: float) -> dict[str, Any]:
     """Each metric at budget ``k`` for holes inside and beyond ``edge``, and standardized to ``expected_share``.
 

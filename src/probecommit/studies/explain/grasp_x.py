@@ -19,24 +19,28 @@ import pandas as pd
 
 from probecommit.runner.config import config_data, parse_config
 from probecommit.runner.study import run_study
-from probecommit.studies.breadth import FAMILY_K, feasible_instances, paper_config, quick_config, truth_sign_flip
+from probecommit.studies.breadth import FAMILY_K, paper_config, quick_config, sign_flip_summary, truth_rows
 
 
-def sign_counts(config: Any, run_dir: Path) -> dict[str, Any]:
-    """Feasible truths and their per-truth signs (Probe-Robust(k) - Blind-Bayes success), as Table II reads them."""
-    feasible = feasible_instances(config, run_dir)
-    episodes = pd.read_parquet(run_dir / "episodes.parquet")
-    episodes = episodes[episodes["instance_id"].map(feasible).fillna(False).astype(bool)]
-    instances = pd.read_parquet(run_dir / "instances.parquet")
-    truth_cols = [c for c in instances.columns if c.startswith("true_")]
-    truth_of = dict(zip(instances["instance_id"], instances[truth_cols].astype(str).agg(",".join, axis=1)))
-    out = truth_sign_flip(episodes, truth_of, FAMILY_K["grasp"])
+#: The model-exact grasp run's rows Table II's sign count reads, with each instance's feasibility and truth label.
+STORED = "grasp_analytic_episodes.parquet"
+
+
+def sign_counts(rows: pd.DataFrame) -> dict[str, Any]:
+    """Feasible truths and their per-truth signs (Probe-Robust(k) - Blind-Bayes success), as Table II reads them,
+    from the stored rows (``breadth.truth_rows``; one function for the explain step and verify)."""
+    out = sign_flip_summary(rows, FAMILY_K["grasp"])
     out.pop("differences")
-    return {**out, "n_feasible": int(sum(feasible.values())), "n_instances": len(feasible)}
+    return out
 
 
-def run(runs: Path, quick: bool, workers: int = 1) -> dict[str, Any]:
-    """Keys of ``explain:results.grasp_signs``: the frozen grasp study on the analytic (model-exact) scene."""
+def keys(rows: pd.DataFrame) -> dict[str, Any]:
+    """Keys of ``explain:results.grasp_signs`` from the stored rows."""
+    return {f"analytic.{k}": v for k, v in sign_counts(rows).items()}
+
+
+def run(runs: Path, quick: bool, workers: int = 1) -> pd.DataFrame:
+    """The frozen grasp study on the analytic (model-exact) scene: its stored rows (``keys`` reads them)."""
     base = paper_config("grasp")
     base = quick_config(base) if quick else base
     data = config_data(base)
@@ -45,4 +49,4 @@ def run(runs: Path, quick: bool, workers: int = 1) -> dict[str, Any]:
     config = parse_config(data)
     path = runs / "grasp_analytic_scene"
     run_study(config, path, workers=workers, threads=1)
-    return {f"analytic.{k}": v for k, v in sign_counts(config, path).items()}
+    return truth_rows(config, path)

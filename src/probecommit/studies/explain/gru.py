@@ -82,3 +82,31 @@ def retrain_tolerance(study_dir: Path, pipeline_run: Path, scratch: Path, quick:
     out["threads_2_vs_frozen_max_abs_param_diff"] = max_diff(states[2], states[frozen])
     torch.set_num_threads(frozen)
     return out
+
+
+def summary_keys(r: dict[str, Any], per_episode: pd.DataFrame | None, boot: dict[str, int],
+                 paper_interval: tuple[float, float]) -> dict[str, Any]:
+    """``explain:results.gru`` but the retrained seed's tolerance: the GRU study's difference and its implied
+    SE against the paper's, the power of the equivalence margin, and (with the per-episode misses) the spread
+    over instances and seeds. ``r`` is the GRU study's results (``studies.gru.summarize_gru``: its results.json
+    in the explain step, recomputed from ``gru_episodes.parquet`` in verify)."""
+    from probecommit.studies.explain.stats import equivalence_power, interval_se
+
+    est, lo, hi = r["gru_minus_pipeline"]
+    margin = float(r["equivalence_margin"])
+    se = interval_se(lo, hi)
+    out: dict[str, Any] = {"available": 1, "difference": [est, lo, hi], "se_implied": se,
+                           "seed_miss_sd": float(r["seed_miss_sd"]),
+                           "seed_sd_of_mean": float(r["seed_miss_sd"]) / np.sqrt(max(int(r["seeds"]), 1))}
+    for name, delta in (("power_at_zero", 0.0), ("power_at_estimate", est)):
+        out[name] = equivalence_power(se, delta, margin)
+    paper_se = interval_se(*paper_interval)
+    out["se_paper_implied"] = paper_se
+    out["se_ratio"] = se / paper_se
+    out["power_at_estimate_with_paper_se"] = equivalence_power(paper_se, est, margin)
+    if per_episode is not None:
+        spread = difference_spread(per_episode, **boot)
+        out.update(spread)
+        out["instances_for_paper_se"] = float(spread["instances"] * (se / paper_se) ** 2)
+        out["power_at_estimate_two_way"] = equivalence_power(interval_se(*spread["two_way_interval"][1:]), est, margin)
+    return out

@@ -18,7 +18,7 @@ import pandas as pd
 
 from probecommit.audit.conformal import budget_thresholds, conformal_quantile, worst_budget_scores
 from probecommit.audit.margin import GAMMA_GRID, instance_optimism, margin_candidates, optimism_margin
-from probecommit.runner.calibration import _calibration_scores, _load
+from probecommit.runner.calibration import calibration_scores, load_for_commit
 
 #: Columns kept of each re-executed calibration table.
 COLUMNS = ("instance_id", "repeat", "k", "status", "predicted", "realized")
@@ -49,8 +49,8 @@ def margin_curve(cal_run: Any, budgets: Sequence[int], alpha: float, escaped_fin
         trajectories), ``gamma`` and ``gamma_covered_only`` (the rule on each), the
         thresholds ``t_k``, the simultaneous ``t`` and the distribution-free margin.
     """
-    cal = _load(cal_run, True, None, chunk_instances, budgets)
-    scores = _calibration_scores(cal)
+    cal = load_for_commit(cal_run, True, None, chunk_instances, budgets)
+    scores = calibration_scores(cal)
     t_k = budget_thresholds(scores, alpha, budgets)
     t_sim = conformal_quantile(worst_budget_scores(scores, budgets).to_numpy(), alpha)
     gammas = margin_candidates(grid)
@@ -85,7 +85,7 @@ def margin_curve(cal_run: Any, budgets: Sequence[int], alpha: float, escaped_fin
     out = {"x_hole": x.reindex(instances).to_numpy(float), "gamma_per_budget": per_budget, "instance_sums": (np.array(gammas), np.array(pred_sums), np.array(real_sums)),
            "scores": scores, "table": table, "gamma": _select(table), "thresholds": {int(k): float(v) for k, v in t_k.items()},
            "simultaneous_threshold": float(t_sim), "distribution_free_margin": float(optimism_margin(optimism, alpha)),
-           "worst_budget_optimism": optimism.max(axis=1)}
+           "worst_budget_optimism": optimism.max(axis=1), "optimism": optimism, "instances": instances}
     if escaped_final is not None:
         covered = pd.DataFrame({"gamma": table["gamma"], "sum_predicted": table["sum_predicted_covered"],
                                 "sum_realized": table["sum_realized_covered"]})

@@ -8,7 +8,10 @@ from __future__ import annotations
 
 from typing import Any
 
+import pandas as pd
+
 from probecommit.studies.explain import breadth, engines_x, grasp_x, mixture_x, pybullet_x, rig, searches
+from probecommit.studies.insertion import ROBUST_FILE
 from probecommit.studies.paper_values import PAPER, value
 
 #: Result groups these steps fill (added to ``Explain.res``).
@@ -20,10 +23,9 @@ def run(job: Any) -> None:
     job.res["engines_x"].update(engines_x.run(job.root))
     job.progress("explain: development searches resampled", 0, 1)
     s = job.res["searches"]
-    s.update({f"cover.{k}": v for k, v in searches.cover_stability(job.p, PAPER["cover.schedule"], job.boot).items()})
-    paper = {f: value(f"T42-robust-chosen.{f}") for f in ("tempering", "mixture", "rejuvenation")}
-    s.update({f"robust.{k}": v for k, v in searches.robust_stability(job.load("dev_random"), job.p.robust, paper,
-                                                                      job.boot).items()})
+    job.stored[searches.COVER_STORED] = searches.cover_table(job.p)
+    s.update(search_keys(job.stored[searches.COVER_STORED], pd.read_parquet(job.root / "insertion" / "results" / ROBUST_FILE),
+                         job.boot))
     job.progress("explain: the simulated rig redrawn", 0, 1)
     keys, tables = rig.run(job.runs, job.cfg, job.boot, job.quick)
     job.res["rig_redraws"].update(keys)
@@ -32,6 +34,15 @@ def run(job: Any) -> None:
     keys, job.tables["breadth_prior"] = breadth.run(job.root, job.runs, job.cfg, job.boot, job.quick)
     job.res["breadth_prior"].update(keys)
     run_ex3(job)
+
+
+def search_keys(cover: pd.DataFrame, robust: pd.DataFrame, boot: dict[str, Any]) -> dict[str, Any]:
+    """``searches.*``: the cover search from its stored rows, the robust filters' tuning from the insertion study's
+    stored tuning rows (``robust_episodes.parquet``), each resampled over development instances."""
+    paper = {f: value(f"T42-robust-chosen.{f}") for f in ("tempering", "mixture", "rejuvenation")}
+    out = {f"cover.{k}": v for k, v in searches.cover_stability(cover, PAPER["cover.schedule"], boot).items()}
+    tuning = robust[robust["part"] == "tuning"]
+    return {**out, **{f"robust.{k}": v for k, v in searches.robust_stability(tuning, paper, boot).items()}}
 
 
 def run_ex3(job: Any) -> None:
@@ -49,4 +60,5 @@ def run_ex3(job: Any) -> None:
                                                       job.p.budgets["random"])
     job.res["mixture_noise"].update(keys)
     job.progress("explain: grasp on the model-exact scene", 0, 1)
-    job.res["grasp_signs"].update(grasp_x.run(job.runs, job.quick, job.workers))
+    job.stored[grasp_x.STORED] = grasp_x.run(job.runs, job.quick, job.workers)
+    job.res["grasp_signs"].update(grasp_x.keys(job.stored[grasp_x.STORED]))  # what verify recomputes

@@ -52,9 +52,9 @@ def _emulated(source: LoadedRun, runs: Path, name: str, offset: float, scale: fl
     return load_run(path)
 
 
-def _probe_k(episodes: Any, k: int) -> Any:
+def _probe_k(episodes: Any, k: int | None) -> Any:
     rows = episodes[(episodes["method"] == "probe_robust") & (episodes["status"] == "ok")]
-    return rows[rows["k"] == k]
+    return rows if k is None else rows[rows["k"] == k]
 
 
 def draw_range(values: list[float]) -> dict[str, float]:
@@ -82,6 +82,54 @@ def stored_keys(deployed: Any, draws: Any, kmax: int, boot: dict[str, Any]) -> d
     return out
 
 
+#: The emulated scene's stored rows: ``part`` ``paper`` / ``unit`` (the paper's capture window / the model's) Probe-Robust
+#: rows at every budget, and ``paper_probe`` / ``unit_probe`` (each tap's reading, in the runs' probe order).
+EMULATED = "pybullet_emulated_episodes.parquet"
+EMULATED_COLUMNS = ("instance_id", "repeat", "k", "action", "z_true", "predicted", "escaped", "true_c", "instance_index",
+                    "instances")
+
+
+def emulated_rows(paper: LoadedRun, unit: LoadedRun) -> pd.DataFrame:
+    """The stored rows of both emulated scenes (``EMULATED``): what :func:`emulated_keys` reads."""
+    parts = []
+    for name, run in (("paper", paper), ("unit", unit)):
+        inst = run.instances.reset_index(drop=True)
+        index = dict(zip(inst["instance_id"], inst.index))
+        rows = _probe_k(run.episodes, None)
+        rows = rows.assign(true_c=inst.set_index("instance_id").loc[rows["instance_id"], "true_c"].to_numpy(float),
+                           instance_index=rows["instance_id"].map(index).astype("int32"), instances=len(inst))
+        parts.append(rows[list(EMULATED_COLUMNS)].assign(part=name))
+        parts.append(pd.DataFrame({"part": f"{name}_probe", "y": np.asarray(run.probes["y"].to_numpy(), float)}))
+    return pd.concat(parts, ignore_index=True)
+
+
+def emulated_keys(rows: pd.DataFrame, stored: pd.DataFrame, kmax: int, boot: dict[str, Any], seed: int = 0) -> dict[str, Any]:
+    """``pybullet_escape``'s emulated-scene keys from the stored rows (``emulated_rows``) and the engines study's
+    PyBullet episodes (``stored``: the run's, or its rows in ``engine_episodes.parquet`` in verify)."""
+    part = lambda name: rows[rows["part"] == name].drop(columns="part").reset_index(drop=True)  # noqa: E731
+    paper, unit = part("paper"), part("unit")
+    ratio, sd = value("T18-engine-scans.pybullet_ratio"), value("T18-engine-scans.pybullet_ratio_sd")
+    out: dict[str, Any] = {}
+    for k in (1, kmax):
+        at = paper[paper["k"] == k]
+        iv = cluster_bootstrap_mean(at["escaped"].to_numpy(float), at["instance_id"].to_numpy(), **boot)
+        out[f"emulated.escape_k{k}"] = [float(iv.estimate), float(iv.lo), float(iv.hi)]
+    out["capture_moves_readings"] = int(not bool((part("paper_probe")["y"].to_numpy() == part("unit_probe")["y"].to_numpy()).all()))
+    e_paper, e_unit = paper[paper["k"] == kmax], unit[unit["k"] == kmax]
+    out["capture_moves_escape_k8"] = float(e_paper["escaped"].mean() - e_unit["escaped"].mean())
+    keys = ["instance_id", "repeat", "k"]
+    both = paper[keys + ["escaped"]].merge(_probe_k(stored, None)[keys + ["escaped"]], on=keys, how="outer",
+                                           suffixes=("", "_stored"))
+    out["same_escape_as_stored_every_k"] = int(both["escaped"].notna().all() and both["escaped_stored"].notna().all()
+                                               and bool((both["escaped"].astype(bool) == both["escaped_stored"].astype(bool)).all()))
+    scales = gamma_scales(ratio, sd, int(paper["instances"].iloc[0]), seed)  # one scale per instance, in instance order
+    per_truth = capture_failure(e_paper["action"].to_numpy(), e_paper["z_true"].to_numpy(), e_paper["true_c"].to_numpy(float),
+                                scales[e_paper["instance_index"].to_numpy().astype(int)])
+    out["per_truth_capture.failure_k8"] = float(per_truth.mean())
+    out["per_truth_capture.optimism_k8"] = float((per_truth - e_paper["predicted"].to_numpy(float)).mean())
+    return out
+
+
 def run(root: Path, runs: Path, boot: dict[str, Any], workers: int = 1, seed: int = 0,
         draws: int = 0, stored_rows: dict[str, Any] | None = None) -> dict[str, Any]:
     """Keys of ``explain:results.pybullet_escape`` (empty without the engines study's PyBullet run); the per-draw
@@ -95,27 +143,11 @@ def run(root: Path, runs: Path, boot: dict[str, Any], workers: int = 1, seed: in
     sd = value("T18-engine-scans.pybullet_ratio_sd")
     paper = _emulated(stored, runs, "pybullet_emulated_paper_scene", offset, ratio, workers)
     unit = _emulated(stored, runs, "pybullet_emulated_paper_boundary_unit_capture", offset, 1.0, workers)
+    rows = emulated_rows(paper, unit)
+    if stored_rows is not None:
+        stored_rows[EMULATED] = rows
     out: dict[str, Any] = {"paper_offset": offset, "paper_ratio": ratio, "paper_ratio_sd": sd}
-    for k in (1, kmax):
-        rows = _probe_k(paper.episodes, k)
-        iv = cluster_bootstrap_mean(rows["escaped"].to_numpy(float), rows["instance_id"].to_numpy(), **boot)
-        out[f"emulated.escape_k{k}"] = [float(iv.estimate), float(iv.lo), float(iv.hi)]
-    same = paper.probes["y"].to_numpy() == unit.probes["y"].to_numpy()
-    out["capture_moves_readings"] = int(not bool(same.all()))
-    e_paper, e_unit = _probe_k(paper.episodes, kmax), _probe_k(unit.episodes, kmax)
-    out["capture_moves_escape_k8"] = float(e_paper["escaped"].mean() - e_unit["escaped"].mean())
-    out["same_escape_as_stored_every_k"] = int(all(
-        np.array_equal(_probe_k(paper.episodes, k)["escaped"].to_numpy(),
-                       _probe_k(stored.episodes, k)["escaped"].to_numpy())
-        for k in range(1, kmax + 1)))
-    inst = paper.instances.set_index("instance_id")
-    ids = inst.index.to_numpy()
-    scales = dict(zip(ids, gamma_scales(ratio, sd, len(ids), seed)))
-    c = inst.loc[e_paper["instance_id"], "true_c"].to_numpy(float)
-    per_truth = capture_failure(e_paper["action"].to_numpy(), e_paper["z_true"].to_numpy(), c,
-                                np.array([scales[i] for i in e_paper["instance_id"]]))
-    out["per_truth_capture.failure_k8"] = float(per_truth.mean())
-    out["per_truth_capture.optimism_k8"] = float((per_truth - e_paper["predicted"].to_numpy(float)).mean())
+    out.update(emulated_keys(rows, stored.episodes, kmax, boot, seed))
     escapes = []
     for i in range(draws):
         split = f"pybullet_draw_{i:02d}"

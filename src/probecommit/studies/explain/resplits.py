@@ -33,13 +33,17 @@ def summary(table: pd.DataFrame) -> dict[str, float]:
             "splits": int(len(table))}
 
 
-def run(protocol: Protocol, schedule: list[float], runs: Path, workers: int) -> dict[str, float]:
-    """The pool under ``schedule`` (run once into ``runs``) and its re-split summary."""
+#: The stored re-split rows (one per split; ``summary`` reads them).
+STORED = "resplits_paper_schedule.parquet"
+
+
+def run(protocol: Protocol, schedule: list[float], runs: Path, workers: int) -> pd.DataFrame:
+    """The pool under ``schedule`` (run once into ``runs``) and its re-split rows (``summary`` summarizes them)."""
     from probecommit.runner.replay import load_run
     from probecommit.runner.study import run_study
 
     path = runs / "B_pool_cover_paper_schedule"
     run_study(pool_config(protocol, schedule), path, workers=workers, threads=1)
     r = protocol.resplits
-    return summary(resplit_table(load_run(path), protocol.alpha, int(r["count"]), int(r["seed"]), protocol.budgets["cover"],
-                                 protocol.bootstrap.seed))
+    return resplit_table(load_run(path), protocol.alpha, int(r["count"]), int(r["seed"]), protocol.budgets["cover"],
+                         protocol.bootstrap.seed)

@@ -32,6 +32,8 @@ def margin_keys(table: pd.DataFrame) -> dict[str, float]:
     episodes, and covered ones only) and the optimism at gamma = 1."""
     out: dict[str, float] = {}
     for label, part in table.groupby("schedule", sort=False):
+        if str(label).endswith("_nu_executor"):  # the uncalibrated executor's curve: only its margin is published
+            continue
         for row in part.to_dict("records"):
             out.update({f"{label}.g{row['gamma']:.2f}.{key}": float(row[col]) for key, col in MARGIN_COLUMNS.items()})
         first = part.iloc[0]

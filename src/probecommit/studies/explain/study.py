@@ -18,17 +18,13 @@ import numpy as np
 import pandas as pd
 import yaml
 
-from probecommit.audit.conformal import simultaneous_threshold
-from probecommit.audit.stats import paired_bootstrap, percentile_interval, resample_counts
+from probecommit.audit.stats import paired_bootstrap
 from probecommit.runner.replay import load_run, replay_episodes
-from probecommit.studies.explain import draw_audit, draw_faults, generator, more, resplits, runs, stored, surprise_variants
+from probecommit.studies.explain import (calibration_rows, draw_audit, draw_faults, engines_x, generator, more, resplits,
+                                         robust_rows, runs, stored, surprise_variants)
 from probecommit.studies.explain import gru as gru_study
 from probecommit.studies.explain.margin import margin_curve
-from probecommit.studies.explain.pool import gate_pools
-from probecommit.studies.explain.stats import (capture_failure, conformal_quantile_draws, equivalence_power, interval_se,
-                                                margin_draws)
 from probecommit.studies.paper_values import PRINTED
-from probecommit.studies.paper_values import value as paper_value
 from probecommit.studies.protocol import Protocol, load_protocol
 from probecommit.store.safefile import write_text, write_with
 
@@ -46,6 +42,17 @@ def cost_keys(differences: list[dict[str, Any]]) -> dict[str, list[float]]:
     passes the ones it recomputed)."""
     return {f"cost_of_calibration.{COST_LABELS[(row['baseline'], row['treatment'])]}": [row["difference"], row["lo"], row["hi"]]
             for row in differences}
+
+
+def surprise_variant_keys(rows: pd.DataFrame, schedules: pd.DataFrame, k: int, boot: dict[str, int]) -> dict[str, Any]:
+    """``missing.surprise_variants.*`` from the stored surprise readings and the stored schedule rows (labels)."""
+    out: dict[str, Any] = {}
+    for label, run in (("ours", "ours_B_test"), ("paper_schedule", "paper_B_test")):
+        aucs = surprise_variants.aucs_from_table(rows[rows["schedule"] == label].reset_index(drop=True),
+                                                 schedules[schedules["run"] == run], [1, k], k,
+                                                 resamples=int(boot["resamples"]), seed=int(boot["seed"]))
+        out.update({f"surprise_variants.{label}.{key}": v for key, v in aucs.items()})
+    return out
 
 
 def load_explain_config(path: str | Path | None = None) -> dict[str, Any]:
@@ -86,6 +93,10 @@ class Explain:
         self.tables: dict[str, pd.DataFrame] = {}
         #: Stored rows written beside results.json as they are, by file name (``more``'s steps).
         self.stored: dict[str, pd.DataFrame] = {}
+        #: Re-executed commits by calibration (``Recorder``) and episodes of the step's own runs by run name, that
+        #: verify recomputes the gates, calibration and thresholds from (``calibration_rows.COMMITS``, ``EPISODES``).
+        self.commits: dict[str, list[pd.DataFrame]] = {}
+        self.episodes: dict[str, pd.DataFrame] = {}
         self._loaded: dict[str, Any] = {}
 
     def load(self, name: str) -> Any:
@@ -113,35 +124,30 @@ class Explain:
         self._cost_and_testc()
 
     def _random_gates(self) -> None:
-        """Every commit gate under random probes (the paper reports only that posterior variance is lowest)."""
+        """Every commit gate under random probes (the paper reports only that posterior variance is lowest);
+        the re-executed rows are kept (``commits.parquet``) for verify's ``gates_from_commits``."""
         from probecommit.runner.calibration import gates
 
-        m = self.res["missing"]
         self.progress("explain: random-probe gates", 0, 1)
+        self.commits["gates_random"] = []
         result = gates(self.load("B_cal_random"), self.load("B_test_random"), alpha=self.p.alpha, **self.boot,
-                       chunk_instances=48)
-        pools = gate_pools(result)
-        areas = {name: pools.get(f"{name}.area", float("nan")) for name in ("raw", "adjusted", "posterior_variance")}
-        m.update({f"gate_area_random.{name}": area for name, area in areas.items()})
-        m["gate_area_random.lowest_is_posterior_variance"] = int(min(areas, key=areas.get) == "posterior_variance")
-        # Areas span each gate's own attainable range; the mean failure over it compares them on equal terms.
-        means = {name: pools.get(f"{name}.mean_failure", float("nan")) for name in areas}
-        m.update({f"gate_mean_failure_random.{name}": v for name, v in means.items()})
-        m["gate_mean_failure_random.lowest_is_posterior_variance"] = int(min(means, key=means.get) == "posterior_variance")
-        self.res["committed_pool"].update({f"random.{k}": v for k, v in pools.items()})
+                       chunk_instances=48, record=self.commits["gates_random"])
+        for group, values in calibration_rows.random_gate_keys(result).items():
+            self.res[group].update(values)
 
     def _corrected_thresholds(self) -> None:
-        """The corrected random-probe simultaneous threshold, and two stored thresholds recomputed."""
-        p, t = self.p, self.res["thresholds"]
+        """The corrected random-probe simultaneous threshold, and two stored thresholds recomputed
+        (``calibration_rows.threshold_keys``; the corrected replay's episodes are stored)."""
         self.progress("explain: corrected random calibration", 0, 1)
-        corrected = runs.corrected_replay(self.ins / "B_cal_random", self.runs, p.delta)
-        budgets = self.cfg["random_budgets"]
-        self.res["missing"]["simultaneous_threshold_random_corrected"] = simultaneous_threshold(
-            _probe(corrected.episodes), budgets, p.alpha)
-        t["simultaneous_random_original_recomputed"] = simultaneous_threshold(
-            _probe(self.load("B_cal_random").episodes), budgets, p.alpha)
-        t["simultaneous_cover_corrected_recomputed"] = simultaneous_threshold(
-            _probe(self.load("B_cal_cover_corrected").episodes), list(range(1, p.budgets["cover"] + 1)), p.alpha)
+        corrected = runs.corrected_replay(self.ins / "B_cal_random", self.runs, self.p.delta)
+        self.episodes[calibration_rows.RANDOM_CORRECTED] = corrected.episodes
+        names = ("B_cal_random", "B_cal_cover_corrected")
+        keys = calibration_rows.threshold_keys({calibration_rows.RANDOM_CORRECTED: corrected.episodes,
+                                                **{n: self.load(n).episodes for n in names}},
+                                               self.cfg["random_budgets"], list(range(1, self.p.budgets["cover"] + 1)),
+                                               self.p.alpha)
+        for group, values in keys.items():
+            self.res[group].update(values)
 
     def _cost_and_testc(self) -> None:
         """The cost-of-calibration differences as keys (Test C's final escapes are ``stored.harness_keys``')."""
@@ -173,107 +179,78 @@ class Explain:
         """The surprise AUC with the paper's words read as a class probability, and with escape read as
         "outside the retained set", on both schedules (k = 1 and the final budget)."""
         self.progress("explain: surprise read as a class probability", 0, 1)
-        for label, run in (("ours", self.load("B_test_cover")), ("paper_schedule", paper_test)):
-            aucs = surprise_variants.variant_aucs(run, _probe(run.episodes), [1, k], k, **self.boot)
-            self.res["missing"].update({f"surprise_variants.{label}.{key}": v for key, v in aucs.items()})
+        rows = [surprise_variants.variant_table(run, label)
+                for label, run in (("ours", self.load("B_test_cover")), ("paper_schedule", paper_test))]
+        self.stored[surprise_variants.STORED] = pd.concat(rows, ignore_index=True)
+        self.res["missing"].update(surprise_variant_keys(self.stored[surprise_variants.STORED], self.tables["schedules"], k,
+                                                         self.boot))
 
     def _schedule_failure(self, paper_schedule: dict[str, Any]) -> None:
         """Table IV's calibrated rows and the cost of calibration under the paper's schedule (the schedules'
-        failures on the same instances are ``stored.pool_keys``')."""
+        failures on the same instances are ``stored.pool_keys``'); the re-executed rows and both runs'
+        episodes are kept for verify's ``calibration_from_tables``."""
         from probecommit.runner.calibration import calibrate
 
-        c, b, k = self.res["committed_pool"], self.boot, self.p.budgets["cover"]
+        k = self.p.budgets["cover"]
         self.progress("explain: calibration under the paper's schedule", 0, 1)
+        self.commits["paper_schedule"] = []
         cal = calibrate(paper_schedule["cal"], paper_schedule["test"], alpha=self.p.alpha, budgets=list(range(1, k + 1)),
-                        **b, chunk_instances=48)
-        for row in cal.cost.to_dict("records"):
-            name = str(row["setting"]).replace(" + ", "_").replace(" ", "_")
-            c[f"schedule.B_test.paper_schedule.cost_table.{name}"] = [row["failure"], row["failure_lo"], row["failure_hi"]]
-        for row in cal.cost_differences.to_dict("records"):
-            key = COST_LABELS[(row["baseline"], row["treatment"])]
-            self.res["missing"][f"cost_of_calibration_paper_schedule.{key}"] = [row["difference"], row["lo"], row["hi"]]
-        self.res["margin_per_gamma"]["paper_schedule.gamma_calibrate"] = cal.margin.gamma
+                        **self.boot, chunk_instances=48, record=self.commits["paper_schedule"])
+        self.episodes[calibration_rows.PAPER_CAL] = paper_schedule["cal"].episodes
+        self.episodes[calibration_rows.PAPER_TEST] = paper_schedule["test"].episodes
+        for group, values in calibration_rows.paper_calibration_keys(cal).items():
+            self.res[group].update(values)
 
     def resplits_paper_schedule(self) -> None:
         """The 50 re-splits of the 192-instance cover pool under the paper's schedule (``resplits``)."""
         self.progress("explain: re-splits under the paper's schedule", 0, 1)
-        out = resplits.run(self.p, COVER_SCHEDULE, self.runs, self.workers)
+        self.stored[resplits.STORED] = resplits.run(self.p, COVER_SCHEDULE, self.runs, self.workers)
+        out = resplits.summary(self.stored[resplits.STORED])  # what verify recomputes from the stored rows
         self.res["committed_pool"].update({f"resplits.paper_schedule.{k}": v for k, v in out.items()})
 
     # ------------------------------------------------------------------ margin and thresholds
     def margins(self, paper_schedule: dict[str, Any]) -> None:
-        g, t, p = self.res["margin_per_gamma"], self.res["thresholds"], self.p
+        """The margin curve of both schedules (every gamma committed), and the margins, thresholds, their
+        intervals and strata: ``calibration_rows.margin_rule_keys`` of the per-instance rows stored beside
+        the curve (what verify recomputes)."""
+        g, p = self.res["margin_per_gamma"], self.p
         k = p.budgets["cover"]
         budgets = list(range(1, k + 1))
+        instances, sums = [], []
         for label, run in (("ours", self.load("B_cal_cover")), ("paper_schedule", paper_schedule["cal"])):
             self.progress(f"explain: margin curve ({label})", 0, 1)
-            curve = margin_curve(run, budgets, p.alpha, _final_escape(run.episodes, k))
-            table = curve["table"]
-            kept = [c for c in table.columns if not c.startswith("sum_")]  # sums are the rule's; the means are published
-            self.tables[f"margin_{label}"] = table[kept].assign(schedule=label)
+            escaped = _final_escape(run.episodes, k)
+            curve = margin_curve(run, budgets, p.alpha, escaped)
+            self.tables[f"margin_{label}"] = curve["table"].assign(schedule=label)
             g.update(stored.margin_keys(self.tables[f"margin_{label}"]))  # what verify recomputes from the stored curve
-            g[f"{label}.gamma"] = curve["gamma"]
-            g[f"{label}.gamma_covered_only"] = curve["gamma_covered_only"]
-            g[f"{label}.escaped_share_cal"] = float(_final_escape(run.episodes, k).mean())
-            t[f"{label}.t_{k}"] = curve["thresholds"][k]
-            t[f"{label}.simultaneous"] = curve["simultaneous_threshold"]
-            t[f"{label}.distribution_free_margin"] = curve["distribution_free_margin"]
-            s = curve["scores_final"]
-            t[f"{label}.share_scores_final_above_paper_t"] = float((s > paper_value("T02-t5-cover.t5")).mean())
-            t[f"{label}.share_scores_final_escaped"] = float((s > 1.0).mean())
-            worst = curve["worst_budget_optimism"]
-            t[f"{label}.share_worst_optimism_above_paper_df"] = float(
-                (worst > paper_value("T04-distribution-free-margin.cover")).mean())
-            for kk, value in curve["gamma_per_budget"].items():
-                g[f"{label}.gamma_at_k{kk}"] = value
-            self._sampling_intervals(label, curve, k)
-            gammas, pred, real = curve["instance_sums"]
-            beyond = np.abs(curve["x_hole"]) > self.cfg["stratum_edge_mm"]
-            share = (10.0 - self.cfg["stratum_edge_mm"]) / 10.0  # the +-10 mm box's share beyond the edge
-            weights = np.where(beyond, share / max(beyond.mean(), 1e-12), (1 - share) / max((~beyond).mean(), 1e-12))
-            g[f"{label}.gamma_standardized"] = float(margin_draws(gammas, pred, real, weights[None, :])[0])
-            g[f"{label}.gamma_inside"] = float(margin_draws(gammas, pred, real, (~beyond).astype(float)[None, :])[0])
-            g[f"{label}.gamma_beyond"] = float(margin_draws(gammas, pred, real, beyond.astype(float)[None, :])[0])
+            instances.append(calibration_rows.instance_table(label, curve, escaped))
+            sums.append(calibration_rows.sums_table(label, curve))
             if label == "ours":
                 nu_curve = margin_curve(run, budgets, p.alpha, None, set_calibrated=False)
-                g["ours.gamma_nu_executor"] = nu_curve["gamma"]
-                g["ours.optimism_at_gamma_1_nu_executor"] = float(
-                    nu_curve["table"].iloc[0].mean_realized - nu_curve["table"].iloc[0].mean_predicted)
-
-    def _sampling_intervals(self, label: str, curve: dict[str, Any], k: int) -> None:
-        """Cluster-bootstrap intervals of gamma, t_k, the simultaneous t and the distribution-free
-        margin: how far a quantile of 96 calibration instances moves with the draw alone."""
-        g, t, p = self.res["margin_per_gamma"], self.res["thresholds"], self.p
-        gammas, pred, real = curve["instance_sums"]
-        scores = curve["scores"]
-        scores.index = scores.index.astype(str)
-        order = np.sort(scores.index.to_numpy())
-        counts = resample_counts(order.size, self.boot["resamples"], self.boot["seed"])
-        draws = margin_draws(gammas, pred, real, counts)
-        g[f"{label}.gamma_interval"] = [curve["gamma"], *percentile_interval(draws)]
-        g[f"{label}.share_resamples_gamma_at_least_paper"] = float(np.mean(draws >= paper_value("T03-margin.cover") - 1e-12))
-        t_draws = conformal_quantile_draws(scores.loc[order, k].to_numpy(float), counts, p.alpha)
-        t[f"{label}.t_{k}_interval"] = [curve["thresholds"][k], *percentile_interval(t_draws)]
-        t[f"{label}.share_resamples_t_{k}_at_most_paper"] = float(np.mean(t_draws <= paper_value("T02-t5-cover.t5")))
-        worst = curve["worst_budget_optimism"]
-        worst.index = worst.index.astype(str)
-        df_draws = conformal_quantile_draws(worst.reindex(order).to_numpy(float), counts, p.alpha)
-        t[f"{label}.distribution_free_margin_interval"] = [curve["distribution_free_margin"], *percentile_interval(df_draws)]
-        t[f"{label}.share_resamples_df_at_least_paper"] = float(
-            np.mean(df_draws >= paper_value("T04-distribution-free-margin.cover")))
+                self.tables[f"margin_{calibration_rows.NU_EXECUTOR}"] = nu_curve["table"].assign(
+                    schedule=calibration_rows.NU_EXECUTOR)
+        self.tables["calibration_instances"] = pd.concat(instances, ignore_index=True)
+        self.tables["calibration_sums"] = pd.concat(sums, ignore_index=True)
+        curves = pd.concat([t for name, t in self.tables.items() if name.startswith("margin_")], ignore_index=True)
+        keys = calibration_rows.margin_rule_keys(curves, self.tables["calibration_instances"], self.tables["calibration_sums"],
+                                                 alpha=p.alpha, edge=self.cfg["stratum_edge_mm"], boot=self.boot)
+        for group, values in keys.items():
+            self.res[group].update(values)
 
     # ------------------------------------------------------------------ instance draws
     def instance_generator(self) -> None:
-        out = self.res["instance_generator"]
+        """Each uniform run's frozen draw against redraws of its generator, from the stored draws (``generator``)."""
         edge, seeds = self.cfg["stratum_edge_mm"], self.cfg["generator_seeds_quick" if self.quick else "generator_seeds"]
-        low, high = -10.0, 10.0
+        frozen = {}
         for name in ("A_cover", "B_cal_cover", "B_test_cover", "B_cal_random", "B_test_random", "C_cover", "C_random"):
             run = self.load(name)
             cfg = run.config.instances
-            if cfg.sampling != "uniform":
-                continue
-            test = generator.generator_test(run.instances, cfg.split, cfg.seed, low, high, edge, seeds)
-            out.update({f"{name}.{k}": v for k, v in test.items()})
+            if cfg.sampling == "uniform":
+                frozen[name] = (run.instances, cfg.split, cfg.seed)
+        if not frozen:
+            return
+        self.stored[generator.STORED] = generator.generator_table(frozen, seeds)
+        self.res["instance_generator"].update(generator.generator_keys(self.stored[generator.STORED], edge))
 
     def draws(self) -> None:
         """Escape, failure and the boundary fix across fresh draws of the generator (analytic scene)."""
@@ -299,8 +276,7 @@ class Explain:
         table = pd.DataFrame(rows)
         mujoco = _probe(self.load("B_test_random").episodes, kmax)
         out.update(stored.draws_keys(table))  # the summaries verify recomputes from the stored rows
-        out["draws.analytic_equals_mujoco_escape_k8"] = int(
-            abs(table.iloc[0]["escape_k8"] - mujoco["escaped"].mean()) < 1e-12)
+        out.update(generator.analytic_equals_mujoco(table, mujoco))
         self.tables["draws"] = table.assign(schedule="draws")
         first = {"audit": 0, "faults": 0, "audit_fresh_cal": 1, "gates_fresh_cal": 1}
         self.tables["cells"] = stored.cells_table(cells, first)
@@ -349,37 +325,26 @@ class Explain:
 
     def robust(self) -> None:
         """The mixture's cost when the model is right, at every epsilon; its optimism on Test C."""
-        out, p, r = self.res["robust"], self.p, self.p.robust
+        p, r = self.p, self.p.robust
         kmax = p.budgets["random"]
         base = self.load("faults_base")
-        right = float(_probe(base.episodes, kmax)["realized"].mean())
-        out["right_model.failure"] = right
+        parts = [_probe(base.episodes, kmax).assign(part="right_base", epsilon=float("nan"))]
         eps_grid = r.epsilons[:1] if self.quick else [*r.epsilons, *self.cfg["mixture_extra_epsilons"]]
         for i, eps in enumerate(eps_grid):
             self.progress("explain: mixture when right", i, len(eps_grid))
             belief = {"likelihood": "mixture", "epsilon": float(eps), "mixture_low": r.mixture_range[0],
                       "mixture_high": r.mixture_range[1]}
             ep, _ = replay_episodes(base, {"belief": belief}, chunk_instances=48)
-            rows = _probe(ep, kmax)
-            out[f"right_model.mixture_eps{eps:g}.failure"] = float(rows["realized"].mean())
-            out[f"right_model.mixture_eps{eps:g}.changed_aims"] = float(
-                (rows.set_index(["instance_id", "repeat"])["action"]
-                 != _probe(base.episodes, kmax).set_index(["instance_id", "repeat"])["action"]).mean())
+            parts.append(_probe(ep, kmax).assign(part="right_mixture", epsilon=float(eps)))
         chosen = json.loads(json.dumps(self.insertion_results()["robust"]["chosen"]))
         eps = float(chosen.get("mixture", r.epsilons[0]))
         belief = {"likelihood": "mixture", "epsilon": eps, "mixture_low": r.mixture_range[0], "mixture_high": r.mixture_range[1]}
         c_old = self.load("C_random")
         ep, _ = replay_episodes(c_old, {"belief": belief}, chunk_instances=48)
-        rows, dep = _probe(ep, kmax), _probe(c_old.episodes, kmax)
-        out["testc.deployed.optimism"] = float((dep["realized"] - dep["predicted"]).mean())
-        out["testc.mixture.optimism"] = float((rows["realized"] - rows["predicted"]).mean())
-        out["testc.mixture.escape"] = float(rows["escaped"].mean())
-        out["testc.mixture.failure_change"] = _triple(paired_bootstrap(dep, rows, "realized", **self.boot).difference)
-        res = self.insertion_results()["robust"]
-        out["harness.deployed.optimism"] = float(res["deployed"]["optimism"][0])
-        for family in ("mixture", "rejuvenation"):
-            if family in res:
-                out[f"harness.{family}.optimism"] = float(res[family]["optimism"][0])
+        parts.append(_probe(ep, kmax).assign(part="testc_mixture", epsilon=eps))
+        self.stored[robust_rows.STORED] = robust_rows.table(parts)
+        self.res["robust"].update(robust_rows.keys(self.stored[robust_rows.STORED], _probe(c_old.episodes, kmax),
+                                                   self.insertion_results()["robust"], self.boot))
 
     # ------------------------------------------------------------------ PhysX
     def physx(self) -> None:
@@ -387,35 +352,17 @@ class Explain:
         out, p, e = self.res["physx_capture"], self.p, self.cfg["physx_emulation"]
         path = self.root / "engines" / "results" / "results.json"
         if path.is_file():
-            scans = json.loads(path.read_text())["results"]["scans"]
-            if "sapien" in scans:
-                out["ours.capture_ratio"] = float(scans["sapien"]["capture"]["ratio_mean"])
-                out["ours.capture_ratio_sd"] = float(scans["sapien"]["capture"]["ratio_sd"])
-                out["ours.boundary_offset"] = float(scans["sapien"]["boundary"]["delta"])
+            out.update(engines_x.physx_ours(json.loads(path.read_text())["results"]["scans"]))
         self.progress("explain: emulated PhysX scene", 0, 1)
         emulated = runs.emulated_engine_runs(p, self.runs, e["boundary_offset"], e["capture_scale"], self.workers)
         instances = emulated["deployed"].instances.set_index("instance_id")
         kmax = p.budgets["random"]
-        tables = {}
+        parts = []
         for variant, run in emulated.items():
-            rows = _probe(run.episodes, kmax).copy()
-            c = instances.loc[rows["instance_id"], "true_c"].to_numpy(float)
-            for scale_name, scale in (("paper_capture", e["capture_scale"]), ("model_capture", 1.0)):
-                realized = capture_failure(rows["action"].to_numpy(), rows["z_true"].to_numpy(), c, scale)
-                pre = f"emulated.{scale_name}.{variant}"
-                out[f"{pre}.failure"] = float(realized.mean())
-                out[f"{pre}.optimism"] = float((realized - rows["predicted"].to_numpy(float)).mean())
-                tables[(scale_name, variant)] = rows.assign(realized=realized)
-            out[f"emulated.{variant}.escape"] = float(rows["escaped"].mean())
-            out[f"emulated.{variant}.episode_coverage"] = float(rows["covered"].mean())
-            out[f"emulated.{variant}.cluster_coverage"] = float(rows.groupby("instance_id")["covered"].all().mean())
-            stored = rows["realized"].to_numpy(float)
-            mine = tables[("paper_capture", variant)]["realized"].to_numpy(float)
-            out[f"emulated.{variant}.stored_equals_recomputed"] = int(np.array_equal(stored, mine))
-        for scale_name in ("paper_capture", "model_capture"):
-            for variant in ("mj_offset", "own_scan"):
-                d = paired_bootstrap(tables[(scale_name, "deployed")], tables[(scale_name, variant)], "realized", **self.boot)
-                out[f"emulated.{scale_name}.{variant}.paired_failure"] = _triple(d.difference)
+            rows = _probe(run.episodes, kmax)
+            parts.append(rows.assign(variant=variant, true_c=instances.loc[rows["instance_id"], "true_c"].to_numpy(float)))
+        self.stored[engines_x.EMULATED] = engines_x.emulated_table(parts)
+        out.update(engines_x.emulated_keys(self.stored[engines_x.EMULATED], e["capture_scale"], self.boot))
 
     # ------------------------------------------------------------------ GRU
     def gru(self) -> None:
@@ -426,27 +373,9 @@ class Explain:
             out["available"] = 0
             return
         r = json.loads(path.read_text())["results"]
-        est, lo, hi = r["gru_minus_pipeline"]
-        margin = float(r["equivalence_margin"])
-        se = interval_se(lo, hi)
-        out["available"] = 1
-        out["difference"] = [est, lo, hi]
-        out["se_implied"] = se
-        out["seed_miss_sd"] = float(r["seed_miss_sd"])
-        out["seed_sd_of_mean"] = float(r["seed_miss_sd"]) / np.sqrt(max(int(r["seeds"]), 1))
-        for name, delta in (("power_at_zero", 0.0), ("power_at_estimate", est)):
-            out[name] = equivalence_power(se, delta, margin)
-        paper_lo, paper_hi = self.cfg["gru_paper_interval"]
-        paper_se = interval_se(paper_lo, paper_hi)
-        out["se_paper_implied"] = paper_se
-        out["se_ratio"] = se / paper_se
-        out["power_at_estimate_with_paper_se"] = equivalence_power(paper_se, est, margin)
         episodes = self.root / "gru" / "results" / "gru_episodes.parquet"
-        if episodes.is_file():
-            spread = gru_study.difference_spread(pd.read_parquet(episodes), **self.boot)
-            out.update(spread)
-            out["instances_for_paper_se"] = float(spread["instances"] * (se / paper_se) ** 2)
-            out["power_at_estimate_two_way"] = equivalence_power(interval_se(*spread["two_way_interval"][1:]), est, margin)
+        per_episode = pd.read_parquet(episodes) if episodes.is_file() else None
+        out.update(gru_study.summary_keys(r, per_episode, self.boot, self.cfg["gru_paper_interval"]))  # what verify recomputes
         runs_dir = self.root / "breadth" / "runs"
         pipeline = runs_dir / ("push2d-quick" if self.quick and (runs_dir / "push2d-quick").is_dir() else "push2d")
         if pipeline.is_dir():
@@ -466,19 +395,35 @@ class Explain:
             step()
         margins = [t for name, t in self.tables.items() if name.startswith("margin_")]
         if margins:
-            write_with(out / "margin_per_gamma.parquet", pd.concat(margins, ignore_index=True).to_parquet)
+            write_with(out / "margin_per_gamma.parquet",
+                       lambda f: pd.concat(margins, ignore_index=True).to_parquet(f, compression="zstd"))
         if "draws" in self.tables:
             write_with(out / stored.DRAWS, self.tables["draws"].drop(columns="schedule").to_parquet)
         for name, file in (("breadth_prior", more.breadth.STORED), ("schedules", stored.SCHEDULES),
+                           ("calibration_instances", calibration_rows.MARGIN_INSTANCES),
+                           ("calibration_sums", calibration_rows.MARGIN_SUMS),
                            ("cells", stored.CELLS), ("mixture_noise", more.mixture_x.STORED)):
             if name in self.tables:  # the rows verify recomputes the summaries from (``stored``)
                 write_with(out / file, lambda f, t=self.tables[name]: t.to_parquet(f, compression="zstd"))
+        self._store_calibrations(out)
         for file, table in self.stored.items():
             write_with(out / file, lambda f, t=table: t.to_parquet(f, compression="zstd"))
         payload = {"results": plain(self.res)}
         write_text(out / "results.json", json.dumps(payload, indent=1, allow_nan=False))
         write_text(out / "explain.md", summary_markdown(payload["results"]))
         return out
+
+
+    def _store_calibrations(self, out: Path) -> None:
+        """The re-executed commits and the step's own runs' episodes (the insertion study's writers and columns)."""
+        from probecommit.studies.insertion import store_commits, store_episodes
+
+        store_commits(self.commits, out / calibration_rows.COMMITS)
+        if self.episodes:
+            methods = lambda name: ["probe_robust", "blind_robust"] if name == calibration_rows.PAPER_TEST else ["probe_robust"]  # noqa: E731
+            rows = pd.concat([ep[ep["method"].isin(methods(name))].assign(run=name) for name, ep in self.episodes.items()],
+                             ignore_index=True)
+            store_episodes(rows, out / calibration_rows.EPISODES, extra=("run",))
 
 
 def plain(o: Any) -> Any:

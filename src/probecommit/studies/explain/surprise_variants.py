@@ -67,18 +67,37 @@ def run_tables(run: Any, chunk_instances: int = 24) -> tuple[pd.MultiIndex, dict
     return index, {name: np.concatenate([p[name] for p in parts]) for name in parts[0]}
 
 
-def variant_aucs(run: Any, episodes: pd.DataFrame, budgets: list[int], final_k: int,
-                 resamples: int, seed: int) -> dict[str, list[float]]:
-    """Rank AUC (cluster-bootstrap triple) of each surprise reading at each budget, for two escape labels:
-    the paper's (outside the full hull at ``final_k``) and "outside the retained set" at ``final_k``."""
+#: The stored surprise readings per trajectory and budget (``schedule``, ``instance_id``, ``repeat``,
+#: ``<reading>_k<k>``): what :func:`aucs_from_table` ranks.
+STORED = "surprise_variants.parquet"
+
+
+def variant_table(run: Any, schedule: str) -> pd.DataFrame:
+    """Each trajectory's running-max surprise under every reading at every budget (``run_tables``), one row each."""
     index, tables = run_tables(run)
-    last = episodes[episodes["k"] == final_k].set_index(["instance_id", "repeat"]).reindex(index)
+    out = pd.DataFrame({"schedule": schedule, "instance_id": index.get_level_values(0).to_numpy(str),
+                        "repeat": index.get_level_values(1).to_numpy("int64")})
+    for reading, table in tables.items():
+        for j in range(table.shape[1]):
+            out[f"{reading}_k{j + 1}"] = table[:, j].astype(float)
+    return out
+
+
+def aucs_from_table(rows: pd.DataFrame, episodes: pd.DataFrame, budgets: list[int], final_k: int,
+                    resamples: int, seed: int) -> dict[str, list[float]]:
+    """Rank AUC (cluster-bootstrap triple) of each surprise reading at each budget, for two escape labels:
+    the paper's (outside the full hull at ``final_k``) and "outside the retained set" at ``final_k``; ``rows``
+    one schedule's ``variant_table``, ``episodes`` its Probe-Robust rows (``escaped``, ``covered`` per budget)."""
+    index = pd.MultiIndex.from_arrays([rows["instance_id"].to_numpy(str), rows["repeat"].to_numpy("int64")])
+    last = episodes[episodes["k"] == final_k]
+    last = last.set_index([last["instance_id"].astype(str), last["repeat"].astype("int64")]).reindex(index)
     labels = {"final_hull": last["escaped"].to_numpy(bool), "final_retained": ~last["covered"].to_numpy(bool)}
     clusters = index.get_level_values(0).to_numpy()
+    readings = dict.fromkeys(c.rsplit("_k", 1)[0] for c in rows.columns if "_k" in c)
     out: dict[str, list[float]] = {}
-    for reading, table in tables.items():
+    for reading in readings:
         for label, y in labels.items():
             for k in budgets:
-                iv = cluster_bootstrap_auc(table[:, k - 1], y, clusters, resamples=resamples, seed=seed)
+                iv = cluster_bootstrap_auc(rows[f"{reading}_k{k}"].to_numpy(float), y, clusters, resamples=resamples, seed=seed)
                 out[f"{reading}.{label}.k{k}"] = [float(iv.estimate), float(iv.lo), float(iv.hi)]
     return out
