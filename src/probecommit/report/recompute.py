@@ -465,6 +465,12 @@ def explain(folder: Path, results: dict[str, Any]) -> Recomputed:
         for key, value in summary(pd.read_parquet(folder / EXPLAIN_MIXTURE)).items():
             out.values[f"mixture_noise.{key}"] = value
         out.sources["mixture_noise"] = EXPLAIN_MIXTURE
+    if (folder / EXPLAIN_EX5).is_file():
+        from probecommit.studies.explain.ex5_calibration import summary as ex5_summary
+
+        for key, value in ex5_summary(pd.read_parquet(folder / EXPLAIN_EX5)).items():
+            out.values[f"ex5_calibration.{key}"] = value
+        out.sources["ex5_calibration"] = EXPLAIN_EX5
     from probecommit.studies.explain.study import plain
 
     out.values = {key: plain(value) for key, value in out.values.items()}  # as the explain step publishes it
@@ -570,6 +576,8 @@ EXPLAIN_BREADTH = "breadth_prior_episodes.parquet"
 EXPLAIN_MIXTURE = "mixture_noise_seeds.parquet"
 #: The explain step's stored rig redraws (``studies.explain.rig.STORED_SESSIONS``, ``STORED_BOUNDARY``).
 EXPLAIN_RIG = ("rig_redraws_sessions.parquet", "rig_redraws_boundary.parquet")
+#: The explain step's stored calibration rows of ex5 (``studies.explain.ex5_calibration.STORED``).
+EXPLAIN_EX5 = "ex5_calibration_rows.parquet"
 
 
 #: The stored tables each study's numbers are recomputed from: a publication without one fails verify
@@ -583,7 +591,7 @@ STORED_TABLES: dict[str, tuple[str, ...]] = {
     "gru": ("gru_episodes.parquet",),
     "beyond": ("beyond_episodes.parquet",),
     "explain": ("margin_per_gamma.parquet", "fresh_draws.parquet", "draw_cells.parquet", EXPLAIN_BREADTH,
-                "schedule_episodes.parquet", EXPLAIN_MIXTURE, *EXPLAIN_RIG),
+                "schedule_episodes.parquet", EXPLAIN_MIXTURE, *EXPLAIN_RIG, EXPLAIN_EX5),
 }
 
 #: Study folder -> its recomputation.
