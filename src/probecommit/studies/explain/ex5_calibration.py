@@ -80,26 +80,27 @@ def cost_keys(rows: pd.DataFrame) -> dict[str, float]:
 # ----------------------------------------------------------------------------- E56: fresh pools
 
 
-def fresh_pool_rows(protocol: Any, schedule: list[float], runs: Path, count: int, workers: int) -> pd.DataFrame:
-    """``count`` fresh pools (split names ``pool_draw_<i>``, the frozen pool's config under ``schedule``), each
-    re-split as the insertion study does; one row per pool with ``resplits.summary``'s statistics."""
+def fresh_pool_row(protocol: Any, schedule: list[float], runs: Path, i: int, workers: int) -> dict[str, Any]:
+    """Fresh pool ``i`` (split ``pool_draw_<i>``, the frozen pool's config under ``schedule``), re-split as the
+    insertion study does: ``resplits.summary``'s statistics."""
     from probecommit.runner.study import run_study
     from probecommit.studies.explain.resplits import summary
     from probecommit.studies.insertion import resplit_table
 
     p = protocol.model_copy(update={"cover_schedule": [float(u) for u in schedule]})
-    r = protocol.resplits
-    rows = []
-    for i in range(count):
-        name = f"pool_draw_{i:02d}"
-        cfg = p.run_config(f"{name}_paper_schedule", "B", name, "cover")
-        cfg = cfg.model_copy(update={"instances": cfg.instances.model_copy(update={"count": p.instances["B"].count * 2})})
-        path = runs / f"{name}_paper_schedule"
-        run_study(cfg, path, workers=workers, threads=1)
-        table = resplit_table(load_run(path), protocol.alpha, int(r["count"]), int(r["seed"]), protocol.budgets["cover"],
-                              protocol.bootstrap.seed)
-        rows.append({"part": "fresh_pool", "index": i, **{k: float(v) for k, v in summary(table).items()}})
-    return pd.DataFrame(rows)
+    r, name = protocol.resplits, f"pool_draw_{i:02d}"
+    cfg = p.run_config(f"{name}_paper_schedule", "B", name, "cover")
+    cfg = cfg.model_copy(update={"instances": cfg.instances.model_copy(update={"count": p.instances["B"].count * 2})})
+    path = runs / f"{name}_paper_schedule"
+    run_study(cfg, path, workers=workers, threads=1)
+    table = resplit_table(load_run(path), protocol.alpha, int(r["count"]), int(r["seed"]), protocol.budgets["cover"],
+                          protocol.bootstrap.seed)
+    return {"part": "fresh_pool", "index": i, **{k: float(v) for k, v in summary(table).items()}}
+
+
+def fresh_pool_rows(protocol: Any, schedule: list[float], runs: Path, count: int, workers: int) -> pd.DataFrame:
+    """``count`` fresh pools (:func:`fresh_pool_row`), one row each."""
+    return pd.DataFrame([fresh_pool_row(protocol, schedule, runs, i, workers) for i in range(count)])
 
 
 def pool_keys(rows: pd.DataFrame) -> dict[str, float]:
