@@ -79,6 +79,9 @@ def test_summary_survives_the_stored_parquet(tmp_path):
     rows.to_parquet(tmp_path / ex5.STORED)
     assert ex5.summary(pd.read_parquet(tmp_path / ex5.STORED)) == ex5.summary(rows)
     assert {k.split(".")[0] for k in ex5.summary(rows)} == {"resplit_cost", "fresh_pool", "capture"}
+    no_pools = pd.concat([rows[rows.part == "resplit_cost"], ex5.fresh_pool_rows(None, [], tmp_path, 0, 1)],
+                         ignore_index=True)  # a quick run draws no fresh pool: its keys are absent, not NaN
+    assert {k.split(".")[0] for k in ex5.summary(no_pools)} == {"resplit_cost"}
 
 
 def test_e55_needs_the_paper_inside_and_the_paper_verdict_often_enough():
