@@ -484,6 +484,12 @@ def explain(folder: Path, results: dict[str, Any]) -> Recomputed:
         for key, value in summary(pd.read_parquet(folder / EXPLAIN_MIXTURE)).items():
             out.values[f"mixture_noise.{key}"] = value
         out.sources["mixture_noise"] = EXPLAIN_MIXTURE
+    if (folder / EXPLAIN_EX5).is_file():
+        from probecommit.studies.explain.ex5_calibration import summary as ex5_summary
+
+        for key, value in ex5_summary(pd.read_parquet(folder / EXPLAIN_EX5)).items():
+            out.values[f"ex5_calibration.{key}"] = value
+        out.sources["ex5_calibration"] = EXPLAIN_EX5
     from probecommit.studies.explain.study import plain
 
     out.values = {key: plain(value) for key, value in out.values.items()}  # as the explain step publishes it
@@ -782,6 +788,8 @@ EXPLAIN_BREADTH = "breadth_prior_episodes.parquet"
 EXPLAIN_MIXTURE = "mixture_noise_seeds.parquet"
 #: The explain step's stored rig redraws (``studies.explain.rig.STORED_SESSIONS``, ``STORED_BOUNDARY``).
 EXPLAIN_RIG = ("rig_redraws_sessions.parquet", "rig_redraws_boundary.parquet")
+#: The explain step's stored calibration rows of ex5 (``studies.explain.ex5_calibration.STORED``).
+EXPLAIN_EX5 = "ex5_calibration_rows.parquet"
 
 
 #: The stored tables each study's numbers are recomputed from: a publication without one fails verify
@@ -799,7 +807,7 @@ STORED_TABLES: dict[str, tuple[str, ...]] = {
                 "margin_instance_sums.parquet", "commits.parquet", "episodes.parquet", "physx_emulated_episodes.parquet",
                 "robust_replays.parquet", "resplits_paper_schedule.parquet", "surprise_variants.parquet",
                 "cover_search_episodes.parquet", "generator_instances.parquet",
-                "grasp_analytic_episodes.parquet"),
+                "grasp_analytic_episodes.parquet", EXPLAIN_EX5),
     # ``pybullet_x.EMULATED`` is required where the engines study's PyBullet run was there (``_engine_keys``).
 }
 
