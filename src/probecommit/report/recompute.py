@@ -465,6 +465,11 @@ def explain(folder: Path, results: dict[str, Any]) -> Recomputed:
         for key, value in summary(pd.read_parquet(folder / EXPLAIN_MIXTURE)).items():
             out.values[f"mixture_noise.{key}"] = value
         out.sources["mixture_noise"] = EXPLAIN_MIXTURE
+    if "ex4_pricing" in results:  # a pure function of the paper's printed values (studies.explain.ex4_pricing)
+        from probecommit.studies.explain.ex4_pricing import keys as ex4_pricing_keys
+
+        out.values.update({f"ex4_pricing.{key}": value for key, value in ex4_pricing_keys().items()})
+        out.sources["ex4_pricing"] = "the paper's printed values (studies/paper_values.py)"
     from probecommit.studies.explain.study import plain
 
     out.values = {key: plain(value) for key, value in out.values.items()}  # as the explain step publishes it

@@ -1,0 +1,76 @@
+"""ex4's explain computations on hand cases: Table II's single-width rule (E35..E40) and the prices
+from the paper's own curve (E48)."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from probecommit.studies import claims
+from probecommit.studies.explain.ex4_breadth import single_width
+from probecommit.studies.explain.ex4_pricing import break_even_grid, consistent_curves, family_keys
+from probecommit.studies.pricing import break_even
+
+
+def _row(**cells: tuple[float, float]) -> dict[str, float]:
+    return {f"{c}{s}": v for c, (lo, hi) in cells.items() for s, v in (("_lo", lo), ("_hi", hi))}
+
+
+def test_single_width_counts_cells_inside_one_width_at_a_time():
+    paper = {"blind_bayes": 0.5, "probe_robust": 0.06, "price.five_below": 0.02}
+    rows = {0.5: _row(blind_bayes=(0.1, 0.2), probe_robust=(0.05, 0.07)),
+            1.25: _row(blind_bayes=(0.4, 0.6), probe_robust=(0.08, 0.1))}
+    assert single_width(rows, paper) == {"single_width.best_cells_inside": 1.0, "single_width.best_scale": 0.5,
+                                         "single_width.all_inside": 0.0}
+    rows[2.0] = _row(blind_bayes=(0.45, 0.55), probe_robust=(0.06, 0.09))  # an interval's end counts as inside
+    assert single_width(rows, paper) == {"single_width.best_cells_inside": 2.0, "single_width.best_scale": 2.0,
+                                         "single_width.all_inside": 1.0}
+
+
+@pytest.mark.parametrize("curve", [(0.5, 0.2, 0.1), (0.3, 0.28, 0.2), (0.035, 0.0115, 0.010), (0.1, 0.2, 0.3)])
+def test_break_even_grid_is_break_even_elementwise(curve):
+    p = break_even(*curve)
+    blind, five = break_even_grid(*curve)
+    assert (float(blind), float(five)) == (p.blind_above, p.five_below)
+
+
+def test_a_curve_s_own_prices_are_found_and_prices_off_by_a_fifth_are_not():
+    p = break_even(0.5, 0.2, 0.1)  # convex: blind above (0.5 - 0.2) / 2 = 0.15, five below (0.2 - 0.1) / 3
+    assert (p.blind_above, p.five_below) == pytest.approx((0.15, 0.1 / 3))
+    hit = consistent_curves((p.blind_above, p.five_below), m5=0.1, m0=0.5, m0_floor=0.4)
+    assert hit["consistent"] == 1 and hit["m2_lo"] <= 0.2 <= hit["m2_hi"]
+    assert consistent_curves((1.2 * p.blind_above, p.five_below), m5=0.1, m0=0.5, m0_floor=0.4)["consistent"] == 0
+    # m0 free: the two prices fix m0 = m2 + 2 * 0.15 and m2 = 0.1 + 3 * five; the floor can rule it out
+    free = consistent_curves((p.blind_above, p.five_below), m5=0.1, m0=None, m0_floor=0.4)
+    assert free["consistent"] == 1 and free["m0_lo"] <= 0.5 <= free["m0_hi"]
+    assert consistent_curves((p.blind_above, p.five_below), m5=0.1, m0=None, m0_floor=0.7)["consistent"] == 0
+
+
+def test_family_keys_read_the_other_blind_arm_only_where_both_are_printed():
+    cells = {"blind_bayes": 0.252, "blind_robust": 0.307, "probe_robust": 0.221}
+    d = (0.307 - 0.221) / 5  # two probes never optimal: both prices are the chord
+    out = family_keys("x", cells, (d, d))
+    assert out["x.consistent"] == 1 and out["x.m0_printed"] == 1 and out["x.blind_bayes_reading.consistent"] == 0
+    assert "x.blind_bayes_reading.consistent" not in family_keys("y", {"blind_bayes": 0.3, "probe_robust": 0.03},
+                                                                 (0.17, 0.012))
+
+
+def test_the_breadth_rows_need_one_width_for_the_whole_row():
+    e = claims.EXPERIMENTS["E36"]
+    good = {"n": 5, "inside": 3.0, "cells": 3.0, "mpl": 0.01, "red": 1.0, "one": 3.0, "at": 0.5, "all": 1.0}
+    assert e.supports(good)
+    assert not e.supports({**good, "one": 2.0, "all": 0.0})  # the span holds every cell, no single width does
+    assert not e.supports({**good, "red": 0.0})
+
+
+def test_e48_speaks_to_every_priced_family_and_needs_a_consistent_curve():
+    by_id = {c.id: c for c in claims.CLAIMS}
+    wired = {e[0] for e in by_id["T01-pricing"].explain if not isinstance(e, str)}
+    assert {f"E48[{f}]" for f in claims.PRICED} <= wired
+    e = claims.EXPERIMENTS["E48[darts]"]
+    v = {"ok": 1.0, "lo": 0.011, "hi": 0.012, "m0lo": 0.0345, "m0hi": 0.0355, "printed": 1.0, "o0": 0.17,
+         "o2": 0.02, "o5": 0.018, "alt": 0.0}
+    assert e.supports(v) and not e.supports({**v, "ok": 0.0})
+    assert "alt" not in claims.EXPERIMENTS["E48[hinge]"].keys
+    assert not math.isnan(v["lo"])
