@@ -74,3 +74,21 @@ def test_e48_speaks_to_every_priced_family_and_needs_a_consistent_curve():
     assert e.supports(v) and not e.supports({**v, "ok": 0.0})
     assert "alt" not in claims.EXPERIMENTS["E48[hinge]"].keys
     assert not math.isnan(v["lo"])
+
+
+def test_e49_needs_no_worsening_and_half_improving_at_the_top_resolution():
+    e = claims.EXPERIMENTS["E49"]
+    v = {"w1": -0.34, "w2": -0.11, "w4": 0.0, "n4": 6, "up4": 3, "tie4": 3, "down4": 0}
+    assert e.supports(v)
+    assert not e.supports({**v, "down4": 1, "w4": -0.0125})  # one seed of eighty still fails
+    assert not e.supports({**v, "n4": 13, "up4": 10})  # no truth worsens, but not half improve
+    by_id = {c.id: c for c in claims.CLAIMS}
+    assert "E49" in by_id["T09-grasp"].explain
+
+
+def test_resolution_config_divides_both_sigmas_and_runs_the_analytic_scene():
+    from probecommit.studies.explain.ex4_grasp import resolution_config
+
+    c = resolution_config(4.0, quick=True)
+    assert c.simulator.engine == "analytic" and c.simulator.noise_sigma == 0.5 and c.model.sigma == 0.5
+    assert c.name == "grasp_analytic_resolution4"

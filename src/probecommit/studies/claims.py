@@ -518,7 +518,7 @@ def _claims_instances_and_comparisons() -> list[Claim]:
                      {"up": "breadth:results.sign_flip_over_truths.grasp.n_improve",
                       "down": "breadth:results.sign_flip_over_truths.grasp.n_worse",
                       "n": "breadth:results.sign_flip_over_truths.grasp.n_feasible"},
-                     lambda v: v["down"] == 0 and 2 * v["up"] == v["n"]),), explain=("E47",)))
+                     lambda v: v["down"] == 0 and 2 * v["up"] == v["n"]),), explain=("E47", "E49")))
     add(Claim("T10-gru", "Sec. V-A, Comparisons", "GRU matches the pipeline within the pre-registered equivalence margin",
               (Holds("equivalent", "difference's interval inside the margin", {"eq": "gru:results.equivalent"},
                      lambda v: bool(v["eq"])),
@@ -1005,7 +1005,7 @@ def _breadth_prior_experiments() -> list[Experiment]:
              "at": f"{b}single_width.best_scale", "all": f"{b}single_width.all_inside"},
             "over {n:d} prior widths (the declared scales of our prior about its centre, ours included; truths at the "
             "same relative positions), {inside:g} of the "
-            "paper's {cells:g} cells of this row lie inside the span of our intervals, but one width holds at most "
+            "paper's {cells:g} cells of this row lie inside the span of our intervals; one width holds at most "
             "{one:g} of them inside its intervals at once (first at {at:g} times our width; all at one width: "
             "{all:g} = yes); probing reduces the miss at "
             "every width ({red:g} = yes) and the paired reduction Blind-Bayes - Probe-Robust excludes zero at every "
@@ -1234,9 +1234,18 @@ def _experiments_ex4() -> list[Experiment]:
             keys,
             "a curve agreeing with the paper's printed Table II cells to their rounding gives both of the paper's "
             "prices within 10 % through our pricing rule: {ok:g} (1 = yes), with Probe-Robust at k = 2 between "
-            "{lo:.4f} and {hi:.4f} and Blind-Robust at k = 0 between {m0lo:.4f} and {m0hi:.4f} (printed: {printed:g}); "
+            "{lo:.4f} and {hi:.4f} and Blind-Robust at k = 0 between {m0lo:.4f} and {m0hi:.4f} (printed in the paper: {printed:g} = yes); "
             "our curve is {o0:.4f}, {o2:.4f}, {o5:.4f} at k = 0, 2, 5." + alt,
             supports=lambda v: v["ok"] == 1))
+    g = f"{X}ex4_grasp."
+    out.append(Experiment(
+        "E49", "grasp's per-truth signs with the squeeze's resolution raised (model-exact scene)",
+        {"w1": f"{g}c1.worst_difference", "w2": f"{g}c2.worst_difference", "w4": f"{g}c4.worst_difference",
+         "n4": f"{g}c4.n_feasible", "up4": f"{g}c4.n_improve", "tie4": f"{g}c4.n_tie", "down4": f"{g}c4.n_worse"},
+        "on the model-exact grasp scene with the squeeze's slip scale multiplied by c (both sigmas divided by c), the "
+        "worst feasible truth's change in success under probing is {w1:+.3f} at c = 1, {w2:+.3f} at c = 2 and "
+        "{w4:+.3f} at c = 4; at c = 4, {up4:d} of {n4:d} feasible truths improve, {tie4:d} tie and {down4:d} worsen.",
+        supports=lambda v: v["down4"] == 0 and 2 * v["up4"] == v["n4"]))
     return out
 
 

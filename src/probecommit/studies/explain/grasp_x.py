@@ -22,8 +22,9 @@ from probecommit.runner.study import run_study
 from probecommit.studies.breadth import FAMILY_K, feasible_instances, paper_config, quick_config, truth_sign_flip
 
 
-def sign_counts(config: Any, run_dir: Path) -> dict[str, Any]:
-    """Feasible truths and their per-truth signs (Probe-Robust(k) - Blind-Bayes success), as Table II reads them."""
+def sign_counts(config: Any, run_dir: Path, worst: bool = False) -> dict[str, Any]:
+    """Feasible truths and their per-truth signs (Probe-Robust(k) - Blind-Bayes success), as Table II reads them;
+    with ``worst``, also the lowest per-truth difference (``worst_difference``, how far the worst truth falls)."""
     feasible = feasible_instances(config, run_dir)
     episodes = pd.read_parquet(run_dir / "episodes.parquet")
     episodes = episodes[episodes["instance_id"].map(feasible).fillna(False).astype(bool)]
@@ -31,7 +32,9 @@ def sign_counts(config: Any, run_dir: Path) -> dict[str, Any]:
     truth_cols = [c for c in instances.columns if c.startswith("true_")]
     truth_of = dict(zip(instances["instance_id"], instances[truth_cols].astype(str).agg(",".join, axis=1)))
     out = truth_sign_flip(episodes, truth_of, FAMILY_K["grasp"])
-    out.pop("differences")
+    differences = out.pop("differences")
+    if worst:
+        out["worst_difference"] = min(differences.values(), default=float("nan"))
     return {**out, "n_feasible": int(sum(feasible.values())), "n_instances": len(feasible)}
 
 
