@@ -92,3 +92,33 @@ def test_resolution_config_divides_both_sigmas_and_runs_the_analytic_scene():
     c = resolution_config(4.0, quick=True)
     assert c.simulator.engine == "analytic" and c.simulator.noise_sigma == 0.5 and c.model.sigma == 0.5
     assert c.name == "grasp_analytic_resolution4"
+
+
+def test_cone_keys_recompute_a_row_per_width_and_the_single_width_rule():
+    import pandas as pd
+
+    from probecommit.studies.explain.ex4_cone import keys
+
+    rows = []
+    for s, (bb, br, pr) in ((0.5, (0.25, 0.30, 0.22)), (1.0, (0.7, 0.6, 0.1))):
+        for i in range(4):
+            for rep in range(2):
+                for method, k, miss in (("blind_bayes", 0, bb), ("blind_robust", 0, br), ("probe_robust", 5, pr)):
+                    rows.append({"instance_id": f"i{i}", "repeat": rep, "k": k, "method": method, "status": "ok",
+                                 "realized": miss, "realized_elliptic": miss / 2, "scale": s})
+    out = keys(pd.DataFrame(rows), 1e-5, dict(resamples=50, seed=0))
+    assert out["premise_holds"] == 1 and keys(pd.DataFrame(rows), 1e-3, dict(resamples=50, seed=0))["premise_holds"] == 0
+    assert out["s0.5.probe_robust"] == pytest.approx(0.22) and out["s1.elliptic_probe_robust"] == pytest.approx(0.05)
+    assert out["s0.5.paired"] == pytest.approx(0.03)
+    # every arm constant: each interval is its point, so 0.252 / 0.307 / 0.221 are not inside at any width
+    assert out["single_width.best_cells_inside"] == 0 and out["single_width.all_inside"] == 0
+
+
+def test_e50_needs_the_premise_and_one_width_for_the_whole_row():
+    e = claims.EXPERIMENTS["E50"]
+    v = {"d": 1e-4, "ok": 1.0, "pr": 0.2, "lo": 0.18, "hi": 0.23, "el": 0.09, "bb": 0.26, "br": 0.3, "one": 3.0,
+         "at": 0.5, "all": 1.0, "plo": 0.17, "phi": 0.2}
+    assert e.supports(v)
+    assert not e.supports({**v, "ok": 0.0}) and not e.supports({**v, "all": 0.0, "one": 2.0})
+    by_id = {c.id: c for c in claims.CLAIMS}
+    assert ("E50", ("push2d ",)) in by_id["tab:breadth"].explain
