@@ -122,3 +122,29 @@ def test_e50_needs_the_premise_and_one_width_for_the_whole_row():
     assert not e.supports({**v, "ok": 0.0}) and not e.supports({**v, "all": 0.0, "one": 2.0})
     by_id = {c.id: c for c in claims.CLAIMS}
     assert ("E50", ("push2d ",)) in by_id["tab:breadth"].explain
+
+
+@pytest.mark.slow
+def test_reexecuting_stored_actions_in_the_stored_scene_gives_the_stored_misses(tmp_path):
+    """Same scene, same actions: the re-execution path reproduces the study's own outcomes exactly, so under the
+    pyramidal cone it changes the cone alone."""
+    from probecommit.runner.study import run_study
+    from probecommit.studies.breadth import paper_config, quick_config
+    from probecommit.studies.explain.ex4_cone import Scene, premise, reexecuted
+
+    config = quick_config(paper_config("push2d"))
+    run_study(config, tmp_path / "push2d", workers=1, threads=1)
+    rows = reexecuted(tmp_path / "push2d", Scene("elliptic"), 1.0)
+    assert len(rows) > 0  # equal but for the last bit (hypot here, norm in the study)
+    assert rows["realized"].to_numpy() == pytest.approx(rows["realized_elliptic"].to_numpy(), abs=1e-12, rel=0)
+    assert premise([tmp_path / "push2d"], Scene("elliptic"), Scene("elliptic")) == 0.0
+
+
+@pytest.mark.slow
+def test_grasp_resolution_step_counts_every_feasible_truth_once(tmp_path):
+    from probecommit.studies.explain import ex4_grasp
+
+    out = ex4_grasp.run(tmp_path, [4.0], quick=True)
+    assert out["factors"] == [4.0]
+    assert out["c4.n_improve"] + out["c4.n_tie"] + out["c4.n_worse"] == out["c4.n_truths"] == out["c4.n_feasible"]
+    assert "c1.worst_difference" not in out  # E47's run is not under this folder
