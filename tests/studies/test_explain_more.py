@@ -83,7 +83,7 @@ def test_unresolved_choice_rule_by_hand():
 
 def test_a_breadth_experiment_that_does_not_bear_its_cause_out_explains_nothing():
     e = claims.EXPERIMENTS["E38"]
-    good = {"n": 5, "inside": 3.0, "cells": 3.0, "mpl": 0.01, "red": 1.0}
+    good = {"n": 5, "inside": 3.0, "cells": 3.0, "mpl": 0.01, "red": 1.0, "one": 3.0, "at": 1.0, "all": 1.0}
     assert e.supports(good)
     assert not e.supports({**good, "inside": 2.0})
     assert not e.supports({**good, "mpl": -0.001})

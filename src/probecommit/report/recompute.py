@@ -490,10 +490,33 @@ def explain(folder: Path, results: dict[str, Any]) -> Recomputed:
         for key, value in ex5_summary(pd.read_parquet(folder / EXPLAIN_EX5)).items():
             out.values[f"ex5_calibration.{key}"] = value
         out.sources["ex5_calibration"] = EXPLAIN_EX5
+    _ex4_cone(folder, results, out)
+    if "ex4_pricing" in results:  # a pure function of the paper's printed values (studies.explain.ex4_pricing)
+        from probecommit.studies.explain.ex4_pricing import keys as ex4_pricing_keys
+
+        out.values.update({f"ex4_pricing.{key}": value for key, value in ex4_pricing_keys().items()})
+        out.sources["ex4_pricing"] = "the paper's printed values (studies/paper_values.py)"
     from probecommit.studies.explain.study import plain
 
     out.values = {key: plain(value) for key, value in out.values.items()}  # as the explain step publishes it
     return out
+
+
+def _ex4_cone(folder: Path, results: dict[str, Any], out: Recomputed) -> None:
+    """2-D push's Table II rows under the pyramidal cone from the stored re-executed rows
+    (``studies.explain.ex4_cone.keys``); the premise's probe difference is an engine measurement (traced)."""
+    from probecommit.studies.explain import ex4_cone
+
+    published = results.get("ex4_cone", {})
+    if not (folder / ex4_cone.STORED).is_file() or "premise_max_probe_difference_m" not in published:
+        return
+    setup = json.loads((folder.parent / "insertion" / "results.json").read_text())["results"]["setup"]["bootstrap"]
+    boot = dict(resamples=int(setup["resamples"]), seed=int(setup["seed"]))
+    premise = float(published["premise_max_probe_difference_m"])
+    for key, value in ex4_cone.keys(pd.read_parquet(folder / ex4_cone.STORED), premise, boot).items():
+        if key != "premise_max_probe_difference_m":
+            out.values[f"ex4_cone.{key}"] = value
+    out.sources["ex4_cone"] = ex4_cone.STORED
 
 
 def _schedules(folder: Path, results: dict[str, Any], out: Recomputed) -> None:

@@ -23,6 +23,7 @@ import pandas as pd
 
 from probecommit.runner.config import config_data, parse_config
 from probecommit.studies.breadth import FAMILY_K, breadth_row, budget_curve, paper_config, quick_config
+from probecommit.studies.explain.ex4_breadth import single_width
 from probecommit.studies.pricing import break_even
 
 COLUMNS = ("blind_bayes", "blind_robust", "probe_robust")
@@ -172,6 +173,7 @@ def sweep_keys(stored: pd.DataFrame, frozen: dict[str, dict[str, float] | None],
         for s, row in rows.items():
             out.update({f"{family}.s{s:g}.{k}": v for k, v in row.items()})
         out.update({f"{family}.{k}": v for k, v in span_summary(rows, paper_cells(str(family))).items()})
+        out.update({f"{family}.{k}": v for k, v in single_width(rows, paper_cells(str(family))).items()})  # ex4
         out[f"{family}.widths"] = len(rows)
     return out
 

@@ -26,11 +26,14 @@ from probecommit.studies.breadth import FAMILY_K, paper_config, quick_config, si
 STORED = "grasp_analytic_episodes.parquet"
 
 
-def sign_counts(rows: pd.DataFrame) -> dict[str, Any]:
+def sign_counts(rows: pd.DataFrame, worst: bool = False) -> dict[str, Any]:
     """Feasible truths and their per-truth signs (Probe-Robust(k) - Blind-Bayes success), as Table II reads them,
-    from the stored rows (``breadth.truth_rows``; one function for the explain step and verify)."""
+    from the stored rows (``breadth.truth_rows``; one function for the explain step and verify); with ``worst``,
+    also the lowest per-truth difference (``worst_difference``, how far the worst truth falls)."""
     out = sign_flip_summary(rows, FAMILY_K["grasp"])
-    out.pop("differences")
+    differences = out.pop("differences")
+    if worst:
+        out["worst_difference"] = min(differences.values(), default=float("nan"))
     return out
 
 
