@@ -76,3 +76,56 @@ def test_a_target_that_read_results_not_yet_made_runs_again_after_them(tmp_path)
     assert spans["reader"][1] < spans["slow"][1] <= spans["reader-again"][0]  # ran beside it, then after it
     assert done["reader"][1] == pytest.approx(0.6)
     shutil.rmtree(log)
+
+
+def _late_reader(name: str, log: str, markers: str) -> tuple[str, float]:
+    """A target that starts, then waits for its late need ``slow`` (``wait_for``) before reading it."""
+    from probecommit.report.schedule import wait_for
+
+    start = time.time()
+    wait_for(markers, ["slow"], poll_s=0.05)
+    Path(log, name).write_text(json.dumps([start, time.time()]))
+    return f"/results/{name}", 0.3
+
+
+def test_a_late_need_lets_a_target_start_before_it_and_wait_where_it_reads_it(tmp_path):
+    markers = tmp_path / "markers"
+
+    def launch(pool, name):
+        if name == "reader":
+            return pool.submit(_late_reader, name, str(tmp_path), str(markers))
+        return pool.submit(_fake_target, name, str(tmp_path), False)
+
+    done = side_by_side(["slow", "reader"], {"reader": ("slow",)}, 2, launch, lambda *args: None, markers=markers,
+                        late={"reader": ("slow",)})
+    assert set(done) == {"slow", "reader"}
+    slow, reader = (json.loads((tmp_path / n).read_text()) for n in ("slow", "reader"))
+    assert reader[0] < slow[1] <= reader[1]  # started beside it, read it only once it was done
+    assert json.loads((markers / "plan.json").read_text()) == {"reader": ["slow"]}
+
+
+def test_a_target_waiting_for_a_late_need_that_failed_stops(tmp_path):
+    markers = tmp_path / "markers"
+
+    def launch(pool, name):
+        if name == "reader":
+            return pool.submit(_late_reader, name, str(tmp_path), str(markers))
+        return pool.submit(_fake_target, name, str(tmp_path), True)
+
+    with pytest.raises(RuntimeError, match="slow failed"):
+        side_by_side(["slow", "reader"], {"reader": ("slow",)}, 2, launch, lambda *args: None, markers=markers,
+                     late={"reader": ("slow",)})
+    assert not (tmp_path / "reader").exists()
+
+
+def test_ready_targets_start_longest_chain_first(monkeypatch):
+    """explain's start needs (insertion, engines) start first: the chain through explain is the longest."""
+    from probecommit.report import schedule
+
+    order = paper.resolve(["all"])
+    needs = {t: tuple(n for n in paper.TARGETS[t].needs if n not in schedule.LATE_NEEDS.get(t, ())) for t in order}
+    real = schedule.chain_seconds(order, needs)
+    assert sorted(real, key=real.get)[-2:] == ["insertion", "engines"]
+    monkeypatch.setattr(schedule, "EXPECTED_S", {"a": 10.0, "b": 1.0, "c": 5.0, "d": 3.0})
+    chains = schedule.chain_seconds(["a", "b", "c", "d"], {"c": ("b",), "d": ("a", "b")})
+    assert chains == {"a": 13.0, "b": 6.0, "c": 5.0, "d": 3.0}

@@ -69,7 +69,8 @@ def _final_escape(episodes: pd.DataFrame, k: int) -> pd.Series:
 class Explain:
     """One explain reproduction: where the runs are, the settings, and the results as they fill in."""
 
-    def __init__(self, root: Path, quick: bool, progress: Progress, workers: int, config: dict[str, Any]) -> None:
+    def __init__(self, root: Path, quick: bool, progress: Progress, workers: int, config: dict[str, Any],
+                 ready: Callable[[], None] | None = None) -> None:
         protocol = load_protocol()
         self.p: Protocol = protocol.quick_version() if quick else protocol
         self.quick = quick
@@ -79,6 +80,9 @@ class Explain:
         self.progress = progress
         self.workers = workers
         self.cfg = config
+        #: Returns once the targets read last (the GRU, breadth and cost studies) are done: side by side
+        #: (``report.schedule.LATE_NEEDS``) this target starts before them. None: they are done.
+        self.ready = ready
         self.boot = dict(resamples=self.p.bootstrap.resamples, seed=self.p.bootstrap.seed)
         self.res: dict[str, dict[str, Any]] = {g: {} for g in (
             "missing", "committed_pool", "instance_generator", "margin_per_gamma", "thresholds", "gru", "physx_capture",
@@ -459,8 +463,8 @@ class Explain:
         paper = runs.schedule_runs(self.p, COVER_SCHEDULE, self.runs, self.workers)
         steps = [self.missing, self.physx_coverage, lambda: self.committed_pool(paper), lambda: self.margins(paper),
                  self.resplits_paper_schedule,
-                 self.instance_generator, self.draws, self.boundary_fault, self.robust, self.physx, self.gru,
-                 lambda: more.run(self)]
+                 self.instance_generator, self.draws, self.boundary_fault, self.robust, self.physx,
+                 lambda: (self.ready and self.ready(), self.gru()), lambda: more.run(self)]
         for i, step in enumerate(steps):
             self.progress("explain", i, len(steps))
             step()
@@ -524,8 +528,8 @@ def summary_markdown(res: dict[str, dict[str, Any]]) -> str:
 
 
 def reproduce_explain(root: str | Path, quick: bool = False, progress: Progress | None = None, workers: int = 1,
-                      config_path: str | Path | None = None) -> Path:
-    """Run every explanation into ``<root>/explain/results``."""
+                      config_path: str | Path | None = None, ready: Callable[[], None] | None = None) -> Path:
+    """Run every explanation into ``<root>/explain/results`` (``ready``: see ``Explain.ready``)."""
     root = Path(root)
-    job = Explain(root, quick, progress or (lambda *a: None), workers, load_explain_config(config_path))
+    job = Explain(root, quick, progress or (lambda *a: None), workers, load_explain_config(config_path), ready)
     return job.run(root / "explain" / "results")
