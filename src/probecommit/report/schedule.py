@@ -169,6 +169,8 @@ def side_by_side(order: Sequence[str], needs: dict[str, tuple[str, ...]], lanes:
                 elif target not in stale:
                     _mark(markers, f"{target}.done")
                 progress("targets side by side", len(done), len(order))
+    if markers is not None:
+        shutil.rmtree(markers, ignore_errors=True)  # every target has finished: nothing waits any more
     if failure is not None:
         raise failure
     return done
