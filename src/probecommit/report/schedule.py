@@ -16,7 +16,6 @@ targets, the one with the longest expected chain after it starts first (``chain_
 
 from __future__ import annotations
 
-import functools
 import json
 import multiprocessing
 import shutil
@@ -29,11 +28,14 @@ from typing import Any, Callable, Sequence
 #: its reproduction.json): of the ready targets, the one with the longest chain after it starts first.
 EXPECTED_S = {"explain": 587.0, "breadth": 258.0, "engines": 215.0, "gru": 139.0, "insertion": 105.0, "beyond": 88.0,
               "robot": 8.0, "figures": 7.0, "setup": 3.0, "cost": 2.0}
-#: Needs a target reads only in its last steps (``Target.needs`` still runs them first one after the
+#: Needs a target reads only in its later steps (``Target.needs`` still runs them first one after the
 #: other). Side by side it starts once its other needs are done and waits for these where it first
-#: reads them: explain reads the GRU study (and the breadth study's push2d run it trained on) and the
-#: breadth and cost studies' results only after all its own runs.
-LATE_NEEDS: dict[str, tuple[str, ...]] = {"explain": ("breadth", "gru", "cost")}
+#: reads them: explain reads the engines study after its own runs, and the GRU study (and the breadth
+#: study's push2d run it trained on) and the breadth and cost studies' results in its last steps.
+LATE_NEEDS: dict[str, tuple[str, ...]] = {"explain": ("engines", "breadth", "gru", "cost")}
+#: The share of a target's expected seconds after it reads its late needs (explain: its GRU and
+#: Table II steps), for ``chain_seconds``.
+LATE_SHARE = 0.15
 #: The folder under the reproduction's root where side by side says which targets are done.
 MARKERS = ".side_by_side"
 
@@ -52,22 +54,40 @@ def wait_for(markers: str, names: Sequence[str], poll_s: float = 0.5) -> None:
             time.sleep(poll_s)
 
 
-def late_needs(markers: str, name: str) -> Callable[[], None] | None:
-    """In a target's process: what waits for its late needs among the targets this reproduction runs
-    (the plan side by side wrote), or None when it waits for none."""
+class LateNeeds:
+    """In a target's process: ``ready(names)`` returns once those of its late needs (all: None) that this
+    reproduction runs are done."""
+
+    def __init__(self, markers: str, names: Sequence[str]) -> None:
+        self.markers, self.names = markers, tuple(names)
+
+    def __call__(self, names: Sequence[str] | None = None) -> None:
+        wait_for(self.markers, [n for n in self.names if names is None or n in names])
+
+
+def late_needs(markers: str, name: str) -> LateNeeds | None:
+    """A target's :class:`LateNeeds` among the targets this reproduction runs (the plan side by side
+    wrote), or None when it waits for none."""
     plan = Path(markers) / "plan.json"
     names = json.loads(plan.read_text()).get(name, []) if plan.is_file() else []
-    return functools.partial(wait_for, markers, tuple(names)) if names else None
+    return LateNeeds(markers, names) if names else None
 
 
-def chain_seconds(order: Sequence[str], needs: dict[str, tuple[str, ...]]) -> dict[str, float]:
+def chain_seconds(order: Sequence[str], needs: dict[str, tuple[str, ...]],
+                  late: dict[str, tuple[str, ...]] | None = None) -> dict[str, float]:
     """Per target, its expected seconds plus the longest chain of targets that need it to start (the
-    order in which ready targets start: the long chains first, so the last lane does not finish alone)."""
+    order in which ready targets start: the long chains first, so the last lane does not finish alone).
+
+    A target that ``d`` reads late counts as if ``d`` had ``LATE_SHARE`` of its expected seconds still
+    to run when it reads it: so it starts before targets nothing waits for, and ``d`` does not wait.
+    """
+    late = late or {}
     memo: dict[str, float] = {}
 
     def chain(target: str) -> float:
         if target not in memo:
             after = [chain(d) for d in order if target in needs.get(d, ())]
+            after += [LATE_SHARE * EXPECTED_S.get(d, 0.0) for d in order if target in late.get(d, ())]
             memo[target] = EXPECTED_S.get(target, 0.0) + max(after, default=0.0)
         return memo[target]
 
@@ -132,7 +152,7 @@ def side_by_side(order: Sequence[str], needs: dict[str, tuple[str, ...]], lanes:
     late = {t: tuple(n for n in (LATE_NEEDS if late is None else late).get(t, ()) if n in order)
             for t in order} if markers is not None and lanes > 1 else {}
     start_needs = {t: tuple(n for n in needs.get(t, ()) if n not in late.get(t, ())) for t in order}
-    first = chain_seconds(order, start_needs)
+    first = chain_seconds(order, start_needs, late)
     _start_markers(markers, order, late)
     waiting = list(order)
     running: dict[Future, str] = {}
