@@ -549,7 +549,7 @@ def summary_markdown(res: dict[str, dict[str, Any]]) -> str:
 
 
 def reproduce_explain(root: str | Path, quick: bool = False, progress: Progress | None = None, workers: int = 1,
-                      config_path: str | Path | None = None, ready: Callable[[], None] | None = None) -> Path:
+                      config_path: str | Path | None = None, ready: Callable[..., None] | None = None) -> Path:
     """Run every explanation into ``<root>/explain/results`` (``ready``: see ``Explain.ready``)."""
     root = Path(root)
     job = Explain(root, quick, progress or (lambda *a: None), workers, load_explain_config(config_path), ready)
