@@ -163,3 +163,24 @@ def test_every_executor_implements_the_injected_interface_and_commit_calls_it():
     table = commit(trace, model, simulator, [FirstAim(model)], thresholds=0.8, margin=0.9)
     assert set(table["method"]) == {"first_aim"} and list(table["k"]) == [1, 2, 1, 2]
     assert np.all(table["action"] == model.action_grid[0, 0]) and np.all(table["predicted"] == 0.5)
+
+
+def test_blind_bayes_answers_each_context_once_per_executor_and_the_same_as_computed_afresh():
+    """A run's units share contexts: Blind-Bayes computes each once, and answers as a fresh executor would."""
+    from probecommit.runner.build import build_model
+    from probecommit.runner.config import load_config
+    from probecommit.studies.breadth import PAPER_CONFIG_DIR
+
+    model = build_model(load_config(PAPER_CONFIG_DIR / "push1d.yaml"))
+    executor = blind_bayes_executor(model, 3, 200)
+    calls = []
+    act_one = executor.act_one
+    executor.act_one = lambda context=None: calls.append(np.asarray(context).tolist()) or act_one(context)
+    contexts = np.array([[0.5], [1.5], [0.5], [1.0]])
+    first = executor.act(4, contexts)
+    again = executor.act(2, contexts[[3, 1]])
+    assert sorted(calls) == [[0.5], [1.0], [1.5]]  # each distinct context once, over both calls
+    fresh = blind_bayes_executor(model, 3, 200)
+    for got, rows in ((first, contexts), (again, contexts[[3, 1]])):
+        want = [fresh.act_one(row) for row in rows]
+        assert got[0].tolist() == [w[0] for w in want] and got[1].tolist() == [w[1] for w in want]

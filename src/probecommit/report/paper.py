@@ -339,12 +339,12 @@ def reproduce(names: list[str], root: str | Path, quick: bool = False, progress:
     order = resolve(names)
     lanes = side_by_side_lanes(workers, len(order))
     if lanes > 1:  # independent targets in processes of their own, each with its share of the workers
-        from probecommit.report.schedule import run_target, side_by_side
+        from probecommit.report.schedule import MARKERS, run_target, side_by_side
 
         inner = max(1, workers // lanes)
         results = side_by_side(order, {t: TARGETS[t].needs for t in order}, lanes,
                                lambda pool, name: pool.submit(run_target, name, str(root), quick, inner, dict(OPTIONS)),
-                               progress, READS_IF_RUN)
+                               progress, READS_IF_RUN, markers=root / MARKERS)
         out["side_by_side"] = lanes
         for name in order:
             out["targets"][name], out["wall_s"][name] = results[name]
@@ -682,7 +682,7 @@ register(Target("figures", ("Fig. 1a and 1c (fig:overview: the demo episode's ta
 def _explain(root: Path, quick: bool, progress: Progress, workers: int) -> Path:
     from probecommit.studies.explain import reproduce_explain
 
-    return reproduce_explain(root, quick=quick, progress=progress, workers=workers)
+    return reproduce_explain(root, quick=quick, progress=progress, workers=workers, ready=OPTIONS.get("_ready"))
 
 
 register(Target("explain", ("the measurements behind each difference from the paper, and the paper's items "

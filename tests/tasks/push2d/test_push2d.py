@@ -98,3 +98,27 @@ def test_small_study_has_blind_and_probe_rows(tmp_path):
     assert set(zip(ep["method"], ep["k"])) == {("blind_bayes", 0), ("blind_robust", 0), ("probe_robust", 2), ("probe_robust", 5)}
     assert len(ep) == 2 * 2 * 4 and np.all(np.isfinite(ep["realized"])) and (ep["status"] == "ok").all()
     assert ep[ep["k"] == 5]["realized"].mean() < ep[ep["method"] == "blind_robust"]["realized"].mean()
+
+
+def test_loss_in_place_equals_the_closed_form_expression_bit_for_bit():
+    """The loss computed in place (memory) gives exactly the expression's values, for [S, d] and [E, N, d]."""
+    from probecommit.tasks.push1d.model import stop_distance
+
+    model = Push2DModel()
+    rng = np.random.default_rng(5)
+    grid = np.asarray(model.action_grid, dtype=float)
+    mag = np.hypot(grid[:, 0], grid[:, 1])
+    unit = grid / np.where(mag > 0, mag, 1.0)[:, None]
+
+    def reference(d, t_sq, along):
+        return np.sqrt(np.maximum(d * d + t_sq - 2.0 * d * along, 0.0)) / model.margin
+
+    theta = model.sample_prior(rng, 300)
+    t = np.array([0.9, -0.3])
+    d = stop_distance(mag[:, None], model.mu_scale * theta[None, :, 0], theta[None, :, 1], theta[None, :, 2])
+    assert np.array_equal(model.loss(grid, theta, t), reference(d, float(t @ t), (unit @ t)[:, None]))
+    theta3 = model.sample_prior(rng, 3 * 64).reshape(3, 64, -1)
+    targets = rng.uniform(-1.5, 1.5, size=(3, 2))
+    d3 = stop_distance(mag[None, :, None], model.mu_scale * theta3[:, None, :, 0], theta3[:, None, :, 1], theta3[:, None, :, 2])
+    want = reference(d3, np.sum(targets * targets, axis=1)[:, None, None], (targets @ unit.T)[:, :, None])
+    assert np.array_equal(model.loss(grid, theta3, targets), want)

@@ -77,7 +77,8 @@ def _final_escape(episodes: pd.DataFrame, k: int) -> pd.Series:
 class Explain:
     """One explain reproduction: where the runs are, the settings, and the results as they fill in."""
 
-    def __init__(self, root: Path, quick: bool, progress: Progress, workers: int, config: dict[str, Any]) -> None:
+    def __init__(self, root: Path, quick: bool, progress: Progress, workers: int, config: dict[str, Any],
+                 ready: Callable[..., None] | None = None) -> None:
         protocol = load_protocol()
         self.p: Protocol = protocol.quick_version() if quick else protocol
         self.quick = quick
@@ -87,6 +88,10 @@ class Explain:
         self.progress = progress
         self.workers = workers
         self.cfg = config
+        #: ``ready(names)`` returns once those targets (None: the engines, GRU, breadth and cost studies)
+        #: are done: side by side (``report.schedule.LATE_NEEDS``) this target starts before them. None:
+        #: they are done.
+        self.ready = ready
         self.boot = dict(resamples=self.p.bootstrap.resamples, seed=self.p.bootstrap.seed)
         self.res: dict[str, dict[str, Any]] = {g: {} for g in (
             "missing", "committed_pool", "instance_generator", "margin_per_gamma", "thresholds", "gru", "physx_capture",
@@ -384,14 +389,34 @@ class Explain:
             self.progress("explain: GRU seed 0 retrained", 0, 1)
             out.update(gru_study.retrain_tolerance(self.root / "gru" / "results", pipeline, self.runs, self.quick))
 
+    def _later(self, group: str, step: Callable[[], None], needs: tuple[str, ...]) -> tuple[Callable[[], None],
+                                                                                             Callable[[], None]]:
+        """``step`` run later, once the targets ``needs`` are done (side by side they may still be running),
+        with its keys put where running it in place would have put them in ``group``: the first callable
+        marks that place, the second runs it."""
+        place: list[int] = []
+
+        def run() -> None:
+            if self.ready is not None:
+                self.ready(needs)
+            values = self.res[group]
+            before = list(values.items())
+            step()
+            added = list(values.items())[len(before):]
+            values.clear()
+            values.update(before[:place[0]] + added + before[place[0]:])
+
+        return lambda: place.append(len(self.res[group])), run
+
     def run(self, out: Path) -> Path:
         out.mkdir(parents=True, exist_ok=True)
         self.progress("explain: paper's cover schedule on Split B", 0, 1)
         paper = runs.schedule_runs(self.p, COVER_SCHEDULE, self.runs, self.workers)
-        steps = [self.missing, self.physx_coverage, lambda: self.committed_pool(paper), lambda: self.margins(paper),
+        place_physx, physx_coverage = self._later("missing", self.physx_coverage, ("engines",))
+        steps = [self.missing, place_physx, lambda: self.committed_pool(paper), lambda: self.margins(paper),
                  self.resplits_paper_schedule,
-                 self.instance_generator, self.draws, self.boundary_fault, self.robust, self.physx, self.gru,
-                 lambda: more.run(self),
+                 self.instance_generator, self.draws, self.boundary_fault, self.robust, physx_coverage, self.physx,
+                 lambda: (self.ready and self.ready(), self.gru()), lambda: more.run(self),
                  lambda: ex5_calibration.run(self), lambda: ex4.run(self)]
         for i, step in enumerate(steps):
             self.progress("explain", i, len(steps))
@@ -472,8 +497,8 @@ def summary_markdown(res: dict[str, dict[str, Any]]) -> str:
 
 
 def reproduce_explain(root: str | Path, quick: bool = False, progress: Progress | None = None, workers: int = 1,
-                      config_path: str | Path | None = None) -> Path:
-    """Run every explanation into ``<root>/explain/results``."""
+                      config_path: str | Path | None = None, ready: Callable[..., None] | None = None) -> Path:
+    """Run every explanation into ``<root>/explain/results`` (``ready``: see ``Explain.ready``)."""
     root = Path(root)
-    job = Explain(root, quick, progress or (lambda *a: None), workers, load_explain_config(config_path))
+    job = Explain(root, quick, progress or (lambda *a: None), workers, load_explain_config(config_path), ready)
     return job.run(root / "explain" / "results")

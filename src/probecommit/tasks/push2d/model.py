@@ -118,11 +118,24 @@ class Push2DModel(TaskModelBase):
             t = target.reshape(2)
             d = stop_distance(mags[:, None], self.mu_scale * theta[None, :, 0], theta[None, :, 1], theta[None, :, 2])[inverse]
             along = (unit @ t)[:, None]  # [A, 1]
-            sq = d * d + float(t @ t) - 2.0 * d * along
-            return np.sqrt(np.maximum(sq, 0.0)) / self.margin
+            return self._miss(d, float(t @ t), along)
         t = target.reshape(-1, 2)  # [E, 2]
         d = stop_distance(mags[None, :, None], self.mu_scale * theta[:, None, :, 0], theta[:, None, :, 1], theta[:, None, :, 2])
         d = d[:, inverse, :]  # [E, A, N]
         along = (t @ unit.T)[:, :, None]  # [E, A, 1]
-        sq = d * d + np.sum(t * t, axis=1)[:, None, None] - 2.0 * d * along
-        return np.sqrt(np.maximum(sq, 0.0)) / self.margin
+        return self._miss(d, np.sum(t * t, axis=1)[:, None, None], along)
+
+    def _miss(self, d: np.ndarray, t_sq: float | np.ndarray, along: np.ndarray) -> np.ndarray:
+        """``sqrt(max(d^2 + |t|^2 - 2 d (e . t), 0)) / margin``, in place in two arrays of ``d``'s size
+        (``d`` is overwritten): the same operations in the same order as the expression, bit for bit,
+        without its four temporaries ([E, A, N] is 138 MB for one push2d unit)."""
+        sq = d * d
+        sq += t_sq
+        d *= 2.0
+        d *= along
+        sq -= d
+        del d
+        np.maximum(sq, 0.0, out=sq)
+        np.sqrt(sq, out=sq)
+        sq /= self.margin
+        return sq
