@@ -34,25 +34,25 @@ def _arm_rows(episodes: pd.DataFrame, fault: str, k: int) -> pd.DataFrame:
     return rows.set_index(["instance_id", "repeat"]).sort_index()
 
 
-def budget_change(episodes: pd.DataFrame, fault: str, first: int, last: int, column: str,
-                  boot: dict[str, int]) -> list[float]:
-    """Mean per-episode change of ``column`` (``escaped`` or ``optimism``) from budget ``first`` to ``last`` on
-    ``fault``'s arm, with a cluster-bootstrap interval over instances: ``[estimate, lo, hi]``."""
-    a, b = _arm_rows(episodes, fault, first), _arm_rows(episodes, fault, last)
-    both = a[[column]].join(b[[column]], lsuffix="_a", rsuffix="_b", how="inner")
+def _paired_mean(first: pd.DataFrame, second: pd.DataFrame, column: str, boot: dict[str, int]) -> list[float]:
+    """Mean of ``second - first`` on ``column`` over the episodes both hold, cluster-bootstrapped over instances."""
+    both = first[[column]].merge(second[[column]], left_index=True, right_index=True, suffixes=("_a", "_b"))
     diff = both[f"{column}_b"].to_numpy(float) - both[f"{column}_a"].to_numpy(float)
     iv = cluster_bootstrap_mean(diff, both.index.get_level_values(0).to_numpy(), **boot)
     return [float(iv.estimate), float(iv.lo), float(iv.hi)]
 
 
+def budget_change(episodes: pd.DataFrame, fault: str, first: int, last: int, column: str,
+                  boot: dict[str, int]) -> list[float]:
+    """Mean per-episode change of ``column`` (``escaped`` or ``optimism``) from budget ``first`` to ``last`` on
+    ``fault``'s arm, with a cluster-bootstrap interval over instances: ``[estimate, lo, hi]``."""
+    return _paired_mean(_arm_rows(episodes, fault, first), _arm_rows(episodes, fault, last), column, boot)
+
+
 def paired_against(episodes: pd.DataFrame, fault: str, other: str, k: int, column: str,
                    boot: dict[str, int]) -> list[float]:
     """``fault`` minus ``other`` on ``column`` at budget ``k``, paired by episode (identical stored probes)."""
-    a, b = _arm_rows(episodes, fault, k), _arm_rows(episodes, other, k)
-    both = a[[column]].join(b[[column]], lsuffix="_f", rsuffix="_o", how="inner")
-    diff = both[f"{column}_f"].to_numpy(float) - both[f"{column}_o"].to_numpy(float)
-    iv = cluster_bootstrap_mean(diff, both.index.get_level_values(0).to_numpy(), **boot)
-    return [float(iv.estimate), float(iv.lo), float(iv.hi)]
+    return _paired_mean(_arm_rows(episodes, other, k), _arm_rows(episodes, fault, k), column, boot)
 
 
 def signature_keys(episodes: pd.DataFrame, kmax: int, boot: dict[str, int]) -> dict[str, Any]:
