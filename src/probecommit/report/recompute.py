@@ -465,6 +465,11 @@ def explain(folder: Path, results: dict[str, Any]) -> Recomputed:
         for key, value in summary(pd.read_parquet(folder / EXPLAIN_MIXTURE)).items():
             out.values[f"mixture_noise.{key}"] = value
         out.sources["mixture_noise"] = EXPLAIN_MIXTURE
+    from probecommit.studies.explain import ex7
+
+    values, sources = ex7.recompute(folder)  # ex7's groups (E69..E72) from their stored rows
+    out.values.update(values)
+    out.sources.update(sources)
     from probecommit.studies.explain.study import plain
 
     out.values = {key: plain(value) for key, value in out.values.items()}  # as the explain step publishes it
@@ -570,6 +575,8 @@ EXPLAIN_BREADTH = "breadth_prior_episodes.parquet"
 EXPLAIN_MIXTURE = "mixture_noise_seeds.parquet"
 #: The explain step's stored rig redraws (``studies.explain.rig.STORED_SESSIONS``, ``STORED_BOUNDARY``).
 EXPLAIN_RIG = ("rig_redraws_sessions.parquet", "rig_redraws_boundary.parquet")
+#: ex7's stored rows (``studies.explain.ex7.STORED``: the fault surprise rows and the fresh draws).
+EXPLAIN_EX7 = ("ex7_fault_surprise.parquet", "ex7_dev_draws.parquet", "ex7_harness_draws.parquet")
 
 
 #: The stored tables each study's numbers are recomputed from: a publication without one fails verify
@@ -583,7 +590,7 @@ STORED_TABLES: dict[str, tuple[str, ...]] = {
     "gru": ("gru_episodes.parquet",),
     "beyond": ("beyond_episodes.parquet",),
     "explain": ("margin_per_gamma.parquet", "fresh_draws.parquet", "draw_cells.parquet", EXPLAIN_BREADTH,
-                "schedule_episodes.parquet", EXPLAIN_MIXTURE, *EXPLAIN_RIG),
+                "schedule_episodes.parquet", EXPLAIN_MIXTURE, *EXPLAIN_RIG, *EXPLAIN_EX7),
 }
 
 #: Study folder -> its recomputation.

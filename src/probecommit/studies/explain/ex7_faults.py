@@ -74,8 +74,9 @@ def arm_surprise_aucs(run: LoadedRun, arm: Arm, episodes: pd.DataFrame, kmax: in
     index, tables = surprise_variants.run_tables(run, config=replay_config(run.config, arm.overrides))
     label = _arm_rows(episodes, arm.fault, kmax)["escaped"].reindex(index)
     rows = pd.DataFrame({"fault": arm.fault, "instance_id": index.get_level_values(0),
-                         "repeat": index.get_level_values(1), "escaped": label.to_numpy(bool),
+                         "repeat": index.get_level_values(1), "escaped": label.to_numpy(object),
                          "density": tables["density"][:, kmax - 1], "class": tables["class"][:, kmax - 1]})
+    rows = rows[label.notna().to_numpy()].astype({"escaped": bool}).reset_index(drop=True)  # no ok row: no label
     return surprise_keys(rows, boot), rows
 
 
@@ -87,6 +88,12 @@ def surprise_keys(rows: pd.DataFrame, boot: dict[str, int]) -> dict[str, Any]:
         iv = cluster_bootstrap_auc(rows[reading].to_numpy(float), y, clusters, **boot)
         out[f"{reading}_auc"] = [float(iv.estimate), float(iv.lo), float(iv.hi)]
     return out
+
+
+def equals_table(keys: dict[str, Any], table_faults: dict[str, Any], fault: str) -> int:
+    """1 when ``keys``' density AUC is Table VIII's surprise AUC for ``fault`` (same data, two paths), else 0."""
+    stored = table_faults.get(fault, {}).get("surprise_auc")
+    return int(stored is not None and abs(keys["density_auc"][0] - stored) < 1e-9)
 
 
 #: The per-episode surprise rows E70's AUCs come from (``explain/results/``).
@@ -111,8 +118,6 @@ def run(job: Any) -> None:
         arm = arms[fault]
         keys, rows = arm_surprise_aucs(job.load(source[arm.rollout]), arm, episodes, kmax, job.boot)
         out.update({f"surprise.{fault}.{k}": v for k, v in keys.items()})
-        stored = stored_auc.get(fault, {}).get("surprise_auc")
-        out[f"surprise.{fault}.density_equals_table"] = int(stored is not None and
-                                                            abs(keys["density_auc"][0] - stored) < 1e-9)
+        out[f"surprise.{fault}.density_equals_table"] = equals_table(keys, stored_auc, fault)
         parts.append(rows)
     job.stored[STORED] = pd.concat(parts, ignore_index=True)
