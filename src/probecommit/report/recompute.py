@@ -617,7 +617,7 @@ RECOMPUTED = {
                "fresh draws; the schedules' pools, failures and cover surprise AUCs; the boundary fault, Test C, "
                "whole-cluster escapes and strata; the prior sweep's rows, prices and spans; the mixture against the "
                "filter's noise; the simulated rig redrawn; the PhysX coverage; the cost of calibration; PyBullet's stored "
-               "escapes and the emulated scene's escape over fresh draws",
+               "escapes and the emulated scene's escape over fresh draws; ex7's fault readings and fresh draws",
 }
 TRACED_ONLY = {
     "insertion": "the stored rows themselves (episodes, re-executed commits, replays); the re-split rows; the cover "
