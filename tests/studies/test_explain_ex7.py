@@ -111,3 +111,15 @@ def test_e71_and_e72_rules_can_fail():
     assert e72.supports({"cmin": cost - 0.01, "cmax": cost + 0.01})
     assert not e72.supports({"cmin": -0.02, "cmax": cost - 0.01})
     assert np.isfinite(cost) and cost > 0
+
+
+def test_the_surprise_cap_ranks_like_infinity():
+    """-log 0 is the largest surprise; the AUC helper drops non-finite scores, so the step stores the cap instead:
+    the episodes no particle predicted must rank above every finite surprise, not vanish."""
+    tiny = np.nextafter(0.0, 1.0)  # the smallest positive float64
+    assert -np.log(tiny) < ex7_faults.SURPRISE_CAP < np.inf
+    rows = pd.DataFrame({"instance_id": list("abcd"), "escaped": [True, False, True, False],
+                         "density": [1.0, 2.0, 3.0, 0.5], "class": [np.inf, 5.0, np.inf, -np.log(tiny)]})
+    capped = rows.assign(**{"class": np.minimum(rows["class"], ex7_faults.SURPRISE_CAP)})
+    assert ex7_faults.surprise_keys(capped, BOOT)["class_auc"][0] == pytest.approx(1.0)
+    assert np.isnan(ex7_faults.surprise_keys(rows, BOOT)["class_auc"][0])  # infinite scores dropped: no positive left
