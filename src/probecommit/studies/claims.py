@@ -1221,10 +1221,10 @@ def _experiments_ex7() -> list[Experiment]:
                    {**tri("e", f"{sig}particles.escape_change"), **tri("o", f"{sig}particles.optimism_change"),
                     **tri("b", f"{sig}boundary.optimism_change"), **tri("d", f"{sig}particles_minus_none.optimism_final")},
                    "read from k = 1 to 8 on the harness, as the paper reads the boundary fault beside it, the "
-                   "impoverished filter's escape rises by {e:+.3f} ({elo:+.3f} to {ehi:+.3f}, paired by episode) while "
-                   "its optimism falls by {o:+.3f} ({olo:+.3f} to {ohi:+.3f}), where the boundary fault's optimism "
-                   "climbs by {b:+.3f} ({blo:+.3f} to {bhi:+.3f}); against the baseline at k = 8, the registry's "
-                   "reading, the impoverished filter is more optimistic by {d:+.3f} ({dlo:+.3f} to {dhi:+.3f}).",
+                   "impoverished filter's escape changes by {e:+.3f} ({elo:+.3f} to {ehi:+.3f}, paired by episode) "
+                   "while its optimism changes by {o:+.3f} ({olo:+.3f} to {ohi:+.3f}), where the boundary fault's "
+                   "optimism changes by {b:+.3f} ({blo:+.3f} to {bhi:+.3f}); against the baseline at k = 8, the "
+                   "registry's reading, the impoverished filter's optimism differs by {d:+.3f} ({dlo:+.3f} to {dhi:+.3f}).",
                    supports=lambda v: v["elo"] > 0 and v["ohi"] < 0 and v["blo"] > 0),
         Experiment("E70", "Table VIII's surprise AUCs with surprise read as the reading class's probability",
                    {**tri("p", f"{sur}particles.class_auc"), **tri("r", f"{sur}prior.class_auc"),
