@@ -496,6 +496,11 @@ def explain(folder: Path, results: dict[str, Any]) -> Recomputed:
 
         out.values.update({f"ex4_pricing.{key}": value for key, value in ex4_pricing_keys().items()})
         out.sources["ex4_pricing"] = "the paper's printed values (studies/paper_values.py)"
+    from probecommit.studies.explain import ex7
+
+    values, sources = ex7.recompute(folder)  # ex7's groups (E69..E72) from their stored rows
+    out.values.update(values)
+    out.sources.update(sources)
     from probecommit.studies.explain.study import plain
 
     out.values = {key: plain(value) for key, value in out.values.items()}  # as the explain step publishes it
@@ -813,6 +818,8 @@ EXPLAIN_MIXTURE = "mixture_noise_seeds.parquet"
 EXPLAIN_RIG = ("rig_redraws_sessions.parquet", "rig_redraws_boundary.parquet")
 #: The explain step's stored calibration rows of ex5 (``studies.explain.ex5_calibration.STORED``).
 EXPLAIN_EX5 = "ex5_calibration_rows.parquet"
+#: ex7's stored rows (``studies.explain.ex7.STORED``: the fault surprise rows and the fresh draws).
+EXPLAIN_EX7 = ("ex7_fault_surprise.parquet", "ex7_dev_draws.parquet", "ex7_harness_draws.parquet")
 
 
 #: The stored tables each study's numbers are recomputed from: a publication without one fails verify
@@ -830,7 +837,7 @@ STORED_TABLES: dict[str, tuple[str, ...]] = {
                 "margin_instance_sums.parquet", "commits.parquet", "episodes.parquet", "physx_emulated_episodes.parquet",
                 "robust_replays.parquet", "resplits_paper_schedule.parquet", "surprise_variants.parquet",
                 "cover_search_episodes.parquet", "generator_instances.parquet",
-                "grasp_analytic_episodes.parquet", EXPLAIN_EX5),
+                "grasp_analytic_episodes.parquet", EXPLAIN_EX5, *EXPLAIN_EX7),
     # ``pybullet_x.EMULATED`` is required where the engines study's PyBullet run was there (``_engine_keys``).
 }
 
@@ -863,7 +870,8 @@ RECOMPUTED = {
                "simulated rig redrawn; the PhysX coverage, capture scans and emulated scene; the cost of calibration; "
                "PyBullet's stored escapes, its emulated scene and that scene's escape over fresh draws; the re-splits under the "
                "paper's schedule; the development searches; grasp on the model-exact scene; the GRU's spread and power; "
-               "the PyBullet capture interval",
+               "the PyBullet capture interval; ex5's re-split costs, fresh pools and capture pairs; ex4's single-width "
+               "counts, prices from the paper's curve and the pyramidal-cone rows; ex7's fault readings and fresh draws",
 }
 TRACED_ONLY = {
     "insertion": "the stored rows themselves (episodes, re-executed commits, replays); the re-split rows; the cover "

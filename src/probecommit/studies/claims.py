@@ -405,7 +405,8 @@ def _table_claims() -> list[Claim]:
         Claim("tab:faults", "Table VIII (tab:faults)", "Controlled mismatch tests, random k = 8", tuple(faults),
               explain=(("E7", ("boundary",)),
                        *((f"E21[{label}]", (label,)) for label in ("boundary fail", "boundary tempered",
-                                                                   "boundary surprise AUC", "particles surprise AUC")))),
+                                                                   "boundary surprise AUC", "particles surprise AUC")),
+                       ("E70", ("particles surprise AUC",)))),
     ]
 
 
@@ -734,7 +735,7 @@ def _claims_fault_classes() -> list[Claim]:
                      lambda v: v["p"] > v["b"]),
                Holds("residual improves", "impoverished optimism at k = 8 below the baseline's",
                      {"p": f"{sig_key('particles', 8)}.optimism", "b": f"{sig_key('none', 8)}.optimism"},
-                     lambda v: v["p"] < v["b"])), explain=(("E22", ("residual",)),)))
+                     lambda v: v["p"] < v["b"])), explain=(("E22", ("residual",)), ("E69", ("residual",)))))
     add(Claim("T40-frame-signature", "Sec. VI, Fault classes", "The frame offset is invisible to the belief "
               "while optimism grows and it fails",
               (Near("coverage", "T40-frame-signature.coverage", f"{sig_key('frame', 8)}.coverage", 0.01),
@@ -756,7 +757,7 @@ def _claims_robust_filters() -> list[Claim]:
     add(Claim("T42-robust-chosen", "Sec. VI, Robust filters", "Development tuning's choice of temperature, "
               "mixture weight and rejuvenation fraction",
               tuple(Near(f, f"T42-robust-chosen.{f}", f"{I}robust.chosen.{f}", 0.0)
-                    for f in ("tempering", "mixture", "rejuvenation")), explain=(("E31", ("tempering",)),)))
+                    for f in ("tempering", "mixture", "rejuvenation")), explain=(("E31", ("tempering",)), ("E71", ("mixture",)))))
     add(Claim("T43-robust-filters", "Sec. VI, Robust filters", "Mixture and rejuvenation cut support escape but "
               "give no resolved failure reduction; optimism stays high",
               (Holds("escape cut", "both filters escape less than the deployed model",
@@ -773,7 +774,7 @@ def _claims_robust_filters() -> list[Claim]:
     add(Claim("T44-mixture-cost", "Sec. VI, Robust filters", "When the model is right the mixture costs failure",
               (Holds("costs", "failure with the mixture above failure without",
                      {"a": f"{I}robust.mixture_cost_when_right.0", "b": f"{I}robust.mixture_cost_when_right.1"},
-                     lambda v: v["b"] > v["a"]),), explain=("E11", "E46")))
+                     lambda v: v["b"] > v["a"]),), explain=("E11", "E46", "E72")))
     return c
 
 
@@ -1320,8 +1321,51 @@ def _experiments_ex4() -> list[Experiment]:
     return out
 
 
+def _experiments_ex7() -> list[Experiment]:
+    """The ex7 helper's experiments (E69..E72, ``studies/explain/ex7_faults.py`` and ``ex7_robust.py``)."""
+    sig, sur, rb = f"{X}ex7_faults.signature.", f"{X}ex7_faults.surprise.", f"{X}ex7_robust."
+    tri = lambda name, key: {name: key, f"{name}lo": f"{key}.1", f"{name}hi": f"{key}.2"}  # noqa: E731
+    inside = lambda v, name, paper: v[f"{name}lo"] <= _pv(paper) <= v[f"{name}hi"]  # noqa: E731
+    dev, har = f"{rb}dev_draws.mixture.", f"{rb}harness_draws.mixture."
+    return [
+        Experiment("E69", "the particle fault's residual read over the budget, as the paper reads the boundary fault",
+                   {**tri("e", f"{sig}particles.escape_change"), **tri("o", f"{sig}particles.optimism_change"),
+                    **tri("b", f"{sig}boundary.optimism_change"), **tri("d", f"{sig}particles_minus_none.optimism_final")},
+                   "read from k = 1 to 8 on the harness, as the paper reads the boundary fault beside it, the "
+                   "impoverished filter's escape changes by {e:+.3f} ({elo:+.3f} to {ehi:+.3f}, paired by episode) "
+                   "while its optimism changes by {o:+.3f} ({olo:+.3f} to {ohi:+.3f}), where the boundary fault's "
+                   "optimism changes by {b:+.3f} ({blo:+.3f} to {bhi:+.3f}); against the baseline at k = 8, the "
+                   "registry's reading, the impoverished filter's optimism differs by {d:+.3f} ({dlo:+.3f} to {dhi:+.3f}).",
+                   supports=lambda v: v["elo"] > 0 and v["ohi"] < 0 and v["blo"] > 0),
+        Experiment("E70", "Table VIII's surprise AUCs with surprise read as the reading class's probability",
+                   {**tri("p", f"{sur}particles.class_auc"), **tri("r", f"{sur}prior.class_auc"),
+                    **tri("b", f"{sur}boundary.class_auc"), "pd": f"{sur}particles.density_auc",
+                    "bd": f"{sur}boundary.density_auc", "rd": f"{sur}prior.density_auc"},
+                   "with surprise read as -log of the reading class's predictive probability instead of the reading's "
+                   "density, the harness's k = 8 AUC for escape is {p:.3f} ({plo:.3f} to {phi:.3f}) for the particle "
+                   "fault (density {pd:.3f}), {r:.3f} ({rlo:.3f} to {rhi:.3f}) for the prior (density {rd:.3f}) and "
+                   "{b:.3f} ({blo:.3f} to {bhi:.3f}) for the boundary (density {bd:.3f}): one definition must fit "
+                   "every row.",
+                   supports=lambda v: inside(v, "p", "tab:faults.particles.surprise")
+                   and inside(v, "r", "tab:faults.prior.surprise") and inside(v, "b", "tab:faults.boundary.surprise")),
+        Experiment("E71", "the mixture weight's development tuning over fresh development draws",
+                   {"n": f"{dev}count", "sp": f"{dev}share_paper", "so": f"{dev}share_ours"},
+                   "over {n:d} fresh development draws of the same generator on MuJoCo (only the split name changed), "
+                   "the frozen rule chooses the paper's epsilon on {sp:.2f} of the draws and ours on {so:.2f}.",
+                   supports=lambda v: v["sp"] >= UNRESOLVED_CHOICE_SHARE and v["so"] >= UNRESOLVED_CHOICE_SHARE),
+        Experiment("E72", "the mixture's cost when the model is right, over fresh draws of the harness",
+                   {"n": f"{har}count", "c": f"{har}paired_cost.mean", "cmin": f"{har}paired_cost.min",
+                    "cmax": f"{har}paired_cost.max", "ch": f"{har}changed_aims.max", "r": f"{har}right.failure.mean"},
+                   "over {n:d} fresh draws of the harness's base run on MuJoCo (right model, failure {r:.3f} on "
+                   "average), the mixture at the paper's epsilon costs {c:+.3f} failure on average (paired; {cmin:+.3f} "
+                   "to {cmax:+.3f}) and changes at most {ch:.3f} of the aims, a bound on any draw's cost.",
+                   supports=lambda v: v["cmin"] <= _pv("T44-mixture-cost.mixture") - _pv("T44-mixture-cost.right")
+                   <= v["cmax"]),
+    ]
+
+
 for _experiment in (_experiments() + _experiments_more() + _experiments_ex3() + _experiments_ex4()
-                    + _experiments_ex5()):
+                    + _experiments_ex5() + _experiments_ex7()):
     EXPERIMENTS[_experiment.number] = _experiment
 
 

@@ -51,11 +51,12 @@ def surprise_tables(trace: Any, model: Any) -> dict[str, np.ndarray]:
     return {"density": np.fmax.accumulate(density, axis=1), "class": np.fmax.accumulate(cls, axis=1)}
 
 
-def run_tables(run: Any, chunk_instances: int = 24) -> tuple[pd.MultiIndex, dict[str, np.ndarray]]:
-    """``surprise_tables`` of a whole run, its beliefs recomputed a chunk of instances at a time (bounded memory)."""
+def run_tables(run: Any, chunk_instances: int = 24, config: Any = None) -> tuple[pd.MultiIndex, dict[str, np.ndarray]]:
+    """``surprise_tables`` of a whole run, its beliefs recomputed a chunk of instances at a time (bounded memory);
+    ``config``: infer under it instead of the run's (a replay's, e.g. a fault arm's)."""
     from probecommit.runner.replay import RunBeliefs
 
-    beliefs = RunBeliefs.of(run, chunk_instances=chunk_instances)
+    beliefs = RunBeliefs.of(run, config, chunk_instances=chunk_instances)
     ids, reps, parts = [], [], []
     for rows in beliefs.chunks:
         trace = beliefs.trace(rows)
