@@ -1,10 +1,13 @@
 """Cluster bootstrap, paired differences, the sign-flip test and rank AUC."""
 
 import itertools
+import math
 
 import numpy as np
 import pandas as pd
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from scipy.stats import mannwhitneyu
 
 from probecommit.audit.stats import (
@@ -185,3 +188,21 @@ def test_resample_counts_and_auc_in_blocks_equal_one_draw(monkeypatch):
         np.testing.assert_array_equal(resample_counts(n_clusters, resamples, seed=5), one_draw)
         iv = cluster_bootstrap_auc(s, y, clusters, resamples=resamples, seed=5)
         assert (iv.lo, iv.hi) == expected
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.lists(st.tuples(st.one_of(st.floats(-50, 50), st.just(math.inf), st.just(-math.inf)), st.booleans(),
+                          st.integers(0, 5)), min_size=2, max_size=30))
+def test_an_infinite_score_ranks_beyond_every_finite_one(rows):
+    """The AUC reads +-inf as the extreme ranks (a surprise no particle predicted is the most surprising), exactly
+    as if each were replaced by a finite value beyond every finite score; only NaN is left out."""
+    scores = np.array([r[0] for r in rows])
+    labels = np.array([r[1] for r in rows])
+    clusters = np.array([r[2] for r in rows])
+    finite = np.where(np.isposinf(scores), 1e6, np.where(np.isneginf(scores), -1e6, scores))
+    a = cluster_bootstrap_auc(scores, labels, clusters, resamples=50, seed=3)
+    b = cluster_bootstrap_auc(finite, labels, clusters, resamples=50, seed=3)
+    assert np.array_equal([a.estimate, a.lo, a.hi], [b.estimate, b.lo, b.hi], equal_nan=True)
+    with_nan = cluster_bootstrap_auc(np.r_[scores, np.nan], np.r_[labels, True], np.r_[clusters, 9],
+                                     resamples=50, seed=3)
+    assert with_nan.estimate == a.estimate or (np.isnan(with_nan.estimate) and np.isnan(a.estimate))

@@ -396,6 +396,11 @@ def cluster_bootstrap_auc(scores: np.ndarray, labels: np.ndarray, clusters: Sequ
     A resampled instance brings all its episodes, positive and negative alike,
     as integer weights; resamples with an empty class are dropped (NaN).
 
+    Only a NaN score (one the data leave undefined) is left out. An infinite score is a rank
+    like any other: ``+inf`` (e.g. a surprise where no particle predicted what was read) ranks
+    above every finite score, ties with other ``+inf``; dropping it would remove exactly the most
+    surprised episodes from the AUC while the caller still counts them.
+
     Args:
         scores: ``[E]`` scores.
         labels: ``[E]`` booleans.
@@ -409,7 +414,7 @@ def cluster_bootstrap_auc(scores: np.ndarray, labels: np.ndarray, clusters: Sequ
     """
     scores = np.asarray(scores, dtype=float)
     labels = np.asarray(labels, dtype=bool)
-    ok = np.isfinite(scores)
+    ok = ~np.isnan(scores)
     scores, labels = scores[ok], labels[ok]
     names, inverse = np.unique(np.asarray(clusters)[ok], return_inverse=True)
     estimate = rank_auc(scores, labels)
