@@ -114,12 +114,12 @@ def test_e71_and_e72_rules_can_fail():
 
 
 def test_the_surprise_cap_ranks_like_infinity():
-    """-log 0 is the largest surprise; the AUC helper drops non-finite scores, so the step stores the cap instead:
-    the episodes no particle predicted must rank above every finite surprise, not vanish."""
+    """-log 0 is the largest surprise; stored tables hold finite numbers, so the step stores the cap instead: the
+    episodes no particle predicted must rank above every finite surprise, as ``inf`` itself does."""
     tiny = np.nextafter(0.0, 1.0)  # the smallest positive float64
     assert -np.log(tiny) < ex7_faults.SURPRISE_CAP < np.inf
     rows = pd.DataFrame({"instance_id": list("abcd"), "escaped": [True, False, True, False],
                          "density": [1.0, 2.0, 3.0, 0.5], "class": [np.inf, 5.0, np.inf, -np.log(tiny)]})
     capped = rows.assign(**{"class": np.minimum(rows["class"], ex7_faults.SURPRISE_CAP)})
     assert ex7_faults.surprise_keys(capped, BOOT)["class_auc"][0] == pytest.approx(1.0)
-    assert np.isnan(ex7_faults.surprise_keys(rows, BOOT)["class_auc"][0])  # infinite scores dropped: no positive left
+    assert ex7_faults.surprise_keys(rows, BOOT)["class_auc"] == ex7_faults.surprise_keys(capped, BOOT)["class_auc"]
