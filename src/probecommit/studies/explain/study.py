@@ -22,6 +22,7 @@ from probecommit.audit.conformal import simultaneous_threshold
 from probecommit.audit.stats import paired_bootstrap, percentile_interval, resample_counts
 from probecommit.runner.replay import load_run, replay_episodes
 from probecommit.studies.explain import draw_audit, draw_faults, generator, more, resplits, runs, stored, surprise_variants
+from probecommit.studies.explain import ex6
 from probecommit.studies.explain import gru as gru_study
 from probecommit.studies.explain.margin import margin_curve
 from probecommit.studies.explain.pool import gate_pools
@@ -82,7 +83,8 @@ class Explain:
         self.boot = dict(resamples=self.p.bootstrap.resamples, seed=self.p.bootstrap.seed)
         self.res: dict[str, dict[str, Any]] = {g: {} for g in (
             "missing", "committed_pool", "instance_generator", "margin_per_gamma", "thresholds", "gru", "physx_capture",
-            "boundary_fault", "robust", *more.GROUPS)}
+            "boundary_fault", "robust", *more.GROUPS,
+            *ex6.GROUPS)}
         self.tables: dict[str, pd.DataFrame] = {}
         #: Stored rows written beside results.json as they are, by file name (``more``'s steps).
         self.stored: dict[str, pd.DataFrame] = {}
@@ -118,8 +120,10 @@ class Explain:
 
         m = self.res["missing"]
         self.progress("explain: random-probe gates", 0, 1)
+        record: list[pd.DataFrame] = []  # the rows the gates read (ex6's E63 compares them over one range)
         result = gates(self.load("B_cal_random"), self.load("B_test_random"), alpha=self.p.alpha, **self.boot,
-                       chunk_instances=48)
+                       chunk_instances=48, record=record)
+        self.tables["random_gates_record"] = record
         pools = gate_pools(result)
         areas = {name: pools.get(f"{name}.area", float("nan")) for name in ("raw", "adjusted", "posterior_variance")}
         m.update({f"gate_area_random.{name}": area for name, area in areas.items()})
@@ -460,7 +464,7 @@ class Explain:
         steps = [self.missing, self.physx_coverage, lambda: self.committed_pool(paper), lambda: self.margins(paper),
                  self.resplits_paper_schedule,
                  self.instance_generator, self.draws, self.boundary_fault, self.robust, self.physx, self.gru,
-                 lambda: more.run(self)]
+                 lambda: more.run(self), lambda: ex6.run(self, paper)]
         for i, step in enumerate(steps):
             self.progress("explain", i, len(steps))
             step()
