@@ -27,8 +27,20 @@ def test_without_replacement_draws_distinct_positions_reproducibly():
 def test_distinct_taps_by_hand():
     probes = pd.DataFrame({"instance_id": ["a"] * 4 + ["b"] * 4, "repeat": [0] * 8, "j": [1, 2, 3, 4] * 2,
                            "u": [0.0, 3.0, 0.0, 3.0, -3.0, 0.0, 3.0, 6.0]})
-    assert ex6_probes.distinct_taps(probes, 4) == pytest.approx((2 + 4) / 2)
-    assert ex6_probes.distinct_taps(probes, 1) == 1.0
+    d = ex6_probes.distinct_taps(probes).set_index(["instance_id", "k"])["distinct_taps"]
+    assert d.loc["a"].tolist() == [1, 2, 2, 2] and d.loc["b"].tolist() == [1, 2, 3, 4]
+
+
+def test_probe_rule_summary_from_stored_rows_by_hand():
+    """Two instances, one repeat, k = 1 and 2; escape rises on one instance without replacement."""
+    rows = pd.DataFrame({"instance_id": ["a", "a", "b", "b"] * 2, "repeat": 0, "k": [1, 2] * 4,
+                         "escaped": [0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0],
+                         "distinct_taps": [1, 1, 1, 2, 1, 2, 1, 2],
+                         "rule": ["with_replacement"] * 4 + ["without_replacement"] * 4})
+    v = ex6_probes.summary(rows, dict(resamples=200, seed=0))
+    assert v["with_replacement.escape_k2"][0] == 0.0 and v["without_replacement.escape_k2"][0] == 0.5
+    assert v["paired_escape_k2"][0] == 0.5
+    assert v["with_replacement.distinct_taps_k2"] == 1.5 and v["without_replacement.distinct_taps_k2"] == 2.0
 
 
 def test_e62_rule_needs_the_paper_inside_both_budgets_and_a_rise():
@@ -93,20 +105,18 @@ def test_e63_rule_can_fail():
 # ------------------------------------------------------------------ E64: surprise readings
 
 
-def _episodes() -> pd.DataFrame:
-    rows = []
-    for tid, (esc1, cov1, esc2, cov2) in enumerate([(1, 0, 0, 1), (0, 1, 1, 0), (0, 1, 0, 1)]):
-        rows += [("i", tid, 1, bool(esc1), bool(cov1)), ("i", tid, 2, bool(esc2), bool(cov2))]
-    return pd.DataFrame(rows, columns=["instance_id", "repeat", "k", "escaped", "covered"])
-
-
-def test_labels_read_at_the_final_or_the_own_budget():
-    index = pd.MultiIndex.from_tuples([("i", 2), ("i", 0), ("i", 1)])
-    lab = ex6_surprise.labels(_episodes(), index, k=1, final_k=2)
-    assert lab["own_hull"].tolist() == [False, True, False]
-    assert lab["final_hull"].tolist() == [False, False, True]
-    assert lab["own_retained"].tolist() == [False, True, False]
-    assert lab["final_retained"].tolist() == [False, False, True]
+def test_surprise_summary_reads_the_label_at_either_budget():
+    """Three trajectories at k = 1: the highest surprise is the one escaped by k = 1 (AUC 1) but not the one
+    escaped at the final budget, which has the lowest surprise (AUC 0); "not covered" mirrors it."""
+    rows = pd.DataFrame({"instance_id": ["a", "b", "c"], "repeat": 0, "k": 1, "density": [3.0, 1.0, 2.0],
+                         "class": [3.0, 1.0, 2.0], "escaped_own": [True, False, False],
+                         "covered_own": [False, True, True], "escaped_final": [False, True, False],
+                         "covered_final": [True, False, True], "first_tap_pocket": [True, True, False]})
+    v = ex6_surprise.summary(rows, resamples=50, seed=0)
+    assert v["density.own_hull.k1"][0] == 1.0 and v["class.own_retained.k1"][0] == 1.0
+    assert v["density.final_hull.k1"][0] == 0.0 and v["class.final_retained.k1"][0] == 0.0
+    assert v["n.own_hull.k1"] == 1 and v["n.final_retained.k1"] == 1
+    assert v["first_tap_pocket.escaped"] == 1.0 and v["first_tap_pocket.rest"] == 0.5
 
 
 def test_e64_needs_one_reading_for_both_budgets():

@@ -465,10 +465,24 @@ def explain(folder: Path, results: dict[str, Any]) -> Recomputed:
         for key, value in summary(pd.read_parquet(folder / EXPLAIN_MIXTURE)).items():
             out.values[f"mixture_noise.{key}"] = value
         out.sources["mixture_noise"] = EXPLAIN_MIXTURE
+    _ex6(folder, results, out)
     from probecommit.studies.explain.study import plain
 
     out.values = {key: plain(value) for key, value in out.values.items()}  # as the explain step publishes it
     return out
+
+
+def _ex6(folder: Path, results: dict[str, Any], out: Recomputed) -> None:
+    """ex6's keys (E62-E64) from their stored rows (``studies.explain.ex6.recompute``)."""
+    from probecommit.studies.explain import ex6
+
+    setup = folder.parent / "insertion" / "results.json"
+    if not setup.is_file():
+        return
+    b = json.loads(setup.read_text())["results"]["setup"]["bootstrap"]
+    for key, (value, source) in ex6.recompute(folder, results, dict(resamples=int(b["resamples"]),
+                                                                   seed=int(b["seed"]))).items():
+        out.values[key], out.sources[key] = value, source
 
 
 def _schedules(folder: Path, results: dict[str, Any], out: Recomputed) -> None:

@@ -28,6 +28,25 @@ def run(job: Any, paper_schedule: dict[str, Any]) -> None:
     keys, rows = ex6_gates.run(job.tables.pop("random_gates_record", []), resamples, job.boot["seed"])
     job.res["ex6_random_gates"].update(keys)
     if rows is not None:
-        job.stored[ex6_gates.STORED] = rows.drop(columns="gamma")
+        job.stored[ex6_gates.STORED] = rows
     job.progress("explain: surprise under every reading", 0, 1)
-    job.res["ex6_surprise"].update(ex6_surprise.run(paper_schedule["test"], job.p.budgets["cover"], job.boot))
+    keys, job.stored[ex6_surprise.STORED] = ex6_surprise.run(paper_schedule["test"], job.p.budgets["cover"], job.boot)
+    job.res["ex6_surprise"].update(keys)
+
+
+def recompute(folder: Any, results: dict[str, Any], boot: dict[str, Any]) -> dict[str, tuple[Any, str]]:
+    """``{"<group>.<key>": (value, stored file)}`` of every key these steps summarize from their stored rows,
+    recomputed from the rows alone (``probecommit verify``). ``boundary_offset`` is a copy of the engines study's
+    scan (traced); the gates' resample count is the published one."""
+    import pandas as pd
+
+    out: dict[str, tuple[Any, str]] = {}
+    steps = ((ex6_probes.STORED, "ex6_probe_rule", lambda rows: ex6_probes.summary(rows, boot)),
+             (ex6_surprise.STORED, "ex6_surprise", lambda rows: ex6_surprise.summary(rows, **boot)),
+             (ex6_gates.STORED, "ex6_random_gates", lambda rows: ex6_gates.summary(
+                 rows, int(results.get("ex6_random_gates", {}).get("bootstrap.resamples", 0)), boot["seed"])))
+    for name, group, summarize in steps:
+        if (folder / name).is_file():
+            for key, value in summarize(pd.read_parquet(folder / name)).items():
+                out[f"{group}.{key}"] = (value, name)
+    return out

@@ -94,14 +94,23 @@ def bootstrap_share(instances: np.ndarray, gates: dict[str, tuple[np.ndarray, np
             "bootstrap.resamples": resamples}
 
 
+def summary(rows: pd.DataFrame, resamples: int, seed: int) -> dict[str, Any]:
+    """Every key of ``explain:results.ex6_random_gates`` from the stored rows (what verify recomputes)."""
+    part = lambda name: rows[rows["request"] == name].drop(columns="request").reset_index(drop=True)  # noqa: E731
+    instances, gates = matrices(part("raw"), part("adjusted"))
+    out = compare(gates)
+    out.update(bootstrap_share(instances, gates, resamples, seed))
+    return out
+
+
 def run(record: list[pd.DataFrame], resamples: int, seed: int) -> tuple[dict[str, Any], pd.DataFrame | None]:
-    """Keys of ``explain:results.ex6_random_gates`` from the random-gate step's recorded rows."""
+    """Keys of ``explain:results.ex6_random_gates`` from the random-gate step's recorded rows, and the rows
+    stored (the two executors' test episodes; the margin search's rows are not needed)."""
     if not record:
         return {}, None
     rows = pd.concat(record, ignore_index=True)
-    raw = rows[rows["request"] == "raw"].drop(columns=["request", "gamma"]).reset_index(drop=True)
-    adjusted = rows[rows["request"] == "adjusted"].drop(columns=["request", "gamma"]).reset_index(drop=True)
-    instances, gates = matrices(raw, adjusted)
-    out = compare(gates)
-    out.update(bootstrap_share(instances, gates, resamples, seed))
-    return out, rows[rows["request"].isin(["raw", "adjusted"])]
+    rows = rows[rows["request"].isin(["raw", "adjusted"])].drop(columns="gamma").reset_index(drop=True)
+    for column in ("escaped", "covered"):
+        if column in rows.columns:
+            rows[column] = rows[column].astype("boolean")
+    return summary(rows, resamples, seed), rows

@@ -28,53 +28,55 @@ from probecommit.studies.explain.surprise_variants import run_tables
 
 #: The labels: (name, column of the episode table, True where the column flags the event).
 LABELS = (("hull", "escaped", True), ("retained", "covered", False))
-#: The label's budget: the final one, or the surprise's own.
-WHEN = ("final", "own")
+#: The stored rows (one per trajectory and budget read) the summaries come from.
+STORED = "ex6_surprise_rows.parquet"
 
 
-def labels(episodes: pd.DataFrame, index: pd.MultiIndex, k: int, final_k: int) -> dict[str, np.ndarray]:
-    """``{"<when>_<label>": [E] bool}`` for trajectories in ``index`` order, read at ``final_k`` or ``k``."""
-    out = {}
-    for when, at in (("final", final_k), ("own", k)):
-        rows = episodes[episodes["k"] == at].set_index(["instance_id", "repeat"]).reindex(index)
-        for name, column, flag in LABELS:
-            values = rows[column].astype(bool).to_numpy()
-            out[f"{when}_{name}"] = values if flag else ~values
-    return out
-
-
-def reading_aucs(index: pd.MultiIndex, tables: dict[str, np.ndarray], episodes: pd.DataFrame, budgets: Sequence[int],
-                 final_k: int, resamples: int, seed: int) -> dict[str, Any]:
-    """Rank AUC (cluster-bootstrap triple) and the labelled count of every reading at each budget."""
-    clusters = index.get_level_values(0).to_numpy()
-    out: dict[str, Any] = {}
-    for k in budgets:
-        for label, y in labels(episodes, index, k, final_k).items():
-            out[f"n.{label}.k{k}"] = int(y.sum())
-            for reading, table in tables.items():
-                iv = cluster_bootstrap_auc(table[:, k - 1], y, clusters, resamples=resamples, seed=seed)
-                out[f"{reading}.{label}.k{k}"] = [float(iv.estimate), float(iv.lo), float(iv.hi)]
-    return out
-
-
-def first_tap_pocket(run: Any, episodes: pd.DataFrame, final_k: int) -> dict[str, float]:
-    """Share of final-budget escapes, and of the rest, whose first tap read the pocket floor."""
+def table(index: pd.MultiIndex, tables: dict[str, np.ndarray], episodes: pd.DataFrame, probes: pd.DataFrame,
+          budgets: Sequence[int], final_k: int) -> pd.DataFrame:
+    """One row per trajectory and budget: each surprise reading, the labels at that budget and at the final one,
+    and whether the trajectory's first tap read the pocket floor."""
     from probecommit.studies.explain.surprise_variants import POCKET_CUT_MM
 
-    probes = run.probes
-    first = probes[probes["j"] == 1].set_index(["instance_id", "repeat"])["y"] < POCKET_CUT_MM
-    last = episodes[episodes["k"] == final_k].set_index(["instance_id", "repeat"])["escaped"].astype(bool)
-    pocket = first.reindex(last.index).to_numpy(bool)
-    esc = last.to_numpy(bool)
-    return {"first_tap_pocket.escaped": float(pocket[esc].mean()) if esc.any() else float("nan"),
-            "first_tap_pocket.rest": float(pocket[~esc].mean()) if (~esc).any() else float("nan")}
+    first = probes[probes["j"] == 1].set_index(["instance_id", "repeat"])["y"].reindex(index) < POCKET_CUT_MM
+    at = lambda k, column: episodes[episodes["k"] == k].set_index(["instance_id", "repeat"])[column].reindex(index)  # noqa: E731
+    parts = []
+    for k in budgets:
+        parts.append(pd.DataFrame({
+            "instance_id": index.get_level_values(0).astype(str), "repeat": index.get_level_values(1).astype(int),
+            "k": int(k), **{reading: t[:, k - 1] for reading, t in tables.items()},
+            "escaped_own": at(k, "escaped").astype(bool).to_numpy(), "covered_own": at(k, "covered").astype(bool).to_numpy(),
+            "escaped_final": at(final_k, "escaped").astype(bool).to_numpy(),
+            "covered_final": at(final_k, "covered").astype(bool).to_numpy(), "first_tap_pocket": first.to_numpy(bool)}))
+    return pd.concat(parts, ignore_index=True)
 
 
-def run(paper_test: Any, final_k: int, boot: dict[str, Any]) -> dict[str, Any]:
-    """Keys of ``explain:results.ex6_surprise`` for the paper's-schedule Split B test run."""
+def summary(rows: pd.DataFrame, resamples: int, seed: int) -> dict[str, Any]:
+    """Rank AUC (cluster-bootstrap triple) and labelled count of every reading at each budget, and the first
+    tap's pocket share among final-budget escapes and the rest, from the stored rows (what verify recomputes)."""
+    out: dict[str, Any] = {}
+    readings = [c for c in ("density", "class") if c in rows.columns]
+    for k, part in rows.groupby("k"):
+        clusters = part["instance_id"].to_numpy()
+        for when in ("final", "own"):
+            for name, column, flag in LABELS:
+                y = part[f"{column}_{when}"].to_numpy(bool)
+                y = y if flag else ~y
+                out[f"n.{when}_{name}.k{int(k)}"] = int(y.sum())
+                for reading in readings:
+                    iv = cluster_bootstrap_auc(part[reading].to_numpy(float), y, clusters, resamples=resamples, seed=seed)
+                    out[f"{reading}.{when}_{name}.k{int(k)}"] = [float(iv.estimate), float(iv.lo), float(iv.hi)]
+    first = rows[rows["k"] == rows["k"].min()]
+    esc, pocket = first["escaped_final"].to_numpy(bool), first["first_tap_pocket"].to_numpy(bool)
+    out["first_tap_pocket.escaped"] = float(pocket[esc].mean()) if esc.any() else float("nan")
+    out["first_tap_pocket.rest"] = float(pocket[~esc].mean()) if (~esc).any() else float("nan")
+    return out
+
+
+def run(paper_test: Any, final_k: int, boot: dict[str, Any]) -> tuple[dict[str, Any], pd.DataFrame]:
+    """Keys of ``explain:results.ex6_surprise`` for the paper's-schedule Split B test run, and the stored rows."""
     episodes = paper_test.episodes
     episodes = episodes[(episodes["method"] == "probe_robust") & (episodes["status"] == "ok")]
     index, tables = run_tables(paper_test)
-    out = reading_aucs(index, tables, episodes, [1, final_k], final_k, **boot)
-    out.update(first_tap_pocket(paper_test, episodes, final_k))
-    return out
+    rows = table(index, tables, episodes, paper_test.probes, [1, final_k], final_k)
+    return summary(rows, **boot), rows
