@@ -14,6 +14,9 @@ from probecommit.studies.explain import ex6_gates, ex6_probes, ex6_surprise
 
 #: Result groups these steps fill (added to ``Explain.res``).
 GROUPS = ("ex6_probe_rule", "ex6_random_gates", "ex6_surprise")
+#: The rows each group's keys are summarized from (stored beside ``results.json``).
+STORED_BY_GROUP = {"ex6_probe_rule": ex6_probes.STORED, "ex6_random_gates": ex6_gates.STORED,
+                   "ex6_surprise": ex6_surprise.STORED}
 
 
 def run(job: Any, paper_schedule: dict[str, Any]) -> None:

@@ -45,9 +45,9 @@ def table(index: pd.MultiIndex, tables: dict[str, np.ndarray], episodes: pd.Data
         parts.append(pd.DataFrame({
             "instance_id": index.get_level_values(0).astype(str), "repeat": index.get_level_values(1).astype(int),
             "k": int(k), **{reading: t[:, k - 1] for reading, t in tables.items()},
-            "escaped_own": at(k, "escaped").astype(bool).to_numpy(), "covered_own": at(k, "covered").astype(bool).to_numpy(),
-            "escaped_final": at(final_k, "escaped").astype(bool).to_numpy(),
-            "covered_final": at(final_k, "covered").astype(bool).to_numpy(), "first_tap_pocket": first.to_numpy(bool)}))
+            "escaped_own": at(k, "escaped").eq(True).to_numpy(), "covered_own": at(k, "covered").eq(True).to_numpy(),
+            "escaped_final": at(final_k, "escaped").eq(True).to_numpy(),
+            "covered_final": at(final_k, "covered").eq(True).to_numpy(), "first_tap_pocket": first.to_numpy(bool)}))
     return pd.concat(parts, ignore_index=True)
 
 
