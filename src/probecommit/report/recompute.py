@@ -501,6 +501,7 @@ def explain(folder: Path, results: dict[str, Any]) -> Recomputed:
     values, sources = ex7.recompute(folder)  # ex7's groups (E69..E72) from their stored rows
     out.values.update(values)
     out.sources.update(sources)
+    _ex6(folder, results, out)
     from probecommit.studies.explain.study import plain
 
     out.values = {key: plain(value) for key, value in out.values.items()}  # as the explain step publishes it
@@ -522,6 +523,20 @@ def _ex4_cone(folder: Path, results: dict[str, Any], out: Recomputed) -> None:
         if key != "premise_max_probe_difference_m":
             out.values[f"ex4_cone.{key}"] = value
     out.sources["ex4_cone"] = ex4_cone.STORED
+def _ex6(folder: Path, results: dict[str, Any], out: Recomputed) -> None:
+    """ex6's keys (E62-E64) from their stored rows (``studies.explain.ex6.recompute``)."""
+    from probecommit.studies.explain import ex6
+
+    setup = folder.parent / "insertion" / "results.json"
+    if not setup.is_file():
+        return
+    b = json.loads(setup.read_text())["results"]["setup"]["bootstrap"]
+    for key, (value, source) in ex6.recompute(folder, results, dict(resamples=int(b["resamples"]),
+                                                                   seed=int(b["seed"]))).items():
+        out.values[key], out.sources[key] = value, source
+    for group, name in ex6.STORED_BY_GROUP.items():  # published keys need their stored rows
+        if results.get(group) and not (folder / name).is_file():
+            out.consistency.append((False, f"explain/{name}: missing (the rows {group}'s keys are recomputed from)"))
 
 
 def _schedules(folder: Path, results: dict[str, Any], out: Recomputed) -> None:
