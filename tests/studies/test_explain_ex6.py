@@ -124,6 +124,8 @@ def test_e64_needs_one_reading_for_both_budgets():
     p1, p5 = claims._pv("T36-surprise.auc_k1"), claims._pv("T36-surprise.auc_k5")
     away = {f"{i}.k{k}.{j}": (0.0 if j == 1 else 0.1) for i in range(8) for k in (1, 5) for j in (1, 2)}
     assert not e.supports(away)
-    split = {**away, "0.k1.1": p1 - 0.01, "0.k1.2": p1 + 0.01, "3.k5.1": p5 - 0.01, "3.k5.2": p5 + 0.01}
+    split = {**away, "0.k1.1": p1 - 0.01, "0.k1.2": p1 + 0.01, "1.k5.1": p5 - 0.01, "1.k5.2": p5 + 0.01}
     assert not e.supports(split)  # k = 1 matched by one reading, k = 5 by another: not one definition
-    assert e.supports({**split, "3.k1.1": p1 - 0.01, "3.k1.2": p1 + 0.01})
+    assert e.supports({**split, "1.k1.1": p1 - 0.01, "1.k1.2": p1 + 0.01})  # density, final-budget retained label
+    own = {**away, "3.k1.1": p1 - 0.01, "3.k1.2": p1 + 0.01, "3.k5.1": p5 - 0.01, "3.k5.2": p5 + 0.01}
+    assert not e.supports(own)  # the label at the surprise's own budget: the paper's words rule it out
