@@ -438,7 +438,8 @@ class RunBeliefs:
 
         Args:
             requests: Per-table keyword arguments of ``runner.inference.commit``
-                (e.g. ``{"thresholds": t, "margin": g}``).
+                (e.g. ``{"thresholds": t, "margin": g}``); ``via`` names another function of
+                those arguments to call instead (``runner.margin_search.sweep_margins``).
             keep: Per request, the columns to keep (None: all); a margin search reads four
                 columns of dozens of tables.
             reduce: Per request, a function applied to each chunk's table as soon as it is
@@ -498,8 +499,10 @@ class RunBeliefs:
         # A cache that outlives this call keeps every set; otherwise each set goes after its last use.
         cache_ends_here = several or final
         for i, (part, request, columns, reducer) in enumerate(zip(parts, requests, keep, reduce)):
-            table = commit(trace, self.model, self.simulator, cache=cache if reuse else None,
-                           columns=columns, **common, **request)
+            request = dict(request)
+            via = request.pop("via", commit)  # another function of commit's arguments (a margin sweep)
+            table = via(trace, self.model, self.simulator, cache=cache if reuse else None,
+                        columns=columns, **common, **request)
             part.append(table if reducer is None else reducer(table))
             del table
             later = requests[i + 1:]
