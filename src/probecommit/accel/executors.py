@@ -104,14 +104,17 @@ def _margin_counts(centre, half, margins, mask, actions):  # pragma: no cover - 
     so the interval shrinks as ``gamma`` does, and a scenario whose interval is empty or NaN at the
     largest margin holds nothing at any. So the margins under which an action succeeds are the
     first ``j`` of the list: each retained scenario visits only the actions inside its widest
-    interval, finds ``j`` by bisection with the predicate itself, and adds one to ``hist[a, j]``; a
-    row's counts are those histograms summed from the right. The same integers as counting each
+    interval, finds ``j`` (guessed from the margins' spacing, then walked to the exact ``j`` with the
+    predicate itself) and adds one to ``hist[a, j]``; a row's counts are those histograms summed
+    from the right. The same integers as counting each
     margin (``_scaled_counts``), for every margin."""
     n_e, n_s = mask.shape
     n_m, n_a = margins.shape[0], actions.shape[0]
     out = np.zeros((n_m, n_e, n_a), dtype=np.int64)
     hist = np.zeros((n_a, n_m + 1), dtype=np.int64)
     widest = margins[0]
+    # 1 / the margins' mean spacing: where the width reaches an action, a first guess of j
+    per_spacing = (n_m - 1) / (widest - margins[n_m - 1]) if n_m > 1 else 0.0
     for e in range(n_e):
         for s in range(n_s):
             if not mask[e, s]:
@@ -123,16 +126,20 @@ def _margin_counts(centre, half, margins, mask, actions):  # pragma: no cover - 
             high = np.inf if high != high else high
             first = np.searchsorted(actions, low, side="right")
             last = np.searchsorted(actions, high, side="left")
+            scale = 1.0 / h if 0.0 < h < np.inf else 0.0
             for a in range(first, last):
                 value = actions[a]
-                j_ok, j_bad = 1, n_m + 1  # the predicate holds at margins[j_ok - 1]; fails at margins[j_bad - 1]
-                while j_bad - j_ok > 1:
-                    mid = (j_ok + j_bad) // 2
-                    if _succeeds(c, h, margins[mid - 1], value):
-                        j_ok = mid
-                    else:
-                        j_bad = mid
-                hist[a, j_ok] += 1
+                # j: the margins at which the action succeeds are margins[:j] (j >= 1: it does at the
+                # widest). A guess from the spacing, then walked to the exact j with the predicate itself.
+                j = n_m
+                if scale > 0.0 and per_spacing > 0.0:
+                    guess = (widest - abs(value - c) * scale) * per_spacing + 1.0
+                    j = 1 if not guess >= 1.0 else n_m if guess > n_m else int(guess)
+                while j < n_m and _succeeds(c, h, margins[j], value):
+                    j += 1
+                while j > 1 and not _succeeds(c, h, margins[j - 1], value):
+                    j -= 1
+                hist[a, j] += 1
         for a in range(n_a):
             run = 0
             for m in range(n_m - 1, -1, -1):
