@@ -131,3 +131,17 @@ def test_choose_margins_is_choose_under_each_margin(runs, kernels, threshold):
         np.testing.assert_array_equal(index[m], one.index)
         np.testing.assert_array_equal(score[m], one.score)
     assert len(np.unique(index, axis=0)) > 1  # the margins choose differently
+
+
+def test_traces_computed_ahead_in_a_thread_give_the_same_rows_and_no_thread_outlives_the_call(runs, monkeypatch):
+    """With two CPUs the next chunk's beliefs are built in a second thread while a chunk is committed:
+    the same result and recorded rows as one thread, and the thread is joined when the pass ends."""
+    import threading
+
+    out = {}
+    for threads in ("1", "2"):
+        monkeypatch.setenv("PROBECOMMIT_ENGINE_THREADS", threads)
+        out[threads] = _calibrated(runs, True, 2)
+        assert not [t for t in threading.enumerate() if t.name.startswith("probecommit-trace")]
+    assert out["1"][0].to_dict() == out["2"][0].to_dict()
+    pd.testing.assert_frame_equal(out["1"][1], out["2"][1], check_exact=True)
