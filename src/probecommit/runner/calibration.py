@@ -300,7 +300,8 @@ class _Run:
             grid: Margin candidates.
             budgets: Budgets the margin rule averages over.
             *extra: Further requests with their reductions (see :meth:`commit`), committed in
-                the first pass.
+                the first pass; a third item names the columns the reduction reads (default: the
+                whole table, validated).
             record: Where each evaluated margin's rows are kept (``Recorder``, request ``margin``),
                 so a publication can store them and ``verify`` search the margin again.
 
@@ -323,10 +324,10 @@ class _Run:
             if gamma not in tables:
                 block = [gamma] if len(self.beliefs.chunks) == 1 else [g for g in candidates if g <= gamma][:per_pass]
                 first = [] if extras else list(extra)
-                out = self.commit(*[(thresholds, g) for g in block], *[request for request, _ in first],
-                                  keep=[MARGIN_COLUMNS] * len(block) + [None] * len(first),
+                out = self.commit(*[(thresholds, g) for g in block], *[request for request, *_ in first],
+                                  keep=[MARGIN_COLUMNS] * len(block) + [_columns(item) for item in first],
                                   reduce=[recorder.wrap("margin", margin_rows, MARGIN_COLUMNS, gamma=g) for g in block]
-                                  + [reducer for _, reducer in first])
+                                  + [reducer for _, reducer, *_ in first])
                 tables.update(zip(block, out[:len(block)]))
                 extras.extend(out[len(block):])
             predicted, realized = tables.pop(gamma)  # the scan reads each margin once
@@ -370,9 +371,9 @@ class _Run:
             return None
 
         request = {"thresholds": _executable(thresholds), "margins": candidates, "execute": several, "via": sweep}
-        chunks, *extras = self.commit(request, *[request for request, _ in extra],
-                                      keep=[MARGIN_COLUMNS] + [None] * len(extra),
-                                      reduce=[part] + [reducer for _, reducer in extra])
+        chunks, *extras = self.commit(request, *[request for request, *_ in extra],
+                                      keep=[MARGIN_COLUMNS] + [_columns(item) for item in extra],
+                                      reduce=[part] + [reducer for _, reducer, *_ in extra])
         chunks = chunks or []
         position = {gamma: m for m, gamma in enumerate(candidates)}
 
@@ -422,6 +423,11 @@ class _Run:
     def release(self) -> None:
         """Drop the beliefs kept between commits (the run's last commit is done)."""
         self.beliefs.release()
+
+
+def _columns(extra: tuple) -> Sequence[str] | None:
+    """The columns an extra request of :meth:`_Run.search_margin` keeps (its third item; None: all, validated)."""
+    return extra[2] if len(extra) > 2 else None
 
 
 def _commit_request(request: Request | dict[str, Any]) -> dict[str, Any]:
@@ -629,7 +635,9 @@ def calibrate(cal_run, test_run, alpha: float = DEFAULT_ALPHA, budgets: Sequence
     scores = _calibration_scores(cal)
     t_k, t_sim, _ = _thresholds(scores, alpha, budgets)
     optimism_of = rec.wrap("optimism", functools.partial(_optimism, budgets=budgets), OPTIMISM_COLUMNS)
-    margin, [optimism] = cal.search_margin(t_k, margin_grid, budgets, ((t_k, None), optimism_of), record=rec)
+    # The calibration run's table at nu was validated whole above; the optimism reads its five columns.
+    margin, [optimism] = cal.search_margin(t_k, margin_grid, budgets, ((t_k, None), optimism_of, OPTIMISM_COLUMNS),
+                                           record=rec)
     # The calibration run is done: its tables, beliefs and engine cache go before the test run's commits.
     cal.release()
     del cal
