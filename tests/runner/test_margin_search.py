@@ -145,3 +145,22 @@ def test_traces_computed_ahead_in_a_thread_give_the_same_rows_and_no_thread_outl
         assert not [t for t in threading.enumerate() if t.name.startswith("probecommit-trace")]
     assert out["1"][0].to_dict() == out["2"][0].to_dict()
     pd.testing.assert_frame_equal(out["1"][1], out["2"][1], check_exact=True)
+
+
+def test_verified_tables_are_read_from_an_arrow_buffer_as_from_the_file(runs):
+    """``RunDir.read_verified`` reads Parquet from an Arrow buffer (no Arrow thread enters the interpreter:
+    the abort at exit of issue 42) and gives the frames a read of the file gives, with filters and columns."""
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    from probecommit.store.rundir import RunDir
+
+    run = RunDir(runs["cal"])
+    assert isinstance(run._verified_source("episodes"), pa.BufferReader)
+    for name in ("instances", "probes", "episodes", "engine_cache"):
+        pd.testing.assert_frame_equal(run.read_verified(name), pd.read_parquet(run.table_path(name)), check_exact=True)
+        assert run.read_verified_arrow(name).equals(pq.read_table(run.table_path(name)))
+    where, columns = ("method", ["probe_robust"]), ["instance_id", "k", "realized"]
+    pd.testing.assert_frame_equal(run.read_verified("episodes", where, columns),
+                                  pd.read_parquet(run.table_path("episodes"), filters=[("method", "in", where[1])],
+                                                  columns=columns), check_exact=True)
