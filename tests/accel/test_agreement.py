@@ -81,6 +81,37 @@ def test_affine_counts_equal_counting_the_models_parts(margin):
     np.testing.assert_array_equal(kept, mask.sum(axis=-1))
 
 
+GAMMA_GRID = np.round(np.arange(100, 29, -2) / 100.0, 2)  # the paper's margins, largest first
+
+
+@pytest.mark.parametrize("margins", [
+    GAMMA_GRID,
+    np.array([1.37, 1.0, 0.999, 0.73, 0.5, 1e-3]),  # uneven, above 1, tiny
+    np.array([0.8]),  # one margin
+    np.array([0.5, 0.8]),  # not largest first: the reference counts them
+])
+@pytest.mark.parametrize("grid", [
+    np.round(np.arange(-10.0, 10.0 + 1e-9, 0.5), 10),  # insertion's aims
+    np.sort(np.random.default_rng(7).uniform(-10, 10, 41)),  # uneven
+])
+def test_margin_counts_are_every_margins_scaled_counts_exactly(margins, grid):
+    """One visit of the scenarios counts every margin: the same integers as counting each margin,
+    with interval ends on grid points, widths at which an end lands on an aim at some margin,
+    non-finite and negative parts, and masked scenarios."""
+    rng = np.random.default_rng(5)
+    x = rng.uniform(-12, 12, (30, 400))
+    x[:, :50] = np.round(x[:, :50] * 2) / 2  # centres on grid points
+    w = rng.uniform(0.0, 3.0, (30, 400))
+    w[:, 50:120] = np.abs(np.round(x[:, 50:120] * 2) / 2 + 0.5 - x[:, 50:120]) / rng.choice(margins, (30, 70))
+    w[0, :8] = [np.nan, np.inf, -np.inf, -1.0, 0.0, -0.0, 1e300, 5e-324]
+    x[1, :6] = [np.nan, np.inf, -np.inf, 1e300, -1e300, 3.0]
+    w[1, :6] = [1.0, 1.0, np.inf, 1.0, 1e300, np.inf]
+    mask = rng.random((30, 400)) < 0.8
+    expected = executors.margin_success_counts(x, w, margins, mask, grid)
+    assert expected.shape == (len(margins), 30, len(grid)) and expected.sum() > 0
+    np.testing.assert_array_equal(fast_executors.margin_counts(x, w, margins, mask, grid), expected)
+
+
 @pytest.mark.parametrize("name", list(CASES))
 @pytest.mark.parametrize("nu", [0.05, 0.8, 1.0, 1.5, "per-row"])
 def test_retained_summary_sets_are_exact_and_references_within_tolerance(name, nu):

@@ -95,8 +95,9 @@ def test_chunked_calibration_with_a_margin_found_late(runs):
 
 
 def test_margin_search_in_passes_of_few_margins_equals_the_whole_scan(runs, monkeypatch):
-    """A run of several chunks commits the scan's margins a few per pass (bounded tables): one
-    margin a pass, or two, gives the scan and the result of the whole-run search."""
+    """The margin-by-margin path (``reuse=False``): a run of several chunks commits the scan's margins a
+    few per pass (bounded tables): one margin a pass, or two, gives the scan and the result of the
+    whole-run search (the default path sweeps every margin in one pass: tests/runner/test_margin_search.py)."""
     import probecommit.runner.calibration as calibration
 
     grid = [1.0, 0.9, 0.5, 0.3, 0.1]
@@ -113,7 +114,7 @@ def test_margin_search_in_passes_of_few_margins_equals_the_whole_scan(runs, monk
     for per_pass in (1, 2):
         passes.clear()
         monkeypatch.setattr(calibration, "MARGIN_BLOCK_ROWS", per_pass * rows)
-        chunked = calibrate(runs["cal"], runs["test"], resamples=50, margin_grid=grid, chunk_instances=2)
+        chunked = calibrate(runs["cal"], runs["test"], resamples=50, margin_grid=grid, chunk_instances=2, reuse=False)
         pd.testing.assert_frame_equal(chunked.margin.search, whole.margin.search, check_exact=True)
         assert chunked.to_dict() == whole.to_dict()
         # The calibration run's uncalibrated pass, then its margin passes (the first also commits the set table).

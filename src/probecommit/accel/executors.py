@@ -12,7 +12,7 @@ import numpy as np
 
 from probecommit.accel.compiled import helper, kernel
 from probecommit.accel.retained import retained_summary
-from probecommit.core.executors import SetKernels
+from probecommit.core.executors import SetKernels, margin_success_counts
 
 
 @helper(inline=True)
@@ -84,6 +84,71 @@ def _affine_counts(scenarios, centre_at, width_at, slope, intercept, margin, mas
     return out
 
 
+@helper(inline=True)
+def _succeeds(centre, half, margin, value):  # pragma: no cover - compiled
+    """``lo < value < hi`` of the interval ``centre -+ half * margin``, its ends made as
+    :func:`_scaled_counts` makes and :func:`_keep` keeps them (the same IEEE operations)."""
+    width = half * margin
+    low, high = centre - width, centre + width
+    low = np.inf if low != low else low
+    high = np.inf if high != high else high
+    return (low < value) & (value < high)
+
+
+@kernel("i8[:, :, ::1](f8[:, ::1], f8[:, ::1], f8[::1], b1[:, ::1], f8[::1])")
+def _margin_counts(centre, half, margins, mask, actions):  # pragma: no cover - compiled
+    """``out[m, e, a]``: the retained scenarios of row ``e`` under which action ``a`` succeeds at
+    ``margins[m]`` (positive, finite, sorted from the largest down).
+
+    Whether an action succeeds is monotone in the margin: ``half * gamma`` is rounded monotonically,
+    so the interval shrinks as ``gamma`` does, and a scenario whose interval is empty or NaN at the
+    largest margin holds nothing at any. So the margins under which an action succeeds are the
+    first ``j`` of the list: each retained scenario visits only the actions inside its widest
+    interval, finds ``j`` (guessed from the margins' spacing, then walked to the exact ``j`` with the
+    predicate itself) and adds one to ``hist[a, j]``; a row's counts are those histograms summed
+    from the right. The same integers as counting each
+    margin (``_scaled_counts``), for every margin."""
+    n_e, n_s = mask.shape
+    n_m, n_a = margins.shape[0], actions.shape[0]
+    out = np.zeros((n_m, n_e, n_a), dtype=np.int64)
+    hist = np.zeros((n_a, n_m + 1), dtype=np.int64)
+    widest = margins[0]
+    # 1 / the margins' mean spacing: where the width reaches an action, a first guess of j
+    per_spacing = (n_m - 1) / (widest - margins[n_m - 1]) if n_m > 1 else 0.0
+    for e in range(n_e):
+        for s in range(n_s):
+            if not mask[e, s]:
+                continue
+            c, h = centre[e, s], half[e, s]
+            width = h * widest
+            low, high = c - width, c + width
+            low = np.inf if low != low else low
+            high = np.inf if high != high else high
+            first = np.searchsorted(actions, low, side="right")
+            last = np.searchsorted(actions, high, side="left")
+            scale = 1.0 / h if 0.0 < h < np.inf else 0.0
+            for a in range(first, last):
+                value = actions[a]
+                # j: the margins at which the action succeeds are margins[:j] (j >= 1: it does at the
+                # widest). A guess from the spacing, then walked to the exact j with the predicate itself.
+                j = n_m
+                if scale > 0.0 and per_spacing > 0.0:
+                    guess = (widest - abs(value - c) * scale) * per_spacing + 1.0
+                    j = 1 if not guess >= 1.0 else n_m if guess > n_m else int(guess)
+                while j < n_m and _succeeds(c, h, margins[j], value):
+                    j += 1
+                while j > 1 and not _succeeds(c, h, margins[j - 1], value):
+                    j -= 1
+                hist[a, j] += 1
+        for a in range(n_a):
+            run = 0
+            for m in range(n_m - 1, -1, -1):
+                run += hist[a, m + 1]
+                out[m, e, a] = run
+                hist[a, m + 1] = 0
+    return out
+
+
 def _grid(actions: np.ndarray) -> np.ndarray:
     return np.ascontiguousarray(actions, dtype=np.float64).reshape(-1)
 
@@ -114,6 +179,20 @@ def affine_counts(scenarios: np.ndarray, affine: tuple[int, int, float, float], 
     return counts, kept
 
 
+def margin_counts(centre: np.ndarray, half: np.ndarray, margins: np.ndarray, mask: np.ndarray,
+                  actions: np.ndarray) -> np.ndarray:
+    """``core.executors.margin_success_counts``, compiled: every margin counted in one visit of the
+    scenarios. Margins that are not positive, finite and strictly decreasing are counted by the
+    reference (the monotone shortcut needs them so)."""
+    margins = np.ascontiguousarray(margins, dtype=np.float64).reshape(-1)
+    if not (margins.size and np.all(np.isfinite(margins)) and np.all(margins > 0) and np.all(np.diff(margins) < 0)):
+        return margin_success_counts(centre, half, margins, mask, actions)
+    f64 = np.float64
+    return _margin_counts(np.ascontiguousarray(centre, dtype=f64), np.ascontiguousarray(half, dtype=f64), margins,
+                          np.ascontiguousarray(mask, dtype=np.bool_), _grid(actions))
+
+
 #: The set executors' compiled kernels (``ProbeRobust(kernels=KERNELS)``).
 KERNELS = SetKernels(retained_summary=retained_summary, interval_success_counts=interval_counts,
-                     scaled_interval_success_counts=scaled_counts, affine_interval_success_counts=affine_counts)
+                     scaled_interval_success_counts=scaled_counts, affine_interval_success_counts=affine_counts,
+                     margin_success_counts=margin_counts)

@@ -15,7 +15,7 @@ index. The truth is never used.
 from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
-from typing import Any, Callable, Protocol, runtime_checkable
+from typing import Any, Callable, Protocol, Sequence, runtime_checkable
 
 import numpy as np
 
@@ -95,6 +95,17 @@ def scaled_interval_success_counts(centre: np.ndarray, half: np.ndarray, margin:
     return interval_success_counts(centre - width, centre + width, mask, actions)
 
 
+def margin_success_counts(centre: np.ndarray, half: np.ndarray, margins: np.ndarray, mask: np.ndarray,
+                          actions: np.ndarray) -> np.ndarray:
+    """:func:`scaled_interval_success_counts` under each of several margins ``[M, E, A]``.
+
+    What a margin search scores: the same retained scenarios under every margin ``gamma``.
+    This reference counts margin by margin; a compiled kernel counts every margin in one visit
+    of the scenarios (``probecommit.accel.executors``), the same integers.
+    """
+    return np.stack([scaled_interval_success_counts(centre, half, float(g), mask, actions) for g in margins])
+
+
 @dataclass(frozen=True)
 class SetKernels:
     """The set executors' hot steps, injected into :class:`ProbeRobust`: the NumPy definitions by
@@ -110,6 +121,8 @@ class SetKernels:
     interval_success_counts: Callable[..., np.ndarray] = interval_success_counts
     scaled_interval_success_counts: Callable[..., np.ndarray] = scaled_interval_success_counts
     affine_interval_success_counts: Callable[..., tuple[np.ndarray, np.ndarray]] | None = None
+    #: ``(centre, half, margins[M], mask, actions) -> [M, E, A]``: a margin search's counts.
+    margin_success_counts: Callable[..., np.ndarray] = margin_success_counts
 
 
 #: The NumPy reference.
@@ -416,6 +429,33 @@ class ProbeRobust:
         if "retained" not in memo:
             memo["retained"] = self.retain(belief.particles, belief.weights, threshold, belief.z)
         return self.choose(memo["retained"], context)
+
+    def choose_margins(self, retained: RetainedSet, margins: Sequence[float],
+                       context: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`choose` under each margin: the aims ``[M, E]`` and their scores ``[M, E]``.
+
+        Equal, margin by margin, to ``self.with_model(model.with_margin(g)).choose(retained, context)``
+        (tested). Why: a margin search scores one retained set under dozens of margins; for a
+        binary loss with success-interval parts (which do not depend on the margin) every margin's
+        counts come from one count (:attr:`SetKernels.margin_success_counts`) of integers, so
+        every score and choice is the same as margin by margin. Other models choose margin by margin.
+        """
+        margins = [float(g) for g in margins]
+        models = [self.model.with_margin(g) for g in margins]
+        parts = retained.interval_parts(self.model) if self.model.binary_loss else [None]
+        if any(part is None for part in parts) or not all(0.0 < g < np.inf for g in margins):
+            chosen = [self.with_model(model).choose(retained, context) for model in models]
+            return np.stack([c.index for c in chosen]), np.stack([np.asarray(c.score, dtype=float) for c in chosen])
+        grid = np.asarray(self.model.action_grid, dtype=float).reshape(-1)
+        successes, kept = 0, 0
+        for (_, mask), (centre, half) in zip(retained.blocks(), parts):
+            successes = successes + self.kernels.margin_success_counts(centre, half, np.asarray(margins), mask, grid)
+            kept = kept + mask.sum(axis=-1)
+        # As retained_scores: integer failures over the retained count, then select_action per margin.
+        scores = (kept[None, :, None] - successes) / np.maximum(kept, 1)[None, :, None]
+        index = np.stack([select_action(scores[m], model.tie_break_cost(model.action_grid, retained.reference, context))
+                          for m, model in enumerate(models)])
+        return index, np.take_along_axis(scores, index[:, :, None], axis=2)[:, :, 0]
 
     def act(self, particles: np.ndarray, weights: np.ndarray, threshold: float,
             context: np.ndarray | None = None) -> Commitment:

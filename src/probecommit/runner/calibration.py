@@ -51,6 +51,7 @@ from probecommit.audit.stats import (
 )
 from probecommit.audit.surprise import surprise_auc
 from probecommit.runner.build import config_executors
+from probecommit.runner.margin_search import SweptChunk, sweep_margins
 from probecommit.runner.replay import CHUNK_INSTANCES, LoadedRun, RunBeliefs, load_run, require_budgets
 from probecommit.errors import UsageError
 
@@ -124,13 +125,15 @@ class Recorder:
 
 
 def _concat_parts(parts: Sequence[Any]) -> Any:
-    """The reductions of a run's parts joined: DataFrames concatenated (their index kept), arrays
-    concatenated, tuples element by element; None parts (nothing kept) skipped, and None when every part is."""
+    """The reductions of a run's parts joined: DataFrames concatenated (their index kept), arrays and
+    lists concatenated, tuples element by element; None parts (nothing kept) skipped, and None when every part is."""
     parts = [part for part in parts if part is not None]
     if not parts:
         return None
     if isinstance(parts[0], tuple):
         return tuple(_concat_parts(column) for column in zip(*parts))
+    if isinstance(parts[0], list):
+        return [item for part in parts for item in part]
     if isinstance(parts[0], np.ndarray):
         return np.concatenate(parts)
     return pd.concat(parts) if len(parts) > 1 else parts[0]
@@ -235,7 +238,7 @@ class _Run:
         reduce = list(reduce) if reduce is not None else [None] * len(requests)
         per_chunk = [None if reducer is None else self._checked(reducer, columns)
                      for reducer, columns in zip(reduce, keep)]
-        tables = self.beliefs.commit([{"thresholds": _executable(t), "margin": g} for t, g in requests], keep=keep,
+        tables = self.beliefs.commit([_commit_request(request) for request in requests], keep=keep,
                                      reduce=per_chunk, reuse=self.reuse, final=final, executors=self.executors)
         out = []
         for table, columns, reducer in zip(tables, keep, reduce):
@@ -298,7 +301,8 @@ class _Run:
             grid: Margin candidates.
             budgets: Budgets the margin rule averages over.
             *extra: Further requests with their reductions (see :meth:`commit`), committed in
-                the first pass.
+                the first pass; a third item names the columns the reduction reads (default: the
+                whole table, validated).
             record: Where each evaluated margin's rows are kept (``Recorder``, request ``margin``),
                 so a publication can store them and ``verify`` search the margin again.
 
@@ -306,6 +310,8 @@ class _Run:
             The margin and what :meth:`commit` returns for ``extra``.
         """
         candidates = margin_candidates(grid)
+        if self.reuse and candidates:
+            return self._sweep_margin(thresholds, candidates, budgets, extra, record or Recorder(None))
         tables: dict[float, tuple[np.ndarray, np.ndarray]] = {}
         extras: list[Any] = []
         # Margins committed in one pass: as many as MARGIN_BLOCK_ROWS rows of their tables allow,
@@ -319,10 +325,10 @@ class _Run:
             if gamma not in tables:
                 block = [gamma] if len(self.beliefs.chunks) == 1 else [g for g in candidates if g <= gamma][:per_pass]
                 first = [] if extras else list(extra)
-                out = self.commit(*[(thresholds, g) for g in block], *[request for request, _ in first],
-                                  keep=[MARGIN_COLUMNS] * len(block) + [None] * len(first),
+                out = self.commit(*[(thresholds, g) for g in block], *[request for request, *_ in first],
+                                  keep=[MARGIN_COLUMNS] * len(block) + [_columns(item) for item in first],
                                   reduce=[recorder.wrap("margin", margin_rows, MARGIN_COLUMNS, gamma=g) for g in block]
-                                  + [reducer for _, reducer in first])
+                                  + [reducer for _, reducer, *_ in first])
                 tables.update(zip(block, out[:len(block)]))
                 extras.extend(out[len(block):])
             predicted, realized = tables.pop(gamma)  # the scan reads each margin once
@@ -333,9 +339,104 @@ class _Run:
         recorder.keep_margins(result.search["gamma"])
         return result, extras
 
+    def _margins_per_pass(self) -> int:
+        """Margins the margin-by-margin search commits in one pass over a run of several chunks."""
+        rows = self.beliefs.batch.n_episodes * max(len(self.beliefs.budgets), 1)
+        return max(1, MARGIN_BLOCK_ROWS // max(rows, 1))
+
+    def _sweep_margin(self, thresholds: float | dict[int, float], candidates: list[float], budgets: Sequence[int],
+                      extra: Sequence[tuple[Request, Reduction | None]],
+                      recorder: Recorder) -> tuple[MarginResult, list[Any]]:
+        """:meth:`search_margin` with every margin committed in one pass over the run's beliefs
+        (``runner.margin_search.sweep_margins``: beliefs, retained sets and counts once), ``extra`` beside it.
+
+        The same margin, search table and recorded rows as margin by margin (``reuse=False``,
+        tested). A run of several chunks executes every margin's aims during its chunk's pass (the
+        margin-by-margin search executed each pass's block of margins, all of them for a paper-sized
+        run); a run of one chunk executes a margin's aims when the scan reads it, as before.
+        """
+        several = len(self.beliefs.chunks) > 1
+        sink = recorder.sink
+        marks: list[int] = []  # where each chunk's rows of the extra requests start in the sink, then their failed rows
+
+        def sweep(*args: Any, **kwargs: Any) -> SweptChunk:
+            if sink is not None:
+                marks.append(len(sink))
+            return sweep_margins(*args, **kwargs)
+
+        def part(swept: Any) -> list[SweptChunk] | None:
+            if isinstance(swept, SweptChunk):
+                return [swept]
+            if sink is not None:  # the run's failed rollout rows: the extras' follow
+                marks.append(len(sink))
+            return None
+
+        request = {"thresholds": _executable(thresholds), "margins": candidates, "execute": several, "via": sweep}
+        chunks, *extras = self.commit(request, *[request for request, *_ in extra],
+                                      keep=[MARGIN_COLUMNS] + [_columns(item) for item in extra],
+                                      reduce=[part] + [reducer for _, reducer, *_ in extra])
+        chunks = chunks or []
+        position = {gamma: m for m, gamma in enumerate(candidates)}
+
+        def evaluate(gamma: float) -> pd.DataFrame:
+            rows = [chunk.rule_rows(position[gamma], budgets) for chunk in chunks]
+            return pd.DataFrame({"predicted": _concat_parts([p for p, _ in rows]) if rows else np.empty(0),
+                                 "realized": _concat_parts([r for _, r in rows]) if rows else np.empty(0)})
+
+        result = select_margin(evaluate, candidates, budgets=None)
+        if sink is not None:
+            blocks = ([candidates[i:i + self._margins_per_pass()] for i in range(0, len(candidates),
+                                                                                 self._margins_per_pass())]
+                      if several else [[gamma] for gamma in candidates])
+            sink[marks[0]:] = self._margin_records(sink, marks, blocks, chunks, list(result.search["gamma"]))
+        return result, extras
+
+    def _margin_records(self, sink: list[pd.DataFrame], marks: list[int], blocks: list[list[float]],
+                        chunks: list[SweptChunk], read: list[float]) -> list[pd.DataFrame]:
+        """The recorded rows of a swept search in the order the margin-by-margin search kept them:
+        pass by pass (a block of margins), chunk by chunk, each read margin's rows then (first pass)
+        the extra requests' rows; after the chunks, the run's failed rollout rows per margin, then
+        the extras'. ``sink[marks[c]:marks[c + 1]]`` are chunk ``c``'s extra rows."""
+        marks = [*marks, len(sink)] if len(marks) == len(chunks) else marks
+        extras = [sink[marks[c]:marks[c + 1]] for c in range(len(chunks))]
+        failed_extras = sink[marks[len(chunks)]:]
+        failed = self._failed()
+        read = {round(float(gamma), 10) for gamma in read}
+        out: list[pd.DataFrame] = []
+        for b, block in enumerate(blocks):
+            block = [gamma for gamma in block if round(gamma, 10) in read]
+            if not block:
+                break
+            for c, chunk in enumerate(chunks):
+                for gamma in block:
+                    columns = chunk.columns(chunk.margins.index(gamma))
+                    out.append(pd.DataFrame(columns)[list(MARGIN_COLUMNS)].assign(request="margin", gamma=float(gamma)))
+                if b == 0:
+                    out.extend(extras[c])
+            if len(failed):
+                for gamma in block:
+                    out.append(failed[list(MARGIN_COLUMNS)].reset_index(drop=True).assign(request="margin",
+                                                                                       gamma=float(gamma)))
+            if b == 0:
+                out.extend(failed_extras)
+        return out
+
     def release(self) -> None:
         """Drop the beliefs kept between commits (the run's last commit is done)."""
         self.beliefs.release()
+
+
+def _columns(extra: tuple) -> Sequence[str] | None:
+    """The columns an extra request of :meth:`_Run.search_margin` keeps (its third item; None: all, validated)."""
+    return extra[2] if len(extra) > 2 else None
+
+
+def _commit_request(request: Request | dict[str, Any]) -> dict[str, Any]:
+    """``RunBeliefs.commit``'s keyword arguments of a ``(thresholds, margin)`` request (a dict is one already)."""
+    if isinstance(request, dict):
+        return request
+    thresholds, margin = request
+    return {"thresholds": _executable(thresholds), "margin": margin}
 
 
 def _executable(thresholds: float | dict[int, float]) -> float | dict[int, float]:
@@ -544,7 +645,9 @@ def calibrate(cal_run, test_run, alpha: float = DEFAULT_ALPHA, budgets: Sequence
     scores = calibration_scores(cal)
     t_k, t_sim, _ = _thresholds(scores, alpha, budgets)
     optimism_of = rec.wrap("optimism", functools.partial(_optimism, budgets=budgets), OPTIMISM_COLUMNS)
-    margin, [optimism] = cal.search_margin(t_k, margin_grid, budgets, ((t_k, None), optimism_of), record=rec)
+    # The calibration run's table at nu was validated whole above; the optimism reads its five columns.
+    margin, [optimism] = cal.search_margin(t_k, margin_grid, budgets, ((t_k, None), optimism_of, OPTIMISM_COLUMNS),
+                                           record=rec)
     # The calibration run is done: its tables, beliefs and engine cache go before the test run's commits.
     cal.release()
     del cal

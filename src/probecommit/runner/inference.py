@@ -9,9 +9,10 @@ faults and calibration all reuse stored probes, so compared arms see identical t
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, field
-from typing import Any, Iterable, Mapping, Sequence
+from typing import Any, Callable, Iterable, Mapping, Sequence
 
 import numpy as np
 import pandas as pd
@@ -322,11 +323,12 @@ def commit(
     frames = []
     for executor, k in plan:
         t = float(thresholds[k] if isinstance(thresholds, Mapping) else thresholds)
-        belief = _belief_at(trace, model, k, z_true, cache)
+        belief = _belief_at(trace, model, k, cache)
         memo = cache.setdefault(("set", executor.method, k, t, executor.memo_tag), {})
         chosen = executor.decide(Belief(trace.states[k].particles, belief["weights"], belief["z"]), t,
                                  trace.batch.episode_context, memo)
-        frames.append(_episode_columns(trace, model, simulator, executor.method, k, chosen, belief, z_true,
+        summary = functools.partial(_belief_summary, belief, model, z_true)
+        frames.append(_episode_columns(trace, model, simulator, executor.method, k, chosen, summary, z_true,
                                        cache.setdefault("outcomes", {}), columns))
     if not frames:
         return {} if as_columns else pd.DataFrame()
@@ -346,34 +348,42 @@ def _commit_plan(trace: BeliefTrace, executors: Sequence[Executor],
     return plan
 
 
-def _belief_at(trace: BeliefTrace, model, k: int, z_true: np.ndarray, cache: dict) -> dict[str, np.ndarray]:
-    """What the table reads of budget ``k``'s belief (decision coordinates, weights, hull, coverage
-    score, posterior variance): margin-independent, so computed once per budget in ``cache``."""
+def _belief_at(trace: BeliefTrace, model, k: int, cache: dict) -> dict[str, np.ndarray]:
+    """Budget ``k``'s belief as the executors read it (decision coordinates, weights), kept in
+    ``cache`` with its summary (:func:`_belief_summary`) once a column asks for that: margin-independent."""
     belief = cache.get(("belief", k))
     if belief is None:
         state = trace.states[k]
         # Contiguous once here: the decision coordinate is a strided view of the particles, and
         # every kernel reading it (coverage, variance, the executor's retained set) copied it.
         z = np.ascontiguousarray(model.decision(state.particles), dtype=np.float64)
+        belief = cache[("belief", k)] = {"z": z, "weights": state.weights}
+    return belief
+
+
+def _belief_summary(belief: dict[str, np.ndarray], model, z_true: np.ndarray) -> dict[str, np.ndarray]:
+    """The belief's hull, coverage score and posterior variance, computed into ``belief`` when a column
+    first reads them (a margin search's columns never do)."""
+    if "score_s" not in belief:
+        z, weights = belief["z"], belief["weights"]
         z_true = np.ascontiguousarray(z_true, dtype=np.float64)
-        weights = state.weights
         kernels = production()
         score_s, hull_lo, hull_hi = kernels.coverage_with_hull(z, weights, z_true, model.decision_domain_width)
-        belief = cache[("belief", k)] = {"z": z, "weights": weights, "hull_lo": hull_lo, "hull_hi": hull_hi,
-                                         "score_s": score_s, "post_var": kernels.weighted_variance(z, weights)}
+        belief.update(hull_lo=hull_lo, hull_hi=hull_hi, score_s=score_s, post_var=kernels.weighted_variance(z, weights))
     return belief
 
 
 def _episode_columns(trace: BeliefTrace, model, simulator, method: str, k: int, chosen: Commitment,
-                     belief: dict[str, np.ndarray], z_true: np.ndarray, outcomes: dict,
+                     belief: Callable[[], dict[str, np.ndarray]], z_true: np.ndarray, outcomes: dict,
                      columns: Sequence[str] | None) -> dict[str, Any]:
     """One commit's episode-table columns (those in ``columns``, or all): the action executed
-    through the simulator (``outcomes`` remembers its answers) and scored against the truth."""
+    through the simulator (``outcomes`` remembers its answers) and scored against the truth;
+    ``belief()`` gives the belief's summary (:func:`_belief_summary`), made only if a column reads it."""
     batch = trace.batch
     grid = np.asarray(model.action_grid, dtype=float).reshape(len(model.action_grid), -1)
     action = grid[chosen.index]
     realized, status, error = _execute(simulator, batch, action, chosen.index, len(grid), outcomes)
-    lo, hi, hull_lo, hull_hi = chosen.lo, chosen.hi, belief["hull_lo"], belief["hull_hi"]
+    lo, hi = chosen.lo, chosen.hi
     # Each column made only when asked for (a margin search asks for four).
     makers = {
         "instance_id": lambda: batch.instance_id.astype(str),
@@ -387,12 +397,12 @@ def _episode_columns(trace: BeliefTrace, model, simulator, method: str, k: int, 
         "z_true": lambda: z_true,
         "retained_lo": lambda: lo,
         "retained_hi": lambda: hi,
-        "hull_lo": lambda: hull_lo,
-        "hull_hi": lambda: hull_hi,
+        "hull_lo": lambda: belief()["hull_lo"],
+        "hull_hi": lambda: belief()["hull_hi"],
         "covered": lambda: (lo <= z_true) & (z_true <= hi),
-        "escaped": lambda: (z_true < hull_lo) | (z_true > hull_hi),
-        "score_s": lambda: belief["score_s"],
-        "post_var": lambda: belief["post_var"],
+        "escaped": lambda: (z_true < belief()["hull_lo"]) | (z_true > belief()["hull_hi"]),
+        "score_s": lambda: belief()["score_s"],
+        "post_var": lambda: belief()["post_var"],
         "max_surprise": lambda: trace.surprise[:, :k].max(axis=1) if k > 0 else np.full(batch.n_episodes, np.nan),
         "n_retained": lambda: chosen.mask.sum(axis=1).astype(np.int64),
         "belief_resets": lambda: (trace.lost[:, :k].sum(axis=1) if trace.lost is not None

@@ -438,7 +438,8 @@ class RunBeliefs:
 
         Args:
             requests: Per-table keyword arguments of ``runner.inference.commit``
-                (e.g. ``{"thresholds": t, "margin": g}``).
+                (e.g. ``{"thresholds": t, "margin": g}``); ``via`` names another function of
+                those arguments to call instead (``runner.margin_search.sweep_margins``).
             keep: Per request, the columns to keep (None: all); a margin search reads four
                 columns of dozens of tables.
             reduce: Per request, a function applied to each chunk's table as soon as it is
@@ -474,23 +475,60 @@ class RunBeliefs:
                        keep: list, reduce: list, reuse: bool, final: bool, common: dict[str, Any]) -> None:
         """:meth:`commit`'s loop over the chunks: each request's table (or reduction) per chunk into ``parts``."""
         several = len(self.chunks) > 1
-        for rows in self.chunks:
-            taken = self._take_answers(rows)
+        with self._traces_ahead() as upcoming:
+            for i, rows in enumerate(self.chunks):
+                taken = self._take_answers(rows)
+                try:
+                    self._commit_chunk(rows, parts, requests, keep, reduce, reuse, final, common, upcoming(i))
+                finally:  # a chunk that raised leaves no stored answer behind in the simulator either
+                    self._put_back_answers(taken)
+                if several:
+                    trim_heap()  # the finished chunk's pages go back, so chunks do not pile up as heap fragments
+
+    @contextlib.contextmanager
+    def _traces_ahead(self) -> Iterator[Callable[[int], BeliefTrace | None]]:
+        """While a chunk is committed, the next chunk's beliefs are computed in a second thread.
+
+        A run of several chunks recomputes its beliefs on every pass; the filter's kernels and
+        NumPy release the GIL, so with two CPUs or more (``tasks.base.engine_threads``) the next
+        chunk's trace is built beside the commits (a trace depends only on its episodes' stored
+        probes and seeds: the same bits, tested). At most one trace is computed ahead. The thread
+        is joined when the pass ends, raised or not: none outlives the call (a thread still
+        running native code at interpreter exit can abort the process). Yields a function giving
+        chunk ``i``'s trace (None: the chunk computes its own, as with one CPU).
+        """
+        from probecommit.tasks.base import engine_threads
+
+        if len(self.chunks) < 2 or self._kept is not None or engine_threads() < 2:
+            yield lambda i: None
+            return
+        from concurrent.futures import ThreadPoolExecutor
+
+        chunks = list(self.chunks)
+        with ThreadPoolExecutor(max_workers=1, thread_name_prefix="probecommit-trace") as pool:
+            ahead = {0: pool.submit(self.trace, chunks[0])}
+
+            def upcoming(i: int) -> BeliefTrace:
+                trace = ahead.pop(i).result()
+                if i + 1 < len(chunks):
+                    ahead[i + 1] = pool.submit(self.trace, chunks[i + 1])
+                return trace
+
             try:
-                self._commit_chunk(rows, parts, requests, keep, reduce, reuse, final, common)
-            finally:  # a chunk that raised leaves no stored answer behind in the simulator either
-                self._put_back_answers(taken)
-            if several:
-                trim_heap()  # the finished chunk's pages go back, so chunks do not pile up as heap fragments
+                yield upcoming
+            finally:
+                for future in ahead.values():
+                    future.cancel()
 
     def _commit_chunk(self, rows: slice, parts: list[list[Any]], requests: Sequence[Mapping[str, Any]],
-                      keep: list, reduce: list, reuse: bool, final: bool, common: dict[str, Any]) -> None:
-        """Every request on the chunk ``batch[rows]``: its beliefs computed (or kept) once."""
+                      keep: list, reduce: list, reuse: bool, final: bool, common: dict[str, Any],
+                      trace: BeliefTrace | None = None) -> None:
+        """Every request on the chunk ``batch[rows]``: its beliefs computed (or kept, or given) once."""
         several = len(self.chunks) > 1
         if self._kept is not None:
             trace, cache = self._kept
         else:
-            trace, cache = self.trace(rows), {}
+            trace, cache = (self.trace(rows) if trace is None else trace), {}
             if not several and not final:
                 self._kept = trace, cache
         if final:
@@ -498,8 +536,10 @@ class RunBeliefs:
         # A cache that outlives this call keeps every set; otherwise each set goes after its last use.
         cache_ends_here = several or final
         for i, (part, request, columns, reducer) in enumerate(zip(parts, requests, keep, reduce)):
-            table = commit(trace, self.model, self.simulator, cache=cache if reuse else None,
-                           columns=columns, **common, **request)
+            request = dict(request)
+            via = request.pop("via", commit)  # another function of commit's arguments (a margin sweep)
+            table = via(trace, self.model, self.simulator, cache=cache if reuse else None,
+                        columns=columns, **common, **request)
             part.append(table if reducer is None else reducer(table))
             del table
             later = requests[i + 1:]

@@ -28,7 +28,6 @@ from __future__ import annotations
 
 import contextlib
 import hashlib
-import io
 import json
 import os
 import subprocess
@@ -662,13 +661,26 @@ class RunDir:
             RunDirError: The file changed since the run wrote its manifest.
         """
         filters = None if where is None else [(where[0], "in", list(where[1]))]
-        return pd.read_parquet(io.BytesIO(self._verified_bytes(name)), filters=filters,
+        return pd.read_parquet(self._verified_source(name), filters=filters,
                                columns=None if columns is None else list(columns))
 
     def read_verified_arrow(self, name: str) -> pa.Table:
         """:meth:`read_verified` as an Arrow table: columns in a few buffers, no Python object per
         row (what a replay holds of a run's engine answers while it works chunk by chunk)."""
-        return pq.read_table(io.BytesIO(self._verified_bytes(name)))
+        return pq.read_table(self._verified_source(name))
+
+    def _verified_source(self, name: str) -> pa.BufferReader:
+        """The verified bytes of table ``name`` as an Arrow buffer to read Parquet from.
+
+        Why not ``io.BytesIO``: Arrow reads a Python file object through the interpreter from its own
+        I/O and CPU threads (a scan's read-ahead may still be running when the read returns). A
+        command that exits just after such a read (a replay prints its new run's table last) can
+        finalize the interpreter while an Arrow thread waits for the GIL; CPython then ends that
+        thread with ``pthread_exit``, whose forced unwind through Arrow's C++ frames calls
+        ``std::terminate``: SIGABRT, "terminate called without an active exception". From an
+        Arrow buffer no Arrow thread ever enters the interpreter.
+        """
+        return pa.BufferReader(self._verified_bytes(name))
 
     def _verified_bytes(self, name: str) -> bytes:
         """The bytes of final table ``name``, refused when they no longer match the manifest's sha256."""
