@@ -105,9 +105,9 @@ def test_a_run_of_one_chunk_asks_the_engine_only_for_the_margins_read(runs):
     asked = {}
     for reuse in (True, False):
         beliefs = RunBeliefs.of(runs["cal"], chunk_instances=None)
-        from probecommit.runner.calibration import _load, _Run
+        from probecommit.runner.calibration import _Run, load_for_commit
 
-        run = _Run(_load(runs["cal"]).loaded, beliefs, reuse)
+        run = _Run(load_for_commit(runs["cal"]).loaded, beliefs, reuse)
         margin, _ = run.search_margin(0.8, GRID, beliefs.budgets)
         asked[reuse] = (margin.gamma, sorted(beliefs.simulator.answered_keys()))
     assert asked[True] == asked[False]
