@@ -62,18 +62,18 @@ def changes_section(doc: Doc) -> None:
     """What moved against the previous frozen results, and why (each cause is a change in this tree)."""
     doc.add("## What moved since the previous publication", "",
             "Against the frozen results before this publication (`git log -- results/paper`), compared key by key, "
-            "every number common to both is identical except two groups, both from the compiled kernels' new "
-            "summation order (`accel/`, issue 43: they no longer mimic NumPy's pairwise sums, and agree with the "
-            "NumPy reference in `core/` to round-off):",
-            "- **Posterior variances** in the adaptive-probing table of `beyond` and one operating threshold of the "
-            "explain target's committed pool moved in their last binary digits (a weighted sum taken in another order).",
-            "- **The simulated rig's boundary-fault sweep**: one episode (one block position, one pull-in size) keeps "
-            "a different retained set, so its coverage and the sweep's coverage change at that size move by one "
-            "episode. The experiment that tests the cause: `PROBECOMMIT_KERNELS=numpy probecommit reproduce robot` "
-            "runs the same sweep on the NumPy reference and gives the previous publication's values exactly (which "
-            "round-off decides that episode's set was not traced further).",
-            "New in this publication: the explain target's experiments behind each difference from the paper (see the "
-            "list above) and the stored rows from which `verify` recomputes them.", "")
+            "every number common to both is identical except one group: the explain target's surprise AUCs with the "
+            "surprise read as the probability of the tap's class, at the final cover budget "
+            "(`missing.surprise_variants.ours.class.final_*`, estimate and interval).",
+            "- **The cause** is a fix in `audit.stats.cluster_bootstrap_auc`: it left out every non-finite score, "
+            "and a surprise is infinite exactly where no particle predicted the class the tap read, so the most "
+            "surprised episodes were dropped from the AUC while the counts beside it still included them. It now "
+            "ranks an infinite score above every finite one and leaves out only NaN.",
+            "- **The experiment** that tests it: `tests/audit/test_stats.py` (hypothesis) shows the AUC and its "
+            "interval equal those with each infinite score replaced by a finite value beyond every score. The "
+            "density reading, finite everywhere, and every published table are unchanged.",
+            "New in this publication: the explain target's experiments E48 to E72 behind the differences from the "
+            "paper (see the list above) and the stored rows from which `verify` recomputes them.", "")
 
 
 def render(frozen: Path, ledger: Ledger) -> str:
