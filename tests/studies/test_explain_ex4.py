@@ -144,7 +144,8 @@ def test_reexecuting_stored_actions_in_the_stored_scene_gives_the_stored_misses(
 def test_grasp_resolution_step_counts_every_feasible_truth_once(tmp_path):
     from probecommit.studies.explain import ex4_grasp
 
-    out = ex4_grasp.run(tmp_path, [4.0], quick=True)
+    out, rows = ex4_grasp.run(tmp_path, [4.0], quick=True)
+    assert out == ex4_grasp.keys(rows)  # verify counts the same keys again from the stored rows
     assert out["factors"] == [4.0]
     assert out["c4.n_improve"] + out["c4.n_tie"] + out["c4.n_worse"] == out["c4.n_truths"] == out["c4.n_feasible"]
     assert "c1.worst_difference" not in out  # E47's run is not under this folder

@@ -655,6 +655,10 @@ def _searches(folder: Path, out: Recomputed) -> None:
             out.consistency.extend(_cover_candidates(pd.read_parquet(insertion / "cover_search.parquet"), cover))
     if (folder / grasp_x.STORED).is_file():
         _publish(out, "grasp_signs", grasp_x.keys(pd.read_parquet(folder / grasp_x.STORED)), grasp_x.STORED)
+    from probecommit.studies.explain import ex4_grasp
+
+    if (folder / ex4_grasp.STORED).is_file():  # publications before it stored these rows trace the keys
+        _publish(out, "ex4_grasp", ex4_grasp.keys(pd.read_parquet(folder / ex4_grasp.STORED)), ex4_grasp.STORED)
     if (folder / resplits.STORED).is_file():
         _publish(out, "committed_pool", {f"resplits.paper_schedule.{k}": v for k, v in
                                          resplits.summary(pd.read_parquet(folder / resplits.STORED)).items()}, resplits.STORED)
@@ -909,7 +913,8 @@ TRACED_ONLY = {
 #: but not recomputed), by kind; ``verify``'s headline counts the traced-only numbers by these kinds.
 TRACED_KINDS = {
     "measured": "a measurement of the run itself (engine-query count, a replay's agreement with the log's "
-                "decisions, the frozen scan offset): no stored table implies it",
+                "decisions, the frozen scan offset and its copy in ex6's scene, the cone premise's largest probe "
+                "difference): no stored table implies it",
     "training": "needs a training run (the GRU's training loss, a retrained seed's parameters)",
     "engine rows": "the frozen choice a search over engine rollouts made, beside its stored per-candidate rows "
                    "(the frozen cover schedule and its rank, the re-split pool's size)",
@@ -927,6 +932,7 @@ TRACED_PATTERNS: tuple[tuple[str, str, str], ...] = (
     ("robot", r"^replay_reproduced_fraction$", "measured"),
     ("engines", r"\.engine_calls(\.|$)", "measured"),
     ("insertion", r"^scan\.frozen_delta$", "measured"),
+    ("explain", r"^(ex6_probe_rule\.boundary_offset|ex4_cone\.premise_max_probe_difference_m)$", "measured"),
     ("insertion", r"^(cover\.frozen|resplits\.pool)", "engine rows"),
     ("figures", r"^(fig1|scenes)\.", "scene render"),
     ("*", r"^(setup|settings|bootstrap|config)\.|^(sweep_resamples|equivalence_margin)$|^instance_generator\.\w+\.seeds$",

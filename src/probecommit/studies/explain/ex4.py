@@ -22,7 +22,8 @@ def run(job: Any) -> None:
     job.res["ex4_pricing"].update(ex4_pricing.keys())
     job.progress("explain: grasp with the squeeze's resolution raised", 0, 1)
     factors = job.cfg["ex4_grasp_factors_quick" if job.quick else "ex4_grasp_factors"]
-    job.res["ex4_grasp"].update(ex4_grasp.run(job.runs, factors, job.quick, job.workers))
+    keys, job.stored[ex4_grasp.STORED] = ex4_grasp.run(job.runs, factors, job.quick, job.workers)
+    job.res["ex4_grasp"].update(keys)
     job.progress("explain: 2-D push under MuJoCo's default friction cone", 0, 1)
     keys, rows = ex4_cone.run(job.root, job.runs, job.boot, job.quick)
     job.res["ex4_cone"].update(keys)

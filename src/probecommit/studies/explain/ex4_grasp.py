@@ -15,6 +15,8 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
+import pandas as pd
+
 from probecommit.runner.config import config_data, parse_config
 from probecommit.runner.study import run_study
 from probecommit.studies.breadth import paper_config, quick_config
@@ -33,16 +35,35 @@ def resolution_config(c: float, quick: bool) -> Any:
     return parse_config(data)
 
 
-def run(runs: Path, factors: list[float], quick: bool, workers: int = 1) -> dict[str, Any]:
-    """Keys of ``explain:results.ex4_grasp``: per factor ``c``, the feasible truths, their signs and the worst
-    truth's difference (the frozen resolution's worst, c = 1, from E47's run when it is there)."""
-    out: dict[str, Any] = {"factors": [float(c) for c in factors]}
+#: The rows the keys are counted from (``truth_rows`` of each rerun, ``part`` = ``c<factor>``, and of E47's frozen
+#: run, ``part`` = ``frozen``): stored beside results.json, so verify counts the keys again (``keys``).
+STORED = "ex4_grasp_rows.parquet"
+
+
+def run(runs: Path, factors: list[float], quick: bool, workers: int = 1) -> tuple[dict[str, Any], pd.DataFrame]:
+    """Keys of ``explain:results.ex4_grasp`` (``keys``) and the rows they are counted from: per factor ``c``, the
+    feasible truths, their signs and the worst truth's difference (the frozen resolution's worst, c = 1, from E47's
+    run when it is there)."""
+    frames = []
     for c in factors:
         config = resolution_config(float(c), quick)
         path = runs / config.name
         run_study(config, path, workers=workers, threads=1)
-        out.update({f"c{c:g}.{k}": v for k, v in sign_counts(truth_rows(config, path), worst=True).items()})
+        frames.append(truth_rows(config, path).assign(part=f"c{float(c):g}", factor=float(c)))
     frozen = runs / "grasp_analytic_scene"  # E47's run: the frozen resolution (c = 1) on the same scene
     if (frozen / "episodes.parquet").is_file():
-        out["c1.worst_difference"] = sign_counts(truth_rows(resolution_config(1.0, quick), frozen), worst=True)["worst_difference"]
+        frames.append(truth_rows(resolution_config(1.0, quick), frozen).assign(part="frozen", factor=1.0))
+    rows = pd.concat(frames, ignore_index=True)
+    return keys(rows), rows
+
+
+def keys(rows: pd.DataFrame) -> dict[str, Any]:
+    """The keys from the stored rows (one function for the explain step and verify)."""
+    reruns = rows[rows["part"] != "frozen"]
+    out: dict[str, Any] = {"factors": [float(c) for c in pd.unique(reruns["factor"])]}
+    for part, r in reruns.groupby("part", sort=False):
+        out.update({f"{part}.{k}": v for k, v in sign_counts(r.drop(columns=["part", "factor"]), worst=True).items()})
+    frozen = rows[rows["part"] == "frozen"]
+    if len(frozen):
+        out["c1.worst_difference"] = sign_counts(frozen.drop(columns=["part", "factor"]), worst=True)["worst_difference"]
     return out
