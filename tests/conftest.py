@@ -22,6 +22,19 @@ def small_config(**overrides) -> "StudyConfig":  # noqa: F821
     return parse_config(data)
 
 
+def cal_test_runs(root, seeds: tuple[int, int], count: int, repeats: int, **overrides) -> dict:
+    """A calibration and a test run of the small config ("cal" and "test" splits, one instance seed each): the
+    pair that calibration, gate, chunking, margin-search and report tests read. Returns their run directories."""
+    from probecommit.runner.study import run_study
+
+    out = {}
+    for split, seed in zip(("cal", "test"), seeds):
+        cfg = small_config(name=split, instances={"split": split, "count": count, "seed": seed}, repeats=repeats,
+                           **overrides)
+        out[split] = run_study(cfg, root / split).run_dir
+    return out
+
+
 @pytest.fixture
 def make_config():
     return small_config

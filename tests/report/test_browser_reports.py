@@ -86,15 +86,9 @@ pytestmark = [pytest.mark.skipif(BROWSER is None, reason="no chromium (make test
 
 @pytest.fixture(scope="module")
 def runs(tmp_path_factory):
-    from probecommit.runner.study import run_study
-    from tests.conftest import small_config
+    from tests.conftest import cal_test_runs
 
-    root = tmp_path_factory.mktemp("browser-runs")
-    out = {}
-    for split, seed in (("cal", 3), ("test", 4)):
-        cfg = small_config(name=split, instances={"split": split, "count": 6, "seed": seed}, repeats=2)
-        out[split] = run_study(cfg, root / split).run_dir
-    return out
+    return cal_test_runs(tmp_path_factory.mktemp("browser-runs"), (3, 4), count=6, repeats=2)
 
 
 @pytest.mark.parametrize("width", WIDTHS)

@@ -18,15 +18,9 @@ ROBOT = Path(__file__).parents[1] / "audit" / "data" / "robot_log.csv"
 
 @pytest.fixture(scope="module")
 def runs(tmp_path_factory):
-    from probecommit.runner.study import run_study
-    from tests.conftest import small_config
+    from tests.conftest import cal_test_runs
 
-    root = tmp_path_factory.mktemp("runs")
-    out = {}
-    for split, seed in (("cal", 3), ("test", 4)):
-        cfg = small_config(name=split, instances={"split": split, "count": 8, "seed": seed}, repeats=3)
-        out[split] = run_study(cfg, root / split).run_dir
-    return out
+    return cal_test_runs(tmp_path_factory.mktemp("runs"), (3, 4), count=8, repeats=3)
 
 
 def _stored_probe(run_dir):

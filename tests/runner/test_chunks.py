@@ -10,20 +10,13 @@ from probecommit.runner.calibration import calibrate, gates
 from probecommit.runner.build import build_executors, build_model, config_executors
 from probecommit.runner.replay import (LoadedRun, RunBeliefs, _chunk_slices, load_run, probe_batch, replay_episodes,
                                       trace_for_run)
-from tests.conftest import small_config
+from tests.conftest import cal_test_runs, small_config
 
 
 @pytest.fixture(scope="module")
 def runs(tmp_path_factory):
-    from probecommit.runner.study import run_study
-
-    root = tmp_path_factory.mktemp("chunk_runs")
-    out = {}
-    for split, seed in (("cal", 5), ("test", 6)):
-        cfg = small_config(name=split, instances={"split": split, "count": 7, "seed": seed}, repeats=3,
-                           methods=["blind_bayes", "blind_robust", "probe_robust"])
-        out[split] = run_study(cfg, root / split).run_dir
-    return out
+    return cal_test_runs(tmp_path_factory.mktemp("chunk_runs"), (5, 6), count=7, repeats=3,
+                         methods=["blind_bayes", "blind_robust", "probe_robust"])
 
 
 def test_chunk_slices_hold_whole_instances():

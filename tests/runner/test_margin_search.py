@@ -13,21 +13,14 @@ from probecommit.core.executors import NUMPY_KERNELS, ProbeRobust
 from probecommit.runner.build import build_model
 from probecommit.runner.calibration import Recorder, calibrate, gates
 from probecommit.runner.replay import RunBeliefs
-from tests.conftest import small_config
+from tests.conftest import cal_test_runs, small_config
 
 GRID = np.round(np.arange(100, 29, -2) / 100.0, 2)
 
 
 @pytest.fixture(scope="module")
 def runs(tmp_path_factory):
-    from probecommit.runner.study import run_study
-
-    root = tmp_path_factory.mktemp("margin_runs")
-    out = {}
-    for split, seed in (("cal", 5), ("test", 6)):
-        cfg = small_config(name=split, instances={"split": split, "count": 7, "seed": seed}, repeats=3)
-        out[split] = run_study(cfg, root / split).run_dir
-    return out
+    return cal_test_runs(tmp_path_factory.mktemp("margin_runs"), (5, 6), count=7, repeats=3)
 
 
 def _calibrated(runs, reuse, chunk, **kwargs):
