@@ -9,7 +9,8 @@ each time. The plain loop (``benchmarks/belief.py``'s ``run_plain``, written ind
 the package) filters the same number of episodes with the same number of taps and commits at
 every budget; it runs in a process of its own too, but only its loop is timed (its start-up
 and data are not counted: a conservative anchor). ``run`` is timed as shipped (units in
-threads, one per CPU up to 4) and with ``--threads 1``. The arms take turns for ``--rounds``
+threads, one per CPU up to 4) and with ``--threads 1``. The package's bytecode is compiled
+first and the processes may load it, as from a user's install (``as_user.py``). The arms take turns for ``--rounds``
 rounds after a warm-up; medians, ratios of the medians and the range of per-round ratios are
 printed, with the load average. With ``--against REF`` the two ``run`` arms of a git ref (checked
 out beside this tree, its kernels built) take turns with this tree's too, and the ratios ref / this
@@ -26,7 +27,6 @@ import argparse
 import contextlib
 import json
 import os
-import resource
 import shutil
 import statistics
 import subprocess
@@ -36,6 +36,7 @@ import time
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
+from as_user import children_cpu, compile_tree, user_env  # noqa: E402
 from baseline import baseline_tree  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -66,27 +67,22 @@ print(json.dumps({{"seconds": time.perf_counter() - t0, "cpu": time.process_time
 """
 
 
-def _children_cpu() -> float:
-    usage = resource.getrusage(resource.RUSAGE_CHILDREN)
-    return usage.ru_utime + usage.ru_stime
-
-
 def run_command(config: Path, out: Path, threads: int | None, src: Path = ROOT / "src") -> tuple[float, float]:
     """Wall and CPU seconds of ``probecommit run`` (the package under ``src``) as a process, into a fresh ``out``."""
     shutil.rmtree(out, ignore_errors=True)
     cmd = [sys.executable, "-m", "probecommit", "run", str(config), "--out", str(out)]
     if threads is not None:
         cmd += ["--threads", str(threads)]
-    env = {**os.environ, "PYTHONPATH": str(src), "COLUMNS": "120"}
-    t0, c0 = time.perf_counter(), _children_cpu()
+    env = user_env(src, COLUMNS="120")
+    t0, c0 = time.perf_counter(), children_cpu()
     subprocess.run(cmd, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, check=True)
-    return time.perf_counter() - t0, _children_cpu() - c0
+    return time.perf_counter() - t0, children_cpu() - c0
 
 
 def plain_loop(episodes: int) -> tuple[float, float]:
     """Wall and CPU seconds of the plain loop alone, in a process of its own."""
     code = PLAIN.format(here=str(HERE), episodes=episodes)
-    env = {**os.environ, "PYTHONPATH": str(ROOT / "src")}
+    env = user_env(ROOT / "src")
     done = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True)
     out = json.loads(done.stdout.strip().splitlines()[-1])
     return out["seconds"], out["cpu"]
@@ -111,8 +107,10 @@ def main() -> None:
             "run1": lambda: run_command(config, tmp / "run1", 1),
             "plain": lambda: plain_loop(episodes),
         }
+        compile_tree(ROOT / "src")
         with (baseline_tree(args.against, tmp / "ref") if args.against else contextlib.nullcontext()) as ref:
             if ref is not None:
+                compile_tree(ref / "src")
                 arms["run@ref"] = lambda: run_command(config, tmp / "run-ref", None, ref / "src")
                 arms["run1@ref"] = lambda: run_command(config, tmp / "run1-ref", 1, ref / "src")
             times, load = _interleaved(arms, args.rounds)

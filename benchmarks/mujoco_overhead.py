@@ -6,7 +6,8 @@ as a process (CPU = user + sys of the process and its children: start-up, import
 rollouts, beliefs, commits, writes). The floor: every distinct engine query the run made
 (its ``engine_cache.parquet``: probes and executions), run again in a fresh process through
 the run's own simulator, one after the other, CPU of that loop alone (no start-up, no
-imports). Prints both, the ratio and the target (<= 1.25).
+imports). Prints both, the ratio and the target (<= 1.25). The package's bytecode is compiled
+first and the processes may load it, as from a user's install (``as_user.py``).
 
     python benchmarks/mujoco_overhead.py [--instances 96] [--threads 1]
 """
@@ -16,7 +17,6 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import resource
 import subprocess
 import sys
 import tempfile
@@ -24,6 +24,8 @@ import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from as_user import children_cpu, compile_tree, user_env  # noqa: E402
 
 CONFIG = """name: mujoco-overhead
 task: insertion
@@ -55,26 +57,22 @@ print(json.dumps({"cpu": time.process_time() - c0, "wall": time.perf_counter() -
 """
 
 
-def _children_cpu() -> float:
-    usage = resource.getrusage(resource.RUSAGE_CHILDREN)
-    return usage.ru_utime + usage.ru_stime
-
-
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--instances", type=int, default=96)
     ap.add_argument("--threads", type=int, default=1, help="The run's --threads (1: its CPU is not inflated by "
                                                           "two threads contending; the floor runs one thread).")
     args = ap.parse_args()
-    env = {**os.environ, "PYTHONPATH": str(ROOT / "src"), "COLUMNS": "120"}
+    env = user_env(ROOT / "src", COLUMNS="120")
+    compile_tree(ROOT / "src")
     load = [os.getloadavg()[0]]
     with tempfile.TemporaryDirectory() as tmp_name:
         tmp = Path(tmp_name)
         (tmp / "c.yaml").write_text(CONFIG.format(instances=args.instances))
-        c0, t0 = _children_cpu(), time.perf_counter()
+        c0, t0 = children_cpu(), time.perf_counter()
         subprocess.run([sys.executable, "-m", "probecommit", "run", str(tmp / "c.yaml"), "--out", str(tmp / "run"),
                         "--threads", str(args.threads)], env=env, check=True, capture_output=True)
-        run_cpu, run_wall = _children_cpu() - c0, time.perf_counter() - t0
+        run_cpu, run_wall = children_cpu() - c0, time.perf_counter() - t0
         load.append(os.getloadavg()[0])
         done = subprocess.run([sys.executable, "-c", QUERIES_ALONE, str(tmp / "run")], env=env, check=True,
                               capture_output=True, text=True)
