@@ -678,7 +678,9 @@ def _groups(parts: "RunParts | dict", instances: pd.DataFrame, todo: list[tuple[
     for first in range(0, len(todo), size):
         group = todo[first:first + size]
         rows = np.concatenate([np.arange(sl.start, sl.stop) for _, sl in group])
-        jobs.append((parts, instances.iloc[rows], [(name, sl.stop - sl.start) for name, sl in group]))
+        contiguous = rows[-1] - rows[0] + 1 == len(rows)  # the usual case: a slice, not a gather
+        jobs.append((parts, instances.iloc[rows[0]:rows[-1] + 1] if contiguous else instances.iloc[rows],
+                     [(name, sl.stop - sl.start) for name, sl in group]))
     return jobs
 
 
