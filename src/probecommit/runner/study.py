@@ -750,4 +750,4 @@ def _run_units(parts: RunParts, run: RunDir, instances, workers, ray, ray_addres
             "resumed_units": len(units) - len(todo),
         },
     )
-    return StudyResult(run.path, manifest, pd.read_parquet(run.table_path("episodes")))
+    return StudyResult(run.path, manifest, run.final_episodes())

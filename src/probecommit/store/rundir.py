@@ -316,6 +316,7 @@ class RunDir:
         self._pending: list[tuple[str, dict[str, pa.Table], dict[str, Any]]] = []
         self._pending_bytes = 0
         self._pending_sizes: dict[str, int] = {}
+        self._written_episodes: pa.Table | None = None  # the final episodes table, once finalize wrote it
         self._last_commit = time.monotonic()
         self._batches: dict[str, Path] = {}
         self._stats: dict[str, dict[str, Any]] = {}
@@ -610,8 +611,20 @@ class RunDir:
         frames = {name: merge_tables([stored[u][name] for u in units]) for name in TABLES}
         del stored
         for name, frame in canonical_tables(frames).items():
-            atomic_write_parquet(self.table_path(name), frame, _SCHEMAS.get(name, ()))
+            table = atomic_write_parquet(self.table_path(name), frame, _SCHEMAS.get(name, ()))
+            if name == "episodes":
+                self._written_episodes = table
         return self.write_manifest(manifest_extra)
+
+    def final_episodes(self) -> pd.DataFrame:
+        """The final episodes table as ``pd.read_parquet`` of its file gives it.
+
+        Converted from the Arrow table :meth:`finalize` wrote (what the file holds) when this
+        object wrote it, so a run does not read back and decode the file it just wrote (nor
+        import the Parquet dataset layer to do so); else read from the file.
+        """
+        table = self._written_episodes
+        return pd.read_parquet(self.table_path("episodes")) if table is None else table.to_pandas()
 
     def copy_table(self, source: "RunDir", name: str) -> None:
         """Final table ``name`` of another complete run, as it is (checked against its manifest)."""
