@@ -16,7 +16,6 @@ from typing import Callable
 
 import typer
 from rich.console import Console
-from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
 from rich.text import Text
 
 from probecommit.errors import UserError
@@ -120,6 +119,9 @@ def user_errors(fn: Callable) -> Callable:
 
 def progress_bar(description: str):
     """A rich progress bar and a ``(done, total)`` callback that drives it."""
+    # Imported here: only the commands that run work draw a bar (``--help`` and the rest start without it).
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
+
     bar = Progress(
         TextColumn("{task.description}", style="bold", markup=False), BarColumn(), MofNCompleteColumn(),
         TimeElapsedColumn(), TimeRemainingColumn(), console=err_console, transient=False,
