@@ -55,13 +55,15 @@ def coverage_rows(pool: str, episodes: pd.DataFrame, alpha: float, count: int, s
     scores = instance_scores(probe, k)
     rows = []
     for n, (cal, test) in enumerate(split_halves(scores.index.to_numpy(), count, seed)):
-        rows.append({"part": "coverage", "pool": pool, "index": n,
+        rows.append({"part": "coverage", "pool": pool, "index": n, "alpha": float(alpha),
                      **tie_coverage(scores.loc[cal].to_numpy(float), scores.loc[test].to_numpy(float), alpha)})
     return pd.DataFrame(rows)
 
 
-def coverage_keys(rows: pd.DataFrame, alpha: float) -> dict[str, float]:
-    """E80's keys: per-pool means' range over the pools, q / (M + 1), and the tied share."""
+def coverage_keys(rows: pd.DataFrame) -> dict[str, float]:
+    """E80's keys: per-pool means' range over the pools, q / (M + 1) (the rows' alpha and half), and the tied
+    share."""
+    alpha = float(rows["alpha"].iloc[0])
     means = rows.groupby("pool", sort=False)[["le", "lt", "tied", "level"]].mean()
     m = _half(rows)
     out: dict[str, float] = {"pools": int(len(means)), "splits": int(len(rows)), "calibration_clusters": m,
@@ -121,10 +123,10 @@ def margin_keys(rows: pd.DataFrame) -> dict[str, float]:
 # ----------------------------------------------------------------------------- the step
 
 
-def summary(rows: pd.DataFrame, alpha: float = 0.2) -> dict[str, float]:
+def summary(rows: pd.DataFrame) -> dict[str, float]:
     """Every key of the ``ex9_calibration`` group from the stored rows (the step and verify both call this)."""
     out: dict[str, float] = {}
-    for part, keys in (("coverage", lambda r: coverage_keys(r, alpha)), ("cost", cost_keys),
+    for part, keys in (("coverage", coverage_keys), ("cost", cost_keys),
                        ("margin", margin_keys)):
         sub = rows[rows["part"] == part]
         if len(sub):
@@ -159,4 +161,4 @@ def run(job: Any) -> None:
                               p.bootstrap.seed))
     rows = pd.concat(frames, ignore_index=True)
     job.stored[STORED] = rows
-    job.res["ex9_calibration"].update(summary(rows, p.alpha))
+    job.res["ex9_calibration"].update(summary(rows))
