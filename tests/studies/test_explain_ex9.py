@@ -114,5 +114,22 @@ def test_e82_needs_both_cells_inside():
 
 def test_ex9_experiments_speak_only_to_their_claims():
     by_claim = {c.id: [e for e, _ in claims.explanations(c)] for c in claims.CLAIMS}
-    owners = {e: cid for cid, es in by_claim.items() for e in es if e in ("E80", "E81", "E82")}
-    assert owners == {"E80": "T14-resplits", "E81": "T13-cost-of-calibration", "E82": "tab:audit"}
+    owners = {e: cid for cid, es in by_claim.items() for e in es if e in ("E80", "E81", "E82", "E83")}
+    assert owners == {"E80": "T14-resplits", "E81": "T13-cost-of-calibration", "E82": "tab:audit", "E83": "T14-resplits"}
+
+
+def test_optimism_keys_average_the_budgets_equally():
+    rows = pd.DataFrame({"part": "resplit_optimism", "index": range(4), "optimism_k1": [0.1, -0.3, 0.0, 0.2],
+                         "optimism_k2": [-0.05, 0.1, 0.0, 0.2], "optimism_k10": [0.0, 0.1, 0.3, -0.1]})
+    keys = ex9.optimism_keys(rows)  # averages 0.0167, -0.0333, 0.1, 0.1; the last budget is k = 10, not k = 2
+    assert keys["splits"] == 4 and keys["budgets"] == 3
+    assert keys["margin_optimistic"] == pytest.approx(0.75)
+    assert keys["margin_optimistic_last"] == pytest.approx(0.5)
+    assert keys["optimism_mean"] == pytest.approx((0.05 / 3 - 0.1 / 3 + 0.1 + 0.1) / 4)
+
+
+def test_e83_reads_the_share_within_the_claims_tolerance():
+    support = claims.EXPERIMENTS["E83"].supports
+    share = value("T14-resplits.margin_optimistic_percent") / 100
+    assert support({"share": share + claims.EX9_OPTIMISTIC_TOL - 0.001})
+    assert not support({"share": share - claims.EX9_OPTIMISTIC_TOL - 0.001})
