@@ -490,6 +490,12 @@ def explain(folder: Path, results: dict[str, Any]) -> Recomputed:
         for key, value in ex5_summary(pd.read_parquet(folder / EXPLAIN_EX5)).items():
             out.values[f"ex5_calibration.{key}"] = value
         out.sources["ex5_calibration"] = EXPLAIN_EX5
+    if (folder / EXPLAIN_EX9).is_file():
+        from probecommit.studies.explain.ex9_calibration import summary as ex9_summary
+
+        for key, value in ex9_summary(pd.read_parquet(folder / EXPLAIN_EX9)).items():
+            out.values[f"ex9_calibration.{key}"] = value
+        out.sources["ex9_calibration"] = EXPLAIN_EX9
     _ex4_cone(folder, results, out)
     if "ex4_pricing" in results:  # a pure function of the paper's printed values (studies.explain.ex4_pricing)
         from probecommit.studies.explain.ex4_pricing import keys as ex4_pricing_keys
@@ -837,6 +843,8 @@ EXPLAIN_MIXTURE = "mixture_noise_seeds.parquet"
 EXPLAIN_RIG = ("rig_redraws_sessions.parquet", "rig_redraws_boundary.parquet")
 #: The explain step's stored calibration rows of ex5 (``studies.explain.ex5_calibration.STORED``).
 EXPLAIN_EX5 = "ex5_calibration_rows.parquet"
+#: ex9's stored rows (``studies.explain.ex9_calibration.STORED``: coverage splits, cost splits, E82's budgets).
+EXPLAIN_EX9 = "ex9_calibration_rows.parquet"
 #: ex7's stored rows (``studies.explain.ex7.STORED``: the fault surprise rows and the fresh draws).
 EXPLAIN_EX7 = ("ex7_fault_surprise.parquet", "ex7_dev_draws.parquet", "ex7_harness_draws.parquet")
 
@@ -856,7 +864,7 @@ STORED_TABLES: dict[str, tuple[str, ...]] = {
                 "margin_instance_sums.parquet", "commits.parquet", "episodes.parquet", "physx_emulated_episodes.parquet",
                 "robust_replays.parquet", "resplits_paper_schedule.parquet", "surprise_variants.parquet",
                 "cover_search_episodes.parquet", "generator_instances.parquet",
-                "grasp_analytic_episodes.parquet", EXPLAIN_EX5, *EXPLAIN_EX7),
+                "grasp_analytic_episodes.parquet", EXPLAIN_EX5, *EXPLAIN_EX7, EXPLAIN_EX9),
     # ``pybullet_x.EMULATED`` is required where the engines study's PyBullet run was there (``_engine_keys``).
 }
 
@@ -890,7 +898,8 @@ RECOMPUTED = {
                "PyBullet's stored escapes, its emulated scene and that scene's escape over fresh draws; the re-splits under the "
                "paper's schedule; the development searches; grasp on the model-exact scene; the GRU's spread and power; "
                "the PyBullet capture interval; ex5's re-split costs, fresh pools and capture pairs; ex4's single-width "
-               "counts, prices from the paper's curve and the pyramidal-cone rows; ex7's fault readings and fresh draws",
+               "counts, prices from the paper's curve and the pyramidal-cone rows; ex7's fault readings and fresh draws; "
+               "ex9's held-out coverage with ties, costs over four pools and the calibrated arm at the paper's margin",
 }
 TRACED_ONLY = {
     "insertion": "the stored rows themselves (episodes, re-executed commits, replays); the re-split rows; the cover "
