@@ -23,6 +23,7 @@ from typing import Any, Mapping, Sequence
 
 import numpy as np
 
+from probecommit.runner.commit_threads import in_threads
 from probecommit.runner.inference import BeliefTrace, _commit_plan, _execute, commit
 
 
@@ -127,13 +128,19 @@ def sweep_margins(trace: BeliefTrace, model: Any, simulator: Any, *, executors: 
     n_e, n_p = trace.batch.n_episodes, len(plan)
     index = np.empty((len(margins), n_e, n_p), dtype=np.int32)
     predicted = np.empty((len(margins), n_e, n_p), dtype=float)
-    for p, (executor, k) in enumerate(plan):
-        t = float(thresholds[k] if isinstance(thresholds, Mapping) else thresholds)
-        memo = cache.setdefault(("set", executor.method, k, t, executor.memo_tag), {})
+    memos = [cache.setdefault(("set", executor.method, k, float(thresholds[k] if isinstance(thresholds, Mapping)
+                                                                  else thresholds), executor.memo_tag), {})
+             for executor, k in plan]  # made here, so the threads below share no dict they add to
+
+    def choose(p: int) -> None:
+        (executor, k), memo = plan[p], memos[p]
         if "retained" not in memo:  # as executor.decide keeps it
             state = trace.states[k]
+            t = float(thresholds[k] if isinstance(thresholds, Mapping) else thresholds)
             memo["retained"] = executor.retain(state.particles, state.weights, t)
         index[:, :, p], predicted[:, :, p] = executor.choose_margins(memo["retained"], margins, context)
+
+    in_threads(choose, range(len(plan)))
     grid = np.asarray(model.action_grid, dtype=float).reshape(len(model.action_grid), -1)
     k = np.tile(np.array([k for _, k in plan], dtype=np.int64), n_e)
     n_m, n_rows = len(margins), n_e * n_p
