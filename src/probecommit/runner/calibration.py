@@ -51,7 +51,7 @@ from probecommit.audit.stats import (
 )
 from probecommit.audit.surprise import surprise_auc
 from probecommit.runner.build import config_executors
-from probecommit.runner.commit_threads import commit_in_threads
+from probecommit.runner.commit_threads import commit_in_threads, in_threads
 from probecommit.runner.margin_search import SweptChunk, sweep_margins
 from probecommit.runner.replay import CHUNK_INSTANCES, LoadedRun, RunBeliefs, load_run, require_budgets
 from probecommit.errors import UsageError
@@ -732,13 +732,18 @@ def _summarize(parts: CalibrationParts, *, alpha: float, budgets: list[int], cos
         cost_rows.append({"setting": label, "k": cost_budget, "n_episodes": n,
                           "failure": iv.estimate, "failure_lo": iv.lo, "failure_hi": iv.hi})
     del counts  # each paired bootstrap draws its own (a [resamples, instances] matrix: 47 MB for 3072 instances)
-    diffs = []
-    for base, treat in (("no calibration", "set calibration + margin"), ("no calibration", "set calibration"),
-                        ("set calibration", "set calibration + margin")):
+    pairs = (("no calibration", "set calibration + margin"), ("no calibration", "set calibration"),
+             ("set calibration", "set calibration + margin"))
+    diffs: list[dict[str, Any]] = [{} for _ in pairs]
+
+    def compare(i: int) -> None:  # each draws from its own generator of an integer `seed`: in threads, the same numbers
+        base, treat = pairs[i]
         pdiff = paired_bootstrap(arms[base], arms[treat], "realized", resamples=resamples, seed=seed, level=level)
-        diffs.append({"baseline": base, "treatment": treat, "difference": pdiff.difference.estimate,
-                      "lo": pdiff.difference.lo, "hi": pdiff.difference.hi, "p_sign_flip": pdiff.p_sign_flip,
-                      "n_pairs": pdiff.n_pairs, "n_clusters": pdiff.n_clusters})
+        diffs[i] = {"baseline": base, "treatment": treat, "difference": pdiff.difference.estimate,
+                    "lo": pdiff.difference.lo, "hi": pdiff.difference.hi, "p_sign_flip": pdiff.p_sign_flip,
+                    "n_pairs": pdiff.n_pairs, "n_clusters": pdiff.n_clusters}
+
+    in_threads(compare, range(len(pairs)), None if not isinstance(seed, np.random.Generator) else 1)
 
     # Simultaneous coverage on test, measured on the sets as constructed at t.
     simultaneous = {"cluster_coverage": math.nan, "lo": math.nan, "hi": math.nan}

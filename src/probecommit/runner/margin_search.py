@@ -24,7 +24,7 @@ from typing import Any, Mapping, Sequence
 import numpy as np
 
 from probecommit.runner.commit_threads import in_threads
-from probecommit.runner.inference import BeliefTrace, _commit_plan, _execute, commit
+from probecommit.runner.inference import BeliefTrace, _belief_at, _commit_plan, _execute, commit
 
 
 @dataclass
@@ -134,10 +134,10 @@ def sweep_margins(trace: BeliefTrace, model: Any, simulator: Any, *, executors: 
 
     def choose(p: int) -> None:
         (executor, k), memo = plan[p], memos[p]
-        if "retained" not in memo:  # as executor.decide keeps it
-            state = trace.states[k]
+        if "retained" not in memo:  # as executor.decide keeps it, from the belief commit() reads (weights, z)
+            belief = _belief_at(trace, model, k, cache)
             t = float(thresholds[k] if isinstance(thresholds, Mapping) else thresholds)
-            memo["retained"] = executor.retain(state.particles, state.weights, t)
+            memo["retained"] = executor.retain(trace.states[k].particles, belief["weights"], t, belief["z"])
         index[:, :, p], predicted[:, :, p] = executor.choose_margins(memo["retained"], margins, context)
 
     in_threads(choose, range(len(plan)))
