@@ -91,9 +91,14 @@ class SweptChunk:
     def rule_rows(self, m: int, budgets: Sequence[int]) -> tuple[np.ndarray, np.ndarray]:
         """What the margin rule sums of margin ``margins[m]``: predicted and realized failure of the
         rows not failed at ``budgets`` (``runner.calibration._margin_rows`` of its table)."""
-        columns = self.columns(m)
-        rows = (columns["status"].astype(str) != "failed") & np.isin(columns["k"], list(budgets))
-        return (np.asarray(columns["predicted"], dtype=float)[rows], np.asarray(columns["realized"], dtype=float)[rows])
+        if self.tables is not None:
+            columns = self.columns(m)
+            rows = (columns["status"].astype(str) != "failed") & np.isin(columns["k"], list(budgets))
+            return (np.asarray(columns["predicted"], dtype=float)[rows],
+                    np.asarray(columns["realized"], dtype=float)[rows])
+        self.execute([m])  # a row's status is "failed" exactly where its execution failed (columns())
+        rows = ~self.failed[m] & np.isin(self.k, list(budgets))
+        return self.predicted[m][rows], self.realized[m][rows]
 
 
 def sweep_margins(trace: BeliefTrace, model: Any, simulator: Any, *, executors: Sequence[Any],
