@@ -123,7 +123,8 @@ def _first_above(actions, value, origin, per_step):  # pragma: no cover - compil
 
 @helper(inline=True)
 def _first_from(actions, value, origin, per_step):  # pragma: no cover - compiled
-    """``np.searchsorted(actions, value, side="left")``, as :func:`_first_above`: ``actions[i - 1] < value <= actions[i]``."""
+    """``np.searchsorted(actions, value, side="left")``, as :func:`_first_above`:
+    ``actions[i - 1] < value <= actions[i]``."""
     n = actions.shape[0]
     i = _grid_guess(value, origin, per_step, n)
     while i < n and actions[i] < value:
@@ -142,10 +143,10 @@ def _margin_counts(centre, half, margins, mask, actions):  # pragma: no cover - 
     so the interval shrinks as ``gamma`` does, and a scenario whose interval is empty or NaN at the
     largest margin holds nothing at any. So the margins under which an action succeeds are the
     first ``j`` of the list: each retained scenario visits only the actions inside its widest
-    interval (found from the grid's spacing and walked exact: no binary search), finds ``j`` (guessed
-    from the margins' spacing, then walked to the exact ``j`` with the predicate itself) and adds one to ``hist[a, j]``; a row's counts are those histograms summed
-    from the right. The same integers as counting each
-    margin (``_scaled_counts``), for every margin."""
+    interval (found from the grid's spacing and walked exact: no binary search), finds ``j``
+    (guessed from the margins' spacing, then walked to the exact ``j`` with the predicate itself) and
+    adds one to ``hist[a, j]``; a row's counts are those histograms summed from the right. The same
+    integers as counting each margin (``_scaled_counts``), for every margin."""
     n_e, n_s = mask.shape
     n_m, n_a = margins.shape[0], actions.shape[0]
     out = np.zeros((n_m, n_e, n_a), dtype=np.int64)
