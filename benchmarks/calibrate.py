@@ -49,11 +49,11 @@ from probecommit.runner.study import run_study
 out = sys.argv[1]
 for split in ("B_cal", "B_test"):
     run_study(load_config(f"{{out}}/{{split}}.yaml"), f"{{out}}/{{split}}")
-t0, c0 = time.perf_counter(), time.process_time()
+t0, c0, m0 = time.perf_counter(), time.process_time(), time.thread_time()
 result = calibrate(f"{{out}}/B_cal", f"{{out}}/B_test"{extra})
-seconds, cpu = time.perf_counter() - t0, time.process_time() - c0
+seconds, cpu, main = time.perf_counter() - t0, time.process_time() - c0, time.thread_time() - m0
 search = result.margin.search.to_dict("list")
-print(json.dumps({{"seconds": seconds, "cpu": cpu, "result": [result.to_dict(), search]}}, default=str, sort_keys=True))
+print(json.dumps({{"seconds": seconds, "cpu": cpu, "main_cpu": main, "result": [result.to_dict(), search]}}, default=str, sort_keys=True))
 """
 
 
@@ -97,11 +97,13 @@ def main() -> None:
           f"load average {min(load):.1f}-{max(load):.1f} on {os.cpu_count()} CPUs")
     for name, arm in arms.items():
         same = json.dumps(arm["result"], sort_keys=True) == json.dumps(first["result"], sort_keys=True)
-        print(f"  {name:50s} CPU {arm['cpu']:7.2f} s  wall {arm['seconds']:7.2f} s   "
-              f"CPU x{arm['cpu'] / first['cpu']:5.2f}   identical: {same}")
+        print(f"  {name:50s} CPU {arm['cpu']:7.2f} s (main thread {arm.get('main_cpu', float('nan')):6.2f} s)  "
+              f"wall {arm['seconds']:7.2f} s   CPU x{arm['cpu'] / first['cpu']:5.2f}   identical: {same}")
     print(f"  target (issue 42): this tree <= {target:.0f} s at E = {episodes} on an idle 2-core machine: "
           f"wall {first['seconds']:.2f} s, CPU {first['cpu']:.2f} s -> "
-          f"{'met' if first['seconds'] <= target else 'MISSED'} (wall; on a loaded machine CPU is the fairer reading)")
+          f"{'met' if first['seconds'] <= target else 'MISSED'} (wall; on a loaded machine CPU is the fairer reading: "
+          f"on an idle 2-core machine the wall is at least max(main-thread CPU, CPU / 2) = "
+          f"{max(first['main_cpu'], first['cpu'] / 2):.2f} s)")
 
 
 if __name__ == "__main__":

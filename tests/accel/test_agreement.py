@@ -93,6 +93,8 @@ GAMMA_GRID = np.round(np.arange(100, 29, -2) / 100.0, 2)  # the paper's margins,
 @pytest.mark.parametrize("grid", [
     np.round(np.arange(-10.0, 10.0 + 1e-9, 0.5), 10),  # insertion's aims
     np.sort(np.random.default_rng(7).uniform(-10, 10, 41)),  # uneven
+    np.array([-1.0, -1.0, 0.0, 0.0, 0.0, 2.5, 100.0]),  # repeated aims and a gap: the spacing's guess is far off
+    np.array([0.25]),  # one aim
 ])
 def test_margin_counts_are_every_margins_scaled_counts_exactly(margins, grid):
     """One visit of the scenarios counts every margin: the same integers as counting each margin,

@@ -95,6 +95,45 @@ def _succeeds(centre, half, margin, value):  # pragma: no cover - compiled
     return (low < value) & (value < high)
 
 
+@helper(inline=True)
+def _grid_guess(value, origin, per_step, n):  # pragma: no cover - compiled
+    """Where ``value`` falls on a grid of ``n`` actions if it were evenly spaced (clamped to ``[0, n]``):
+    a first guess that :func:`_first_above` and :func:`_first_from` walk to the exact index."""
+    x = (value - origin) * per_step
+    if not x > 0.0:
+        return 0
+    if not x < n:
+        return n
+    return int(x)
+
+
+@helper(inline=True)
+def _first_above(actions, value, origin, per_step):  # pragma: no cover - compiled
+    """``np.searchsorted(actions, value, side="right")`` (sorted actions, no NaN): from a guess, walked to
+    the index ``i`` with ``actions[i - 1] <= value < actions[i]``, which is unique, so exact for any
+    sorted grid; on an evenly spaced grid the guess is right and no binary search's branches are taken."""
+    n = actions.shape[0]
+    i = _grid_guess(value, origin, per_step, n)
+    while i < n and actions[i] <= value:
+        i += 1
+    while i > 0 and actions[i - 1] > value:
+        i -= 1
+    return i
+
+
+@helper(inline=True)
+def _first_from(actions, value, origin, per_step):  # pragma: no cover - compiled
+    """``np.searchsorted(actions, value, side="left")``, as :func:`_first_above`:
+    ``actions[i - 1] < value <= actions[i]``."""
+    n = actions.shape[0]
+    i = _grid_guess(value, origin, per_step, n)
+    while i < n and actions[i] < value:
+        i += 1
+    while i > 0 and actions[i - 1] >= value:
+        i -= 1
+    return i
+
+
 @kernel("i8[:, :, ::1](f8[:, ::1], f8[:, ::1], f8[::1], b1[:, ::1], f8[::1])")
 def _margin_counts(centre, half, margins, mask, actions):  # pragma: no cover - compiled
     """``out[m, e, a]``: the retained scenarios of row ``e`` under which action ``a`` succeeds at
@@ -104,10 +143,10 @@ def _margin_counts(centre, half, margins, mask, actions):  # pragma: no cover - 
     so the interval shrinks as ``gamma`` does, and a scenario whose interval is empty or NaN at the
     largest margin holds nothing at any. So the margins under which an action succeeds are the
     first ``j`` of the list: each retained scenario visits only the actions inside its widest
-    interval, finds ``j`` (guessed from the margins' spacing, then walked to the exact ``j`` with the
-    predicate itself) and adds one to ``hist[a, j]``; a row's counts are those histograms summed
-    from the right. The same integers as counting each
-    margin (``_scaled_counts``), for every margin."""
+    interval (found from the grid's spacing and walked exact: no binary search), finds ``j``
+    (guessed from the margins' spacing, then walked to the exact ``j`` with the predicate itself) and
+    adds one to ``hist[a, j]``; a row's counts are those histograms summed from the right. The same
+    integers as counting each margin (``_scaled_counts``), for every margin."""
     n_e, n_s = mask.shape
     n_m, n_a = margins.shape[0], actions.shape[0]
     out = np.zeros((n_m, n_e, n_a), dtype=np.int64)
@@ -115,6 +154,9 @@ def _margin_counts(centre, half, margins, mask, actions):  # pragma: no cover - 
     widest = margins[0]
     # 1 / the margins' mean spacing: where the width reaches an action, a first guess of j
     per_spacing = (n_m - 1) / (widest - margins[n_m - 1]) if n_m > 1 else 0.0
+    # 1 / the actions' mean spacing: a guess of each scenario's first and last action, walked exact
+    origin = actions[0] if n_a else 0.0
+    per_step = (n_a - 1) / (actions[n_a - 1] - origin) if n_a > 1 and actions[n_a - 1] > origin else 0.0
     for e in range(n_e):
         for s in range(n_s):
             if not mask[e, s]:
@@ -124,8 +166,8 @@ def _margin_counts(centre, half, margins, mask, actions):  # pragma: no cover - 
             low, high = c - width, c + width
             low = np.inf if low != low else low
             high = np.inf if high != high else high
-            first = np.searchsorted(actions, low, side="right")
-            last = np.searchsorted(actions, high, side="left")
+            first = _first_above(actions, low, origin, per_step)
+            last = _first_from(actions, high, origin, per_step)
             scale = 1.0 / h if 0.0 < h < np.inf else 0.0
             for a in range(first, last):
                 value = actions[a]

@@ -51,6 +51,7 @@ from probecommit.audit.stats import (
 )
 from probecommit.audit.surprise import surprise_auc
 from probecommit.runner.build import config_executors
+from probecommit.runner.commit_threads import commit_in_threads, in_threads
 from probecommit.runner.margin_search import SweptChunk, sweep_margins
 from probecommit.runner.replay import CHUNK_INSTANCES, LoadedRun, RunBeliefs, load_run, require_budgets
 from probecommit.errors import UsageError
@@ -238,7 +239,7 @@ class _Run:
         reduce = list(reduce) if reduce is not None else [None] * len(requests)
         per_chunk = [None if reducer is None else self._checked(reducer, columns)
                      for reducer, columns in zip(reduce, keep)]
-        tables = self.beliefs.commit([_commit_request(request) for request in requests], keep=keep,
+        tables = self.beliefs.commit([_commit_request(request, self.reuse) for request in requests], keep=keep,
                                      reduce=per_chunk, reuse=self.reuse, final=final, executors=self.executors)
         out = []
         for table, columns, reducer in zip(tables, keep, reduce):
@@ -431,12 +432,13 @@ def _columns(extra: tuple) -> Sequence[str] | None:
     return extra[2] if len(extra) > 2 else None
 
 
-def _commit_request(request: Request | dict[str, Any]) -> dict[str, Any]:
-    """``RunBeliefs.commit``'s keyword arguments of a ``(thresholds, margin)`` request (a dict is one already)."""
+def _commit_request(request: Request | dict[str, Any], threaded: bool = False) -> dict[str, Any]:
+    """``RunBeliefs.commit``'s keyword arguments of a ``(thresholds, margin)`` request (a dict is one already);
+    ``threaded``: the chunk's budgets committed in two threads (``runner.commit_threads``, the same table)."""
     if isinstance(request, dict):
         return request
     thresholds, margin = request
-    return {"thresholds": _executable(thresholds), "margin": margin}
+    return {"thresholds": _executable(thresholds), "margin": margin, **({"via": commit_in_threads} if threaded else {})}
 
 
 def _executable(thresholds: float | dict[int, float]) -> float | dict[int, float]:
@@ -730,13 +732,18 @@ def _summarize(parts: CalibrationParts, *, alpha: float, budgets: list[int], cos
         cost_rows.append({"setting": label, "k": cost_budget, "n_episodes": n,
                           "failure": iv.estimate, "failure_lo": iv.lo, "failure_hi": iv.hi})
     del counts  # each paired bootstrap draws its own (a [resamples, instances] matrix: 47 MB for 3072 instances)
-    diffs = []
-    for base, treat in (("no calibration", "set calibration + margin"), ("no calibration", "set calibration"),
-                        ("set calibration", "set calibration + margin")):
+    pairs = (("no calibration", "set calibration + margin"), ("no calibration", "set calibration"),
+             ("set calibration", "set calibration + margin"))
+    diffs: list[dict[str, Any]] = [{} for _ in pairs]
+
+    def compare(i: int) -> None:  # each draws from its own generator of an integer `seed`: in threads, the same numbers
+        base, treat = pairs[i]
         pdiff = paired_bootstrap(arms[base], arms[treat], "realized", resamples=resamples, seed=seed, level=level)
-        diffs.append({"baseline": base, "treatment": treat, "difference": pdiff.difference.estimate,
-                      "lo": pdiff.difference.lo, "hi": pdiff.difference.hi, "p_sign_flip": pdiff.p_sign_flip,
-                      "n_pairs": pdiff.n_pairs, "n_clusters": pdiff.n_clusters})
+        diffs[i] = {"baseline": base, "treatment": treat, "difference": pdiff.difference.estimate,
+                    "lo": pdiff.difference.lo, "hi": pdiff.difference.hi, "p_sign_flip": pdiff.p_sign_flip,
+                    "n_pairs": pdiff.n_pairs, "n_clusters": pdiff.n_clusters}
+
+    in_threads(compare, range(len(pairs)), None if not isinstance(seed, np.random.Generator) else 1)
 
     # Simultaneous coverage on test, measured on the sets as constructed at t.
     simultaneous = {"cluster_coverage": math.nan, "lo": math.nan, "hi": math.nan}

@@ -23,7 +23,8 @@ from typing import Any, Mapping, Sequence
 
 import numpy as np
 
-from probecommit.runner.inference import BeliefTrace, _commit_plan, _execute, commit
+from probecommit.runner.commit_threads import in_threads
+from probecommit.runner.inference import BeliefTrace, _belief_at, _commit_plan, _execute, commit
 
 
 @dataclass
@@ -90,9 +91,14 @@ class SweptChunk:
     def rule_rows(self, m: int, budgets: Sequence[int]) -> tuple[np.ndarray, np.ndarray]:
         """What the margin rule sums of margin ``margins[m]``: predicted and realized failure of the
         rows not failed at ``budgets`` (``runner.calibration._margin_rows`` of its table)."""
-        columns = self.columns(m)
-        rows = (columns["status"].astype(str) != "failed") & np.isin(columns["k"], list(budgets))
-        return (np.asarray(columns["predicted"], dtype=float)[rows], np.asarray(columns["realized"], dtype=float)[rows])
+        if self.tables is not None:
+            columns = self.columns(m)
+            rows = (columns["status"].astype(str) != "failed") & np.isin(columns["k"], list(budgets))
+            return (np.asarray(columns["predicted"], dtype=float)[rows],
+                    np.asarray(columns["realized"], dtype=float)[rows])
+        self.execute([m])  # a row's status is "failed" exactly where its execution failed (columns())
+        rows = ~self.failed[m] & np.isin(self.k, list(budgets))
+        return self.predicted[m][rows], self.realized[m][rows]
 
 
 def sweep_margins(trace: BeliefTrace, model: Any, simulator: Any, *, executors: Sequence[Any],
@@ -127,13 +133,19 @@ def sweep_margins(trace: BeliefTrace, model: Any, simulator: Any, *, executors: 
     n_e, n_p = trace.batch.n_episodes, len(plan)
     index = np.empty((len(margins), n_e, n_p), dtype=np.int32)
     predicted = np.empty((len(margins), n_e, n_p), dtype=float)
-    for p, (executor, k) in enumerate(plan):
-        t = float(thresholds[k] if isinstance(thresholds, Mapping) else thresholds)
-        memo = cache.setdefault(("set", executor.method, k, t, executor.memo_tag), {})
-        if "retained" not in memo:  # as executor.decide keeps it
-            state = trace.states[k]
-            memo["retained"] = executor.retain(state.particles, state.weights, t)
+    memos = [cache.setdefault(("set", executor.method, k, float(thresholds[k] if isinstance(thresholds, Mapping)
+                                                                  else thresholds), executor.memo_tag), {})
+             for executor, k in plan]  # made here, so the threads below share no dict they add to
+
+    def choose(p: int) -> None:
+        (executor, k), memo = plan[p], memos[p]
+        if "retained" not in memo:  # as executor.decide keeps it, from the belief commit() reads (weights, z)
+            belief = _belief_at(trace, model, k, cache)
+            t = float(thresholds[k] if isinstance(thresholds, Mapping) else thresholds)
+            memo["retained"] = executor.retain(trace.states[k].particles, belief["weights"], t, belief["z"])
         index[:, :, p], predicted[:, :, p] = executor.choose_margins(memo["retained"], margins, context)
+
+    in_threads(choose, range(len(plan)))
     grid = np.asarray(model.action_grid, dtype=float).reshape(len(model.action_grid), -1)
     k = np.tile(np.array([k for _, k in plan], dtype=np.int64), n_e)
     n_m, n_rows = len(margins), n_e * n_p
