@@ -1,0 +1,37 @@
+"""The ex8 explain helper's steps (E73..), run last by ``Explain.run``.
+
+Each step writes one result group of ``explain:results`` and reads only what ``Explain`` holds
+(the rows earlier steps stored, the breadth study's stored tables under the root).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+from probecommit.studies.explain import ex4_grasp, ex8_grasp
+
+#: Result groups these steps fill (added to ``Explain.res``).
+GROUPS = ("ex8_grasp",)
+
+
+def run(job: Any) -> None:
+    """Grasp truth by truth: E49's stored rows and Table II's, and one particle rerun at c = 4."""
+    job.progress("explain: grasp truth by truth against the paper's decomposition", 0, 1)
+    keys, rows = ex8_grasp.run(job.root, job.runs, job.stored.get(ex4_grasp.STORED), job.quick, job.workers)
+    job.res["ex8_grasp"].update(keys)
+    job.stored[ex8_grasp.STORED] = rows
+
+
+#: Each group's own stored rows (published keys without them fail verify).
+STORED_BY_GROUP = {"ex8_grasp": ex8_grasp.STORED}
+
+
+def recompute(folder: Path, results: dict[str, Any]) -> tuple[dict[str, Any], dict[str, str], list[str]]:
+    """ex8's keys recomputed from a publication's stored rows (``verify``): ``(values, sources, problems)``, keyed
+    as ``explain:results``; a group published without its stored rows is a problem."""
+    values = {f"ex8_grasp.{k}": v for k, v in ex8_grasp.recompute(folder).items()}
+    sources = dict.fromkeys(values, f"{ex8_grasp.STORED}, {ex4_grasp.STORED} and breadth/sign_flip_rows.parquet")
+    problems = [f"explain/{name}: missing (the rows {group}'s keys are recomputed from)"
+                for group, name in STORED_BY_GROUP.items() if results.get(group) and not (folder / name).is_file()]
+    return values, sources, problems

@@ -1,0 +1,104 @@
+"""ex8's explain experiments (E73..): hand cases with exact answers, the rule's teeth, the stored-rows round trip."""
+
+from __future__ import annotations
+
+import pandas as pd
+import pytest
+
+from probecommit.studies import claims
+
+
+def _rows(truths: dict[str, tuple[bool, int, int]], seeds: int = 80, part: str | None = None) -> pd.DataFrame:
+    """Truth-labelled rows as ``breadth.truth_rows`` gives them: ``truth -> (feasible, blind success 0/1,
+    probed failures of ``seeds``)``."""
+    rows = []
+    for t, (feasible, blind, fails) in truths.items():
+        for rep in range(seeds):
+            rows.append({"instance_id": t, "repeat": rep, "method": "blind_bayes", "k": 0, "status": "ok",
+                         "realized": float(1 - blind), "feasible": feasible, "truth": t})
+            rows.append({"instance_id": t, "repeat": rep, "method": "probe_robust", "k": 8, "status": "ok",
+                         "realized": float(rep < fails), "feasible": feasible, "truth": t})
+    out = pd.DataFrame(rows)
+    return out.assign(part=part) if part else out
+
+
+def test_paper_decomposition_is_the_papers_own_arithmetic():
+    from probecommit.studies.explain.ex8_grasp import paper_keys
+
+    k = paper_keys()
+    assert k["paper.n_feasible"] == 6 and k["paper.n_held"] == 2  # 0.333 x 6
+    assert k["paper.improve_middle"] == pytest.approx(6 * 0.692 - 2 - 0.36 - 0.96)
+    assert k["paper.consistent"] == 1
+
+
+def test_part_keys_count_held_truths_their_failures_and_the_chance_of_two_ties():
+    from probecommit.studies.explain.ex8_grasp import part_keys
+
+    rows = _rows({"held": (True, 1, 2), "missed": (True, 0, 60), "other": (True, 0, 8), "out": (False, 0, 80)})
+    k = part_keys(rows)
+    assert k["n_feasible"] == 3 and k["n_held"] == 1  # the infeasible truth is not read
+    assert k["held_failures"] == 2 and k["held_episodes"] == 80 and k["held_failure_rate"] == pytest.approx(2 / 80)
+    assert k["paper_ties_chance"] == pytest.approx((1 - 2 / 80) ** 160)
+    assert k["other_failure_rate"] == pytest.approx(68 / 160) and k["failure_rate"] == pytest.approx(70 / 240)
+    assert k["lowest_probe_success"] == pytest.approx(0.25) and k["highest_probe_success"] == pytest.approx(0.975)
+    assert k["n_worse"] == 1 and k["n_worse_not_held"] == 0  # the held truth loses 2 of 80
+
+
+def test_keys_read_every_run_and_the_rule_needs_ties_and_a_low_truth_in_one_run():
+    from probecommit.studies.explain.ex8_grasp import keys
+
+    sharp = {"held": (True, 1, 0), "a": (True, 0, 1), "b": (True, 0, 2)}  # ties, but every truth near 1
+    spread = {"held": (True, 1, 30), "a": (True, 0, 60), "b": (True, 0, 2)}  # a low truth, but no ties
+    mujoco = _rows(spread).assign(family="grasp")
+    ex4 = pd.concat([_rows(spread, part="frozen"), _rows(spread, part="c2"), _rows(sharp, part="c4")])
+    out = keys(mujoco, ex4, _rows(sharp, part="c4_particles"))
+    assert out["runs"] == 4 and out["runs_with_ties"] == 1 and out["runs_with_low_truth"] == 3
+    assert out["runs_with_both"] == 0
+    assert out["c4.paper_ties_chance"] == 1 and out["c4_particles.factor"] == 4
+    both = {"held": (True, 1, 0), "a": (True, 0, 60)}  # the paper's pattern: a tie and a low truth
+    ex4_both = pd.concat([_rows(spread, part="frozen"), _rows(both, part="c2"), _rows(sharp, part="c4")])
+    assert keys(mujoco, ex4_both, _rows(sharp))["runs_with_both"] == 1
+
+
+def test_e73_supports_only_when_one_run_has_both():
+    e = claims.EXPERIMENTS["E73"]
+    v = {name: 0.5 for name in e.keys}
+    e.template.format(**v)  # every template field is a key
+    assert not e.supports({**v, "both": 0.0}) and e.supports({**v, "both": 1.0})
+    assert "E73" in {c.id: c for c in claims.CLAIMS}["T09-grasp"].explain
+
+
+def test_recompute_needs_the_stored_rows(tmp_path):
+    from probecommit.studies.explain import ex8
+
+    (tmp_path / "explain").mkdir()
+    values, sources, problems = ex8.recompute(tmp_path / "explain", {"ex8_grasp": {"runs": 4.0}})
+    assert values == {} and sources == {} and problems == [
+        "explain/ex8_grasp_rows.parquet: missing (the rows ex8_grasp's keys are recomputed from)"]
+    assert ex8.recompute(tmp_path / "explain", {})[2] == []
+
+
+def test_recompute_gives_the_step_keys_from_stored_rows(tmp_path):
+    from probecommit.studies.explain import ex4_grasp, ex8, ex8_grasp
+
+    explain, breadth = tmp_path / "explain", tmp_path / "breadth"
+    explain.mkdir(), breadth.mkdir()
+    spread = {"held": (True, 1, 30), "a": (True, 0, 60)}
+    mujoco = _rows(spread).assign(family="grasp")
+    ex4 = pd.concat([_rows(spread, part=p) for p in ("frozen", "c2", "c4")], ignore_index=True)
+    own = _rows(spread, part="c4_particles")
+    mujoco.to_parquet(breadth / "sign_flip_rows.parquet")
+    ex4.to_parquet(explain / ex4_grasp.STORED)
+    own.to_parquet(explain / ex8_grasp.STORED)
+    values, _, problems = ex8.recompute(explain, {"ex8_grasp": {}})
+    assert problems == []
+    assert values == {f"ex8_grasp.{k}": v for k, v in ex8_grasp.keys(mujoco, ex4, own).items()}
+
+
+@pytest.mark.slow
+def test_grasp_particle_rerun_counts_every_feasible_truth(tmp_path):
+    from probecommit.studies.explain import ex8_grasp
+
+    out, rows = ex8_grasp.run(tmp_path, tmp_path / "runs", None, quick=True)
+    assert out == {}  # no Table II rows under this root: no keys, the rerun's rows still come back
+    assert set(rows["part"]) == {"c4_particles"} and rows["feasible"].notna().all()
