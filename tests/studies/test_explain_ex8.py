@@ -90,9 +90,14 @@ def test_recompute_gives_the_step_keys_from_stored_rows(tmp_path):
     mujoco.to_parquet(breadth / "sign_flip_rows.parquet")
     ex4.to_parquet(explain / ex4_grasp.STORED)
     own.to_parquet(explain / ex8_grasp.STORED)
-    values, _, problems = ex8.recompute(explain, {"ex8_grasp": {}})
+    readings = _paired_readings(bias=0.01)
+    readings.to_parquet(explain / "ex8_pybullet_readings.parquet")
+    values, _, problems = ex8.recompute(explain, {"ex8_grasp": {}, "ex8_pybullet": {}})
     assert problems == []
-    assert values == {f"ex8_grasp.{k}": v for k, v in ex8_grasp.keys(mujoco, ex4, own).items()}
+    from probecommit.studies.explain.ex8_pybullet import keys as pybullet_keys
+
+    assert values == {**{f"ex8_grasp.{k}": v for k, v in ex8_grasp.keys(mujoco, ex4, own).items()},
+                      **{f"ex8_pybullet.{k}": v for k, v in pybullet_keys(readings).items()}}
 
 
 @pytest.mark.slow
@@ -102,3 +107,53 @@ def test_grasp_particle_rerun_counts_every_feasible_truth(tmp_path):
     out, rows = ex8_grasp.run(tmp_path, tmp_path / "runs", None, quick=True)
     assert out == {}  # no Table II rows under this root: no keys, the rerun's rows still come back
     assert set(rows["part"]) == {"c4_particles"} and rows["feasible"].notna().all()
+
+
+def _paired_readings(bias: float = 0.0, engine: float = 0.0) -> pd.DataFrame:
+    """Paired push2d readings at one truth and pulse: the MuJoCo-fitted model's prediction plus +-sigma noise (so
+    the cell's mean residual is exactly ``bias``), PyBullet ``engine`` metres off MuJoCo."""
+    from probecommit.runner.build import build_model
+    from probecommit.studies.breadth import paper_config
+
+    model = build_model(paper_config("push2d_pybullet"))
+    theta = [0.4, 1.0, 1.75]
+    pred = model.predict([[2.0]], [[theta]])[0, 0]
+    rows = []
+    for j, sign in enumerate((1.0, -1.0) * 8):
+        y = pred + sign * model.sigma + bias
+        rows.append({"instance_id": "i0", "repeat": 0, "j": j, "u": 2.0, "y_0_mujoco": y[0] - engine,
+                     "y_0_pybullet": y[0], "y_1_mujoco": y[1], "y_1_pybullet": y[1],
+                     "true_mu": theta[0], "true_m": theta[1], "true_k_d": theta[2]})
+    return pd.DataFrame(rows)
+
+
+def test_pybullet_keys_measure_engine_difference_and_model_bias_exactly():
+    from probecommit.studies.explain.ex8_pybullet import keys
+
+    k = keys(_paired_readings())
+    assert k["readings"] == 16 and k["cells"] == 2 and k["sigma_m"] == 0.05
+    assert k["engine_max_difference_m"] == 0 and k["model_max_cell_bias_m"] == pytest.approx(0, abs=1e-12)
+    assert k["model_residual_sd_m"] == pytest.approx(0.05)  # +-sigma on both dimensions
+    assert k["premise_holds"] == 1
+    off = keys(_paired_readings(bias=0.05))  # 16 readings: SE = sigma / 4, so the bias is 4 SE
+    assert off["model_max_cell_bias_m"] == pytest.approx(0.05) and off["model_max_cell_bias_se"] == pytest.approx(4.0)
+    assert off["premise_holds"] == 0
+    apart = keys(_paired_readings(engine=0.006))  # more than a tenth of sigma between the engines
+    assert apart["engine_max_difference_m"] == pytest.approx(0.006) and apart["premise_holds"] == 0
+
+
+def test_e74_needs_the_premise_and_the_residual_model_value_inside():
+    e = claims.EXPERIMENTS["E74"]
+    v = {"d": 0.002, "n": 540.0, "sd": 0.05, "b": 0.01, "bse": 1.5, "ok": 1.0, "pr": 0.09, "lo": 0.055, "hi": 0.129}
+    e.template.format(**v)
+    assert e.supports(v)
+    assert not e.supports({**v, "ok": 0.0}) and not e.supports({**v, "hi": 0.11})
+    explain = dict((n, labels) for n, labels in (x for x in {c.id: c for c in claims.CLAIMS}["tab:breadth"].explain
+                                                 if isinstance(x, tuple)))
+    assert explain["E74"] == ("push2d_pybullet probe_robust",)
+
+
+def test_pybullet_step_needs_both_frozen_runs(tmp_path):
+    from probecommit.studies.explain import ex8_pybullet
+
+    assert ex8_pybullet.run(tmp_path)[0] == {} and ex8_pybullet.recompute(tmp_path) == {}
