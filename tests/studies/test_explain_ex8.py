@@ -157,3 +157,61 @@ def test_pybullet_step_needs_both_frozen_runs(tmp_path):
     from probecommit.studies.explain import ex8_pybullet
 
     assert ex8_pybullet.run(tmp_path)[0] == {} and ex8_pybullet.recompute(tmp_path) == {}
+
+
+def _blind_rows(truths: list[list[float]], actions: dict[str, list[float]], target: float = 1.0) -> pd.DataFrame:
+    """push1d blind episodes at one target: every arm's actions (one per repeat) on every truth, realized from the
+    model (so the premise is exact)."""
+    from probecommit.studies.explain.ex8_blind import _model
+
+    model = _model("push1d")
+    rows = []
+    for i, theta in enumerate(truths):
+        for method, acts in actions.items():
+            for rep, a in enumerate(acts):
+                miss = float(model.loss([[a]], [theta], [target])[0, 0])
+                rows.append({"instance_id": f"i{i}", "repeat": rep, "method": method, "realized": miss, "action": a,
+                             "true_mu": theta[0], "true_m": theta[1], "true_k_d": theta[2], "ctx_target": target})
+    return pd.DataFrame(rows)
+
+
+def test_blind_model_cell_and_redraws_are_the_models_misses():
+    import numpy as np
+
+    from probecommit.studies.explain.ex8_blind import _model, model_cell, redraw_cells
+
+    model = _model("push1d")
+    rows = _blind_rows([[0.3, 0.8, 1.0], [0.5, 1.2, 2.0]], {"blind_bayes": [2.0, 2.0], "blind_robust": [1.5, 2.5]})
+    bb = rows[rows["method"] == "blind_bayes"]
+    assert model_cell(bb, model) == pytest.approx(bb["realized"].mean(), rel=1e-12)
+    cells = redraw_cells(rows[rows["method"] == "blind_robust"], model, n_truths=2, draws=5, seed=7)
+    theta = model.prior_low + (model.prior_high - model.prior_low) * np.random.default_rng(7).random((10, 3))
+    per_truth = np.mean([model.loss([[a]], theta, [1.0])[0] for a in (1.5, 2.5, 1.5, 2.5)], axis=0)
+    assert cells == pytest.approx(per_truth.reshape(5, 2).mean(axis=1), rel=1e-12)
+
+
+def test_blind_keys_compare_the_papers_cell_with_the_central_interval():
+    from probecommit.studies.explain.ex8_blind import keys
+
+    rows = _blind_rows([[0.3, 0.8, 1.0], [0.5, 1.2, 2.0]], {"blind_bayes": [2.0], "blind_robust": [2.2]})
+    out = keys(rows.assign(family="push1d"), draws=200)
+    assert out["push1d.premise_holds"] == 1 and out["push1d.n_truths"] == 2 and out["push1d.cells"] == 1
+    lo, hi = out["push1d.blind_bayes.draws.p025"], out["push1d.blind_bayes.draws.p975"]
+    assert lo < out["push1d.blind_bayes.draws.mean"] < hi
+    assert out["push1d.blind_bayes.paper_inside"] == float(lo <= 0.491 <= hi) == out["push1d.cells_inside"]
+    bad = rows.assign(realized=rows["realized"] * 1.05, family="push1d")  # the scene 5 % off the model
+    assert keys(bad, draws=20)["push1d.premise_holds"] == 0
+
+
+def test_e75_to_e78_need_the_premise_every_cell_and_the_ratio():
+    for number, two in (("E75", False), ("E76", True), ("E77", False), ("E78", True)):
+        e = claims.EXPERIMENTS[number]
+        v = {name: 1.0 for name in e.keys} | {"cells": 2.0 if two else 1.0, "inside": 2.0 if two else 1.0}
+        e.template.format(**v)
+        assert e.supports(v) and not e.supports({**v, "ok": 0.0}) and not e.supports({**v, "inside": 0.0})
+        if two:
+            assert not e.supports({**v, "qin": 0.0})
+    explain = {n: labels for n, labels in (x for x in {c.id: c for c in claims.CLAIMS}["tab:breadth"].explain
+                                           if isinstance(x, tuple))}
+    assert explain["E76"] == ("push2d blind_bayes", "push2d blind_robust")
+    assert explain["E77"] == ("push2d_pybullet blind_bayes",)

@@ -388,7 +388,8 @@ def _table_claims() -> list[Claim]:
         Claim("tab:breadth", "Table II (tab:breadth)", "Every family, blind against probed; paired delta = Blind-Bayes - "
               "Probe-Robust(k)", tuple(breadth),
               explain=tuple((f"E{35 + i}", (f"{fam} ",)) for i, fam in enumerate(PRIOR_SWEPT)) + (("E50", ("push2d ",)),)
-              + (("E74", ("push2d_pybullet probe_robust",)),),
+              + (("E74", ("push2d_pybullet probe_robust",)),)
+              + tuple((f"E{75 + i}", tuple(f"{fam} {c}" for c in cells)) for i, (fam, cells) in enumerate(BLIND_REDRAWN)),
               note="PyBullet's residual model (the caption's last sentence) is not built here."),
         Claim("tab:audit", "Table III (tab:audit)", "Insertion audit, Split B, random probes", tuple(audit),
               explain=tuple((f"E17[{c.label}]", (c.label,)) for c in audit)
@@ -1455,7 +1456,40 @@ def _experiments_ex8() -> list[Experiment]:
             "and no (truth, pulse) bias above {b:.4f} m ({bse:.2f} standard errors; premise {ok:g} = holds): our "
             "row is the residual-model condition, where our Probe-Robust(5) is {pr:.3f} [{lo:.3f}, {hi:.3f}].",
             supports=lambda v: v["ok"] == 1 and v["lo"] <= _pv("tab:breadth.push2d_pybullet.residual_model") <= v["hi"]),
-    ]
+    ] + _blind_redraw_experiments()
+
+
+#: Table II's rows whose printed blind cells E75..E78 redraw (``studies/explain/ex8_blind.py``), in that order.
+BLIND_REDRAWN = (("push1d", ("blind_bayes",)), ("push2d", ("blind_bayes", "blind_robust")),
+                 ("push2d_pybullet", ("blind_bayes",)), ("darts", ("blind_bayes", "blind_robust")))
+
+
+def _blind_redraw_experiments() -> list[Experiment]:
+    """E75..E78: one per row, the printed blind cells over redrawn truth sets."""
+    out = []
+    for i, (fam, cells) in enumerate(BLIND_REDRAWN):
+        b = f"{X}ex8_blind.{fam}."
+        keys = {"n": f"{b}draws", "t": f"{b}n_truths", "c": f"{b}targets", "ok": f"{b}premise_holds",
+                "pd": f"{b}blind_bayes.premise_rel_diff", "bs": f"{b}blind_bayes.stored",
+                "blo": f"{b}blind_bayes.draws.p025", "bhi": f"{b}blind_bayes.draws.p975",
+                "inside": f"{b}cells_inside", "cells": f"{b}cells"}
+        extra = ""
+        if len(cells) == 2:
+            keys.update({"rs": f"{b}blind_robust.stored", "rlo": f"{b}blind_robust.draws.p025",
+                         "rhi": f"{b}blind_robust.draws.p975", "qlo": f"{b}ratio.draws.p025",
+                         "qhi": f"{b}ratio.draws.p975", "qp": f"{b}ratio.paper", "qin": f"{b}ratio.paper_inside"})
+            extra = (", Blind-Robust {rlo:.3f} to {rhi:.3f} (ours {rs:.3f}) and their ratio {qlo:.2f} to {qhi:.2f} "
+                     "(the paper's {qp:.2f}; inside: {qin:g} = yes)")
+        out.append(Experiment(
+            f"E{75 + i}", f"{fam}'s blind cells over redrawn truth sets (the truths the paper does not report)",
+            keys,
+            "over {n:g} redraws of a {t:g}-truth set uniform over our prior (our {c:g} targets and the frozen blind "
+            "actions; the model gives our stored blind cells to {pd:.4f} relative, premise {ok:g} = holds), "
+            "Blind-Bayes spans {blo:.3f} to {bhi:.3f} (central 95 %; ours {bs:.3f} on our truths)" + extra
+            + "; {inside:g} of the paper's {cells:g} blind cells of this row lie inside.",
+            supports=(lambda v: v["ok"] == 1 and v["inside"] == v["cells"] and v["qin"] == 1) if len(cells) == 2
+            else (lambda v: v["ok"] == 1 and v["inside"] == v["cells"])))
+    return out
 
 
 for _experiment in (_experiments() + _experiments_more() + _experiments_ex3() + _experiments_ex4()

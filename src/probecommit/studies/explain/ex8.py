@@ -9,15 +9,16 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-from probecommit.studies.explain import ex4_grasp, ex8_grasp, ex8_pybullet
+from probecommit.studies.explain import ex4_grasp, ex8_blind, ex8_grasp, ex8_pybullet
 
 #: Result groups these steps fill (added to ``Explain.res``).
-GROUPS = ("ex8_grasp", "ex8_pybullet")
+GROUPS = ("ex8_grasp", "ex8_pybullet", "ex8_blind")
 
 
 def run(job: Any) -> None:
     """Grasp truth by truth (E49's stored rows and Table II's, one particle rerun at c = 4); the PyBullet
-    push's readings against the MuJoCo-fitted model (the frozen breadth runs' probes)."""
+    push's readings against the MuJoCo-fitted model (the frozen breadth runs' probes); Table II's blind cells over
+    redrawn truth sets (the frozen blind episodes, the model; no engine run)."""
     job.progress("explain: grasp truth by truth against the paper's decomposition", 0, 1)
     keys, rows = ex8_grasp.run(job.root, job.runs, job.stored.get(ex4_grasp.STORED), job.quick, job.workers)
     job.res["ex8_grasp"].update(keys)
@@ -27,10 +28,16 @@ def run(job: Any) -> None:
     job.res["ex8_pybullet"].update(keys)
     if len(rows):
         job.stored[ex8_pybullet.STORED] = rows
+    job.progress("explain: Table II's blind cells over redrawn truth sets", 0, 1)
+    keys, rows = ex8_blind.run(job.root, int(job.cfg["ex8_blind_draws_quick" if job.quick else "ex8_blind_draws"]))
+    job.res["ex8_blind"].update(keys)
+    if len(rows):
+        job.stored[ex8_blind.STORED] = rows
 
 
 #: Each group's own stored rows (published keys without them fail verify).
-STORED_BY_GROUP = {"ex8_grasp": ex8_grasp.STORED, "ex8_pybullet": ex8_pybullet.STORED}
+STORED_BY_GROUP = {"ex8_grasp": ex8_grasp.STORED, "ex8_pybullet": ex8_pybullet.STORED,
+                   "ex8_blind": ex8_blind.STORED}
 
 
 def recompute(folder: Path, results: dict[str, Any]) -> tuple[dict[str, Any], dict[str, str], list[str]]:
@@ -41,6 +48,9 @@ def recompute(folder: Path, results: dict[str, Any]) -> tuple[dict[str, Any], di
     pybullet = {f"ex8_pybullet.{k}": v for k, v in ex8_pybullet.recompute(folder).items()}
     values.update(pybullet)
     sources.update(dict.fromkeys(pybullet, ex8_pybullet.STORED))
+    blind = {f"ex8_blind.{k}": v for k, v in ex8_blind.recompute(folder, results.get("ex8_blind", {})).items()}
+    values.update(blind)
+    sources.update(dict.fromkeys(blind, ex8_blind.STORED))
     problems = [f"explain/{name}: missing (the rows {group}'s keys are recomputed from)"
                 for group, name in STORED_BY_GROUP.items() if results.get(group) and not (folder / name).is_file()]
     return values, sources, problems
