@@ -121,7 +121,8 @@ def _paired_readings(bias: float = 0.0, engine: float = 0.0) -> pd.DataFrame:
     rows = []
     for j, sign in enumerate((1.0, -1.0) * 8):
         y = pred + sign * model.sigma + bias
-        rows.append({"instance_id": "i0", "repeat": 0, "j": j, "u": 2.0, "y_0_mujoco": y[0] - engine,
+        rows.append({"instance_id": "i0", "repeat": 0, "j": j, "u_mujoco": 2.0, "u_pybullet": 2.0,
+                     "y_0_mujoco": y[0] - engine,
                      "y_0_pybullet": y[0], "y_1_mujoco": y[1], "y_1_pybullet": y[1],
                      "true_mu": theta[0], "true_m": theta[1], "true_k_d": theta[2]})
     return pd.DataFrame(rows)
@@ -140,6 +141,8 @@ def test_pybullet_keys_measure_engine_difference_and_model_bias_exactly():
     assert off["premise_holds"] == 0
     apart = keys(_paired_readings(engine=0.006))  # more than a tenth of sigma between the engines
     assert apart["engine_max_difference_m"] == pytest.approx(0.006) and apart["premise_holds"] == 0
+    other = _paired_readings().assign(u_mujoco=1.0)  # different pulses: not paired runs
+    assert keys(other)["pulses_match"] == 0 and keys(other)["premise_holds"] == 0
 
 
 def test_e74_needs_the_premise_and_the_residual_model_value_inside():
