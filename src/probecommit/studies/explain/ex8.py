@@ -24,12 +24,13 @@ def run(job: Any) -> None:
     job.res["ex8_grasp"].update(keys)
     job.stored[ex8_grasp.STORED] = rows
     job.progress("explain: 2-D push on PyBullet against the paper's residual model", 0, 1)
-    keys, rows = ex8_pybullet.run(job.root)  # the breadth study's frozen probes: no run
+    keys, rows = ex8_pybullet.run(job.root, job.quick)  # the breadth study's frozen probes: no run
     job.res["ex8_pybullet"].update(keys)
     if len(rows):
         job.stored[ex8_pybullet.STORED] = rows
     job.progress("explain: Table II's blind cells over redrawn truth sets", 0, 1)
-    keys, rows = ex8_blind.run(job.root, int(job.cfg["ex8_blind_draws_quick" if job.quick else "ex8_blind_draws"]))
+    draws = int(job.cfg["ex8_blind_draws_quick" if job.quick else "ex8_blind_draws"])
+    keys, rows = ex8_blind.run(job.root, draws, job.quick)
     job.res["ex8_blind"].update(keys)
     if len(rows):
         job.stored[ex8_blind.STORED] = rows

@@ -29,9 +29,17 @@ STORED = "ex8_blind_episodes.parquet"
 SEED, PREMISE, CENTRAL = 3601, 0.02, (2.5, 97.5)
 
 
-def blind_rows(root: Path, family: str) -> pd.DataFrame:
+def run_dir(root: Path, family: str, quick: bool = False) -> Path:
+    """The breadth study's run of ``family`` under ``root`` (its quick version's in a quick run)."""
+    from probecommit.studies.breadth import paper_config, quick_config
+
+    config = paper_config(family)
+    return Path(root) / "breadth" / "runs" / (quick_config(config) if quick else config).name
+
+
+def blind_rows(root: Path, family: str, quick: bool = False) -> pd.DataFrame:
     """The frozen run's blind episodes (status ok) with each instance's truth and target."""
-    run = Path(root) / "breadth" / "runs" / family
+    run = run_dir(root, family, quick)
     episodes = pd.read_parquet(run / "episodes.parquet")
     episodes = episodes[episodes["method"].isin(ARMS) & (episodes["status"] == "ok")]
     keep = ["instance_id", "repeat", "method", "realized", *[c for c in episodes.columns if c.startswith("action")]]
@@ -117,12 +125,12 @@ def keys(stored: pd.DataFrame, draws: int) -> dict[str, Any]:
     return out
 
 
-def run(root: Path, draws: int) -> tuple[dict[str, Any], pd.DataFrame]:
-    """The keys and the stored rows, for the families whose frozen breadth runs are under ``root``."""
-    present = [f for f in FAMILIES if (Path(root) / "breadth" / "runs" / f / "episodes.parquet").is_file()]
+def run(root: Path, draws: int, quick: bool = False) -> tuple[dict[str, Any], pd.DataFrame]:
+    """The keys and the stored rows, for the families whose breadth runs are under ``root``."""
+    present = [f for f in FAMILIES if (run_dir(root, f, quick) / "episodes.parquet").is_file()]
     if not present:
         return {}, pd.DataFrame()
-    stored = pd.concat([blind_rows(root, f) for f in present], ignore_index=True)
+    stored = pd.concat([blind_rows(root, f, quick) for f in present], ignore_index=True)
     return keys(stored, draws), stored
 
 

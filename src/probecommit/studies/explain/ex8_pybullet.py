@@ -24,12 +24,16 @@ STORED = "ex8_pybullet_readings.parquet"
 ENGINE_FRACTION, BIAS_SE = 0.1, 3.0
 
 
-def readings(root: Path) -> pd.DataFrame:
+FAMILIES = ("push2d", "push2d_pybullet")
+
+
+def readings(root: Path, quick: bool = False) -> pd.DataFrame:
     """The frozen push2d (MuJoCo) and push2d_pybullet probes paired by instance, repeat and probe index, with the
     truth (latents) of each instance."""
-    runs = Path(root) / "breadth" / "runs"
-    mj, pb = (pd.read_parquet(runs / name / "probes.parquet") for name in ("push2d", "push2d_pybullet"))
-    truths = pd.read_parquet(runs / "push2d_pybullet" / "instances.parquet")
+    from probecommit.studies.explain.ex8_blind import run_dir
+
+    mj, pb = (pd.read_parquet(run_dir(root, name, quick) / "probes.parquet") for name in FAMILIES)
+    truths = pd.read_parquet(run_dir(root, "push2d_pybullet", quick) / "instances.parquet")
     truths = truths[["instance_id", *[c for c in truths.columns if c.startswith("true_")]]]
     ycols = [c for c in mj.columns if c.startswith("y_")]
     pair = mj.merge(pb, on=["instance_id", "repeat", "j"], suffixes=("_mujoco", "_pybullet"), validate="one_to_one")
@@ -66,12 +70,13 @@ def keys(rows: pd.DataFrame) -> dict[str, float]:
             "premise_holds": float(matched == 1 and engine <= ENGINE_FRACTION * sigma and bias_se <= BIAS_SE)}
 
 
-def run(root: Path) -> tuple[dict[str, float], pd.DataFrame]:
+def run(root: Path, quick: bool = False) -> tuple[dict[str, float], pd.DataFrame]:
     """The keys and the stored rows; none when the breadth study's two runs are not under ``root``."""
-    runs = Path(root) / "breadth" / "runs"
-    if not all((runs / name / "probes.parquet").is_file() for name in ("push2d", "push2d_pybullet")):
+    from probecommit.studies.explain.ex8_blind import run_dir
+
+    if not all((run_dir(root, name, quick) / "probes.parquet").is_file() for name in FAMILIES):
         return {}, pd.DataFrame()
-    rows = readings(root)
+    rows = readings(root, quick)
     return keys(rows), rows
 
 
