@@ -508,6 +508,12 @@ def explain(folder: Path, results: dict[str, Any]) -> Recomputed:
     out.values.update(values)
     out.sources.update(sources)
     _ex6(folder, results, out)
+    from probecommit.studies.explain import ex8
+
+    values, sources, problems = ex8.recompute(folder, results)  # ex8's groups (E73..) from their stored rows
+    out.values.update(values)
+    out.sources.update(sources)
+    out.consistency.extend((False, problem) for problem in problems)
     from probecommit.studies.explain.study import plain
 
     out.values = {key: plain(value) for key, value in out.values.items()}  # as the explain step publishes it

@@ -387,7 +387,9 @@ def _table_claims() -> list[Claim]:
         setup,
         Claim("tab:breadth", "Table II (tab:breadth)", "Every family, blind against probed; paired delta = Blind-Bayes - "
               "Probe-Robust(k)", tuple(breadth),
-              explain=tuple((f"E{35 + i}", (f"{fam} ",)) for i, fam in enumerate(PRIOR_SWEPT)) + (("E50", ("push2d ",)),),
+              explain=tuple((f"E{35 + i}", (f"{fam} ",)) for i, fam in enumerate(PRIOR_SWEPT)) + (("E50", ("push2d ",)),)
+              + (("E74", ("push2d_pybullet probe_robust",)),)
+              + tuple((f"E{75 + i}", tuple(f"{fam} {c}" for c in cells)) for i, (fam, cells) in enumerate(BLIND_REDRAWN)),
               note="PyBullet's residual model (the caption's last sentence) is not built here."),
         Claim("tab:audit", "Table III (tab:audit)", "Insertion audit, Split B, random probes", tuple(audit),
               explain=tuple((f"E17[{c.label}]", (c.label,)) for c in audit)
@@ -522,7 +524,7 @@ def _claims_instances_and_comparisons() -> list[Claim]:
                      {"up": "breadth:results.sign_flip_over_truths.grasp.n_improve",
                       "down": "breadth:results.sign_flip_over_truths.grasp.n_worse",
                       "n": "breadth:results.sign_flip_over_truths.grasp.n_feasible"},
-                     lambda v: v["down"] == 0 and 2 * v["up"] == v["n"]),), explain=("E47", "E49")))
+                     lambda v: v["down"] == 0 and 2 * v["up"] == v["n"]),), explain=("E47", "E49", "E73")))
     add(Claim("T10-gru", "Sec. V-A, Comparisons", "GRU matches the pipeline within the pre-registered equivalence margin",
               (Holds("equivalent", "difference's interval inside the margin", {"eq": "gru:results.equivalent"},
                      lambda v: bool(v["eq"])),
@@ -1469,11 +1471,83 @@ def _experiments_ex9() -> list[Experiment]:
 EX9_TIE_EXCESS = 0.02
 #: E83: the claim's own tolerance on the margin-optimistic share (T14's "margin optimistic" comparison).
 EX9_OPTIMISTIC_TOL = 0.1
+def _experiments_ex8() -> list[Experiment]:
+    """The ex8 explain helper's experiments (E73..E79, ``studies/explain/ex8_*.py``; rules in docs/decisions.md,
+    "ex8")."""
+    g, pb = f"{X}ex8_grasp.", f"{X}ex8_pybullet."
+    return [
+        Experiment(
+            "E73", "grasp's row truth by truth: the paper's decomposition against ours at every squeeze resolution",
+            {"mid": f"{g}paper.improve_middle", "pc": f"{g}paper.consistent",
+             "mr": f"{g}mujoco.held_failure_rate", "mlow": f"{g}mujoco.lowest_probe_success",
+             "r1": f"{g}c1.held_failure_rate", "r2": f"{g}c2.held_failure_rate", "r4": f"{g}c4.held_failure_rate",
+             "t4": f"{g}c4.paper_ties_chance", "low4": f"{g}c4.lowest_probe_success",
+             "w4": f"{g}c4.n_worse", "wn": f"{g}c4.n_worse_not_held", "o4": f"{g}c4.other_failure_rate",
+             "rp": f"{g}c4_particles.failure_rate", "pf": f"{g}c4_particles.factor", "r4all": f"{g}c4.failure_rate",
+             "both": f"{g}runs_with_both", "ties": f"{g}runs_with_ties", "lowr": f"{g}runs_with_low_truth",
+             "runs": f"{g}runs"},
+            "the paper's cells force its decomposition: the two truths its blind grip holds tie (every probed seed "
+            "succeeds), one feasible truth is never grasped, the third improvement is {mid:.3f} (consistent: {pc:g} "
+            "= yes), so its probed success spans 0 to 1; ours on the truths our blind grip holds fails {mr:.3f} of "
+            "probed seeds (MuJoCo; lowest probed success over feasible truths {mlow:.3f}), {r1:.3f}, {r2:.3f} and "
+            "{r4:.4f} on the model-exact scene at squeeze resolution c = 1, 2, 4; at c = 4 the paper's two ties "
+            "have chance {t4:.3f} but no feasible truth falls below {low4:.3f}; {w4:g} truths still worsen there, "
+            "{wn:g} of them not held by the blind grip, from a residual failure common to all ({o4:.4f} on the "
+            "others), which {pf:g} times the particles does not remove ({r4all:.4f} -> {rp:.4f}). Of the {runs:g} "
+            "runs, those giving the ties a chance of at least 0.05: {ties:g}; with a feasible truth as low as the "
+            "paper's lowest improvement: {lowr:g}; both: {both:g}.",
+            supports=lambda v: v["both"] >= 1),
+        Experiment(
+            "E74", "2-D push on PyBullet: our scene against the paper's residual-model condition",
+            {"d": f"{pb}engine_max_difference_m", "n": f"{pb}readings", "sd": f"{pb}model_residual_sd_m",
+             "b": f"{pb}model_max_cell_bias_m", "bse": f"{pb}model_max_cell_bias_se", "ok": f"{pb}premise_holds",
+             "pr": f"{B}push2d_pybullet.probe_robust", "lo": f"{B}push2d_pybullet.probe_robust_lo",
+             "hi": f"{B}push2d_pybullet.probe_robust_hi"},
+            "the paper's PyBullet row runs its MuJoCo-fitted model and a residual model fitted to PyBullet lowers "
+            "Probe-Robust(5); ours runs the MuJoCo-fitted model on a PyBullet scene whose {n:g} probe readings "
+            "differ from the MuJoCo scene's by at most {d:.4f} m, with residual SD {sd:.4f} m against the model "
+            "and no (truth, pulse) bias above {b:.4f} m ({bse:.2f} standard errors; premise {ok:g} = holds): our "
+            "row is the residual-model condition, where our Probe-Robust(5) is {pr:.3f} [{lo:.3f}, {hi:.3f}].",
+            supports=lambda v: v["ok"] == 1 and v["lo"] <= _pv("tab:breadth.push2d_pybullet.residual_model") <= v["hi"]),
+    ] + _blind_redraw_experiments()
+
+
+#: Table II's rows whose printed blind cells E75..E78 redraw (``studies/explain/ex8_blind.py``), in that order.
+BLIND_REDRAWN = (("push1d", ("blind_bayes",)), ("push2d", ("blind_bayes", "blind_robust")),
+                 ("push2d_pybullet", ("blind_bayes",)), ("darts", ("blind_bayes", "blind_robust")))
+
+
+def _blind_redraw_experiments() -> list[Experiment]:
+    """E75..E78: one per row, the printed blind cells over redrawn truth sets."""
+    out = []
+    for i, (fam, cells) in enumerate(BLIND_REDRAWN):
+        b = f"{X}ex8_blind.{fam}."
+        keys = {"n": f"{b}draws", "t": f"{b}n_truths", "c": f"{b}targets", "ok": f"{b}premise_holds",
+                "pd": f"{b}blind_bayes.premise_rel_diff", "bs": f"{b}blind_bayes.stored",
+                "blo": f"{b}blind_bayes.draws.p025", "bhi": f"{b}blind_bayes.draws.p975",
+                "inside": f"{b}cells_inside", "cells": f"{b}cells"}
+        extra = ""
+        if len(cells) == 2:
+            keys.update({"rs": f"{b}blind_robust.stored", "rlo": f"{b}blind_robust.draws.p025",
+                         "rhi": f"{b}blind_robust.draws.p975", "qlo": f"{b}ratio.draws.p025",
+                         "qhi": f"{b}ratio.draws.p975", "qp": f"{b}ratio.paper", "qin": f"{b}ratio.paper_inside"})
+            extra = (", Blind-Robust {rlo:.3f} to {rhi:.3f} (ours {rs:.3f}) and their ratio {qlo:.2f} to {qhi:.2f} "
+                     "(the paper's {qp:.2f}; inside: {qin:g} = yes)")
+        out.append(Experiment(
+            f"E{75 + i}", f"{fam}'s blind cells over redrawn truth sets (the truths the paper does not report)",
+            keys,
+            "over {n:g} redraws of a {t:g}-truth set uniform over our prior (our {c:g} targets and the frozen blind "
+            "actions; the model gives our stored blind cells to {pd:.4f} relative, premise {ok:g} = holds), "
+            "Blind-Bayes spans {blo:.3f} to {bhi:.3f} (central 95 %; ours {bs:.3f} on our truths)" + extra
+            + "; {inside:g} of the paper's {cells:g} blind cells of this row lie inside.",
+            supports=(lambda v: v["ok"] == 1 and v["inside"] == v["cells"] and v["qin"] == 1) if len(cells) == 2
+            else (lambda v: v["ok"] == 1 and v["inside"] == v["cells"])))
+    return out
 
 
 for _experiment in (_experiments() + _experiments_more() + _experiments_ex3() + _experiments_ex4()
                     + _experiments_ex5() + _experiments_ex6() + _experiments_ex7()
-                    + _experiments_ex9()):
+                    + _experiments_ex8() + _experiments_ex9()):
     EXPERIMENTS[_experiment.number] = _experiment
 
 
