@@ -502,6 +502,7 @@ def explain(folder: Path, results: dict[str, Any]) -> Recomputed:
     out.values.update(values)
     out.sources.update(sources)
     _ex6(folder, results, out)
+    _ex10(folder, results, out)
     from probecommit.studies.explain.study import plain
 
     out.values = {key: plain(value) for key, value in out.values.items()}  # as the explain step publishes it
@@ -535,6 +536,21 @@ def _ex6(folder: Path, results: dict[str, Any], out: Recomputed) -> None:
                                                                    seed=int(b["seed"]))).items():
         out.values[key], out.sources[key] = value, source
     for group, name in ex6.STORED_BY_GROUP.items():  # published keys need their stored rows
+        if results.get(group) and not (folder / name).is_file():
+            out.consistency.append((False, f"explain/{name}: missing (the rows {group}'s keys are recomputed from)"))
+
+
+def _ex10(folder: Path, results: dict[str, Any], out: Recomputed) -> None:
+    """ex10's keys (E87..) from their stored rows (``studies.explain.ex10.recompute``)."""
+    from probecommit.studies.explain import ex10
+
+    setup = folder.parent / "insertion" / "results.json"
+    if not setup.is_file():
+        return
+    b = json.loads(setup.read_text())["results"]["setup"]["bootstrap"]
+    for key, (value, source) in ex10.recompute(folder, dict(resamples=int(b["resamples"]), seed=int(b["seed"]))).items():
+        out.values[key], out.sources[key] = value, source
+    for group, name in ex10.STORED_BY_GROUP.items():  # published keys need their stored rows
         if results.get(group) and not (folder / name).is_file():
             out.consistency.append((False, f"explain/{name}: missing (the rows {group}'s keys are recomputed from)"))
 
