@@ -82,3 +82,61 @@ def test_e87_needs_all_four_paper_numbers_inside_at_one_sd():
     split = {**one, "o8.s091": paper["o8"] + 0.001, "o8.s121": paper["o8"] - 0.01, "o8.s122": paper["o8"] + 0.01}
     assert not e.supports(split)
     assert tuple(claims.EX10_BOUNDARY_SD_MM) == (0.0, 0.3, 0.6, 0.9, 1.2)
+
+
+def _surprise_rows() -> pd.DataFrame:
+    """Four trajectories of two instances under two filters; budgets 1 and 5."""
+    rows = []
+    for name, esc, s1 in (("as_run", [False, False, True, False], [1.0, 2.0, 0.5, 0.7]),
+                          ("mh", [True, False, True, False], [3.0, 2.0, 4.0, 0.7])):
+        for t, (e, s) in enumerate(zip(esc, s1)):
+            for k in (1, 5):
+                rows.append({"filter": name, "instance_id": f"i{t // 2}", "repeat": t % 2, "k": k,
+                             "density": s + (k - 1), "escaped_final": e, "first_tap_pocket": t == 0})
+    return pd.DataFrame(rows)
+
+
+def test_surprise_summary_counts_escapes_and_ranks_the_surprise():
+    from probecommit.studies.explain import ex10_surprise as es
+
+    out = es.summary(_surprise_rows(), BOOT)
+    assert out["as_run.n_escaped"] == 1 and out["mh.n_escaped"] == 2
+    assert out["as_run.auc_k1"][0] == pytest.approx(0.0)  # the one escape is the least surprised
+    assert out["mh.auc_k1"][0] == pytest.approx(1.0) and out["mh.auc_k5"][0] == pytest.approx(1.0)
+    assert out["mh.first_tap_pocket.escaped"] == pytest.approx(0.5)
+    assert out["as_run.first_tap_pocket.escaped"] == pytest.approx(0.0)
+
+
+def test_surprise_matches_stored_needs_surprise_and_final_label():
+    from probecommit.studies.explain import ex10_surprise as es
+
+    rows = _surprise_rows()
+    mine = rows[rows["filter"] == "as_run"]
+    stored = mine.rename(columns={"density": "max_surprise"}).assign(escaped=mine["escaped_final"])
+    assert es.matches_stored(rows, stored) == 1
+    assert es.matches_stored(rows, stored.assign(max_surprise=stored["max_surprise"] + 1e-6)) == 0
+    flipped = stored.copy()
+    flipped.loc[(flipped["k"] == 5) & (flipped["instance_id"] == "i0") & (flipped["repeat"] == 0), "escaped"] = True
+    assert es.matches_stored(rows, flipped) == 0
+
+
+def test_the_filters_change_only_the_belief_move():
+    from probecommit.runner.config import config_data
+    from probecommit.studies.explain import ex10_surprise as es
+    from probecommit.studies.protocol import load_protocol
+
+    assert es.FILTERS == {"as_run": {}, "mh": {"move": "mh"}, "no_jitter": {"jitter": False}}
+    base = load_protocol().run_config("x", "B", "B_test_cover", "cover")
+    moved = es.filter_config(base, es.FILTERS["mh"])
+    a, b = config_data(base), config_data(moved)
+    assert b["belief"]["move"] == "mh" and {**b, "belief": a["belief"]} == a
+
+
+def test_e88_needs_both_paper_aucs_inside_the_tail_free_intervals():
+    e = claims.EXPERIMENTS["E88"]
+    assert "E88" in [x if isinstance(x, str) else x[0] for x in {c.id: c for c in claims.CLAIMS}["T36-surprise"].explain]
+    k1, k5 = claims._pv("T36-surprise.auc_k1"), claims._pv("T36-surprise.auc_k5")
+    ok = {"mh11": k1 - 0.05, "mh12": k1 + 0.05, "mh51": k5 - 0.05, "mh52": k5 + 0.05}
+    assert e.supports(ok)
+    assert not e.supports({**ok, "mh12": k1 - 0.01})
+    assert not e.supports({**ok, "mh51": k5 + 0.01})

@@ -706,7 +706,7 @@ def _claims_commit_decision() -> list[Claim]:
               "(cover) at k = 1 but hardly at k = 5",
               (Inside("k=1", "T36-surprise.auc_k1", f"{X}missing.surprise_auc_cover_k1"),
                Inside("k=5", "T36-surprise.auc_k5", f"{X}missing.surprise_auc_cover_k5")),
-              explain=(("E15", ("k=5",)), ("E16", ("k=1",)), ("E64", ("k=1", "k=5")))))
+              explain=(("E15", ("k=5",)), ("E16", ("k=1",)), ("E64", ("k=1", "k=5")), ("E88", ("k=1", "k=5")))))
     return c
 
 
@@ -1425,7 +1425,7 @@ def _experiments_ex10() -> list[Experiment]:
     """The ex10 helper's experiments (E87.., ``studies/explain/ex10_*.py``; rules in docs/decisions.md, "ex10")."""
     from probecommit.studies.explain.ex10_boundary import s_label
 
-    bd = f"{X}ex10_boundary."
+    bd, su = f"{X}ex10_boundary.", f"{X}ex10_surprise."
     cells = {"d1": ("deployed", 1), "d8": ("deployed", 8), "m8": ("mj_offset", 8), "o8": ("own_scan", 8)}
     paper = {"d1": "T19-pybullet-escape.k1", "d8": "T19-pybullet-escape.k8",
              "m8": "tab:engines.pybullet/mj_offset.support_escape", "o8": "tab:engines.pybullet/own_scan.support_escape"}
@@ -1448,6 +1448,21 @@ def _experiments_ex10() -> list[Experiment]:
                    "(1.2 mm), where k = 1 gives {d1top:.3f} and the MuJoCo offset and PyBullet's own scan, which "
                    "escape nowhere under a fixed boundary, escape {m8top:.3f} and {o8top:.3f}.",
                    supports=lambda v: any(fits(v, s) for s in EX10_BOUNDARY_SD_MM)),
+        Experiment("E88", "the cover schedule's surprise AUC when the belief keeps no particle its taps contradict",
+                   {**{f"{f}{k}{e}": f"{su}{f}.auc_k{k}{'.' + e if e else ''}" for f in ("mh", "as_run", "no_jitter")
+                       for k in (1, 5) for e in ("", "1", "2")},
+                    "n": f"{su}as_run.n_escaped", "nm": f"{su}mh.n_escaped", "nj": f"{su}no_jitter.n_escaped",
+                    "pe": f"{su}as_run.first_tap_pocket.escaped", "pm": f"{su}mh.first_tap_pocket.escaped",
+                    "same": f"{su}as_run_equals_stored", "pn": "paper:T36-surprise.escaped"},
+                   "replaying the paper's-schedule Split B test run with a resample-move that rejects jittered copies "
+                   "its taps contradict (the tail that covers the escapes whose first tap reads the pocket), "
+                   "final-budget escapes become {nm:d} (as run {n:d}, paper {pn:.0f}; {pm:.2f} of them read the pocket "
+                   "first, as run {pe:.2f}) and the surprise AUC is {mh1:.3f} ({mh11:.3f} to {mh12:.3f}) at k = 1 and "
+                   "{mh5:.3f} ({mh51:.3f} to {mh52:.3f}) at k = 5 (as run {as_run1:.3f} and {as_run5:.3f}; replay "
+                   "equals the stored run: {same:d} = yes); with the jitter off, {nj:d} escapes and {no_jitter1:.3f}, "
+                   "{no_jitter5:.3f}.",
+                   supports=lambda v: v["mh11"] <= _pv("T36-surprise.auc_k1") <= v["mh12"]
+                   and v["mh51"] <= _pv("T36-surprise.auc_k5") <= v["mh52"]),
     ]
 
 

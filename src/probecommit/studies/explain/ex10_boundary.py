@@ -70,18 +70,24 @@ def reread(probes: pd.DataFrame, instances: pd.DataFrame, z: np.ndarray, mean_of
     return probes.assign(y=y - old + np.where(pocket, POCKET_MM, TOP_MM))
 
 
+def outside_hull(model: Any, trace: Any, k: int) -> np.ndarray:
+    """``[E]`` whether each truth lies outside the full particle hull of its belief at budget ``k`` (the runner's
+    escape: every particle, whatever its weight)."""
+    truth = np.asarray(model.decision(trace.batch.truths[:, None, :]), dtype=float).reshape(-1)
+    z = np.asarray(model.decision(trace.states[k].particles), dtype=float)
+    return (truth < z.min(axis=1)) | (truth > z.max(axis=1))
+
+
 def hull_escape(loaded: LoadedRun, chunk_instances: int = 48) -> pd.DataFrame:
     """Per trajectory and budget, whether the truth lies outside the full particle hull (the runner's escape)."""
     beliefs = RunBeliefs.of(loaded, chunk_instances=chunk_instances)
     parts = []
     for rows in beliefs.chunks:
         trace = beliefs.trace(rows)
-        truth = np.asarray(beliefs.model.decision(trace.batch.truths[:, None, :]), dtype=float).reshape(-1)
         for k in trace.budgets:
-            z = np.asarray(beliefs.model.decision(trace.states[k].particles), dtype=float)
             parts.append(pd.DataFrame({"instance_id": trace.batch.instance_id.astype(str),
                                        "repeat": trace.batch.repeat.astype(int), "k": int(k),
-                                       "escaped": (truth < z.min(axis=1)) | (truth > z.max(axis=1))}))
+                                       "escaped": outside_hull(beliefs.model, trace, k)}))
         del trace
     return pd.concat(parts, ignore_index=True)
 

@@ -421,7 +421,7 @@ class Explain:
                  lambda: (self.ready and self.ready(), self.gru()), lambda: more.run(self),
                  lambda: ex5_calibration.run(self), lambda: ex4.run(self),
                  lambda: ex6.run(self, paper), lambda: ex7.run(self),
-                 lambda: ex10.run(self)]
+                 lambda: ex10.run(self, paper)]
         for i, step in enumerate(steps):
             self.progress("explain", i, len(steps))
             step()
