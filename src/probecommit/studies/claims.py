@@ -1423,8 +1423,7 @@ EX10_BOUNDARY_SD_MM = (0.0, 0.3, 0.6, 0.9, 1.2)
 
 def _experiments_ex10() -> list[Experiment]:
     """The ex10 helper's experiments (E87.., ``studies/explain/ex10_*.py``; rules in docs/decisions.md, "ex10")."""
-    from probecommit.studies.explain.ex10_boundary import s_label
-
+    s_label = lambda s: f"s{int(round(float(s) * 10)):02d}"  # noqa: E731  (as ``explain.ex10_boundary.s_label``)
     bd, su = f"{X}ex10_boundary.", f"{X}ex10_surprise."
     cells = {"d1": ("deployed", 1), "d8": ("deployed", 8), "m8": ("mj_offset", 8), "o8": ("own_scan", 8)}
     paper = {"d1": "T19-pybullet-escape.k1", "d8": "T19-pybullet-escape.k8",
