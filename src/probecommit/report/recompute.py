@@ -906,7 +906,8 @@ RECOMPUTED = {
                "PyBullet's stored escapes, its emulated scene and that scene's escape over fresh draws; the re-splits under the "
                "paper's schedule; the development searches; grasp on the model-exact scene; the GRU's spread and power; "
                "the PyBullet capture interval; ex5's re-split costs, fresh pools and capture pairs; ex4's single-width "
-               "counts, prices from the paper's curve and the pyramidal-cone rows; ex7's fault readings and fresh draws",
+               "counts, prices from the paper's curve and the pyramidal-cone rows; ex7's fault readings and fresh draws; ex10's "
+               "per-tap boundary replays of PyBullet and the paper's-schedule surprise without the jitter's tail",
 }
 TRACED_ONLY = {
     "insertion": "the stored rows themselves (episodes, re-executed commits, replays); the re-split rows; the cover "
