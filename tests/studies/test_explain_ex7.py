@@ -123,6 +123,10 @@ def test_an_unpredicted_class_is_stored_as_infinity_and_ranks_above_every_finite
                          "density": [1.0, 2.0, 3.0, 0.5], "class": [np.inf, 5.0, np.inf, -np.log(tiny)]})
     out = ex7_faults.surprise_keys(rows, BOOT)
     assert out["class_auc"][0] == pytest.approx(1.0) and out["n_class_unpredicted"] == 2
+    # a publication made before the rows kept +inf stored 745: the same count and the same AUC
+    old = ex7_faults.surprise_keys(rows.assign(**{"class": np.minimum(rows["class"], 745.0)}), BOOT)
+    assert old["n_class_unpredicted"] == 2 and old["class_auc"] == out["class_auc"]
+    assert -np.log(tiny) == ex7_faults.LARGEST_FINITE_SURPRISE < 745.0
 
     class Tally:
         def __init__(self):

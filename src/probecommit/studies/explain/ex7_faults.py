@@ -84,10 +84,16 @@ def arm_surprise_aucs(run: LoadedRun, arm: Arm, episodes: pd.DataFrame, kmax: in
     return surprise_keys(rows, boot), rows
 
 
+#: The largest finite surprise a float64 probability can give, -log of the smallest positive float64 (about 744.4): a
+#: stored surprise above it is one whose probability was 0, whether stored as +inf or (publications before the
+#: rows kept +inf) as 745.
+LARGEST_FINITE_SURPRISE = float(-np.log(np.nextafter(0.0, 1.0)))
+
+
 def surprise_keys(rows: pd.DataFrame, boot: dict[str, int]) -> dict[str, Any]:
     """Per surprise reading, the AUC (cluster-bootstrap triple) of the stored per-episode rows of one arm."""
     y, clusters = rows["escaped"].to_numpy(bool), rows["instance_id"].to_numpy()
-    out: dict[str, Any] = {"n_escaped": int(y.sum()), "n_class_unpredicted": int(np.isposinf(rows["class"]).sum())}
+    out: dict[str, Any] = {"n_escaped": int(y.sum()), "n_class_unpredicted": int((rows["class"] > LARGEST_FINITE_SURPRISE).sum())}
     for reading in ("density", "class"):
         iv = cluster_bootstrap_auc(rows[reading].to_numpy(float), y, clusters, **boot)
         out[f"{reading}_auc"] = [float(iv.estimate), float(iv.lo), float(iv.hi)]
