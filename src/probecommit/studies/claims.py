@@ -1442,9 +1442,9 @@ def _experiments_ex10() -> list[Experiment]:
                     "d1top": f"{bd}deployed.{top}.escape_k1", "m8top": f"{bd}mj_offset.{top}.escape_k8",
                     "o8top": f"{bd}own_scan.{top}.escape_k8"},
                    "re-reading the engines study's PyBullet taps with the boundary at hg + {pm:.3f} mm plus a fresh normal "
-                   "draw at every tap, escape at k = 8 climbs from {d8:.3f} (SD 0, our PyBullet's fixed boundary; "
+                   "draw at every tap, escape at k = 8 climbs from {d8:.3f} (no draw: our PyBullet's fixed boundary; "
                    "replay equals the stored run: {same:d} = yes) to {d8top:.3f} at the declared grid's top SD "
-                   "(1.2 mm), where k = 1 gives {d1top:.3f} and the MuJoCo offset and PyBullet's own scan, which "
+                   "(docs/decisions.md), where k = 1 gives {d1top:.3f} and the MuJoCo offset and PyBullet's own scan, which "
                    "escape nowhere under a fixed boundary, escape {m8top:.3f} and {o8top:.3f}.",
                    supports=lambda v: any(fits(v, s) for s in EX10_BOUNDARY_SD_MM)),
         Experiment("E88", "the cover schedule's surprise AUC when the belief keeps no particle its taps contradict",
