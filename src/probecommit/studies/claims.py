@@ -1440,12 +1440,13 @@ def _experiments_ex10() -> list[Experiment]:
                    {**grid, "same": f"{bd}deployed.as_run_equals_stored", "pm": "paper:T18-engine-scans.pybullet_offset",
                     "d8": f"{bd}deployed.s00.escape_k8", "d8top": f"{bd}deployed.{top}.escape_k8",
                     "d1top": f"{bd}deployed.{top}.escape_k1", "m8top": f"{bd}mj_offset.{top}.escape_k8",
-                    "o8top": f"{bd}own_scan.{top}.escape_k8"},
+                    "o8top": f"{bd}own_scan.{top}.escape_k8", "m0": f"{bd}mj_offset.s00.escape_k8",
+                    "o0": f"{bd}own_scan.s00.escape_k8"},
                    "re-reading the engines study's PyBullet taps with the boundary at hg + {pm:.3f} mm plus a fresh normal "
-                   "draw at every tap, escape at k = 8 climbs from {d8:.3f} (no draw: our PyBullet's fixed boundary; "
-                   "replay equals the stored run: {same:d} = yes) to {d8top:.3f} at the declared grid's top SD "
-                   "(docs/decisions.md), where k = 1 gives {d1top:.3f} and the MuJoCo offset and PyBullet's own scan, which "
-                   "escape nowhere under a fixed boundary, escape {m8top:.3f} and {o8top:.3f}.",
+                   "draw at every tap, escape at k = 8 climbs from {d8:.3f} (no draw: a fixed boundary, as in our "
+                   "PyBullet, whose replay equals the stored run: {same:d} = yes) to {d8top:.3f} at the declared grid's "
+                   "top SD (docs/decisions.md), where k = 1 gives {d1top:.3f} and the MuJoCo offset and PyBullet's own "
+                   "scan escape {m8top:.3f} and {o8top:.3f} (under a fixed boundary {m0:.3f} and {o0:.3f}).",
                    supports=lambda v: any(fits(v, s) for s in EX10_BOUNDARY_SD_MM)),
         Experiment("E88", "the cover schedule's surprise AUC when the belief keeps no particle its taps contradict",
                    {**{f"{f}{k}{e}": f"{su}{f}.auc_k{k}{'.' + e if e else ''}" for f in ("mh", "as_run", "no_jitter")
