@@ -113,13 +113,30 @@ def test_e71_and_e72_rules_can_fail():
     assert np.isfinite(cost) and cost > 0
 
 
-def test_the_surprise_cap_ranks_like_infinity():
-    """-log 0 is the largest surprise; stored tables hold finite numbers, so the step stores the cap instead: the
-    episodes no particle predicted must rank above every finite surprise, as ``inf`` itself does."""
-    tiny = np.nextafter(0.0, 1.0)  # the smallest positive float64
-    assert -np.log(tiny) < ex7_faults.SURPRISE_CAP < np.inf
+def test_an_unpredicted_class_is_stored_as_infinity_and_ranks_above_every_finite_surprise():
+    """-log 0 is the largest surprise: the rows keep ``+inf`` (no finite stand-in), the AUC ranks it above the largest
+    finite one and counts it as unpredicted, and ``verify``'s checks accept it in the class column only."""
+    from probecommit.report import checks
+
+    tiny = np.nextafter(0.0, 1.0)  # the smallest positive float64: its -log is the largest finite surprise
     rows = pd.DataFrame({"instance_id": list("abcd"), "escaped": [True, False, True, False],
                          "density": [1.0, 2.0, 3.0, 0.5], "class": [np.inf, 5.0, np.inf, -np.log(tiny)]})
-    capped = rows.assign(**{"class": np.minimum(rows["class"], ex7_faults.SURPRISE_CAP)})
-    assert ex7_faults.surprise_keys(capped, BOOT)["class_auc"][0] == pytest.approx(1.0)
-    assert ex7_faults.surprise_keys(rows, BOOT)["class_auc"] == ex7_faults.surprise_keys(capped, BOOT)["class_auc"]
+    out = ex7_faults.surprise_keys(rows, BOOT)
+    assert out["class_auc"][0] == pytest.approx(1.0) and out["n_class_unpredicted"] == 2
+    # a publication made before the rows kept +inf stored 745: the same count and the same AUC
+    old = ex7_faults.surprise_keys(rows.assign(**{"class": np.minimum(rows["class"], 745.0)}), BOOT)
+    assert old["n_class_unpredicted"] == 2 and old["class_auc"] == out["class_auc"]
+    assert -np.log(tiny) == ex7_faults.LARGEST_FINITE_SURPRISE < 745.0
+
+    class Tally:
+        def __init__(self):
+            self.failed = []
+
+        def check(self, kind, ok, message):
+            if not ok:
+                self.failed.append(message)
+
+    ok, bad = Tally(), Tally()
+    checks.parquet_invariants("explain", ex7_faults.STORED, rows, ok)
+    checks.parquet_invariants("explain", ex7_faults.STORED, rows.assign(density=[np.inf, 2.0, 3.0, 0.5]), bad)
+    assert ok.failed == [] and len(bad.failed) == 1 and "density" in bad.failed[0]

@@ -26,7 +26,8 @@ DECLARED_NONFINITE = {("insertion", "results.gates.summary.#.claimed")}
 #: Stored columns that may hold +inf, by (study, file, column pattern): a class surprise ``-log p`` of a reading the
 #: belief gave probability 0 (``studies.explain.surprise_variants``; the AUC ranks it above every finite one).
 DECLARED_INFINITE_COLUMNS = {("explain", "surprise_variants.parquet", r"class_k\d+"),
-                             ("explain", "ex6_surprise_rows.parquet", r"class")}
+                             ("explain", "ex6_surprise_rows.parquet", r"class"),
+                             ("explain", "ex7_fault_surprise.parquet", r"class")}
 #: Stored columns that hold an episode's miss (metres, not a rate) under a name the rate rule would read as a rate,
 #: by (study, file, column): the pyramidal-cone rows keep the elliptic cone's miss beside the re-executed one.
 DECLARED_MISS_COLUMNS = {("explain", "ex4_cone_rows.parquet", "realized_elliptic")}

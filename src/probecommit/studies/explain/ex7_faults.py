@@ -67,30 +67,33 @@ def signature_keys(episodes: pd.DataFrame, kmax: int, boot: dict[str, int]) -> d
     }
 
 
-#: Stored in place of an infinite surprise (no particle predicts the class read): above every finite one, since a
-#: positive float64 is at least 5e-324 and -log(5e-324) < 745, so the ranks (and the AUC) are those of ``inf``;
-#: stored tables hold finite numbers only (``verify`` refuses others).
-SURPRISE_CAP = 745.0
 
 
 def arm_surprise_aucs(run: LoadedRun, arm: Arm, episodes: pd.DataFrame, kmax: int,
                       boot: dict[str, int]) -> tuple[dict[str, Any], pd.DataFrame]:
     """AUC at ``kmax`` of the density and the class surprise for final-budget escape on one fault arm, its beliefs
-    recomputed from ``run``'s stored probes under the arm's overrides; and the per-episode rows they come from."""
+    recomputed from ``run``'s stored probes under the arm's overrides; and the per-episode rows they come from. A class
+    no particle predicted is stored as its surprise, ``+inf`` (declared in ``report.checks``), which the AUC ranks above
+    every finite one: a finite stand-in would be a number the definition never gives."""
     index, tables = surprise_variants.run_tables(run, config=replay_config(run.config, arm.overrides))
     label = _arm_rows(episodes, arm.fault, kmax)["escaped"].reindex(index)
     rows = pd.DataFrame({"fault": arm.fault, "instance_id": index.get_level_values(0),
                          "repeat": index.get_level_values(1), "escaped": label.to_numpy(object),
-                         "density": np.minimum(tables["density"][:, kmax - 1], SURPRISE_CAP),
-                         "class": np.minimum(tables["class"][:, kmax - 1], SURPRISE_CAP)})
+                         "density": tables["density"][:, kmax - 1], "class": tables["class"][:, kmax - 1]})
     rows = rows[label.notna().to_numpy()].astype({"escaped": bool}).reset_index(drop=True)  # no ok row: no label
     return surprise_keys(rows, boot), rows
+
+
+#: The largest finite surprise a float64 probability can give, -log of the smallest positive float64 (about 744.4): a
+#: stored surprise above it is one whose probability was 0, whether stored as +inf or (publications before the
+#: rows kept +inf) as 745.
+LARGEST_FINITE_SURPRISE = float(-np.log(np.nextafter(0.0, 1.0)))
 
 
 def surprise_keys(rows: pd.DataFrame, boot: dict[str, int]) -> dict[str, Any]:
     """Per surprise reading, the AUC (cluster-bootstrap triple) of the stored per-episode rows of one arm."""
     y, clusters = rows["escaped"].to_numpy(bool), rows["instance_id"].to_numpy()
-    out: dict[str, Any] = {"n_escaped": int(y.sum()), "n_class_unpredicted": int((rows["class"] >= SURPRISE_CAP).sum())}
+    out: dict[str, Any] = {"n_escaped": int(y.sum()), "n_class_unpredicted": int((rows["class"] > LARGEST_FINITE_SURPRISE).sum())}
     for reading in ("density", "class"):
         iv = cluster_bootstrap_auc(rows[reading].to_numpy(float), y, clusters, **boot)
         out[f"{reading}_auc"] = [float(iv.estimate), float(iv.lo), float(iv.hi)]

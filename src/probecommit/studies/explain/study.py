@@ -22,9 +22,7 @@ from probecommit.audit.stats import paired_bootstrap
 from probecommit.runner.replay import load_run, replay_episodes
 from probecommit.studies.explain import (calibration_rows, draw_audit, draw_faults, engines_x, generator, more, resplits,
                                          robust_rows, runs, stored, surprise_variants)
-from probecommit.studies.explain import ex4, ex5_calibration, ex6, ex7
-from probecommit.studies.explain import ex8
-from probecommit.studies.explain import ex9_calibration
+from probecommit.studies.explain import ex4, ex5_calibration, ex6, ex7, ex8, ex9_calibration, ex10
 from probecommit.studies.explain import gru as gru_study
 from probecommit.studies.explain.margin import margin_curve
 from probecommit.studies.paper_values import PRINTED
@@ -99,7 +97,7 @@ class Explain:
             "missing", "committed_pool", "instance_generator", "margin_per_gamma", "thresholds", "gru", "physx_capture",
             "boundary_fault", "robust", *more.GROUPS,
             "ex5_calibration", *ex4.GROUPS, *ex6.GROUPS, *ex7.GROUPS,
-            *ex8.GROUPS, "ex9_calibration")}
+            *ex8.GROUPS, "ex9_calibration", *ex10.GROUPS)}
         self.tables: dict[str, pd.DataFrame] = {}
         #: Stored rows written beside results.json as they are, by file name (``more``'s steps).
         self.stored: dict[str, pd.DataFrame] = {}
@@ -423,7 +421,7 @@ class Explain:
                  lambda: (self.ready and self.ready(), self.gru()), lambda: more.run(self),
                  lambda: ex5_calibration.run(self), lambda: ex4.run(self),
                  lambda: ex6.run(self, paper), lambda: ex7.run(self),
-                 lambda: ex8.run(self), lambda: ex9_calibration.run(self)]
+                 lambda: ex8.run(self), lambda: ex9_calibration.run(self), lambda: ex10.run(self, paper)]
         for i, step in enumerate(steps):
             self.progress("explain", i, len(steps))
             step()
