@@ -84,8 +84,8 @@ def main() -> None:
         total = time.process_time() - start
         shutil.rmtree(Path(tmp) / "run", ignore_errors=True)
     print(f"CPU seconds, {args.instances * args.repeats} episodes, one thread:")
-    print(f"  {"imports (runner, store, core; not the CLI)":54s} {IMPORTS:6.3f}")
-    print(f"  {"run_study":54s} {total:6.3f}")
+    print(f"  {'imports (runner, store, core; not the CLI)':54s} {IMPORTS:6.3f}")
+    print(f"  {'run_study':54s} {total:6.3f}")
     for label in [p[2] for p in PIECES[:5]] + ["  executors decide"] + [p[2] for p in PIECES[5:]]:
         print(f"    {label:52s} {CPU[label]:6.3f}")
 
