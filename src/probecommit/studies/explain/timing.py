@@ -10,6 +10,7 @@ timing code and a step added later is timed too.
 from __future__ import annotations
 
 import logging
+import sys
 import time
 from typing import Callable
 
@@ -18,8 +19,19 @@ logger = logging.getLogger(__name__)
 Progress = Callable[[str, int, int], None]
 
 
+def peak_mb() -> float:
+    """This process's peak resident set size so far, in MB (0 where the platform does not say)."""
+    try:
+        import resource
+    except ImportError:  # not on Windows
+        return 0.0
+    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    return peak / 2**20 if sys.platform == "darwin" else peak / 1024  # bytes on macOS, KiB on Linux
+
+
 class StepClock:
-    """``progress`` passed through, with each label's wall and CPU seconds logged when the next begins.
+    """``progress`` passed through, with each label's wall and CPU seconds logged when the next begins, and
+    the process's peak resident memory so far (what a step that holds too much shows as a jump).
 
     ``steps`` keeps ``(label, wall_s, cpu_s)`` in order (a label reported again later is a new entry).
     """
@@ -42,5 +54,5 @@ class StepClock:
             return
         wall, cpu = time.perf_counter() - self._wall, time.process_time() - self._cpu
         self.steps.append((self._label, wall, cpu))
-        logger.info("%s: %.1f s wall, %.1f s CPU", self._label, wall, cpu)
+        logger.info("%s: %.1f s wall, %.1f s CPU, peak %.0f MB", self._label, wall, cpu, peak_mb())
         self._label = None
