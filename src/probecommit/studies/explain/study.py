@@ -23,6 +23,7 @@ from probecommit.runner.replay import load_run, replay_episodes
 from probecommit.studies.explain import (calibration_rows, draw_audit, draw_faults, engines_x, generator, more, resplits,
                                          robust_rows, runs, stored, surprise_variants)
 from probecommit.studies.explain.shared_beliefs import SharedBeliefs, cyclic_pairs
+from probecommit.studies.explain.background import Background
 from probecommit.studies.explain.timing import StepClock
 from probecommit.studies.explain import ex4, ex5_calibration, ex6, ex7
 from probecommit.studies.explain import gru as gru_study
@@ -107,6 +108,8 @@ class Explain:
         self.commits: dict[str, list[pd.DataFrame]] = {}
         self.episodes: dict[str, pd.DataFrame] = {}
         self._loaded: dict[str, Any] = {}
+        #: Steps run in a process of their own beside the later steps, by result group (``background``).
+        self.background = Background()
 
     def load(self, name: str) -> Any:
         if name not in self._loaded:
@@ -398,9 +401,10 @@ class Explain:
         out.update(gru_study.summary_keys(r, per_episode, self.boot, self.cfg["gru_paper_interval"]))  # what verify recomputes
         runs_dir = self.root / "breadth" / "runs"
         pipeline = runs_dir / ("push2d-quick" if self.quick and (runs_dir / "push2d-quick").is_dir() else "push2d")
-        if pipeline.is_dir():
-            self.progress("explain: GRU seed 0 retrained", 0, 1)
-            out.update(gru_study.retrain_tolerance(self.root / "gru" / "results", pipeline, self.runs, self.quick))
+        if pipeline.is_dir():  # its keys join the group once the later steps are done (``Background``)
+            self.progress("explain: GRU seed 0 retrained (in a process of its own, beside the later steps)", 0, 1)
+            self.background.submit("gru", gru_study.retrain_tolerance, self.root / "gru" / "results", pipeline,
+                                   self.runs, self.quick)
 
     def _later(self, group: str, step: Callable[[], None], needs: tuple[str, ...]) -> tuple[Callable[[], None],
                                                                                              Callable[[], None]]:
@@ -432,9 +436,15 @@ class Explain:
                  lambda: (self.ready and self.ready(), self.gru()), lambda: more.run(self),
                  lambda: ex5_calibration.run(self), lambda: ex4.run(self),
                  lambda: ex6.run(self, paper), lambda: ex7.run(self)]
-        for i, step in enumerate(steps):
-            self.progress("explain", i, len(steps))
-            step()
+        try:
+            for i, step in enumerate(steps):
+                self.progress("explain", i, len(steps))
+                step()
+            self.progress("explain: waiting for the steps in a process of their own", 0, 1)
+            for group, values in self.background.results().items():  # each fills one group no other step fills
+                self.res[group].update(values)
+        finally:
+            self.background.close()
         self.progress.close()
         margins = [t for name, t in self.tables.items() if name.startswith("margin_")]
         if margins:
