@@ -1,5 +1,5 @@
-"""The explain target's shared beliefs (issue 42): one trace per run gives every calibration, gate and audit
-the same numbers as recomputing the beliefs per call; the cyclic pairs run in an order that holds two runs."""
+"""The explain target's speed machinery (issue 42): one belief trace per run gives every calibration, gate and
+audit the same numbers as recomputing it per call; the cyclic pairs hold two runs; background steps hand on in order."""
 
 from __future__ import annotations
 
@@ -104,3 +104,38 @@ def test_step_clock_logs_each_label_once(caplog):
     assert [s[0] for s in clock.steps] == ["a", "b"]
     assert len(seen) == 4  # every call passed through
     assert [r.getMessage().split(":")[0] for r in caplog.records] == ["a", "b"]
+
+
+def test_background_hands_results_on_in_submission_order():
+    import operator
+
+    from probecommit.studies.explain.background import Background
+
+    got: list = []
+    work = Background()
+    try:
+        work.submit(got.append, operator.mul, 6, 7)
+        work.submit(got.append, operator.add, 1, 2)
+        assert got == []  # nothing is handed on before finish
+        work.finish()
+    finally:
+        work.close()
+    assert got == [42, 3]
+
+
+def test_background_raises_a_failure_and_runs_inline_on_one_cpu(monkeypatch):
+    import operator
+
+    from probecommit.studies.explain import background
+
+    work = background.Background()
+    try:
+        work.submit(lambda _: None, operator.truediv, 1, 0)
+        with pytest.raises(ZeroDivisionError):
+            work.finish()
+    finally:
+        work.close()
+    monkeypatch.setattr(background.os, "cpu_count", lambda: 1)
+    got: list = []
+    background.Background().submit(got.append, operator.add, 2, 2)
+    assert got == [4]  # at once, in this process

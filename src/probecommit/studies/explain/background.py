@@ -1,10 +1,11 @@
-"""An explain step that runs in a process of its own while the later steps go on (issue 42).
+"""Explain steps that run in a process of their own while the later steps go on (issue 42).
 
-The GRU step retrains seed 0 twice (PyTorch, its own thread count): minutes of CPU that read
-nothing the other steps write and write one result group nobody else fills. In a process of its
-own it overlaps the rest of the target (the reproduction's critical path, often with a CPU to
-spare at its end), and PyTorch is never imported into the explain process (about 220 MB less
-held through every later step). Its keys are the same: the function and its arguments are.
+The GRU step retrains seed 0 twice (PyTorch, its own thread count) and the rig step simulates
+and sweeps 30 rig sessions: minutes of CPU each, that read nothing the other steps write and
+fill result groups nobody else fills. In a process of their own (one after the other) they
+overlap the rest of the target (the reproduction's critical path, often with a CPU to spare at
+its end), and PyTorch is never imported into the explain process (about 220 MB less held
+through every later step). Their keys are the same: the functions and their arguments are.
 """
 
 from __future__ import annotations
@@ -20,24 +21,23 @@ class Background:
 
     def __init__(self) -> None:
         self._pool: ProcessPoolExecutor | None = None
-        self._pending: dict[str, Future] = {}
-        self._done: dict[str, Any] = {}
+        self._pending: list[tuple[Future, Callable[[Any], None]]] = []
 
-    def submit(self, name: str, fn: Callable[..., Any], *args: Any) -> None:
-        """Start ``fn(*args)`` (a module-level function of picklable arguments) under ``name``."""
-        if (os.cpu_count() or 1) < 2:
-            self._done[name] = fn(*args)
+    def submit(self, then: Callable[[Any], None], fn: Callable[..., Any], *args: Any) -> None:
+        """Start ``fn(*args)`` (a module-level function of picklable arguments); :meth:`finish` hands its
+        result to ``then`` (in this process: it puts the keys where the step would have)."""
+        if self._pool is None and (os.cpu_count() or 1) < 2:
+            then(fn(*args))  # one CPU: nothing to overlap
             return
         if self._pool is None:  # spawned: no fork of a process that may hold threads
             self._pool = ProcessPoolExecutor(max_workers=1, mp_context=multiprocessing.get_context("spawn"))
-        self._pending[name] = self._pool.submit(fn, *args)
+        self._pending.append((self._pool.submit(fn, *args), then))
 
-    def results(self) -> dict[str, Any]:
-        """Every submitted function's result, in submission order, once all are done (a failure is raised)."""
-        for name, future in self._pending.items():
-            self._done[name] = future.result()
-        self._pending.clear()
-        return dict(self._done)
+    def finish(self) -> None:
+        """Wait for every submitted function and hand each result on, in submission order (a failure is raised)."""
+        while self._pending:
+            future, then = self._pending.pop(0)
+            then(future.result())
 
     def close(self) -> None:
         """End the process (what has not started is cancelled): after :meth:`results`, or when a step failed."""

@@ -403,7 +403,7 @@ class Explain:
         pipeline = runs_dir / ("push2d-quick" if self.quick and (runs_dir / "push2d-quick").is_dir() else "push2d")
         if pipeline.is_dir():  # its keys join the group once the later steps are done (``Background``)
             self.progress("explain: GRU seed 0 retrained (in a process of its own, beside the later steps)", 0, 1)
-            self.background.submit("gru", gru_study.retrain_tolerance, self.root / "gru" / "results", pipeline,
+            self.background.submit(out.update, gru_study.retrain_tolerance, self.root / "gru" / "results", pipeline,
                                    self.runs, self.quick)
 
     def _later(self, group: str, step: Callable[[], None], needs: tuple[str, ...]) -> tuple[Callable[[], None],
@@ -441,8 +441,7 @@ class Explain:
                 self.progress("explain", i, len(steps))
                 step()
             self.progress("explain: waiting for the steps in a process of their own", 0, 1)
-            for group, values in self.background.results().items():  # each fills one group no other step fills
-                self.res[group].update(values)
+            self.background.finish()  # each fills groups (and stored rows) no other step fills
         finally:
             self.background.close()
         self.progress.close()
