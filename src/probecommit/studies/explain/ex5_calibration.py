@@ -135,7 +135,7 @@ def capture_draws(protocol: Any, runs: Path, scale: float, count: int, workers: 
     return out
 
 
-def pair_cells(cal: Path, test: Path, budgets: Sequence[int], alpha: float) -> dict[str, float]:
+def pair_cells(cal: Path | LoadedRun, test: Path | LoadedRun, budgets: Sequence[int], alpha: float) -> dict[str, float]:
     """Table III's optimism cells (both arms), bottom row and the margin on ``test`` calibrated on ``cal``."""
     res = calibrate(cal, test, alpha=alpha, budgets=list(budgets), resamples=2, seed=0, chunk_instances=48)
     out = {"gamma": float(res.margin.gamma)}
@@ -150,12 +150,16 @@ def pair_cells(cal: Path, test: Path, budgets: Sequence[int], alpha: float) -> d
 def capture_rows(protocol: Any, runs: Path, scales: Sequence[float], count: int, budgets: Sequence[int],
                  workers: int) -> pd.DataFrame:
     """One row per (scale, pair): draw ``i`` tested under a calibration on draw ``i + 1`` (cyclic, as E19)."""
-    rows = []
+    from probecommit.studies.explain.shared_beliefs import SharedBeliefs, cyclic_pairs
+
+    rows, shared = [], SharedBeliefs()  # each draw's beliefs once for both pairs it is in
     for scale in scales:
         paths = capture_draws(protocol, runs, float(scale), count, workers)
-        for i, test in enumerate(paths):
-            cells = pair_cells(paths[(i + 1) % len(paths)], test, budgets, protocol.alpha)
-            rows.append({"part": "capture", "index": i, "scale": float(scale), **cells})
+        _, pairs = cyclic_pairs(paths, lambda cal, test: pair_cells(shared.run(cal, budgets), shared.run(test, budgets),
+                                                                     budgets, protocol.alpha), shared)
+        if len(paths) == 1:  # calibrated on itself, as ``paths[(i + 1) % 1]`` is
+            pairs = [pair_cells(paths[0], paths[0], budgets, protocol.alpha)]
+        rows += [{"part": "capture", "index": i, "scale": float(scale), **cells} for i, cells in enumerate(pairs)]
     return pd.DataFrame(rows)
 
 

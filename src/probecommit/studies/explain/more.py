@@ -26,10 +26,13 @@ def run(job: Any) -> None:
     job.stored[searches.COVER_STORED] = searches.cover_table(job.p)
     s.update(search_keys(job.stored[searches.COVER_STORED], pd.read_parquet(job.root / "insertion" / "results" / ROBUST_FILE),
                          job.boot))
-    job.progress("explain: the simulated rig redrawn", 0, 1)
-    keys, tables = rig.run(job.runs, job.cfg, job.boot, job.quick)
-    job.res["rig_redraws"].update(keys)
-    job.stored.update(tables)
+    job.progress("explain: the simulated rig redrawn (in a process of its own, beside the later steps)", 0, 1)
+
+    def rig_done(result: tuple[dict[str, Any], dict[str, pd.DataFrame]]) -> None:
+        job.res["rig_redraws"].update(result[0])
+        job.stored.update(result[1])
+
+    job.background.submit(rig_done, rig.run, job.runs, job.cfg, job.boot, job.quick)
     job.progress("explain: Table II's families over the prior's width", 0, 1)
     keys, job.tables["breadth_prior"] = breadth.run(job.root, job.runs, job.cfg, job.boot, job.quick)
     job.res["breadth_prior"].update(keys)

@@ -22,6 +22,9 @@ from probecommit.audit.stats import paired_bootstrap
 from probecommit.runner.replay import load_run, replay_episodes
 from probecommit.studies.explain import (calibration_rows, draw_audit, draw_faults, engines_x, generator, more, resplits,
                                          robust_rows, runs, stored, surprise_variants)
+from probecommit.studies.explain.shared_beliefs import SharedBeliefs, cyclic_pairs
+from probecommit.studies.explain.background import Background
+from probecommit.studies.explain.timing import StepClock
 from probecommit.studies.explain import ex4, ex5_calibration, ex6, ex7, ex8, ex9_calibration, ex10
 from probecommit.studies.explain import gru as gru_study
 from probecommit.studies.explain.margin import margin_curve
@@ -85,7 +88,7 @@ class Explain:
         self.root = Path(root)
         self.ins = self.root / "insertion" / "runs"
         self.runs = self.root / "explain" / "runs"
-        self.progress = progress
+        self.progress = StepClock(progress)  # each step's wall and CPU seconds logged (``-v``)
         self.workers = workers
         self.cfg = config
         #: ``ready(names)`` returns once those targets (None: the engines, GRU, breadth and cost studies)
@@ -106,6 +109,8 @@ class Explain:
         self.commits: dict[str, list[pd.DataFrame]] = {}
         self.episodes: dict[str, pd.DataFrame] = {}
         self._loaded: dict[str, Any] = {}
+        #: Steps run in a process of their own beside the later steps, by result group (``background``).
+        self.background = Background()
 
     def load(self, name: str) -> Any:
         if name not in self._loaded:
@@ -297,20 +302,30 @@ class Explain:
         res = self.insertion_results()
         thresholds = {int(r["k"]): float(r["threshold"]) for r in res["table_audit"]["table"]}
         gamma = float(res["table_insertion"]["margin_random"])
+        budgets, nominal = sorted(thresholds), 1 - self.p.alpha
+        shared = SharedBeliefs()  # each draw's beliefs once, for its audit, both its calibration pairs and gates
+
+        def audit(path: Path) -> dict[str, float]:
+            return draw_audit.draw_cells(shared.run(path, budgets), thresholds, gamma, nominal=nominal, resamples=2, seed=0)
+
+        def pair(cal: Path, test: Path) -> tuple[dict[str, float], dict[str, float]]:
+            """Table III's calibrated cells and the random-probe gates on ``test``, calibrated on ``cal``."""
+            cells = draw_audit.fresh_calibration_cells(shared.run(cal, budgets), shared.run(test, budgets), budgets,
+                                                       alpha=self.p.alpha)
+            return cells, draw_audit.fresh_gate_cells(shared.run(cal), shared.run(test), alpha=self.p.alpha)
+
         self.progress("explain: Table III on fresh draws", 0, len(drawn))
-        cells = [draw_audit.draw_cells(deployed.path, thresholds, gamma, nominal=1 - self.p.alpha, resamples=2, seed=0)
-                 for _, deployed, _ in drawn]
-        parts["audit"] = cells
-        fresh = [deployed.path for _, deployed, _ in drawn[1:]]
+        check, *fresh = [deployed.path for _, deployed, _ in drawn]
+        parts["audit"] = [audit(check)]
+        shared.drop(check)
         if len(fresh) > 1:  # each fresh draw tested under a calibration on the next one (cyclic): both draws vary
-            self.progress("explain: Table III with fresh calibration draws", 0, len(fresh))
-            pairs = [draw_audit.fresh_calibration_cells(fresh[(i + 1) % len(fresh)], test, sorted(thresholds),
-                                                        alpha=self.p.alpha) for i, test in enumerate(fresh)]
-            parts["audit_fresh_cal"] = pairs
-            self.progress("explain: random-probe gates on fresh draws", 0, len(fresh))
-            gate_cells = [draw_audit.fresh_gate_cells(fresh[(i + 1) % len(fresh)], test, alpha=self.p.alpha)
-                          for i, test in enumerate(fresh)]
-            parts["gates_fresh_cal"] = gate_cells
+            self.progress("explain: Table III and random-probe gates with fresh calibration draws", 0, len(fresh))
+            audits, pairs = cyclic_pairs(fresh, pair, shared, first=audit)
+            parts["audit"] += audits
+            parts["audit_fresh_cal"] = [cells for cells, _ in pairs]
+            parts["gates_fresh_cal"] = [gate for _, gate in pairs]
+        else:
+            parts["audit"] += [audit(path) for path in fresh]
 
     def _draw_faults(self, drawn: list[tuple[str, Any, Any]], parts: dict[str, list[dict[str, float]]]) -> None:
         """The fault harness's none, boundary and particle arms replayed on each fresh draw's corrected run
@@ -387,9 +402,10 @@ class Explain:
         out.update(gru_study.summary_keys(r, per_episode, self.boot, self.cfg["gru_paper_interval"]))  # what verify recomputes
         runs_dir = self.root / "breadth" / "runs"
         pipeline = runs_dir / ("push2d-quick" if self.quick and (runs_dir / "push2d-quick").is_dir() else "push2d")
-        if pipeline.is_dir():
-            self.progress("explain: GRU seed 0 retrained", 0, 1)
-            out.update(gru_study.retrain_tolerance(self.root / "gru" / "results", pipeline, self.runs, self.quick))
+        if pipeline.is_dir():  # its keys join the group once the later steps are done (``Background``)
+            self.progress("explain: GRU seed 0 retrained (in a process of its own, beside the later steps)", 0, 1)
+            self.background.submit(out.update, gru_study.retrain_tolerance, self.root / "gru" / "results", pipeline,
+                                   self.runs, self.quick)
 
     def _later(self, group: str, step: Callable[[], None], needs: tuple[str, ...]) -> tuple[Callable[[], None],
                                                                                              Callable[[], None]]:
@@ -422,9 +438,15 @@ class Explain:
                  lambda: ex5_calibration.run(self), lambda: ex4.run(self),
                  lambda: ex6.run(self, paper), lambda: ex7.run(self),
                  lambda: ex8.run(self), lambda: ex9_calibration.run(self), lambda: ex10.run(self, paper)]
-        for i, step in enumerate(steps):
-            self.progress("explain", i, len(steps))
-            step()
+        try:
+            for i, step in enumerate(steps):
+                self.progress("explain", i, len(steps))
+                step()
+            self.progress("explain: waiting for the steps in a process of their own", 0, 1)
+            self.background.finish()  # each fills groups (and stored rows) no other step fills
+        finally:
+            self.background.close()
+        self.progress.close()
         margins = [t for name, t in self.tables.items() if name.startswith("margin_")]
         if margins:
             write_with(out / "margin_per_gamma.parquet",
