@@ -19,6 +19,8 @@ import pandas as pd
 
 #: Keys whose numbers are probabilities or rates.
 RATE_WORDS = ("failure", "coverage", "escape", "success", "commit_rate", "fail", "realized", "predicted")
+#: A key ending in a plural of those outcomes counts episodes (``held_failures``, ``escapes``): no rate.
+COUNT_ENDINGS = ("failures", "escapes", "successes")
 TOLERANCE = 1e-9
 #: Non-finite numbers a result may hold, by (study, key pattern with list indices as #): a gate
 #: signal with no probability claim has no claimed failure.
@@ -64,7 +66,7 @@ def _is_rate(key: str) -> bool:
     word = re.split(r"\.", key)[-1].lower()
     if word.isdigit():
         word = key.split(".")[-2].lower()
-    if word.startswith(("n_", "sum_")) or "escaped_" in word:  # a count or a sum of rates is no rate
+    if word.startswith(("n_", "sum_")) or "escaped_" in word or word.endswith(COUNT_ENDINGS):  # a count or a sum
         return False
     if any(tag in word for tag in ("diff", "minus", "change", "optimism", "delta", "gap", "paired", "_s", "auc", "fix")):
         return False

@@ -62,17 +62,12 @@ def changes_section(doc: Doc) -> None:
     """What moved against the previous frozen results, and why (each cause is a change in this tree)."""
     doc.add("## What moved since the previous publication", "",
             "Against the frozen results before this publication (`git log -- results/paper`), compared key by key, "
-            "every number common to both is identical except one group: the explain target's surprise AUCs with the "
-            "surprise read as the probability of the tap's class, at the final cover budget "
-            "(`missing.surprise_variants.ours.class.final_*`, estimate and interval).",
-            "- **The cause** is a fix in `audit.stats.cluster_bootstrap_auc`: it left out every non-finite score, "
-            "and a surprise is infinite exactly where no particle predicted the class the tap read, so the most "
-            "surprised episodes were dropped from the AUC while the counts beside it still included them. It now "
-            "ranks an infinite score above every finite one and leaves out only NaN.",
-            "- **The experiment** that tests it: `tests/audit/test_stats.py` (hypothesis) shows the AUC and its "
-            "interval equal those with each infinite score replaced by a finite value beyond every score. The "
-            "density reading, finite everywhere, and every published table are unchanged.",
-            "New in this publication: the explain target's experiments E48 to E72 behind the differences from the "
+            "every number common to both is identical.",
+            "- **Stored rows:** ex7's fault-surprise rows (`explain/ex7_fault_surprise.parquet`) now store an "
+            "infinite surprise where no particle predicted the class the tap read, where they stored a finite "
+            "stand-in; the column is declared infinite for `verify`, and every AUC and count read from it is "
+            "unchanged (`tests/studies/test_explain_ex7.py`).",
+            "New in this publication: the explain target's experiments E73 to E88 behind the differences from the "
             "paper (see the list above) and the stored rows from which `verify` recomputes them.", "")
 
 
