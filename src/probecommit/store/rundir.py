@@ -45,7 +45,7 @@ from probecommit import __version__
 from probecommit.store.manifest_rules import ManifestError, read_manifest, sha256_file
 from probecommit.store.safefile import atomic_file
 from probecommit.store.yamlsafe import YamlError, load_yaml
-from probecommit.store import arrow_final, batches
+from probecommit.store import batches
 from probecommit.store.schema import (EPISODE_COLUMNS, INSTANCE_COLUMNS, PROBE_COLUMNS, Column, float_matrix,
                                       vector_columns)
 from probecommit.errors import UserError
@@ -608,16 +608,10 @@ class RunDir:
         """Merge the units' tables into the final tables (canonical order), then write the manifest."""
         self.flush()
         stored = self._unit_tables(units)
-        arrow = arrow_canonical_tables({name: [stored[u][name] for u in units] for name in _SCHEMAS}) or {}
-        frames = {name: merge_tables([stored[u][name] for u in units]) for name in TABLES if name not in arrow}
+        frames = {name: merge_tables([stored[u][name] for u in units]) for name in TABLES}
         del stored
-        canonical = canonical_tables(frames)
-        for name in TABLES:
-            if name in arrow:
-                table = arrow[name]
-                atomic_write_arrow(self.table_path(name), table)
-            else:
-                table = atomic_write_parquet(self.table_path(name), canonical[name], _SCHEMAS.get(name, ()))
+        for name, frame in canonical_tables(frames).items():
+            table = atomic_write_parquet(self.table_path(name), frame, _SCHEMAS.get(name, ()))
             if name == "episodes":
                 self._written_episodes = table
         return self.write_manifest(manifest_extra)
@@ -822,34 +816,6 @@ def _conformed(table: pa.Table, schema: pa.Schema) -> pa.Table:
         if field.name not in table.column_names:
             table = table.append_column(field.name, pa.nulls(table.num_rows, field.type))
     return table.select(schema.names).cast(schema)
-
-
-def arrow_canonical_tables(tables: dict[str, list[pa.Table]]) -> dict[str, pa.Table] | None:
-    """The final instances, probes and episodes tables of the units' ``tables`` (each name's in
-    unit order) in canonical order, built in Arrow alone: the tables :func:`canonical_tables`
-    and :func:`arrow_table` give through pandas, or None where they might differ
-    (:mod:`probecommit.store.arrow_final`): then all three take the pandas path, as the
-    instances order the others."""
-    joined = {name: arrow_final.joined(tables[name], _SCHEMAS[name]) for name in _SCHEMAS}
-    if any(table is None for table in joined.values()):
-        return None
-    rank = arrow_final.instance_rank(joined["instances"])
-    if rank is None:
-        return None
-    rows, order = rank
-    out = {"instances": arrow_final.taken(joined["instances"], rows)}
-    for name, keys in arrow_final.KEYS.items():
-        rows = arrow_final.by_instance(joined[name], keys, order)
-        if rows is None:
-            return None
-        out[name] = arrow_final.taken(joined[name], rows)
-    for name, table in out.items():
-        # The pandas metadata (and types) the pandas path gives: those of one row of the table through it.
-        reference = arrow_table(table.slice(0, 1).to_pandas(), _SCHEMAS[name])
-        if not reference.schema.equals(table.schema, check_metadata=False):
-            return None
-        out[name] = table.replace_schema_metadata(reference.schema.metadata)
-    return out
 
 
 def canonical_tables(frames: dict[str, pd.DataFrame]) -> dict[str, pd.DataFrame]:
