@@ -40,7 +40,7 @@ class Background:
             then(future.result())
 
     def close(self) -> None:
-        """End the process (what has not started is cancelled): after :meth:`results`, or when a step failed."""
+        """End the process (what has not started is cancelled): after :meth:`finish`, or when a step failed."""
         if self._pool is not None:
             self._pool.shutdown(wait=True, cancel_futures=True)
             self._pool = None

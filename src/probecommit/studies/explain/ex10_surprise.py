@@ -23,8 +23,7 @@ import numpy as np
 import pandas as pd
 
 from probecommit.audit.stats import cluster_bootstrap_auc
-from probecommit.runner.config import config_data, parse_config
-from probecommit.runner.replay import LoadedRun, RunBeliefs
+from probecommit.runner.replay import LoadedRun, RunBeliefs, replay_config
 from probecommit.studies.explain.ex10_boundary import outside_hull
 
 #: The stored rows (filter, trajectory, budget, surprise, final-budget label) the summaries come from.
@@ -37,9 +36,7 @@ POCKET_CUT_MM = -7.5
 
 def filter_config(config: Any, overrides: dict[str, Any]) -> Any:
     """``config`` with its belief settings overridden (``{}``: the run's own)."""
-    data = config_data(config)
-    data["belief"] = {**data["belief"], **overrides}
-    return parse_config(data)
+    return replay_config(config, {"belief": overrides})
 
 
 def filter_rows(run: LoadedRun, name: str, final_k: int, chunk_instances: int = 48) -> pd.DataFrame:

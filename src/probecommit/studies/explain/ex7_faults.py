@@ -67,8 +67,6 @@ def signature_keys(episodes: pd.DataFrame, kmax: int, boot: dict[str, int]) -> d
     }
 
 
-
-
 def arm_surprise_aucs(run: LoadedRun, arm: Arm, episodes: pd.DataFrame, kmax: int,
                       boot: dict[str, int]) -> tuple[dict[str, Any], pd.DataFrame]:
     """AUC at ``kmax`` of the density and the class surprise for final-budget escape on one fault arm, its beliefs
