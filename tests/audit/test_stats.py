@@ -206,3 +206,18 @@ def test_an_infinite_score_ranks_beyond_every_finite_one(rows):
     with_nan = cluster_bootstrap_auc(np.r_[scores, np.nan], np.r_[labels, True], np.r_[clusters, 9],
                                      resamples=50, seed=3)
     assert with_nan.estimate == a.estimate or (np.isnan(with_nan.estimate) and np.isnan(a.estimate))
+
+
+def test_sign_flip_monte_carlo_signs_are_rng_choice_signs():
+    # The Monte Carlo signs are drawn as integers and mapped to -1/+1: the same matrix as
+    # rng.choice((-1.0, 1.0)) of the same generator, so the p-value of a seed is unchanged.
+    for shape in ((7, 5), (3, 1), (1, 11)):
+        a = np.random.default_rng(3).choice((-1.0, 1.0), size=shape)
+        b = np.random.default_rng(3).integers(0, 2, size=shape).astype(float) * 2.0 - 1.0
+        assert np.array_equal(a, b)
+    d = np.random.default_rng(6).normal(0.1, 1.0, 40)
+    rng = np.random.default_rng(2)
+    signs = rng.choice((-1.0, 1.0), size=(5000, d.size))
+    tol = 1e-12 * max(1.0, np.abs(d).sum())
+    expected = (1 + int(np.count_nonzero(np.abs(signs @ d) >= abs(d.sum()) - tol))) / (1 + 5000)
+    assert sign_flip_test(d, max_exact=5, resamples=5000, seed=2) == expected

@@ -201,3 +201,19 @@ def test_gates_recompute_from_their_recorded_rows(runs):
     stored = stored[(stored.method == "probe_robust") & stored.k.isin(res.budgets)].set_index(["instance_id", "repeat", "k"])
     raw = commits[commits.request == "raw"].astype({"repeat": "int64"}).set_index(["instance_id", "repeat", "k"])
     np.testing.assert_array_equal(raw.loc[stored.index, "predicted"], stored["predicted"])
+
+
+def test_calibration_summary_in_threads_equals_one_thread(runs, monkeypatch):
+    """The summary's bootstraps run as jobs in two threads (``_summary``); each draws from its own
+    generator of the integer seed, so the result is the one thread's, bit for bit (and the BLAS
+    thread limit around them changes no product)."""
+    import json
+
+    from probecommit.tasks.base import ENGINE_THREADS_ENV
+
+    def result(threads: str) -> str:
+        monkeypatch.setenv(ENGINE_THREADS_ENV, threads)
+        res = calibrate(runs["cal"], runs["test"], alpha=0.2, resamples=200)
+        return json.dumps([res.to_dict(), res.margin.search.to_dict("list")], default=str, sort_keys=True)
+
+    assert result("2") == result("1")

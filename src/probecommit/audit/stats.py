@@ -348,10 +348,15 @@ def sign_flip_test(cluster_differences: np.ndarray, *, max_exact: int = 20, resa
     # Draw the [resamples, M] signs in blocks of rows (about 16 MB each; all of them at
     # once is 600 MB at M = 768): consecutive draws continue the generator's stream, so
     # the signs, and the p-value, are those of a single draw.
+    # The signs are ``rng.choice((-1.0, 1.0), size)``'s, drawn as that draws them (its indices,
+    # ``rng.integers(0, 2, size)``: the same stream, tested) and mapped 0 -> -1, 1 -> +1 by arithmetic
+    # instead of a gather: a third of the time, the same float matrix, so the same sums.
     rows = max(1, SIGN_BLOCK_ELEMENTS // d.size)
     hits = 0
     for start in range(0, resamples, rows):
-        signs = rng.choice((-1.0, 1.0), size=(min(rows, resamples - start), d.size))
+        signs = rng.integers(0, 2, size=(min(rows, resamples - start), d.size)).astype(float)
+        signs *= 2.0
+        signs -= 1.0
         hits += int(np.count_nonzero(np.abs(signs @ d) >= observed - tol))
     return (1 + hits) / (1 + resamples)
 

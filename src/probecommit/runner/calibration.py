@@ -20,6 +20,7 @@ from typing import Any, Callable, Iterable, Sequence
 
 import numpy as np
 import pandas as pd
+from threadpoolctl import threadpool_limits
 
 from probecommit.audit.conformal import (
     DEFAULT_ALPHA,
@@ -698,15 +699,52 @@ class CalibrationParts:
     blind: pd.DataFrame
 
 
-def _summarize(parts: CalibrationParts, *, alpha: float, budgets: list[int], cost_budget: int, resamples: int,
-               seed: int, level: float) -> CalibrationResult:
+def _summarize(parts: CalibrationParts, **options: Any) -> CalibrationResult:
     """The calibration result from its parts: one function for ``calibrate`` (parts reduced chunk by chunk
-    from re-executed commits) and ``calibration_from_tables`` (parts reduced from a publication's stored rows)."""
+    from re-executed commits) and ``calibration_from_tables`` (parts reduced from a publication's stored rows).
+
+    Its bootstraps are matrix-vector products (``counts @ x``, ``signs @ d``) of a few MB each, run
+    two at a time in threads (``in_threads``); BLAS's own threads add nothing to products this size
+    but spin between them, beside ours: 1.2 of 1.9 CPU seconds here at E = 3072 on two CPUs. One
+    BLAS thread splits no dot product differently (each draw is one row's dot product), so the
+    numbers are the same bits.
+    """
+    with threadpool_limits(limits=1, user_api="blas"):
+        return _summary(parts, **options)
+
+
+#: The paired cost comparisons (Table IV): (baseline, treatment) arms.
+COST_PAIRS = (("no calibration", "set calibration + margin"), ("no calibration", "set calibration"),
+              ("set calibration", "set calibration + margin"))
+
+
+def _summary(parts: CalibrationParts, *, alpha: float, budgets: list[int], cost_budget: int, resamples: int,
+             seed: int, level: float) -> CalibrationResult:
+    """:func:`_summarize`'s work. Its bootstraps (the two audits, the failure rows, the paired
+    comparisons, the simultaneous coverage) are independent jobs, run two at a time in threads: with
+    an integer ``seed`` each draws from its own generator, so the same numbers in any order; a
+    Generator ``seed`` is one stream, so its jobs run in this thread in the order listed (the
+    order of the draws)."""
     t_k, t_sim, n_calibration = _thresholds(parts.scores, alpha, budgets)
     df_margin = optimism_margin(parts.optimism.sort_index(), alpha)
-    orig, full = parts.orig, parts.full
-    a_orig = audit_from_sums(*orig[:2], budgets=budgets, resamples=resamples, seed=seed, level=level)
-    a_cal = audit_from_sums(*full[:2], budgets=budgets, resamples=resamples, seed=seed, level=level)
+    boot = {"resamples": resamples, "seed": seed, "level": level}
+    arms = {"no calibration": parts.orig[2], "set calibration": parts.set_rows,
+            "set calibration + margin": parts.full[2]}
+    jobs: list[tuple[Any, Callable[[], Any]]] = [
+        ("original", lambda: audit_from_sums(*parts.orig[:2], budgets=budgets, **boot)),
+        ("calibrated", lambda: audit_from_sums(*parts.full[:2], budgets=budgets, **boot)),
+        ("cost", lambda: _cost_table(parts, arms, cost_budget, boot)),
+        *[(pair, functools.partial(_compare, arms, pair, boot)) for pair in COST_PAIRS],
+        ("simultaneous", lambda: _simultaneous(parts.covered, boot)),
+    ]
+    done: dict[Any, Any] = {}
+
+    def run(i: int) -> None:
+        name, job = jobs[i]
+        done[name] = job()
+
+    in_threads(run, range(len(jobs)), None if not isinstance(seed, np.random.Generator) else 1)
+    a_orig, a_cal = done["original"], done["calibrated"]
     table3 = pd.DataFrame({"k": a_orig["k"]})
     for name, src in (("original", a_orig), ("calibrated", a_cal)):
         for metric in ("cluster_coverage", "coverage", "optimism"):
@@ -716,50 +754,49 @@ def _summarize(parts: CalibrationParts, *, alpha: float, budgets: list[int], cos
     nominal = 1.0 - alpha
     s_orig, s_cal = summary_row(a_orig, nominal), summary_row(a_cal, nominal)
     summary = {f"{k}_original": v for k, v in s_orig.items()} | {f"{k}_calibrated": v for k, v in s_cal.items()}
-
-    # Cost of calibration (Table IV): failure at the cost budget, paired over identical episodes.
-    names = np.unique(orig[0]["instance_id"].to_numpy().astype(str))
-    counts = resample_counts(names.size, resamples, seed)
-    arms = {"no calibration": orig[2], "set calibration": parts.set_rows, "set calibration + margin": full[2]}
-    cost_rows = []
-    blind = parts.blind
-    if len(blind):
-        iv, n = _failure_at(blind, int(blind["k"].iloc[0]), counts, names, level)
-        cost_rows.append({"setting": "blind_robust", "k": int(blind["k"].iloc[0]), "n_episodes": n,
-                          "failure": iv.estimate, "failure_lo": iv.lo, "failure_hi": iv.hi})
-    for label, table in arms.items():
-        iv, n = _failure_at(table, cost_budget, counts, names, level)
-        cost_rows.append({"setting": label, "k": cost_budget, "n_episodes": n,
-                          "failure": iv.estimate, "failure_lo": iv.lo, "failure_hi": iv.hi})
-    del counts  # each paired bootstrap draws its own (a [resamples, instances] matrix: 47 MB for 3072 instances)
-    pairs = (("no calibration", "set calibration + margin"), ("no calibration", "set calibration"),
-             ("set calibration", "set calibration + margin"))
-    diffs: list[dict[str, Any]] = [{} for _ in pairs]
-
-    def compare(i: int) -> None:  # each draws from its own generator of an integer `seed`: in threads, the same numbers
-        base, treat = pairs[i]
-        pdiff = paired_bootstrap(arms[base], arms[treat], "realized", resamples=resamples, seed=seed, level=level)
-        diffs[i] = {"baseline": base, "treatment": treat, "difference": pdiff.difference.estimate,
-                    "lo": pdiff.difference.lo, "hi": pdiff.difference.hi, "p_sign_flip": pdiff.p_sign_flip,
-                    "n_pairs": pdiff.n_pairs, "n_clusters": pdiff.n_clusters}
-
-    in_threads(compare, range(len(pairs)), None if not isinstance(seed, np.random.Generator) else 1)
-
-    # Simultaneous coverage on test, measured on the sets as constructed at t.
-    simultaneous = {"cluster_coverage": math.nan, "lo": math.nan, "hi": math.nan}
-    if parts.covered is not None:
-        per_inst = parts.covered.sort_index().astype(float)
-        sim_iv = cluster_bootstrap_mean(per_inst.to_numpy(), per_inst.index.to_numpy(), resamples=resamples,
-                                        seed=seed, level=level)
-        simultaneous = {"cluster_coverage": sim_iv.estimate, "lo": sim_iv.lo, "hi": sim_iv.hi}
     return CalibrationResult(
         alpha=alpha, budgets=budgets, n_calibration=n_calibration,
         thresholds=t_k, simultaneous_threshold=t_sim, margin=parts.margin, distribution_free_margin=df_margin,
-        table3=table3, summary=summary, cost=pd.DataFrame(cost_rows), cost_differences=pd.DataFrame(diffs),
-        cost_budget=cost_budget,
-        simultaneous_coverage=simultaneous,
-        audit_original=a_orig, audit_calibrated=a_cal,
+        table3=table3, summary=summary, cost=done["cost"],
+        cost_differences=pd.DataFrame([done[pair] for pair in COST_PAIRS]), cost_budget=cost_budget,
+        simultaneous_coverage=done["simultaneous"], audit_original=a_orig, audit_calibrated=a_cal,
     )
+
+
+def _cost_table(parts: CalibrationParts, arms: dict[str, pd.DataFrame], cost_budget: int,
+                boot: dict[str, Any]) -> pd.DataFrame:
+    """Cost of calibration (Table IV): failure at the cost budget per arm (and Blind-Robust's at its
+    own budget), one set of resamples of the test instances for all of them."""
+    names = np.unique(parts.orig[0]["instance_id"].to_numpy().astype(str))
+    counts = resample_counts(names.size, boot["resamples"], boot["seed"])
+    rows = []
+    blind = parts.blind
+    settings = ([("blind_robust", blind, int(blind["k"].iloc[0]))] if len(blind) else []) + \
+        [(label, table, cost_budget) for label, table in arms.items()]
+    for label, table, k in settings:
+        iv, n = _failure_at(table, k, counts, names, boot["level"])
+        rows.append({"setting": label, "k": k, "n_episodes": n,
+                     "failure": iv.estimate, "failure_lo": iv.lo, "failure_hi": iv.hi})
+    return pd.DataFrame(rows)
+
+
+def _compare(arms: dict[str, pd.DataFrame], pair: tuple[str, str], boot: dict[str, Any]) -> dict[str, Any]:
+    """The paired difference of realized failure between two arms (one row of ``cost_differences``);
+    it draws its own resamples (a [resamples, instances] matrix each)."""
+    base, treat = pair
+    pdiff = paired_bootstrap(arms[base], arms[treat], "realized", **boot)
+    return {"baseline": base, "treatment": treat, "difference": pdiff.difference.estimate,
+            "lo": pdiff.difference.lo, "hi": pdiff.difference.hi, "p_sign_flip": pdiff.p_sign_flip,
+            "n_pairs": pdiff.n_pairs, "n_clusters": pdiff.n_clusters}
+
+
+def _simultaneous(covered: pd.Series | None, boot: dict[str, Any]) -> dict[str, float]:
+    """Simultaneous coverage on test, measured on the sets as constructed at ``t`` (NaN when not recorded)."""
+    if covered is None:
+        return {"cluster_coverage": math.nan, "lo": math.nan, "hi": math.nan}
+    per_inst = covered.sort_index().astype(float)
+    iv = cluster_bootstrap_mean(per_inst.to_numpy(), per_inst.index.to_numpy(), **boot)
+    return {"cluster_coverage": iv.estimate, "lo": iv.lo, "hi": iv.hi}
 
 
 def _stored_margin(rows: pd.DataFrame, grid: Iterable[float], budgets: list[int]) -> MarginResult:
