@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-#: The families redrawn, each with its pool size, its pool's engine (None: the frozen run's own) and its experiment.
+#: The families redrawn (E94, E95 in this order), each with its pool size and its pool's engine (None: the frozen run's own).
 FAMILIES = {"hinge": (36, "analytic"), "push2d": (18, None)}
 #: The stored rows (every row the keys read), beside results.json.
 STORED = "ex11_probe_rows.parquet"
