@@ -1,4 +1,4 @@
-"""ex11's explain experiments (E94, E95): hand cases with exact answers, the rule's teeth, the stored-rows round trip."""
+"""ex11's explain experiments (E94, E95): hand cases, exact answers, the rule's teeth, the stored rows' round trip."""
 
 from __future__ import annotations
 

@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-#: The families redrawn (E94, E95 in this order), each with its pool size and its pool's engine (None: the frozen run's own).
+#: The families redrawn (E94, E95 in this order): pool size, pool engine (None: the frozen run's own).
 FAMILIES = {"hinge": (36, "analytic"), "push2d": (18, None)}
 #: The stored rows (every row the keys read), beside results.json.
 STORED = "ex11_probe_rows.parquet"
@@ -125,7 +125,8 @@ def family_rows(root: Path, runs: Path, family: str, quick: bool, workers: int) 
     return pd.concat(parts, ignore_index=True)
 
 
-def run(root: Path, runs: Path, draws: int, quick: bool = False, workers: int = 1) -> tuple[dict[str, Any], pd.DataFrame]:
+def run(root: Path, runs: Path, draws: int, quick: bool = False,
+        workers: int = 1) -> tuple[dict[str, Any], pd.DataFrame]:
     """The keys and the stored rows, for the families whose breadth runs are under ``root``."""
     from probecommit.studies.explain.ex8_blind import run_dir
 
