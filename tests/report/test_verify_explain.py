@@ -105,6 +105,8 @@ CASES: list[tuple[str, Edit]] = [
     ("stored-ex10-boundary-row", edit_stored("ex10_boundary_noise.parquet",
                                              lambda t: (t.variant == "deployed") & (t.s == t.s.max()) & (t.k == t.k.max()),
                                              "escaped", lambda v: not v, "ex10_boundary.deployed.s12.escape_k")),
+    ("stored-ex11-pool-episode", edit_stored("ex11_probe_rows.parquet", lambda t: t.part == "pool", "realized", bump,
+                                             "ex11_probe.")),
     ("json-ex7-signature", edit_results("explain", ["ex7_faults", "signature.particles.optimism_change"],
                                         lambda v: [v[0] + 0.0123, *v[1:]])),
     ("json-pybullet-stored-escape", edit_results("explain", ["pybullet_escape", "stored.escape_k8"],
@@ -175,6 +177,7 @@ CASES: list[tuple[str, Edit]] = [
     ("deleted-explain-commits-rehashed", delete_stored("commits.parquet")),
     ("deleted-draw-cells-rehashed", delete_stored("draw_cells.parquet")),
     ("deleted-schedules-rehashed", delete_stored("schedule_episodes.parquet")),
+    ("deleted-ex11-rows-rehashed", delete_stored("ex11_probe_rows.parquet")),
 ]
 
 

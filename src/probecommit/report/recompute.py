@@ -515,6 +515,12 @@ def explain(folder: Path, results: dict[str, Any]) -> Recomputed:
     out.sources.update(sources)
     out.consistency.extend((False, problem) for problem in problems)
     _ex10(folder, results, out)
+    from probecommit.studies.explain import ex11
+
+    values, sources, problems = ex11.recompute(folder, results)  # ex11's groups (E94..) from their stored rows
+    out.values.update(values)
+    out.sources.update(sources)
+    out.consistency.extend((False, problem) for problem in problems)
     from probecommit.studies.explain.study import plain
 
     out.values = {key: plain(value) for key, value in out.values.items()}  # as the explain step publishes it
