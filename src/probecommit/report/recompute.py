@@ -478,53 +478,48 @@ def explain(folder: Path, results: dict[str, Any]) -> Recomputed:
         for key, value in rig.keys(*(pd.read_parquet(folder / name) for name in EXPLAIN_RIG), boot).items():
             out.values[f"rig_redraws.{key}"] = value
         out.sources["rig_redraws"] = " and ".join(EXPLAIN_RIG)
-    if (folder / EXPLAIN_MIXTURE).is_file():
-        from probecommit.studies.explain.mixture_x import summary
-
-        for key, value in summary(pd.read_parquet(folder / EXPLAIN_MIXTURE)).items():
-            out.values[f"mixture_noise.{key}"] = value
-        out.sources["mixture_noise"] = EXPLAIN_MIXTURE
-    if (folder / EXPLAIN_EX5).is_file():
-        from probecommit.studies.explain.ex5_calibration import summary as ex5_summary
-
-        for key, value in ex5_summary(pd.read_parquet(folder / EXPLAIN_EX5)).items():
-            out.values[f"ex5_calibration.{key}"] = value
-        out.sources["ex5_calibration"] = EXPLAIN_EX5
-    if (folder / EXPLAIN_EX9).is_file():
-        from probecommit.studies.explain.ex9_calibration import summary as ex9_summary
-
-        for key, value in ex9_summary(pd.read_parquet(folder / EXPLAIN_EX9)).items():
-            out.values[f"ex9_calibration.{key}"] = value
-        out.sources["ex9_calibration"] = EXPLAIN_EX9
+    _stored_summaries(folder, results, out)
     _ex4_cone(folder, results, out)
     if "ex4_pricing" in results:  # a pure function of the paper's printed values (studies.explain.ex4_pricing)
         from probecommit.studies.explain.ex4_pricing import keys as ex4_pricing_keys
 
         out.values.update({f"ex4_pricing.{key}": value for key, value in ex4_pricing_keys().items()})
         out.sources["ex4_pricing"] = "the paper's printed values (studies/paper_values.py)"
-    from probecommit.studies.explain import ex7
-
-    values, sources = ex7.recompute(folder)  # ex7's groups (E69..E72) from their stored rows
-    out.values.update(values)
-    out.sources.update(sources)
     _ex6(folder, results, out)
-    from probecommit.studies.explain import ex8
-
-    values, sources, problems = ex8.recompute(folder, results)  # ex8's groups (E73..) from their stored rows
-    out.values.update(values)
-    out.sources.update(sources)
-    out.consistency.extend((False, problem) for problem in problems)
     _ex10(folder, results, out)
-    from probecommit.studies.explain import ex11
-
-    values, sources, problems = ex11.recompute(folder, results)  # ex11's groups (E94..) from their stored rows
-    out.values.update(values)
-    out.sources.update(sources)
-    out.consistency.extend((False, problem) for problem in problems)
+    _self_recomputing(folder, results, out)
     from probecommit.studies.explain.study import plain
 
     out.values = {key: plain(value) for key, value in out.values.items()}  # as the explain step publishes it
     return out
+
+
+
+def _stored_summaries(folder: Path, results: dict[str, Any], out: Recomputed) -> None:
+    """``STORED_SUMMARIES``' keys, each group from its stored table; published keys need their rows."""
+    import importlib
+
+    for group, name, module in STORED_SUMMARIES:
+        if not (folder / name).is_file():
+            if results.get(group):
+                out.consistency.append((False, f"explain/{name}: missing (the rows {group}'s keys are recomputed from)"))
+            continue
+        summary = importlib.import_module(f"probecommit.studies.explain.{module}").summary
+        for key, value in summary(pd.read_parquet(folder / name)).items():
+            out.values[f"{group}.{key}"] = value
+        out.sources[group] = name
+
+
+def _self_recomputing(folder: Path, results: dict[str, Any], out: Recomputed) -> None:
+    """``SELF_RECOMPUTING``'s groups, each module's ``recompute`` from its own stored rows."""
+    import importlib
+
+    for module in SELF_RECOMPUTING:
+        values, sources, problems = importlib.import_module(f"probecommit.studies.explain.{module}").recompute(
+            folder, results)
+        out.values.update(values)
+        out.sources.update(sources)
+        out.consistency.extend((False, problem) for problem in problems)
 
 
 def _ex4_cone(folder: Path, results: dict[str, Any], out: Recomputed) -> None:
@@ -875,6 +870,16 @@ EXPLAIN_EX5 = "ex5_calibration_rows.parquet"
 EXPLAIN_EX9 = "ex9_calibration_rows.parquet"
 #: ex7's stored rows (``studies.explain.ex7.STORED``: the fault surprise rows and the fresh draws).
 EXPLAIN_EX7 = ("ex7_fault_surprise.parquet", "ex7_dev_draws.parquet", "ex7_harness_draws.parquet")
+
+#: Explain groups whose keys are one ``summary(rows)`` of one stored table: (group, file, module).
+STORED_SUMMARIES = (("mixture_noise", EXPLAIN_MIXTURE, "mixture_x"),
+                    ("ex5_calibration", EXPLAIN_EX5, "ex5_calibration"),
+                    ("ex9_calibration", EXPLAIN_EX9, "ex9_calibration"))
+
+#: Explain modules that recompute their own groups: ``recompute(folder, results)`` gives
+#: ``(values, sources, problems)`` (a group published without its stored rows is a problem).
+SELF_RECOMPUTING = ("ex7", "ex8", "ex11")
+
 
 
 #: The stored tables each study's numbers are recomputed from: a publication without one fails verify

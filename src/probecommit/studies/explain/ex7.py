@@ -26,12 +26,13 @@ def run(job: Any) -> None:
 STORED = (ex7_faults.STORED, ex7_robust.STORED_DEV, ex7_robust.STORED_HARNESS)
 
 
-def recompute(folder: Path) -> tuple[dict[str, Any], dict[str, str]]:
+def recompute(folder: Path, results: dict[str, Any]) -> tuple[dict[str, Any], dict[str, str], list[str]]:
     """ex7's keys recomputed from a publication's stored rows (``verify``): the signatures from the insertion
     study's fault episodes, the surprise AUCs and the draws' summaries from the rows this step stored.
 
-    Returns ``(values, sources)`` keyed as ``explain:results`` (``ex7_faults.<key>``); a missing stored table
-    recomputes nothing (``STORED_TABLES`` fails it on its own)."""
+    Returns ``(values, sources, problems)`` keyed as ``explain:results`` (``ex7_faults.<key>``), the contract of
+    ``report.recompute.SELF_RECOMPUTING``; a missing stored table recomputes nothing and is no problem here
+    (``STORED_TABLES`` fails it on its own)."""
     import json
 
     import pandas as pd
@@ -68,4 +69,4 @@ def recompute(folder: Path) -> tuple[dict[str, Any], dict[str, str]]:
         for key, v in ex7_robust.harness_draw_keys(pd.read_parquet(folder / ex7_robust.STORED_HARNESS)).items():
             values[f"ex7_robust.harness_draws.mixture.{key}"] = v
             sources[f"ex7_robust.harness_draws.mixture.{key}"] = ex7_robust.STORED_HARNESS
-    return values, sources
+    return values, sources, []
