@@ -515,6 +515,7 @@ def explain(folder: Path, results: dict[str, Any]) -> Recomputed:
     out.sources.update(sources)
     out.consistency.extend((False, problem) for problem in problems)
     _ex10(folder, results, out)
+    _ex13(folder, results, out)
     from probecommit.studies.explain.study import plain
 
     out.values = {key: plain(value) for key, value in out.values.items()}  # as the explain step publishes it
@@ -563,6 +564,21 @@ def _ex10(folder: Path, results: dict[str, Any], out: Recomputed) -> None:
     for key, (value, source) in ex10.recompute(folder, dict(resamples=int(b["resamples"]), seed=int(b["seed"]))).items():
         out.values[key], out.sources[key] = value, source
     for group, name in ex10.STORED_BY_GROUP.items():  # published keys need their stored rows
+        if results.get(group) and not (folder / name).is_file():
+            out.consistency.append((False, f"explain/{name}: missing (the rows {group}'s keys are recomputed from)"))
+
+
+def _ex13(folder: Path, results: dict[str, Any], out: Recomputed) -> None:
+    """ex13's keys (E106..) from their stored rows (``studies.explain.ex13.recompute``)."""
+    from probecommit.studies.explain import ex13
+
+    setup = folder.parent / "insertion" / "results.json"
+    if not setup.is_file():
+        return
+    b = json.loads(setup.read_text())["results"]["setup"]["bootstrap"]
+    for key, (value, source) in ex13.recompute(folder, dict(resamples=int(b["resamples"]), seed=int(b["seed"]))).items():
+        out.values[key], out.sources[key] = value, source
+    for group, name in ex13.STORED_BY_GROUP.items():  # published keys need their stored rows
         if results.get(group) and not (folder / name).is_file():
             out.consistency.append((False, f"explain/{name}: missing (the rows {group}'s keys are recomputed from)"))
 
@@ -922,7 +938,8 @@ RECOMPUTED = {
                "the PyBullet capture interval; ex5's re-split costs, fresh pools and capture pairs; ex4's single-width "
                "counts, prices from the paper's curve and the pyramidal-cone rows; ex7's fault readings and fresh draws; "
                "ex9's held-out coverage with ties, costs over four pools and the calibrated arm at the paper's margin; "
-               "ex10's per-tap boundary replays of PyBullet and the paper's-schedule surprise without the jitter's tail",
+               "ex10's per-tap boundary replays of PyBullet and the paper's-schedule surprise without the jitter's tail; "
+               "ex13's surprise AUCs over five draws of the generator under the paper's schedule",
 }
 TRACED_ONLY = {
     "insertion": "the stored rows themselves (episodes, re-executed commits, replays); the re-split rows; the cover "
