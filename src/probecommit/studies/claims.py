@@ -711,7 +711,8 @@ def _claims_commit_decision() -> list[Claim]:
               "(cover) at k = 1 but hardly at k = 5",
               (Inside("k=1", "T36-surprise.auc_k1", f"{X}missing.surprise_auc_cover_k1"),
                Inside("k=5", "T36-surprise.auc_k5", f"{X}missing.surprise_auc_cover_k5")),
-              explain=(("E15", ("k=5",)), ("E16", ("k=1",)), ("E64", ("k=1", "k=5")), ("E88", ("k=1", "k=5")))))
+              explain=(("E15", ("k=5",)), ("E16", ("k=1",)), ("E64", ("k=1", "k=5")), ("E88", ("k=1", "k=5")),
+                       ("E106", ("k=1",)))))
     return c
 
 
@@ -781,7 +782,7 @@ def _claims_robust_filters() -> list[Claim]:
     add(Claim("T44-mixture-cost", "Sec. VI, Robust filters", "When the model is right the mixture costs failure",
               (Holds("costs", "failure with the mixture above failure without",
                      {"a": f"{I}robust.mixture_cost_when_right.0", "b": f"{I}robust.mixture_cost_when_right.1"},
-                     lambda v: v["b"] > v["a"]),), explain=("E11", "E46", "E72")))
+                     lambda v: v["b"] > v["a"]),), explain=("E11", "E46", "E72", "E107")))
     return c
 
 
@@ -1622,10 +1623,54 @@ def _experiments_ex11() -> list[Experiment]:
     return out
 
 
+def _experiments_ex13() -> list[Experiment]:
+    """The sixth session's ex13 experiments (E106..E111, ``studies/explain/ex13*.py``; rules in docs/decisions.md,
+    "ex13", written before the runs)."""
+    su, mx = f"{X}ex13_surprise.", f"{X}ex13_mixture."
+    draws = ("b_test", "b_cal", "a", "pool_0", "pool_1")
+    return [
+        Experiment("E106", "the k = 1 surprise AUC over five draws of the generator under the paper's schedule",
+                   {"lo": f"{su}auc_k1.min", "hi": f"{su}auc_k1.max", "lo5": f"{su}auc_k5.min", "hi5": f"{su}auc_k5.max",
+                    "nlo": f"{su}n_escaped.min", "nhi": f"{su}n_escaped.max", "pn": "paper:T36-surprise.escaped",
+                    "n": f"{su}draws", **{f"p{i}": f"{su}{d}.first_tap_pocket.escaped" for i, d in enumerate(draws)},
+                    "r0": f"{su}b_test.first_tap_pocket.rest", "pa": f"{su}a.auc_k1", "ea": f"{su}a.n_escaped"},
+                   "over {n:d} draws of 96 instances that the explain target runs on MuJoCo under the paper's schedule and "
+                   "the deployed model (Split B test, Split B calibration, Split A, the re-split pool's two halves), "
+                   "final-budget escapes number {nlo:d} to {nhi:d} (paper {pn:.0f}) and the k = 1 surprise AUC spans "
+                   "{lo:.3f} to {hi:.3f} (k = 5: {lo5:.3f} to {hi5:.3f}). At k = 1 only the first tap (-12 mm) has been read, "
+                   "so the AUC grows with the share of escapes that read the pocket there against the rest's: Split A, "
+                   "{pa:.3f} with {ea:d} escapes, {p2:.2f} of them reading the pocket first; Split B test {p0:.2f} "
+                   "(the rest {r0:.2f}); the other draws {p1:.2f}, {p3:.2f} and {p4:.2f}.",
+                   supports=lambda v: v["lo"] <= _pv("T36-surprise.auc_k1") <= v["hi"]),
+        Experiment("E107", "the mixture's cost when the model is right under every reading of q0's units",
+                   {"n": f"{mx}seeds", "r": f"{mx}right.failure.mean",
+                    **{f"{a}{s}": f"{mx}{name}.{key}" for a, name in (("o", "ours"), ("k", "kernel"), ("mk", "mass_kernel"),
+                                                                      ("md", "mass_density"), ("m", "q0_per_metre"),
+                                                                      ("mp", "q0_per_metre_kernel"), ("pm", "p_per_metre"))
+                       for s, key in (("", "paired_cost.mean"), ("lo", "paired_cost.min"), ("hi", "paired_cost.max"))},
+                    "mf": f"{mx}q0_per_metre.failure.mean", "me": f"{mx}q0_per_metre.effective_epsilon",
+                    "mc": f"{mx}q0_per_metre.changed_aims.mean", "pr": "paper:T44-mixture-cost.right",
+                    "pmx": "paper:T44-mixture-cost.mixture"},
+                   "a particle's weight depends only on the mixture floor's ratio to the tap Gaussian's constant, so "
+                   "the units of q0 and of the Gaussian set the mixture's strength at the paper's epsilon. Replaying the "
+                   "harness's right-model run over {n:d} filter seeds (right model {r:.3f}), the paired cost is "
+                   "{o:+.3f} as we read it (q0 and the Gaussian per mm), {k:+.3f} with the paper's unnormalized kernel, "
+                   "{mk:+.3f} and {md:+.3f} with q0 a probability mass (against the kernel, the density), {mp:+.3f} with "
+                   "q0 per metre against the kernel and {pm:+.3f} with the Gaussian per metre; with q0 a density per "
+                   "metre against the Gaussian per mm (a unit mismatch, epsilon {me:.3f} in ours) {m:+.3f} ({mlo:+.3f} "
+                   "to {mhi:+.3f} over seeds; failure {mf:.3f}, the paper {pr:.3f} to {pmx:.3f}), changing {mc:.2f} of "
+                   "the aims. A reading whose range spans the paper's cost names a mismatch of units in an "
+                   "implementation, not a property of the stated filter.",
+                   supports=lambda v: v["mlo"] <= _pv("T44-mixture-cost.mixture") - _pv("T44-mixture-cost.right")
+                   <= v["mhi"] or any(v[f"{a}lo"] <= _pv("T44-mixture-cost.mixture") - _pv("T44-mixture-cost.right")
+                                      <= v[f"{a}hi"] for a in ("o", "k", "mk", "md", "mp", "pm"))),
+    ]
+
+
 for _experiment in (_experiments() + _experiments_more() + _experiments_ex3() + _experiments_ex4()
                     + _experiments_ex5() + _experiments_ex6() + _experiments_ex7()
                     + _experiments_ex8() + _experiments_ex9()
-                    + _experiments_ex10() + _experiments_ex11()):
+                    + _experiments_ex10() + _experiments_ex11() + _experiments_ex13()):
     EXPERIMENTS[_experiment.number] = _experiment
 
 
