@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from probecommit.runner.replay import replay_episodes
+from probecommit.studies.explain.replay_final import replay_at
 from probecommit.studies.explain.runs import _run
 from probecommit.studies.robust import final_rows, robust_candidates, tune_robust_filters
 
@@ -58,7 +58,7 @@ def harness_draw_table(protocol: Any, runs: Any, mixture: dict[str, Any], count:
                                      seed_offset=protocol.faults.seed_offset)
         run = _run(config, runs / split, workers)
         right = _final(final_rows(run.episodes), k)
-        mixed = _final(final_rows(replay_episodes(run, {"belief": mixture}, chunk_instances=48)[0]), k)
+        mixed = _final(final_rows(replay_at(run, {"belief": mixture}, k)), k)  # only budget k committed
         rows.append({"draw": split, "right": float(right["realized"].mean()), "mixed": float(mixed["realized"].mean()),
                      "changed": float((right["action"].to_numpy() != mixed["action"].to_numpy()).mean())})
     return pd.DataFrame(rows, columns=["draw", "right", "mixed", "changed"])

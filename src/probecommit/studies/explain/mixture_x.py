@@ -17,7 +17,8 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from probecommit.runner.replay import LoadedRun, replay_episodes
+from probecommit.runner.replay import LoadedRun
+from probecommit.studies.explain.replay_final import replay_at
 
 
 def _final(episodes: pd.DataFrame, k: int) -> pd.DataFrame:
@@ -52,8 +53,8 @@ def run(base: LoadedRun, mixture: dict[str, Any], seeds: list[int], k: int) -> t
     frozen = _final(base.episodes, k)
     for seed in seeds:
         loaded = reseeded(base, seed)
-        r = _final(replay_episodes(loaded, None, chunk_instances=48)[0], k)
-        m = _final(replay_episodes(loaded, {"belief": mixture}, chunk_instances=48)[0], k)
+        r = _final(replay_at(loaded, None, k), k)  # only the final budget is read: only it is committed
+        m = _final(replay_at(loaded, {"belief": mixture}, k), k)
         rows.append({"seed": int(seed), "epsilon": float(mixture["epsilon"]), "right": float(r["realized"].mean()),
                      "mixed": float(m["realized"].mean()),
                      "changed": float((r["action"].to_numpy() != m["action"].to_numpy()).mean()),

@@ -19,7 +19,8 @@ import pandas as pd
 import yaml
 
 from probecommit.audit.stats import paired_bootstrap
-from probecommit.runner.replay import load_run, replay_episodes
+from probecommit.runner.replay import load_run
+from probecommit.studies.explain.replay_final import replay_at
 from probecommit.studies.explain import (calibration_rows, draw_audit, draw_faults, engines_x, generator, more, resplits,
                                          robust_rows, runs, stored, surprise_variants)
 from probecommit.studies.explain.shared_beliefs import SharedBeliefs, cyclic_pairs
@@ -361,13 +362,13 @@ class Explain:
             self.progress("explain: mixture when right", i, len(eps_grid))
             belief = {"likelihood": "mixture", "epsilon": float(eps), "mixture_low": r.mixture_range[0],
                       "mixture_high": r.mixture_range[1]}
-            ep, _ = replay_episodes(base, {"belief": belief}, chunk_instances=48)
+            ep = replay_at(base, {"belief": belief}, kmax)  # only the final budget is read (``replay_final``)
             parts.append(_probe(ep, kmax).assign(part="right_mixture", epsilon=float(eps)))
         chosen = json.loads(json.dumps(self.insertion_results()["robust"]["chosen"]))
         eps = float(chosen.get("mixture", r.epsilons[0]))
         belief = {"likelihood": "mixture", "epsilon": eps, "mixture_low": r.mixture_range[0], "mixture_high": r.mixture_range[1]}
         c_old = self.load("C_random")
-        ep, _ = replay_episodes(c_old, {"belief": belief}, chunk_instances=48)
+        ep = replay_at(c_old, {"belief": belief}, kmax)
         parts.append(_probe(ep, kmax).assign(part="testc_mixture", epsilon=eps))
         self.stored[robust_rows.STORED] = robust_rows.table(parts)
         self.res["robust"].update(robust_rows.keys(self.stored[robust_rows.STORED], _probe(c_old.episodes, kmax),
