@@ -515,6 +515,14 @@ def explain(folder: Path, results: dict[str, Any]) -> Recomputed:
     out.sources.update(sources)
     out.consistency.extend((False, problem) for problem in problems)
     _ex10(folder, results, out)
+    if (folder / EXPLAIN_EX12).is_file():  # ex12's E100 from its stored rows (``studies.explain.ex12_distinct``)
+        from probecommit.studies.explain.ex12_distinct import summary as ex12_summary
+
+        for key, value in ex12_summary(pd.read_parquet(folder / EXPLAIN_EX12)).items():
+            out.values[f"ex12_distinct.{key}"] = value
+        out.sources["ex12_distinct"] = EXPLAIN_EX12
+    elif results.get("ex12_distinct"):  # published keys need their stored rows
+        out.consistency.append((False, f"explain/{EXPLAIN_EX12}: missing (the rows ex12_distinct's keys are recomputed from)"))
     from probecommit.studies.explain.study import plain
 
     out.values = {key: plain(value) for key, value in out.values.items()}  # as the explain step publishes it
@@ -867,6 +875,8 @@ EXPLAIN_RIG = ("rig_redraws_sessions.parquet", "rig_redraws_boundary.parquet")
 EXPLAIN_EX5 = "ex5_calibration_rows.parquet"
 #: ex9's stored rows (``studies.explain.ex9_calibration.STORED``: coverage splits, cost splits, E82's budgets).
 EXPLAIN_EX9 = "ex9_calibration_rows.parquet"
+#: ex12's stored rows (``studies.explain.ex12_distinct.STORED``: E100's budget-k rows without replacement).
+EXPLAIN_EX12 = "ex12_distinct_rows.parquet"
 #: ex7's stored rows (``studies.explain.ex7.STORED``: the fault surprise rows and the fresh draws).
 EXPLAIN_EX7 = ("ex7_fault_surprise.parquet", "ex7_dev_draws.parquet", "ex7_harness_draws.parquet")
 
@@ -922,7 +932,8 @@ RECOMPUTED = {
                "the PyBullet capture interval; ex5's re-split costs, fresh pools and capture pairs; ex4's single-width "
                "counts, prices from the paper's curve and the pyramidal-cone rows; ex7's fault readings and fresh draws; "
                "ex9's held-out coverage with ties, costs over four pools and the calibrated arm at the paper's margin; "
-               "ex10's per-tap boundary replays of PyBullet and the paper's-schedule surprise without the jitter's tail",
+               "ex10's per-tap boundary replays of PyBullet and the paper's-schedule surprise without the jitter's tail; "
+               "ex12's Table III original cells under a schedule without replacement",
 }
 TRACED_ONLY = {
     "insertion": "the stored rows themselves (episodes, re-executed commits, replays); the re-split rows; the cover "

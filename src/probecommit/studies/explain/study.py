@@ -26,6 +26,7 @@ from probecommit.studies.explain.shared_beliefs import SharedBeliefs, cyclic_pai
 from probecommit.studies.explain.background import Background
 from probecommit.studies.explain.timing import StepClock
 from probecommit.studies.explain import ex4, ex5_calibration, ex6, ex7, ex8, ex9_calibration, ex10
+from probecommit.studies.explain import ex12_distinct
 from probecommit.studies.explain import gru as gru_study
 from probecommit.studies.explain.margin import margin_curve
 from probecommit.studies.paper_values import PRINTED
@@ -100,7 +101,8 @@ class Explain:
             "missing", "committed_pool", "instance_generator", "margin_per_gamma", "thresholds", "gru", "physx_capture",
             "boundary_fault", "robust", *more.GROUPS,
             "ex5_calibration", *ex4.GROUPS, *ex6.GROUPS, *ex7.GROUPS,
-            *ex8.GROUPS, "ex9_calibration", *ex10.GROUPS)}
+            *ex8.GROUPS, "ex9_calibration", *ex10.GROUPS,
+            ex12_distinct.GROUP)}
         self.tables: dict[str, pd.DataFrame] = {}
         #: Stored rows written beside results.json as they are, by file name (``more``'s steps).
         self.stored: dict[str, pd.DataFrame] = {}
@@ -437,7 +439,8 @@ class Explain:
                  lambda: (self.ready and self.ready(), self.gru()), lambda: more.run(self),
                  lambda: ex5_calibration.run(self), lambda: ex4.run(self),
                  lambda: ex6.run(self, paper), lambda: ex7.run(self),
-                 lambda: ex8.run(self), lambda: ex9_calibration.run(self), lambda: ex10.run(self, paper)]
+                 lambda: ex8.run(self), lambda: ex9_calibration.run(self), lambda: ex10.run(self, paper),
+                 lambda: ex12_distinct.run(self)]
         try:
             for i, step in enumerate(steps):
                 self.progress("explain", i, len(steps))
