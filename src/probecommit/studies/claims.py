@@ -1623,12 +1623,13 @@ def _experiments_ex12() -> list[Experiment]:
             {**ranges, "lo": f"{d}{metric}.k{k}.min", "hi": f"{d}{metric}.k{k}.max", "m": f"{d}{metric}.k{k}.mean",
              "f": f"{d}{metric}.k{k}.frozen", "n": f"{d}draws", "c": f"{d}clusters.k5.min",
              "o1lo": f"{d}optimism.k1.min", "o1hi": f"{d}optimism.k1.max",
-             "o2lo": f"{d}optimism.k2.min", "o2hi": f"{d}optimism.k2.max"},
+             "o2lo": f"{d}optimism.k2.min", "o2hi": f"{d}optimism.k2.max",
+             "p1": "paper:tab:audit.optimism_original.1", "p2": "paper:tab:audit.optimism_original.2"},
             "reading E17's {n:d} fresh draws at the tap where the k-th distinct probe position first appears (a "
             "schedule drawn without replacement; at least {c:d} eligible clusters a draw at k = 5), this cell ranges "
             "{lo:.3f} to {hi:.3f} (mean {m:.3f}; the frozen draw {f:.3f}); the rule is joint over the original arm's "
-            "eight cells at k = 1, 2, 3, 5, and the optimism at k = 1 ({o1lo:+.3f} to {o1hi:+.3f}) and k = 2 "
-            "({o2lo:+.3f} to {o2hi:+.3f}) bound it.",
+            "eight cells at k = 1, 2, 3, 5, where optimism ranges {o1lo:+.3f} to {o1hi:+.3f} at k = 1 (paper "
+            "{p1:+.3f}) and {o2lo:+.3f} to {o2hi:+.3f} at k = 2 (paper {p2:+.3f}).",
             supports=lambda v, key=f"tab:audit.{metric}_original.{k}": v["c"] >= EX12_MIN_CLUSTERS and joint(v)
             and v["lo"] <= _pv(key) <= v["hi"]))
     return out
