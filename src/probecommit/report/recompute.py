@@ -523,6 +523,15 @@ def explain(folder: Path, results: dict[str, Any]) -> Recomputed:
         out.sources["ex12_distinct"] = EXPLAIN_EX12
     elif results.get("ex12_distinct"):  # published keys need their stored rows
         out.consistency.append((False, f"explain/{EXPLAIN_EX12}: missing (the rows ex12_distinct's keys are recomputed from)"))
+    if (folder / EXPLAIN_EX12_SIM).is_file():  # ex12's E101 from its stored rows (``studies.explain.ex12_simultaneous``)
+        from probecommit.studies.explain.ex12_simultaneous import summary as ex12_sim_summary
+
+        for key, value in ex12_sim_summary(pd.read_parquet(folder / EXPLAIN_EX12_SIM)).items():
+            out.values[f"ex12_simultaneous.{key}"] = value
+        out.sources["ex12_simultaneous"] = EXPLAIN_EX12_SIM
+    elif results.get("ex12_simultaneous"):
+        out.consistency.append((False, f"explain/{EXPLAIN_EX12_SIM}: missing (the rows ex12_simultaneous's keys are "
+                                       "recomputed from)"))
     from probecommit.studies.explain.study import plain
 
     out.values = {key: plain(value) for key, value in out.values.items()}  # as the explain step publishes it
@@ -877,6 +886,8 @@ EXPLAIN_EX5 = "ex5_calibration_rows.parquet"
 EXPLAIN_EX9 = "ex9_calibration_rows.parquet"
 #: ex12's stored rows (``studies.explain.ex12_distinct.STORED``: E100's budget-k rows without replacement).
 EXPLAIN_EX12 = "ex12_distinct_rows.parquet"
+#: ex12's stored rows (``studies.explain.ex12_simultaneous.STORED``: E101's re-splits under the simultaneous level).
+EXPLAIN_EX12_SIM = "ex12_simultaneous_rows.parquet"
 #: ex7's stored rows (``studies.explain.ex7.STORED``: the fault surprise rows and the fresh draws).
 EXPLAIN_EX7 = ("ex7_fault_surprise.parquet", "ex7_dev_draws.parquet", "ex7_harness_draws.parquet")
 
@@ -933,7 +944,8 @@ RECOMPUTED = {
                "counts, prices from the paper's curve and the pyramidal-cone rows; ex7's fault readings and fresh draws; "
                "ex9's held-out coverage with ties, costs over four pools and the calibrated arm at the paper's margin; "
                "ex10's per-tap boundary replays of PyBullet and the paper's-schedule surprise without the jitter's tail; "
-               "ex12's Table III original cells under a schedule without replacement",
+               "ex12's Table III original cells under a schedule without replacement and the re-splits under the "
+               "budget-simultaneous level",
 }
 TRACED_ONLY = {
     "insertion": "the stored rows themselves (episodes, re-executed commits, replays); the re-split rows; the cover "

@@ -575,7 +575,8 @@ def _claims_audit_and_calibration() -> list[Claim]:
                                                                    "margin optimistic")),
                        *((f"E56[{label}]", (label,)) for label in ("level mean", "held-out cluster coverage",
                                                                    "margin optimistic")),
-                       ("E80", ("held-out cluster coverage",)), ("E83", ("margin optimistic",)))))
+                       ("E80", ("held-out cluster coverage",)), ("E83", ("margin optimistic",)),
+                       ("E101", ("held-out cluster coverage",)))))
     return c
 
 
@@ -1632,6 +1633,16 @@ def _experiments_ex12() -> list[Experiment]:
             "{p1:+.3f}) and {o2lo:+.3f} to {o2hi:+.3f} at k = 2 (paper {p2:+.3f}).",
             supports=lambda v, key=f"tab:audit.{metric}_original.{k}": v["c"] >= EX12_MIN_CLUSTERS and joint(v)
             and v["lo"] <= _pv(key) <= v["hi"]))
+    sp = f"{d.replace('ex12_distinct', 'ex12_simultaneous')}B_pool_cover."
+    out.append(Experiment(
+        "E101", "the re-splits' held-out cluster coverage against the budget-simultaneous level",
+        {"lv": f"{sp}level.mean", "lsd": f"{sp}level.sd", "cv": f"{sp}coverage.mean", "n": f"{sp}splits",
+         "lf": f"{sp}level_fixed.mean", "cf": f"{sp}coverage_fixed.mean"},
+        "calibrating each of the frozen cover pool's {n:d} re-splits with the budget-simultaneous level over the cover "
+        "budgets (S_i = max_k s_rep_(i,k)), the level is {lv:.3f} +- {lsd:.3f} (SD across splits) and the held-out "
+        "cluster coverage at k = 5 is {cv:.3f}; with the fixed-budget t_5 (our study's reading), {lf:.3f} and {cf:.3f}.",
+        supports=lambda v: abs(v["cv"] - _pv("T14-resplits.heldout_cluster_coverage")) <= POINT_TOL * 2.5
+        and abs(v["lv"] - _pv("T14-resplits.level_mean")) <= 0.1))
     return out
 
 
