@@ -75,3 +75,34 @@ def test_the_joint_rule_needs_every_original_cell_in_range():
     assert not exp.supports({**v, "c": claims.EX12_MIN_CLUSTERS - 1})
     assert not exp.supports({**v, "hi": value("tab:audit.optimism_original.3") - 0.001})
     assert claims.EX12_MIN_CLUSTERS == ex12.MIN_CLUSTERS and tuple(claims.EX12_BUDGETS) == ex12.BUDGETS
+
+
+# ----------------------------------------------------------------------------- E101
+from probecommit.studies.explain import ex12_simultaneous as ex12s  # noqa: E402
+
+
+def test_split_row_takes_the_simultaneous_level_over_budgets_and_covers_at_the_last():
+    # 5 calibration clusters, alpha = 0.2: q = ceil(0.8 * 6) = 5, the largest score
+    ids = [f"c{j}" for j in range(5)] + ["t0", "t1"]
+    table = pd.DataFrame({1: [0.1, 0.2, 0.3, 0.4, 1.2, 0.1, 0.1], 2: [0.3, 0.1, 0.2, 0.5, 0.6, 0.9, 0.55]},
+                         index=ids)
+    got = ex12s.split_row(table, np.array(ids[:5]), np.array(["t0", "t1"]), 0.2, 2)
+    assert got == {"level": 1.2, "coverage": 1.0, "level_fixed": 0.6, "coverage_fixed": 0.5}
+
+
+def test_summary_per_pool_means_and_sd():
+    rows = pd.DataFrame({"pool": ["a", "a", "b"], "index": [0, 1, 0], "level": [1.0, 0.5, 0.9],
+                         "coverage": [0.8, 0.9, 0.7], "level_fixed": [0.4, 0.6, 0.3], "coverage_fixed": [0.8, 0.8, 0.6]})
+    got = ex12s.summary(rows)
+    assert got["a.splits"] == 2 and got["a.level.mean"] == 0.75 and math.isclose(got["a.level.sd"], 0.5 ** 0.5 / 2)
+    assert math.isclose(got["a.coverage.mean"], 0.85) and got["a.level_fixed.mean"] == 0.5
+    assert got["b.splits"] == 1 and np.isnan(got["b.level.sd"])
+
+
+def test_e101_needs_both_the_coverage_and_the_level_of_the_same_reading():
+    exp = claims.EXPERIMENTS["E101"]
+    v = {"lv": value("T14-resplits.level_mean"), "lsd": 0.2, "cv": value("T14-resplits.heldout_cluster_coverage"),
+         "n": 50, "lf": 0.6, "cf": 0.8}
+    assert exp.supports(v)
+    assert not exp.supports({**v, "lv": 1.011})  # a level that does not vary as the paper's does
+    assert not exp.supports({**v, "cv": 0.918})
