@@ -108,6 +108,7 @@ def _run_rows(run: Path, draw: str) -> pd.DataFrame:
 
 def run(explain: Any) -> None:
     """The explain step: re-index E17's fresh draws and the frozen test run, store the rows, publish keys."""
+    explain.progress("explain: Table III's original arm without replacement (E100)", 0, 1)
     runs_root = Path(explain.runs)
     count = explain.cfg["fresh_draws_quick" if explain.quick else "fresh_draws"]
     names = [f"analytic_draw_{i:02d}" for i in range(int(count))]

@@ -65,6 +65,7 @@ def summary(rows: pd.DataFrame) -> dict[str, Any]:
 
 def run(explain: Any) -> None:
     """The explain step: the frozen cover pool and E80's paper-schedule pools, stored rows and keys."""
+    explain.progress("explain: the re-splits under the budget-simultaneous level (E101)", 0, 1)
     from probecommit.runner.replay import load_run
     from probecommit.studies.explain.ex9_calibration import pools
 
