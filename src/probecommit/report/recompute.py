@@ -868,13 +868,19 @@ EXPLAIN_RIG = ("rig_redraws_sessions.parquet", "rig_redraws_boundary.parquet")
 EXPLAIN_EX5 = "ex5_calibration_rows.parquet"
 #: ex9's stored rows (``studies.explain.ex9_calibration.STORED``: coverage splits, cost splits, E82's budgets).
 EXPLAIN_EX9 = "ex9_calibration_rows.parquet"
+#: ex12's stored rows (``studies.explain.ex12_distinct.STORED``: E100's budget-k rows without replacement).
+EXPLAIN_EX12 = "ex12_distinct_rows.parquet"
+#: ex12's stored rows (``studies.explain.ex12_simultaneous.STORED``: E101's re-splits under the simultaneous level).
+EXPLAIN_EX12_SIM = "ex12_simultaneous_rows.parquet"
 #: ex7's stored rows (``studies.explain.ex7.STORED``: the fault surprise rows and the fresh draws).
 EXPLAIN_EX7 = ("ex7_fault_surprise.parquet", "ex7_dev_draws.parquet", "ex7_harness_draws.parquet")
 
 #: Explain groups whose keys are one ``summary(rows)`` of one stored table: (group, file, module).
 STORED_SUMMARIES = (("mixture_noise", EXPLAIN_MIXTURE, "mixture_x"),
                     ("ex5_calibration", EXPLAIN_EX5, "ex5_calibration"),
-                    ("ex9_calibration", EXPLAIN_EX9, "ex9_calibration"))
+                    ("ex9_calibration", EXPLAIN_EX9, "ex9_calibration"),
+                    ("ex12_distinct", EXPLAIN_EX12, "ex12_distinct"),
+                    ("ex12_simultaneous", EXPLAIN_EX12_SIM, "ex12_simultaneous"))
 
 #: Explain modules that recompute their own groups: ``recompute(folder, results)`` gives
 #: ``(values, sources, problems)`` (a group published without its stored rows is a problem).
@@ -934,7 +940,9 @@ RECOMPUTED = {
                "ex9's held-out coverage with ties, costs over four pools and the calibrated arm at the paper's margin; "
                "ex10's per-tap boundary replays of PyBullet and the paper's-schedule surprise without the jitter's tail; "
                "ex11's Probe-Robust cells over redrawn truth pools; ex13's surprise AUCs over five draws of the generator "
-               "under the paper's schedule and the mixture's cost under every reading of q0's units",
+               "under the paper's schedule and the mixture's cost under every reading of q0's units; "
+               "ex12's Table III original cells under a schedule without replacement and the re-splits under the "
+               "budget-simultaneous level",
 }
 TRACED_ONLY = {
     "insertion": "the stored rows themselves (episodes, re-executed commits, replays); the re-split rows; the cover "

@@ -396,7 +396,9 @@ def _table_claims() -> list[Claim]:
               explain=tuple((f"E17[{c.label}]", (c.label,)) for c in audit)
               + tuple((f"E19[{c.label}]", (c.label,)) for c in audit if " calibrated " in c.label)
               + tuple((f"E57[{c.label}]", (c.label,)) for c in audit if c.label.startswith("optimism "))
-              + (("E82", ("optimism calibrated k=2", "optimism calibrated k=3")),)),
+              + (("E82", ("optimism calibrated k=2", "optimism calibrated k=3")),)
+              + tuple((f"E100[{c}]", (c,)) for c in ("cluster_coverage original k=5", "optimism original k=2",
+                                                       "optimism original k=3"))),
         Claim("tab:insertion", "Table IV (tab:insertion)", "Insertion failure by split and calibration setting",
               tuple(insertion), explain=(("E9", ("A cover", "B cover")), "E2")),
         Claim("tab:testc", "Table V (tab:testc)", "Confirmation on untouched instances (Test C)", tuple(testc),
@@ -574,7 +576,8 @@ def _claims_audit_and_calibration() -> list[Claim]:
                                                                    "margin optimistic")),
                        *((f"E56[{label}]", (label,)) for label in ("level mean", "held-out cluster coverage",
                                                                    "margin optimistic")),
-                       ("E80", ("held-out cluster coverage",)), ("E83", ("margin optimistic",)))))
+                       ("E80", ("held-out cluster coverage",)), ("E83", ("margin optimistic",)),
+                       ("E101", ("held-out cluster coverage",)))))
     return c
 
 
@@ -1667,10 +1670,56 @@ def _experiments_ex13() -> list[Experiment]:
     ]
 
 
+#: E100's budgets (8 taps drawn with replacement from 9 positions seldom reach 8 distinct; docs/decisions.md, "ex12").
+EX12_BUDGETS = (1, 2, 3, 5)
+#: E100: a draw's cells count only with at least this many eligible clusters at k = 5 (as ``ex12_distinct.MIN_CLUSTERS``).
+EX12_MIN_CLUSTERS = 40
+
+
+def _experiments_ex12() -> list[Experiment]:
+    """The ex12 helper's experiment (E100, ``studies/explain/ex12_distinct.py``; rule in docs/decisions.md, "ex12"):
+    Table III's original arm under a random schedule drawn without replacement, read from stored tables."""
+    d = f"{X}ex12_distinct."
+    cells = [(m, k) for k in EX12_BUDGETS for m in ("cluster_coverage", "optimism")]
+    ranges = {f"{m}{k}{e}": f"{d}{m}.k{k}.{s}" for m, k in cells for e, s in (("lo", "min"), ("hi", "max"))}
+
+    def joint(v: dict[str, Any]) -> bool:  # every one of the paper's eight original cells inside its range
+        return all(v[f"{m}{k}lo"] <= _pv(f"tab:audit.{m}_original.{k}") <= v[f"{m}{k}hi"] for m, k in cells)
+
+    out = []
+    for metric, k in (("cluster_coverage", 5), ("optimism", 2), ("optimism", 3)):
+        out.append(Experiment(
+            f"E100[{metric} original k={k}]",
+            f"Table III's {metric.replace('_', ' ')} (original, k = {k}) under a random schedule without replacement",
+            {**ranges, "lo": f"{d}{metric}.k{k}.min", "hi": f"{d}{metric}.k{k}.max", "m": f"{d}{metric}.k{k}.mean",
+             "f": f"{d}{metric}.k{k}.frozen", "n": f"{d}draws", "c": f"{d}clusters.k5.min",
+             "o1lo": f"{d}optimism.k1.min", "o1hi": f"{d}optimism.k1.max",
+             "o2lo": f"{d}optimism.k2.min", "o2hi": f"{d}optimism.k2.max",
+             "p1": "paper:tab:audit.optimism_original.1", "p2": "paper:tab:audit.optimism_original.2"},
+            "reading E17's {n:d} fresh draws at the tap where the k-th distinct probe position first appears (a "
+            "schedule drawn without replacement; at least {c:d} eligible clusters a draw at k = 5), this cell ranges "
+            "{lo:.3f} to {hi:.3f} (mean {m:.3f}; the frozen draw {f:.3f}); the rule is joint over the original arm's "
+            "eight cells at k = 1, 2, 3, 5, where optimism ranges {o1lo:+.3f} to {o1hi:+.3f} at k = 1 (paper "
+            "{p1:+.3f}) and {o2lo:+.3f} to {o2hi:+.3f} at k = 2 (paper {p2:+.3f}).",
+            supports=lambda v, key=f"tab:audit.{metric}_original.{k}": v["c"] >= EX12_MIN_CLUSTERS and joint(v)
+            and v["lo"] <= _pv(key) <= v["hi"]))
+    sp = f"{d.replace('ex12_distinct', 'ex12_simultaneous')}B_pool_cover."
+    out.append(Experiment(
+        "E101", "the re-splits' held-out cluster coverage against the budget-simultaneous level",
+        {"lv": f"{sp}level.mean", "lsd": f"{sp}level.sd", "cv": f"{sp}coverage.mean", "n": f"{sp}splits",
+         "lf": f"{sp}level_fixed.mean", "cf": f"{sp}coverage_fixed.mean"},
+        "calibrating each of the frozen cover pool's {n:d} re-splits with the budget-simultaneous level over the cover "
+        "budgets (S_i = max_k s_rep_(i,k)), the level is {lv:.3f} +- {lsd:.3f} (SD across splits) and the held-out "
+        "cluster coverage at k = 5 is {cv:.3f}; with the fixed-budget t_5 (our study's reading), {lf:.3f} and {cf:.3f}.",
+        supports=lambda v: abs(v["cv"] - _pv("T14-resplits.heldout_cluster_coverage")) <= POINT_TOL * 2.5
+        and abs(v["lv"] - _pv("T14-resplits.level_mean")) <= 0.1))
+    return out
+
+
 for _experiment in (_experiments() + _experiments_more() + _experiments_ex3() + _experiments_ex4()
                     + _experiments_ex5() + _experiments_ex6() + _experiments_ex7()
                     + _experiments_ex8() + _experiments_ex9()
-                    + _experiments_ex10() + _experiments_ex11() + _experiments_ex13()):
+                    + _experiments_ex10() + _experiments_ex11() + _experiments_ex12() + _experiments_ex13()):
     EXPERIMENTS[_experiment.number] = _experiment
 
 
