@@ -63,14 +63,11 @@ def changes_section(doc: Doc) -> None:
     doc.add("## What moved since the previous publication", "",
             "Against the frozen results before this publication (`git log -- results/paper`), compared key by key, "
             "every number common to both is identical.",
-            "- **Stored rows:** ex7's fault-surprise rows (`explain/ex7_fault_surprise.parquet`) now store an "
-            "infinite surprise where no particle predicted the class the tap read, where they stored a finite "
-            "stand-in; the column is declared infinite for `verify`, and every AUC and count read from it is "
-            "unchanged (`tests/studies/test_explain_ex7.py`). ex5's re-split rows "
-            "(`explain/ex5_calibration_rows.parquet`) gained each budget's held-out calibrated optimism, which E83 "
-            "reads; E55's keys computed from those rows are unchanged.",
-            "New in this publication: the explain target's experiments E73 to E88 behind the differences from the "
-            "paper (see the list above) and the stored rows from which `verify` recomputes them.", "")
+            "No stored row of an earlier experiment changed: the speed changes of this tree (explain's replays that "
+            "commit only the budget they read, calibrate's bootstraps in threads) give the same rows bit for bit "
+            "(`benchmarks/explain_equal.py`, `tests/runner/test_calibration.py`).",
+            "New in this publication: the explain target's experiments E94, E95, E100, E101, E106 and E107 behind the "
+            "differences from the paper (see the list above) and the stored rows from which `verify` recomputes them.", "")
 
 
 def render(frozen: Path, ledger: Ledger) -> str:
