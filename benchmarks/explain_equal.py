@@ -14,17 +14,8 @@ from __future__ import annotations
 import json
 import sys
 from pathlib import Path
-from typing import Any
 
-
-def leaves(value: Any, prefix: str = "") -> dict[str, Any]:
-    """Every leaf of a JSON value by its dotted path."""
-    if isinstance(value, dict):
-        out: dict[str, Any] = {}
-        for key, item in value.items():
-            out.update(leaves(item, f"{prefix}{key}."))
-        return out
-    return {prefix.rstrip("."): value}
+from probecommit.store.rundir import flatten_dotted
 
 
 def parquet_cells(a: Path, b: Path) -> str:
@@ -40,7 +31,7 @@ def parquet_cells(a: Path, b: Path) -> str:
 def compare(a: Path, b: Path) -> list[str]:
     """One line per difference (none: identical)."""
     out = []
-    ja, jb = (leaves(json.loads((p / "results.json").read_text())) for p in (a, b))
+    ja, jb = (flatten_dotted(json.loads((p / "results.json").read_text())) for p in (a, b))
     for key in sorted(set(ja) | set(jb)):
         if ja.get(key, "<absent>") != jb.get(key, "<absent>"):
             out.append(f"results.json {key}: {ja.get(key, '<absent>')!r} -> {jb.get(key, '<absent>')!r}")

@@ -20,6 +20,7 @@ import pandas as pd
 import yaml
 
 from probecommit.errors import UserError
+from probecommit.store.rundir import flatten_dotted
 
 #: Columns of the episode table that the headline numbers read.
 _HEADLINE_COLUMNS = ["instance_id", "repeat", "k", "method", "status", "realized", "predicted", "covered", "escaped"]
@@ -134,19 +135,10 @@ def list_runs(root: str | Path) -> pd.DataFrame:
 # ----------------------------------------------------------------------------- compare
 
 
-def _flatten(data: Any, prefix: str = "") -> dict[str, Any]:
-    if isinstance(data, dict):
-        out: dict[str, Any] = {}
-        for key, value in data.items():
-            out.update(_flatten(value, f"{prefix}{key}."))
-        return out
-    return {prefix[:-1]: data}
-
-
 def config_diff(a: Path, b: Path) -> pd.DataFrame:
     """The config fields whose values differ between two run directories (``field``, ``a``, ``b``)."""
-    fa = _flatten(yaml.safe_load((a / "config.yaml").read_text()) or {})
-    fb = _flatten(yaml.safe_load((b / "config.yaml").read_text()) or {})
+    fa = flatten_dotted(yaml.safe_load((a / "config.yaml").read_text()) or {})
+    fb = flatten_dotted(yaml.safe_load((b / "config.yaml").read_text()) or {})
     rows = [{"field": key, "a": fa.get(key, "(unset)"), "b": fb.get(key, "(unset)")}
             for key in sorted(set(fa) | set(fb)) if fa.get(key, "(unset)") != fb.get(key, "(unset)")]
     return pd.DataFrame(rows, columns=["field", "a", "b"])

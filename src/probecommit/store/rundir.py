@@ -184,11 +184,13 @@ def atomic_write_arrow(path: Path, table: pa.Table) -> None:
     atomic_write_bytes(path, sink.getvalue().to_pybytes())
 
 
-def _flatten(data: Any, prefix: str = "") -> dict[str, Any]:
+def flatten_dotted(data: Any, prefix: str = "") -> dict[str, Any]:
+    """Every leaf of nested dicts (a config, a ``results.json``) by its dotted path: what two of them are
+    compared by, field by field (lists are leaves)."""
     if isinstance(data, dict):
         out: dict[str, Any] = {}
         for key, value in data.items():
-            out.update(_flatten(value, f"{prefix}{key}."))
+            out.update(flatten_dotted(value, f"{prefix}{key}."))
         return out
     return {prefix.rstrip("."): data}
 
@@ -196,8 +198,8 @@ def _flatten(data: Any, prefix: str = "") -> dict[str, Any]:
 def config_difference(old_yaml: str, new_yaml: str) -> str:
     """The first differing config field, as ``field: old in the directory, new here``."""
     try:
-        old = _flatten(load_yaml(old_yaml, "config.yaml") or {})
-        new = _flatten(load_yaml(new_yaml, "the config") or {})
+        old = flatten_dotted(load_yaml(old_yaml, "config.yaml") or {})
+        new = flatten_dotted(load_yaml(new_yaml, "the config") or {})
     except YamlError:
         return "its config.yaml is not valid YAML"
     for key in list(new) + [k for k in old if k not in new]:
