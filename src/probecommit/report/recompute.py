@@ -485,8 +485,7 @@ def explain(folder: Path, results: dict[str, Any]) -> Recomputed:
 
         out.values.update({f"ex4_pricing.{key}": value for key, value in ex4_pricing_keys().items()})
         out.sources["ex4_pricing"] = "the paper's printed values (studies/paper_values.py)"
-    _ex6(folder, results, out)
-    _ex10(folder, results, out)
+    _bootstrapped(folder, results, out)
     _self_recomputing(folder, results, out)
     from probecommit.studies.explain.study import plain
 
@@ -537,35 +536,23 @@ def _ex4_cone(folder: Path, results: dict[str, Any], out: Recomputed) -> None:
         if key != "premise_max_probe_difference_m":
             out.values[f"ex4_cone.{key}"] = value
     out.sources["ex4_cone"] = ex4_cone.STORED
-def _ex6(folder: Path, results: dict[str, Any], out: Recomputed) -> None:
-    """ex6's keys (E62-E64) from their stored rows (``studies.explain.ex6.recompute``)."""
-    from probecommit.studies.explain import ex6
+def _bootstrapped(folder: Path, results: dict[str, Any], out: Recomputed) -> None:
+    """``BOOTSTRAPPED``'s groups from their stored rows, each module's ``recompute`` given the insertion
+    study's bootstrap settings; published keys need their stored rows (``STORED_BY_GROUP``)."""
+    import importlib
 
     setup = folder.parent / "insertion" / "results.json"
     if not setup.is_file():
         return
     b = json.loads(setup.read_text())["results"]["setup"]["bootstrap"]
-    for key, (value, source) in ex6.recompute(folder, results, dict(resamples=int(b["resamples"]),
-                                                                   seed=int(b["seed"]))).items():
-        out.values[key], out.sources[key] = value, source
-    for group, name in ex6.STORED_BY_GROUP.items():  # published keys need their stored rows
-        if results.get(group) and not (folder / name).is_file():
-            out.consistency.append((False, f"explain/{name}: missing (the rows {group}'s keys are recomputed from)"))
-
-
-def _ex10(folder: Path, results: dict[str, Any], out: Recomputed) -> None:
-    """ex10's keys (E87..) from their stored rows (``studies.explain.ex10.recompute``)."""
-    from probecommit.studies.explain import ex10
-
-    setup = folder.parent / "insertion" / "results.json"
-    if not setup.is_file():
-        return
-    b = json.loads(setup.read_text())["results"]["setup"]["bootstrap"]
-    for key, (value, source) in ex10.recompute(folder, dict(resamples=int(b["resamples"]), seed=int(b["seed"]))).items():
-        out.values[key], out.sources[key] = value, source
-    for group, name in ex10.STORED_BY_GROUP.items():  # published keys need their stored rows
-        if results.get(group) and not (folder / name).is_file():
-            out.consistency.append((False, f"explain/{name}: missing (the rows {group}'s keys are recomputed from)"))
+    boot = dict(resamples=int(b["resamples"]), seed=int(b["seed"]))
+    for name in BOOTSTRAPPED:
+        module = importlib.import_module(f"probecommit.studies.explain.{name}")
+        for key, (value, source) in module.recompute(folder, results, boot).items():
+            out.values[key], out.sources[key] = value, source
+        for group, stored in module.STORED_BY_GROUP.items():
+            if results.get(group) and not (folder / stored).is_file():
+                out.consistency.append((False, f"explain/{stored}: missing (the rows {group}'s keys are recomputed from)"))
 
 
 def _schedules(folder: Path, results: dict[str, Any], out: Recomputed) -> None:
@@ -884,7 +871,11 @@ STORED_SUMMARIES = (("mixture_noise", EXPLAIN_MIXTURE, "mixture_x"),
 
 #: Explain modules that recompute their own groups: ``recompute(folder, results)`` gives
 #: ``(values, sources, problems)`` (a group published without its stored rows is a problem).
-SELF_RECOMPUTING = ("ex7", "ex8", "ex11", "ex13")
+SELF_RECOMPUTING = ("ex7", "ex8", "ex11")
+
+#: Explain modules whose ``recompute(folder, results, boot)`` gives ``{key: (value, stored file)}`` under the
+#: insertion study's bootstrap settings, with ``STORED_BY_GROUP`` naming each group's rows.
+BOOTSTRAPPED = ("ex6", "ex10", "ex13")
 
 
 #: The stored tables each study's numbers are recomputed from: a publication without one fails verify

@@ -35,9 +35,10 @@ def run(job: Any, paper_schedule: dict[str, Any]) -> None:
     job.res["ex10_surprise"].update(keys)
 
 
-def recompute(folder: Path, boot: dict[str, Any]) -> dict[str, tuple[Any, str]]:
+def recompute(folder: Path, results: dict[str, Any], boot: dict[str, Any]) -> dict[str, tuple[Any, str]]:
     """``{"<group>.<key>": (value, stored file)}`` of every key these steps publish, from their stored rows and the
-    engines study's published episodes (``probecommit verify``)."""
+    engines study's published episodes (``probecommit verify``; the contract of ``report.recompute.BOOTSTRAPPED``:
+    ``results`` is not read here)."""
     import pandas as pd
 
     out: dict[str, tuple[Any, str]] = {}

@@ -56,21 +56,23 @@ def mixture(job: Any) -> None:
     job.res["ex13_mixture"].update(keys)
 
 
-def recompute(folder: Path, results: dict[str, Any]) -> tuple[dict[str, Any], dict[str, str], list[str]]:
-    """Every key these steps publish, from their stored rows (``probecommit verify``): ``(values, sources,
-    problems)``, the contract of ``report.recompute.SELF_RECOMPUTING``; a group published without its
-    stored rows is a problem. The bootstrap's settings are the insertion study's."""
-    import json
-
+def recompute(folder: Path, results: dict[str, Any], boot: dict[str, Any]) -> dict[str, tuple[Any, str]]:
+    """``{"<group>.<key>": (value, stored file)}`` of every key these steps publish, from their stored rows
+    (``probecommit verify``; the contract of ``report.recompute.BOOTSTRAPPED``)."""
     import pandas as pd
 
-    values: dict[str, Any] = {}
-    sources: dict[str, str] = {}
-    problems = [f"explain/{name}: missing (the rows {group}'s keys are recomputed from)"
-                for group, name in STORED_BY_GROUP.items() if results.get(group) and not (folder / name).is_file()]
-    setup = folder.parent / "insertion" / "results.json"
-    if not setup.is_file():
-        return values, sources, problems
+    out: dict[str, tuple[Any, str]] = {}
+    name = ex13_surprise.STORED
+    if (folder / name).is_file():
+        rows = pd.read_parquet(folder / name)
+        ks = sorted(int(c.removeprefix("surprise_k")) for c in rows.columns if c.startswith("surprise_k"))
+        for key, v in ex13_surprise.summary(rows, (ks[0], ks[-1]), **boot).items():
+            out[f"ex13_surprise.{key}"] = (v, name)
+    name = ex13_mixture.STORED
+    if (folder / name).is_file():
+        for key, v in ex13_mixture.summary(pd.read_parquet(folder / name)).items():
+            out[f"ex13_mixture.{key}"] = (v, name)
+    return out
     b = json.loads(setup.read_text())["results"]["setup"]["bootstrap"]
     boot = dict(resamples=int(b["resamples"]), seed=int(b["seed"]))
     name = ex13_surprise.STORED
