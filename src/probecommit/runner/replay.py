@@ -635,7 +635,7 @@ def replay_episodes(
     Returns:
         ``(episodes, simulator)``; the simulator carries the engine-call counts.
     """
-    beliefs, request, common = _replay_commit(loaded, overrides, thresholds, margin, fixed_probes, chunk_instances)
+    beliefs, request, common = replay_commit(loaded, overrides, thresholds, margin, fixed_probes, chunk_instances)
     [episodes] = beliefs.commit([request], **common)
     failed = _failed_rows(loaded, beliefs)
     if len(failed):
@@ -643,11 +643,14 @@ def replay_episodes(
     return episodes, beliefs.simulator
 
 
-def _replay_commit(loaded: LoadedRun, overrides: dict[str, dict[str, Any]] | None,
+def replay_commit(loaded: LoadedRun, overrides: dict[str, dict[str, Any]] | None,
                    thresholds: float | dict[int, float] | None, margin: float | None, fixed_probes: bool,
                    chunk_instances: int | None) -> tuple[RunBeliefs, dict[str, Any], dict[str, Any]]:
     """The checked replay of ``loaded``: its beliefs under the overrides, and the request and
-    keyword arguments of the one ``RunBeliefs.commit`` that gives its episodes."""
+    keyword arguments of the one ``RunBeliefs.commit`` that gives its episodes.
+
+    Public because a caller that reads only some budgets (``studies/explain/replay_final``) narrows
+    the beliefs' kept budgets before committing: the checks stay in one place."""
     overrides = overrides or {}
     bad = set(overrides) - {"model", "belief", "simulator"}
     if bad:
@@ -696,7 +699,7 @@ def replay_run(src: str | Path, out: str | Path, overrides: dict[str, dict[str, 
     if Path(out).resolve() == Path(src).resolve():
         raise UsageError(f"replay would overwrite its source run {src}; give another --out")
     loaded = load_run(src)
-    beliefs, request, common = _replay_commit(loaded, overrides, None, None, fixed_probes, chunk_instances)
+    beliefs, request, common = replay_commit(loaded, overrides, None, None, fixed_probes, chunk_instances)
     config, sim = beliefs.config, beliefs.simulator
     run = RunDir(out)
     with run.writing(dump_config(config)):

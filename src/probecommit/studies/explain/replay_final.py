@@ -15,7 +15,7 @@ from typing import Any
 
 import pandas as pd
 
-from probecommit.runner.replay import LoadedRun, _replay_commit, committed_budgets, require_budgets
+from probecommit.runner.replay import LoadedRun, replay_commit, committed_budgets, require_budgets
 
 
 def replay_at(loaded: LoadedRun, overrides: dict[str, dict[str, Any]] | None, k: int,
@@ -23,7 +23,7 @@ def replay_at(loaded: LoadedRun, overrides: dict[str, dict[str, Any]] | None, k:
     """``replay_episodes(loaded, overrides, chunk_instances=...)``'s rows at budget ``k`` (every method
     committed there; no failed-rollout rows, which no caller of it reads): the same checks, model,
     executors and thresholds, with only budget ``k``'s beliefs kept and committed."""
-    beliefs, request, common = _replay_commit(loaded, overrides, None, None, False, chunk_instances)
+    beliefs, request, common = replay_commit(loaded, overrides, None, None, False, chunk_instances)
     kept = tuple(require_budgets([int(k)], committed_budgets(beliefs.config)))  # refuses a budget the run lacks
     beliefs = replace(beliefs, kept_budgets=kept)
     [episodes] = beliefs.commit([request], **common)
