@@ -107,6 +107,8 @@ CASES: list[tuple[str, Edit]] = [
                                              "escaped", lambda v: not v, "ex10_boundary.deployed.s12.escape_k")),
     ("stored-ex11-pool-episode", edit_stored("ex11_probe_rows.parquet", lambda t: t.part == "pool", "realized", bump,
                                              "ex11_probe.")),
+    ("stored-ex16-reach-episode", edit_stored("ex16_reach_rows.parquet", lambda t: t.part == "reach", "realized", bump,
+                                              "ex16_reach.")),
     ("json-ex7-signature", edit_results("explain", ["ex7_faults", "signature.particles.optimism_change"],
                                         lambda v: [v[0] + 0.0123, *v[1:]])),
     ("json-pybullet-stored-escape", edit_results("explain", ["pybullet_escape", "stored.escape_k8"],
@@ -178,6 +180,7 @@ CASES: list[tuple[str, Edit]] = [
     ("deleted-draw-cells-rehashed", delete_stored("draw_cells.parquet")),
     ("deleted-schedules-rehashed", delete_stored("schedule_episodes.parquet")),
     ("deleted-ex11-rows-rehashed", delete_stored("ex11_probe_rows.parquet")),
+    ("deleted-ex16-rows-rehashed", delete_stored("ex16_reach_rows.parquet")),
 ]
 
 

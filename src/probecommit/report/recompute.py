@@ -871,7 +871,7 @@ STORED_SUMMARIES = (("mixture_noise", EXPLAIN_MIXTURE, "mixture_x"),
 
 #: Explain modules that recompute their own groups: ``recompute(folder, results)`` gives
 #: ``(values, sources, problems)`` (a group published without its stored rows is a problem).
-SELF_RECOMPUTING = ("ex7", "ex8", "ex11")
+SELF_RECOMPUTING = ("ex7", "ex8", "ex11", "ex16")
 
 #: Explain modules whose ``recompute(folder, results, boot)`` gives ``{key: (value, stored file)}`` under the
 #: insertion study's bootstrap settings, with ``STORED_BY_GROUP`` naming each group's rows.
@@ -933,7 +933,7 @@ RECOMPUTED = {
                "ex11's Probe-Robust cells over redrawn truth pools; ex13's surprise AUCs over five draws of the generator "
                "under the paper's schedule and the mixture's cost under every reading of q0's units; "
                "ex12's Table III original cells under a schedule without replacement and the re-splits under the "
-               "budget-simultaneous level",
+               "budget-simultaneous level; ex16's hinge and push1d probed cells with probes that reach the commit regime",
 }
 TRACED_ONLY = {
     "insertion": "the stored rows themselves (episodes, re-executed commits, replays); the re-split rows; the cover "
