@@ -127,3 +127,15 @@ def test_rules_read_the_selected_reading():
     a = C._pv("T36-surprise.auc_k1")
     assert C.EXPERIMENTS["E114[k=1]"].supports({**base, "sel": 1, "lo1": a - 0.01, "hi1": a + 0.01})
     assert not C.EXPERIMENTS["E114[k=1]"].supports({**base, "sel": 0, "lo1": a - 0.01, "hi1": a + 0.01})
+
+
+def test_draw_keys_span_the_draws():
+    rows = pd.DataFrame({"run": ["draw_00"] * 4 + ["draw_01"] * 4 + ["random"] * 2, "k": 1,
+                         "in_band": [True, True, False, False, True, False, False, False, True, True],
+                         "escaped": [True, False, False, False, True, False, False, False, True, True]})
+    out = S.draw_keys(rows)
+    assert out["draws.n"] == 2
+    assert (out["draws.band_share.min"], out["draws.band_share.max"]) == (0.25, 0.5)
+    assert (out["draws.escape_given_band_k1.min"], out["draws.escape_given_band_k1.max"]) == (0.5, 1.0)
+    assert (out["draws.escape_k1.min"], out["draws.escape_k1.max"]) == (0.25, 0.25)
+    assert S.draw_keys(rows[rows["run"] == "random"])["draws.n"] == 0

@@ -1746,7 +1746,9 @@ def _experiments_ex14() -> list[Experiment]:
         "E112", "k = 1 escape as a band event, and the filter sentence's readings against the paper's escape",
         {**esc, **{f"g{i + 1}": f"{e}{r}.escape_given_band_k1" for i, r in enumerate(R)},
          "pb": f"{e}p_band", "bs": f"{e}band_share", "ig": f"{e}implied_escape_given_band", "off": f"{e}stated.escape_off_band_k1",
-         "sel": f"{e}selected", "p1": "paper:T11-audit-trend.escape_k1", "p8": "paper:T11-audit-trend.escape_k8"},
+         "sel": f"{e}selected", "p1": "paper:T11-audit-trend.escape_k1", "p8": "paper:T11-audit-trend.escape_k8",
+         **{f"d{t}{x}": f"{e}draws.{n}.{y}" for t, n in (("b", "band_share"), ("g", "escape_given_band_k1"), ("e", "escape_k1"))
+            for x, y in (("lo", "min"), ("hi", "max"))}, "dn": f"{e}draws.n"},
         "a first random tap lands in the band between the model's boundary and the simulator's (it reads pocket, the "
         "model says top) with exact probability {pb:.3f} (this draw: {bs:.3f} of trajectories); our k = 1 escapes all "
         "come from it (off the band {off:.3f}), {g1:.3f} of band hits escaping, where the paper's {p1:.1f} % needs "
@@ -1755,7 +1757,9 @@ def _experiments_ex14() -> list[Experiment]:
         "jitter {a2:.3f} [{a2lo:.3f}, {a2hi:.3f}] and {b2:.3f} [{b2lo:.3f}, {b2hi:.3f}] ({g2:.3f} of band hits); jitter "
         "on duplicates only {a3:.3f} [{a3lo:.3f}, {a3hi:.3f}] and {b3:.3f} [{b3lo:.3f}, {b3hi:.3f}]; resampling every tap "
         "{a4:.3f} [{a4lo:.3f}, {a4hi:.3f}] and {b4:.3f} [{b4lo:.3f}, {b4hi:.3f}] (paper {p1:.1f} % and {p8:.1f} %; "
-        "selected reading {sel:d}, 0 = none reproduces both).",
+        "selected reading {sel:d}, 0 = none reproduces both). Beside the rule, on E17's {dn:d} fresh draws (stated "
+        "filter): band share {dblo:.3f} to {dbhi:.3f}, P(escape | band) {dglo:.3f} to {dghi:.3f}, k = 1 escape {delo:.3f} "
+        "to {dehi:.3f}.",
         supports=lambda v: int(v["sel"]) > 0)]
     for metric in ("cluster_coverage", "optimism"):
         for k in EX14_BUDGETS:
@@ -1770,9 +1774,9 @@ def _experiments_ex14() -> list[Experiment]:
                 "re-committed on Split B random test under each reading: {m1:.3f} [{lo1:.3f}, {hi1:.3f}] as stated (the "
                 "pre-jitter hull changes no belief: the same), {m3:.3f} [{lo3:.3f}, {hi3:.3f}] with jitter on duplicates "
                 "only, {m4:.3f} [{lo4:.3f}, {hi4:.3f}] resampling every tap (paper {p:.3f}). Optimism as escape share x "
-                "(realized - score on escaped) + the rest: stated {s1:.3f} x {ge1:+.3f} + {gc1:+.3f}; pre-jitter hull "
-                "{s2:.3f} x {ge2:+.3f} + {gc2:+.3f}; duplicates {s3:.3f} x {ge3:+.3f} + {gc3:+.3f}; every tap {s4:.3f} x "
-                "{ge4:+.3f} + {gc4:+.3f}. The rule reads the reading E112 selects ({sel:d}; 0 = none).",
+                "(realized - score on escaped), and the rest's gap: stated {s1:.3f} x {ge1:+.3f}, rest {gc1:+.3f}; pre-jitter "
+                "hull {s2:.3f} x {ge2:+.3f}, rest {gc2:+.3f}; duplicates {s3:.3f} x {ge3:+.3f}, rest {gc3:+.3f}; every tap "
+                "{s4:.3f} x {ge4:+.3f}, rest {gc4:+.3f}. The rule reads the reading E112 selects ({sel:d}; 0 = none).",
                 supports=lambda v, key=f"tab:audit.{metric}_original.{k}": _ex14_cell(v, _pv(key))))
     out.append(Experiment(
         "E113[T12 original]", "T12's original mean |optimism| under the filter sentence's readings",

@@ -71,6 +71,22 @@ def random_rows(loaded: Any, chunk: int | None) -> pd.DataFrame:
     return out.assign(run="random")
 
 
+def draw_rows(runs: Path) -> pd.DataFrame:
+    """E17's fresh draws (``analytic_draw_NN``, stated reading, stored episodes): k = 1 escape and the first
+    tap's band, per trajectory (published beside E112, in no rule)."""
+    from probecommit.runner.replay import load_run
+
+    parts = []
+    for path in sorted(p for p in runs.glob("analytic_draw_[0-9][0-9]") if (p / "episodes.parquet").is_file()):
+        loaded = load_run(path)
+        e = loaded.episodes
+        e = e[(e["method"] == "probe_robust") & (e["status"] == "ok") & (e["k"] == 1)]
+        e = e[KEY + ["escaped"]].astype({"instance_id": str, "repeat": "int64"})
+        rows = e.merge(first_tap_band(loaded), on=["instance_id", "repeat"], how="left")
+        parts.append(rows.assign(run=path.name.removeprefix("analytic_"), reading=ex14_escape.READINGS[0]))
+    return pd.concat(parts, ignore_index=True) if parts else pd.DataFrame(columns=[*KEY, "escaped", "in_band", "run", "reading"])
+
+
 def cover_rows(loaded: Any, budgets: tuple[int, int]) -> pd.DataFrame:
     """T36's paper's-schedule test run under every reading: escape and running-max surprise at both budgets."""
     from probecommit.runner.replay import RunBeliefs
@@ -86,6 +102,7 @@ def summaries(rows: pd.DataFrame, p_band: float, budgets: tuple[int, int], boot:
 
     escape = ex14_summary.escape_keys(rows, p_band, value("T11-audit-trend.escape_k1") / 100.0,
                                       value("T11-audit-trend.escape_k8") / 100.0, boot)
+    escape.update(ex14_summary.draw_keys(rows))
     return {"ex14_escape": escape, "ex14_audit": ex14_summary.audit_keys(rows, AUDIT_BUDGETS, boot),
             "ex14_surprise": ex14_summary.surprise_keys(rows, budgets, boot)}
 
@@ -97,7 +114,8 @@ def run(job: Any, paper_schedule: dict[str, Any]) -> None:
     job.progress("explain: k = 1 escape as a band event; the filter sentence's readings", 0, 1)
     random = job.load("B_test_random")
     budgets = (1, int(job.p.budgets["cover"]))
-    rows = pd.concat([random_rows(random, 48), cover_rows(paper_schedule["test"], budgets)], ignore_index=True)
+    rows = pd.concat([random_rows(random, 48), cover_rows(paper_schedule["test"], budgets), draw_rows(job.runs)],
+                     ignore_index=True)
     job.stored[ex14_summary.STORED] = rows
     for group, keys in summaries(rows, band_probability(InsertionModel, random.config), budgets, job.boot).items():
         job.res[group].update(keys)

@@ -57,6 +57,23 @@ def escape_keys(rows: pd.DataFrame, p_band: float, paper_k1: float, paper_k8: fl
     return out
 
 
+def draw_keys(rows: pd.DataFrame) -> dict[str, Any]:
+    """Beside E112: per fresh draw (``run`` = ``draw_NN``), the band share of first taps, P(escape | band) and
+    k = 1 escape; min and max over the draws (``draws.n`` = 0 and NaN when there are none)."""
+    d = rows[rows["run"].astype(str).str.startswith("draw_")]
+    per = []
+    for _, part in d.groupby("run"):
+        band, esc = part["in_band"].to_numpy(bool), part["escaped"].to_numpy(bool)
+        per.append((band.mean(), esc[band].mean() if band.any() else np.nan, esc.mean()))
+    out: dict[str, Any] = {"draws.n": len(per)}
+    for i, name in enumerate(("band_share", "escape_given_band_k1", "escape_k1")):
+        values = np.array([p[i] for p in per], float)
+        finite = values[np.isfinite(values)]
+        out[f"draws.{name}.min"] = float(finite.min()) if finite.size else float("nan")
+        out[f"draws.{name}.max"] = float(finite.max()) if finite.size else float("nan")
+    return out
+
+
 def audit_keys(rows: pd.DataFrame, budgets: Sequence[int], boot: dict[str, int]) -> dict[str, Any]:
     """E113: per reading, Table III's original cells (cluster coverage, optimism per budget, cluster-bootstrap)
     and mean |optimism|, and optimism split by stratum: escape share, realized minus score on escaped and
