@@ -27,14 +27,25 @@ BELIEF_READINGS = ("duplicates", "every_step")
 KEY = ["instance_id", "repeat", "k"]
 
 
-def band_probability(model_cls: Any, config: Any) -> float:
-    """The exact P(first random tap in the misread band) for a run's prior, probe grid and boundaries."""
-    from probecommit.tasks.insertion.model import TIP_RADIUS_MM, half_gap
+#: The band's inputs, stored on every row of the random run (a closed form of the run's config).
+BAND_COLUMNS = ("x_low", "x_high", "c_low", "c_high", "sim_offset")
 
+
+def band_inputs(config: Any) -> dict[str, float]:
+    """The run's prior box and the simulator's boundary offset (what the exact band probability needs)."""
     m = config.model
-    return ex14_escape.p_band(model_cls.probe_grid[:, 0], (m.prior_low[0], m.prior_high[0]),
-                              (m.prior_low[1], m.prior_high[1]), half_gap, -TIP_RADIUS_MM,
-                              float(config.simulator.boundary_offset))
+    return dict(zip(BAND_COLUMNS, (float(m.prior_low[0]), float(m.prior_high[0]), float(m.prior_low[1]),
+                                   float(m.prior_high[1]), float(config.simulator.boundary_offset))))
+
+
+def band_probability(rows: pd.DataFrame) -> float:
+    """The exact P(first random tap in the misread band) from the random run's stored band inputs, over the
+    insertion model's probe grid."""
+    from probecommit.tasks.insertion.model import TIP_RADIUS_MM, InsertionModel, half_gap
+
+    b = rows.loc[rows["run"] == "random", list(BAND_COLUMNS)].iloc[0]
+    return ex14_escape.p_band(InsertionModel.probe_grid[:, 0], (b["x_low"], b["x_high"]), (b["c_low"], b["c_high"]),
+                              half_gap, -TIP_RADIUS_MM, b["sim_offset"])
 
 
 def first_tap_band(loaded: Any) -> pd.DataFrame:
@@ -68,7 +79,7 @@ def random_rows(loaded: Any, chunk: int | None) -> pd.DataFrame:
         cols = source[KEY + ["covered", "realized", "predicted"]].astype({"instance_id": str, "repeat": "int64"})
         parts.append(rows.merge(cols, on=KEY, how="left", validate="one_to_one"))
     out = pd.concat(parts, ignore_index=True).merge(first_tap_band(loaded), on=["instance_id", "repeat"], how="left")
-    return out.assign(run="random")
+    return out.assign(run="random", **band_inputs(loaded.config))
 
 
 def draw_rows(runs: Path) -> pd.DataFrame:
@@ -96,11 +107,11 @@ def cover_rows(loaded: Any, budgets: tuple[int, int]) -> pd.DataFrame:
     return pd.concat(parts, ignore_index=True).assign(run="cover")
 
 
-def summaries(rows: pd.DataFrame, p_band: float, budgets: tuple[int, int], boot: dict[str, int]) -> dict[str, dict[str, Any]]:
+def summaries(rows: pd.DataFrame, budgets: tuple[int, int], boot: dict[str, int]) -> dict[str, dict[str, Any]]:
     """The three groups' keys from the stored rows."""
     from probecommit.studies.paper_values import value
 
-    escape = ex14_summary.escape_keys(rows, p_band, value("T11-audit-trend.escape_k1") / 100.0,
+    escape = ex14_summary.escape_keys(rows, band_probability(rows), value("T11-audit-trend.escape_k1") / 100.0,
                                       value("T11-audit-trend.escape_k8") / 100.0, boot)
     escape.update(ex14_summary.draw_keys(rows))
     return {"ex14_escape": escape, "ex14_audit": ex14_summary.audit_keys(rows, AUDIT_BUDGETS, boot),
@@ -109,32 +120,27 @@ def summaries(rows: pd.DataFrame, p_band: float, budgets: tuple[int, int], boot:
 
 def run(job: Any, paper_schedule: dict[str, Any]) -> None:
     """E112..E114 on the insertion study's random test run and the paper's-schedule Split B test run."""
-    from probecommit.tasks.insertion.model import InsertionModel
-
     job.progress("explain: k = 1 escape as a band event; the filter sentence's readings", 0, 1)
     random = job.load("B_test_random")
     budgets = (1, int(job.p.budgets["cover"]))
     rows = pd.concat([random_rows(random, 48), cover_rows(paper_schedule["test"], budgets), draw_rows(job.runs)],
                      ignore_index=True)
     job.stored[ex14_summary.STORED] = rows
-    for group, keys in summaries(rows, band_probability(InsertionModel, random.config), budgets, job.boot).items():
+    for group, keys in summaries(rows, budgets, job.boot).items():
         job.res[group].update(keys)
 
 
 def recompute(folder: Path, results: dict[str, Any], boot: dict[str, Any]) -> dict[str, tuple[Any, str]]:
     """``{"<group>.<key>": (value, stored file)}`` of every key these steps publish, from the stored rows (the
-    band probability is the closed form again, from the insertion model's grid and the study's random run
-    config as published in ``ex14_escape.p_band``)."""
+    band probability again as the closed form of the stored band inputs)."""
     name = ex14_summary.STORED
     if not (folder / name).is_file() or not results.get("ex14_escape"):
         return {}
     rows = pd.read_parquet(folder / name)
     cover = rows[rows["run"] == "cover"]
     budgets = (int(cover["k"].min()), int(cover["k"].max()))
-    p_band = float(results["ex14_escape"]["p_band"])  # a closed form of the config, checked by the tests
     out: dict[str, tuple[Any, str]] = {}
-    for group, keys in summaries(rows, p_band, budgets, boot).items():
+    for group, keys in summaries(rows, budgets, boot).items():
         for key, v in keys.items():
-            if key != "p_band":
-                out[f"{group}.{key}"] = (v, name)
+            out[f"{group}.{key}"] = (v, name)
     return out
