@@ -1771,7 +1771,8 @@ def _experiments_ex14() -> list[Experiment]:
                 f"E113[{metric} original k={k}]",
                 f"Table III's {metric.replace('_', ' ')} (original, k = {k}) under the filter sentence's readings",
                 {**cell, **strata, "sel": f"{e}selected", "p": f"paper:tab:audit.{metric}_original.{k}"},
-                "re-committed on Split B random test under each reading: {m1:.3f} [{lo1:.3f}, {hi1:.3f}] as stated (the "
+                "on Split B random test (the stored commits as stated, re-committed on the two readings that change the "
+                "belief): {m1:.3f} [{lo1:.3f}, {hi1:.3f}] as stated (the "
                 "pre-jitter hull changes no belief: the same), {m3:.3f} [{lo3:.3f}, {hi3:.3f}] with jitter on duplicates "
                 "only, {m4:.3f} [{lo4:.3f}, {hi4:.3f}] resampling every tap (paper {p:.3f}). Optimism as escape share x "
                 "(realized - score on escaped), and the rest's gap: stated {s1:.3f} x {ge1:+.3f}, rest {gc1:+.3f}; pre-jitter "
