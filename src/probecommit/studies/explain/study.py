@@ -29,6 +29,7 @@ from probecommit.studies.explain.timing import StepClock
 from probecommit.studies.explain import ex4, ex5_calibration, ex6, ex7, ex8, ex9_calibration, ex10
 from probecommit.studies.explain import ex11
 from probecommit.studies.explain import ex13
+from probecommit.studies.explain import ex14
 from probecommit.studies.explain import ex16
 from probecommit.studies.explain import ex12_distinct, ex12_simultaneous
 from probecommit.studies.explain import gru as gru_study
@@ -107,6 +108,7 @@ class Explain:
             "ex5_calibration", *ex4.GROUPS, *ex6.GROUPS, *ex7.GROUPS,
             *ex8.GROUPS, "ex9_calibration", *ex10.GROUPS,
             *ex11.GROUPS, *ex13.GROUPS,
+            *ex14.GROUPS,
             *ex16.GROUPS,
             ex12_distinct.GROUP, ex12_simultaneous.GROUP)}
         self.tables: dict[str, pd.DataFrame] = {}
@@ -447,6 +449,7 @@ class Explain:
                  lambda: ex6.run(self, paper), lambda: ex7.run(self),
                  lambda: ex8.run(self), lambda: ex9_calibration.run(self), lambda: ex10.run(self, paper),
                  lambda: ex11.run(self), lambda: ex16.run(self), lambda: ex13.run(self, paper),
+                 lambda: ex14.run(self, paper),
                  lambda: ex12_distinct.run(self), lambda: ex12_simultaneous.run(self)]
         try:
             for i, step in enumerate(steps):
