@@ -577,7 +577,8 @@ def _claims_audit_and_calibration() -> list[Claim]:
                        *((f"E56[{label}]", (label,)) for label in ("level mean", "held-out cluster coverage",
                                                                    "margin optimistic")),
                        ("E80", ("held-out cluster coverage",)), ("E83", ("margin optimistic",)),
-                       ("E101", ("held-out cluster coverage",)))))
+                       ("E101", ("held-out cluster coverage",)),
+                       ("E118", ("level mean", "held-out cluster coverage", "margin optimistic")))))
     return c
 
 
@@ -1716,10 +1717,49 @@ def _experiments_ex12() -> list[Experiment]:
     return out
 
 
+#: E118's readings of T14's sentence: level/coverage readings x (calibration, optimistic rule) pairs.
+EX15_READINGS = ("a1", "a2", "a3", "a4")
+EX15_MARGINS = (("c5", "b0"), ("c15", "b1"), ("c15", "b2"), ("c15", "b3"))
+
+
+def _ex15_inside(v: Mapping[str, Any]) -> list[str]:
+    """E118's readings whose failure, level, coverage and optimistic share are all within T14's own tolerances."""
+    paper = {q: _pv(f"T14-resplits.{k}") for q, k in (("f", "failure_mean"), ("l", "level_mean"),
+                                                        ("c", "heldout_cluster_coverage"))}
+    paper["s"] = _pv("T14-resplits.margin_optimistic_percent") / 100
+    tol = {"f": POINT_TOL, "l": 0.1, "c": POINT_TOL * 2.5, "s": 0.1}
+    return [f"{a}/{c}.{b}" for a in EX15_READINGS for c, b in EX15_MARGINS
+            if all(abs(got - paper[q]) <= tol[q] for q, got in (("f", v[f"{c}f"]), ("l", v[f"{a}l"]),
+                                                                ("c", v[f"{a}c"]), ("s", v[f"{c}{b}"])))]
+
+
+def _experiments_ex15() -> list[Experiment]:
+    """The ex15 helper's experiment (E118, ``studies/explain/ex15_readings.py``; rule in docs/decisions.md, "ex15"):
+    T14's re-split sentence under every reading it admits, on the frozen pool's stored scores and calibrations."""
+    d = f"{X}ex15_readings.B_pool_cover."
+    keys = {"n": f"{d}splits", **{f"{a}{m}": f"{d}{a}.{w}" for a in EX15_READINGS
+                                  for m, w in (("l", "level"), ("c", "coverage"))},
+            **{f"{c}f": f"{d}{c}.failure" for c in ("c5", "c15")},
+            **{f"{c}{b}": f"{d}{c}.{b}" for c, b in EX15_MARGINS}}
+    return [Experiment(
+        "E118", "the re-split sentence under every reading it admits (budgets, calibration, optimistic rule)",
+        keys,
+        "on the frozen cover pool's {n:d} re-splits, level and held-out coverage read at the final budget are "
+        "{a1l:.3f} and {a1c:.3f}; averaged over budgets 1..5 (each t_k) {a2l:.3f} and {a2c:.3f}; t_5 with coverage "
+        "averaged over budgets {a3c:.3f}, at every budget at once {a4c:.3f}. Failure is {c5f:.3f} (level and margin "
+        "at k = 5) or {c15f:.3f} (margin over budgets 1..5, the paper's rule); the margin is optimistic on {c5b0:.2f} "
+        "of splits at k = 5 (ours), and with the margin over budgets {c15b1:.2f} at k = 5, {c15b2:.2f} on the "
+        "budget mean, {c15b3:.2f} at some budget. Each of the four level/coverage readings is paired with each of "
+        "the four margin readings; a pairing counts only with failure, level, coverage and share all inside the "
+        "claim's own tolerances.",
+        supports=lambda v: bool(_ex15_inside(v)))]
+
+
 for _experiment in (_experiments() + _experiments_more() + _experiments_ex3() + _experiments_ex4()
                     + _experiments_ex5() + _experiments_ex6() + _experiments_ex7()
                     + _experiments_ex8() + _experiments_ex9()
-                    + _experiments_ex10() + _experiments_ex11() + _experiments_ex12() + _experiments_ex13()):
+                    + _experiments_ex10() + _experiments_ex11() + _experiments_ex12() + _experiments_ex13()
+                    + _experiments_ex15()):
     EXPERIMENTS[_experiment.number] = _experiment
 
 
