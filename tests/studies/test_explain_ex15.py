@@ -87,8 +87,31 @@ def test_e118_needs_all_four_numbers_of_one_reading():
     assert not exp.supports({**v, "a3c": 0.0, "a1c": value("T14-resplits.heldout_cluster_coverage")})
 
 
-def test_t14_names_e118_for_its_three_failing_comparisons():
+def test_t14_names_e118_and_e119_for_its_three_failing_comparisons():
     t14 = next(c for c in claims.CLAIMS if c.id == "T14-resplits")
     spoken = {label for number, labels in (e if isinstance(e, tuple) else (e, ()) for e in t14.explain)
-              if number == "E118" for label in labels}
+              if number in ("E118", "E119") for label in labels}
     assert spoken == {"level mean", "held-out cluster coverage", "margin optimistic"}
+
+
+# ----------------------------------------------------------------------------- E119
+def test_union_pools_two_runs_tables_with_instances_in_id_order():
+    from probecommit.runner.replay import LoadedRun
+    from probecommit.studies.explain import ex15_union
+
+    def run(name: str, ids: list[str]) -> LoadedRun:
+        table = pd.DataFrame({"instance_id": ids, "v": range(len(ids))})
+        return LoadedRun(f"/nowhere/{name}", None, table[["instance_id"]], table, table, table, {"name": name})
+
+    got = ex15_union.union([run("b", ["t-1", "t-0"]), run("a", ["c-0"])])
+    assert list(got.instances["instance_id"]) == ["c-0", "t-0", "t-1"]
+    assert list(got.episodes["instance_id"]) == ["t-1", "t-0", "c-0"] and len(got.engine_cache) == 3
+    assert got.manifest == {"name": "b"} and str(got.path) == "/nowhere/b"
+
+
+def test_e119_reads_the_union_pools_keys_under_e118s_rule():
+    e118, e119 = claims.EXPERIMENTS["E118"], claims.EXPERIMENTS["E119"]
+    assert set(e119.keys) == set(e118.keys)
+    assert all(key.startswith("explain:results.ex15_union.B_union_cover.") for key in e119.keys.values())
+    v = _at_paper()
+    assert e119.supports(v) and not e119.supports({**v, "c5b0": 0.0})

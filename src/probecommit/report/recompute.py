@@ -861,6 +861,8 @@ EXPLAIN_EX12 = "ex12_distinct_rows.parquet"
 EXPLAIN_EX12_SIM = "ex12_simultaneous_rows.parquet"
 #: ex15's stored rows (``studies.explain.ex15_readings.STORED``: E118's re-splits under every reading).
 EXPLAIN_EX15 = "ex15_readings_rows.parquet"
+#: ex15's stored rows (``studies.explain.ex15_union.STORED``: E119's re-splits of the literal Split B pool).
+EXPLAIN_EX15_UNION = "ex15_union_rows.parquet"
 #: ex7's stored rows (``studies.explain.ex7.STORED``: the fault surprise rows and the fresh draws).
 EXPLAIN_EX7 = ("ex7_fault_surprise.parquet", "ex7_dev_draws.parquet", "ex7_harness_draws.parquet")
 
@@ -870,7 +872,8 @@ STORED_SUMMARIES = (("mixture_noise", EXPLAIN_MIXTURE, "mixture_x"),
                     ("ex9_calibration", EXPLAIN_EX9, "ex9_calibration"),
                     ("ex12_distinct", EXPLAIN_EX12, "ex12_distinct"),
                     ("ex12_simultaneous", EXPLAIN_EX12_SIM, "ex12_simultaneous"),
-                    ("ex15_readings", EXPLAIN_EX15, "ex15_readings"))
+                    ("ex15_readings", EXPLAIN_EX15, "ex15_readings"),
+                    ("ex15_union", EXPLAIN_EX15_UNION, "ex15_union"))
 
 #: Explain modules that recompute their own groups: ``recompute(folder, results)`` gives
 #: ``(values, sources, problems)`` (a group published without its stored rows is a problem).
@@ -936,7 +939,7 @@ RECOMPUTED = {
                "ex11's Probe-Robust cells over redrawn truth pools; ex13's surprise AUCs over five draws of the generator "
                "under the paper's schedule and the mixture's cost under every reading of q0's units; "
                "ex12's Table III original cells under a schedule without replacement and the re-splits under the "
-               "budget-simultaneous level; ex15's re-splits under every reading of the paper's sentence",
+               "budget-simultaneous level; ex15's re-splits under every reading of the paper's sentence, on the frozen pool and on Split B's pooled halves",
 }
 TRACED_ONLY = {
     "insertion": "the stored rows themselves (episodes, re-executed commits, replays); the re-split rows; the cover "

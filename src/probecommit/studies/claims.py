@@ -578,7 +578,8 @@ def _claims_audit_and_calibration() -> list[Claim]:
                                                                    "margin optimistic")),
                        ("E80", ("held-out cluster coverage",)), ("E83", ("margin optimistic",)),
                        ("E101", ("held-out cluster coverage",)),
-                       ("E118", ("level mean", "held-out cluster coverage", "margin optimistic")))))
+                       *((number, ("level mean", "held-out cluster coverage", "margin optimistic"))
+                         for number in ("E118", "E119")))))
     return c
 
 
@@ -1733,18 +1734,16 @@ def _ex15_inside(v: Mapping[str, Any]) -> list[str]:
                                                                 ("c", v[f"{a}c"]), ("s", v[f"{c}{b}"])))]
 
 
-def _experiments_ex15() -> list[Experiment]:
-    """The ex15 helper's experiment (E118, ``studies/explain/ex15_readings.py``; rule in docs/decisions.md, "ex15"):
-    T14's re-split sentence under every reading it admits, on the frozen pool's stored scores and calibrations."""
-    d = f"{X}ex15_readings.B_pool_cover."
+def _ex15_experiment(number: str, group_pool: str, title: str, where: str) -> Experiment:
+    """One of ex15's experiments: E118's 16 readings on one pool's stored re-split rows (``group_pool``)."""
+    d = f"{X}{group_pool}."
     keys = {"n": f"{d}splits", **{f"{a}{m}": f"{d}{a}.{w}" for a in EX15_READINGS
                                   for m, w in (("l", "level"), ("c", "coverage"))},
             **{f"{c}f": f"{d}{c}.failure" for c in ("c5", "c15")},
             **{f"{c}{b}": f"{d}{c}.{b}" for c, b in EX15_MARGINS}}
-    return [Experiment(
-        "E118", "the re-split sentence under every reading it admits (budgets, calibration, optimistic rule)",
-        keys,
-        "on the frozen cover pool's {n:d} re-splits, level and held-out coverage read at the final budget are "
+    return Experiment(
+        number, title, keys,
+        f"on {where}'s {{n:d}} re-splits, level and held-out coverage read at the final budget are "
         "{a1l:.3f} and {a1c:.3f}; averaged over budgets 1..5 (each t_k) {a2l:.3f} and {a2c:.3f}; t_5 with coverage "
         "averaged over budgets {a3c:.3f}, at every budget at once {a4c:.3f}. Failure is {c5f:.3f} (level and margin "
         "at k = 5) or {c15f:.3f} (margin over budgets 1..5, the paper's rule); the margin is optimistic on {c5b0:.2f} "
@@ -1752,7 +1751,19 @@ def _experiments_ex15() -> list[Experiment]:
         "budget mean, {c15b3:.2f} at some budget. Each of the four level/coverage readings is paired with each of "
         "the four margin readings; a pairing counts only with failure, level, coverage and share all inside the "
         "claim's own tolerances.",
-        supports=lambda v: bool(_ex15_inside(v)))]
+        supports=lambda v: bool(_ex15_inside(v)))
+
+
+def _experiments_ex15() -> list[Experiment]:
+    """The ex15 helper's experiments (``studies/explain/ex15_*.py``; rules in docs/decisions.md, "ex15"): T14's
+    re-split sentence under every reading it admits, on the frozen pool (E118: stored scores and E55's stored
+    calibrations) and on the literal Split B pool, calibration + test of the cover protocol (E119)."""
+    return [_ex15_experiment("E118", "ex15_readings.B_pool_cover",
+                             "the re-split sentence under every reading it admits (budgets, calibration, optimistic "
+                             "rule)", "the frozen cover pool"),
+            _ex15_experiment("E119", "ex15_union.B_union_cover",
+                             "the re-split sentence's readings on the literal Split B pool (calibration + test)",
+                             "Split B's cover calibration and test runs pooled")]
 
 
 for _experiment in (_experiments() + _experiments_more() + _experiments_ex3() + _experiments_ex4()

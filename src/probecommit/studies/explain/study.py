@@ -30,7 +30,7 @@ from probecommit.studies.explain import ex4, ex5_calibration, ex6, ex7, ex8, ex9
 from probecommit.studies.explain import ex11
 from probecommit.studies.explain import ex13
 from probecommit.studies.explain import ex12_distinct, ex12_simultaneous
-from probecommit.studies.explain import ex15_readings
+from probecommit.studies.explain import ex15_readings, ex15_union
 from probecommit.studies.explain import gru as gru_study
 from probecommit.studies.explain.margin import margin_curve
 from probecommit.studies.paper_values import PRINTED
@@ -108,7 +108,7 @@ class Explain:
             *ex8.GROUPS, "ex9_calibration", *ex10.GROUPS,
             *ex11.GROUPS, *ex13.GROUPS,
             ex12_distinct.GROUP, ex12_simultaneous.GROUP,
-            ex15_readings.GROUP)}
+            ex15_readings.GROUP, ex15_union.GROUP)}
         self.tables: dict[str, pd.DataFrame] = {}
         #: Stored rows written beside results.json as they are, by file name (``more``'s steps).
         self.stored: dict[str, pd.DataFrame] = {}
@@ -448,7 +448,7 @@ class Explain:
                  lambda: ex8.run(self), lambda: ex9_calibration.run(self), lambda: ex10.run(self, paper),
                  lambda: ex11.run(self), lambda: ex13.run(self, paper),
                  lambda: ex12_distinct.run(self), lambda: ex12_simultaneous.run(self),
-                 lambda: ex15_readings.run(self)]
+                 lambda: ex15_readings.run(self), lambda: ex15_union.run(self)]
         try:
             for i, step in enumerate(steps):
                 self.progress("explain", i, len(steps))
