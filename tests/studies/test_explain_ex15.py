@@ -115,3 +115,22 @@ def test_e119_reads_the_union_pools_keys_under_e118s_rule():
     assert all(key.startswith("explain:results.ex15_union.B_union_cover.") for key in e119.keys.values())
     v = _at_paper()
     assert e119.supports(v) and not e119.supports({**v, "c5b0": 0.0})
+
+
+def test_a_batch_pooling_two_splits_keeps_each_episodes_split_through_subsets():
+    from probecommit.runner.inference import ProbeBatch
+
+    n = 3
+    batch = ProbeBatch(np.array(["a", "b", "b"], dtype=object), np.array(["a-0", "b-0", "b-1"], dtype=object),
+                       np.array([0, 0, 1]), np.zeros(n, int), np.zeros((n, 2)), np.zeros((n, 1, 1)), np.zeros((n, 1, 1)))
+    assert list(batch.subset(np.array([2, 0])).split) == ["b", "a"]
+    one = ProbeBatch("a", batch.instance_id, batch.instance_index, batch.repeat, batch.truths, batch.u, batch.y)
+    assert one.subset(np.array([1])).split == "a"  # a single run's batch is unchanged
+
+
+def test_a_pooled_batchs_filter_streams_are_each_runs_own():
+    from probecommit.runner.seeding import episode_rngs
+
+    pooled = episode_rngs(7, ["B_cal_cover", "B_test_cover"], [3, 3], [1, 1], 0)
+    alone = [episode_rngs(7, name, [3], [1], 0)[0] for name in ("B_cal_cover", "B_test_cover")]
+    assert [g.random() for g in pooled] == [g.random() for g in alone]
