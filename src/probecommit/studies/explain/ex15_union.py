@@ -68,11 +68,16 @@ def rows_of(runs_dir: Path, alpha: float, count: int, seed: int, k: int, boot_se
 
 
 def run(explain: Any) -> None:
-    """The explain step: stored rows and keys of the ``ex15_union`` group."""
-    explain.progress("explain: the re-splits of the literal Split B pool (E119)", 0, 1)
+    """The explain step: stored rows and keys of the ``ex15_union`` group, computed in the explain target's process
+    of its own beside the later steps (it reads only the insertion study's runs and fills a group nobody else
+    fills; its 100 calibrations are minutes of CPU on a loaded machine)."""
+    explain.progress("explain: the re-splits of the literal Split B pool (E119, in a process of its own)", 0, 1)
     p = explain.p
-    rows = rows_of(explain.ins, p.alpha, int(p.resplits["count"]), int(p.resplits["seed"]), int(p.budgets["cover"]),
-                   int(p.bootstrap.seed))
-    if rows is not None:
-        explain.stored[STORED] = rows
-        explain.res[GROUP].update(summary(rows))
+
+    def done(rows: pd.DataFrame | None) -> None:
+        if rows is not None:
+            explain.stored[STORED] = rows
+            explain.res[GROUP].update(summary(rows))
+
+    explain.background.submit(done, rows_of, explain.ins, float(p.alpha), int(p.resplits["count"]),
+                              int(p.resplits["seed"]), int(p.budgets["cover"]), int(p.bootstrap.seed))

@@ -443,12 +443,13 @@ class Explain:
                  self.resplits_paper_schedule,
                  self.instance_generator, self.draws, self.boundary_fault, self.robust, physx_coverage, self.physx,
                  lambda: (self.ready and self.ready(), self.gru()), lambda: more.run(self),
+                 lambda: ex15_union.run(self),
                  lambda: ex5_calibration.run(self), lambda: ex4.run(self),
                  lambda: ex6.run(self, paper), lambda: ex7.run(self),
                  lambda: ex8.run(self), lambda: ex9_calibration.run(self), lambda: ex10.run(self, paper),
                  lambda: ex11.run(self), lambda: ex13.run(self, paper),
                  lambda: ex12_distinct.run(self), lambda: ex12_simultaneous.run(self),
-                 lambda: ex15_readings.run(self), lambda: ex15_union.run(self)]
+                 lambda: ex15_readings.run(self)]
         try:
             for i, step in enumerate(steps):
                 self.progress("explain", i, len(steps))
