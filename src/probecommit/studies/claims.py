@@ -1743,7 +1743,7 @@ def _ex15_experiment(number: str, group_pool: str, title: str, where: str) -> Ex
             **{f"{c}{b}": f"{d}{c}.{b}" for c, b in EX15_MARGINS}}
     return Experiment(
         number, title, keys,
-        f"on {where}'s {{n:d}} re-splits, level and held-out coverage read at the final budget are "
+        f"on the {{n:d}} re-splits of {where}, level and held-out coverage read at the final budget are "
         "{a1l:.3f} and {a1c:.3f}; averaged over budgets 1..5 (each t_k) {a2l:.3f} and {a2c:.3f}; t_5 with coverage "
         "averaged over budgets {a3c:.3f}, at every budget at once {a4c:.3f}. Failure is {c5f:.3f} (level and margin "
         "at k = 5) or {c15f:.3f} (margin over budgets 1..5, the paper's rule); the margin is optimistic on {c5b0:.2f} "
