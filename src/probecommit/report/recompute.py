@@ -859,6 +859,10 @@ EXPLAIN_EX9 = "ex9_calibration_rows.parquet"
 EXPLAIN_EX12 = "ex12_distinct_rows.parquet"
 #: ex12's stored rows (``studies.explain.ex12_simultaneous.STORED``: E101's re-splits under the simultaneous level).
 EXPLAIN_EX12_SIM = "ex12_simultaneous_rows.parquet"
+#: ex15's stored rows (``studies.explain.ex15_readings.STORED``: E118's re-splits under every reading).
+EXPLAIN_EX15 = "ex15_readings_rows.parquet"
+#: ex15's stored rows (``studies.explain.ex15_union.STORED``: E119's re-splits of the literal Split B pool).
+EXPLAIN_EX15_UNION = "ex15_union_rows.parquet"
 #: ex7's stored rows (``studies.explain.ex7.STORED``: the fault surprise rows and the fresh draws).
 EXPLAIN_EX7 = ("ex7_fault_surprise.parquet", "ex7_dev_draws.parquet", "ex7_harness_draws.parquet")
 
@@ -867,7 +871,9 @@ STORED_SUMMARIES = (("mixture_noise", EXPLAIN_MIXTURE, "mixture_x"),
                     ("ex5_calibration", EXPLAIN_EX5, "ex5_calibration"),
                     ("ex9_calibration", EXPLAIN_EX9, "ex9_calibration"),
                     ("ex12_distinct", EXPLAIN_EX12, "ex12_distinct"),
-                    ("ex12_simultaneous", EXPLAIN_EX12_SIM, "ex12_simultaneous"))
+                    ("ex12_simultaneous", EXPLAIN_EX12_SIM, "ex12_simultaneous"),
+                    ("ex15_readings", EXPLAIN_EX15, "ex15_readings"),
+                    ("ex15_union", EXPLAIN_EX15_UNION, "ex15_union"))
 
 #: Explain modules that recompute their own groups: ``recompute(folder, results)`` gives
 #: ``(values, sources, problems)`` (a group published without its stored rows is a problem).
@@ -935,7 +941,9 @@ RECOMPUTED = {
                "ex14's band decomposition of k = 1 escape and the filter sentence's readings (escape, Table III's "
                "original cells, T36's AUCs); "
                "ex12's Table III original cells under a schedule without replacement and the re-splits under the "
-               "budget-simultaneous level; ex16's hinge and push1d probed cells with probes that reach the commit regime",
+               "budget-simultaneous level; ex15's re-splits under every reading of the paper's sentence, on the frozen "
+               "pool and on Split B's pooled halves; ex16's hinge and push1d probed cells with probes that reach the "
+               "commit regime",
 }
 TRACED_ONLY = {
     "insertion": "the stored rows themselves (episodes, re-executed commits, replays); the re-split rows; the cover "

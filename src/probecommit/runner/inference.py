@@ -33,7 +33,9 @@ class ProbeBatch:
         context: ``[E, c]`` observed context per episode (``c`` may be 0).
     """
 
-    split: str
+    #: The episodes' split: one name, or one per episode when the batch pools runs of several splits (each
+    #: episode's filter then draws its own run's random numbers, ``episode_rngs``).
+    split: str | np.ndarray
     instance_id: np.ndarray  # [E] str
     instance_index: np.ndarray  # [E] int
     repeat: np.ndarray  # [E] int
@@ -64,7 +66,8 @@ class ProbeBatch:
 
     def subset(self, rows: np.ndarray) -> "ProbeBatch":
         return ProbeBatch(
-            self.split, self.instance_id[rows], self.instance_index[rows], self.repeat[rows],
+            self.split if isinstance(self.split, str) else self.split[rows], self.instance_id[rows],
+            self.instance_index[rows], self.repeat[rows],
             self.truths[rows], self.u[rows], self.y[rows], self.status[rows], self.error[rows], self.context[rows],
         )
 

@@ -163,7 +163,9 @@ def _probe_batch(loaded: LoadedRun, model: Any) -> ProbeBatch:
     rows = loaded.instances.iloc[position[first]]
     truths, context = instance_arrays(rows, model)
     return ProbeBatch(
-        split=str(loaded.instances["split"].iloc[0]),
+        # one split name; a pool of several runs (``studies.explain.ex15_union``) keeps each episode's own
+        split=(str(loaded.instances["split"].iloc[0]) if loaded.instances["split"].nunique() <= 1
+               else rows["split"].astype(str).to_numpy(object)),
         instance_id=inst_ids[position[first]],
         instance_index=rows["instance_index"].to_numpy(np.int64),
         repeat=repeat[first],

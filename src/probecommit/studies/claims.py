@@ -590,7 +590,9 @@ def _claims_audit_and_calibration() -> list[Claim]:
                        *((f"E56[{label}]", (label,)) for label in ("level mean", "held-out cluster coverage",
                                                                    "margin optimistic")),
                        ("E80", ("held-out cluster coverage",)), ("E83", ("margin optimistic",)),
-                       ("E101", ("held-out cluster coverage",)))))
+                       ("E101", ("held-out cluster coverage",)),
+                       *((number, ("level mean", "held-out cluster coverage", "margin optimistic"))
+                         for number in ("E118", "E119")))))
     return c
 
 
@@ -1844,11 +1846,59 @@ def _experiments_ex14() -> list[Experiment]:
     return out
 
 
+#: E118's readings of T14's sentence: level/coverage readings x (calibration, optimistic rule) pairs.
+EX15_READINGS = ("a1", "a2", "a3", "a4")
+EX15_MARGINS = (("c5", "b0"), ("c15", "b1"), ("c15", "b2"), ("c15", "b3"))
+
+
+def _ex15_inside(v: Mapping[str, Any]) -> list[str]:
+    """E118's readings whose failure, level, coverage and optimistic share are all within T14's own tolerances."""
+    paper = {q: _pv(f"T14-resplits.{k}") for q, k in (("f", "failure_mean"), ("l", "level_mean"),
+                                                        ("c", "heldout_cluster_coverage"))}
+    paper["s"] = _pv("T14-resplits.margin_optimistic_percent") / 100
+    tol = {"f": POINT_TOL, "l": 0.1, "c": POINT_TOL * 2.5, "s": 0.1}
+    return [f"{a}/{c}.{b}" for a in EX15_READINGS for c, b in EX15_MARGINS
+            if all(abs(got - paper[q]) <= tol[q] for q, got in (("f", v[f"{c}f"]), ("l", v[f"{a}l"]),
+                                                                ("c", v[f"{a}c"]), ("s", v[f"{c}{b}"])))]
+
+
+def _ex15_experiment(number: str, group_pool: str, title: str, where: str) -> Experiment:
+    """One of ex15's experiments: E118's 16 readings on one pool's stored re-split rows (``group_pool``)."""
+    d = f"{X}{group_pool}."
+    keys = {"n": f"{d}splits", **{f"{a}{m}": f"{d}{a}.{w}" for a in EX15_READINGS
+                                  for m, w in (("l", "level"), ("c", "coverage"))},
+            **{f"{c}f": f"{d}{c}.failure" for c in ("c5", "c15")},
+            **{f"{c}{b}": f"{d}{c}.{b}" for c, b in EX15_MARGINS}}
+    return Experiment(
+        number, title, keys,
+        f"on the {{n:d}} re-splits of {where}, level and held-out coverage read at the final budget are "
+        "{a1l:.3f} and {a1c:.3f}; averaged over budgets 1..5 (each t_k) {a2l:.3f} and {a2c:.3f}; t_5 with coverage "
+        "averaged over budgets {a3c:.3f}, at every budget at once {a4c:.3f}. Failure is {c5f:.3f} (level and margin "
+        "at k = 5) or {c15f:.3f} (margin over budgets 1..5, the paper's rule); the margin is optimistic on {c5b0:.2f} "
+        "of splits at k = 5 (ours), and with the margin over budgets {c15b1:.2f} at k = 5, {c15b2:.2f} on the "
+        "budget mean, {c15b3:.2f} at some budget. Each of the four level/coverage readings is paired with each of "
+        "the four margin readings; a pairing counts only with failure, level, coverage and share all inside the "
+        "claim's own tolerances.",
+        supports=lambda v: bool(_ex15_inside(v)))
+
+
+def _experiments_ex15() -> list[Experiment]:
+    """The ex15 helper's experiments (``studies/explain/ex15_*.py``; rules in docs/decisions.md, "ex15"): T14's
+    re-split sentence under every reading it admits, on the frozen pool (E118: stored scores and E55's stored
+    calibrations) and on the literal Split B pool, calibration + test of the cover protocol (E119)."""
+    return [_ex15_experiment("E118", "ex15_readings.B_pool_cover",
+                             "the re-split sentence under every reading it admits (budgets, calibration, optimistic "
+                             "rule)", "the frozen cover pool"),
+            _ex15_experiment("E119", "ex15_union.B_union_cover",
+                             "the re-split sentence's readings on the literal Split B pool (calibration + test)",
+                             "Split B's cover calibration and test runs pooled")]
+
+
 for _experiment in (_experiments() + _experiments_more() + _experiments_ex3() + _experiments_ex4()
                     + _experiments_ex5() + _experiments_ex6() + _experiments_ex7()
                     + _experiments_ex8() + _experiments_ex9()
                     + _experiments_ex10() + _experiments_ex11() + _experiments_ex12() + _experiments_ex13()
-                    + _experiments_ex14() + _experiments_ex16()):
+                    + _experiments_ex14() + _experiments_ex15() + _experiments_ex16()):
     EXPERIMENTS[_experiment.number] = _experiment
 
 

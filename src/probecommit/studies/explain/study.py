@@ -32,6 +32,7 @@ from probecommit.studies.explain import ex13
 from probecommit.studies.explain import ex14
 from probecommit.studies.explain import ex16
 from probecommit.studies.explain import ex12_distinct, ex12_simultaneous
+from probecommit.studies.explain import ex15_readings, ex15_union
 from probecommit.studies.explain import gru as gru_study
 from probecommit.studies.explain.margin import margin_curve
 from probecommit.studies.paper_values import PRINTED
@@ -110,7 +111,8 @@ class Explain:
             *ex11.GROUPS, *ex13.GROUPS,
             *ex14.GROUPS,
             *ex16.GROUPS,
-            ex12_distinct.GROUP, ex12_simultaneous.GROUP)}
+            ex12_distinct.GROUP, ex12_simultaneous.GROUP,
+            ex15_readings.GROUP, ex15_union.GROUP)}
         self.tables: dict[str, pd.DataFrame] = {}
         #: Stored rows written beside results.json as they are, by file name (``more``'s steps).
         self.stored: dict[str, pd.DataFrame] = {}
@@ -445,12 +447,14 @@ class Explain:
                  self.resplits_paper_schedule,
                  self.instance_generator, self.draws, self.boundary_fault, self.robust, physx_coverage, self.physx,
                  lambda: (self.ready and self.ready(), self.gru()), lambda: more.run(self),
+                 lambda: ex15_union.run(self),
                  lambda: ex5_calibration.run(self), lambda: ex4.run(self),
                  lambda: ex6.run(self, paper), lambda: ex7.run(self),
                  lambda: ex8.run(self), lambda: ex9_calibration.run(self), lambda: ex10.run(self, paper),
                  lambda: ex11.run(self), lambda: ex16.run(self), lambda: ex13.run(self, paper),
                  lambda: ex14.run(self, paper),
-                 lambda: ex12_distinct.run(self), lambda: ex12_simultaneous.run(self)]
+                 lambda: ex12_distinct.run(self), lambda: ex12_simultaneous.run(self),
+                 lambda: ex15_readings.run(self)]
         try:
             for i, step in enumerate(steps):
                 self.progress("explain", i, len(steps))
