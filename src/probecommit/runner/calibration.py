@@ -113,6 +113,15 @@ class Recorder:
         """Keep a whole table's ``columns`` (a commit not reduced chunk by chunk)."""
         self.wrap(request, lambda t: None, columns)(table)
 
+    def mark(self) -> int:
+        """Where the rows kept from now on start (for :meth:`drop_since`)."""
+        return 0 if self.sink is None else len(self.sink)
+
+    def drop_since(self, mark: int) -> None:
+        """Forget the rows kept since :meth:`mark` gave ``mark`` (a pass whose results were not used)."""
+        if self.sink is not None:
+            del self.sink[mark:]
+
     def keep_margins(self, gammas: Iterable[float]) -> None:
         """Drop the margin rows of candidates the search committed in a block but never read."""
         if self.sink is None:
@@ -645,12 +654,8 @@ def calibrate(cal_run, test_run, alpha: float = DEFAULT_ALPHA, budgets: Sequence
 
     # Of each table, only what the results read is kept, chunk by chunk: per-instance scores, sums and
     # optimism, the rows at the cost budget and the margin rows, so memory does not grow with the runs.
-    scores = calibration_scores(cal)
+    scores, margin, optimism = _calibration_side(cal, alpha, budgets, margin_grid, rec)
     t_k, t_sim, _ = _thresholds(scores, alpha, budgets)
-    optimism_of = rec.wrap("optimism", functools.partial(_optimism, budgets=budgets), OPTIMISM_COLUMNS)
-    # The calibration run's table at nu was validated whole above; the optimism reads its five columns.
-    margin, [optimism] = cal.search_margin(t_k, margin_grid, budgets, ((t_k, None), optimism_of, OPTIMISM_COLUMNS),
-                                           record=rec)
     # The calibration run is done: its tables, beliefs and engine cache go before the test run's commits.
     cal.release()
     del cal
@@ -666,6 +671,64 @@ def calibrate(cal_run, test_run, alpha: float = DEFAULT_ALPHA, budgets: Sequence
     blind = ok_episodes(test.loaded.table("episodes", where=("method", ["blind_robust"]), columns=FAILURE_COLUMNS))
     return _summarize(CalibrationParts(scores, margin, optimism, orig, set_rows, full, covered, blind),
                       alpha=alpha, budgets=budgets, cost_budget=cost_budget, resamples=resamples, seed=seed, level=level)
+
+
+#: The columns of the calibration run's stored episode rows that :func:`_stored_thresholds` reads.
+SCORE_COLUMNS = ("instance_id", "k", "method", "variant", "status", "score_s")
+
+
+def _calibration_side(cal: _Run, alpha: float, budgets: list[int], margin_grid: Iterable[float],
+                      rec: Recorder) -> tuple[pd.DataFrame, MarginResult, pd.DataFrame]:
+    """The calibration run's scores (recomputed), and the margin search and optimism under the ``t_k``
+    they give, in one pass over its beliefs where the run's stored rows tell ``t_k`` beforehand.
+
+    Why: the search needs ``t_k`` before its pass, and ``t_k`` comes from the scores of the ``nu``
+    commit, so the scores took a pass of their own (a third of calibrate's belief recomputations).
+    The run stores its ``nu`` commit's rows, whose scores are the recomputed ones for a run made by
+    this code under its own config; their ``t_k`` is taken as a guess, the search is run under it
+    with the ``nu`` commit beside it, and the guess is checked against the recomputed scores'
+    ``t_k`` exactly. Stored rows that are not what the beliefs give (another code's run, an
+    imported one) cost a second pass under the recomputed ``t_k``, its recorded rows replacing the
+    first's: the result is always the one the recomputed scores give, bit for bit.
+    """
+    guess = _stored_thresholds(cal, alpha, budgets)
+    scores = None if guess is not None else calibration_scores(cal)
+    t_k = guess if guess is not None else _thresholds(scores, alpha, budgets)[0]
+    start = rec.mark()
+    margin, optimism, recomputed = _search_under(cal, t_k, budgets, margin_grid, rec, scores is None)
+    if scores is not None:
+        return scores, margin, optimism
+    if recomputed is None:
+        raise UsageError(f"{cal.loaded.path}: no episode of the calibration run committed (every one failed)")
+    scores = recomputed.sort_index()
+    actual = _thresholds(scores, alpha, budgets)[0]
+    if actual != t_k:  # the stored rows are not what the recomputed beliefs give
+        rec.drop_since(start)
+        margin, optimism, _ = _search_under(cal, actual, budgets, margin_grid, rec, False)
+    return scores, margin, optimism
+
+
+def _search_under(cal: _Run, t_k: dict[int, float], budgets: list[int], margin_grid: Iterable[float], rec: Recorder,
+                  with_scores: bool) -> tuple[MarginResult, pd.DataFrame, pd.DataFrame | None]:
+    """The margin search under ``t_k`` and the optimism of the ``t_k`` commit; ``with_scores``: the ``nu``
+    commit's worst-repeat scores beside them (its whole table validated chunk by chunk), else None."""
+    optimism_of = rec.wrap("optimism", functools.partial(_optimism, budgets=budgets), OPTIMISM_COLUMNS)
+    extra: list[tuple] = [((t_k, None), optimism_of, OPTIMISM_COLUMNS)]
+    if with_scores:
+        extra.append(((cal.nu, None), _scores))
+    margin, [optimism, *scores] = cal.search_margin(t_k, margin_grid, budgets, *extra, record=rec)
+    return margin, optimism, scores[0] if scores else None
+
+
+def _stored_thresholds(cal: _Run, alpha: float, budgets: list[int]) -> dict[int, float] | None:
+    """``t_k`` from the calibration run's stored ``nu`` commit rows (a guess :func:`_calibration_side`
+    checks); None where the stored rows give none (no probe rows, no scores, a budget missing)."""
+    try:
+        rows = cal.loaded.table("episodes", where=("method", [PROBE_METHOD]), columns=SCORE_COLUMNS)
+        scores = _scores(rows)
+        return None if scores is None else _thresholds(scores.sort_index(), alpha, budgets)[0]
+    except (ValueError, KeyError):  # pyarrow's errors for a missing column are ValueErrors too
+        return None
 
 
 #: The columns a publication stores of each recorded request (``Recorder``): what its reduction reads.
