@@ -258,3 +258,12 @@ def test_stored_thresholds_are_a_guess_the_recomputed_scores_check(runs, stored,
     assert got == expected
     pd.testing.assert_frame_equal(rows, expected_rows)
     assert sum(passes) == (1 if stored == "as run" else 2)
+    # The gates search the margin under the stored rows' simultaneous t the same way.
+    want = gates(runs["cal"], runs["test"], alpha=0.2, resamples=50, seed=5, chunk_instances=3)
+    passes.clear()
+    have = gates(cal, runs["test"], alpha=0.2, resamples=50, seed=5, chunk_instances=3)
+    pd.testing.assert_frame_equal(have.summary, want.summary)
+    pd.testing.assert_frame_equal(have.curves, want.curves)
+    assert {k: have.info[k] for k in ("threshold", "gamma", "gamma_satisfied")} == \
+        {k: want.info[k] for k in ("threshold", "gamma", "gamma_satisfied")}
+    assert sum(passes) == (1 if stored == "as run" else 2)

@@ -654,7 +654,10 @@ def calibrate(cal_run, test_run, alpha: float = DEFAULT_ALPHA, budgets: Sequence
 
     # Of each table, only what the results read is kept, chunk by chunk: per-instance scores, sums and
     # optimism, the rows at the cost budget and the margin rows, so memory does not grow with the runs.
-    scores, margin, optimism = _calibration_side(cal, alpha, budgets, margin_grid, rec)
+    optimism_of = rec.wrap("optimism", functools.partial(_optimism, budgets=budgets), OPTIMISM_COLUMNS)
+    scores, margin, [optimism] = search_with_scores(
+        cal, lambda scores: _thresholds(scores, alpha, budgets)[0], margin_grid, budgets, rec,
+        lambda t_k: [((t_k, None), optimism_of, OPTIMISM_COLUMNS)])
     t_k, t_sim, _ = _thresholds(scores, alpha, budgets)
     # The calibration run is done: its tables, beliefs and engine cache go before the test run's commits.
     cal.release()
@@ -673,60 +676,61 @@ def calibrate(cal_run, test_run, alpha: float = DEFAULT_ALPHA, budgets: Sequence
                       alpha=alpha, budgets=budgets, cost_budget=cost_budget, resamples=resamples, seed=seed, level=level)
 
 
-#: The columns of the calibration run's stored episode rows that :func:`_stored_thresholds` reads.
+#: The columns of the calibration run's stored episode rows that :func:`_stored_scores` reads.
 SCORE_COLUMNS = ("instance_id", "k", "method", "variant", "status", "score_s")
 
+#: Thresholds of the calibration scores (``t_k`` or ``t``): what the margin is searched under.
+ThresholdsOf = Callable[[pd.DataFrame], "float | dict[int, float]"]
+#: The extra requests of the search's pass under given thresholds (see :meth:`_Run.search_margin`).
+ExtraOf = Callable[["float | dict[int, float]"], list]
 
-def _calibration_side(cal: _Run, alpha: float, budgets: list[int], margin_grid: Iterable[float],
-                      rec: Recorder) -> tuple[pd.DataFrame, MarginResult, pd.DataFrame]:
-    """The calibration run's scores (recomputed), and the margin search and optimism under the ``t_k``
-    they give, in one pass over its beliefs where the run's stored rows tell ``t_k`` beforehand.
 
-    Why: the search needs ``t_k`` before its pass, and ``t_k`` comes from the scores of the ``nu``
-    commit, so the scores took a pass of their own (a third of calibrate's belief recomputations).
-    The run stores its ``nu`` commit's rows, whose scores are the recomputed ones for a run made by
-    this code under its own config; their ``t_k`` is taken as a guess, the search is run under it
-    with the ``nu`` commit beside it, and the guess is checked against the recomputed scores'
-    ``t_k`` exactly. Stored rows that are not what the beliefs give (another code's run, an
-    imported one) cost a second pass under the recomputed ``t_k``, its recorded rows replacing the
-    first's: the result is always the one the recomputed scores give, bit for bit.
+def search_with_scores(cal: _Run, thresholds_of: ThresholdsOf, margin_grid: Iterable[float], budgets: list[int],
+                       rec: Recorder, extra_of: ExtraOf = lambda thresholds: []) -> tuple[pd.DataFrame, MarginResult,
+                                                                                        list[Any]]:
+    """The calibration run's scores (recomputed), and the margin search (with ``extra_of``'s requests)
+    under the thresholds they give, in one pass over its beliefs where the run's stored rows tell
+    those thresholds beforehand.
+
+    Why: the search needs its thresholds before its pass, and they come from the scores of the
+    ``nu`` commit, so the scores took a pass of their own (a third of calibrate's belief
+    recomputations). The run stores its ``nu`` commit's rows, whose scores are the recomputed ones
+    for a run made by this code under its own config; their thresholds are taken as a guess, the
+    search runs under it with the ``nu`` commit beside it, and the guess is checked against the
+    recomputed scores' thresholds exactly. Stored rows that are not what the beliefs give (another
+    code's run, an imported or edited one) cost a second pass under the recomputed thresholds, its
+    recorded rows replacing the first's: the result is always the recomputed scores', bit for bit.
+
+    Returns:
+        The scores (instances sorted x budgets), the margin and ``extra_of``'s results.
     """
-    guess = _stored_thresholds(cal, alpha, budgets)
+    guess = _stored_scores(cal, thresholds_of)
     scores = None if guess is not None else calibration_scores(cal)
-    t_k = guess if guess is not None else _thresholds(scores, alpha, budgets)[0]
+    thresholds = guess if guess is not None else thresholds_of(scores)
     start = rec.mark()
-    margin, optimism, recomputed = _search_under(cal, t_k, budgets, margin_grid, rec, scores is None)
+    extra = extra_of(thresholds) + ([((cal.nu, None), _scores)] if scores is None else [])
+    margin, extras = cal.search_margin(thresholds, margin_grid, budgets, *extra, record=rec)
     if scores is not None:
-        return scores, margin, optimism
+        return scores, margin, extras
+    recomputed = extras.pop()
     if recomputed is None:
         raise UsageError(f"{cal.loaded.path}: no episode of the calibration run committed (every one failed)")
     scores = recomputed.sort_index()
-    actual = _thresholds(scores, alpha, budgets)[0]
-    if actual != t_k:  # the stored rows are not what the recomputed beliefs give
+    actual = thresholds_of(scores)
+    if actual != thresholds:  # the stored rows are not what the recomputed beliefs give
         rec.drop_since(start)
-        margin, optimism, _ = _search_under(cal, actual, budgets, margin_grid, rec, False)
-    return scores, margin, optimism
+        margin, extras = cal.search_margin(actual, margin_grid, budgets, *extra_of(actual), record=rec)
+    return scores, margin, extras
 
 
-def _search_under(cal: _Run, t_k: dict[int, float], budgets: list[int], margin_grid: Iterable[float], rec: Recorder,
-                  with_scores: bool) -> tuple[MarginResult, pd.DataFrame, pd.DataFrame | None]:
-    """The margin search under ``t_k`` and the optimism of the ``t_k`` commit; ``with_scores``: the ``nu``
-    commit's worst-repeat scores beside them (its whole table validated chunk by chunk), else None."""
-    optimism_of = rec.wrap("optimism", functools.partial(_optimism, budgets=budgets), OPTIMISM_COLUMNS)
-    extra: list[tuple] = [((t_k, None), optimism_of, OPTIMISM_COLUMNS)]
-    if with_scores:
-        extra.append(((cal.nu, None), _scores))
-    margin, [optimism, *scores] = cal.search_margin(t_k, margin_grid, budgets, *extra, record=rec)
-    return margin, optimism, scores[0] if scores else None
-
-
-def _stored_thresholds(cal: _Run, alpha: float, budgets: list[int]) -> dict[int, float] | None:
-    """``t_k`` from the calibration run's stored ``nu`` commit rows (a guess :func:`_calibration_side`
-    checks); None where the stored rows give none (no probe rows, no scores, a budget missing)."""
+def _stored_scores(cal: _Run, thresholds_of: ThresholdsOf) -> "float | dict[int, float] | None":
+    """The thresholds of the calibration run's stored ``nu`` commit scores (a guess that
+    :func:`search_with_scores` checks); None where the stored rows give none (no probe rows or
+    scores, a budget missing, NaN)."""
     try:
         rows = cal.loaded.table("episodes", where=("method", [PROBE_METHOD]), columns=SCORE_COLUMNS)
         scores = _scores(rows)
-        return None if scores is None else _thresholds(scores.sort_index(), alpha, budgets)[0]
+        return None if scores is None else thresholds_of(scores.sort_index())
     except (ValueError, KeyError):  # pyarrow's errors for a missing column are ValueErrors too
         return None
 
@@ -966,8 +970,9 @@ def gates(cal_run, test_run, alpha: float = DEFAULT_ALPHA, budgets: Sequence[int
     budgets = _budgets(cal, budgets)
     _budgets(test, budgets)
     rec = Recorder(record)
-    t_sim = conformal_quantile(worst_budget_scores(calibration_scores(cal), budgets).to_numpy(), alpha)
-    margin, _ = cal.search_margin(t_sim, margin_grid, budgets, record=rec)
+    simultaneous = lambda scores: conformal_quantile(worst_budget_scores(scores, budgets).to_numpy(), alpha)  # noqa: E731
+    scores, margin, _ = search_with_scores(cal, simultaneous, margin_grid, budgets, rec)
+    t_sim = simultaneous(scores)
     cal.release()
     del cal  # the calibration run is done before the test run's commits
     raw, adjusted = test.commit((test.nu, None), (t_sim, margin.gamma), final=True)
