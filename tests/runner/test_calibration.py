@@ -167,6 +167,8 @@ def test_calibration_recomputes_from_its_recorded_rows(runs, chunk):
     res = calibrate(runs["cal"], runs["test"], alpha=0.2, resamples=200, seed=5, chunk_instances=chunk, record=record)
     commits = Recorder(record).table()
     assert set(commits["request"]) == {"margin", "optimism", "set", "set_margin"}
+    # The set-calibrated arm is read at the cost budget only, so only that budget is committed and kept.
+    assert set(commits.loc[commits.request == "set", "k"]) == {res.cost_budget}
     # Only the margins the search read are kept.
     assert sorted(commits.loc[commits.request == "margin", "gamma"].unique()) == sorted(res.margin.search["gamma"])
     again = calibration_from_tables(commits, _stored_all(runs["cal"]), _stored_all(runs["test"]), 0.2,

@@ -663,10 +663,12 @@ def calibrate(cal_run, test_run, alpha: float = DEFAULT_ALPHA, budgets: Sequence
     cal.release()
     del cal
 
-    # Every test commit in one pass over the test run's chunks.
+    # Every test commit in one pass over the test run's chunks. Of the set-calibrated arm only the cost
+    # budget's rows are read (Table IV's failure and pairs), so only that budget is committed.
     audited = functools.partial(_audited, k=cost_budget)
     orig, set_rows, full, covered = test.commit(
-        (test.nu, None), (t_k, None), (t_k, margin.gamma), (t_sim, None), keep=[None] + [AUDIT_COLUMNS] * 3,
+        (test.nu, None), ({cost_budget: t_k[cost_budget]}, None), (t_k, margin.gamma), (t_sim, None),
+        keep=[None] + [AUDIT_COLUMNS] * 3,
         reduce=[audited, rec.wrap("set", functools.partial(_cost_rows, k=cost_budget), SET_COLUMNS),
                 rec.wrap("set_margin", audited, AUDIT_COLUMNS),
                 functools.partial(_all_covered, budgets=budgets)],
