@@ -972,7 +972,10 @@ def gates(cal_run, test_run, alpha: float = DEFAULT_ALPHA, budgets: Sequence[int
     budgets = _budgets(cal, budgets)
     _budgets(test, budgets)
     rec = Recorder(record)
-    simultaneous = lambda scores: conformal_quantile(worst_budget_scores(scores, budgets).to_numpy(), alpha)  # noqa: E731
+
+    def simultaneous(scores: pd.DataFrame) -> float:
+        return conformal_quantile(worst_budget_scores(scores, budgets).to_numpy(), alpha)
+
     scores, margin, _ = search_with_scores(cal, simultaneous, margin_grid, budgets, rec)
     t_sim = simultaneous(scores)
     cal.release()
