@@ -167,6 +167,8 @@ def test_calibration_recomputes_from_its_recorded_rows(runs, chunk):
     res = calibrate(runs["cal"], runs["test"], alpha=0.2, resamples=200, seed=5, chunk_instances=chunk, record=record)
     commits = Recorder(record).table()
     assert set(commits["request"]) == {"margin", "optimism", "set", "set_margin"}
+    # The set-calibrated arm is read at the cost budget only, so only that budget is committed and kept.
+    assert set(commits.loc[commits.request == "set", "k"]) == {res.cost_budget}
     # Only the margins the search read are kept.
     assert sorted(commits.loc[commits.request == "margin", "gamma"].unique()) == sorted(res.margin.search["gamma"])
     again = calibration_from_tables(commits, _stored_all(runs["cal"]), _stored_all(runs["test"]), 0.2,
@@ -217,3 +219,53 @@ def test_calibration_summary_in_threads_equals_one_thread(runs, monkeypatch):
         return json.dumps([res.to_dict(), res.margin.search.to_dict("list")], default=str, sort_keys=True)
 
     assert result("2") == result("1")
+
+
+@pytest.mark.parametrize("stored", ["as run", "altered", "absent"])
+def test_stored_thresholds_are_a_guess_the_recomputed_scores_check(runs, stored, monkeypatch):
+    """calibrate searches the margin under the ``t_k`` of the calibration run's stored ``nu`` rows, in the
+    pass that recomputes the scores (one pass over the run); stored rows that are not what the beliefs
+    give (altered here) cost a second pass under the recomputed ``t_k``, and rows that give none (no
+    probe rows) a scores pass first: the result and the recorded rows are the same bits in every case."""
+    import json
+
+    import probecommit.runner.calibration as calibration
+    from probecommit.runner.calibration import Recorder
+    from probecommit.runner.replay import LoadedRun, load_run
+
+    def result(cal) -> tuple[str, pd.DataFrame]:
+        record: list = []
+        res = calibrate(cal, runs["test"], alpha=0.2, resamples=50, seed=5, chunk_instances=3, record=record)
+        return json.dumps([res.to_dict(), res.margin.search.to_dict("list")], default=str, sort_keys=True), \
+            Recorder(record).table()
+
+    expected, expected_rows = result(runs["cal"])
+    loaded = load_run(runs["cal"])
+    episodes = loaded.episodes.copy()
+    probe = episodes["method"] == "probe_robust"
+    if stored == "altered":
+        episodes.loc[probe, "score_s"] = episodes.loc[probe, "score_s"] * 0.5
+    elif stored == "absent":
+        episodes = episodes.loc[~probe]
+    cal = LoadedRun(loaded.path, loaded.config, loaded.instances, episodes=episodes, manifest=loaded.manifest)
+    passes = []
+    original = calibration._Run.commit
+
+    def counted(self, *requests, **kwargs):
+        passes.append(self.loaded is cal)
+        return original(self, *requests, **kwargs)
+
+    monkeypatch.setattr(calibration._Run, "commit", counted)
+    got, rows = result(cal)
+    assert got == expected
+    pd.testing.assert_frame_equal(rows, expected_rows)
+    assert sum(passes) == (1 if stored == "as run" else 2)
+    # The gates search the margin under the stored rows' simultaneous t the same way.
+    want = gates(runs["cal"], runs["test"], alpha=0.2, resamples=50, seed=5, chunk_instances=3)
+    passes.clear()
+    have = gates(cal, runs["test"], alpha=0.2, resamples=50, seed=5, chunk_instances=3)
+    pd.testing.assert_frame_equal(have.summary, want.summary)
+    pd.testing.assert_frame_equal(have.curves, want.curves)
+    assert {k: have.info[k] for k in ("threshold", "gamma", "gamma_satisfied")} == \
+        {k: want.info[k] for k in ("threshold", "gamma", "gamma_satisfied")}
+    assert sum(passes) == (1 if stored == "as run" else 2)

@@ -113,6 +113,15 @@ class Recorder:
         """Keep a whole table's ``columns`` (a commit not reduced chunk by chunk)."""
         self.wrap(request, lambda t: None, columns)(table)
 
+    def mark(self) -> int:
+        """Where the rows kept from now on start (for :meth:`drop_since`)."""
+        return 0 if self.sink is None else len(self.sink)
+
+    def drop_since(self, mark: int) -> None:
+        """Forget the rows kept since :meth:`mark` gave ``mark`` (a pass whose results were not used)."""
+        if self.sink is not None:
+            del self.sink[mark:]
+
     def keep_margins(self, gammas: Iterable[float]) -> None:
         """Drop the margin rows of candidates the search committed in a block but never read."""
         if self.sink is None:
@@ -645,20 +654,21 @@ def calibrate(cal_run, test_run, alpha: float = DEFAULT_ALPHA, budgets: Sequence
 
     # Of each table, only what the results read is kept, chunk by chunk: per-instance scores, sums and
     # optimism, the rows at the cost budget and the margin rows, so memory does not grow with the runs.
-    scores = calibration_scores(cal)
-    t_k, t_sim, _ = _thresholds(scores, alpha, budgets)
     optimism_of = rec.wrap("optimism", functools.partial(_optimism, budgets=budgets), OPTIMISM_COLUMNS)
-    # The calibration run's table at nu was validated whole above; the optimism reads its five columns.
-    margin, [optimism] = cal.search_margin(t_k, margin_grid, budgets, ((t_k, None), optimism_of, OPTIMISM_COLUMNS),
-                                           record=rec)
+    scores, margin, [optimism] = search_with_scores(
+        cal, lambda scores: _thresholds(scores, alpha, budgets)[0], margin_grid, budgets, rec,
+        lambda t_k: [((t_k, None), optimism_of, OPTIMISM_COLUMNS)])
+    t_k, t_sim, _ = _thresholds(scores, alpha, budgets)
     # The calibration run is done: its tables, beliefs and engine cache go before the test run's commits.
     cal.release()
     del cal
 
-    # Every test commit in one pass over the test run's chunks.
+    # Every test commit in one pass over the test run's chunks. Of the set-calibrated arm only the cost
+    # budget's rows are read (Table IV's failure and pairs), so only that budget is committed.
     audited = functools.partial(_audited, k=cost_budget)
     orig, set_rows, full, covered = test.commit(
-        (test.nu, None), (t_k, None), (t_k, margin.gamma), (t_sim, None), keep=[None] + [AUDIT_COLUMNS] * 3,
+        (test.nu, None), ({cost_budget: t_k[cost_budget]}, None), (t_k, margin.gamma), (t_sim, None),
+        keep=[None] + [AUDIT_COLUMNS] * 3,
         reduce=[audited, rec.wrap("set", functools.partial(_cost_rows, k=cost_budget), SET_COLUMNS),
                 rec.wrap("set_margin", audited, AUDIT_COLUMNS),
                 functools.partial(_all_covered, budgets=budgets)],
@@ -666,6 +676,65 @@ def calibrate(cal_run, test_run, alpha: float = DEFAULT_ALPHA, budgets: Sequence
     blind = ok_episodes(test.loaded.table("episodes", where=("method", ["blind_robust"]), columns=FAILURE_COLUMNS))
     return _summarize(CalibrationParts(scores, margin, optimism, orig, set_rows, full, covered, blind),
                       alpha=alpha, budgets=budgets, cost_budget=cost_budget, resamples=resamples, seed=seed, level=level)
+
+
+#: The columns of the calibration run's stored episode rows that :func:`_stored_scores` reads.
+SCORE_COLUMNS = ("instance_id", "k", "method", "variant", "status", "score_s")
+
+#: Thresholds of the calibration scores (``t_k`` or ``t``): what the margin is searched under.
+ThresholdsOf = Callable[[pd.DataFrame], "float | dict[int, float]"]
+#: The extra requests of the search's pass under given thresholds (see :meth:`_Run.search_margin`).
+ExtraOf = Callable[["float | dict[int, float]"], list]
+
+
+def search_with_scores(cal: _Run, thresholds_of: ThresholdsOf, margin_grid: Iterable[float], budgets: list[int],
+                       rec: Recorder, extra_of: ExtraOf = lambda thresholds: []) -> tuple[pd.DataFrame, MarginResult,
+                                                                                        list[Any]]:
+    """The calibration run's scores (recomputed), and the margin search (with ``extra_of``'s requests)
+    under the thresholds they give, in one pass over its beliefs where the run's stored rows tell
+    those thresholds beforehand.
+
+    Why: the search needs its thresholds before its pass, and they come from the scores of the
+    ``nu`` commit, so the scores took a pass of their own (a third of calibrate's belief
+    recomputations). The run stores its ``nu`` commit's rows, whose scores are the recomputed ones
+    for a run made by this code under its own config; their thresholds are taken as a guess, the
+    search runs under it with the ``nu`` commit beside it, and the guess is checked against the
+    recomputed scores' thresholds exactly. Stored rows that are not what the beliefs give (another
+    code's run, an imported or edited one) cost a second pass under the recomputed thresholds, its
+    recorded rows replacing the first's: the result is always the recomputed scores', bit for bit.
+
+    Returns:
+        The scores (instances sorted x budgets), the margin and ``extra_of``'s results.
+    """
+    guess = _stored_scores(cal, thresholds_of)
+    scores = None if guess is not None else calibration_scores(cal)
+    thresholds = guess if guess is not None else thresholds_of(scores)
+    start = rec.mark()
+    extra = extra_of(thresholds) + ([((cal.nu, None), _scores)] if scores is None else [])
+    margin, extras = cal.search_margin(thresholds, margin_grid, budgets, *extra, record=rec)
+    if scores is not None:
+        return scores, margin, extras
+    recomputed = extras.pop()
+    if recomputed is None:
+        raise UsageError(f"{cal.loaded.path}: no episode of the calibration run committed (every one failed)")
+    scores = recomputed.sort_index()
+    actual = thresholds_of(scores)
+    if actual != thresholds:  # the stored rows are not what the recomputed beliefs give
+        rec.drop_since(start)
+        margin, extras = cal.search_margin(actual, margin_grid, budgets, *extra_of(actual), record=rec)
+    return scores, margin, extras
+
+
+def _stored_scores(cal: _Run, thresholds_of: ThresholdsOf) -> "float | dict[int, float] | None":
+    """The thresholds of the calibration run's stored ``nu`` commit scores (a guess that
+    :func:`search_with_scores` checks); None where the stored rows give none (no probe rows or
+    scores, a budget missing, NaN)."""
+    try:
+        rows = cal.loaded.table("episodes", where=("method", [PROBE_METHOD]), columns=SCORE_COLUMNS)
+        scores = _scores(rows)
+        return None if scores is None else thresholds_of(scores.sort_index())
+    except (ValueError, KeyError):  # pyarrow's errors for a missing column are ValueErrors too
+        return None
 
 
 #: The columns a publication stores of each recorded request (``Recorder``): what its reduction reads.
@@ -903,8 +972,12 @@ def gates(cal_run, test_run, alpha: float = DEFAULT_ALPHA, budgets: Sequence[int
     budgets = _budgets(cal, budgets)
     _budgets(test, budgets)
     rec = Recorder(record)
-    t_sim = conformal_quantile(worst_budget_scores(calibration_scores(cal), budgets).to_numpy(), alpha)
-    margin, _ = cal.search_margin(t_sim, margin_grid, budgets, record=rec)
+
+    def simultaneous(scores: pd.DataFrame) -> float:
+        return conformal_quantile(worst_budget_scores(scores, budgets).to_numpy(), alpha)
+
+    scores, margin, _ = search_with_scores(cal, simultaneous, margin_grid, budgets, rec)
+    t_sim = simultaneous(scores)
     cal.release()
     del cal  # the calibration run is done before the test run's commits
     raw, adjusted = test.commit((test.nu, None), (t_sim, margin.gamma), final=True)
