@@ -33,10 +33,15 @@ def run(job: Any) -> None:
         job.stored.update(result[1])
 
     job.background.submit(rig_done, rig.run, job.runs, job.cfg, job.boot, job.quick)
+    job.aside(breadth_prior)()  # minutes of serial engine runs that only this group reads: in a process of its own
+    run_ex3(job)
+
+
+def breadth_prior(job: Any) -> None:
+    """Table II's families over the prior's width (``breadth``)."""
     job.progress("explain: Table II's families over the prior's width", 0, 1)
     keys, job.tables["breadth_prior"] = breadth.run(job.root, job.runs, job.cfg, job.boot, job.quick)
     job.res["breadth_prior"].update(keys)
-    run_ex3(job)
 
 
 def search_keys(cover: pd.DataFrame, robust: pd.DataFrame, boot: dict[str, Any]) -> dict[str, Any]:
@@ -54,6 +59,14 @@ def run_ex3(job: Any) -> None:
     draws = job.cfg["pybullet_draws_quick" if job.quick else "pybullet_draws"]
     job.res["pybullet_escape"].update(pybullet_x.run(job.root, job.runs, job.boot, job.workers, draws=draws,
                                                          stored_rows=job.stored))
+    job.aside(mixture_noise, needs=())()  # replays of the insertion study's run only: in a process of its own
+    job.progress("explain: grasp on the model-exact scene", 0, 1)
+    job.stored[grasp_x.STORED] = grasp_x.run(job.runs, job.quick, job.workers)
+    job.res["grasp_signs"].update(grasp_x.keys(job.stored[grasp_x.STORED]))  # what verify recomputes
+
+
+def mixture_noise(job: Any) -> None:
+    """The mixture against the filter's own noise (``mixture_x``): the harness's base run replayed per filter seed."""
     job.progress("explain: the mixture against the filter's own noise", 0, 1)
     r, seeds = job.p.robust, job.cfg["mixture_filter_seeds_quick" if job.quick else "mixture_filter_seeds"]
     base = job.load("faults_base")
@@ -62,6 +75,3 @@ def run_ex3(job: Any) -> None:
     keys, job.tables["mixture_noise"] = mixture_x.run(base, mixture, [base.config.seed + i for i in range(1, seeds + 1)],
                                                       job.p.budgets["random"])
     job.res["mixture_noise"].update(keys)
-    job.progress("explain: grasp on the model-exact scene", 0, 1)
-    job.stored[grasp_x.STORED] = grasp_x.run(job.runs, job.quick, job.workers)
-    job.res["grasp_signs"].update(grasp_x.keys(job.stored[grasp_x.STORED]))  # what verify recomputes

@@ -435,15 +435,16 @@ class Explain:
 
         return lambda: place.append(len(self.res[group])), run
 
-    def aside(self, *steps: Callable[[Any], None]) -> Callable[[], Any]:
+    def aside(self, *steps: Callable[[Any], None], needs: tuple[str, ...] | None = None) -> Callable[[], Any]:
         """A ``steps`` entry: ``steps`` (module-level functions of the job, run in this order on a job of their own)
         set aside to a process of their own (``Background``) beside the later steps, their keys put where running
         them here would have put them. Only for steps that read stored inputs (the root's runs and results, the
         settings) and runs earlier steps wrote, never what later steps write or hold; a step that reads another's
-        rows goes with it (``run_aside`` refuses what cannot be merged in order)."""
+        rows goes with it (``run_aside`` refuses what cannot be merged in order). ``needs``: the late needs
+        (``ready``) they read, waited for before they are set aside (None: all of them)."""
         def submit() -> Any:
-            if self.ready is not None:
-                self.ready()  # the job aside has every need done
+            if self.ready is not None and needs != ():
+                self.ready(needs)  # the job aside takes its needs as done
             places = {group: len(values) for group, values in self.res.items()}
             self.progress(f"explain: set aside to a process of its own: {', '.join(_name(s) for s in steps)}", 0, 1)
             return self.background.submit(lambda filled: self._merge(filled, places), run_aside, self.root, self.quick,
@@ -474,13 +475,15 @@ class Explain:
         paper = runs.schedule_runs(self.p, COVER_SCHEDULE, self.runs, self.workers)
         place_physx, physx_coverage = self._later("missing", self.physx_coverage, ("engines",))
         steps = [self.missing, place_physx, lambda: self.committed_pool(paper), lambda: self.margins(paper),
-                 self.resplits_paper_schedule,
+                 self.resplits_paper_schedule,  # the steps set aside here read only the insertion study and it
+                 self.aside(ex5_calibration.run, ex9_calibration.run, ex12_simultaneous.run, needs=()),
+                 self.aside(ex7.run, needs=()), self.aside(ex13.mixture, needs=()),
                  self.instance_generator, self.draws, self.boundary_fault, self.robust, physx_coverage, self.physx,
                  lambda: (self.ready and self.ready(), self.gru()), lambda: more.run(self),
-                 self.aside(ex5_calibration.run, ex9_calibration.run, ex12_simultaneous.run), lambda: ex4.run(self),
-                 lambda: ex6.run(self, paper), self.aside(ex7.run),
+                 lambda: ex4.run(self),
+                 lambda: ex6.run(self, paper),
                  lambda: ex8.run(self), lambda: ex10.run(self, paper),
-                 self.aside(ex11.run), lambda: ex13.surprise(self, paper), self.aside(ex13.mixture),
+                 self.aside(ex11.run), lambda: ex13.surprise(self, paper),
                  lambda: ex12_distinct.run(self)]
         try:
             for i, step in enumerate(steps):
