@@ -78,3 +78,13 @@ def test_background_runs_each_function_in_a_fresh_process_and_finishes_up_to_one
         work.close()
     if (os.cpu_count() or 1) > 1:
         assert len(set(got)) == 2 and os.getpid() not in got
+
+
+def test_a_step_set_aside_waits_for_the_late_needs_it_reads_only(tmp_path, monkeypatch):
+    job = Explain(tmp_path, True, lambda *a: None, 1, {}, ready=lambda names=None: waited.append(names))
+    waited: list = []
+    monkeypatch.setattr(job.background, "submit", lambda then, fn, *args: args[-1])
+    assert job.aside(_fill_first, needs=())() == (_fill_first,)
+    job.aside(_fill_first, needs=("breadth",))()
+    job.aside(_fill_first)()
+    assert waited == [("breadth",), None]  # needs=(): none; default: every late need
