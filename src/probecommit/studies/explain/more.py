@@ -55,10 +55,7 @@ def search_keys(cover: pd.DataFrame, robust: pd.DataFrame, boot: dict[str, Any])
 
 def run_ex3(job: Any) -> None:
     """The third helper's steps (E45..)."""
-    job.progress("explain: PyBullet's reported scene properties", 0, 1)
-    draws = job.cfg["pybullet_draws_quick" if job.quick else "pybullet_draws"]
-    job.res["pybullet_escape"].update(pybullet_x.run(job.root, job.runs, job.boot, job.workers, draws=draws,
-                                                         stored_rows=job.stored))
+    job.aside(pybullet_escape, needs=("engines",))()  # PyBullet draws only this group reads: set aside
     job.aside(mixture_noise, needs=())()  # replays of the insertion study's run only: in a process of its own
     job.progress("explain: grasp on the model-exact scene", 0, 1)
     job.stored[grasp_x.STORED] = grasp_x.run(job.runs, job.quick, job.workers)
@@ -75,3 +72,11 @@ def mixture_noise(job: Any) -> None:
     keys, job.tables["mixture_noise"] = mixture_x.run(base, mixture, [base.config.seed + i for i in range(1, seeds + 1)],
                                                       job.p.budgets["random"])
     job.res["mixture_noise"].update(keys)
+
+
+def pybullet_escape(job: Any) -> None:
+    """PyBullet's reported scene properties (``pybullet_x``): fresh PyBullet draws of the engines study's run."""
+    job.progress("explain: PyBullet's reported scene properties", 0, 1)
+    draws = job.cfg["pybullet_draws_quick" if job.quick else "pybullet_draws"]
+    job.res["pybullet_escape"].update(pybullet_x.run(job.root, job.runs, job.boot, job.workers, draws=draws,
+                                                     stored_rows=job.stored))
