@@ -33,15 +33,10 @@ def run(job: Any) -> None:
         job.stored.update(result[1])
 
     job.background.submit(rig_done, rig.run, job.runs, job.cfg, job.boot, job.quick)
-    job.aside(breadth_prior)()  # minutes of serial engine runs that only this group reads: in a process of its own
-    run_ex3(job)
-
-
-def breadth_prior(job: Any) -> None:
-    """Table II's families over the prior's width (``breadth``)."""
-    job.progress("explain: Table II's families over the prior's width", 0, 1)
+    job.progress("explain: Table II's families over the prior's width", 0, 1)  # in place: ex4's cone reads its runs
     keys, job.tables["breadth_prior"] = breadth.run(job.root, job.runs, job.cfg, job.boot, job.quick)
     job.res["breadth_prior"].update(keys)
+    run_ex3(job)
 
 
 def search_keys(cover: pd.DataFrame, robust: pd.DataFrame, boot: dict[str, Any]) -> dict[str, Any]:
