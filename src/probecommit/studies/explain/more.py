@@ -33,7 +33,7 @@ def run(job: Any) -> None:
         job.stored.update(result[1])
 
     job.background.submit(rig_done, rig.run, job.runs, job.cfg, job.boot, job.quick)
-    job.progress("explain: Table II's families over the prior's width", 0, 1)
+    job.progress("explain: Table II's families over the prior's width", 0, 1)  # in place: ex4's cone reads its runs
     keys, job.tables["breadth_prior"] = breadth.run(job.root, job.runs, job.cfg, job.boot, job.quick)
     job.res["breadth_prior"].update(keys)
     run_ex3(job)
@@ -50,10 +50,15 @@ def search_keys(cover: pd.DataFrame, robust: pd.DataFrame, boot: dict[str, Any])
 
 def run_ex3(job: Any) -> None:
     """The third helper's steps (E45..)."""
-    job.progress("explain: PyBullet's reported scene properties", 0, 1)
-    draws = job.cfg["pybullet_draws_quick" if job.quick else "pybullet_draws"]
-    job.res["pybullet_escape"].update(pybullet_x.run(job.root, job.runs, job.boot, job.workers, draws=draws,
-                                                         stored_rows=job.stored))
+    job.aside(pybullet_escape, needs=("engines",))()  # PyBullet draws only this group reads: set aside
+    job.aside(mixture_noise, needs=())()  # replays of the insertion study's run only: in a process of its own
+    job.progress("explain: grasp on the model-exact scene", 0, 1)
+    job.stored[grasp_x.STORED] = grasp_x.run(job.runs, job.quick, job.workers)
+    job.res["grasp_signs"].update(grasp_x.keys(job.stored[grasp_x.STORED]))  # what verify recomputes
+
+
+def mixture_noise(job: Any) -> None:
+    """The mixture against the filter's own noise (``mixture_x``): the harness's base run replayed per filter seed."""
     job.progress("explain: the mixture against the filter's own noise", 0, 1)
     r, seeds = job.p.robust, job.cfg["mixture_filter_seeds_quick" if job.quick else "mixture_filter_seeds"]
     base = job.load("faults_base")
@@ -62,6 +67,11 @@ def run_ex3(job: Any) -> None:
     keys, job.tables["mixture_noise"] = mixture_x.run(base, mixture, [base.config.seed + i for i in range(1, seeds + 1)],
                                                       job.p.budgets["random"])
     job.res["mixture_noise"].update(keys)
-    job.progress("explain: grasp on the model-exact scene", 0, 1)
-    job.stored[grasp_x.STORED] = grasp_x.run(job.runs, job.quick, job.workers)
-    job.res["grasp_signs"].update(grasp_x.keys(job.stored[grasp_x.STORED]))  # what verify recomputes
+
+
+def pybullet_escape(job: Any) -> None:
+    """PyBullet's reported scene properties (``pybullet_x``): fresh PyBullet draws of the engines study's run."""
+    job.progress("explain: PyBullet's reported scene properties", 0, 1)
+    draws = job.cfg["pybullet_draws_quick" if job.quick else "pybullet_draws"]
+    job.res["pybullet_escape"].update(pybullet_x.run(job.root, job.runs, job.boot, job.workers, draws=draws,
+                                                     stored_rows=job.stored))

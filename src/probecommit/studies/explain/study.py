@@ -25,6 +25,7 @@ from probecommit.studies.explain import (calibration_rows, draw_audit, draw_faul
                                          robust_rows, runs, stored, surprise_variants)
 from probecommit.studies.explain.shared_beliefs import SharedBeliefs, cyclic_pairs
 from probecommit.studies.explain.background import Background
+from probecommit.studies.explain import timing
 from probecommit.studies.explain.timing import StepClock
 from probecommit.studies.explain import ex4, ex5_calibration, ex6, ex7, ex8, ex9_calibration, ex10
 from probecommit.studies.explain import ex11
@@ -123,6 +124,8 @@ class Explain:
         self._loaded: dict[str, Any] = {}
         #: Steps run in a process of their own beside the later steps, by result group (``background``).
         self.background = Background()
+        #: Keys merged from jobs aside so far, by group (``_merge``).
+        self._merged: dict[str, int] = {}
 
     def load(self, name: str) -> Any:
         if name not in self._loaded:
@@ -438,23 +441,59 @@ class Explain:
 
         return lambda: place.append(len(self.res[group])), run
 
+    def aside(self, *steps: Callable[[Any], None], needs: tuple[str, ...] | None = None) -> Callable[[], Any]:
+        """A ``steps`` entry: ``steps`` (module-level functions of the job, run in this order on a job of their own)
+        set aside to a process of their own (``Background``) beside the later steps, their keys put where running
+        them here would have put them. Only for steps that read stored inputs (the root's runs and results, the
+        settings) and runs earlier steps wrote, never what later steps write or hold; a step that reads another's
+        rows goes with it (``run_aside`` refuses what cannot be merged in order). ``needs``: the late needs
+        (``ready``) they read, waited for before they are set aside (None: all of them)."""
+        def submit() -> Any:
+            if self.ready is not None and needs != ():
+                self.ready(needs)  # the job aside takes its needs as done
+            places = {group: len(values) for group, values in self.res.items()}
+            self.progress(f"explain: set aside to a process of its own: {', '.join(_name(s) for s in steps)}", 0, 1)
+            return self.background.submit(lambda filled: self._merge(filled, places), run_aside, self.root, self.quick,
+                                          self.workers, self.cfg, steps)
+
+        return submit
+
+    def _merge(self, filled: dict[str, Any], places: dict[str, int]) -> None:
+        """What a job aside filled, each group's keys where they were when it was set aside (after those of the
+        jobs set aside before it: they ran first in place)."""
+        for group, added in filled["res"].items():
+            values = self.res[group]
+            at = places[group] + self._merged.get(group, 0)
+            self._merged[group] = self._merged.get(group, 0) + len(added)
+            items = list(values.items())
+            values.clear()
+            values.update(items[:at] + list(added.items()) + items[at:])
+        self.stored.update(filled["stored"])
+        self.tables.update(filled["tables"])
+        for label, wall, cpu, children in filled["steps"]:
+            timing.logger.info("%s (aside): %.1f s wall, %.1f s CPU (+%.1f s in worker processes)", label, wall, cpu,
+                               children)
+        timing.logger.info("(aside: peak %.0f MB)", filled["peak_mb"])
+
     def run(self, out: Path) -> Path:
         out.mkdir(parents=True, exist_ok=True)
         self.progress("explain: paper's cover schedule on Split B", 0, 1)
         paper = runs.schedule_runs(self.p, COVER_SCHEDULE, self.runs, self.workers)
         place_physx, physx_coverage = self._later("missing", self.physx_coverage, ("engines",))
         steps = [self.missing, place_physx, lambda: self.committed_pool(paper), lambda: self.margins(paper),
-                 self.resplits_paper_schedule,
+                 self.resplits_paper_schedule,  # the steps set aside here read only the insertion study and it
+                 self.aside(ex5_calibration.run, ex9_calibration.run, ex12_simultaneous.run, ex15_readings.run,
+                            needs=()),  # E118 (ex15_readings) joins the rows ex5 and ex9 store
+                 self.aside(ex7.run, needs=()), self.aside(ex13.mixture, needs=()),
                  self.instance_generator, self.draws, self.boundary_fault, self.robust, physx_coverage, self.physx,
                  lambda: (self.ready and self.ready(), self.gru()), lambda: more.run(self),
                  lambda: ex15_union.run(self),
-                 lambda: ex5_calibration.run(self), lambda: ex4.run(self),
-                 lambda: ex6.run(self, paper), lambda: ex7.run(self),
-                 lambda: ex8.run(self), lambda: ex9_calibration.run(self), lambda: ex10.run(self, paper),
-                 lambda: ex11.run(self), lambda: ex16.run(self), lambda: ex13.run(self, paper),
+                 lambda: ex4.run(self),
+                 lambda: ex6.run(self, paper),
+                 lambda: ex8.run(self), lambda: ex10.run(self, paper),
+                 self.aside(ex11.run), lambda: ex16.run(self), lambda: ex13.surprise(self, paper),
                  lambda: ex14.run(self, paper),
-                 lambda: ex12_distinct.run(self), lambda: ex12_simultaneous.run(self),
-                 lambda: ex15_readings.run(self)]
+                 lambda: ex12_distinct.run(self)]
         try:
             for i, step in enumerate(steps):
                 self.progress("explain", i, len(steps))
@@ -495,6 +534,36 @@ class Explain:
             rows = pd.concat([ep[ep["method"].isin(methods(name))].assign(run=name) for name, ep in self.episodes.items()],
                              ignore_index=True)
             store_episodes(rows, out / calibration_rows.EPISODES, extra=("run",))
+
+
+def _name(step: Callable[..., Any]) -> str:
+    return f"{step.__module__.rsplit('.', 1)[-1]}.{step.__name__}"
+
+
+def run_aside(root: Path, quick: bool, workers: int, config: dict[str, Any],
+              steps: tuple[Callable[[Any], None], ...]) -> dict[str, Any]:
+    """In a process of its own (``Explain.aside``): ``steps`` run one after the other on a fresh job whose needs are
+    done; the groups, stored rows and tables they filled, and their clocks.
+
+    Raises:
+        RuntimeError: a step filled what the target concatenates in step order (commits, episodes, margin
+            tables): merged later it would move.
+    """
+    from probecommit.tasks.base import shared_engine_answers
+
+    job = Explain(root, quick, lambda *a: None, workers, config)
+    try:
+        with shared_engine_answers():  # as the target's own process (``schedule.run_target``)
+            for step in steps:
+                step(job)
+            job.background.finish()
+    finally:
+        job.background.close()
+    job.progress.close()
+    if job.commits or job.episodes or any(name.startswith("margin_") for name in job.tables):
+        raise RuntimeError(f"{', '.join(map(_name, steps))}: fills rows kept in step order; run it in place")
+    return {"res": {g: v for g, v in job.res.items() if v}, "stored": job.stored, "tables": job.tables,
+            "steps": job.progress.steps, "peak_mb": timing.peak_mb()}
 
 
 def plain(o: Any) -> Any:

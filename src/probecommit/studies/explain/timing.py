@@ -21,6 +21,11 @@ Progress = Callable[[str, int, int], None]
 
 def peak_mb() -> float:
     """This process's peak resident set size so far, in MB (0 where the platform does not say)."""
+    try:  # this process's own high-water mark (a spawned process's ru_maxrss starts at its parent's at the fork)
+        with open("/proc/self/status") as status:
+            return next(int(line.split()[1]) for line in status if line.startswith("VmHWM")) / 1024
+    except (OSError, StopIteration, ValueError):
+        pass
     try:
         import resource
     except ImportError:  # not on Windows
@@ -29,23 +34,36 @@ def peak_mb() -> float:
     return peak / 2**20 if sys.platform == "darwin" else peak / 1024  # bytes on macOS, KiB on Linux
 
 
+def children_cpu() -> float:
+    """CPU seconds of this process's ended child processes so far (0 where the platform does not say)."""
+    try:
+        import resource
+    except ImportError:  # not on Windows
+        return 0.0
+    usage = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return usage.ru_utime + usage.ru_stime
+
+
 class StepClock:
     """``progress`` passed through, with each label's wall and CPU seconds logged when the next begins, and
     the process's peak resident memory so far (what a step that holds too much shows as a jump).
 
-    ``steps`` keeps ``(label, wall_s, cpu_s)`` in order (a label reported again later is a new entry).
+    ``steps`` keeps ``(label, wall_s, cpu_s, child_cpu_s)`` in order (a label reported again later is a new
+    entry); ``child_cpu_s`` is the CPU of the worker processes the step's runs started and ended (a study's
+    ``--workers``), counted once they are reaped.
     """
 
     def __init__(self, progress: Progress) -> None:
         self.inner = progress
-        self.steps: list[tuple[str, float, float]] = []
+        self.steps: list[tuple[str, float, float, float]] = []
         self._label: str | None = None
-        self._wall = self._cpu = 0.0
+        self._wall = self._cpu = self._children = 0.0
 
     def __call__(self, label: str, done: int, total: int) -> None:
         if label != self._label and not label == "explain":  # "explain" i/n only counts the steps
             self.close()
             self._label, self._wall, self._cpu = label, time.perf_counter(), time.process_time()
+            self._children = children_cpu()
         self.inner(label, done, total)
 
     def close(self) -> None:
@@ -53,6 +71,8 @@ class StepClock:
         if self._label is None:
             return
         wall, cpu = time.perf_counter() - self._wall, time.process_time() - self._cpu
-        self.steps.append((self._label, wall, cpu))
-        logger.info("%s: %.1f s wall, %.1f s CPU, peak %.0f MB", self._label, wall, cpu, peak_mb())
+        children = children_cpu() - self._children
+        self.steps.append((self._label, wall, cpu, children))
+        logger.info("%s: %.1f s wall, %.1f s CPU (+%.1f s in worker processes), peak %.0f MB", self._label, wall, cpu,
+                    children, peak_mb())
         self._label = None
