@@ -9,7 +9,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-from probecommit.studies.explain import ex11_probe
+from probecommit.studies.explain import ex11_probe, stored
 
 #: Result groups these steps fill (added to ``Explain.res``).
 GROUPS = ("ex11_probe",)
@@ -29,10 +29,5 @@ def run(job: Any) -> None:
 
 
 def recompute(folder: Path, results: dict[str, Any]) -> tuple[dict[str, Any], dict[str, str], list[str]]:
-    """ex11's keys recomputed from a publication's stored rows (``verify``): ``(values, sources, problems)``, keyed
-    as ``explain:results``; a group published without its stored rows is a problem."""
-    values = {f"ex11_probe.{k}": v for k, v in ex11_probe.recompute(folder, results.get("ex11_probe", {})).items()}
-    sources = dict.fromkeys(values, ex11_probe.STORED)
-    problems = [f"explain/{name}: missing (the rows {group}'s keys are recomputed from)"
-                for group, name in STORED_BY_GROUP.items() if results.get(group) and not (folder / name).is_file()]
-    return values, sources, problems
+    """ex11's keys recomputed from a publication's stored rows (``verify``; ``stored.recompute_group``)."""
+    return stored.recompute_group(folder, results, "ex11_probe", ex11_probe.STORED, ex11_probe.recompute)

@@ -11,7 +11,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-from probecommit.studies.explain import ex16_reach
+from probecommit.studies.explain import ex16_reach, stored
 
 #: Result groups these steps fill (added to ``Explain.res``).
 GROUPS = ("ex16_reach",)
@@ -34,10 +34,5 @@ def run(job: Any) -> None:
 
 
 def recompute(folder: Path, results: dict[str, Any]) -> tuple[dict[str, Any], dict[str, str], list[str]]:
-    """ex16's keys recomputed from a publication's stored rows (``verify``): ``(values, sources, problems)``, keyed
-    as ``explain:results``; a group published without its stored rows is a problem."""
-    values = {f"ex16_reach.{k}": v for k, v in ex16_reach.recompute(folder, results.get("ex16_reach", {})).items()}
-    sources = dict.fromkeys(values, ex16_reach.STORED)
-    problems = [f"explain/{name}: missing (the rows {group}'s keys are recomputed from)"
-                for group, name in STORED_BY_GROUP.items() if results.get(group) and not (folder / name).is_file()]
-    return values, sources, problems
+    """ex16's keys recomputed from a publication's stored rows (``verify``; ``stored.recompute_group``)."""
+    return stored.recompute_group(folder, results, "ex16_reach", ex16_reach.STORED, ex16_reach.recompute)

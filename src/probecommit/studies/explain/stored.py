@@ -9,7 +9,8 @@ functions on the stored tables. A consistent edit of a published key, or of a st
 
 from __future__ import annotations
 
-from typing import Any, Mapping, Sequence
+from pathlib import Path
+from typing import Any, Callable, Mapping, Sequence
 
 import numpy as np
 import pandas as pd
@@ -214,3 +215,16 @@ def physx_coverage_keys(episodes: pd.DataFrame, k: int) -> dict[str, float]:
         out[f"physx_cluster_coverage.{variant}"] = float(rows.groupby("instance_id")["covered"].all().mean())
         out[f"physx_episode_coverage.{variant}"] = float(rows["covered"].mean())
     return out
+
+
+def recompute_group(folder: Path, results: Mapping[str, Any], group: str, stored: str,
+                    recompute: Callable[[Path, dict[str, Any]], Mapping[str, Any]]) -> tuple[dict[str, Any],
+                                                                                         dict[str, str], list[str]]:
+    """One result group's keys recomputed from its stored rows (``verify``), the contract of
+    ``report.recompute.SELF_RECOMPUTING``: ``(values, sources, problems)`` keyed as ``explain:results``;
+    a group published without its stored rows (``stored``) is a problem. ``recompute(folder, published)``
+    is the group's own summary of the rows, called with the group's published keys."""
+    values = {f"{group}.{k}": v for k, v in recompute(folder, results.get(group, {})).items()}
+    problems = ([f"explain/{stored}: missing (the rows {group}'s keys are recomputed from)"]
+                if results.get(group) and not (folder / stored).is_file() else [])
+    return values, dict.fromkeys(values, stored), problems
