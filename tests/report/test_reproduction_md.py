@@ -12,7 +12,7 @@ from probecommit.report import ledger
 from probecommit.report.publish import write_reproduction_md
 from probecommit.report.reproduction_md import MD_FILE, PROSE, Doc
 from probecommit.studies import paper_values
-from probecommit.studies.claims import STATUSES
+from probecommit.studies.claims import EXPERIMENTS, STATUSES
 
 DECIMAL = re.compile(r"(?<![\w.])[+-]?\d+\.\d+")
 
@@ -33,6 +33,31 @@ def unrecorded_decimals(text: str, entries: list[ledger.Entry]) -> list[str]:
         skip.update(range(setup.start(), setup.end()))
     return [text[max(0, m.start() - 40):m.end()] for m in DECIMAL.finditer(text)
             if m.start() not in skip and not set(range(m.start(), m.end())) <= covered]
+
+
+def unnamed_experiments_tried(text: str, claims: dict) -> list[str]:
+    """Experiments an unexplained item was tested by (not holding) that its line in "Where ours differs" does not
+    name: a reviewer must see what was ruled out."""
+    lines = {line.split("`")[1]: line for line in text.splitlines() if line.startswith("- `")}
+    missing = []
+    for cid, c in claims["claims"].items():
+        if c["status"] != "differs, unexplained":
+            continue
+        held = set((c.get("experiment") or "").split(", "))
+        for candidate in c.get("explain_candidates", []):
+            if candidate not in held and candidate in EXPERIMENTS and not re.search(
+                    rf"\b{re.escape(candidate.split('[')[0])}\b", lines[cid]):
+                missing.append(f"{cid}: {candidate}")
+    return missing
+
+
+def test_the_frozen_reproduction_md_names_every_experiment_tried_for_an_unexplained_item():
+    repo = Path(__file__).resolve().parents[2]
+    claims = json.loads((repo / "results" / "paper" / "claims.json").read_text())
+    text = (repo / "REPRODUCTION.md").read_text()
+    assert any(c["status"] == "differs, unexplained" for c in claims["claims"].values())
+    assert "Tested without support" in text
+    assert not unnamed_experiments_tried(text, claims)
 
 
 def check_publication(repo: Path) -> dict:
@@ -63,6 +88,7 @@ def check_publication(repo: Path) -> dict:
     first = text.split("## Every item of the paper, compared", 1)[1][:1000]
     for status in ("reproduced", "missing"):
         assert f"**{counts[status]} {status}**" in first
+    assert not unnamed_experiments_tried(text, claims)
     return claims
 
 

@@ -199,8 +199,29 @@ def claims_section(doc: Doc) -> None:
                 line += f" **{e.number}, {e.title}:** {doc.fill(e.template, dict(e.keys))}"
         if numbers and status == "differs, unexplained":
             line += " The experiments above speak to part of the difference only; the rest is unexplained."
+        if status == "differs, unexplained":
+            line += _tried(doc, base, numbers)
         doc.add(line)
     doc.add("")
+
+
+def _tried(doc: Doc, base: str, holding: str | None) -> str:
+    """The experiments an unexplained item was tested by that support no cause (their rules failed on our data),
+    by number and title (an experiment run once per cell, ``E17[<cell>]``, once, with its count of cells): a
+    reviewer sees what was ruled out, and finds each one's numbers in explain.md."""
+    candidates = doc.value(f"{base}.explain_candidates") if doc.has(f"{base}.explain_candidates") else []
+    held = set((holding or "").split(", "))
+    by_number: dict[str, list[str]] = {}
+    for c in map(str, candidates):
+        if c not in held and c in EXPERIMENTS:
+            by_number.setdefault(c.split("[")[0], []).append(c)
+    if not by_number:
+        return ""
+    parts = [f"{n}, {EXPERIMENTS[ids[0]].title}" if ids == [n] else
+             f"{n} on {len(ids)} cell{'s' if len(ids) > 1 else ''}, e.g. {ids[0]}, {EXPERIMENTS[ids[0]].title}"
+             for n, ids in by_number.items()]
+    return (" Tested without support (each experiment's rule and numbers in `results/paper/explain/explain.md`): "
+            + "; ".join(parts) + ".")
 
 
 # ----------------------------------------------------------------------------- the machine
