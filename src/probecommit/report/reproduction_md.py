@@ -220,8 +220,8 @@ def _tried(doc: Doc, base: str, holding: str | None) -> str:
     parts = [f"{n}, {EXPERIMENTS[ids[0]].title}" if ids == [n] else
              f"{n} on {len(ids)} cell{'s' if len(ids) > 1 else ''}, e.g. {ids[0]}, {EXPERIMENTS[ids[0]].title}"
              for n, ids in by_number.items()]
-    return (" Tested without support (their rules in `docs/decisions.md`, their numbers in `results/paper/explain/explain.md`): "
-            + "; ".join(parts) + ".")
+    return (" Tested without support (their rules in `docs/decisions.md`, their numbers in "
+            "`results/paper/explain/explain.md`): " + "; ".join(parts) + ".")
 
 
 # ----------------------------------------------------------------------------- the machine
