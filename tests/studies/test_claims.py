@@ -131,3 +131,12 @@ def test_no_result_number_is_typed_into_publishing_prose():
     for claim in C.CLAIMS:  # what the claims table prints about each item
         for text in (claim.what, claim.location, claim.note):
             assert not re.findall(r"(?<![\w.])\d+\.\d+", text), (claim.id, text)
+
+
+def test_no_experiment_title_or_claim_text_types_a_decimal_number():
+    """Titles and claim descriptions are printed as prose in REPRODUCTION.md; a result or paper value in them
+    would be a number typed by hand (it must come from a key, as the experiment's sentence fills it)."""
+    decimal = re.compile(r"(?<![\w.])[+-]?\d+\.\d+")
+    typed = [f"{n}: {e.title}" for n, e in C.EXPERIMENTS.items() if decimal.search(e.title)]
+    typed += [f"{c.id}: {c.what}" for c in C.CLAIMS if decimal.search(c.what)]
+    assert not typed, typed

@@ -1466,7 +1466,7 @@ def _experiments_ex9() -> list[Experiment]:
                    "on {share:.3f} of the splits and below on {below:.3f}.",
                    supports=lambda v: v["lo"] <= _pv("T13-cost-of-calibration.full") <= v["hi"]
                    and v["share"] >= EX5_VERDICT_SHARE),
-        Experiment("E82", "Table III's calibrated arm at the paper's random-probe margin 0.62",
+        Experiment("E82", "Table III's calibrated arm at the paper's random-probe margin",
                    {"g": f"{mg}gamma", "k2": f"{mg}optimism.k2", "k2lo": f"{mg}optimism.k2.lo",
                     "k2hi": f"{mg}optimism.k2.hi", "k3": f"{mg}optimism.k3", "k3lo": f"{mg}optimism.k3.lo",
                     "k3hi": f"{mg}optimism.k3.hi"},
