@@ -152,3 +152,8 @@ def test_a_quick_reproduction_publishes_a_reproduction_md_whose_every_number_tra
     assert json.loads((robot / "results.json").read_text())["results"]["rig"] == "simulated"
     report = verify(tmp_path / "repo" / "results")
     assert report.ok, report.failures[:5]
+
+
+def test_the_frozen_publication_passes_every_check_a_new_publication_must():
+    """The checks run on a quick publication, on the frozen full one (its sentences print more experiments)."""
+    check_publication(Path(__file__).resolve().parents[2])

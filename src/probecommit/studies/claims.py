@@ -1254,7 +1254,7 @@ def _experiments_ex5() -> list[Experiment]:
         {"n": f"{rc}splits", "m": f"{rc}estimate.mean", "lo": f"{rc}estimate.p025", "hi": f"{rc}estimate.p975",
          "share": f"{rc}share_above_zero", "below": f"{rc}share_below_zero"},
         "calibrating one half of our 192-instance MuJoCo cover pool and testing the other ({n:d} re-splits, Table "
-        "IV's definition), the full adjustment's paired failure increase has mean {m:+.3f} (2.5-97.5 % of splits "
+        "IV's definition), the full adjustment's paired failure increase has mean {m:+.3f} (central 95 % of splits "
         "{lo:+.3f} to {hi:+.3f}); its interval lies above zero on {share:.2f} of the splits and below on {below:.2f}.",
         supports=lambda v: v["lo"] <= _pv("T13-cost-of-calibration.full") <= v["hi"] and v["share"] >= EX5_VERDICT_SHARE)]
     for label, stat, paper, scale in (("level mean", "level_mean", "T14-resplits.level_mean", 1.0),
@@ -1462,7 +1462,7 @@ def _experiments_ex9() -> list[Experiment]:
                     "hi": f"{co}estimate.p975", "share": f"{co}share_above_zero", "below": f"{co}share_below_zero"},
                    "calibrating one half and testing the other of {n:d} 192-instance pools under the paper's cover "
                    "schedule ({s:d} splits, Table IV's definition), the full adjustment's paired failure increase "
-                   "has mean {m:+.3f} (2.5-97.5 % of splits {lo:+.3f} to {hi:+.3f}); its interval lies above zero "
+                   "has mean {m:+.3f} (central 95 % of splits {lo:+.3f} to {hi:+.3f}); its interval lies above zero "
                    "on {share:.3f} of the splits and below on {below:.3f}.",
                    supports=lambda v: v["lo"] <= _pv("T13-cost-of-calibration.full") <= v["hi"]
                    and v["share"] >= EX5_VERDICT_SHARE),
