@@ -73,16 +73,3 @@ def recompute(folder: Path, results: dict[str, Any], boot: dict[str, Any]) -> di
         for key, v in ex13_mixture.summary(pd.read_parquet(folder / name)).items():
             out[f"ex13_mixture.{key}"] = (v, name)
     return out
-    b = json.loads(setup.read_text())["results"]["setup"]["bootstrap"]
-    boot = dict(resamples=int(b["resamples"]), seed=int(b["seed"]))
-    name = ex13_surprise.STORED
-    if (folder / name).is_file():
-        rows = pd.read_parquet(folder / name)
-        ks = sorted(int(c.removeprefix("surprise_k")) for c in rows.columns if c.startswith("surprise_k"))
-        for key, v in ex13_surprise.summary(rows, (ks[0], ks[-1]), **boot).items():
-            values[f"ex13_surprise.{key}"], sources[f"ex13_surprise.{key}"] = v, name
-    name = ex13_mixture.STORED
-    if (folder / name).is_file():
-        for key, v in ex13_mixture.summary(pd.read_parquet(folder / name)).items():
-            values[f"ex13_mixture.{key}"], sources[f"ex13_mixture.{key}"] = v, name
-    return values, sources, problems
