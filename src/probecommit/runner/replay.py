@@ -163,9 +163,7 @@ def _probe_batch(loaded: LoadedRun, model: Any) -> ProbeBatch:
     rows = loaded.instances.iloc[position[first]]
     truths, context = instance_arrays(rows, model)
     return ProbeBatch(
-        # one split name; a pool of several runs (``studies.explain.ex15_union``) keeps each episode's own
-        split=(str(loaded.instances["split"].iloc[0]) if loaded.instances["split"].nunique() <= 1
-               else rows["split"].astype(str).to_numpy(object)),
+        split=rows["split"].astype(str).to_numpy(object),  # each episode's own (a pool of runs mixes splits)
         instance_id=inst_ids[position[first]],
         instance_index=rows["instance_index"].to_numpy(np.int64),
         repeat=repeat[first],
@@ -646,8 +644,8 @@ def replay_episodes(
 
 
 def replay_commit(loaded: LoadedRun, overrides: dict[str, dict[str, Any]] | None,
-                   thresholds: float | dict[int, float] | None, margin: float | None, fixed_probes: bool,
-                   chunk_instances: int | None) -> tuple[RunBeliefs, dict[str, Any], dict[str, Any]]:
+                  thresholds: float | dict[int, float] | None, margin: float | None, fixed_probes: bool,
+                  chunk_instances: int | None) -> tuple[RunBeliefs, dict[str, Any], dict[str, Any]]:
     """The checked replay of ``loaded``: its beliefs under the overrides, and the request and
     keyword arguments of the one ``RunBeliefs.commit`` that gives its episodes.
 
