@@ -9,6 +9,8 @@ import pytest
 from probecommit.studies import claims
 from probecommit.studies.explain import ex11_probe as ep
 
+from .recompute_contract import assert_round_trip
+
 
 def _rows(family: str, stored: dict[str, float], scene: dict[str, float], pool: dict[str, float],
           seeds: int = 3) -> pd.DataFrame:
@@ -78,13 +80,7 @@ def test_stored_rows_round_trip_through_verify(tmp_path):
     from probecommit.studies.explain import ex11
 
     rows = _rows("hinge", {"x": 0.08}, {"x": 0.08}, {"p": 0.02, "q": 0.05})
-    published = {f"ex11_probe.{k}": v for k, v in ep.keys(rows, draws=40).items()}
-    rows.to_parquet(tmp_path / ep.STORED)
-    group = {k.removeprefix("ex11_probe."): v for k, v in published.items()}
-    values, sources, problems = ex11.recompute(tmp_path, {"ex11_probe": group})
-    assert values == published and problems == [] and set(sources.values()) == {ep.STORED}
-    (tmp_path / ep.STORED).unlink()
-    assert ex11.recompute(tmp_path, {"ex11_probe": group})[2]  # published keys without their rows: a problem
+    assert_round_trip(tmp_path, ex11.recompute, "ex11_probe", ep.STORED, rows, ep.keys(rows, draws=40))
 
 
 def test_no_breadth_runs_no_keys(tmp_path):

@@ -9,6 +9,8 @@ import pytest
 from probecommit.studies import claims
 from probecommit.studies.explain import ex16_reach as er
 
+from .recompute_contract import assert_round_trip
+
 
 def _rows(family: str, cells: dict[tuple[str, int], tuple[float, float]], repeats: int = 2) -> pd.DataFrame:
     """Two instances per (part, k) with the given misses, every repeat the same (exact means)."""
@@ -91,13 +93,7 @@ def test_stored_rows_round_trip_through_verify(tmp_path):
     from probecommit.studies.explain import ex16
 
     rows = _rows("hinge", _cells((0.07, 0.08), (0.07, 0.08), (0.06, 0.07), (0.03, 0.032)))
-    published = {f"ex16_reach.{k}": v for k, v in er.keys(rows).items()}
-    rows.to_parquet(tmp_path / er.STORED)
-    group = {k.removeprefix("ex16_reach."): v for k, v in published.items()}
-    values, sources, problems = ex16.recompute(tmp_path, {"ex16_reach": group})
-    assert values == published and problems == [] and set(sources.values()) == {er.STORED}
-    (tmp_path / er.STORED).unlink()
-    assert ex16.recompute(tmp_path, {"ex16_reach": group})[2]  # published keys without their rows: a problem
+    assert_round_trip(tmp_path, ex16.recompute, "ex16_reach", er.STORED, rows, er.keys(rows))
 
 
 def test_no_breadth_runs_no_keys(tmp_path):
