@@ -47,17 +47,29 @@ def test_steps_set_aside_put_their_keys_where_running_them_in_place_would(tmp_pa
     jobs = {}
     for aside in (True, False):
         job = jobs[aside] = Explain(tmp_path, True, lambda *a: None, 1, {})
-        try:
-            for step in _steps(job, aside):
-                step()
-            job.background.finish()
-        finally:
-            job.background.close()
+        job.run_steps(_steps(job, aside))
     assert list(jobs[True].res["gru"]) == list(jobs[False].res["gru"]) == ["a", "x", "y", "b", "z"]
     assert jobs[True].res["gru"] == jobs[False].res["gru"]
     assert list(jobs[True].stored) == ["first.parquet"]
     if (os.cpu_count() or 1) > 1:  # in a process of its own
         assert jobs[True].res["robust"]["r"] != os.getpid()
+
+
+@pytest.mark.parametrize("read", [lambda job: list(job.res["gru"].values()), lambda job: job.res["gru"].get("y"),
+                                  lambda job: dict(job.res["gru"]), lambda job: "first.parquet" in job.stored,
+                                  lambda job: job.stored.pop("first.parquet", None)])
+def test_a_later_step_reading_what_a_step_set_aside_fills_is_refused(tmp_path, read):
+    """Merged before or after it by timing, such a read would depend on the schedule (``lanes``)."""
+    job = Explain(tmp_path, True, lambda *a: None, 1, {})
+    with pytest.raises(RuntimeError, match=r"step 2 reads .* which .*_fill_first.* \(set aside at step 0\)"):
+        job.run_steps([job.aside(_fill_first, _fill_second), lambda: job.res["gru"].update(b=1.0), lambda: read(job)])
+
+
+def test_reads_before_the_step_is_set_aside_and_of_other_keys_pass(tmp_path):
+    job = Explain(tmp_path, True, lambda *a: None, 1, {})
+    job.run_steps([lambda: job.res["gru"].update(a=0.0), lambda: job.res["gru"].get("x"),
+                   job.aside(_fill_first), lambda: job.res["gru"]["a"], lambda: job.res["robust"].get("r")])
+    assert job.res["gru"] == {"a": 0.0, "x": 1.0}
 
 
 def test_a_step_that_fills_rows_kept_in_step_order_is_refused_aside(tmp_path):

@@ -25,6 +25,7 @@ from probecommit.studies.explain import (calibration_rows, draw_audit, draw_faul
                                          robust_rows, runs, stored, surprise_variants)
 from probecommit.studies.explain.shared_beliefs import SharedBeliefs, cyclic_pairs
 from probecommit.studies.explain.background import Background
+from probecommit.studies.explain.lanes import ReadDict, Reads
 from probecommit.studies.explain import timing
 from probecommit.studies.explain.timing import StepClock
 from probecommit.studies.explain import ex4, ex5_calibration, ex6, ex7, ex8, ex9_calibration, ex10
@@ -104,7 +105,9 @@ class Explain:
         #: they are done.
         self.ready = ready
         self.boot = dict(resamples=self.p.bootstrap.resamples, seed=self.p.bootstrap.seed)
-        self.res: dict[str, dict[str, Any]] = {g: {} for g in (
+        #: What the main lane read, by step: no later step may read what a step set aside fills (``lanes``).
+        self.reads = Reads()
+        self.res: dict[str, dict[str, Any]] = {g: ReadDict(self.reads, "res", g) for g in (
             "missing", "committed_pool", "instance_generator", "margin_per_gamma", "thresholds", "gru", "physx_capture",
             "boundary_fault", "robust", *more.GROUPS,
             "ex5_calibration", *ex4.GROUPS, *ex6.GROUPS, *ex7.GROUPS,
@@ -114,9 +117,9 @@ class Explain:
             *ex16.GROUPS,
             ex12_distinct.GROUP, ex12_simultaneous.GROUP,
             ex15_readings.GROUP, ex15_union.GROUP)}
-        self.tables: dict[str, pd.DataFrame] = {}
+        self.tables: dict[str, pd.DataFrame] = ReadDict(self.reads, "tables")
         #: Stored rows written beside results.json as they are, by file name (``more``'s steps).
-        self.stored: dict[str, pd.DataFrame] = {}
+        self.stored: dict[str, pd.DataFrame] = ReadDict(self.reads, "stored")
         #: Re-executed commits by calibration (``Recorder``) and episodes of the step's own runs by run name, that
         #: verify recomputes the gates, calibration and thresholds from (``calibration_rows.COMMITS``, ``EPISODES``).
         self.commits: dict[str, list[pd.DataFrame]] = {}
@@ -433,9 +436,11 @@ class Explain:
             if self.ready is not None:
                 self.ready(needs)
             values = self.res[group]
-            before = list(values.items())
+            with self.reads.paused():
+                before = list(values.items())
             step()
-            added = list(values.items())[len(before):]
+            with self.reads.paused():
+                added = list(values.items())[len(before):]
             values.clear()
             values.update(before[:place[0]] + added + before[place[0]:])
 
@@ -452,22 +457,26 @@ class Explain:
             if self.ready is not None and needs != ():
                 self.ready(needs)  # the job aside takes its needs as done
             places = {group: len(values) for group, values in self.res.items()}
-            self.progress(f"explain: set aside to a process of its own: {', '.join(_name(s) for s in steps)}", 0, 1)
-            return self.background.submit(lambda filled: self._merge(filled, places), run_aside, self.root, self.quick,
-                                          self.workers, self.cfg, steps)
+            at, label = self.reads.step, ", ".join(_name(s) for s in steps)
+            self.progress(f"explain: set aside to a process of its own: {label}", 0, 1)
+            return self.background.submit(lambda filled: self._merge(filled, places, at, label), run_aside, self.root,
+                                          self.quick, self.workers, self.cfg, steps)
 
         return submit
 
-    def _merge(self, filled: dict[str, Any], places: dict[str, int]) -> None:
-        """What a job aside filled, each group's keys where they were when it was set aside (after those of the
-        jobs set aside before it: they ran first in place)."""
+    def _merge(self, filled: dict[str, Any], places: dict[str, int], step: int, label: str) -> None:
+        """What a job aside (set aside at ``step``) filled, each group's keys where they were when it was set aside
+        (after those of the jobs set aside before it: they ran first in place)."""
         for group, added in filled["res"].items():
             values = self.res[group]
             at = places[group] + self._merged.get(group, 0)
             self._merged[group] = self._merged.get(group, 0) + len(added)
-            items = list(values.items())
+            with self.reads.paused():
+                items = list(values.items())
             values.clear()
             values.update(items[:at] + list(added.items()) + items[at:])
+        self.reads.filled(step, label, {("res", g, k) for g, added in filled["res"].items() for k in added}
+                          | {(where, "", name) for where in ("stored", "tables") for name in filled[where]})
         self.stored.update(filled["stored"])
         self.tables.update(filled["tables"])
         for label, wall, cpu, children in filled["steps"]:
@@ -494,15 +503,7 @@ class Explain:
                  self.aside(ex11.run), lambda: ex16.run(self), lambda: ex13.surprise(self, paper),
                  lambda: ex14.run(self, paper),
                  lambda: ex12_distinct.run(self)]
-        try:
-            for i, step in enumerate(steps):
-                self.progress("explain", i, len(steps))
-                step()
-            self.progress("explain: waiting for the steps in a process of their own", 0, 1)
-            self.background.finish()  # each fills groups (and stored rows) no other step fills
-        finally:
-            self.background.close()
-        self.progress.close()
+        self.run_steps(steps)
         margins = [t for name, t in self.tables.items() if name.startswith("margin_")]
         if margins:
             write_with(out / "margin_per_gamma.parquet",
@@ -523,6 +524,22 @@ class Explain:
         write_text(out / "explain.md", summary_markdown(payload["results"]))
         return out
 
+
+    def run_steps(self, steps: list[Callable[[], Any]]) -> None:
+        """``steps`` in order, then the jobs set aside handed on; checks that no step read what a job set aside
+        before it fills (``lanes.Reads.check``: such a read would depend on the schedule)."""
+        try:
+            for i, step in enumerate(steps):
+                self.reads.step = i
+                self.progress("explain", i, len(steps))
+                step()
+            self.reads.step = len(steps)
+            self.progress("explain: waiting for the steps in a process of their own", 0, 1)
+            self.background.finish()  # each fills groups (and stored rows) no other step fills
+        finally:
+            self.background.close()
+        self.progress.close()
+        self.reads.check()
 
     def _store_calibrations(self, out: Path) -> None:
         """The re-executed commits and the step's own runs' episodes (the insertion study's writers and columns)."""
