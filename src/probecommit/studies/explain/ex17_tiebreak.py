@@ -19,6 +19,8 @@ from typing import Any, Sequence
 import numpy as np
 import pandas as pd
 
+#: The stored rows (one per trajectory, budget and reading) the keys are summarized from.
+STORED = "ex17_tiebreak_rows.parquet"
 #: The tie-break readings, in the order the selection rule scans them (A0 first: ours).
 READINGS = ("reference", "lowest", "highest", "uniform")
 #: Table III's budgets.
@@ -149,3 +151,51 @@ def commit_rows(loaded: Any, budgets: Sequence[int] = BUDGETS, readings: Sequenc
                 "n_tied": n_tied.astype("int64"), "plateau_mm": width,
                 "stored_realized": ref["realized"].to_numpy(float), "stored_predicted": ref["predicted"].to_numpy(float)}))
     return pd.concat(parts, ignore_index=True)
+
+
+def _triple(out: dict[str, Any], name: str, row: Any, metric: str) -> None:
+    for s in ("", "_lo", "_hi"):
+        out[f"{name}{s}"] = float(getattr(row, f"{metric}{s}"))
+
+
+def keys(rows: pd.DataFrame, paper: Sequence[float], boot: dict[str, int]) -> dict[str, Any]:
+    """E126's keys from its stored rows: A0's check, per reading the original arm's optimism per budget
+    (Table III's cluster bootstrap), mean |optimism| and whether every ``paper`` optimism (one per budget, in
+    ``BUDGETS`` order) lies inside its interval; ``selected`` (1-based into ``READINGS``; 0: none) and its mean
+    |optimism|; beside them, per budget, the tie shares and, for every reading, the
+    covered and escaped strata's optimism split into score, model and belief parts."""
+    from probecommit.audit.metrics import audit_table
+
+    a0 = rows[rows["reading"] == READINGS[0]]
+    out: dict[str, Any] = {
+        "a0_reproduces_stored": int(bool(np.array_equal(a0["realized"].to_numpy(float), a0["stored_realized"].to_numpy(float))
+                                         and np.allclose(a0["predicted"], a0["stored_predicted"], rtol=0, atol=1e-12))),
+        "predicted_same_every_reading": int(all(np.array_equal(p["predicted"].to_numpy(float), a0["predicted"].to_numpy(float))
+                                                for _, p in rows.groupby("reading", sort=False)))}
+    budgets = sorted(int(k) for k in a0["k"].unique())
+    for k, at in a0.groupby("k"):
+        out[f"tied_share.k{int(k)}"] = float((at["n_tied"] > 1).mean())
+        out[f"plateau_mm.k{int(k)}"] = float(at["plateau_mm"].mean())
+    selected = 0
+    for i, reading in enumerate(READINGS):
+        part = rows[rows["reading"] == reading]
+        table = part.assign(method="probe_robust", variant="deployed", status="ok")
+        audit = audit_table(table, **boot).sort_values("k")
+        for row in audit.itertuples():
+            _triple(out, f"{reading}.optimism.k{int(row.k)}", row, "optimism")
+        out[f"{reading}.mean_abs_optimism"] = float(np.mean(np.abs(audit["optimism"].to_numpy(float))))
+        out[f"{reading}.from_cache"] = float(part["from_cache"].mean())
+        ok = len(paper) == len(budgets) and all(
+            out[f"{reading}.optimism.k{k}_lo"] <= p <= out[f"{reading}.optimism.k{k}_hi"] for k, p in zip(budgets, paper))
+        out[f"{reading}.reproduces"] = int(ok)
+        if ok and i > 0 and not selected and out["a0_reproduces_stored"]:
+            selected = i + 1
+        for k, at in part.groupby("k"):
+            parts = decomposition(at["realized"], at["predicted"], at["fail_truth"], at["posterior"])
+            esc = at["escaped"].to_numpy(bool)
+            for stratum, mask in (("covered", ~esc), ("escaped", esc)):
+                for name, values in parts.items():
+                    out[f"{reading}.{stratum}.{name}.k{int(k)}"] = float(values[mask].mean()) if mask.any() else 0.0
+    out["selected"] = int(selected)
+    out["selected_mean_abs_optimism"] = out[f"{READINGS[selected - 1]}.mean_abs_optimism"] if selected else float("nan")
+    return out
