@@ -153,9 +153,9 @@ def commit_rows(loaded: Any, budgets: Sequence[int] = BUDGETS, readings: Sequenc
     return pd.concat(parts, ignore_index=True)
 
 
-def _triple(out: dict[str, Any], name: str, row: Any, metric: str) -> None:
+def _triple(out: dict[str, Any], reading: str, row: Any, metric: str) -> None:
     for s in ("", "_lo", "_hi"):
-        out[f"{name}{s}"] = float(getattr(row, f"{metric}{s}"))
+        out[f"{reading}.{metric}{s}.k{int(row.k)}"] = float(getattr(row, f"{metric}{s}"))
 
 
 def keys(rows: pd.DataFrame, paper: Sequence[float], boot: dict[str, int]) -> dict[str, Any]:
@@ -182,11 +182,11 @@ def keys(rows: pd.DataFrame, paper: Sequence[float], boot: dict[str, int]) -> di
         table = part.assign(method="probe_robust", variant="deployed", status="ok")
         audit = audit_table(table, **boot).sort_values("k")
         for row in audit.itertuples():
-            _triple(out, f"{reading}.optimism.k{int(row.k)}", row, "optimism")
+            _triple(out, reading, row, "optimism")
         out[f"{reading}.mean_abs_optimism"] = float(np.mean(np.abs(audit["optimism"].to_numpy(float))))
         out[f"{reading}.from_cache"] = float(part["from_cache"].mean())
         ok = len(paper) == len(budgets) and all(
-            out[f"{reading}.optimism.k{k}_lo"] <= p <= out[f"{reading}.optimism.k{k}_hi"] for k, p in zip(budgets, paper))
+            out[f"{reading}.optimism_lo.k{k}"] <= p <= out[f"{reading}.optimism_hi.k{k}"] for k, p in zip(budgets, paper))
         out[f"{reading}.reproduces"] = int(ok)
         if ok and i > 0 and not selected and out["a0_reproduces_stored"]:
             selected = i + 1
