@@ -63,8 +63,9 @@ def band(job: Any, paper_schedule: dict[str, Any], first_tap: float) -> None:
         instances.append(pd.read_parquet(pool / "instances.parquet"))
     config = runs[0].config
     m = config.model
-    inputs = {"first_tap": float(first_tap), "x_low": float(m.prior_low[0]), "x_high": float(m.prior_high[0]), "c_low": float(m.prior_low[1]),
-              "c_high": float(m.prior_high[1]), "sim_offset": float(config.simulator.boundary_offset)}
+    inputs = {"first_tap": float(first_tap), "x_low": float(m.prior_low[0]), "x_high": float(m.prior_high[0]),
+              "c_low": float(m.prior_low[1]), "c_high": float(m.prior_high[1]),
+              "sim_offset": float(config.simulator.boundary_offset)}
     rows = ex17_band.band_rows(surprise, instances, inputs)
     job.stored[ex17_band.STORED] = rows
     job.res["ex17_band"].update(ex17_band.keys(rows, *_paper_t36(), DRAWS))
