@@ -881,7 +881,7 @@ SELF_RECOMPUTING = ("ex7", "ex8", "ex11", "ex16")
 
 #: Explain modules whose ``recompute(folder, results, boot)`` gives ``{key: (value, stored file)}`` under the
 #: insertion study's bootstrap settings, with ``STORED_BY_GROUP`` naming each group's rows.
-BOOTSTRAPPED = ("ex6", "ex10", "ex13", "ex14")
+BOOTSTRAPPED = ("ex6", "ex10", "ex13", "ex14", "ex17")
 
 
 #: The stored tables each study's numbers are recomputed from: a publication without one fails verify
@@ -943,7 +943,8 @@ RECOMPUTED = {
                "ex12's Table III original cells under a schedule without replacement and the re-splits under the "
                "budget-simultaneous level; ex15's re-splits under every reading of the paper's sentence, on the frozen "
                "pool and on Split B's pooled halves; ex16's hinge and push1d probed cells with probes that reach the "
-               "commit regime",
+               "commit regime; ex17's Table III original arm under the aim tie-break readings (optimism and its "
+               "score, model and belief parts) and the cover schedule's first-tap band against T36's escapes",
 }
 TRACED_ONLY = {
     "insertion": "the stored rows themselves (episodes, re-executed commits, replays); the re-split rows; the cover "

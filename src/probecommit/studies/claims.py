@@ -353,7 +353,8 @@ def _audit_explain(audit: list[Comparison]) -> tuple[Any, ...]:
             + (("E82", ("optimism calibrated k=2", "optimism calibrated k=3")),)
             + tuple((f"E100[{c}]", (c,)) for c in ("cluster_coverage original k=5", "optimism original k=2",
                                                      "optimism original k=3"))
-            + tuple((f"E113[{c.label}]", (c.label,)) for c in audit if " original " in c.label))
+            + tuple((f"E113[{c.label}]", (c.label,)) for c in audit if " original " in c.label)
+            + tuple((f"E126[{c.label}]", (c.label,)) for c in audit if c.label.startswith("optimism original ")))
 
 
 def _table_claims() -> list[Claim]:
@@ -566,7 +567,7 @@ def _claims_audit_and_calibration() -> list[Claim]:
                Near("calibrated", "T12-calibrated-audit.optimism_calibrated",
                     f"{I}table_audit.summary.mean_abs_optimism_calibrated", POINT_TOL * 2.5)),
               explain=(("E18[original]", ("original",)), ("E18[calibrated]", ("calibrated",)), ("E58", ("original",)),
-                       ("E113[T12 original]", ("original",)))))
+                       ("E113[T12 original]", ("original",)), ("E126[T12 original]", ("original",)))))
     cost = f"{I}table_insertion.B.cost_differences."
     add(Claim("T13-cost-of-calibration", "Sec. V-B, Cost of calibration", "Paired failure increase: full adjustment, "
               "set calibration, margin",
@@ -730,7 +731,7 @@ def _claims_commit_decision() -> list[Claim]:
               (Inside("k=1", "T36-surprise.auc_k1", f"{X}missing.surprise_auc_cover_k1"),
                Inside("k=5", "T36-surprise.auc_k5", f"{X}missing.surprise_auc_cover_k5")),
               explain=(("E15", ("k=5",)), ("E16", ("k=1",)), ("E64", ("k=1", "k=5")), ("E88", ("k=1", "k=5")),
-                       ("E106", ("k=1",)), ("E114[k=1]", ("k=1",)), ("E114[k=5]", ("k=5",)))))
+                       ("E106", ("k=1",)), ("E114[k=1]", ("k=1",)), ("E114[k=5]", ("k=5",)), ("E127", ("k=1",)))))
     return c
 
 
@@ -1894,11 +1895,76 @@ def _experiments_ex15() -> list[Experiment]:
                              "Split B's cover calibration and test runs pooled")]
 
 
+#: E126's aim tie-break readings (``studies/explain/ex17_tiebreak.READINGS``), A0 first: ours.
+EX17_READINGS = ("reference", "lowest", "highest", "uniform")
+
+
+def _ex17_cell(v: Mapping[str, Any], paper: float) -> bool:
+    """E126's rule on one cell: the stored commits replayed exactly (``a0``), a reading other than ours selected
+    (its intervals hold the paper's original optimism at every budget: ``sel`` > 1), and the paper's value inside
+    that reading's interval here."""
+    i = int(v["sel"])
+    return int(v["a0"]) == 1 and i > 1 and v[f"lo{i}"] <= paper <= v[f"hi{i}"]
+
+
+def _experiments_ex17() -> list[Experiment]:
+    """The ex17 helper's experiments (``studies/explain/ex17*.py``; rules in docs/decisions.md, "ex17", written
+    before the runs): Table III's original arm under the aim tie-break readings, its optimism split into the
+    score, failure-model and belief parts (E126), and what T36's k = 1 AUC asks of the first tap (E127)."""
+    t, b = f"{X}ex17_tiebreak.", f"{X}ex17_band."
+    R = EX17_READINGS
+    out = []
+    for k in EX14_BUDGETS:
+        cell = {f"{q}{i + 1}": f"{t}{r}.optimism{y}.k{k}" for i, r in enumerate(R)
+                for q, y in (("m", ""), ("lo", "_lo"), ("hi", "_hi"))}
+        parts = {f"{q}{s[0]}": f"{t}reference.{s}.{n}.k{k}" for s in ("covered", "escaped")
+                 for q, n in (("s", "score"), ("f", "model"), ("b", "belief"))}
+        out.append(Experiment(
+            f"E126[optimism original k={k}]",
+            f"Table III's optimism (original, k = {k}) under the aim tie-break readings, split into its parts",
+            {**cell, **parts, "ts": f"{t}tied_share.k{k}", "pw": f"{t}plateau_mm.k{k}", "a0": f"{t}a0_reproduces_stored",
+             "sel": f"{t}selected", "p": f"paper:tab:audit.optimism_original.{k}"},
+            "on Split B random test (beliefs recomputed from the stored taps; the stored commits replayed exactly: "
+            "{a0:d}, 1 = yes), the minimum score ties on {ts:.3f} of commits (the tied aims span {pw:.2f} mm on "
+            "average); optimism {m1:.3f} [{lo1:.3f}, {hi1:.3f}] ours (nearest the retained "
+            "mean), {m2:.3f} [{lo2:.3f}, {hi2:.3f}] lowest tied aim, {m3:.3f} [{lo3:.3f}, {hi3:.3f}] highest, {m4:.3f} "
+            "[{lo4:.3f}, {hi4:.3f}] uniform among the tied (paper {p:.3f}; selected reading {sel:d}, 0 = none holds "
+            "the paper's optimism at every budget). Ours split into its parts, on covered episodes: score vs "
+            "posterior {sc:+.3f}, failure model given the truth {fc:+.3f}, belief {bc:+.3f}; on escaped ones "
+            "{se:+.3f}, {fe:+.3f}, {be:+.3f}.",
+            supports=lambda v, key=f"tab:audit.optimism_original.{k}": _ex17_cell(v, _pv(key))))
+    out.append(Experiment(
+        "E126[T12 original]", "T12's original mean |optimism| under the aim tie-break readings",
+        {**{f"m{i + 1}": f"{t}{r}.mean_abs_optimism" for i, r in enumerate(R)}, "a0": f"{t}a0_reproduces_stored",
+         "sel": f"{t}selected", "p": "paper:T12-calibrated-audit.optimism_original"},
+        "the original arm's mean |optimism| over Table III's budgets is {m1:.3f} ours, {m2:.3f} with the lowest tied "
+        "aim, {m3:.3f} with the highest, {m4:.3f} uniform among the tied (paper {p:.3f}); the rule reads the reading "
+        "E126 selects ({sel:d}; 0 = none).",
+        supports=lambda v: int(v["a0"]) == 1 and int(v["sel"]) > 1
+        and abs(v[f"m{int(v['sel'])}"] - _pv("T12-calibrated-audit.optimism_original")) <= POINT_TOL * 2.5))
+    draws = {f"{q}{d}": f"{b}{d}.{n}" for d in ("b_test", "b_cal", "a", "pool_0", "pool_1")
+             for q, n in (("n_", "n_band"), ("e_", "n_band_escaped"))}
+    out.append(Experiment(
+        "E127", "what T36's k = 1 AUC asks of the cover schedule's first tap",
+        {**draws, "pb": f"{b}p_band", "pp": f"{b}p_pocket", "eb": f"{b}expected_band", "imp": f"{b}implied_share",
+         "lo": f"{b}share.min", "hi": f"{b}share.max", "nd": f"{b}draws", "pa": "paper:T36-surprise.auc_k1",
+         "pn": "paper:T36-surprise.escaped"},
+        "the first tap reads the pocket with exact probability {pp:.3f} and lies in the misread band (pocket in the "
+        "simulator, top in the model) with {pb:.3f}, about {eb:.1f} band trajectories in a Split B test set; a "
+        "first-reading AUC of {pa:.2f} with {pn:.0f} escapes needs at least {imp:.3f} of them still escaped at k = 5. "
+        "On E106's {nd:d} draws under the paper's schedule the band holds {n_b_test:d}, {n_b_cal:d}, {n_a:d}, "
+        "{n_pool_0:d} and {n_pool_1:d} trajectories, of which {e_b_test:d}, {e_b_cal:d}, {e_a:d}, {e_pool_0:d} and "
+        "{e_pool_1:d} escape at k = 5 (share {lo:.3f} to {hi:.3f}).",
+        supports=lambda v: v["imp"] <= 1 and v["lo"] <= v["imp"] <= v["hi"]))
+    return out
+
+
 for _experiment in (_experiments() + _experiments_more() + _experiments_ex3() + _experiments_ex4()
                     + _experiments_ex5() + _experiments_ex6() + _experiments_ex7()
                     + _experiments_ex8() + _experiments_ex9()
                     + _experiments_ex10() + _experiments_ex11() + _experiments_ex12() + _experiments_ex13()
-                    + _experiments_ex14() + _experiments_ex15() + _experiments_ex16()):
+                    + _experiments_ex14() + _experiments_ex15() + _experiments_ex16()
+                    + _experiments_ex17()):
     EXPERIMENTS[_experiment.number] = _experiment
 
 

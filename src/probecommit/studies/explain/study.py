@@ -33,6 +33,7 @@ from probecommit.studies.explain import ex11
 from probecommit.studies.explain import ex13
 from probecommit.studies.explain import ex14
 from probecommit.studies.explain import ex16
+from probecommit.studies.explain import ex17
 from probecommit.studies.explain import ex12_distinct, ex12_simultaneous
 from probecommit.studies.explain import ex15_readings, ex15_union
 from probecommit.studies.explain import gru as gru_study
@@ -115,6 +116,7 @@ class Explain:
             *ex11.GROUPS, *ex13.GROUPS,
             *ex14.GROUPS,
             *ex16.GROUPS,
+            *ex17.GROUPS,
             ex12_distinct.GROUP, ex12_simultaneous.GROUP,
             ex15_readings.GROUP, ex15_union.GROUP)}
         self.tables: dict[str, pd.DataFrame] = ReadDict(self.reads, "tables")
@@ -493,7 +495,7 @@ class Explain:
                  self.resplits_paper_schedule,  # the steps set aside here read only the insertion study and it
                  self.aside(ex5_calibration.run, ex9_calibration.run, ex12_simultaneous.run, ex15_readings.run,
                             needs=()),  # E118 (ex15_readings) joins the rows ex5 and ex9 store
-                 self.aside(ex7.run, needs=()), self.aside(ex13.mixture, needs=()),
+                 self.aside(ex7.run, needs=()), self.aside(ex13.mixture, needs=()), self.aside(ex17.tiebreak, needs=()),
                  self.instance_generator, self.draws, self.boundary_fault, self.robust, physx_coverage, self.physx,
                  lambda: (self.ready and self.ready(), self.gru()), lambda: more.run(self),
                  lambda: ex15_union.run(self),
@@ -502,6 +504,7 @@ class Explain:
                  lambda: ex8.run(self), lambda: ex10.run(self, paper),
                  self.aside(ex11.run), lambda: ex16.run(self), lambda: ex13.surprise(self, paper),
                  lambda: ex14.run(self, paper),
+                 lambda: ex17.band(self, paper, COVER_SCHEDULE[0]),
                  lambda: ex12_distinct.run(self)]
         self.run_steps(steps)
         margins = [t for name, t in self.tables.items() if name.startswith("margin_")]
