@@ -32,6 +32,7 @@ from probecommit.studies.explain import ex11
 from probecommit.studies.explain import ex13
 from probecommit.studies.explain import ex14
 from probecommit.studies.explain import ex16
+from probecommit.studies.explain import ex19
 from probecommit.studies.explain import ex12_distinct, ex12_simultaneous
 from probecommit.studies.explain import ex15_readings, ex15_union
 from probecommit.studies.explain import gru as gru_study
@@ -112,6 +113,7 @@ class Explain:
             *ex11.GROUPS, *ex13.GROUPS,
             *ex14.GROUPS,
             *ex16.GROUPS,
+            *ex19.GROUPS,
             ex12_distinct.GROUP, ex12_simultaneous.GROUP,
             ex15_readings.GROUP, ex15_union.GROUP)}
         self.tables: dict[str, pd.DataFrame] = {}
@@ -488,6 +490,7 @@ class Explain:
                  self.instance_generator, self.draws, self.boundary_fault, self.robust, physx_coverage, self.physx,
                  lambda: (self.ready and self.ready(), self.gru()), lambda: more.run(self),
                  lambda: ex15_union.run(self),
+                 lambda: ex19.run(self),  # E138 reads the prior sweep's darts runs (more.run)
                  lambda: ex4.run(self),
                  lambda: ex6.run(self, paper),
                  lambda: ex8.run(self), lambda: ex10.run(self, paper),
