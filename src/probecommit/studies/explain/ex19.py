@@ -10,12 +10,12 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-from probecommit.studies.explain import ex19_darts, stored
+from probecommit.studies.explain import ex19_cone, ex19_darts, stored
 
 #: Result groups these steps fill (added to ``Explain.res``).
-GROUPS = ("ex19_darts",)
+GROUPS = ("ex19_darts", "ex19_cone")
 #: The rows each group's keys are summarized from (stored beside ``results.json``).
-STORED_BY_GROUP = {"ex19_darts": ex19_darts.STORED}
+STORED_BY_GROUP = {"ex19_darts": ex19_darts.STORED, "ex19_cone": ex19_cone.STORED}
 
 
 def run(job: Any) -> None:
@@ -27,6 +27,20 @@ def run(job: Any) -> None:
         job.stored[ex19_darts.STORED] = rows
 
 
+def cone(job: Any) -> None:
+    """E139: 2-D push under the pyramidal cone over E95's pool (its stored actions and the frozen blind actions
+    re-executed in the frozen scene under both cones). Set aside after ``ex11.run``, whose pool run it reads."""
+    job.progress("explain: 2-D push under the pyramidal cone over redrawn truth sets", 0, 1)
+    draws = int(job.cfg["ex19_cone_draws_quick" if job.quick else "ex19_cone_draws"])
+    keys, rows = ex19_cone.run(job.root, job.runs, draws, job.quick)
+    job.res["ex19_cone"].update(keys)
+    if len(rows):
+        job.stored[ex19_cone.STORED] = rows
+
+
 def recompute(folder: Path, results: dict[str, Any]) -> tuple[dict[str, Any], dict[str, str], list[str]]:
     """ex19's keys recomputed from a publication's stored rows (``verify``; ``stored.recompute_group``)."""
-    return stored.recompute_group(folder, results, "ex19_darts", ex19_darts.STORED, ex19_darts.recompute)
+    values, sources, problems = stored.recompute_group(folder, results, "ex19_darts", ex19_darts.STORED,
+                                                       ex19_darts.recompute)
+    more = stored.recompute_group(folder, results, "ex19_cone", ex19_cone.STORED, ex19_cone.recompute)
+    return values | more[0], sources | more[1], problems + more[2]

@@ -494,7 +494,8 @@ class Explain:
                  lambda: ex4.run(self),
                  lambda: ex6.run(self, paper),
                  lambda: ex8.run(self), lambda: ex10.run(self, paper),
-                 self.aside(ex11.run), lambda: ex16.run(self), lambda: ex13.surprise(self, paper),
+                 self.aside(ex11.run, ex19.cone),  # E139 (ex19.cone) re-executes the pool ex11 runs
+                 lambda: ex16.run(self), lambda: ex13.surprise(self, paper),
                  lambda: ex14.run(self, paper),
                  lambda: ex12_distinct.run(self)]
         try:
