@@ -37,6 +37,11 @@ def _with_instances(run: Path) -> pd.DataFrame:
                                           on="instance_id", how="left")
 
 
+def _label(theta: tuple[float, ...]) -> str:
+    """A pool truth's label (its latents to six digits, as a config stores them)."""
+    return "|".join(f"{float(v):.6f}" for v in theta)
+
+
 def _miss(scene: Any, theta: tuple[float, ...], action: tuple[float, float], target: tuple[float, float]) -> float:
     rest = scene.rest_of(theta, action)
     return float(np.hypot(rest[0] - target[0], rest[1] - target[1]))
@@ -49,13 +54,13 @@ def miss_rows(pool: pd.DataFrame, blind: pd.DataFrame, scene: Any, cone: str) ->
     probe = pool[(pool["method"] == "probe_robust") & (pool["k"] == K)]
     for r in probe.itertuples(index=False):
         theta = (r.true_mu, r.true_m, r.true_k_d)
-        rows.append((cone, "|".join(f"{v:.6f}".rstrip("0") for v in theta), "probe_robust", r.ctx_target_x,
+        rows.append((cone, _label(theta), "probe_robust", r.ctx_target_x,
                      r.ctx_target_y, r.action_0, r.action_1,
                      _miss(scene, theta, (r.action_0, r.action_1), (r.ctx_target_x, r.ctx_target_y)), r.realized))
     truths = probe[list(LATENTS)].drop_duplicates().itertuples(index=False)
     arms = blind[blind["method"].isin(ARMS[:2]) & (blind["k"] == 0)]
     for theta in truths:
-        label = "|".join(f"{v:.6f}".rstrip("0") for v in theta)
+        label = _label(tuple(theta))
         for r in arms.itertuples(index=False):
             rows.append((cone, label, r.method, r.ctx_target_x, r.ctx_target_y, r.action_0, r.action_1,
                          _miss(scene, tuple(theta), (r.action_0, r.action_1), (r.ctx_target_x, r.ctx_target_y)),
@@ -68,7 +73,7 @@ def probe_rows(truths: list[tuple[float, ...]], scenes: dict[str, Any], pulses: 
     """Noise-free probe rests (pulses along +x) at every pool truth under each cone (premise a)."""
     rows = []
     for theta in truths:
-        label = "|".join(f"{v:.6f}".rstrip("0") for v in theta)
+        label = _label(theta)
         for cone, scene in scenes.items():
             for u in pulses:
                 rest = scene.rest_of(tuple(theta), (u, 0.0))
