@@ -109,7 +109,8 @@ def keys(rows: pd.DataFrame, draws: int) -> dict[str, Any]:
     replay = miss[(miss["cone"] == "elliptic") & (miss["method"] == "probe_robust")]
     replay_m = float((replay["realized"] - replay["stored"]).abs().max())
     out: dict[str, Any] = {"pool_truths": float(miss["truth"].nunique()), "draws": float(draws),
-                           "n_truths": float(N_TRUTHS), "premise.probe_max_m": probe_m, "premise.replay_max_m": replay_m}
+                           "n_truths": float(N_TRUTHS), "premise.probe_max_m": probe_m,
+                           "premise.replay_max_m": replay_m}
     out["premise_holds"] = float(probe_m <= PROBE_M and replay_m <= REPLAY_M)
     paper = paper_cells()
     for cone in CONES:
@@ -118,7 +119,8 @@ def keys(rows: pd.DataFrame, draws: int) -> dict[str, Any]:
         for name, values in cells.items():
             lo, hi = np.percentile(values, CENTRAL)
             out.update({f"{cone}.{name}.mean": float(values.mean()), f"{cone}.{name}.p025": float(lo),
-                        f"{cone}.{name}.p975": float(hi), f"{cone}.{name}.paper_inside": float(lo <= paper[name] <= hi)})
+                        f"{cone}.{name}.p975": float(hi),
+                        f"{cone}.{name}.paper_inside": float(lo <= paper[name] <= hi)})
         for arm in ARMS:
             out[f"{cone}.{arm}.pool_min"] = float(means[arm].min())
             out[f"{cone}.{arm}.pool_max"] = float(means[arm].max())
