@@ -78,7 +78,7 @@ def test_a_width_holds_only_when_every_condition_does(monkeypatch):
     per = {0.25: blind, 1.0: blind | {"blind_inside": 0.0, "blind_bayes.paper_inside": 0.0, "blind_bayes.mean": 0.08,
                                       "blind_robust.mean": 0.13, "blind_bayes.stored": 0.16,
                                       "blind_robust.stored": 0.17}}
-    monkeypatch.setattr(ed, "width_keys", lambda rows, s, draws: dict(per[s]))
+    monkeypatch.setattr(ed, "width_keys", lambda rows, s, draws, family: dict(per[s]))
     stored = pd.DataFrame({"scale": [0.25, 1.0]})
     k = ed.keys(stored, 10, _e38(0.25) | _e38(1.0))
     assert (k["s0.25.holds"], k["s1.holds"], k["widths_holding"], k["first_width"]) == (1, 0, 1, 0.25)
@@ -109,3 +109,43 @@ def test_stored_rows_round_trip(tmp_path):
     keys = ed.keys(stored, 20, e38)
     (tmp_path / "results.json").write_text(json.dumps({"results": {"breadth_prior": e38}}))
     assert_round_trip(tmp_path, ex19.recompute, "ex19_darts", ed.STORED, stored, keys)
+
+
+def test_the_other_rows_print_only_blind_bayes_and_keep_their_truth_set_sizes():
+    assert ed.printed("darts") == ("blind_bayes", "blind_robust")
+    assert ed.printed("hinge") == ("blind_bayes",) and ed.printed("push1d") == ("blind_bayes",)
+    assert (ed.N_TRUTHS["hinge"], ed.N_TRUTHS["push1d"]) == (6, 27)
+
+
+def test_widths_keys_prefix_each_row_and_use_its_own_printed_cells(monkeypatch):
+    seen = []
+
+    def fake(rows, draws, e38, family):
+        seen.append((family, len(rows), "family" in rows))
+        return {"holds_somewhere": 1.0}
+
+    monkeypatch.setattr(ed, "keys", fake)
+    stored = pd.DataFrame({"family": ["hinge", "hinge", "push1d"], "scale": [1.0, 1.0, 1.0]})
+    assert ed.widths_keys(stored, 5, {}) == {"hinge.holds_somewhere": 1.0, "push1d.holds_somewhere": 1.0}
+    assert seen == [("hinge", 2, False), ("push1d", 1, False)]
+
+
+def test_e140_e141_speak_to_the_rows_uncovered_cells():
+    breadth = next(c for c in claims.CLAIMS if c.id == "tab:breadth")
+    spoken = {e[0]: e[1] for e in breadth.explain if isinstance(e, tuple)}
+    assert spoken["E140"] == ("hinge probe_robust",)
+    assert spoken["E141"] == ("push1d blind_bayes", "push1d probe_robust")
+    for n in ("E140", "E141"):
+        assert claims.EXPERIMENTS[n].supports({"h": 1, "holds": 1, "ok": 1})
+        assert not claims.EXPERIMENTS[n].supports({"h": 0, "holds": 0, "ok": 1})
+
+
+def test_widths_rows_round_trip(tmp_path, monkeypatch):
+    from probecommit.studies.explain import ex19
+
+    monkeypatch.setattr(ed, "keys", lambda rows, draws, e38, family: {"draws": float(draws),
+                                                                     "cell": float(rows["realized"].mean())})
+    stored = pd.DataFrame({"family": ["hinge", "push1d"], "scale": [1.0, 1.0], "realized": [0.25, 0.5]})
+    keys = ed.widths_keys(stored, 7, {})
+    assert keys == {"hinge.draws": 7.0, "hinge.cell": 0.25, "push1d.draws": 7.0, "push1d.cell": 0.5}
+    assert_round_trip(tmp_path, ex19.recompute, "ex19_widths", ed.STORED_WIDTHS, stored, keys)

@@ -343,7 +343,8 @@ def _breadth_explain() -> tuple[Any, ...]:
             + tuple((f"E{75 + i}", tuple(f"{fam} {c}" for c in cells)) for i, (fam, cells) in enumerate(BLIND_REDRAWN))
             + tuple((f"E{94 + i}", (f"{fam} probe_robust",)) for i, fam in enumerate(PROBE_REDRAWN))
             + tuple((f"E{124 + i}", (f"{fam} probe_robust",)) for i, fam in enumerate(PROBE_REACHED))
-            + (("E138", tuple(f"darts {c}" for c in EX19_DARTS_CELLS)), ("E139", ("push2d probe_robust",))))
+            + (("E138", tuple(f"darts {c}" for c in EX19_DARTS_CELLS)), ("E139", ("push2d probe_robust",)))
+            + tuple((f"E{140 + i}", cells) for i, cells in enumerate(EX19_WIDTH_ROWS.values())))
 
 
 def _audit_explain(audit: list[Comparison]) -> tuple[Any, ...]:
@@ -1924,7 +1925,29 @@ def _experiments_ex19() -> list[Experiment]:
         "drawn. The paper's prior and truths stay unknown: this shows only that our darts scene gives the paper's "
         "row on a prior a few times narrower than ours over some six truths.",
         supports=lambda v: v["h"] >= 1 and v["holds"] == 1 and v["ok"] == 1),
-        _e139()]
+        _e139()] + [_width_rule(f"E{140 + i}", fam) for i, fam in enumerate(EX19_WIDTH_ROWS)]
+
+
+#: Table II's rows E140, E141 run under E138's rule (``ex19_darts.OTHERS``), and the failing cells each speaks to.
+EX19_WIDTH_ROWS = {"hinge": ("hinge probe_robust",), "push1d": ("push1d blind_bayes", "push1d probe_robust")}
+
+
+def _width_rule(number: str, family: str) -> Experiment:
+    """E140/E141: E138's rule on a row whose only printed blind cell is Blind-Bayes."""
+    b = f"{X}ex19_widths.{family}."
+    return Experiment(
+        number, f"{family}'s row at the prior sweep's widths with its truths redrawn (E138's rule)",
+        {"n": f"{b}widths", "d": f"{b}draws", "t": f"{b}n_truths", "h": f"{b}widths_holding", "at": f"{b}first_width",
+         "w": f"{b}best_width", "ok": f"{b}best.premise_holds", "blo": f"{b}best.blind_bayes.p025",
+         "bhi": f"{b}best.blind_bayes.p975", "bin": f"{b}best.blind_bayes.paper_inside",
+         "plo": f"{b}best.probe_robust_lo", "phi": f"{b}best.probe_robust_hi",
+         "pin": f"{b}best.probe_robust.paper_inside", "holds": f"{b}best.holds"},
+        "at each of the prior sweep's {n:g} widths, {d:g} redraws of a {t:g}-truth set uniform over that width's prior "
+        "box (the width's stored blind actions, the model) against the sweep's Probe-Robust(5) interval there: "
+        "everything holds at {h:g} width(s) (first at {at:g} times ours; 0 = none). At {w:g} times our width, "
+        "Blind-Bayes spans {blo:.3f} to {bhi:.3f} (the paper's inside: {bin:g}) and Probe-Robust(5) {plo:.3f} to "
+        "{phi:.3f} ({pin:g}; premise {ok:g}).",
+        supports=lambda v: v["h"] >= 1 and v["holds"] == 1 and v["ok"] == 1)
 
 
 def _e139() -> Experiment:

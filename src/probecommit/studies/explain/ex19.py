@@ -13,18 +13,24 @@ from typing import Any
 from probecommit.studies.explain import ex19_cone, ex19_darts, stored
 
 #: Result groups these steps fill (added to ``Explain.res``).
-GROUPS = ("ex19_darts", "ex19_cone")
+GROUPS = ("ex19_darts", "ex19_widths", "ex19_cone")
 #: The rows each group's keys are summarized from (stored beside ``results.json``).
-STORED_BY_GROUP = {"ex19_darts": ex19_darts.STORED, "ex19_cone": ex19_cone.STORED}
+STORED_BY_GROUP = {"ex19_darts": ex19_darts.STORED, "ex19_widths": ex19_darts.STORED_WIDTHS,
+                   "ex19_cone": ex19_cone.STORED}
 
 
 def run(job: Any) -> None:
-    """E138: darts' row at E38's widths with its truth set redrawn (the model on stored blind actions)."""
-    job.progress("explain: darts' row at the prior's widths with its truths redrawn", 0, 1)
+    """E138: darts' row at E38's widths with its truth set redrawn (the model on stored blind actions); E140, E141:
+    the hinge's and push1d's rows under the same rule."""
+    job.progress("explain: Table II's rows at the prior's widths with their truths redrawn", 0, 1)
     keys, rows = ex19_darts.run(job.root, job.runs, job.cfg, job.res["breadth_prior"], job.quick)
     job.res["ex19_darts"].update(keys)
     if len(rows):
         job.stored[ex19_darts.STORED] = rows
+    keys, rows = ex19_darts.run_widths(job.root, job.runs, job.cfg, job.res["breadth_prior"], job.quick)
+    job.res["ex19_widths"].update(keys)
+    if len(rows):
+        job.stored[ex19_darts.STORED_WIDTHS] = rows
 
 
 def cone(job: Any) -> None:
@@ -42,5 +48,8 @@ def recompute(folder: Path, results: dict[str, Any]) -> tuple[dict[str, Any], di
     """ex19's keys recomputed from a publication's stored rows (``verify``; ``stored.recompute_group``)."""
     values, sources, problems = stored.recompute_group(folder, results, "ex19_darts", ex19_darts.STORED,
                                                        ex19_darts.recompute)
-    more = stored.recompute_group(folder, results, "ex19_cone", ex19_cone.STORED, ex19_cone.recompute)
-    return values | more[0], sources | more[1], problems + more[2]
+    for group, name, recompute_one in (("ex19_widths", ex19_darts.STORED_WIDTHS, ex19_darts.recompute_widths),
+                                       ("ex19_cone", ex19_cone.STORED, ex19_cone.recompute)):
+        more = stored.recompute_group(folder, results, group, name, recompute_one)
+        values, sources, problems = values | more[0], sources | more[1], problems + more[2]
+    return values, sources, problems
