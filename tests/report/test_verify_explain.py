@@ -111,6 +111,8 @@ CASES: list[tuple[str, Edit]] = [
                                               "ex16_reach.")),
     ("stored-ex19-darts-episode", edit_stored("ex19_darts_rows.parquet", lambda t: t.method == "blind_bayes", "realized",
                                               bump, "ex19_darts.")),
+    ("stored-ex19-widths-episode", edit_stored("ex19_widths_rows.parquet", lambda t: t.method == "blind_bayes",
+                                               "realized", bump, "ex19_widths.")),
     ("stored-ex19-cone-miss", edit_stored("ex19_cone_rows.parquet", lambda t: (t.kind == "miss") & (t.cone == "pyramidal"),
                                           "realized", bump, "ex19_cone.")),
     ("json-ex7-signature", edit_results("explain", ["ex7_faults", "signature.particles.optimism_change"],
