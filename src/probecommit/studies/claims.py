@@ -1919,11 +1919,11 @@ def _experiments_ex19() -> list[Experiment]:
         "Probe-Robust(5) interval there: everything holds at {h:g} width(s), first at {at:g} times our width (0 = "
         "none). At {w:g} times our width Blind-Bayes spans {blo:.3f} to {bhi:.3f}, Blind-Robust {rlo:.3f} to "
         "{rhi:.3f}, their ratio {qlo:.2f} to {qhi:.2f} (the paper's {qp:.2f}), Probe-Robust(5) {plo:.3f} to {phi:.3f}, "
-        "the paired reduction's lower bound {dlo:+.3f} (premise {ok:g}, all {holds:g} = yes). One scene has one "
-        "width, yet the paper's two blind cells imply different ones: {ipb:.3f} and {ipr:.3f} times ours from the "
-        "prior-expected miss, {iob:.3f} and {ior:.3f} on our six truths; their ratio is a property of the truths "
-        "drawn. The paper's prior and truths stay unknown: this shows only that our darts scene gives the paper's "
-        "row on a prior a few times narrower than ours over some six truths.",
+        "the paired reduction's lower bound {dlo:+.3f} (premise {ok:g}, all {holds:g} = yes). On one truth set one "
+        "width would have to give both blind cells: the paper's Blind-Bayes needs {ipb:.3f} times our width and its "
+        "Blind-Robust {ipr:.3f} from the prior-expected miss, {iob:.3f} and {ior:.3f} on our six truths. The "
+        "paper's prior and truths stay unknown: a supported rule shows only that our darts scene gives the paper's "
+        "row at some width of the grid over some six truths.",
         supports=lambda v: v["h"] >= 1 and v["holds"] == 1 and v["ok"] == 1),
         _e139()] + [_width_rule(f"E{140 + i}", fam) for i, fam in enumerate(EX19_WIDTH_ROWS)]
 
