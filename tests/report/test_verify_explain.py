@@ -109,6 +109,12 @@ CASES: list[tuple[str, Edit]] = [
                                              "ex11_probe.")),
     ("stored-ex16-reach-episode", edit_stored("ex16_reach_rows.parquet", lambda t: t.part == "reach", "realized", bump,
                                               "ex16_reach.")),
+    ("stored-ex19-darts-episode", edit_stored("ex19_darts_rows.parquet", lambda t: t.method == "blind_bayes", "realized",
+                                              bump, "ex19_darts.")),
+    ("stored-ex19-widths-episode", edit_stored("ex19_widths_rows.parquet", lambda t: t.method == "blind_bayes",
+                                               "realized", bump, "ex19_widths.")),
+    ("stored-ex19-cone-miss", edit_stored("ex19_cone_rows.parquet", lambda t: (t.kind == "miss") & (t.cone == "pyramidal"),
+                                          "realized", bump, "ex19_cone.")),
     ("json-ex7-signature", edit_results("explain", ["ex7_faults", "signature.particles.optimism_change"],
                                         lambda v: [v[0] + 0.0123, *v[1:]])),
     ("json-pybullet-stored-escape", edit_results("explain", ["pybullet_escape", "stored.escape_k8"],
@@ -181,6 +187,7 @@ CASES: list[tuple[str, Edit]] = [
     ("deleted-schedules-rehashed", delete_stored("schedule_episodes.parquet")),
     ("deleted-ex11-rows-rehashed", delete_stored("ex11_probe_rows.parquet")),
     ("deleted-ex16-rows-rehashed", delete_stored("ex16_reach_rows.parquet")),
+    ("deleted-ex19-cone-rows-rehashed", delete_stored("ex19_cone_rows.parquet")),
 ]
 
 

@@ -877,7 +877,7 @@ STORED_SUMMARIES = (("mixture_noise", EXPLAIN_MIXTURE, "mixture_x"),
 
 #: Explain modules that recompute their own groups: ``recompute(folder, results)`` gives
 #: ``(values, sources, problems)`` (a group published without its stored rows is a problem).
-SELF_RECOMPUTING = ("ex7", "ex8", "ex11", "ex16")
+SELF_RECOMPUTING = ("ex7", "ex8", "ex11", "ex16", "ex19")
 
 #: Explain modules whose ``recompute(folder, results, boot)`` gives ``{key: (value, stored file)}`` under the
 #: insertion study's bootstrap settings, with ``STORED_BY_GROUP`` naming each group's rows.
@@ -944,7 +944,8 @@ RECOMPUTED = {
                "budget-simultaneous level; ex15's re-splits under every reading of the paper's sentence, on the frozen "
                "pool and on Split B's pooled halves; ex16's hinge and push1d probed cells with probes that reach the "
                "commit regime; ex17's Table III original arm under the aim tie-break readings (optimism and its "
-               "score, model and belief parts) and the cover schedule's first-tap band against T36's escapes",
+               "score, model and belief parts) and the cover schedule's first-tap band against T36's escapes; "
+               "ex19's darts blind cells over redrawn truths at every width of the prior sweep",
 }
 TRACED_ONLY = {
     "insertion": "the stored rows themselves (episodes, re-executed commits, replays); the re-split rows; the cover "

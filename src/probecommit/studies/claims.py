@@ -342,7 +342,9 @@ def _breadth_explain() -> tuple[Any, ...]:
             + (("E74", ("push2d_pybullet probe_robust",)),)
             + tuple((f"E{75 + i}", tuple(f"{fam} {c}" for c in cells)) for i, (fam, cells) in enumerate(BLIND_REDRAWN))
             + tuple((f"E{94 + i}", (f"{fam} probe_robust",)) for i, fam in enumerate(PROBE_REDRAWN))
-            + tuple((f"E{124 + i}", (f"{fam} probe_robust",)) for i, fam in enumerate(PROBE_REACHED)))
+            + tuple((f"E{124 + i}", (f"{fam} probe_robust",)) for i, fam in enumerate(PROBE_REACHED))
+            + (("E138", tuple(f"darts {c}" for c in EX19_DARTS_CELLS)), ("E139", ("push2d probe_robust",)))
+            + tuple((f"E{140 + i}", cells) for i, cells in enumerate(EX19_WIDTH_ROWS.values())))
 
 
 def _audit_explain(audit: list[Comparison]) -> tuple[Any, ...]:
@@ -1959,12 +1961,90 @@ def _experiments_ex17() -> list[Experiment]:
     return out
 
 
+#: The darts cells E138 speaks to (``studies/explain/ex19_darts.py``).
+EX19_DARTS_CELLS = ("blind_bayes", "blind_robust", "probe_robust")
+
+
+def _experiments_ex19() -> list[Experiment]:
+    """The ex19 helper's experiments (E138.., ``studies/explain/ex19_*.py``; rules in docs/decisions.md, "ex19",
+    written before the keys were computed)."""
+    b = f"{X}ex19_darts."
+    return [Experiment(
+        "E138", "darts' row at the prior sweep's widths with its six truths redrawn (two properties the paper does "
+        "not report, at once)",
+        {"n": f"{b}widths", "d": f"{b}draws", "h": f"{b}widths_holding", "at": f"{b}first_width",
+         "w": f"{b}best_width", "ok": f"{b}best.premise_holds", "blo": f"{b}best.blind_bayes.p025",
+         "bhi": f"{b}best.blind_bayes.p975", "rlo": f"{b}best.blind_robust.p025", "rhi": f"{b}best.blind_robust.p975",
+         "qlo": f"{b}best.ratio.p025", "qhi": f"{b}best.ratio.p975", "qp": f"{b}ratio.paper",
+         "plo": f"{b}best.probe_robust_lo", "phi": f"{b}best.probe_robust_hi", "dlo": f"{b}best.paired_lo",
+         "holds": f"{b}best.holds", "ipb": f"{b}implied.prior.blind_bayes", "ipr": f"{b}implied.prior.blind_robust",
+         "iob": f"{b}implied.ours.blind_bayes", "ior": f"{b}implied.ours.blind_robust"},
+        "at each of the prior sweep's {n:g} widths, {d:g} redraws of a six-truth set uniform over that width's prior "
+        "box (the width's stored blind actions, the model; premise: it gives the stored blind cells) against E38's "
+        "Probe-Robust(5) interval there: everything holds at {h:g} width(s), first at {at:g} times our width (0 = "
+        "none). At {w:g} times our width Blind-Bayes spans {blo:.3f} to {bhi:.3f}, Blind-Robust {rlo:.3f} to "
+        "{rhi:.3f}, their ratio {qlo:.2f} to {qhi:.2f} (the paper's {qp:.2f}), Probe-Robust(5) {plo:.3f} to {phi:.3f}, "
+        "the paired reduction's lower bound {dlo:+.3f} (premise {ok:g}, all {holds:g} = yes). On one truth set one "
+        "width would have to give both blind cells: the paper's Blind-Bayes needs {ipb:.3f} times our width and its "
+        "Blind-Robust {ipr:.3f} from the prior-expected miss, {iob:.3f} and {ior:.3f} on our six truths. The "
+        "paper's prior and truths stay unknown: a supported rule shows only that our darts scene gives the paper's "
+        "row at some width of the grid over some six truths.",
+        supports=lambda v: v["h"] >= 1 and v["holds"] == 1 and v["ok"] == 1),
+        _e139()] + [_width_rule(f"E{140 + i}", fam) for i, fam in enumerate(EX19_WIDTH_ROWS)]
+
+
+#: Table II's rows E140, E141 run under E138's rule (``ex19_darts.OTHERS``), and the failing cells each speaks to.
+EX19_WIDTH_ROWS = {"hinge": ("hinge probe_robust",), "push1d": ("push1d blind_bayes", "push1d probe_robust")}
+
+
+def _width_rule(number: str, family: str) -> Experiment:
+    """E140/E141: E138's rule on a row whose only printed blind cell is Blind-Bayes."""
+    b = f"{X}ex19_widths.{family}."
+    return Experiment(
+        number, f"{family}'s row at the prior sweep's widths with its truths redrawn (E138's rule)",
+        {"n": f"{b}widths", "d": f"{b}draws", "t": f"{b}n_truths", "h": f"{b}widths_holding", "at": f"{b}first_width",
+         "w": f"{b}best_width", "ok": f"{b}best.premise_holds", "blo": f"{b}best.blind_bayes.p025",
+         "bhi": f"{b}best.blind_bayes.p975", "bin": f"{b}best.blind_bayes.paper_inside",
+         "plo": f"{b}best.probe_robust_lo", "phi": f"{b}best.probe_robust_hi",
+         "pin": f"{b}best.probe_robust.paper_inside", "holds": f"{b}best.holds"},
+        "at each of the prior sweep's {n:g} widths, {d:g} redraws of a {t:g}-truth set uniform over that width's prior "
+        "box (the width's stored blind actions, the model) against the sweep's Probe-Robust(5) interval there: "
+        "everything holds at {h:g} width(s) (first at {at:g} times ours; 0 = none). At {w:g} times our width, "
+        "Blind-Bayes spans {blo:.3f} to {bhi:.3f} (the paper's inside: {bin:g}) and Probe-Robust(5) {plo:.3f} to "
+        "{phi:.3f} ({pin:g}; premise {ok:g}).",
+        supports=lambda v: v["h"] >= 1 and v["holds"] == 1 and v["ok"] == 1)
+
+
+def _e139() -> Experiment:
+    """E139: 2-D push under the pyramidal cone over E95's pool (``studies/explain/ex19_cone.py``)."""
+    c = f"{X}ex19_cone."
+    names = {"b": "blind_bayes", "r": "blind_robust", "p": "probe_robust", "q": "probe_over_robust"}
+    keys = {f"{a}{e}": f"{c}pyramidal.{n}.{s}" for a, n in names.items() for e, s in (("lo", "p025"), ("hi", "p975"),
+                                                                                        ("in", "paper_inside"))}
+    keys.update({"t": f"{c}pool_truths", "d": f"{c}draws", "pm": f"{c}premise.probe_max_m",
+                 "rm": f"{c}premise.replay_max_m", "ok": f"{c}premise_holds", "qp": f"{c}paper.probe_over_robust",
+                 "elo": f"{c}elliptic.probe_robust.p025", "ehi": f"{c}elliptic.probe_robust.p975",
+                 "ein": f"{c}elliptic.probe_robust.paper_inside", "eqlo": f"{c}elliptic.probe_over_robust.p025",
+                 "eqhi": f"{c}elliptic.probe_over_robust.p975", "holds": f"{c}holds"})
+    return Experiment(
+        "E139", "2-D push (MuJoCo) under the pyramidal friction cone over redrawn truth sets (the cone and the truths "
+        "the paper does not report, at once)", keys,
+        "E95's {t:g} pool truths with their stored Probe-Robust(5) actions and the frozen blind actions re-executed "
+        "under the pyramidal cone (probes read the same under both cones to {pm:.5f} m, the elliptic re-execution "
+        "gives the stored misses to {rm:.1e} m: premise {ok:g} = holds); over {d:g} three-truth redraws from the pool "
+        "Blind-Bayes spans {blo:.3f} to {bhi:.3f} (inside: {bin:g}), Blind-Robust {rlo:.3f} to {rhi:.3f} "
+        "({rin:g}), Probe-Robust(5) {plo:.3f} to {phi:.3f} ({pin:g}) and Probe-Robust / Blind-Robust {qlo:.2f} to "
+        "{qhi:.2f} against the paper's {qp:.2f} ({qin:g}); under our elliptic cone Probe-Robust(5) spans {elo:.3f} "
+        "to {ehi:.3f} (paper's inside: {ein:g}) and the ratio {eqlo:.2f} to {eqhi:.2f}. All hold: {holds:g} = yes.",
+        supports=lambda v: v["holds"] == 1 and v["ok"] == 1)
+
+
 for _experiment in (_experiments() + _experiments_more() + _experiments_ex3() + _experiments_ex4()
                     + _experiments_ex5() + _experiments_ex6() + _experiments_ex7()
                     + _experiments_ex8() + _experiments_ex9()
                     + _experiments_ex10() + _experiments_ex11() + _experiments_ex12() + _experiments_ex13()
                     + _experiments_ex14() + _experiments_ex15() + _experiments_ex16()
-                    + _experiments_ex17()):
+                    + _experiments_ex17() + _experiments_ex19()):
     EXPERIMENTS[_experiment.number] = _experiment
 
 

@@ -34,6 +34,7 @@ from probecommit.studies.explain import ex13
 from probecommit.studies.explain import ex14
 from probecommit.studies.explain import ex16
 from probecommit.studies.explain import ex17
+from probecommit.studies.explain import ex19
 from probecommit.studies.explain import ex12_distinct, ex12_simultaneous
 from probecommit.studies.explain import ex15_readings, ex15_union
 from probecommit.studies.explain import gru as gru_study
@@ -117,6 +118,7 @@ class Explain:
             *ex14.GROUPS,
             *ex16.GROUPS,
             *ex17.GROUPS,
+            *ex19.GROUPS,
             ex12_distinct.GROUP, ex12_simultaneous.GROUP,
             ex15_readings.GROUP, ex15_union.GROUP)}
         self.tables: dict[str, pd.DataFrame] = ReadDict(self.reads, "tables")
@@ -499,10 +501,12 @@ class Explain:
                  self.instance_generator, self.draws, self.boundary_fault, self.robust, physx_coverage, self.physx,
                  lambda: (self.ready and self.ready(), self.gru()), lambda: more.run(self),
                  lambda: ex15_union.run(self),
+                 lambda: ex19.run(self),  # E138 reads the prior sweep's darts runs (more.run)
                  lambda: ex4.run(self),
                  lambda: ex6.run(self, paper),
                  lambda: ex8.run(self), lambda: ex10.run(self, paper),
-                 self.aside(ex11.run), lambda: ex16.run(self), lambda: ex13.surprise(self, paper),
+                 self.aside(ex11.run, ex19.cone),  # E139 (ex19.cone) re-executes the pool ex11 runs
+                 lambda: ex16.run(self), lambda: ex13.surprise(self, paper),
                  lambda: ex14.run(self, paper),
                  lambda: ex17.band(self, paper, COVER_SCHEDULE[0]),
                  lambda: ex12_distinct.run(self)]
