@@ -428,7 +428,24 @@ class ProbeRobust:
         memo = {} if memo is None else memo
         if "retained" not in memo:
             memo["retained"] = self.retain(belief.particles, belief.weights, threshold, belief.z)
-        return self.choose(memo["retained"], context)
+        retained = memo["retained"]
+        swept = memo.get("margins", {}).get(float(self.model.margin))
+        if swept is not None:  # chosen already by a margin sweep of this set (decide_margins)
+            return Commitment(*swept, retained.mask, retained.lo, retained.hi)
+        return self.choose(retained, context)
+
+    def decide_margins(self, belief: Belief, threshold: float, margins: Sequence[float],
+                       context: np.ndarray | None = None, memo: dict | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`choose_margins` on the retained set :meth:`decide` keeps in ``memo``; each margin's
+        aims and scores are kept there too, so a later :meth:`decide` under one of those margins
+        (a calibration's commit at the model's margin beside its margin search) is not scored again:
+        ``choose_margins`` equals ``choose`` margin by margin (tested), so it is the same commitment."""
+        memo = {} if memo is None else memo
+        if "retained" not in memo:
+            memo["retained"] = self.retain(belief.particles, belief.weights, threshold, belief.z)
+        index, score = self.choose_margins(memo["retained"], margins, context)
+        memo["margins"] = {float(g): (index[m], score[m]) for m, g in enumerate(margins)}
+        return index, score
 
     def choose_margins(self, retained: RetainedSet, margins: Sequence[float],
                        context: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:

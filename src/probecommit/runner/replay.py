@@ -365,11 +365,13 @@ class RunBeliefs:
         """Beliefs of the episodes ``batch[rows]`` at every kept budget.
 
         With chosen budgets (``RunBeliefs.of(..., budgets=...)``) the trace keeps those only:
-        not the prior (k = 0), which only the blind methods read.
+        not the prior (k = 0), which only the blind methods read. Each budget's weights are kept
+        as the update computed them: every commit of the chunk reads them (``inference._belief_at``
+        keeps them for the chunk's commits anyway), so they are not exponentiated again.
         """
         budgets = self.config.probes.commit_budgets if self.kept_budgets is None else self.kept_budgets
         return build_trace(self.pfilter, self.batch.subset(rows), self.config.seed, budgets,
-                           keep_prior=self.kept_budgets is None)
+                           keep_weights=True, keep_prior=self.kept_budgets is None)
 
     def _whole_trace(self, chunk_instances: int = KEPT_TRACE_CHUNK_INSTANCES) -> BeliefTrace:
         """The trace of the whole run, computed ``chunk_instances`` instances at a time.
