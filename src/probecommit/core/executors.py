@@ -468,10 +468,12 @@ class ProbeRobust:
         for (_, mask), (centre, half) in zip(retained.blocks(), parts):
             successes = successes + self.kernels.margin_success_counts(centre, half, np.asarray(margins), mask, grid)
             kept = kept + mask.sum(axis=-1)
-        # As retained_scores: integer failures over the retained count, then select_action per margin.
+        # As retained_scores: integer failures over the retained count, then select_action per margin
+        # (every margin's rows in one call: its steps are row by row, so the same choice as margin by margin).
         scores = (kept[None, :, None] - successes) / np.maximum(kept, 1)[None, :, None]
-        index = np.stack([select_action(scores[m], model.tie_break_cost(model.action_grid, retained.reference, context))
-                          for m, model in enumerate(models)])
+        ties = np.stack([model.tie_break_cost(model.action_grid, retained.reference, context) for model in models])
+        index = select_action(scores.reshape(-1, scores.shape[-1]), ties.reshape(-1, ties.shape[-1]))
+        index = index.reshape(scores.shape[:2])
         return index, np.take_along_axis(scores, index[:, :, None], axis=2)[:, :, 0]
 
     def act(self, particles: np.ndarray, weights: np.ndarray, threshold: float,
