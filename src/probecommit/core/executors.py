@@ -106,6 +106,20 @@ def margin_success_counts(centre: np.ndarray, half: np.ndarray, margins: np.ndar
     return np.stack([scaled_interval_success_counts(centre, half, float(g), mask, actions) for g in margins])
 
 
+def margin_choices(successes: np.ndarray, kept: np.ndarray, ties: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Every margin's action and its score from its success counts: ``(index [M, E], score [M, E])``.
+
+    ``successes[M, E, A]``: retained scenarios under which each action succeeds at each margin;
+    ``kept[E]``: the retained count; ``ties[M, E, A]``: each margin's tie-break costs. The score is
+    the failure fraction ``(kept - successes) / max(kept, 1)`` (as :func:`retained_scores` makes it)
+    and the action :func:`select_action`'s, margin by margin (its steps are row by row, so every
+    margin's rows go in one call).
+    """
+    scores = (kept[None, :, None] - successes) / np.maximum(kept, 1)[None, :, None]
+    index = select_action(scores.reshape(-1, scores.shape[-1]), ties.reshape(-1, ties.shape[-1])).reshape(scores.shape[:2])
+    return index, np.take_along_axis(scores, index[:, :, None], axis=2)[:, :, 0]
+
+
 @dataclass(frozen=True)
 class SetKernels:
     """The set executors' hot steps, injected into :class:`ProbeRobust`: the NumPy definitions by
@@ -123,6 +137,8 @@ class SetKernels:
     affine_interval_success_counts: Callable[..., tuple[np.ndarray, np.ndarray]] | None = None
     #: ``(centre, half, margins[M], mask, actions) -> [M, E, A]``: a margin search's counts.
     margin_success_counts: Callable[..., np.ndarray] = margin_success_counts
+    #: ``(successes[M, E, A], kept[E], ties[M, E, A]) -> (index, score)``: a margin search's choices.
+    margin_choices: Callable[..., tuple[np.ndarray, np.ndarray]] = margin_choices
 
 
 #: The NumPy reference.
@@ -468,13 +484,9 @@ class ProbeRobust:
         for (_, mask), (centre, half) in zip(retained.blocks(), parts):
             successes = successes + self.kernels.margin_success_counts(centre, half, np.asarray(margins), mask, grid)
             kept = kept + mask.sum(axis=-1)
-        # As retained_scores: integer failures over the retained count, then select_action per margin
-        # (every margin's rows in one call: its steps are row by row, so the same choice as margin by margin).
-        scores = (kept[None, :, None] - successes) / np.maximum(kept, 1)[None, :, None]
+        # As retained_scores: integer failures over the retained count, then select_action per margin.
         ties = np.stack([model.tie_break_cost(model.action_grid, retained.reference, context) for model in models])
-        index = select_action(scores.reshape(-1, scores.shape[-1]), ties.reshape(-1, ties.shape[-1]))
-        index = index.reshape(scores.shape[:2])
-        return index, np.take_along_axis(scores, index[:, :, None], axis=2)[:, :, 0]
+        return self.kernels.margin_choices(successes, kept, ties)
 
     def act(self, particles: np.ndarray, weights: np.ndarray, threshold: float,
             context: np.ndarray | None = None) -> Commitment:
