@@ -97,9 +97,15 @@ def commit_in_threads(trace: BeliefTrace, model: Any, simulator: Any, executors:
 
 
 def in_threads(work: Callable[[int], None], items: Iterable[int], threads: int | None = None) -> None:
-    """``work(item)`` for every item, the items alternated over ``threads`` threads (default
-    :data:`COMMIT_THREADS`, one with a single CPU), this one among them; every thread is joined
-    before this returns, and the first error is raised here."""
+    """``work(item)`` for every item over ``threads`` threads (default :data:`COMMIT_THREADS`, one
+    with a single CPU), this one among them; every thread is joined before this returns, and the
+    first error is raised here (no item is started after it).
+
+    Each thread takes the next item not yet taken, in order, when it is free: items of unequal
+    cost (a chunk's plain and grown sets, a summary's bootstraps) keep both CPUs busy, where a
+    fixed share of the items each left one thread idle at the end. ``work`` writes its item's own
+    result, so the results do not depend on which thread ran an item.
+    """
     from probecommit.tasks.base import engine_threads
 
     items = list(items)
@@ -109,20 +115,26 @@ def in_threads(work: Callable[[int], None], items: Iterable[int], threads: int |
             work(item)
         return
     errors: list[BaseException] = []
+    upcoming = iter(items)
+    lock = threading.Lock()
+    done = object()
 
-    def run(share: list[int]) -> None:
-        try:
-            for item in share:
+    def run() -> None:
+        while not errors:
+            with lock:
+                item = next(upcoming, done)
+            if item is done:
+                return
+            try:
                 work(item)
-        except BaseException as exc:  # noqa: BLE001 - raised again in the calling thread
-            errors.append(exc)
+            except BaseException as exc:  # noqa: BLE001 - raised again in the calling thread
+                errors.append(exc)
 
-    helpers = [threading.Thread(target=run, args=(items[i::threads],), name="probecommit-commit")
-               for i in range(1, threads)]
+    helpers = [threading.Thread(target=run, name="probecommit-commit") for _ in range(1, threads)]
     for thread in helpers:
         thread.start()
     try:
-        run(items[0::threads])
+        run()
     finally:
         for thread in helpers:
             thread.join()
