@@ -114,6 +114,30 @@ def test_margin_counts_are_every_margins_scaled_counts_exactly(margins, grid):
     np.testing.assert_array_equal(fast_executors.margin_counts(x, w, margins, mask, grid), expected)
 
 
+def test_margin_choices_are_select_action_of_each_margins_scores_exactly():
+    """Every margin's action and score from its counts: the same as the reference's scores and
+    ``select_action``, with ties within the tolerance, equal scores of unequal tie costs, an empty
+    retained set, NaN and infinite tie costs, and a row of scores that differ by less than the tolerance."""
+    rng = np.random.default_rng(9)
+    m, e, a = 7, 60, 41
+    kept = rng.integers(0, 40, e)
+    kept[:3] = [0, 1, 10**12 + 1]
+    successes = (rng.random((m, e, a)) * (kept[None, :, None] + 1)).astype(np.int64)
+    successes[:, :, ::5] = successes[:, :, :1]  # equal scores: the tie costs decide
+    ties = np.round(rng.uniform(0, 5, (m, e, a)) * 2) / 2  # tied costs too: the first index decides
+    ties[0, 5, 3], ties[1, 6, :] = np.nan, np.nan
+    ties[2, 7, :], ties[3, 8, 10:] = np.inf, -np.inf
+    successes[4, 2, :] = 10**12 + 1 - np.arange(a)  # scores 1e-12 apart: within the tolerance of the best
+    index, score = fast_executors.margin_choices(successes, kept, ties)
+    want_index, want_score = executors.margin_choices(successes, kept, ties)
+    np.testing.assert_array_equal(index, want_index)
+    np.testing.assert_array_equal(score, want_score)
+    assert index.dtype == want_index.dtype and score.dtype == want_score.dtype
+    scores = (kept[None, :, None] - successes) / np.maximum(kept, 1)[None, :, None]
+    for g in range(m):  # the reference is select_action margin by margin
+        np.testing.assert_array_equal(want_index[g], executors.select_action(scores[g], ties[g]))
+
+
 @pytest.mark.parametrize("name", list(CASES))
 @pytest.mark.parametrize("nu", [0.05, 0.8, 1.0, 1.5, "per-row"])
 def test_retained_summary_sets_are_exact_and_references_within_tolerance(name, nu):

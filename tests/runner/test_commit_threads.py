@@ -65,6 +65,22 @@ def test_an_error_in_the_helper_thread_is_raised_here():
         in_threads(work, range(4))
 
 
+def test_a_free_thread_takes_the_next_item(monkeypatch):
+    """Items go to whichever thread is free, in order: while one thread runs a long item, the
+    other runs every short one (a fixed share would leave half of them waiting behind it)."""
+    monkeypatch.setenv("PROBECOMMIT_ENGINE_THREADS", "2")
+    ran: dict[int, str] = {}
+
+    def work(item):
+        ran[item] = threading.current_thread().name
+        if item == 0:
+            threading.Event().wait(0.5)
+
+    in_threads(work, range(6))
+    assert sorted(ran) == list(range(6))
+    assert {ran[item] for item in range(1, 6)} == {ran[1]} != {ran[0]}
+
+
 def test_the_locked_simulator_runs_one_engine_call_at_a_time():
     inside, most = [0], [0]
 

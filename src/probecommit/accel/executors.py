@@ -12,7 +12,7 @@ import numpy as np
 
 from probecommit.accel.compiled import helper, kernel
 from probecommit.accel.retained import retained_summary
-from probecommit.core.executors import SetKernels, margin_success_counts
+from probecommit.core.executors import SCORE_TIE_TOLERANCE, SetKernels, margin_success_counts
 
 
 @helper(inline=True)
@@ -191,6 +191,46 @@ def _margin_counts(centre, half, margins, mask, actions):  # pragma: no cover - 
     return out
 
 
+@kernel("Tuple((i8[:, ::1], f8[:, ::1]))(i8[:, :, ::1], i8[::1], f8[:, :, ::1], f8)")
+def _margin_choices(successes, kept, ties, tolerance):  # pragma: no cover - compiled
+    """``core.executors.margin_choices`` row by row: the failure fraction of each action, then
+    ``select_action``'s steps (the row's minimum, NaN if any; the actions within ``tolerance`` of it;
+    the first least tie cost among them, the others at infinity, the first NaN if any)."""
+    n_m, n_e, n_a = successes.shape
+    index = np.zeros((n_m, n_e), dtype=np.int64)
+    score = np.empty((n_m, n_e))
+    row = np.empty(n_a)
+    for m in range(n_m):
+        for e in range(n_e):
+            total = kept[e]
+            count = np.float64(total if total > 1 else 1)
+            best = np.inf
+            for a in range(n_a):
+                row[a] = np.float64(total - successes[m, e, a]) / count
+                if best == best and (row[a] < best or row[a] != row[a]):
+                    best = row[a]
+            limit = best + tolerance
+            chosen = 0
+            least = ties[m, e, 0] if row[0] <= limit else np.inf
+            if least == least:
+                for a in range(1, n_a):
+                    cost = ties[m, e, a] if row[a] <= limit else np.inf
+                    if cost != cost:
+                        chosen = a
+                        break
+                    if cost < least:
+                        least, chosen = cost, a
+            index[m, e] = chosen
+            score[m, e] = row[chosen]
+    return index, score
+
+
+def margin_choices(successes: np.ndarray, kept: np.ndarray, ties: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``core.executors.margin_choices``, compiled: no ``[M, E, A]`` scores, masks or costs formed."""
+    return _margin_choices(np.ascontiguousarray(successes, dtype=np.int64), np.ascontiguousarray(kept, dtype=np.int64),
+                           np.ascontiguousarray(ties, dtype=np.float64), SCORE_TIE_TOLERANCE)
+
+
 def _grid(actions: np.ndarray) -> np.ndarray:
     return np.ascontiguousarray(actions, dtype=np.float64).reshape(-1)
 
@@ -237,4 +277,4 @@ def margin_counts(centre: np.ndarray, half: np.ndarray, margins: np.ndarray, mas
 #: The set executors' compiled kernels (``ProbeRobust(kernels=KERNELS)``).
 KERNELS = SetKernels(retained_summary=retained_summary, interval_success_counts=interval_counts,
                      scaled_interval_success_counts=scaled_counts, affine_interval_success_counts=affine_counts,
-                     margin_success_counts=margin_counts)
+                     margin_success_counts=margin_counts, margin_choices=margin_choices)

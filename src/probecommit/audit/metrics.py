@@ -62,28 +62,35 @@ def instance_sums(episodes: pd.DataFrame) -> tuple[pd.DataFrame, pd.DataFrame]:
     values = {name: episodes[name].to_numpy(bool).astype(float) for name in ("covered", "escaped")}
     values |= {name: episodes[name].to_numpy(float) for name in ("realized", "predicted")}
     repeat = episodes["repeat"].to_numpy()
-    parts = []
+    gkeys, parts = [], []
     # Positions of each group's rows, in table order (groupby's indices keep it).
     for gkey, pos in (episodes.groupby(keys).indices.items() if len(episodes) else ()):
-        gkey = gkey if isinstance(gkey, tuple) else (gkey,)
         names, idx = np.unique(ids[pos], return_inverse=True)
         fk = failed[pos]
         ok, oi, m = pos[~fk], idx[~fk], names.size
-
-        def total(column: str) -> np.ndarray:
-            return np.bincount(oi, weights=values[column][ok], minlength=m)
-
-        n_repeats = np.zeros(m, np.int64)
-        if ok.size:
-            per_instance = pd.Series(repeat[ok]).groupby(oi).nunique()
-            n_repeats[per_instance.index.to_numpy()] = per_instance.to_numpy()
-        parts.append(pd.DataFrame({**dict(zip(keys, gkey)), "instance_id": names,
-                                   "n": np.bincount(oi, minlength=m).astype(float),
-                                   **{column: total(column) for column in values},
-                                   "n_repeats": n_repeats, "n_failed": np.bincount(idx[fk], minlength=m)}))
+        gkeys.append(gkey if isinstance(gkey, tuple) else (gkey,))
+        parts.append({"instance_id": names, "n": np.bincount(oi, minlength=m).astype(float),
+                      **{column: np.bincount(oi, weights=values[column][ok], minlength=m) for column in values},
+                      "n_repeats": _distinct_counts(oi, repeat[ok], m), "n_failed": np.bincount(idx[fk], minlength=m)})
     columns = keys + ["instance_id", *SUM_COLUMNS]
-    sums = pd.concat(parts, ignore_index=True) if parts else pd.DataFrame(columns=columns)
+    if not parts:
+        sums = pd.DataFrame(columns=columns)
+    else:  # one frame of every group's rows, as the groups' own frames concatenated would be
+        sizes = [part["instance_id"].size for part in parts]
+        sums = pd.DataFrame({**{key: np.repeat(np.asarray([g[j] for g in gkeys]), sizes) for j, key in enumerate(keys)},
+                             **{name: np.concatenate([part[name] for part in parts]) for name in parts[0]}})
     return sums[columns], episodes.loc[failed, keys + ["instance_id", "repeat"]].reset_index(drop=True)
+
+
+def _distinct_counts(group: np.ndarray, values: np.ndarray, m: int) -> np.ndarray:
+    """How many distinct ``values`` (NaN not counted) each group ``0..m-1`` has (``int64 [m]``)."""
+    if values.dtype.kind == "f":
+        group, values = group[~np.isnan(values)], values[~np.isnan(values)]
+    order = np.lexsort((values, group))
+    group, values = group[order], values[order]
+    first = np.ones(group.size, dtype=bool)
+    first[1:] = (group[1:] != group[:-1]) | (values[1:] != values[:-1])
+    return np.bincount(group[first], minlength=m).astype(np.int64)
 
 
 def audit_table(episodes: pd.DataFrame, *, budgets=None, resamples: int = DEFAULT_RESAMPLES,

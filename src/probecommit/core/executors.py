@@ -106,6 +106,20 @@ def margin_success_counts(centre: np.ndarray, half: np.ndarray, margins: np.ndar
     return np.stack([scaled_interval_success_counts(centre, half, float(g), mask, actions) for g in margins])
 
 
+def margin_choices(successes: np.ndarray, kept: np.ndarray, ties: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Every margin's action and its score from its success counts: ``(index [M, E], score [M, E])``.
+
+    ``successes[M, E, A]``: retained scenarios under which each action succeeds at each margin;
+    ``kept[E]``: the retained count; ``ties[M, E, A]``: each margin's tie-break costs. The score is
+    the failure fraction ``(kept - successes) / max(kept, 1)`` (as :func:`retained_scores` makes it)
+    and the action :func:`select_action`'s, margin by margin (its steps are row by row, so every
+    margin's rows go in one call).
+    """
+    scores = (kept[None, :, None] - successes) / np.maximum(kept, 1)[None, :, None]
+    index = select_action(scores.reshape(-1, scores.shape[-1]), ties.reshape(-1, ties.shape[-1])).reshape(scores.shape[:2])
+    return index, np.take_along_axis(scores, index[:, :, None], axis=2)[:, :, 0]
+
+
 @dataclass(frozen=True)
 class SetKernels:
     """The set executors' hot steps, injected into :class:`ProbeRobust`: the NumPy definitions by
@@ -123,6 +137,8 @@ class SetKernels:
     affine_interval_success_counts: Callable[..., tuple[np.ndarray, np.ndarray]] | None = None
     #: ``(centre, half, margins[M], mask, actions) -> [M, E, A]``: a margin search's counts.
     margin_success_counts: Callable[..., np.ndarray] = margin_success_counts
+    #: ``(successes[M, E, A], kept[E], ties[M, E, A]) -> (index, score)``: a margin search's choices.
+    margin_choices: Callable[..., tuple[np.ndarray, np.ndarray]] = margin_choices
 
 
 #: The NumPy reference.
@@ -428,7 +444,24 @@ class ProbeRobust:
         memo = {} if memo is None else memo
         if "retained" not in memo:
             memo["retained"] = self.retain(belief.particles, belief.weights, threshold, belief.z)
-        return self.choose(memo["retained"], context)
+        retained = memo["retained"]
+        swept = memo.get("margins", {}).get(float(self.model.margin))
+        if swept is not None:  # chosen already by a margin sweep of this set (decide_margins)
+            return Commitment(*swept, retained.mask, retained.lo, retained.hi)
+        return self.choose(retained, context)
+
+    def decide_margins(self, belief: Belief, threshold: float, margins: Sequence[float],
+                       context: np.ndarray | None = None, memo: dict | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`choose_margins` on the retained set :meth:`decide` keeps in ``memo``; each margin's
+        aims and scores are kept there too, so a later :meth:`decide` under one of those margins
+        (a calibration's commit at the model's margin beside its margin search) is not scored again:
+        ``choose_margins`` equals ``choose`` margin by margin (tested), so it is the same commitment."""
+        memo = {} if memo is None else memo
+        if "retained" not in memo:
+            memo["retained"] = self.retain(belief.particles, belief.weights, threshold, belief.z)
+        index, score = self.choose_margins(memo["retained"], margins, context)
+        memo["margins"] = {float(g): (index[m], score[m]) for m, g in enumerate(margins)}
+        return index, score
 
     def choose_margins(self, retained: RetainedSet, margins: Sequence[float],
                        context: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
@@ -452,10 +485,8 @@ class ProbeRobust:
             successes = successes + self.kernels.margin_success_counts(centre, half, np.asarray(margins), mask, grid)
             kept = kept + mask.sum(axis=-1)
         # As retained_scores: integer failures over the retained count, then select_action per margin.
-        scores = (kept[None, :, None] - successes) / np.maximum(kept, 1)[None, :, None]
-        index = np.stack([select_action(scores[m], model.tie_break_cost(model.action_grid, retained.reference, context))
-                          for m, model in enumerate(models)])
-        return index, np.take_along_axis(scores, index[:, :, None], axis=2)[:, :, 0]
+        ties = np.stack([model.tie_break_cost(model.action_grid, retained.reference, context) for model in models])
+        return self.kernels.margin_choices(successes, kept, ties)
 
     def act(self, particles: np.ndarray, weights: np.ndarray, threshold: float,
             context: np.ndarray | None = None) -> Commitment:

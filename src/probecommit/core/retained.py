@@ -58,15 +58,28 @@ def masked_interval(z: np.ndarray, mask: np.ndarray) -> tuple[np.ndarray, np.nda
 def weighted_mean(z: np.ndarray, weights: np.ndarray, mask: np.ndarray | None = None) -> np.ndarray:
     """Weighted mean of ``z`` over ``mask`` (all particles if None) ``[E]``."""
     w = weights if mask is None else np.where(mask, weights, 0.0)
-    total = np.sum(w, axis=-1)
+    return _weighted_mean(z, w, np.sum(w, axis=-1), mask)
+
+
+def _weighted_mean(z: np.ndarray, w: np.ndarray, total: np.ndarray, mask: np.ndarray | None) -> np.ndarray:
+    """:func:`weighted_mean` from the masked weights ``w`` and their sum ``total`` (shared by every
+    latent of :func:`belief_reference`). The unweighted fallback is computed only for the rows that
+    need it (every row's value where one does: the same numbers as computing it always)."""
+    positive = total > 0
+    weighted = np.sum(w * z, axis=-1) / np.where(positive, total, 1.0)
+    if positive.all():
+        return weighted
     # A retained set of zero-weight particles only: fall back to the unweighted mean.
     plain = np.sum(np.where(mask, z, 0.0), axis=-1) / np.maximum(np.sum(mask, axis=-1), 1) if mask is not None else np.mean(z, axis=-1)
-    return np.where(total > 0, np.sum(w * z, axis=-1) / np.where(total > 0, total, 1.0), plain)
+    return np.where(positive, weighted, plain)
 
 
 def belief_reference(particles: np.ndarray, weights: np.ndarray, mask: np.ndarray | None = None) -> np.ndarray:
-    """Weighted mean of every latent over ``mask`` ``[E, d]``: the executors' tie-break reference."""
-    return np.stack([weighted_mean(particles[..., j], weights, mask) for j in range(particles.shape[-1])], axis=-1)
+    """Weighted mean of every latent over ``mask`` ``[E, d]``: the executors' tie-break reference
+    (the masked weights and their sum formed once for every latent)."""
+    w = weights if mask is None else np.where(mask, weights, 0.0)
+    total = np.sum(w, axis=-1)
+    return np.stack([_weighted_mean(particles[..., j], w, total, mask) for j in range(particles.shape[-1])], axis=-1)
 
 
 def retained_summary(weights: np.ndarray, nu: float | np.ndarray, z: np.ndarray,

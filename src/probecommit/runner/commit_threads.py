@@ -2,13 +2,13 @@
 
 Why: a calibration commits every budget of a chunk in turn (``runner.inference.commit``), and each
 budget's retained set, scores and belief summary depend only on that budget's beliefs. The
-compiled kernels and NumPy's large operations release the GIL, so two halves of the budgets
-committed in two threads use two CPUs where one thread left the second idle (the trace-ahead
-thread of ``RunBeliefs`` is busy only part of a pass). The table is the same bits: each half is
-``commit`` itself on the same trace and cache, with the thresholds of its budgets (a mapping
-``{k: t}`` commits exactly the budgets it names, as a float does every budget), and the halves'
-columns are interleaved back into the canonical row order (episode by episode, budgets inside)
-as ``commit`` interleaves its own. The simulator is shared behind a lock, so each engine query is
+compiled kernels and NumPy's large operations release the GIL, so the budgets committed in two
+threads (each budget by whichever thread is free) use two CPUs where one thread left the second
+idle (the trace-ahead thread of ``RunBeliefs`` is busy only part of a pass). The table is the same
+bits: each budget's part is ``commit`` itself on the same trace and cache, with the threshold of
+that budget (a mapping ``{k: t}`` commits exactly the budgets it names, as a float does every
+budget), and the parts' columns are interleaved back into the canonical row order (episode by
+episode, budgets inside) as ``commit`` interleaves its own. The simulator is shared behind a lock, so each engine query is
 asked and counted once, as in one thread; only which thread asks first may differ.
 """
 
@@ -29,7 +29,7 @@ COMMIT_THREADS = 2
 class LockedSimulator:
     """A simulator whose engine calls (``execute``, ``prefetch``, ``probe``) run one at a time.
 
-    Two threads committing halves of a chunk share its simulator; its answer cache and call
+    Two threads committing parts of a chunk share its simulator; its answer cache and call
     counts are plain Python state, so the calls that may ask the engine are serialized. Every
     other attribute is the simulator's own.
     """
@@ -53,9 +53,10 @@ class LockedSimulator:
 
 
 def _budget_groups(trace: BeliefTrace, executors: Sequence[Any], thresholds: Any) -> list[list[int]] | None:
-    """The budgets of each thread (plan positions alternated, so grown and plain sets spread
-    evenly), or None when one thread commits: fewer than two CPUs or budgets, or a blind executor
-    (its prior commit is not a budget of the thresholds)."""
+    """The budgets committed as one unit of work each (``in_threads`` gives each unit to whichever
+    thread is free, so a plain set's cheap budget and a grown set's dear one keep both CPUs busy),
+    or None when one thread commits: fewer than two CPUs or budgets, or a blind executor (its prior
+    commit is not a budget of the thresholds)."""
     from probecommit.tasks.base import engine_threads
 
     if engine_threads() < 2 or any(executor.on_prior for executor in executors):
@@ -63,7 +64,7 @@ def _budget_groups(trace: BeliefTrace, executors: Sequence[Any], thresholds: Any
     budgets = [k for _, k in _commit_plan(trace, executors, thresholds)]
     if len(executors) != 1 or len(budgets) < 2:
         return None
-    return [budgets[i::COMMIT_THREADS] for i in range(COMMIT_THREADS)]
+    return [[k] for k in budgets]
 
 
 def commit_in_threads(trace: BeliefTrace, model: Any, simulator: Any, executors: Sequence[Any],
@@ -82,14 +83,14 @@ def commit_in_threads(trace: BeliefTrace, model: Any, simulator: Any, executors:
         return commit(trace, model, simulator, executors, thresholds, margin, cache, columns)
     shared = LockedSimulator(simulator)
 
-    def half(budgets: list[int]) -> dict[str, Any]:
+    def part(budgets: list[int]) -> dict[str, Any]:
         mine = {k: (thresholds[k] if isinstance(thresholds, Mapping) else thresholds) for k in budgets}
         return commit(trace, model, shared, executors, mine, margin, cache, columns, as_columns=True)
 
     parts: list[Any] = [None] * len(groups)
 
     def run(i: int) -> None:
-        parts[i] = half(groups[i])
+        parts[i] = part(groups[i])
 
     in_threads(run, range(len(groups)), COMMIT_THREADS)
     return pd.DataFrame(_interleave(parts, groups, [k for _, k in _commit_plan(trace, executors, thresholds)],
@@ -97,9 +98,15 @@ def commit_in_threads(trace: BeliefTrace, model: Any, simulator: Any, executors:
 
 
 def in_threads(work: Callable[[int], None], items: Iterable[int], threads: int | None = None) -> None:
-    """``work(item)`` for every item, the items alternated over ``threads`` threads (default
-    :data:`COMMIT_THREADS`, one with a single CPU), this one among them; every thread is joined
-    before this returns, and the first error is raised here."""
+    """``work(item)`` for every item over ``threads`` threads (default :data:`COMMIT_THREADS`, one
+    with a single CPU), this one among them; every thread is joined before this returns, and the
+    first error is raised here (no item is started after it).
+
+    Each thread takes the next item not yet taken, in order, when it is free: items of unequal
+    cost (a chunk's plain and grown sets, a summary's bootstraps) keep both CPUs busy, where a
+    fixed share of the items each left one thread idle at the end. ``work`` writes its item's own
+    result, so the results do not depend on which thread ran an item.
+    """
     from probecommit.tasks.base import engine_threads
 
     items = list(items)
@@ -109,20 +116,26 @@ def in_threads(work: Callable[[int], None], items: Iterable[int], threads: int |
             work(item)
         return
     errors: list[BaseException] = []
+    upcoming = iter(items)
+    lock = threading.Lock()
+    done = object()
 
-    def run(share: list[int]) -> None:
-        try:
-            for item in share:
+    def run() -> None:
+        while not errors:
+            with lock:
+                item = next(upcoming, done)
+            if item is done:
+                return
+            try:
                 work(item)
-        except BaseException as exc:  # noqa: BLE001 - raised again in the calling thread
-            errors.append(exc)
+            except BaseException as exc:  # noqa: BLE001 - raised again in the calling thread
+                errors.append(exc)
 
-    helpers = [threading.Thread(target=run, args=(items[i::threads],), name="probecommit-commit")
-               for i in range(1, threads)]
+    helpers = [threading.Thread(target=run, name="probecommit-commit") for _ in range(1, threads)]
     for thread in helpers:
         thread.start()
     try:
-        run(items[0::threads])
+        run()
     finally:
         for thread in helpers:
             thread.join()

@@ -6,7 +6,7 @@ Margin by margin, each evaluation recomputed what does not depend on the margin:
 several chunks recomputed its beliefs for every few margins (``MARGIN_BLOCK_ROWS``), and every
 margin counted the retained scenarios again. Here the beliefs and retained sets of a chunk are
 made once, every margin's choice comes from one count of the scenarios
-(``ProbeRobust.choose_margins``), and the aims of every margin are executed together, one engine
+(``ProbeRobust.decide_margins``), and the aims of every margin are executed together, one engine
 query per distinct (instance, aim) as ``runner.inference._execute`` makes them.
 
 :func:`sweep_margins` has ``runner.inference.commit``'s calling convention, so a run's chunk
@@ -23,6 +23,7 @@ from typing import Any, Mapping, Sequence
 
 import numpy as np
 
+from probecommit.core.executors import Belief
 from probecommit.runner.commit_threads import in_threads
 from probecommit.runner.inference import BeliefTrace, _belief_at, _commit_plan, _execute, commit
 
@@ -110,7 +111,7 @@ def sweep_margins(trace: BeliefTrace, model: Any, simulator: Any, *, executors: 
         trace: Beliefs per budget (one chunk of a run).
         model: The model; margin ``gamma`` scores with ``model.with_margin(gamma)``.
         simulator: Ground truth (``execute``, one query per distinct action).
-        executors: The injected executors (set executors with ``choose_margins`` sweep; any
+        executors: The injected executors (set executors with ``decide_margins`` sweep; any
             other commits margin by margin).
         thresholds: The set calibration (a float for every budget or ``{k: t_k}``).
         margins: The margins, largest first.
@@ -125,7 +126,7 @@ def sweep_margins(trace: BeliefTrace, model: Any, simulator: Any, *, executors: 
     cache = {} if cache is None else cache
     margins = [float(g) for g in margins]
     plan = _commit_plan(trace, executors, thresholds)
-    if not all(hasattr(executor, "choose_margins") for executor, _ in plan):
+    if not all(hasattr(executor, "decide_margins") for executor, _ in plan):
         wanted = ("k", "status", "predicted", "realized")
         tables = [commit(trace, model, simulator, executors, thresholds, g, cache, wanted) for g in margins]
         return SweptChunk(margins, np.empty(0, np.int64), np.empty((0, 0)), np.empty((0, 0)), tables=tables)
@@ -139,11 +140,10 @@ def sweep_margins(trace: BeliefTrace, model: Any, simulator: Any, *, executors: 
 
     def choose(p: int) -> None:
         (executor, k), memo = plan[p], memos[p]
-        if "retained" not in memo:  # as executor.decide keeps it, from the belief commit() reads (weights, z)
-            belief = _belief_at(trace, model, k, cache)
-            t = float(thresholds[k] if isinstance(thresholds, Mapping) else thresholds)
-            memo["retained"] = executor.retain(trace.states[k].particles, belief["weights"], t, belief["z"])
-        index[:, :, p], predicted[:, :, p] = executor.choose_margins(memo["retained"], margins, context)
+        belief = _belief_at(trace, model, k, cache)  # the belief commit() reads (weights, z)
+        t = float(thresholds[k] if isinstance(thresholds, Mapping) else thresholds)
+        index[:, :, p], predicted[:, :, p] = executor.decide_margins(
+            Belief(trace.states[k].particles, belief["weights"], belief["z"]), t, margins, context, memo)
 
     in_threads(choose, range(len(plan)))
     grid = np.asarray(model.action_grid, dtype=float).reshape(len(model.action_grid), -1)

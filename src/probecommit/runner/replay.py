@@ -361,15 +361,18 @@ class RunBeliefs:
             simulator, answers = simulator_for_run(loaded, config), None
         return cls(config, model, simulator, build_filter(model, config.belief), batch, chunks, kept, answers)
 
-    def trace(self, rows: slice) -> BeliefTrace:
+    def trace(self, rows: slice, keep_weights: bool = False) -> BeliefTrace:
         """Beliefs of the episodes ``batch[rows]`` at every kept budget.
 
         With chosen budgets (``RunBeliefs.of(..., budgets=...)``) the trace keeps those only:
-        not the prior (k = 0), which only the blind methods read.
+        not the prior (k = 0), which only the blind methods read. ``keep_weights``: each budget's
+        weights as the update computed them, for a chunk about to be committed (every commit
+        reads them, and ``inference._belief_at`` keeps them for the chunk's commits anyway), so
+        they are not exponentiated again; a trace held for other uses does not carry them.
         """
         budgets = self.config.probes.commit_budgets if self.kept_budgets is None else self.kept_budgets
         return build_trace(self.pfilter, self.batch.subset(rows), self.config.seed, budgets,
-                           keep_prior=self.kept_budgets is None)
+                           keep_weights=keep_weights, keep_prior=self.kept_budgets is None)
 
     def _whole_trace(self, chunk_instances: int = KEPT_TRACE_CHUNK_INSTANCES) -> BeliefTrace:
         """The trace of the whole run, computed ``chunk_instances`` instances at a time.
@@ -506,12 +509,12 @@ class RunBeliefs:
 
         chunks = list(self.chunks)
         with ThreadPoolExecutor(max_workers=1, thread_name_prefix="probecommit-trace") as pool:
-            ahead = {0: pool.submit(self.trace, chunks[0])}
+            ahead = {0: pool.submit(self.trace, chunks[0], True)}
 
             def upcoming(i: int) -> BeliefTrace:
                 trace = ahead.pop(i).result()
                 if i + 1 < len(chunks):
-                    ahead[i + 1] = pool.submit(self.trace, chunks[i + 1])
+                    ahead[i + 1] = pool.submit(self.trace, chunks[i + 1], True)
                 return trace
 
             try:
@@ -528,7 +531,7 @@ class RunBeliefs:
         if self._kept is not None:
             trace, cache = self._kept
         else:
-            trace, cache = (self.trace(rows) if trace is None else trace), {}
+            trace, cache = (self.trace(rows, keep_weights=True) if trace is None else trace), {}
             if not several and not final:
                 self._kept = trace, cache
         if final:
