@@ -863,6 +863,8 @@ EXPLAIN_EX12_SIM = "ex12_simultaneous_rows.parquet"
 EXPLAIN_EX15 = "ex15_readings_rows.parquet"
 #: ex15's stored rows (``studies.explain.ex15_union.STORED``: E119's re-splits of the literal Split B pool).
 EXPLAIN_EX15_UNION = "ex15_union_rows.parquet"
+#: ex18's stored rows (``studies.explain.ex18_share.STORED``: E132's per-split optimistic readings of two pools).
+EXPLAIN_EX18_SHARE = "ex18_share_rows.parquet"
 #: ex7's stored rows (``studies.explain.ex7.STORED``: the fault surprise rows and the fresh draws).
 EXPLAIN_EX7 = ("ex7_fault_surprise.parquet", "ex7_dev_draws.parquet", "ex7_harness_draws.parquet")
 
@@ -873,7 +875,8 @@ STORED_SUMMARIES = (("mixture_noise", EXPLAIN_MIXTURE, "mixture_x"),
                     ("ex12_distinct", EXPLAIN_EX12, "ex12_distinct"),
                     ("ex12_simultaneous", EXPLAIN_EX12_SIM, "ex12_simultaneous"),
                     ("ex15_readings", EXPLAIN_EX15, "ex15_readings"),
-                    ("ex15_union", EXPLAIN_EX15_UNION, "ex15_union"))
+                    ("ex15_union", EXPLAIN_EX15_UNION, "ex15_union"),
+                    ("ex18_share", EXPLAIN_EX18_SHARE, "ex18_share"))
 
 #: Explain modules that recompute their own groups: ``recompute(folder, results)`` gives
 #: ``(values, sources, problems)`` (a group published without its stored rows is a problem).

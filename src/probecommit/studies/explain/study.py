@@ -34,6 +34,7 @@ from probecommit.studies.explain import ex14
 from probecommit.studies.explain import ex16
 from probecommit.studies.explain import ex12_distinct, ex12_simultaneous
 from probecommit.studies.explain import ex15_readings, ex15_union
+from probecommit.studies.explain import ex18_share
 from probecommit.studies.explain import gru as gru_study
 from probecommit.studies.explain.margin import margin_curve
 from probecommit.studies.paper_values import PRINTED
@@ -113,7 +114,8 @@ class Explain:
             *ex14.GROUPS,
             *ex16.GROUPS,
             ex12_distinct.GROUP, ex12_simultaneous.GROUP,
-            ex15_readings.GROUP, ex15_union.GROUP)}
+            ex15_readings.GROUP, ex15_union.GROUP,
+            ex18_share.GROUP)}
         self.tables: dict[str, pd.DataFrame] = {}
         #: Stored rows written beside results.json as they are, by file name (``more``'s steps).
         self.stored: dict[str, pd.DataFrame] = {}
@@ -493,7 +495,8 @@ class Explain:
                  lambda: ex8.run(self), lambda: ex10.run(self, paper),
                  self.aside(ex11.run), lambda: ex16.run(self), lambda: ex13.surprise(self, paper),
                  lambda: ex14.run(self, paper),
-                 lambda: ex12_distinct.run(self)]
+                 lambda: ex12_distinct.run(self),
+                 lambda: ex18_share.run(self)]  # last: it waits for E118's and E119's rows
         try:
             for i, step in enumerate(steps):
                 self.progress("explain", i, len(steps))
