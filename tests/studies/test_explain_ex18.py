@@ -81,3 +81,72 @@ def test_t14_names_e132_for_its_three_failing_comparisons():
     named = {number: labels for number, labels in t14.explain}
     assert named["E132"] == ("level mean", "held-out cluster coverage", "margin optimistic")
     assert "E132" in claims.EXPERIMENTS
+
+
+def test_force_ceiling_cuts_both_grids_and_restores_them():
+    from probecommit.studies.explain import ex18_grasp
+    from probecommit.tasks.grasp.model import ACTION_FORCES, GraspModel
+
+    frozen_actions, frozen_probes = GraspModel.action_grid.copy(), GraspModel.probe_grid.copy()
+    with ex18_grasp.force_ceiling(2.0):
+        assert GraspModel.probe_grid.ravel().tolist() == [0.25, 0.5, 1.0, 2.0]
+        assert GraspModel.action_grid.max() <= 2.0 and GraspModel.action_grid[0, 0] == ACTION_FORCES[0]
+        assert len(GraspModel.action_grid) == int(np.sum(ACTION_FORCES <= 2.0))
+    assert np.array_equal(GraspModel.action_grid, frozen_actions) and np.array_equal(GraspModel.probe_grid, frozen_probes)
+    try:
+        with ex18_grasp.force_ceiling(3.0):
+            raise RuntimeError("inside")
+    except RuntimeError:
+        pass
+    assert np.array_equal(GraspModel.action_grid, frozen_actions)  # restored when the block fails too
+    assert ex18_grasp.label(2.5) == "cap25" and ex18_grasp.label(5.0) == "cap50"
+    assert [ex18_grasp.label(c) for c in ex18_grasp.CEILINGS] == list(claims.EX18_CEILINGS)
+
+
+def _truth_rows(successes: dict[str, tuple[float, float]], ceiling: float, infeasible: int = 0) -> pd.DataFrame:
+    """Rows as ``breadth.truth_rows`` gives them: per truth, Blind-Bayes and Probe-Robust(8) success over 4 seeds."""
+    rows = []
+    for n, (truth, (blind, probe)) in enumerate(successes.items()):
+        for rep in range(4):
+            rows.append({"instance_id": f"i{n}", "repeat": rep, "method": "blind_bayes", "k": 0, "status": "ok",
+                         "realized": 1.0 - blind, "feasible": True, "truth": truth})
+            rows.append({"instance_id": f"i{n}", "repeat": rep, "method": "probe_robust", "k": 8, "status": "ok",
+                         "realized": float(rep >= 4 * probe), "feasible": True, "truth": truth})
+    for j in range(infeasible):
+        rows.append({"instance_id": f"x{j}", "repeat": 0, "method": "blind_bayes", "k": 0, "status": "ok",
+                     "realized": 1.0, "feasible": False, "truth": f"x{j}"})
+    return pd.DataFrame(rows).assign(ceiling=ceiling)
+
+
+def test_grasp_summary_counts_signs_per_ceiling():
+    from probecommit.studies.explain import ex18_grasp
+
+    rows = pd.concat([_truth_rows({"a": (0.0, 0.75), "b": (1.0, 1.0), "c": (1.0, 0.5)}, 2.0, infeasible=2),
+                      _truth_rows({"a": (0.0, 1.0)}, 5.0)], ignore_index=True)
+    got = ex18_grasp.summary(rows)
+    assert got["cap20.ceiling"] == 2.0 and got["cap20.n_feasible"] == 3 and got["cap20.n_instances"] == 5
+    assert (got["cap20.n_improve"], got["cap20.n_tie"], got["cap20.n_worse"]) == (1, 1, 1)
+    assert got["cap20.improve_max"] == 0.75 and got["cap20.worst_difference"] == -0.5
+    assert (got["cap50.n_feasible"], got["cap50.n_improve"], got["cap50.n_worse"]) == (1, 1, 0)
+
+
+def _caps(**over: tuple[int, int]) -> dict[str, float]:
+    v: dict[str, float] = {}
+    for c in claims.EX18_CEILINGS:
+        f, w = over.get(c, (13, 3))
+        v.update({f"{c}f": f, f"{c}w": w})
+    return v
+
+
+def test_e133_needs_six_give_or_take_one_feasible_and_no_worsening_at_one_ceiling():
+    assert not claims._ex18_grasp_holds(_caps())
+    assert not claims._ex18_grasp_holds(_caps(cap20=(5, 1), cap25=(7, 2)))  # E133's full-data outcome
+    assert claims._ex18_grasp_holds(_caps(cap20=(5, 0)))
+    assert claims._ex18_grasp_holds(_caps(cap25=(7, 0)))
+    assert not claims._ex18_grasp_holds(_caps(cap30=(8, 0)))  # no worsening, but eight feasible
+    assert not claims._ex18_grasp_holds(_caps(cap20=(5, 1), cap30=(8, 0)))  # the two conditions at one ceiling
+
+
+def test_t09_names_e133():
+    t09 = next(c for c in claims.CLAIMS if c.id == "T09-grasp")
+    assert "E133" in t09.explain and "E133" in claims.EXPERIMENTS

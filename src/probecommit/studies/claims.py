@@ -540,7 +540,7 @@ def _claims_instances_and_comparisons() -> list[Claim]:
                      {"up": "breadth:results.sign_flip_over_truths.grasp.n_improve",
                       "down": "breadth:results.sign_flip_over_truths.grasp.n_worse",
                       "n": "breadth:results.sign_flip_over_truths.grasp.n_feasible"},
-                     lambda v: v["down"] == 0 and 2 * v["up"] == v["n"]),), explain=("E47", "E49", "E73")))
+                     lambda v: v["down"] == 0 and 2 * v["up"] == v["n"]),), explain=("E47", "E49", "E73", "E133")))
     add(Claim("T10-gru", "Sec. V-A, Comparisons", "GRU matches the pipeline within the pre-registered equivalence margin",
               (Holds("equivalent", "difference's interval inside the margin", {"eq": "gru:results.equivalent"},
                      lambda v: bool(v["eq"])),
@@ -1928,7 +1928,39 @@ def _experiments_ex18() -> list[Experiment]:
         "paper's {pk:.0f}: Fisher's exact two-sided p = {p:.3f}. Published beside, not tested: with the margin "
         "searched over budgets 1..5, {k15:.0f} (p = {p15:.3f}) at k = 5 and {km:.0f} (p = {pm:.3f}) on the budget "
         "mean; on the frozen separate pool {fk:.0f} of {fn:d} (p = {fp:.3f}).",
-        supports=_ex18_share_holds)]
+        supports=_ex18_share_holds),
+        Experiment(
+            "E133", "grasp's feasible truths and signs against the gripper's force ceiling, the paper's unreported "
+            "grip range", _ex18_grasp_keys(),
+            "the frozen MuJoCo grasp study rerun with the gripper's ceiling on every force it exerts (grips and "
+            "squeezes) gives, as feasible truths / improve / tie / worsen: "
+            + "; ".join(f"{{{c}f:.0f}} / {{{c}i:.0f}} / {{{c}t:.0f}} / {{{c}w:.0f}} at the ceiling {{{c}n:.1f}} N "
+                        f"(worst truth {{{c}d:+.3f}})" for c in EX18_CEILINGS)
+            + ". It counts only if some ceiling gives six feasible truths give or take one and none of them worsens.",
+            supports=_ex18_grasp_holds)]
+
+
+#: E133's declared ceilings, as key prefixes (tenths of a newton per pad; ``ex18_grasp.CEILINGS``).
+EX18_CEILINGS = ("cap15", "cap20", "cap25", "cap30", "cap40", "cap50")
+
+
+def _ex18_grasp_keys() -> dict[str, str]:
+    d = f"{X}ex18_grasp."
+    out = {}
+    for c in EX18_CEILINGS:
+        out.update({f"{c}f": f"{d}{c}.n_feasible", f"{c}i": f"{d}{c}.n_improve", f"{c}t": f"{d}{c}.n_tie",
+                    f"{c}w": f"{d}{c}.n_worse", f"{c}n": f"{d}{c}.ceiling", f"{c}d": f"{d}{c}.worst_difference"})
+    return out
+
+
+def _ex18_grasp_holds(v: Mapping[str, Any]) -> bool:
+    """E133's declared rule: some declared ceiling gives 6 +- 1 feasible truths and, at that ceiling, no feasible
+    truth worsens."""
+    return any(abs(v[f"{c}f"] - EX18_PAPER_FEASIBLE) <= 1 and v[f"{c}w"] == 0 for c in EX18_CEILINGS)
+
+
+#: The paper's feasible grasp truths: "three of six feasible truths improve" (Sec. V-A; ``T09-grasp.improve``).
+EX18_PAPER_FEASIBLE = 6
 
 for _experiment in (_experiments() + _experiments_more() + _experiments_ex3() + _experiments_ex4()
                     + _experiments_ex5() + _experiments_ex6() + _experiments_ex7()

@@ -34,7 +34,7 @@ from probecommit.studies.explain import ex14
 from probecommit.studies.explain import ex16
 from probecommit.studies.explain import ex12_distinct, ex12_simultaneous
 from probecommit.studies.explain import ex15_readings, ex15_union
-from probecommit.studies.explain import ex18_share
+from probecommit.studies.explain import ex18_grasp, ex18_share
 from probecommit.studies.explain import gru as gru_study
 from probecommit.studies.explain.margin import margin_curve
 from probecommit.studies.paper_values import PRINTED
@@ -115,7 +115,7 @@ class Explain:
             *ex16.GROUPS,
             ex12_distinct.GROUP, ex12_simultaneous.GROUP,
             ex15_readings.GROUP, ex15_union.GROUP,
-            ex18_share.GROUP)}
+            ex18_share.GROUP, ex18_grasp.GROUP)}
         self.tables: dict[str, pd.DataFrame] = {}
         #: Stored rows written beside results.json as they are, by file name (``more``'s steps).
         self.stored: dict[str, pd.DataFrame] = {}
@@ -489,7 +489,7 @@ class Explain:
                  self.aside(ex7.run, needs=()), self.aside(ex13.mixture, needs=()),
                  self.instance_generator, self.draws, self.boundary_fault, self.robust, physx_coverage, self.physx,
                  lambda: (self.ready and self.ready(), self.gru()), lambda: more.run(self),
-                 lambda: ex15_union.run(self),
+                 lambda: ex15_union.run(self), self.aside(ex18_grasp.run, needs=()),  # E133: frozen config only
                  lambda: ex4.run(self),
                  lambda: ex6.run(self, paper),
                  lambda: ex8.run(self), lambda: ex10.run(self, paper),
