@@ -949,7 +949,7 @@ RECOMPUTED = {
                "ex12's Table III original cells under a schedule without replacement and the re-splits under the "
                "budget-simultaneous level; ex15's re-splits under every reading of the paper's sentence, on the frozen "
                "pool and on Split B's pooled halves; ex16's hinge and push1d probed cells with probes that reach the "
-               "commit regime",
+               "commit regime; ex18's optimistic-split counts against the paper's and grasp under each force ceiling",
 }
 TRACED_ONLY = {
     "insertion": "the stored rows themselves (episodes, re-executed commits, replays); the re-split rows; the cover "
