@@ -65,6 +65,14 @@ def test_a_later_step_reading_what_a_step_set_aside_fills_is_refused(tmp_path, r
         job.run_steps([job.aside(_fill_first, _fill_second), lambda: job.res["gru"].update(b=1.0), lambda: read(job)])
 
 
+def test_a_step_may_read_what_a_job_aside_fills_once_it_waited_for_it(tmp_path):
+    job = Explain(tmp_path, True, lambda *a: None, 1, {})
+    got: list = []
+    job.run_steps([job.aside(_fill_first), lambda: (job.wait_aside(), got.append(job.res["gru"]["x"])),
+                   lambda: got.append(job.stored["first.parquet"]["v"].sum())])
+    assert got == [1.0, 3]
+
+
 def test_reads_before_the_step_is_set_aside_and_of_other_keys_pass(tmp_path):
     job = Explain(tmp_path, True, lambda *a: None, 1, {})
     job.run_steps([lambda: job.res["gru"].update(a=0.0), lambda: job.res["gru"].get("x"),

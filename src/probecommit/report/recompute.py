@@ -863,6 +863,10 @@ EXPLAIN_EX12_SIM = "ex12_simultaneous_rows.parquet"
 EXPLAIN_EX15 = "ex15_readings_rows.parquet"
 #: ex15's stored rows (``studies.explain.ex15_union.STORED``: E119's re-splits of the literal Split B pool).
 EXPLAIN_EX15_UNION = "ex15_union_rows.parquet"
+#: ex18's stored rows (``studies.explain.ex18_share.STORED``: E132's per-split optimistic readings of two pools).
+EXPLAIN_EX18_SHARE = "ex18_share_rows.parquet"
+#: ex18's stored rows (``studies.explain.ex18_grasp.STORED``: E133's grasp reruns under each force ceiling).
+EXPLAIN_EX18_GRASP = "ex18_grasp_rows.parquet"
 #: ex7's stored rows (``studies.explain.ex7.STORED``: the fault surprise rows and the fresh draws).
 EXPLAIN_EX7 = ("ex7_fault_surprise.parquet", "ex7_dev_draws.parquet", "ex7_harness_draws.parquet")
 
@@ -873,7 +877,9 @@ STORED_SUMMARIES = (("mixture_noise", EXPLAIN_MIXTURE, "mixture_x"),
                     ("ex12_distinct", EXPLAIN_EX12, "ex12_distinct"),
                     ("ex12_simultaneous", EXPLAIN_EX12_SIM, "ex12_simultaneous"),
                     ("ex15_readings", EXPLAIN_EX15, "ex15_readings"),
-                    ("ex15_union", EXPLAIN_EX15_UNION, "ex15_union"))
+                    ("ex15_union", EXPLAIN_EX15_UNION, "ex15_union"),
+                    ("ex18_share", EXPLAIN_EX18_SHARE, "ex18_share"),
+                    ("ex18_grasp", EXPLAIN_EX18_GRASP, "ex18_grasp"))
 
 #: Explain modules that recompute their own groups: ``recompute(folder, results)`` gives
 #: ``(values, sources, problems)`` (a group published without its stored rows is a problem).
@@ -945,7 +951,8 @@ RECOMPUTED = {
                "pool and on Split B's pooled halves; ex16's hinge and push1d probed cells with probes that reach the "
                "commit regime; ex17's Table III original arm under the aim tie-break readings (optimism and its "
                "score, model and belief parts) and the cover schedule's first-tap band against T36's escapes; "
-               "ex19's darts blind cells over redrawn truths at every width of the prior sweep",
+               "ex19's darts blind cells over redrawn truths at every width of the prior sweep; ex18's "
+               "optimistic-split counts against the paper's and grasp under each force ceiling",
 }
 TRACED_ONLY = {
     "insertion": "the stored rows themselves (episodes, re-executed commits, replays); the re-split rows; the cover "

@@ -5,7 +5,8 @@ rows and tables are merged when it is handed on, which may be before or after an
 once on one CPU, at the end on two). A later step reading them would see them or not by machine and load,
 where run in place it always would, so its numbers would depend on the schedule. ``Reads`` records the last
 step at which the main lane read each entry; ``check``, once every job is merged, compares those reads
-with what each job aside filled and names the first step that breaks the rule.
+with what each job aside filled and names the first step that breaks the rule. A step that needs what a
+job aside fills waits for it first (``Explain.wait_aside``): from then on every run sees it merged.
 """
 
 from __future__ import annotations
@@ -24,13 +25,29 @@ class Reads:
 
     def __init__(self) -> None:
         self.step = -1  # the step running now (``Explain.run_steps`` sets it)
-        self.last: dict[Entry, int] = {}
-        self.asides: list[tuple[int, str, set[Entry]]] = []
+        self._clock = 0  # counts reads, submissions and waits, in the order the main lane made them
+        self.log: dict[Entry, list[tuple[int, int]]] = {}  # entry -> (clock, step) of each read
+        self.jobs: list[dict[str, Any]] = []
         self._paused = 0
+
+    def _tick(self) -> int:
+        self._clock += 1
+        return self._clock
 
     def note(self, where: str, group: str, key: Any) -> None:
         if not self._paused:
-            self.last[(where, group, str(key))] = self.step
+            self.log.setdefault((where, group, str(key)), []).append((self._tick(), self.step))
+
+    def submitted(self, label: str) -> int:
+        """A job set aside now; its number, for :meth:`filled`."""
+        self.jobs.append({"label": label, "step": self.step, "start": self._tick(), "end": None, "entries": set()})
+        return len(self.jobs) - 1
+
+    def waited(self) -> None:
+        """The main lane waited for every job set aside so far: later reads see them merged on every run."""
+        clock = self._tick()
+        for job in self.jobs:
+            job["end"] = clock if job["end"] is None else job["end"]
 
     @contextmanager
     def paused(self) -> Iterator[None]:
@@ -41,21 +58,26 @@ class Reads:
         finally:
             self._paused -= 1
 
-    def filled(self, at: int, label: str, entries: set[Entry]) -> None:
-        """A job set aside at step ``at`` was merged and filled ``entries``."""
-        self.asides.append((at, label, entries))
+    def filled(self, job: int, entries: set[Entry]) -> None:
+        """Job ``job`` was merged and filled ``entries``."""
+        self.jobs[job]["entries"] = entries
 
     def check(self) -> None:
         """Raises:
-            RuntimeError: a main-lane step after a job's submission read an entry that job filled."""
-        for at, label, entries in self.asides:
-            groups = {(where, group) for where, group, _ in entries}
-            for (where, group, key), step in self.last.items():
-                hit = (where, group, key) in entries or (key == WHOLE and (where, group) in groups)
-                if step > at and hit:
-                    raise RuntimeError(
-                        f"explain: step {step} reads {where} {group + ' ' if group else ''}{key!r}, which {label} "
-                        f"(set aside at step {at}) fills; set that step aside in the same job or run {label} in place")
+            RuntimeError: a main-lane step read an entry that a job filled after setting it aside and before
+                waiting for it."""
+        for job in self.jobs:
+            groups = {(where, group) for where, group, _ in job["entries"]}
+            end = float("inf") if job["end"] is None else job["end"]
+            for (where, group, key), reads in self.log.items():
+                if (where, group, key) not in job["entries"] and not (key == WHOLE and (where, group) in groups):
+                    continue
+                for clock, step in reads:
+                    if job["start"] < clock < end:
+                        raise RuntimeError(
+                            f"explain: step {step} reads {where} {group + ' ' if group else ''}{key!r}, which "
+                            f"{job['label']} (set aside at step {job['step']}) fills; wait for it first "
+                            f"(Explain.wait_aside), set that step aside in the same job, or run it in place")
 
 
 class ReadDict(dict):

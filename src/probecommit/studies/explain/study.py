@@ -37,6 +37,7 @@ from probecommit.studies.explain import ex17
 from probecommit.studies.explain import ex19
 from probecommit.studies.explain import ex12_distinct, ex12_simultaneous
 from probecommit.studies.explain import ex15_readings, ex15_union
+from probecommit.studies.explain import ex18_grasp, ex18_share
 from probecommit.studies.explain import gru as gru_study
 from probecommit.studies.explain.margin import margin_curve
 from probecommit.studies.paper_values import PRINTED
@@ -120,7 +121,8 @@ class Explain:
             *ex17.GROUPS,
             *ex19.GROUPS,
             ex12_distinct.GROUP, ex12_simultaneous.GROUP,
-            ex15_readings.GROUP, ex15_union.GROUP)}
+            ex15_readings.GROUP, ex15_union.GROUP,
+            ex18_share.GROUP, ex18_grasp.GROUP)}
         self.tables: dict[str, pd.DataFrame] = ReadDict(self.reads, "tables")
         #: Stored rows written beside results.json as they are, by file name (``more``'s steps).
         self.stored: dict[str, pd.DataFrame] = ReadDict(self.reads, "stored")
@@ -461,15 +463,21 @@ class Explain:
             if self.ready is not None and needs != ():
                 self.ready(needs)  # the job aside takes its needs as done
             places = {group: len(values) for group, values in self.res.items()}
-            at, label = self.reads.step, ", ".join(_name(s) for s in steps)
+            label = ", ".join(_name(s) for s in steps)
+            job = self.reads.submitted(label)
             self.progress(f"explain: set aside to a process of its own: {label}", 0, 1)
-            return self.background.submit(lambda filled: self._merge(filled, places, at, label), run_aside, self.root,
+            return self.background.submit(lambda filled: self._merge(filled, places, job), run_aside, self.root,
                                           self.quick, self.workers, self.cfg, steps)
 
         return submit
 
-    def _merge(self, filled: dict[str, Any], places: dict[str, int], step: int, label: str) -> None:
-        """What a job aside (set aside at ``step``) filled, each group's keys where they were when it was set aside
+    def wait_aside(self) -> None:
+        """Wait for every job set aside so far and merge it: a later step may then read what they fill."""
+        self.background.finish()
+        self.reads.waited()
+
+    def _merge(self, filled: dict[str, Any], places: dict[str, int], job: int) -> None:
+        """What job aside ``job`` filled, each group's keys where they were when it was set aside
         (after those of the jobs set aside before it: they ran first in place)."""
         for group, added in filled["res"].items():
             values = self.res[group]
@@ -479,7 +487,7 @@ class Explain:
                 items = list(values.items())
             values.clear()
             values.update(items[:at] + list(added.items()) + items[at:])
-        self.reads.filled(step, label, {("res", g, k) for g, added in filled["res"].items() for k in added}
+        self.reads.filled(job, {("res", g, k) for g, added in filled["res"].items() for k in added}
                           | {(where, "", name) for where in ("stored", "tables") for name in filled[where]})
         self.stored.update(filled["stored"])
         self.tables.update(filled["tables"])
@@ -500,7 +508,7 @@ class Explain:
                  self.aside(ex7.run, needs=()), self.aside(ex13.mixture, needs=()), self.aside(ex17.tiebreak, needs=()),
                  self.instance_generator, self.draws, self.boundary_fault, self.robust, physx_coverage, self.physx,
                  lambda: (self.ready and self.ready(), self.gru()), lambda: more.run(self),
-                 lambda: ex15_union.run(self),
+                 lambda: ex15_union.run(self), self.aside(ex18_grasp.run, needs=()),  # E133: frozen config only
                  lambda: ex19.run(self),  # E138 reads the prior sweep's darts runs (more.run)
                  lambda: ex4.run(self),
                  lambda: ex6.run(self, paper),
@@ -509,7 +517,8 @@ class Explain:
                  lambda: ex16.run(self), lambda: ex13.surprise(self, paper),
                  lambda: ex14.run(self, paper),
                  lambda: ex17.band(self, paper, COVER_SCHEDULE[0]),
-                 lambda: ex12_distinct.run(self)]
+                 lambda: ex12_distinct.run(self),
+                 lambda: ex18_share.run(self)]  # last: it waits for E118's and E119's rows
         self.run_steps(steps)
         margins = [t for name, t in self.tables.items() if name.startswith("margin_")]
         if margins:
