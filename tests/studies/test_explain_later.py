@@ -1,11 +1,12 @@
 """explain's deferred step (side by side it waits for the engines study): its keys land where they would in place."""
 
+from probecommit.studies.explain.lanes import Reads
 from probecommit.studies.explain.study import Explain
 
 
 def _job(ready=None) -> Explain:
-    job = Explain.__new__(Explain)  # only the results and the wait are used
-    job.res, job.ready = {"missing": {}}, ready
+    job = Explain.__new__(Explain)  # only the results, the wait and the read log are used
+    job.res, job.ready, job.reads = {"missing": {}}, ready, Reads()
     return job
 
 
