@@ -1511,7 +1511,7 @@ def _experiments_ex8() -> list[Experiment]:
              "w4": f"{g}c4.n_worse", "wn": f"{g}c4.n_worse_not_held", "o4": f"{g}c4.other_failure_rate",
              "rp": f"{g}c4_particles.failure_rate", "pf": f"{g}c4_particles.factor", "r4all": f"{g}c4.failure_rate",
              "both": f"{g}runs_with_both", "ties": f"{g}runs_with_ties", "lowr": f"{g}runs_with_low_truth",
-             "runs": f"{g}runs"},
+             "runs": f"{g}runs", "tc": f"{g}tie_chance_threshold"},
             "the paper's cells force its decomposition: the two truths its blind grip holds tie (every probed seed "
             "succeeds), one feasible truth is never grasped, the third improvement is {mid:.3f} (consistent: {pc:g} "
             "= yes), so its probed success spans 0 to 1; ours on the truths our blind grip holds fails {mr:.3f} of "
@@ -1520,7 +1520,7 @@ def _experiments_ex8() -> list[Experiment]:
             "have chance {t4:.3f} but no feasible truth falls below {low4:.3f}; {w4:g} truths still worsen there, "
             "{wn:g} of them not held by the blind grip, from a residual failure common to all ({o4:.4f} on the "
             "others), which {pf:g} times the particles does not remove ({r4all:.4f} -> {rp:.4f}). Of the {runs:g} "
-            "runs, those giving the ties a chance of at least 0.05: {ties:g}; with a feasible truth as low as the "
+            "runs, those giving the ties a chance of at least {tc:g}: {ties:g}; with a feasible truth as low as the "
             "paper's lowest improvement: {lowr:g}; both: {both:g}.",
             supports=lambda v: v["both"] >= 1),
         Experiment(

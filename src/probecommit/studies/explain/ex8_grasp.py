@@ -94,6 +94,7 @@ def keys(mujoco: pd.DataFrame, ex4_rows: pd.DataFrame, own: pd.DataFrame) -> dic
     out["runs_with_ties"] = float(sum(out[f"{n}.paper_ties_chance"] >= TIE_CHANCE for n in parts))
     out["runs_with_low_truth"] = float(sum(out[f"{n}.lowest_probe_success"] <= LOWEST for n in parts))
     out["runs"] = float(len(parts))
+    out["tie_chance_threshold"] = float(TIE_CHANCE)
     return out
 
 
