@@ -139,6 +139,30 @@ def prior_expected_loss(losses: np.ndarray) -> np.ndarray:
     return np.mean(np.asarray(losses, dtype=float), axis=-1)
 
 
+#: Bytes of one block of the ``[actions, prior sample]`` loss matrix :func:`blocked_prior_expected_loss`
+#: computes at once (the model's temporaries are a few more of the same size).
+PRIOR_LOSS_BLOCK_BYTES = 16 * 1024**2
+
+
+def blocked_prior_expected_loss(model: Any, sample: np.ndarray, context: np.ndarray | None = None,
+                                block_bytes: int = PRIOR_LOSS_BLOCK_BYTES) -> np.ndarray:
+    """``prior_expected_loss(model.loss(model.action_grid, sample, context))``, a block of grid actions at a time.
+
+    Each action's mean is over its own row, the same numbers in the same order whatever else the
+    block holds, so the answer is bit for bit the whole matrix's; but the matrix (2805 actions x
+    5000 draws for a 2-D push target: 112 MB, and the loss's temporaries as many again) never
+    exists at once: it set the memory peak of a reproduction's breadth target (issue 42).
+    """
+    grid = model.action_grid
+    rows = max(1, int(block_bytes) // (8 * max(1, len(sample))))
+    # Blocks of nearly equal size, never one action alone: a one-row matrix product (a model's
+    # ``actions @ target``) takes BLAS's vector path, whose rounding differs in the last bit.
+    blocks = min(-(-len(grid) // rows), max(1, len(grid) // 2))
+    edges = np.linspace(0, len(grid), blocks + 1).round().astype(int)
+    return np.concatenate([prior_expected_loss(model.loss(grid[a:b], sample, context))
+                           for a, b in zip(edges[:-1], edges[1:])], axis=-1)
+
+
 def scenario_scores(model: Any, scenarios: np.ndarray, mask: np.ndarray, context: np.ndarray | None = None,
                     parts: tuple[np.ndarray, np.ndarray] | None = None,
                     kernels: SetKernels = NUMPY_KERNELS) -> np.ndarray:
@@ -517,7 +541,7 @@ class BlindBayes:
     def act_one(self, context: np.ndarray | None = None) -> tuple[int, float]:
         """Action index and its prior expected loss for one context (or none)."""
         model, sample = self.model, self.prior_sample
-        expected = prior_expected_loss(model.loss(model.action_grid, sample, context))
+        expected = blocked_prior_expected_loss(model, sample, context)
         reference = sample.mean(axis=0)[None, :]
         cost = model.tie_break_cost(model.action_grid, reference, None if context is None else np.asarray(context)[None])
         index = int(select_action(expected[None, :], cost)[0])
