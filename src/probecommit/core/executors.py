@@ -180,7 +180,29 @@ def scenario_scores(model: Any, scenarios: np.ndarray, mask: np.ndarray, context
     if model.binary_loss:
         failures, retained = _failure_counts(model, scenarios, mask, context, parts, kernels)
         return failures / np.maximum(retained, 1)[:, None]
-    return scenario_max_loss(model.loss(model.action_grid, scenarios, context), mask)
+    return blocked_max_loss(model, scenarios, mask, context)
+
+
+#: Bytes of one ``[episodes, actions, scenarios]`` loss block :func:`blocked_max_loss` computes at once.
+SCENARIO_BLOCK_BYTES = 32 * 1024**2
+
+
+def blocked_max_loss(model: Any, scenarios: np.ndarray, mask: np.ndarray, context: np.ndarray | None = None,
+                     block_bytes: int = SCENARIO_BLOCK_BYTES) -> np.ndarray:
+    """``scenario_max_loss(model.loss(model.action_grid, scenarios, context), mask)``, a block of scenarios at a time.
+
+    A maximum is exact in any grouping, and each block's losses are the same numbers (the model's
+    action terms do not depend on the scenarios), so the scores are bit for bit the whole array's
+    (as :func:`retained_scores`' blocks); but ``[E, A, N]`` and the loss's temporaries (a 2-D push
+    unit: 6 x 2805 x 1024, 138 MB each, three at once) never exist whole (issue 42: the memory peak
+    of the breadth target).
+    """
+    n_episodes, n = mask.shape
+    step = max(1, int(block_bytes) // (8 * max(1, n_episodes * len(model.action_grid))))
+    if step >= n:
+        return scenario_max_loss(model.loss(model.action_grid, scenarios, context), mask)
+    return np.maximum.reduce([scenario_max_loss(model.loss(model.action_grid, scenarios[:, i:i + step], context),
+                                                mask[:, i:i + step]) for i in range(0, n, step)])
 
 
 def _in_place_affine(model: Any, kernels: SetKernels) -> tuple[int, int, float, float] | None:
