@@ -183,8 +183,10 @@ def scenario_scores(model: Any, scenarios: np.ndarray, mask: np.ndarray, context
     return blocked_max_loss(model, scenarios, mask, context)
 
 
-#: Bytes of one ``[episodes, actions, scenarios]`` loss block :func:`blocked_max_loss` computes at once.
-SCENARIO_BLOCK_BYTES = 32 * 1024**2
+#: Bytes of one ``[episodes, actions, scenarios]`` loss block :func:`blocked_max_loss` computes at once. Darts
+#: units (8 episodes x 1483 actions): 8 MiB blocks took 0.72x the CPU of 32 MiB ones (they stay in cache) and the
+#: process 40-55 MB less resident memory.
+SCENARIO_BLOCK_BYTES = 8 * 1024**2
 
 
 def blocked_max_loss(model: Any, scenarios: np.ndarray, mask: np.ndarray, context: np.ndarray | None = None,
