@@ -27,6 +27,8 @@ ARMS = ("blind_bayes", "blind_robust")
 STORED = "ex8_blind_episodes.parquet"
 #: Redraw seed, premise tolerance (relative) and the central interval (declared).
 SEED, PREMISE, CENTRAL = 3601, 0.02, (2.5, 97.5)
+#: Redrawn truths per block of :func:`redraw_cells`' loss matrix.
+REDRAW_BLOCK = 4096
 
 
 def run_dir(root: Path, family: str, quick: bool = False) -> Path:
@@ -78,9 +80,15 @@ def redraw_cells(rows: pd.DataFrame, model: Any, n_truths: int, draws: int, seed
     low, high = np.asarray(model.prior_low, float), np.asarray(model.prior_high, float)
     theta = low + (high - low) * np.random.default_rng(seed).random((draws * n_truths, low.size))
     per_target = []
+    # A block of truths at a time (issue 42: the whole [actions, truths] matrix and its temporaries added 300 MB to
+    # the explain process). Each truth's column is the same numbers summed in the same order in any block of at
+    # least two columns (one column alone would be summed pairwise), so the cells are the whole matrix's bits.
+    blocks = min(-(-len(theta) // REDRAW_BLOCK), max(1, len(theta) // 2))
+    edges = np.linspace(0, len(theta), blocks + 1).round().astype(int)
     for _, part in rows.groupby(ctx, sort=True):
-        loss = np.asarray(model.loss(part[actions].to_numpy(float), theta, part[ctx].iloc[0].to_numpy(float)), float)
-        per_target.append(loss.mean(axis=0))  # every stored action of the target (its seeds) weighs the same
+        acts, target = part[actions].to_numpy(float), part[ctx].iloc[0].to_numpy(float)
+        per_target.append(np.concatenate([np.asarray(model.loss(acts, theta[a:b], target), float).mean(axis=0)
+                                          for a, b in zip(edges[:-1], edges[1:])]))  # each stored action weighs the same
     return np.mean(per_target, axis=0).reshape(draws, n_truths).mean(axis=1)
 
 

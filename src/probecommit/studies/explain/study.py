@@ -290,14 +290,18 @@ class Explain:
         self.stored[generator.STORED] = generator.generator_table(frozen, seeds)
         self.res["instance_generator"].update(generator.generator_keys(self.stored[generator.STORED], edge))
 
+    def draw_runs(self) -> list[tuple[str, Any, Any]]:
+        """The fresh draws of the generator and their corrected replays (``runs.fresh_draws``; finished ones resume)."""
+        count = self.cfg["fresh_draws_quick" if self.quick else "fresh_draws"]
+        self.progress("explain: fresh draws of the generator", 0, 1)
+        return runs.fresh_draws(self.p, self.runs, count, self.workers)
+
     def draws(self) -> None:
         """Escape, failure and the boundary fix across fresh draws of the generator (analytic scene)."""
         out, p, b = self.res["instance_generator"], self.p, self.boot
         kmax, edge = p.budgets["random"], self.cfg["stratum_edge_mm"]
-        count = self.cfg["fresh_draws_quick" if self.quick else "fresh_draws"]
-        self.progress("explain: fresh draws of the generator", 0, 1)
         rows = []
-        drawn = runs.fresh_draws(p, self.runs, count, self.workers)
+        drawn = self.draw_runs()
         for split, deployed, corrected in drawn:
             old, new = _probe(deployed.episodes), _probe(corrected.episodes)
             x = deployed.instances["true_x_hole"].to_numpy(float)
@@ -506,7 +510,8 @@ class Explain:
                  self.aside(ex5_calibration.run, ex9_calibration.run, ex12_simultaneous.run, ex15_readings.run,
                             needs=()),  # E118 (ex15_readings) joins the rows ex5 and ex9 store
                  self.aside(ex7.run, needs=()), self.aside(ex13.mixture, needs=()), self.aside(ex17.tiebreak, needs=()),
-                 self.instance_generator, self.draws, self.boundary_fault, self.robust, physx_coverage, self.physx,
+                 self.instance_generator, self.draw_runs, self.aside(draw_summaries, needs=()), self.boundary_fault,
+                 self.robust, physx_coverage, self.physx,
                  lambda: (self.ready and self.ready(), self.gru()), lambda: more.run(self),
                  lambda: ex15_union.run(self), self.aside(ex18_grasp.run, needs=()),  # E133: frozen config only
                  lambda: ex19.run(self),  # E138 reads the prior sweep's darts runs (more.run)
@@ -567,6 +572,14 @@ class Explain:
             rows = pd.concat([ep[ep["method"].isin(methods(name))].assign(run=name) for name, ep in self.episodes.items()],
                              ignore_index=True)
             store_episodes(rows, out / calibration_rows.EPISODES, extra=("run",))
+
+
+def draw_summaries(job: Explain) -> None:
+    """``Explain.draws`` as a step set aside (``Explain.aside``), after ``Explain.draw_runs`` wrote the draws in place
+    (later steps read them: ex12, ex14); here they resume. Its audits and gates hold two whole-run belief traces at
+    once (``SharedBeliefs``, about 110 MB each) above what the explain process already holds: in a process of its
+    own they never add to the explain process's peak (issue 42, target 4)."""
+    job.draws()
 
 
 def _name(step: Callable[..., Any]) -> str:

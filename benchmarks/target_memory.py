@@ -1,0 +1,122 @@
+"""Benchmark: the peak resident memory of each process of one reproduction target, as ``reproduce all --workers 2`` runs it.
+
+Usage::
+
+    python benchmarks/target_memory.py breadth --inputs runs/paper --root /tmp/mem     # one target, fresh
+    python benchmarks/target_memory.py explain --inputs runs/paper --root /tmp/mem --stacks
+
+``--inputs`` is a finished reproduction's root: every target folder but this one is copied under ``--root``
+(the targets it reads), so the target itself runs from nothing. It runs as a side-by-side lane does
+(``report.schedule.run_target``, one worker, the command's Arrow pool and heap thresholds) in a child
+process; the resident memory (``VmRSS``) of that process and of every process it starts (explain's steps
+set aside, worker pools) is read from ``/proc`` every 0.2 s. Printed: each process's peak (MB) and when,
+the largest sum over the tree, wall seconds and the load average at start and end (peaks hardly depend
+on load; times do). ``--stacks``: a ``py-spy dump`` of a process each time its peak grows by 40 MB above
+250 MB (where it was when it grew), when py-spy is installed. ``--json PATH`` writes it all.
+Linux only (``/proc``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import shutil
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+LANE = """
+import sys
+from probecommit.cli.app import use_system_arrow_pool
+from probecommit.process.memory import reuse_freed_arrays
+if __name__ == "__main__":
+    use_system_arrow_pool(); reuse_freed_arrays()
+    from probecommit.report.schedule import run_target
+    print(run_target(sys.argv[1], sys.argv[2], False, 1, {}))
+"""
+
+
+def tree_rss(root_pid: int) -> dict[int, int]:
+    """VmRSS (MB) of ``root_pid`` and every process below it."""
+    children: dict[int, list[int]] = {}
+    for entry in os.listdir("/proc"):
+        if entry.isdigit():
+            try:
+                stat = Path(f"/proc/{entry}/stat").read_text()
+            except OSError:
+                continue
+            children.setdefault(int(stat.rsplit(")", 1)[1].split()[1]), []).append(int(entry))
+    out, stack = {}, [root_pid]
+    while stack:
+        pid = stack.pop()
+        stack += children.get(pid, [])
+        try:
+            line = next(x for x in Path(f"/proc/{pid}/status").read_text().splitlines() if x.startswith("VmRSS:"))
+        except (OSError, StopIteration):
+            continue
+        out[pid] = int(line.split()[1]) // 1024
+    return out
+
+
+def command_line(pid: int) -> str:
+    try:
+        return Path(f"/proc/{pid}/cmdline").read_bytes().replace(b"\0", b" ").decode()[:120]
+    except OSError:
+        return "?"
+
+
+def sample(argv: list[str], stacks: bool, poll_s: float = 0.2) -> dict:
+    """Run ``argv``, sampling its process tree; the per-process peaks."""
+    spy = shutil.which("py-spy") or str(Path(sys.executable).with_name("py-spy"))
+    proc = subprocess.Popen(argv)
+    start, peaks, dumps, dumped, most = time.perf_counter(), {}, [], {}, 0
+    while proc.poll() is None:
+        now = round(time.perf_counter() - start, 1)
+        sizes = tree_rss(proc.pid)
+        most = max(most, sum(sizes.values()))
+        for pid, mb in sizes.items():
+            if mb > peaks.get(pid, (0,))[0]:
+                peaks[pid] = (mb, now, command_line(pid))
+                if stacks and mb >= 250 and mb >= dumped.get(pid, 0) + 40 and Path(spy).exists():
+                    dumped[pid] = mb
+                    dump = subprocess.run([spy, "dump", "--nonblocking", "--pid", str(pid)], capture_output=True,
+                                          text=True, timeout=60).stdout
+                    dumps.append({"s": now, "pid": pid, "mb": mb, "stack": dump})
+        time.sleep(poll_s)
+    return {"rc": proc.returncode, "wall_s": round(time.perf_counter() - start, 1), "tree_sum_peak_mb": most,
+            "processes": sorted(([mb, s, pid, cmd] for pid, (mb, s, cmd) in peaks.items()), reverse=True),
+            "stacks": dumps}
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("target")
+    parser.add_argument("--inputs", required=True, help="a finished reproduction's root (the targets it reads)")
+    parser.add_argument("--root", required=True, help="a scratch root (replaced)")
+    parser.add_argument("--stacks", action="store_true")
+    parser.add_argument("--json")
+    args = parser.parse_args()
+    root = Path(args.root)
+    shutil.rmtree(root, ignore_errors=True)
+    root.mkdir(parents=True)
+    for folder in Path(args.inputs).iterdir():
+        if folder.is_dir() and folder.name != args.target:
+            shutil.copytree(folder, root / folder.name)
+    lane = root / "_lane.py"
+    lane.write_text(LANE)
+    load = os.getloadavg()
+    result = sample([sys.executable, str(lane), args.target, str(root)], args.stacks)
+    result.update(target=args.target, load_start=load, load_end=os.getloadavg())
+    for mb, s, pid, cmd in result["processes"][:8]:
+        print(f"{mb:6d} MB at {s:7.1f} s  pid {pid}  {cmd}")
+    print(f"{args.target}: rc {result['rc']}, wall {result['wall_s']} s, largest process {result['processes'][0][0]} MB, "
+          f"tree sum {result['tree_sum_peak_mb']} MB, load {load[0]:.1f} -> {result['load_end'][0]:.1f}")
+    if args.json:
+        Path(args.json).write_text(json.dumps(result, indent=1))
+    sys.exit(result["rc"])
+
+
+if __name__ == "__main__":
+    main()
