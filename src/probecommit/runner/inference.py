@@ -458,29 +458,48 @@ def _interleave_columns(plans: list[dict[str, Any]], n_episodes: int) -> dict[st
     return out
 
 
+def outcome_keys(batch: ProbeBatch, episodes: np.ndarray, index: np.ndarray,
+                 n_actions: int) -> tuple[np.ndarray, np.ndarray, list[tuple[str, int]]]:
+    """The distinct (instance, action) pairs of rows ``episodes`` of ``batch`` committing to grid actions ``index``:
+    ``np.unique``'s ``first`` and ``inverse`` over those rows, and each pair's memo key
+    ``(split, instance_index * n_actions + index)``, the same in every batch cut from the run or pool.
+
+    The split is part of the key because instance indices start at 0 in every run: a batch pooling runs of
+    several splits holds several instances under one index, and an index-only key gave them one shared outcome
+    (whichever was executed first, so the answer also depended on thread timing).
+    """
+    flat = batch.instance_index.astype(np.int64)[episodes] * n_actions + np.asarray(index, dtype=np.int64)
+    if isinstance(batch.split, str):
+        codes, names = np.zeros(len(flat), dtype=np.int64), [batch.split]
+    else:
+        codes, names = pd.factorize(np.asarray(batch.split, dtype=object)[episodes])
+        codes, names = codes.astype(np.int64), list(names)
+    _, first, inverse = np.unique(flat * max(len(names), 1) + codes, return_index=True, return_inverse=True)
+    keys = [(str(names[c]), f) for c, f in zip(codes[first].tolist(), flat[first].tolist())]
+    return first, np.asarray(inverse).reshape(-1), keys
+
+
 def _execute(simulator, batch: ProbeBatch, action: np.ndarray, index: np.ndarray, n_actions: int,
              outcomes: dict):
     """Realized outcome of each episode's action: one ``execute`` per distinct (instance, action).
 
     Repeats of an instance that commit to the same action share one call, and
     ``outcomes`` remembers each answer across commits on the same batch (the engine
-    answer is cached anyway; this saves the per-call overhead). An error marks every
-    episode of that (instance, action) failed, with the reason.
+    answer is cached anyway; this saves the per-call overhead), under :func:`outcome_keys`.
+    An error marks every episode of that (instance, action) failed, with the reason.
     """
     n = batch.n_episodes
     status = np.full(n, "ok", dtype=object)
     error = np.full(n, "", dtype=object)
-    keys = batch.instance_index.astype(np.int64) * n_actions + index
-    unique, first, inverse = np.unique(keys, return_index=True, return_inverse=True)
+    first, inverse, keys = outcome_keys(batch, np.arange(n), index, n_actions)
     context = batch.episode_context
-    inverse = np.asarray(inverse).reshape(-1)
-    values = np.empty(len(unique))
+    values = np.empty(len(keys))
     errors: dict[int, str] = {}
     if simulator.parallel_queries:
         # Every distinct action's engine query is needed below: run them in engine threads first.
         simulator.prefetch([simulator.execute_query_key(batch.truths[e], action[e], None if context is None else context[e])
-                            for key, e in zip(unique.tolist(), first) if key not in outcomes])
-    for u, (key, e) in enumerate(zip(unique.tolist(), first)):
+                            for key, e in zip(keys, first) if key not in outcomes])
+    for u, (key, e) in enumerate(zip(keys, first)):
         if key not in outcomes:
             try:
                 ctx = None if context is None else context[e]

@@ -25,7 +25,7 @@ import numpy as np
 
 from probecommit.core.executors import Belief
 from probecommit.runner.commit_threads import in_threads
-from probecommit.runner.inference import BeliefTrace, _belief_at, _commit_plan, _execute, commit
+from probecommit.runner.inference import BeliefTrace, _belief_at, _commit_plan, _execute, commit, outcome_keys
 
 
 @dataclass
@@ -62,13 +62,12 @@ class SweptChunk:
         n_rows = self.index.shape[1]
         episode = np.broadcast_to(np.arange(n_rows) // n_plans, (which.size, n_rows)).reshape(-1)
         flat = self.index[which].reshape(-1).astype(np.int64)
-        keys = batch.instance_index.astype(np.int64)[episode] * n_actions + flat
-        unique, first, inverse = np.unique(keys, return_index=True, return_inverse=True)
-        missing = np.array([u for u, key in enumerate(unique.tolist()) if key not in outcomes], dtype=np.int64)
+        first, inverse, keys = outcome_keys(batch, episode, flat, n_actions)
+        missing = np.array([u for u, key in enumerate(keys) if key not in outcomes], dtype=np.int64)
         if missing.size:
             rows = first[missing]
             _execute(simulator, batch.subset(episode[rows]), grid[flat[rows]], flat[rows], n_actions, outcomes)
-        answers = [outcomes[key] for key in unique.tolist()]
+        answers = [outcomes[key] for key in keys]
         failed = np.array([isinstance(value, str) for value in answers], dtype=bool)
         values = np.array([np.nan if isinstance(value, str) else value for value in answers], dtype=float)
         inverse = np.asarray(inverse).reshape(-1)
