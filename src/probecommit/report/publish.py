@@ -62,13 +62,14 @@ def changes_section(doc: Doc) -> None:
     """What moved against the previous frozen results, and why (each cause is a change in this tree)."""
     doc.add("## What moved since the previous publication", "",
             "Against the frozen results before this publication (`git log -- results/paper`), compared key by key, "
-            "every number common to both is identical.",
-            "Stored rows: the calibrated-set test arm (`request` = `set`) is now committed only at the budget Table IV "
-            "and `verify` read (the cost budget), so the insertion, beyond and explain commit tables hold fewer `set` "
-            "rows; every other row is unchanged bit for bit, and no number read from them moved. The explain steps "
-            "that now run in processes of their own give the same keys, in the same order, and the same rows "
-            "(`benchmarks/explain_equal.py`).",
-            "New in this publication: the explain target's experiments E112-E114, E118, E119, E124 and E125 behind "
+            "every number common to both is identical except six keys of E119 (`ex15_union`, the re-splits of the "
+            "literal Split B pool). A commit remembered realized outcomes by instance index and action; instance "
+            "indices restart in every run, so on a pool of Split B's calibration and test runs two instances shared "
+            "one outcome, whichever was executed first (which also made these columns depend on thread timing). "
+            "Outcomes are now remembered per split, instance and action (`runner.inference.outcome_keys`); single-run "
+            "commits, every other table and every stored row outside E119's are unchanged. E132, new here, reads "
+            "E119's rows and fails on the corrected ones.",
+            "New in this publication: the explain target's experiments E126, E127, E132, E133 and E138-E141 behind "
             "the differences from the paper (see the list above) and the stored rows from which `verify` recomputes "
             "them.", "")
 
