@@ -65,6 +65,22 @@ def test_a_later_step_reading_what_a_step_set_aside_fills_is_refused(tmp_path, r
         job.run_steps([job.aside(_fill_first, _fill_second), lambda: job.res["gru"].update(b=1.0), lambda: read(job)])
 
 
+def _answer() -> float:
+    return 5.0
+
+
+def test_what_a_submitted_job_hands_on_is_checked_as_a_job_set_aside(tmp_path):
+    """``Explain.submit`` (a function and a hand-on, as the GRU and rig steps use) obeys the same rule."""
+    job = Explain(tmp_path, True, lambda *a: None, 1, {})
+    submit = lambda: job.submit(lambda v: job.res["gru"].update(w=v), _answer)  # noqa: E731
+    with pytest.raises(RuntimeError, match=r"step 1 reads res gru 'w', which .*_answer"):
+        job.run_steps([submit, lambda: job.res["gru"].get("w")])
+    job = Explain(tmp_path, True, lambda *a: None, 1, {})
+    job.run_steps([submit, lambda: job.res["gru"].get("other"), lambda: job.wait_aside(),
+                   lambda: job.res["gru"]["w"]])
+    assert job.res["gru"] == {"w": 5.0}
+
+
 def test_a_step_may_read_what_a_job_aside_fills_once_it_waited_for_it(tmp_path):
     job = Explain(tmp_path, True, lambda *a: None, 1, {})
     got: list = []

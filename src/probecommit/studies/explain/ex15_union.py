@@ -79,5 +79,5 @@ def run(explain: Any) -> None:
             explain.stored[STORED] = rows
             explain.res[GROUP].update(summary(rows))
 
-    explain.background.submit(done, rows_of, explain.ins, float(p.alpha), int(p.resplits["count"]),
+    explain.submit(done, rows_of, explain.ins, float(p.alpha), int(p.resplits["count"]),
                               int(p.resplits["seed"]), int(p.budgets["cover"]), int(p.bootstrap.seed))

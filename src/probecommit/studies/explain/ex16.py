@@ -30,7 +30,7 @@ def run(job: Any) -> None:
         if len(rows):
             job.stored[ex16_reach.STORED] = rows
 
-    job.background.submit(then, ex16_reach.run, Path(job.root), bool(job.quick))
+    job.submit(then, ex16_reach.run, Path(job.root), bool(job.quick))
 
 
 def recompute(folder: Path, results: dict[str, Any]) -> tuple[dict[str, Any], dict[str, str], list[str]]:

@@ -6,7 +6,9 @@ once on one CPU, at the end on two). A later step reading them would see them or
 where run in place it always would, so its numbers would depend on the schedule. ``Reads`` records the last
 step at which the main lane read each entry; ``check``, once every job is merged, compares those reads
 with what each job aside filled and names the first step that breaks the rule. A step that needs what a
-job aside fills waits for it first (``Explain.wait_aside``): from then on every run sees it merged.
+job aside fills waits for it first (``Explain.wait_aside``): from then on every run sees it merged. Every
+job in a process of its own counts, whether set aside (``Explain.aside``) or submitted (``Explain.submit``):
+what its hand-on writes is recorded as that job's.
 """
 
 from __future__ import annotations
@@ -29,6 +31,7 @@ class Reads:
         self.log: dict[Entry, list[tuple[int, int]]] = {}  # entry -> (clock, step) of each read
         self.jobs: list[dict[str, Any]] = []
         self._paused = 0
+        self._recording: int | None = None  # the job whose hand-on is writing now
 
     def _tick(self) -> int:
         self._clock += 1
@@ -49,9 +52,22 @@ class Reads:
         for job in self.jobs:
             job["end"] = clock if job["end"] is None else job["end"]
 
+    def wrote(self, where: str, group: str, key: Any) -> None:
+        if self._recording is not None and not self._paused:
+            self.jobs[self._recording]["entries"].add((where, group, str(key)))
+
+    @contextmanager
+    def recording(self, job: int) -> Iterator[None]:
+        """What is written inside is what job ``job`` filled (its hand-on runs here)."""
+        self._recording = job
+        try:
+            yield
+        finally:
+            self._recording = None
+
     @contextmanager
     def paused(self) -> Iterator[None]:
-        """The bookkeeping's own reads (where to put merged keys) are not a step's."""
+        """The bookkeeping's own reads and rewrites (where to put merged keys) are not a step's."""
         self._paused += 1
         try:
             yield
@@ -59,8 +75,8 @@ class Reads:
             self._paused -= 1
 
     def filled(self, job: int, entries: set[Entry]) -> None:
-        """Job ``job`` was merged and filled ``entries``."""
-        self.jobs[job]["entries"] = entries
+        """Job ``job`` was merged and filled ``entries`` (beside what its hand-on wrote)."""
+        self.jobs[job]["entries"] |= entries
 
     def check(self) -> None:
         """Raises:
@@ -89,6 +105,15 @@ class ReadDict(dict):
 
     def _note(self, key: Any) -> None:
         self._reads.note(self._where, self._group, key)
+
+    def __setitem__(self, key: Any, value: Any) -> None:
+        self._reads.wrote(self._where, self._group, key)
+        super().__setitem__(key, value)
+
+    def update(self, *args: Any, **kwargs: Any) -> None:
+        for key in dict(*args, **kwargs):
+            self._reads.wrote(self._where, self._group, key)
+        super().update(*args, **kwargs)
 
     def __getitem__(self, key: Any) -> Any:
         self._note(key)

@@ -32,7 +32,7 @@ def run(job: Any) -> None:
         job.res["rig_redraws"].update(result[0])
         job.stored.update(result[1])
 
-    job.background.submit(rig_done, rig.run, job.runs, job.cfg, job.boot, job.quick)
+    job.submit(rig_done, rig.run, job.runs, job.cfg, job.boot, job.quick)
     job.progress("explain: Table II's families over the prior's width", 0, 1)  # in place: ex4's cone reads its runs
     keys, job.tables["breadth_prior"] = breadth.run(job.root, job.runs, job.cfg, job.boot, job.quick)
     job.res["breadth_prior"].update(keys)

@@ -432,8 +432,8 @@ class Explain:
         pipeline = runs_dir / ("push2d-quick" if self.quick and (runs_dir / "push2d-quick").is_dir() else "push2d")
         if pipeline.is_dir():  # its keys join the group once the later steps are done (``Background``)
             self.progress("explain: GRU seed 0 retrained (in a process of its own, beside the later steps)", 0, 1)
-            self.background.submit(out.update, gru_study.retrain_tolerance, self.root / "gru" / "results", pipeline,
-                                   self.runs, self.quick)
+            self.submit(out.update, gru_study.retrain_tolerance, self.root / "gru" / "results", pipeline,
+                        self.runs, self.quick)
 
     def _later(self, group: str, step: Callable[[], None], needs: tuple[str, ...]) -> tuple[Callable[[], None],
                                                                                              Callable[[], None]]:
@@ -468,12 +468,26 @@ class Explain:
                 self.ready(needs)  # the job aside takes its needs as done
             places = {group: len(values) for group, values in self.res.items()}
             label = ", ".join(_name(s) for s in steps)
-            job = self.reads.submitted(label)
             self.progress(f"explain: set aside to a process of its own: {label}", 0, 1)
-            return self.background.submit(lambda filled: self._merge(filled, places, job), run_aside, self.root,
-                                          self.quick, self.workers, self.cfg, steps)
+            job = self.reads.submitted(label)
+            return self._hand_on(job, lambda filled: self._merge(filled, places, job), run_aside, self.root,
+                                 self.quick, self.workers, self.cfg, steps)
 
         return submit
+
+    def submit(self, then: Callable[[Any], None], fn: Callable[..., Any], *args: Any) -> Any:
+        """``fn(*args)`` (a module-level function of picklable arguments) in a process of its own
+        (``Background.submit``), its result handed to ``then`` in this process. What ``then`` writes into the
+        results, stored rows or tables is recorded as this job's, so no later step may read it before
+        :meth:`wait_aside` (``lanes``)."""
+        return self._hand_on(self.reads.submitted(_name(fn)), then, fn, *args)
+
+    def _hand_on(self, job: int, then: Callable[[Any], None], fn: Callable[..., Any], *args: Any) -> Any:
+        def hand_on(result: Any) -> None:
+            with self.reads.recording(job):
+                then(result)
+
+        return self.background.submit(hand_on, fn, *args)
 
     def wait_aside(self) -> None:
         """Wait for every job set aside so far and merge it: a later step may then read what they fill."""
@@ -487,10 +501,10 @@ class Explain:
             values = self.res[group]
             at = places[group] + self._merged.get(group, 0)
             self._merged[group] = self._merged.get(group, 0) + len(added)
-            with self.reads.paused():
+            with self.reads.paused():  # a rewrite of the group: only ``added`` is the job's
                 items = list(values.items())
-            values.clear()
-            values.update(items[:at] + list(added.items()) + items[at:])
+                values.clear()
+                values.update(items[:at] + list(added.items()) + items[at:])
         self.reads.filled(job, {("res", g, k) for g, added in filled["res"].items() for k in added}
                           | {(where, "", name) for where in ("stored", "tables") for name in filled[where]})
         self.stored.update(filled["stored"])
