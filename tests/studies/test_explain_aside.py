@@ -124,3 +124,20 @@ def test_a_step_set_aside_waits_for_the_late_needs_it_reads_only(tmp_path, monke
     job.aside(_fill_first, needs=("breadth",))()
     job.aside(_fill_first)()
     assert waited == [("breadth",), None]  # needs=(): none; default: every late need
+
+
+def _rows() -> pd.DataFrame:
+    return pd.DataFrame({"v": [1, 2, 3]})
+
+
+def test_a_hand_on_reading_what_it_wrote_is_the_jobs_read_not_a_steps(tmp_path, monkeypatch):
+    """On one CPU a hand-on runs at once, inside the step that submitted it: its reads are the job's own."""
+    monkeypatch.setattr(os, "cpu_count", lambda: 1)
+
+    def then(rows: pd.DataFrame) -> None:
+        job.stored["x.parquet"] = rows
+        job.res["gru"].update(n=len(job.stored["x.parquet"]))
+
+    job = Explain(tmp_path, True, lambda *a: None, 1, {})
+    job.run_steps([lambda: job.submit(then, _rows), lambda: job.res["robust"].get("r")])
+    assert job.res["gru"] == {"n": 3}

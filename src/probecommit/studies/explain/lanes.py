@@ -38,7 +38,7 @@ class Reads:
         return self._clock
 
     def note(self, where: str, group: str, key: Any) -> None:
-        if not self._paused:
+        if not self._paused and self._recording is None:  # a job's hand-on reads as the job, not as a step
             self.log.setdefault((where, group, str(key)), []).append((self._tick(), self.step))
 
     def submitted(self, label: str) -> int:
