@@ -70,7 +70,6 @@ class SweptChunk:
         answers = [outcomes[key] for key in keys]
         failed = np.array([isinstance(value, str) for value in answers], dtype=bool)
         values = np.array([np.nan if isinstance(value, str) else value for value in answers], dtype=float)
-        inverse = np.asarray(inverse).reshape(-1)
         self.realized[which] = values[inverse].reshape(which.size, n_rows)
         self.failed[which] = failed[inverse].reshape(which.size, n_rows)
         self.done[which] = True

@@ -505,8 +505,8 @@ class Explain:
                 items = list(values.items())
                 values.clear()
                 values.update(items[:at] + list(added.items()) + items[at:])
-        self.reads.filled(job, {("res", g, k) for g, added in filled["res"].items() for k in added}
-                          | {(where, "", name) for where in ("stored", "tables") for name in filled[where]})
+        # the rewrites above are paused; the rows and tables below are recorded as they are written (``_hand_on``)
+        self.reads.filled(job, {("res", g, k) for g, added in filled["res"].items() for k in added})
         self.stored.update(filled["stored"])
         self.tables.update(filled["tables"])
         for label, wall, cpu, children in filled["steps"]:
@@ -558,7 +558,6 @@ class Explain:
         write_text(out / "results.json", json.dumps(payload, indent=1, allow_nan=False))
         write_text(out / "explain.md", summary_markdown(payload["results"]))
         return out
-
 
     def run_steps(self, steps: list[Callable[[], Any]]) -> None:
         """``steps`` in order, then the jobs set aside handed on; checks that no step read what a job set aside
