@@ -1,11 +1,11 @@
 """The final tables of a run, as Arrow tables: the units' tables joined and put in canonical order.
 
 Built on Arrow and NumPy, so writing a run's final tables does not convert every table to a
-DataFrame and back (and sort it there). What comes out is what the same steps gave on DataFrames (``pd.concat``, ``sort_values(kind="stable")``,
-the schema's columns added and ordered, ``Table.from_pandas``): the same rows, order, types and
-pandas metadata, byte for byte once written (tested against pandas). Tables only pandas can
-join as it did (units of different columns, empty tables, whose column types pandas decides)
-are joined by pandas, imported then.
+DataFrame and back (and sort it there). What comes out is what the same steps gave on
+DataFrames (``pd.concat``, ``sort_values(kind="stable")``, the schema's columns added and
+ordered, ``Table.from_pandas``): the same rows, order and types, byte for byte once written
+(``tests/runner/test_canonical.py``). Tables only pandas can join as it did (units of
+different columns, empty tables, whose column types pandas decides) are joined by pandas.
 """
 
 from __future__ import annotations
