@@ -2,7 +2,7 @@
 
 When a command has finished, CPython still frees every module and object before the process
 ends: for ``probecommit run`` (pandas, pyarrow, numpy and a run's arrays loaded) that took
-about 0.12 s of CPU, a sixth of a short run's and 6 % of the 480 x 4 study's, and bought
+about 0.12-0.14 s of CPU, a fifth of a 4-episode run's and 6 % of the 480 x 4 study's, and bought
 nothing (the operating system takes the memory back at once). :func:`exit_process` does the
 part of interpreter exit that has effects (joins the non-daemon threads and runs the threading
 module's exit hooks, as finalization does first, then every ``atexit`` handler: log handlers
