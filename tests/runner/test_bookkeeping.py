@@ -80,3 +80,25 @@ def test_a_runs_episodes_equal_reading_its_file(tmp_path, make_config, monkeypat
     # A complete run opened again reads its file: the same frame.
     again = run_study(cfg, tmp_path / "run", threads=1)
     pd.testing.assert_frame_equal(again.episodes, read, check_exact=True)
+
+
+@settings(max_examples=60, deadline=None)
+@given(n_units=st.integers(1, 300), unit_instances=st.integers(1, 9), repeats=st.integers(1, 8),
+       parallel=st.integers(1, 4))
+def test_groups_are_as_many_as_the_episode_bound_needs_and_differ_by_one_unit_at_most(n_units, unit_instances, repeats,
+                                                                                     parallel):
+    """Every group holds at most GROUP_EPISODES episodes' worth of units (and, in parallel, a quarter of the
+    units per worker at most), no more groups are made than that bound needs, and their sizes differ by
+    one unit at most: threads taking groups in turn finish together."""
+    import math
+
+    instances = pd.DataFrame({"instance_id": [f"t-{i}" for i in range(n_units * unit_instances)],
+                              "instance_index": np.arange(n_units * unit_instances)})
+    todo = unit_names(len(instances), unit_instances)
+    bound = max(1, study.GROUP_EPISODES // (unit_instances * repeats))
+    if parallel > 1:
+        bound = max(1, min(bound, math.ceil(n_units / (2 * parallel))))
+    sizes = [len(units) for _, _, units in study._groups(None, instances, todo, repeats, parallel)]
+    assert sum(sizes) == n_units and max(sizes) <= bound
+    assert len(sizes) == math.ceil(n_units / bound)
+    assert max(sizes) - min(sizes) <= 1

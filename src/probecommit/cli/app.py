@@ -316,11 +316,18 @@ def use_system_arrow_pool() -> None:
 
 
 def main() -> None:  # pragma: no cover - entry point
+    """The ``probecommit`` command: the app, then the process ends without the interpreter's
+    teardown (:func:`probecommit.process.finish.exit_process`; an uncaught error ends as usual)."""
+    from probecommit.process.finish import exit_process
     from probecommit.process.memory import reuse_freed_arrays
 
     use_system_arrow_pool()
     reuse_freed_arrays()
-    app()
+    try:
+        app()
+    except SystemExit as done:  # how the app always ends (typer's standalone mode)
+        exit_process(done.code)
+    exit_process(0)
 
 
 if __name__ == "__main__":  # pragma: no cover

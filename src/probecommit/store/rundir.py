@@ -33,12 +33,10 @@ import os
 import subprocess
 import time
 from pathlib import Path
-from typing import Any, Iterator, Sequence
+from typing import TYPE_CHECKING, Any, Iterator, Sequence
 
 import numpy as np
-import pandas as pd
 import pyarrow as pa
-import pyarrow.compute as pc
 import pyarrow.parquet as pq
 
 from probecommit import __version__
@@ -46,9 +44,13 @@ from probecommit.store.manifest_rules import ManifestError, read_manifest, sha25
 from probecommit.store.safefile import atomic_file
 from probecommit.store.yamlsafe import YamlError, load_yaml
 from probecommit.store import batches
-from probecommit.store.schema import (EPISODE_COLUMNS, INSTANCE_COLUMNS, PROBE_COLUMNS, Column, float_matrix,
-                                      vector_columns)
+from probecommit.store.canonical import (by_instance, canonical_arrow, engine_cache_order, instance_order,
+                                         instance_positions, merge_arrow, with_schema_columns)
+from probecommit.store.schema import EPISODE_COLUMNS, INSTANCE_COLUMNS, PROBE_COLUMNS, Column, vector_columns
 from probecommit.errors import UserError
+
+if TYPE_CHECKING:
+    import pandas as pd
 
 MANIFEST = "manifest.json"
 CONFIG = "config.yaml"
@@ -88,20 +90,20 @@ def _fsync_dir(folder: Path) -> None:
         os.close(fd)
 
 
-def merge_tables(tables: list[pa.Table]) -> pd.DataFrame:
-    """One table of several units' tables, in their order: their rows (the empty ones only when
-    every table is empty), as ``pd.concat`` of each converted alone gives them.
+def merge_tables(tables: list[pa.Table]) -> "pd.DataFrame":
+    """:func:`~probecommit.store.canonical.merge_arrow` as a DataFrame (what ``pd.concat`` of each
+    table converted alone gives)."""
+    import pandas as pd
 
-    Tables of one schema (the usual case) are joined as Arrow tables and converted once; tables
-    whose columns differ (a unit whose every trajectory failed has only the rollout rows'
-    columns) are converted one by one and joined by pandas.
-    """
-    if not tables:
-        return pd.DataFrame()
-    nonempty = [t for t in tables if t.num_rows] or tables[:1]
-    if all(t.schema.equals(nonempty[0].schema) for t in nonempty[1:]):
-        return pa.concat_tables(nonempty).to_pandas()
-    return pd.concat([t.to_pandas() for t in nonempty], ignore_index=True)
+    merged = merge_arrow(tables)
+    return pd.DataFrame() if merged is None else merged.to_pandas()
+
+
+def _empty_table() -> pa.Table:
+    """The table of no units (an empty DataFrame converted, as it always was)."""
+    import pandas as pd
+
+    return pa.Table.from_pandas(pd.DataFrame(), preserve_index=False)
 
 
 def _is_tmp(path: Path) -> bool:
@@ -142,6 +144,8 @@ def arrow_from_columns(columns: dict[str, Any], n_rows: int, schema: tuple[Colum
     unit's beliefs on a short study.
     """
     if not columns or not n_rows:  # pandas decides an empty column's type: ask it (cheap when empty)
+        import pandas as pd
+
         return arrow_table(pd.DataFrame(columns), schema)
     arrays = []
     for value in columns.values():
@@ -159,6 +163,8 @@ def arrow_from_columns(columns: dict[str, Any], n_rows: int, schema: tuple[Colum
     names = list(columns)
     key = tuple(zip(names, (a.type for a in arrays)))
     if key not in _PANDAS_METADATA:
+        import pandas as pd
+
         sample = pd.DataFrame({name: (value[:1] if isinstance(value, (list, np.ndarray)) else value)
                                for name, value in columns.items()}, index=range(1))
         _PANDAS_METADATA[key] = pa.Schema.from_pandas(sample, preserve_index=False).metadata
@@ -610,10 +616,11 @@ class RunDir:
         """Merge the units' tables into the final tables (canonical order), then write the manifest."""
         self.flush()
         stored = self._unit_tables(units)
-        frames = {name: merge_tables([stored[u][name] for u in units]) for name in TABLES}
+        merged = {name: merge_arrow([stored[u][name] for u in units]) for name in TABLES}
         del stored
-        for name, frame in canonical_tables(frames).items():
-            table = atomic_write_parquet(self.table_path(name), frame, _SCHEMAS.get(name, ()))
+        for name, table in canonical_arrow(merged, _SCHEMAS).items():
+            table = _schema_typed(table if table is not None else _empty_table(), _SCHEMAS.get(name, ()))
+            atomic_write_arrow(self.table_path(name), table)
             if name == "episodes":
                 self._written_episodes = table
         return self.write_manifest(manifest_extra)
@@ -625,6 +632,8 @@ class RunDir:
         object wrote it, so a run does not read back and decode the file it just wrote (nor
         import the Parquet dataset layer to do so); else read from the file.
         """
+        import pandas as pd
+
         table = self._written_episodes
         return pd.read_parquet(self.table_path("episodes")) if table is None else table.to_pandas()
 
@@ -668,6 +677,8 @@ class RunDir:
             raise RunDirError(str(exc)) from None
 
     def read(self, name: str) -> pd.DataFrame:
+        import pandas as pd
+
         self.manifest()
         return pd.read_parquet(self.table_path(name))
 
@@ -680,6 +691,8 @@ class RunDir:
         Raises:
             RunDirError: The file changed since the run wrote its manifest.
         """
+        import pandas as pd
+
         filters = None if where is None else [(where[0], "in", list(where[1]))]
         return pd.read_parquet(self._verified_source(name), filters=filters,
                                columns=None if columns is None else list(columns))
@@ -747,7 +760,7 @@ class EpisodeStream:
 
     def __init__(self, run: RunDir, instances: pd.DataFrame, pending: pd.DataFrame | None = None) -> None:
         self.run = run
-        self._order = _instance_order(instances)
+        self._order = instance_order(pa.Table.from_pandas(instances, preserve_index=False, nthreads=1))
         self._pending = pending if pending is not None and len(pending) else None
         self._pending_at = None if self._pending is None else _instance_positions(self._pending, self._order)
         self._parts: list[Path] = []
@@ -764,16 +777,19 @@ class EpisodeStream:
             if self._pending is not None:
                 take = self._pending_at <= self._reached
                 if take.any():
+                    import pandas as pd
+
                     frame = pd.concat([frame, self._pending[take]], ignore_index=True)
                     self._pending, self._pending_at = self._pending[~take], self._pending_at[~take]
         self._write_part(frame)
 
     def _write_part(self, frame: pd.DataFrame) -> None:
-        frame = _with_schema_columns(_by_instance(frame, ["instance_id", "repeat"], self._order), EPISODE_COLUMNS)
+        table = pa.Table.from_pandas(frame, preserve_index=False, nthreads=1)
+        table = with_schema_columns(by_instance(table, ["instance_id", "repeat"], self._order), EPISODE_COLUMNS)
         # A temporary's name: a killed writer's parts go with remove_stale_temporaries.
         path = self.run.shards / f".episodes.part{len(self._parts):06d}.parquet.tmp"
         self.run.shards.mkdir(parents=True, exist_ok=True)
-        pq.write_table(arrow_table(frame, EPISODE_COLUMNS), path)
+        pq.write_table(_schema_typed(table, EPISODE_COLUMNS), path)
         self._parts.append(path)
 
     def __enter__(self) -> "EpisodeStream":
@@ -788,6 +804,8 @@ class EpisodeStream:
 
     def finish(self) -> None:
         """Write ``episodes.parquet`` from the parts (and the pending rows no part reached)."""
+        import pandas as pd
+
         if self._pending is not None and len(self._pending):
             # Rows no part reached join the last part (read back), not a part of their own, which
             # would lack the columns only episode rows have (a vector action's components).
@@ -820,113 +838,15 @@ def _conformed(table: pa.Table, schema: pa.Schema) -> pa.Table:
     return table.select(schema.names).cast(schema)
 
 
-def canonical_tables(frames: dict[str, pd.DataFrame]) -> dict[str, pd.DataFrame]:
-    """The final tables in a row order that depends on their content only.
-
-    Instances by index; probes by (instance, repeat, j); episodes by (instance,
-    repeat), keeping the runner's plan order (blind first, then budgets) within a
-    trajectory; the engine cache by (engine, instance truth, query, argument).
-    Instances order the others, so ``test-10000`` follows ``test-9999``.
-    """
-    out = dict(frames)
-    instances = frames.get("instances")
-    if instances is not None and "instance_index" in instances.columns:
-        instances = instances.sort_values(["instance_index"], kind="stable", ignore_index=True)
-        out["instances"] = instances
-    order = _instance_order(instances)
-    out["probes"] = _by_instance(frames.get("probes"), ["instance_id", "repeat", "j"], order)
-    out["episodes"] = _by_instance(frames.get("episodes"), ["instance_id", "repeat"], order)
-    cache = frames.get("engine_cache")
-    rows = engine_cache_order(cache) if cache is not None else None
-    if rows is not None:
-        out["engine_cache"] = cache.iloc[rows].reset_index(drop=True)
-    for name, columns in _SCHEMAS.items():
-        if out.get(name) is not None:
-            out[name] = _with_schema_columns(out[name], columns)
-    return {name: out[name] for name in frames}
+def canonical_tables(frames: dict[str, "pd.DataFrame | None"]) -> dict[str, "pd.DataFrame | None"]:
+    """:func:`~probecommit.store.canonical.canonical_arrow` of DataFrames (the schema's tables get
+    their columns), as DataFrames."""
+    tables = {name: None if f is None else pa.Table.from_pandas(f, preserve_index=False, nthreads=1)
+              for name, f in frames.items()}
+    return {name: None if t is None else t.to_pandas() for name, t in canonical_arrow(tables, _SCHEMAS).items()}
 
 
-def _instance_order(instances: pd.DataFrame | None) -> dict[str, int]:
-    """Each instance id's position in the canonical instance order (by ``instance_index``);
-    empty without an instances table that has one."""
-    if instances is None or "instance_index" not in instances.columns:
-        return {}
-    ids = instances.sort_values(["instance_index"], kind="stable")["instance_id"].astype(str)
-    return {iid: n for n, iid in enumerate(ids)}
-
-
-def _instance_positions(frame: pd.DataFrame, order: dict[str, int]) -> np.ndarray:
-    """Each row's instance position in ``order``; ids it lacks come after every instance."""
-    ids = frame["instance_id"].astype(str)
-    # One hash lookup of the column (``Series.map`` with a dict goes through Python per row).
-    at = pd.Index(list(order), dtype=ids.dtype).get_indexer(ids)
-    return np.where(at < 0, len(order), at).astype(float)
-
-
-def _by_instance(frame: pd.DataFrame | None, keys: list[str], order: dict[str, int]) -> pd.DataFrame | None:
-    """``frame`` sorted (stably) by its instances' positions in ``order``, then by ``keys``."""
-    if frame is None or not len(frame) or not set(keys) <= set(frame.columns):
-        return frame
-    ranked = frame.assign(_pos=_instance_positions(frame, order) if order else 0)
-    sort_keys = ["_pos", "instance_id"] + keys[1:]
-    return ranked.sort_values(sort_keys, kind="stable", ignore_index=True).drop(columns="_pos")
-
-
-def _with_schema_columns(frame: pd.DataFrame, columns: tuple[Column, ...]) -> pd.DataFrame:
-    """Every schema column, in schema order, then the frame's others (a table of failed rows
-    only lacks some: they are added, empty)."""
-    if not len(frame.columns):
-        return frame
-    names = [n for c in columns for n in (vector_columns(frame.columns, c.name) if c.vector else [c.name]) or [c.name]]
-    missing = {n: pd.Series([None] * len(frame), index=frame.index, dtype=object) for n in names if n not in frame}
-    if missing:
-        frame = frame.assign(**missing)
-    return frame[names + [c for c in frame.columns if c not in names]]
-
-
-def engine_cache_order(cache: pd.DataFrame | pa.Table) -> np.ndarray | None:
-    """Row positions that put an engine cache (a frame or an Arrow table) in its canonical
-    order: by engine, the instance truth (the latent columns), query, then argument (as tuples
-    of floats compare); None for a table without those columns. The keys alone are converted,
-    not the answers."""
-    arrow = isinstance(cache, pa.Table)
-    cols = list(cache.column_names if arrow else cache.columns)
-    if not (cache.num_rows if arrow else len(cache)) or not {"engine", "query", "arg"} <= set(cols):
-        return None
-    latents = cols[cols.index("query") + 1: cols.index("arg")]  # the family's latent names
-
-    def column(name: str) -> pd.Series:
-        return cache.column(name).to_pandas() if arrow else cache[name].reset_index(drop=True)
-
-    keys = pd.DataFrame({name: column(name) for name in ("engine", *latents, "query")})
-    arg_keys = _arg_sort_keys(cache.column("arg") if arrow else cache["arg"])
-    keys = keys.assign(**arg_keys)
-    return keys.sort_values(["engine", *latents, "query", *arg_keys], kind="stable").index.to_numpy()
-
-
-def _arg_sort_keys(args: pd.Series | pa.ChunkedArray) -> dict[str, Any]:
-    """Sort keys that order query arguments as tuples of floats do: one column per component
-    when every argument has the same length (one conversion for the whole column), else the
-    tuples themselves."""
-    if isinstance(args, pa.ChunkedArray):
-        matrix = _arrow_float_matrix(args)
-        values = args.to_pylist() if matrix is None else None
-    else:
-        values = args.tolist()
-        matrix = float_matrix(values)
-    if matrix is None:  # arguments of different lengths
-        return {"_arg": pd.Series([tuple(float(v) for v in a) for a in values], dtype=object)}
-    return {f"_arg{i}": matrix[:, i] for i in range(matrix.shape[1])}
-
-
-def _arrow_float_matrix(column: pa.ChunkedArray) -> np.ndarray | None:
-    """A list column of float vectors of one length as a ``[rows, length]`` array (None when
-    their lengths differ or one is missing), read from its values buffer."""
-    column = column.combine_chunks() if column.num_chunks != 1 else column.chunk(0)
-    if column.null_count:
-        return None
-    lengths = pc.list_value_length(column).to_numpy(zero_copy_only=False)
-    if len(lengths) and (lengths != lengths[0]).any():
-        return None
-    flat = pc.list_flatten(column).to_numpy(zero_copy_only=False).astype(float, copy=False)
-    return flat.reshape(len(column), -1)
+def _instance_positions(frame: Any, order: dict[str, int]) -> np.ndarray:
+    """Each row's instance position in ``order`` (:func:`~probecommit.store.canonical.instance_positions`
+    of its ``instance_id`` column); ids it lacks come after every instance."""
+    return instance_positions(frame["instance_id"], order)
