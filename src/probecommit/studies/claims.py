@@ -344,7 +344,8 @@ def _breadth_explain() -> tuple[Any, ...]:
             + tuple((f"E{94 + i}", (f"{fam} probe_robust",)) for i, fam in enumerate(PROBE_REDRAWN))
             + tuple((f"E{124 + i}", (f"{fam} probe_robust",)) for i, fam in enumerate(PROBE_REACHED))
             + (("E138", tuple(f"darts {c}" for c in EX19_DARTS_CELLS)), ("E139", ("push2d probe_robust",)))
-            + tuple((f"E{140 + i}", cells) for i, cells in enumerate(EX19_WIDTH_ROWS.values())))
+            + tuple((f"E{140 + i}", cells) for i, cells in enumerate(EX19_WIDTH_ROWS.values()))
+            + tuple((f"E{156 + i}", (f"{fam} probe_robust",)) for i, fam in enumerate(EXACT_POSTERIOR)))
 
 
 def _audit_explain(audit: list[Comparison]) -> tuple[Any, ...]:
@@ -2107,12 +2108,46 @@ def _ex18_grasp_holds(v: Mapping[str, Any]) -> bool:
 EX18_PAPER_FEASIBLE = 6
 
 
+#: Table II's rows whose Probe-Robust cells E156, E157 decide again on the exact posterior of the stored readings
+#: (``studies/explain/ex22_exact.py``), in that order.
+EXACT_POSTERIOR = ("push1d", "hinge")
+
+
+def _experiments_ex22() -> list[Experiment]:
+    """The ex22 helper's experiments (E156.., ``studies/explain/ex22_*.py``; rules in docs/decisions.md, "ex22",
+    written before any key was computed)."""
+    out = []
+    for i, fam in enumerate(EXACT_POSTERIOR):
+        b = f"{X}ex22_exact.{fam}."
+        out.append(Experiment(
+            f"E{156 + i}", f"{fam}'s Probe-Robust(2, 5) decided again on the exact posterior of each stored episode's "
+            "readings (the filter's jitter, which the paper does not report for this family, removed)",
+            {"n": f"{b}episodes", "m": f"{b}sample", "s2": f"{b}stored.k2", "s5": f"{b}stored.k5",
+             "md": f"{b}premise_model_rel_diff", "cd": f"{b}premise_convergence_rel_diff", "ok": f"{b}premises_hold",
+             "e2": f"{b}exact.k2", "e2lo": f"{b}exact.k2_lo", "e2hi": f"{b}exact.k2_hi", "e5": f"{b}exact.k5",
+             "e5lo": f"{b}exact.k5_lo", "e5hi": f"{b}exact.k5_hi", "p5": f"{b}paper.k5", "p2": f"{b}paper.k2_implied",
+             "in5": f"{b}exact.k5_paper_inside", "in2": f"{b}exact.k2_paper_inside", "sq": f"{b}stored.ratio_k2_k5",
+             "eq": f"{b}exact.ratio_k2_k5", "pq": f"{b}paper.ratio_k2_k5", "kept": f"{b}exact.k5_median_kept",
+             "same": f"{b}same_action_share", "holds": f"{b}holds"},
+            "each of the {n:g} stored Probe-Robust episodes a budget decided again, from its own stored readings, on "
+            "the posterior weights of {m:g} prior points (no resampling, no jitter; the model's miss at the truth, "
+            "which gives the stored actions' cell to {md:.4f} relative; Monte Carlo: a quarter of the points moves "
+            "the k = 5 cell by {cd:.4f}; premises {ok:g} = hold): Probe-Robust(5) is {e5:.3f} [{e5lo:.3f}, "
+            "{e5hi:.3f}] (ours {s5:.3f}; the paper's {p5:.3f} inside: {in5:g} = yes) and Probe-Robust(2) {e2:.3f} "
+            "[{e2lo:.3f}, {e2hi:.3f}] (ours {s2:.3f}; the paper's implied {p2:.3f} inside: {in2:g}); k = 2 over "
+            "k = 5 is {eq:.2f} (ours {sq:.2f}, the paper's {pq:.2f}). The exact posterior's retained set still "
+            "holds a median {kept:g} of the points at k = 5, and {same:.2f} of the episodes keep the stored action.",
+            supports=lambda v: v["ok"] == 1 and v["in5"] == 1 and v["in2"] == 1))
+    return out
+
+
 for _experiment in (_experiments() + _experiments_more() + _experiments_ex3() + _experiments_ex4()
                     + _experiments_ex5() + _experiments_ex6() + _experiments_ex7()
                     + _experiments_ex8() + _experiments_ex9()
                     + _experiments_ex10() + _experiments_ex11() + _experiments_ex12() + _experiments_ex13()
                     + _experiments_ex14() + _experiments_ex15() + _experiments_ex16()
-                    + _experiments_ex17() + _experiments_ex18() + _experiments_ex19()):
+                    + _experiments_ex17() + _experiments_ex18() + _experiments_ex19()
+                    + _experiments_ex22()):
     EXPERIMENTS[_experiment.number] = _experiment
 
 
