@@ -28,8 +28,9 @@ STORED = "ex22_exact_rows.parquet"
 BUDGETS = (2, 5)
 #: The prior sample's size (full, quick), its seed, and premise (b)'s tolerance between M / 4 and M (declared).
 SAMPLE, QUICK_SAMPLE, SAMPLE_SEED, CONVERGENCE = 2**17, 2**12, 2201, 0.03
-#: Log-weights this far below the largest are left out of the sort (their total is checked against 1 - nu).
-LOG_CUT = 40.0
+#: Log-weights this far below the largest are left out of the sort: the prefix is unchanged whenever the points
+#: kept hold the mass nu (checked; otherwise every point is sorted).
+LOG_CUT = 12.0
 #: Grid actions scored on each side of the scenario minimax's crossing (the score is quasi-convex: enough).
 WINDOW = 3
 #: Cluster bootstrap as Table II's cells (``studies.breadth.run_breadth``'s defaults).
