@@ -953,7 +953,7 @@ RECOMPUTED = {
                "score, model and belief parts) and the cover schedule's first-tap band against T36's escapes; "
                "ex19's darts blind cells over redrawn truths at every width of the prior sweep; ex18's "
                "optimistic-split counts against the paper's and grasp under each force ceiling; ex22's hinge and push1d "
-               "probed cells decided again on the exact posterior of the stored readings",
+               "probed cells decided again on the exact posterior of the stored readings and the hinge's probe magnitudes swept",
 }
 TRACED_ONLY = {
     "insertion": "the stored rows themselves (episodes, re-executed commits, replays); the re-split rows; the cover "
