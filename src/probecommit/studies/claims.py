@@ -2132,12 +2132,12 @@ def _experiments_ex22() -> list[Experiment]:
              "same": f"{b}same_action_share", "holds": f"{b}holds"},
             "each of the {n:g} stored Probe-Robust episodes a budget decided again, from its own stored readings, on "
             "the posterior weights of {m:g} prior points (no resampling, no jitter; the model's miss at the truth, "
-            "which gives the stored actions' cell to {md:.4f} relative; Monte Carlo: a quarter of the points moves "
+            "which gives the stored actions' cell to {md:.2g} relative; Monte Carlo: a quarter of the points moves "
             "the k = 5 cell by {cd:.4f}; premises {ok:g} = hold): Probe-Robust(5) is {e5:.3f} [{e5lo:.3f}, "
-            "{e5hi:.3f}] (ours {s5:.3f}; the paper's {p5:.3f} inside: {in5:g} = yes) and Probe-Robust(2) {e2:.3f} "
+            "{e5hi:.3f}] (ours {s5:.3f}; the paper's {p5:.3f} inside: {in5:g}, 1 = yes) and Probe-Robust(2) {e2:.3f} "
             "[{e2lo:.3f}, {e2hi:.3f}] (ours {s2:.3f}; the paper's implied {p2:.3f} inside: {in2:g}); k = 2 over "
             "k = 5 is {eq:.2f} (ours {sq:.2f}, the paper's {pq:.2f}). The exact posterior's retained set still "
-            "holds a median {kept:g} of the points at k = 5, and {same:.2f} of the episodes keep the stored action.",
+            "holds a median {kept:.0f} of the points at k = 5, and {same:.2f} of the episodes keep the stored action.",
             supports=lambda v: v["ok"] == 1 and v["in5"] == 1 and v["in2"] == 1))
     return out + [_e158()]
 
