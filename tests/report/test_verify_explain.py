@@ -115,6 +115,10 @@ CASES: list[tuple[str, Edit]] = [
                                                "realized", bump, "ex19_widths.")),
     ("stored-ex19-cone-miss", edit_stored("ex19_cone_rows.parquet", lambda t: (t.kind == "miss") & (t.cone == "pyramidal"),
                                           "realized", bump, "ex19_cone.")),
+    ("stored-ex22-exact-episode", edit_stored("ex22_exact_rows.parquet", lambda t: t.part == "exact", "realized", bump,
+                                              "ex22_exact.")),
+    ("stored-ex22-magnitude-episode", edit_stored("ex22_magnitude_rows.parquet", lambda t: t.part == "c150", "realized",
+                                                  bump, "ex22_magnitude.")),
     ("json-ex7-signature", edit_results("explain", ["ex7_faults", "signature.particles.optimism_change"],
                                         lambda v: [v[0] + 0.0123, *v[1:]])),
     ("json-pybullet-stored-escape", edit_results("explain", ["pybullet_escape", "stored.escape_k8"],
@@ -188,6 +192,7 @@ CASES: list[tuple[str, Edit]] = [
     ("deleted-ex11-rows-rehashed", delete_stored("ex11_probe_rows.parquet")),
     ("deleted-ex16-rows-rehashed", delete_stored("ex16_reach_rows.parquet")),
     ("deleted-ex19-cone-rows-rehashed", delete_stored("ex19_cone_rows.parquet")),
+    ("deleted-ex22-exact-rows-rehashed", delete_stored("ex22_exact_rows.parquet")),
 ]
 
 

@@ -883,7 +883,7 @@ STORED_SUMMARIES = (("mixture_noise", EXPLAIN_MIXTURE, "mixture_x"),
 
 #: Explain modules that recompute their own groups: ``recompute(folder, results)`` gives
 #: ``(values, sources, problems)`` (a group published without its stored rows is a problem).
-SELF_RECOMPUTING = ("ex7", "ex8", "ex11", "ex16", "ex19")
+SELF_RECOMPUTING = ("ex7", "ex8", "ex11", "ex16", "ex19", "ex22")
 
 #: Explain modules whose ``recompute(folder, results, boot)`` gives ``{key: (value, stored file)}`` under the
 #: insertion study's bootstrap settings, with ``STORED_BY_GROUP`` naming each group's rows.
@@ -952,7 +952,8 @@ RECOMPUTED = {
                "commit regime; ex17's Table III original arm under the aim tie-break readings (optimism and its "
                "score, model and belief parts) and the cover schedule's first-tap band against T36's escapes; "
                "ex19's darts blind cells over redrawn truths at every width of the prior sweep; ex18's "
-               "optimistic-split counts against the paper's and grasp under each force ceiling",
+               "optimistic-split counts against the paper's and grasp under each force ceiling; ex22's hinge and push1d "
+               "probed cells decided again on the exact posterior of the stored readings and the hinge's probe magnitudes swept",
 }
 TRACED_ONLY = {
     "insertion": "the stored rows themselves (episodes, re-executed commits, replays); the re-split rows; the cover "

@@ -344,7 +344,9 @@ def _breadth_explain() -> tuple[Any, ...]:
             + tuple((f"E{94 + i}", (f"{fam} probe_robust",)) for i, fam in enumerate(PROBE_REDRAWN))
             + tuple((f"E{124 + i}", (f"{fam} probe_robust",)) for i, fam in enumerate(PROBE_REACHED))
             + (("E138", tuple(f"darts {c}" for c in EX19_DARTS_CELLS)), ("E139", ("push2d probe_robust",)))
-            + tuple((f"E{140 + i}", cells) for i, cells in enumerate(EX19_WIDTH_ROWS.values())))
+            + tuple((f"E{140 + i}", cells) for i, cells in enumerate(EX19_WIDTH_ROWS.values()))
+            + tuple((f"E{156 + i}", (f"{fam} probe_robust",)) for i, fam in enumerate(EXACT_POSTERIOR))
+            + (("E158", ("hinge probe_robust",)),))
 
 
 def _audit_explain(audit: list[Comparison]) -> tuple[Any, ...]:
@@ -2107,12 +2109,75 @@ def _ex18_grasp_holds(v: Mapping[str, Any]) -> bool:
 EX18_PAPER_FEASIBLE = 6
 
 
+#: Table II's rows whose Probe-Robust cells E156, E157 decide again on the exact posterior of the stored readings
+#: (``studies/explain/ex22_exact.py``), in that order.
+EXACT_POSTERIOR = ("push1d", "hinge")
+
+
+def _experiments_ex22() -> list[Experiment]:
+    """The ex22 helper's experiments (E156.., ``studies/explain/ex22_*.py``; rules in docs/decisions.md, "ex22",
+    written before any key was computed)."""
+    out = []
+    for i, fam in enumerate(EXACT_POSTERIOR):
+        b = f"{X}ex22_exact.{fam}."
+        out.append(Experiment(
+            f"E{156 + i}", f"{fam}'s Probe-Robust(2, 5) decided again on the exact posterior of each stored episode's "
+            "readings (the filter's jitter, which the paper does not report for this family, removed)",
+            {"n": f"{b}episodes", "m": f"{b}sample", "s2": f"{b}stored.k2", "s5": f"{b}stored.k5",
+             "md": f"{b}premise_model_rel_diff", "cd": f"{b}premise_convergence_rel_diff", "ok": f"{b}premises_hold",
+             "e2": f"{b}exact.k2", "e2lo": f"{b}exact.k2_lo", "e2hi": f"{b}exact.k2_hi", "e5": f"{b}exact.k5",
+             "e5lo": f"{b}exact.k5_lo", "e5hi": f"{b}exact.k5_hi", "p5": f"{b}paper.k5", "p2": f"{b}paper.k2_implied",
+             "in5": f"{b}exact.k5_paper_inside", "in2": f"{b}exact.k2_paper_inside", "sq": f"{b}stored.ratio_k2_k5",
+             "eq": f"{b}exact.ratio_k2_k5", "pq": f"{b}paper.ratio_k2_k5", "kept": f"{b}exact.k5_median_kept",
+             "same": f"{b}same_action_share", "holds": f"{b}holds"},
+            "each of the {n:g} stored Probe-Robust episodes a budget decided again, from its own stored readings, on "
+            "the posterior weights of {m:g} prior points (no resampling, no jitter; the model's miss at the truth, "
+            "which gives the stored actions' cell to {md:.2g} relative; Monte Carlo: a quarter of the points moves "
+            "the k = 5 cell by {cd:.4f}; premises {ok:g} = hold): Probe-Robust(5) is {e5:.3f} [{e5lo:.3f}, "
+            "{e5hi:.3f}] (ours {s5:.3f}; the paper's {p5:.3f} inside: {in5:g}, 1 = yes) and Probe-Robust(2) {e2:.3f} "
+            "[{e2lo:.3f}, {e2hi:.3f}] (ours {s2:.3f}; the paper's implied {p2:.3f} inside: {in2:g}); k = 2 over "
+            "k = 5 is {eq:.2f} (ours {sq:.2f}, the paper's {pq:.2f}). The exact posterior's retained set still "
+            "holds a median {kept:.0f} of the points at k = 5, and {same:.2f} of the episodes keep the stored action.",
+            supports=lambda v: v["ok"] == 1 and v["in5"] == 1 and v["in2"] == 1))
+    return out + [_e158()]
+
+
+#: E158's swept scales of the hinge's frozen release speeds (``ex22_magnitude.SCALES`` past the premise's 1).
+EX22_SCALES = ("c125", "c150", "c175", "c200")
+
+
+def _e158() -> Experiment:
+    """E158: the hinge's probe magnitudes swept (``studies/explain/ex22_magnitude.py``)."""
+    b = f"{X}ex22_magnitude."
+    keys = {"n": f"{b}scales_swept", "h": f"{b}scales_holding", "at": f"{b}first_scale", "d": f"{b}premise_rel_diff",
+            "ok": f"{b}premise_holds", "pq": f"{b}paper.ratio_k2_k5", "sq": f"{b}stored.ratio_k2_k5",
+            "holds": f"{b}holds"}
+    for i, s in enumerate(EX22_SCALES):
+        keys.update({f"k5_{i}": f"{b}{s}.k5", f"k2_{i}": f"{b}{s}.k2", f"q{i}": f"{b}{s}.ratio_k2_k5",
+                     f"qlo{i}": f"{b}{s}.ratio_lo", f"qhi{i}": f"{b}{s}.ratio_hi", f"in5_{i}": f"{b}{s}.k5_paper_inside",
+                     f"in2_{i}": f"{b}{s}.k2_paper_inside"})
+    cells = "; ".join(f"{{k5_{i}:.3f}} and {{k2_{i}:.3f}} (inside: {{in5_{i}:g}}, {{in2_{i}:g}}), ratio {{q{i}:.2f}} "
+                      f"[{{qlo{i}:.2f}}, {{qhi{i}:.2f}}]" for i in range(len(EX22_SCALES)))
+    return Experiment(
+        "E158", "the hinge's Probe-Robust(2, 5) with its release speeds scaled over a declared sweep (the probe "
+        "magnitudes the paper does not report), against both curve points and the curve's shape",
+        keys,
+        "the frozen hinge on its closed-form scene (which gives the stored MuJoCo cell to {d:.4f} relative, premise "
+        "{ok:g} = holds) with its three release speeds scaled by each of {n:g} declared factors (a quarter more, "
+        "half more, three quarters more, twice), gives Probe-Robust(5) and (2), the paper's values inside our "
+        "intervals or not, and k = 2 over k = 5 with its cluster-bootstrap interval: " + cells + ". The rule (both "
+        "cells and the paper's ratio {pq:.2f} inside at one scale) holds at {h:g} scale(s) (first {at:g}; 0 = none); "
+        "the frozen ratio is {sq:.2f}.",
+        supports=lambda v: v["ok"] == 1 and v["holds"] == 1 and v["h"] >= 1)
+
+
 for _experiment in (_experiments() + _experiments_more() + _experiments_ex3() + _experiments_ex4()
                     + _experiments_ex5() + _experiments_ex6() + _experiments_ex7()
                     + _experiments_ex8() + _experiments_ex9()
                     + _experiments_ex10() + _experiments_ex11() + _experiments_ex12() + _experiments_ex13()
                     + _experiments_ex14() + _experiments_ex15() + _experiments_ex16()
-                    + _experiments_ex17() + _experiments_ex18() + _experiments_ex19()):
+                    + _experiments_ex17() + _experiments_ex18() + _experiments_ex19()
+                    + _experiments_ex22()):
     EXPERIMENTS[_experiment.number] = _experiment
 
 

@@ -35,6 +35,7 @@ from probecommit.studies.explain import ex14
 from probecommit.studies.explain import ex16
 from probecommit.studies.explain import ex17
 from probecommit.studies.explain import ex19
+from probecommit.studies.explain import ex22
 from probecommit.studies.explain import ex12_distinct, ex12_simultaneous
 from probecommit.studies.explain import ex15_readings, ex15_union
 from probecommit.studies.explain import ex18_grasp, ex18_share
@@ -120,6 +121,7 @@ class Explain:
             *ex16.GROUPS,
             *ex17.GROUPS,
             *ex19.GROUPS,
+            *ex22.GROUPS,
             ex12_distinct.GROUP, ex12_simultaneous.GROUP,
             ex15_readings.GROUP, ex15_union.GROUP,
             ex18_share.GROUP, ex18_grasp.GROUP)}
@@ -528,6 +530,7 @@ class Explain:
                  self.robust, physx_coverage, self.physx,
                  lambda: (self.ready and self.ready(), self.gru()), lambda: more.run(self),
                  lambda: ex15_union.run(self), self.aside(ex18_grasp.run, needs=()),  # E133: frozen config only
+                 self.aside(ex22.exact, ex22.magnitude, needs=("breadth",)),  # E156-E158: stored breadth rows, closed forms
                  lambda: ex19.run(self),  # E138 reads the prior sweep's darts runs (more.run)
                  lambda: ex4.run(self),
                  lambda: ex6.run(self, paper),
