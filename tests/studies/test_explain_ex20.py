@@ -114,3 +114,21 @@ def test_claims_name_the_experiments():
     assert {f"E146[cluster_coverage original k={k}]" for k in (1, 2, 3, 5, 8)} <= named
     t12 = next(c for c in C.CLAIMS if c.id == "T12-calibrated-audit")
     assert ("E145", ("original",)) in t12.explain
+
+
+def test_verify_recomputes_every_key_from_the_stored_rows(tmp_path):
+    from probecommit.studies.explain import ex20
+
+    ep, probes, inst = _episodes_and_taps()
+    rows = B.band_rows(ep, probes, inst, B.FROZEN, DESIGN, budgets=(1, 2))
+    boot = {"resamples": 30, "seed": 2}
+    published = B.keys(rows, boot)
+    rows.to_parquet(tmp_path / B.STORED)
+    got = ex20.recompute(tmp_path, {"ex20_band": published}, boot)
+    assert set(got) == {f"ex20_band.{k}" for k in published}
+    for k, v in published.items():
+        value, source = got[f"ex20_band.{k}"]
+        assert source == B.STORED and (value == v or (np.isnan(value) and np.isnan(v)))
+    assert ex20.STORED_BY_GROUP == {"ex20_band": B.STORED}
+    (tmp_path / B.STORED).unlink()
+    assert ex20.recompute(tmp_path, {"ex20_band": published}, boot) == {}  # verify then flags the missing rows
