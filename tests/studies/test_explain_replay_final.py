@@ -76,3 +76,21 @@ def test_e107_rows_are_the_full_replays_rows(base):
             rows.append((float(right["realized"].mean()), float(mixed["realized"].mean()),
                          float((right["action"].to_numpy() != mixed["action"].to_numpy()).mean())))
     assert list(zip(got["right"], got["mixed"], got["changed"])) == rows
+
+
+def test_fault_cells_on_a_draw_are_the_full_harness_cells(base):
+    """The fault harness's arms on a fresh draw, replayed at the final budget only, give the full harness's cells."""
+    import math
+
+    from probecommit.studies.explain import draw_faults
+    from probecommit.studies.faults import fault_arms, run_fault_harness
+
+    p = load_protocol()
+    f, k = p.faults, max(base.config.probes.commit_budgets)
+    arms = [a for a in fault_arms(f.noise_factor, f.prior_half_width, 16, f.frame_offset, f.temperature, p.sigma)
+            if a.rollout == "base" and a.fault in draw_faults.FAULTS]
+    want = draw_faults.arm_cells(run_fault_harness({"base": base}, arms, chunk_instances=48), k)
+    got = draw_faults.arm_cells(draw_faults.harness_at(base, arms, k), k)
+    assert {"none.fail", "boundary.fail", "particles.fail"} <= set(want)
+    assert got.keys() == want.keys()
+    assert all(got[c] == want[c] or (math.isnan(got[c]) and math.isnan(want[c])) for c in want)
