@@ -26,8 +26,8 @@ from probecommit.studies.robust import final_failure, final_rows, mark_chosen, r
 
 def tune_at_final(run: Any, grid: dict[str, list[tuple[float, dict[str, Any]]]]) -> pd.DataFrame:
     """``tune_robust_filters(run, grid)`` without its ``belief`` column: a candidate's failure reads only the final
-    budget, so each replay commits only it (``replay_at``: the same rows there; a full replay's other seven budgets
-    were three quarters of each replay's CPU, issue 42)."""
+    budget, so each replay commits only it (``replay_at``: the same rows there; committing the other seven budgets
+    was half of each dev draw's replay CPU, issue 42)."""
     from probecommit.runner.replay import committed_budgets
 
     k = max(committed_budgets(run.config))
