@@ -562,14 +562,11 @@ class Explain:
     def run_steps(self, steps: list[Callable[[], Any]]) -> None:
         """``steps`` in order, then the jobs set aside handed on; checks that no step read what a job set aside
         before it fills (``lanes.Reads.check``: such a read would depend on the schedule)."""
-        from probecommit.process.memory import trim_heap
-
         try:
             for i, step in enumerate(steps):
                 self.reads.step = i
                 self.progress("explain", i, len(steps))
                 step()
-                trim_heap()  # what the step freed goes back: the next step's peak starts from what is live
             self.reads.step = len(steps)
             self.progress("explain: waiting for the steps in a process of their own", 0, 1)
             self.background.finish()  # each fills groups (and stored rows) no other step fills
@@ -611,7 +608,6 @@ def run_aside(root: Path, quick: bool, workers: int, config: dict[str, Any],
         RuntimeError: a step filled what the target concatenates in step order (commits, episodes, margin
             tables): merged later it would move.
     """
-    from probecommit.process.memory import trim_heap
     from probecommit.tasks.base import shared_engine_answers
 
     job = Explain(root, quick, lambda *a: None, workers, config)
@@ -619,7 +615,6 @@ def run_aside(root: Path, quick: bool, workers: int, config: dict[str, Any],
         with shared_engine_answers():  # as the target's own process (``schedule.run_target``)
             for step in steps:
                 step(job)
-                trim_heap()  # as between the steps in place (``Explain.run_steps``)
             job.background.finish()
     finally:
         job.background.close()
