@@ -18,7 +18,8 @@ from typing import Any
 
 import pandas as pd
 
-from probecommit.runner.replay import LoadedRun, replay_episodes
+from probecommit.runner.replay import LoadedRun
+from probecommit.studies.explain.replay_final import replay_at
 from probecommit.studies.explain.mixture_x import reseeded
 
 #: The stored rows (one per filter seed and reading) the keys are summarized from.
@@ -58,11 +59,11 @@ def run(base: LoadedRun, epsilon: float, low: float, high: float, seeds: list[in
     rows = []
     for seed in seeds:
         loaded = reseeded(base, seed)
-        right = _final(replay_episodes(loaded, None, chunk_instances=48)[0], k)
+        right = _final(replay_at(loaded, None, k), k)  # only budget k is read: only it is committed (issue 42)
         for reading in READINGS:
             eff = effective_epsilon(reading, epsilon, high - low, sigma)
             belief = {"likelihood": "mixture", "epsilon": eff, "mixture_low": low, "mixture_high": high}
-            mixed = _final(replay_episodes(loaded, {"belief": belief}, chunk_instances=48)[0], k)
+            mixed = _final(replay_at(loaded, {"belief": belief}, k), k)
             rows.append({"seed": int(seed), "reading": reading, "epsilon": float(epsilon), "effective_epsilon": eff,
                          "right": float(right["realized"].mean()), "mixed": float(mixed["realized"].mean()),
                          "changed": float((right["action"].to_numpy() != mixed["action"].to_numpy()).mean())})

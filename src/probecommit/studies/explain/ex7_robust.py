@@ -21,7 +21,19 @@ import pandas as pd
 
 from probecommit.studies.explain.replay_final import replay_at
 from probecommit.studies.explain.runs import _run
-from probecommit.studies.robust import final_rows, robust_candidates, tune_robust_filters
+from probecommit.studies.robust import final_failure, final_rows, mark_chosen, robust_candidates
+
+
+def tune_at_final(run: Any, grid: dict[str, list[tuple[float, dict[str, Any]]]]) -> pd.DataFrame:
+    """``tune_robust_filters(run, grid)`` without its ``belief`` column: a candidate's failure reads only the final
+    budget, so each replay commits only it (``replay_at``: the same rows there; committing the other seven budgets
+    was half of each dev draw's replay CPU, issue 42)."""
+    from probecommit.runner.replay import committed_budgets
+
+    k = max(committed_budgets(run.config))
+    rows = [{"family": family, "value": value, "failure": final_failure(replay_at(run, {"belief": belief}, k))}
+            for family, candidates in grid.items() for value, belief in candidates]
+    return mark_chosen(pd.DataFrame(rows, columns=["family", "value", "failure"]))
 
 
 def dev_draw_table(protocol: Any, runs: Any, count: int, workers: int = 1) -> pd.DataFrame:
@@ -32,7 +44,7 @@ def dev_draw_table(protocol: Any, runs: Any, count: int, workers: int = 1) -> pd
     for i in range(count):
         split = f"dev_draw_{i:02d}"
         run = _run(protocol.run_config(split, "development", split, "random"), runs / split, workers)
-        table = tune_robust_filters(run, grid, chunk_instances=48).drop(columns="belief")
+        table = tune_at_final(run, grid)
         parts.append(table.assign(draw=split))
     return pd.concat(parts, ignore_index=True)[["draw", "family", "value", "failure", "chosen"]]
 
