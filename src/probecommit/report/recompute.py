@@ -887,7 +887,7 @@ SELF_RECOMPUTING = ("ex7", "ex8", "ex11", "ex16", "ex19")
 
 #: Explain modules whose ``recompute(folder, results, boot)`` gives ``{key: (value, stored file)}`` under the
 #: insertion study's bootstrap settings, with ``STORED_BY_GROUP`` naming each group's rows.
-BOOTSTRAPPED = ("ex6", "ex10", "ex13", "ex14", "ex17")
+BOOTSTRAPPED = ("ex6", "ex10", "ex13", "ex14", "ex17", "ex21")
 
 
 #: The stored tables each study's numbers are recomputed from: a publication without one fails verify
@@ -952,7 +952,9 @@ RECOMPUTED = {
                "commit regime; ex17's Table III original arm under the aim tie-break readings (optimism and its "
                "score, model and belief parts) and the cover schedule's first-tap band against T36's escapes; "
                "ex19's darts blind cells over redrawn truths at every width of the prior sweep; ex18's "
-               "optimistic-split counts against the paper's and grasp under each force ceiling",
+               "optimistic-split counts against the paper's and grasp under each force ceiling; ex21's paper's-schedule "
+               "band trajectories under the unstated weight and jitter-timing readings and without the first "
+               "resampling's jitter",
 }
 TRACED_ONLY = {
     "insertion": "the stored rows themselves (episodes, re-executed commits, replays); the re-split rows; the cover "

@@ -35,6 +35,7 @@ from probecommit.studies.explain import ex14
 from probecommit.studies.explain import ex16
 from probecommit.studies.explain import ex17
 from probecommit.studies.explain import ex19
+from probecommit.studies.explain import ex21
 from probecommit.studies.explain import ex12_distinct, ex12_simultaneous
 from probecommit.studies.explain import ex15_readings, ex15_union
 from probecommit.studies.explain import ex18_grasp, ex18_share
@@ -120,6 +121,7 @@ class Explain:
             *ex16.GROUPS,
             *ex17.GROUPS,
             *ex19.GROUPS,
+            *ex21.GROUPS,
             ex12_distinct.GROUP, ex12_simultaneous.GROUP,
             ex15_readings.GROUP, ex15_union.GROUP,
             ex18_share.GROUP, ex18_grasp.GROUP)}
@@ -536,6 +538,7 @@ class Explain:
                  lambda: ex16.run(self), lambda: ex13.surprise(self, paper),
                  lambda: ex14.run(self, paper),
                  lambda: ex17.band(self, paper, COVER_SCHEDULE[0]),
+                 lambda: ex21.run(self, paper),
                  lambda: ex12_distinct.run(self),
                  lambda: ex18_share.run(self)]  # last: it waits for E118's and E119's rows
         self.run_steps(steps)
