@@ -18,6 +18,8 @@ from probecommit.studies.explain import ex21_band
 GROUPS = ("ex21_band",)
 #: The rows each group's keys are summarized from (stored beside ``results.json``).
 STORED_BY_GROUP = {"ex21_band": ex21_band.STORED}
+#: The paper's-schedule runs ``runs.schedule_runs`` writes, by the part ``rows_of`` reads.
+PAPER_RUNS = {"test": "B_test_cover_paper_schedule", "cal": "B_cal_cover_paper_schedule", "A": "A_cover_paper_schedule"}
 
 
 def _draw_rows(beliefs: Any, loaded: Any, final_k: int, inner: float, outer: float) -> pd.DataFrame:
@@ -51,16 +53,18 @@ def rows_of(paper_schedule: dict[str, Any], pool: Any, final_k: int, outer: floa
     return pd.concat(parts, ignore_index=True)
 
 
-def run(job: Any, paper_schedule: dict[str, Any]) -> None:
-    """E150 and E151 on the paper's-schedule runs and the re-split pool's run (none: four draws)."""
+def run(job: Any) -> None:
+    """E150 and E151 on the paper's-schedule runs and the re-split pool's run (none: four draws), read from the
+    explain target's run folders (stored inputs only: the step runs in a process of its own)."""
     from probecommit.runner.replay import load_run
     from probecommit.studies.explain.ex13 import POOL_RUN
 
-    job.progress("explain: T36's band trajectories under the unstated weight and jitter choices", 0, 1)
+    job.progress("explain: T36's band trajectories under the unstated weight and jitter-timing readings", 0, 1)
+    paper = {part: load_run(job.runs / name) for part, name in PAPER_RUNS.items()}
     pool_dir = job.runs / POOL_RUN
     pool = load_run(pool_dir) if (pool_dir / "episodes.parquet").is_file() else None
-    test = paper_schedule["test"]
-    rows = rows_of(paper_schedule, pool, int(job.p.budgets["cover"]), float(test.config.simulator.boundary_offset))
+    offset = float(paper["test"].config.simulator.boundary_offset)
+    rows = rows_of(paper, pool, int(job.p.budgets["cover"]), offset)
     job.stored[ex21_band.STORED] = rows
     job.res["ex21_band"].update(ex21_band.keys(rows, **job.boot))
 

@@ -538,7 +538,7 @@ class Explain:
                  lambda: ex16.run(self), lambda: ex13.surprise(self, paper),
                  lambda: ex14.run(self, paper),
                  lambda: ex17.band(self, paper, COVER_SCHEDULE[0]),
-                 lambda: ex21.run(self, paper),
+                 self.aside(ex21.run, needs=()),  # E150/E151: the paper's-schedule runs and the pool's, stored
                  lambda: ex12_distinct.run(self),
                  lambda: ex18_share.run(self)]  # last: it waits for E118's and E119's rows
         self.run_steps(steps)
