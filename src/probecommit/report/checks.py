@@ -29,7 +29,9 @@ DECLARED_NONFINITE = {("insertion", "results.gates.summary.#.claimed")}
 #: belief gave probability 0 (``studies.explain.surprise_variants``; the AUC ranks it above every finite one).
 DECLARED_INFINITE_COLUMNS = {("explain", "surprise_variants.parquet", r"class_k\d+"),
                              ("explain", "ex6_surprise_rows.parquet", r"class"),
-                             ("explain", "ex7_fault_surprise.parquet", r"class")}
+                             ("explain", "ex7_fault_surprise.parquet", r"class"),
+                             # W2's float32 weights: a tap contradicting every particle has predictive density 0
+                             ("explain", "ex21_band_rows.parquet", r"surprise_(k1|final)")}
 #: Stored columns that hold an episode's miss (metres, not a rate) under a name the rate rule would read as a rate,
 #: by (study, file, column): the pyramidal-cone rows keep the elliptic cone's miss beside the re-executed one.
 DECLARED_MISS_COLUMNS = {("explain", "ex4_cone_rows.parquet", "realized_elliptic")}

@@ -887,7 +887,7 @@ SELF_RECOMPUTING = ("ex7", "ex8", "ex11", "ex16", "ex19", "ex22")
 
 #: Explain modules whose ``recompute(folder, results, boot)`` gives ``{key: (value, stored file)}`` under the
 #: insertion study's bootstrap settings, with ``STORED_BY_GROUP`` naming each group's rows.
-BOOTSTRAPPED = ("ex6", "ex10", "ex13", "ex14", "ex17", "ex20")
+BOOTSTRAPPED = ("ex6", "ex10", "ex13", "ex14", "ex17", "ex20", "ex21")
 
 
 #: The stored tables each study's numbers are recomputed from: a publication without one fails verify
@@ -954,7 +954,9 @@ RECOMPUTED = {
                "ex19's darts blind cells over redrawn truths at every width of the prior sweep; ex18's "
                "optimistic-split counts against the paper's and grasp under each force ceiling; ex22's hinge and push1d "
                "probed cells decided again on the exact posterior of the stored readings and the hinge's probe magnitudes swept; "
-               "ex20's Table III original arm post-stratified on the design's exposure to the misread band",
+               "ex20's Table III original arm post-stratified on the design's exposure to the misread band; ex21's "
+               "paper's-schedule band trajectories under the unstated weight and jitter-timing readings and without "
+               "the first resampling's jitter",
 }
 TRACED_ONLY = {
     "insertion": "the stored rows themselves (episodes, re-executed commits, replays); the re-split rows; the cover "

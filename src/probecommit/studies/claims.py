@@ -738,7 +738,9 @@ def _claims_commit_decision() -> list[Claim]:
               (Inside("k=1", "T36-surprise.auc_k1", f"{X}missing.surprise_auc_cover_k1"),
                Inside("k=5", "T36-surprise.auc_k5", f"{X}missing.surprise_auc_cover_k5")),
               explain=(("E15", ("k=5",)), ("E16", ("k=1",)), ("E64", ("k=1", "k=5")), ("E88", ("k=1", "k=5")),
-                       ("E106", ("k=1",)), ("E114[k=1]", ("k=1",)), ("E114[k=5]", ("k=5",)), ("E127", ("k=1",)))))
+                       ("E106", ("k=1",)), ("E114[k=1]", ("k=1",)), ("E114[k=5]", ("k=5",)), ("E127", ("k=1",)),
+                       ("E150[k=1]", ("k=1",)), ("E150[k=5]", ("k=5",)), ("E151[k=1]", ("k=1",)),
+                       ("E151[k=5]", ("k=5",)))))
     return c
 
 
@@ -2111,6 +2113,76 @@ def _ex18_grasp_holds(v: Mapping[str, Any]) -> bool:
 #: The paper's feasible grasp truths: "three of six feasible truths improve" (Sec. V-A; ``T09-grasp.improve``).
 EX18_PAPER_FEASIBLE = 6
 
+#: E150's readings, in its rule's order (``studies/explain/ex21_band.py``): W1, W2, J1.
+EX21_READINGS = ("linear64", "linear32", "move_next")
+
+
+def _ex21_keeps_lost(v: Mapping[str, Any], r: str) -> bool:
+    """ex21's declared condition for one reading: W0's check, E127's implied share within the five draws' band
+    escaped shares under it, and the paper's k = 1 AUC within their point k = 1 AUCs."""
+    return (int(v["w0"]) == 1 and v[f"{r}slo"] <= v["imp"] <= v[f"{r}shi"]
+            and v[f"{r}alo"] <= _pv("T36-surprise.auc_k1") <= v[f"{r}ahi"])
+
+
+def _ex21_selected(v: Mapping[str, Any]) -> str | None:
+    """E150's selected reading: the first of W1, W2, J1 that keeps the band lost (None: none does)."""
+    return next((r for r in EX21_READINGS if _ex21_keeps_lost(v, r)), None)
+
+
+def _experiments_ex21() -> list[Experiment]:
+    """The ex21 helper's experiments (``studies/explain/ex21*.py``; rules in docs/decisions.md, "ex21", written
+    before the runs): T36's band trajectories replayed under the unstated weight and jitter-timing readings
+    (E150) and with the first resampling's jitter removed (E151)."""
+    b = f"{X}ex21_band."
+    common = {"w0": f"{b}w0_reproduces_stored", "imp": f"{X}ex17_band.implied_share", "nd": f"{b}draws",
+              "pa1": "paper:T36-surprise.auc_k1", "pa5": "paper:T36-surprise.auc_k5"}
+    spans = {f"{r}{q}": f"{b}{r}.{n}" for r in (*EX21_READINGS, "stated", "first_unjittered")
+             for q, n in (("slo", "share.min"), ("shi", "share.max"), ("alo", "auc_k1.min"), ("ahi", "auc_k1.max"),
+                          ("flo", "auc_final.min"), ("fhi", "auc_final.max"), ("elo", "n_escaped.min"),
+                          ("ehi", "n_escaped.max"))}
+    trace = {f"{q}{d}": f"{b}trace.{d}.band_share.{n}" for d in ("b_test", "a")
+             for q, n in (("p_", "prejitter_k1"), ("k_", "k1"), ("f_", "final"))}
+    trace.update({"same": f"{b}trace.band.hull_unchanged_share", "reach": f"{b}trace.band.tail_reach_mm",
+                  "nb": f"{b}trace.band.n", "ac": f"{b}trace.all_contradicted_taps",
+                  "acb": f"{b}trace.band.all_contradicted_taps"})
+    mech = ("Our filter follows the paper's filter paragraph; on E106's {nd:d} paper's-schedule draws ({nb:d} "
+            "first-tap band trajectories) the first tap's resampling does remove the band truth (escaped before its "
+            "jitter: {p_b_test:.3f} on Split B test, {p_a:.3f} on Split A) but the jitter of the copies at the "
+            "pocket-consistent edge reaches {reach:.2f} mm past them on average, so after it only {k_b_test:.3f} and "
+            "{k_a:.3f} stay escaped, and {f_b_test:.3f} and {f_a:.3f} at k = 5: later taps neither lose nor recover "
+            "them ({same:.3f} of band hulls are the same at k = 1 and k = 5); no band tap contradicts every particle "
+            "({acb:d} such taps; {ac:d} on all trajectories). ")
+    readings = ("Linear-space weights in float64 give band escaped shares {linear64slo:.3f} to {linear64shi:.3f} "
+                "and k = 1 AUC {linear64alo:.3f} to {linear64ahi:.3f}, in float32 {linear32slo:.3f} to "
+                "{linear32shi:.3f} and {linear32alo:.3f} to {linear32ahi:.3f} (ours {statedslo:.3f} to "
+                "{statedshi:.3f} and {statedalo:.3f} to {statedahi:.3f}); the jitter as the next tap's move "
+                "{move_nextslo:.3f} to {move_nextshi:.3f} and {move_nextalo:.3f} to {move_nextahi:.3f} (the band is "
+                "lost at k = 1 and covered again by the -6 mm tap); the paper's k = 1 AUC {pa1:.2f} needs a share of "
+                "at least {imp:.3f}.")
+    removed = ("Without the jitter of each trajectory's first resampling the band escaped share is "
+               "{first_unjitteredslo:.3f} to {first_unjitteredshi:.3f} over the draws (needed {imp:.3f}), the "
+               "escapes number {first_unjitteredelo:d} to {first_unjitteredehi:d} and the k = 1 AUC is "
+               "{first_unjitteredalo:.3f} to {first_unjitteredahi:.3f} (paper {pa1:.2f}), k = 5 "
+               "{first_unjitteredflo:.3f} to {first_unjitteredfhi:.3f} (paper {pa5:.2f}).")
+    out = [
+        Experiment("E150[k=1]", "T36's band trajectories under the unstated weight and jitter-timing readings (k = 1)",
+                   {**common, **spans, **trace}, mech + readings,
+                   supports=lambda v: _ex21_selected(v) is not None),
+        Experiment("E150[k=5]", "T36's band trajectories under the unstated weight and jitter-timing readings (k = 5)",
+                   {**common, **spans, **trace}, readings + " At k = 5 the readings give AUC {linear64flo:.3f} to "
+                   "{linear64fhi:.3f}, {linear32flo:.3f} to {linear32fhi:.3f} and {move_nextflo:.3f} to "
+                   "{move_nextfhi:.3f} (paper {pa5:.2f}).",
+                   supports=lambda v: (r := _ex21_selected(v)) is not None
+                   and v[f"{r}flo"] <= _pv("T36-surprise.auc_k5") <= v[f"{r}fhi"]),
+        Experiment("E151[k=1]", "T36's band trajectories without the first resampling's jitter (k = 1)",
+                   {**common, **spans}, removed, supports=lambda v: _ex21_keeps_lost(v, "first_unjittered")),
+        Experiment("E151[k=5]", "T36's band trajectories without the first resampling's jitter (k = 5)",
+                   {**common, **spans}, removed,
+                   supports=lambda v: _ex21_keeps_lost(v, "first_unjittered")
+                   and v["first_unjitteredflo"] <= _pv("T36-surprise.auc_k5") <= v["first_unjitteredfhi"]),
+    ]
+    return out
+
 
 #: Table II's rows whose Probe-Robust cells E156, E157 decide again on the exact posterior of the stored readings
 #: (``studies/explain/ex22_exact.py``), in that order.
@@ -2228,7 +2300,7 @@ for _experiment in (_experiments() + _experiments_more() + _experiments_ex3() + 
                     + _experiments_ex14() + _experiments_ex15() + _experiments_ex16()
                     + _experiments_ex17() + _experiments_ex18() + _experiments_ex19()
                     + _experiments_ex22()
-                    + _experiments_ex20()):
+                    + _experiments_ex20() + _experiments_ex21()):
     EXPERIMENTS[_experiment.number] = _experiment
 
 
