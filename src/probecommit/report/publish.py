@@ -62,14 +62,10 @@ def changes_section(doc: Doc) -> None:
     """What moved against the previous frozen results, and why (each cause is a change in this tree)."""
     doc.add("## What moved since the previous publication", "",
             "Against the frozen results before this publication (`git log -- results/paper`), compared key by key, "
-            "every number common to both is identical except six keys of E119 (`ex15_union`, the re-splits of the "
-            "literal Split B pool). A commit remembered realized outcomes by instance index and action; instance "
-            "indices restart in every run, so on a pool of Split B's calibration and test runs two instances shared "
-            "one outcome, whichever was executed first (which also made these columns depend on thread timing). "
-            "Outcomes are now remembered per split, instance and action (`runner.inference.outcome_keys`); single-run "
-            "commits, every other table and every stored row outside E119's are unchanged. E132, new here, reads "
-            "E119's rows and fails on the corrected ones.",
-            "New in this publication: the explain target's experiments E126, E127, E132, E133 and E138-E141 behind "
+            "every number common to both is identical; only file paths and wall seconds differ. The speed changes "
+            "of this publication (a run's final tables joined as Arrow, even unit groups, three explain steps that "
+            "replay only the final budget they read) leave every table and key as it was.",
+            "New in this publication: the explain target's experiments E144-E146, E150, E151 and E156-E158 behind "
             "the differences from the paper (see the list above) and the stored rows from which `verify` recomputes "
             "them.", "")
 
