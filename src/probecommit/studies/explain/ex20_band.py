@@ -35,12 +35,12 @@ LEVEL = 0.95
 
 def in_band(u: np.ndarray, x: np.ndarray, c: np.ndarray, r: float, delta: float) -> np.ndarray:
     """Whether a tap at ``u`` lies in the misread band of truth ``(x, c)``: the simulator reads the pocket
-    (``|u - x| < hg(c) + delta``) and the original model the top (``|u - x| >= hg(c) - r``)."""
+    (``|u - x| < hg(c) + delta``) and the original model the top (``|u - x| >= hg(c) - r``): ex14's band test
+    (``ex14_escape.in_band``) at the truth's half-gap."""
+    from probecommit.studies.explain.ex14_escape import in_band as band_test
     from probecommit.tasks.insertion.model import half_gap
 
-    d = np.abs(np.asarray(u, dtype=float) - np.asarray(x, dtype=float))
-    hg = half_gap(np.asarray(c, dtype=float))
-    return (d >= hg - r) & (d < hg + delta)
+    return band_test(u, x, half_gap(np.asarray(c, dtype=float)), -r, delta)
 
 
 def design_probabilities(positions: Sequence[float], design: Mapping[str, float], budgets: Sequence[int] = BUDGETS,
