@@ -5,7 +5,11 @@ import math
 import numpy as np
 import pytest
 
-from probecommit.core.retained import masked_interval, retained_count, retained_mask, weighted_mean
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from probecommit.core.retained import (masked_interval, median_over_particles, retained_count, retained_mask,
+                                       weighted_mean)
 
 
 def test_retained_sets_are_nested_in_nu():
@@ -49,3 +53,25 @@ def test_interval_and_mean():
     assert (lo[0], hi[0]) == (-1.0, 3.0)
     w = np.array([[0.5, 0.5, 0.0, 0.0]])
     assert weighted_mean(z, w, mask)[0] == 1.0
+
+
+# Values with the cases where algorithms could differ: repeated values, both zeros, NaN and infinities.
+_MEDIAN_VALUES = st.sampled_from([-2.0, -1.0, -0.0, 0.0, 0.5, 1.0, 3.0, np.inf, -np.inf, np.nan, 1e-300, -7.25])
+
+
+@settings(max_examples=300, deadline=None)
+@given(st.integers(1, 4), st.integers(1, 40), st.integers(1, 3), st.data())
+def test_median_over_particles_is_numpys_bit_for_bit(n_e, n, m, data):
+    values = np.array(data.draw(st.lists(_MEDIAN_VALUES, min_size=n_e * n * m, max_size=n_e * n * m))).reshape(n_e, n, m)
+    assert median_over_particles(values).tobytes() == np.median(values, axis=1).tobytes()
+
+
+def test_median_over_particles_on_beliefs_and_views():
+    rng = np.random.default_rng(5)
+    particles = rng.normal(size=(64, 1024, 3))
+    particles[:3, :600, 1] = 0.25  # ties in the middle
+    particles[3, 512:, 2] = -0.0  # a zero in the middle: NumPy's own rows
+    particles[4, 7, 0] = np.nan
+    for view in (particles, particles[:, :, 1:], particles[:, :1023], particles[::2, :, :1]):
+        assert median_over_particles(view).tobytes() == np.median(view, axis=1).tobytes()
+    assert median_over_particles(particles[:, :, 1:]).shape == (64, 2)

@@ -331,10 +331,12 @@ def grown_set(model: Any, particles: np.ndarray, threshold: float) -> tuple[np.n
     return np.concatenate([particles, points], axis=1), lo, hi
 
 
-def grown_points(model: Any, particles: np.ndarray, threshold: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def grown_points(model: Any, particles: np.ndarray, threshold: float,
+                 z: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The ``GROWN_SET_POINTS`` scenarios a grown set adds to the particles ``[E, 9, d]``, and
-    its interval ``(lo, hi)`` (see :func:`grown_set`)."""
-    z = model.decision(particles)
+    its interval ``(lo, hi)`` (see :func:`grown_set`); ``z`` is ``model.decision(particles)`` when the
+    caller has it (a contiguous copy: its extremes are read several times as fast as a strided view's)."""
+    z = model.decision(particles) if z is None else z
     grow = (threshold - 1.0) * model.decision_domain_width
     lo, hi = z.min(axis=1) - grow, z.max(axis=1) + grow
     z_points = lo[:, None] + (hi - lo)[:, None] * np.linspace(0.0, 1.0, GROWN_SET_POINTS)[None, :]
@@ -463,7 +465,7 @@ class ProbeRobust:
             mask, lo, hi, reference = self.kernels.retained_summary(
                 weights, threshold, model.decision(particles) if z is None else z, particles)
             return RetainedSet(particles, mask, lo, hi, reference)
-        points, lo, hi = grown_points(model, particles, threshold)
+        points, lo, hi = grown_points(model, particles, threshold, z)
         return RetainedSet(particles, np.ones_like(weights, dtype=bool), lo, hi, belief_reference(particles, weights),
                            points)
 

@@ -32,6 +32,8 @@ from typing import Any, Callable, Iterable, Iterator, Protocol, runtime_checkabl
 
 import numpy as np
 
+from probecommit.core.retained import median_over_particles
+
 
 @runtime_checkable
 class TaskModel(Protocol):
@@ -170,7 +172,7 @@ class TaskModelBase:
         particles = np.asarray(particles)
         centre = np.zeros((particles.shape[0], particles.shape[2]))
         if particles.shape[2] > 1:  # latent 0 is replaced below: its median is not needed
-            centre[:, 1:] = np.median(particles[:, :, 1:], axis=1)
+            centre[:, 1:] = median_over_particles(particles[:, :, 1:])
         extra = np.repeat(centre[:, None, :], z_points.shape[1], axis=1)
         extra[..., 0] = z_points
         return extra

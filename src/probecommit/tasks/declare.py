@@ -22,6 +22,7 @@ from typing import Any, ClassVar, Literal, Mapping, Sequence
 import numpy as np
 from pydantic import Field, create_model
 
+from probecommit.core.retained import median_over_particles
 from probecommit.tasks.base import NoisySimulator, TaskModelBase, TaskSpec, as_rows
 from probecommit.tasks.config import ModelConfigBase, SimulatorConfigBase, TaskConfigBase
 
@@ -238,7 +239,7 @@ class DeclaredModel(TaskModelBase):
     def grown_scenarios(self, particles: np.ndarray, z_points: np.ndarray) -> np.ndarray:
         """Each point at the particles' per-coordinate median, its decision coordinate set."""
         particles = np.asarray(particles)
-        centre = np.median(particles, axis=1)
+        centre = median_over_particles(particles)
         extra = np.repeat(centre[:, None, :], z_points.shape[1], axis=1)
         extra[..., self.declaration.decision_index] = z_points
         return extra

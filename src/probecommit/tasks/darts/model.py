@@ -30,6 +30,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from probecommit.core.retained import median_over_particles
 from probecommit.tasks.base import TaskModelBase
 
 #: Release height above the ground plane (m).
@@ -137,7 +138,7 @@ class DartsModel(TaskModelBase):
 
     def grown_scenarios(self, particles: np.ndarray, z_points: np.ndarray) -> np.ndarray:
         """Scenarios at drag rates ``z``: median ``m`` and ``g``, ``k_d = z * median(m)`` (``b`` clipped > 0)."""
-        extra = np.repeat(np.median(particles, axis=1)[:, None, :], z_points.shape[1], axis=1)
+        extra = np.repeat(median_over_particles(particles)[:, None, :], z_points.shape[1], axis=1)
         extra[..., 0] = np.maximum(z_points, 1e-6) * extra[..., 1]
         return extra
 

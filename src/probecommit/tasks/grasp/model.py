@@ -25,6 +25,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from probecommit.core.retained import median_over_particles
 from probecommit.tasks.base import TaskModelBase
 
 G = 9.81
@@ -98,7 +99,7 @@ class GraspModel(TaskModelBase):
 
     def grown_scenarios(self, particles: np.ndarray, z_points: np.ndarray) -> np.ndarray:
         """Scenarios at hold forces ``z``: median mass, ``mu = m (g + a) / (2 z)``."""
-        extra = np.repeat(np.median(particles, axis=1)[:, None, :], z_points.shape[1], axis=1)
+        extra = np.repeat(median_over_particles(particles)[:, None, :], z_points.shape[1], axis=1)
         extra[..., 0] = extra[..., 1] * (G + LIFT_ACCEL) / (2.0 * np.maximum(z_points, 1e-6))
         return extra
 
