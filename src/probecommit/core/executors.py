@@ -260,11 +260,15 @@ class Belief:
         particles: ``[E, N, d]`` latent hypotheses.
         weights: ``[E, N]`` normalized weights.
         z: ``[E, N]`` each particle's decision coordinate (``model.decision(particles)``).
+        shared: What a set builds from the belief alone, whatever its threshold (a grown set's
+            tie-break reference and decision-coordinate extremes), kept here by the caller that holds
+            the belief: a calibration commits one belief under ``t_k`` and under ``t``.
     """
 
     particles: np.ndarray
     weights: np.ndarray
     z: np.ndarray
+    shared: dict = field(default_factory=dict, repr=False, compare=False)
 
 
 @runtime_checkable
@@ -331,14 +335,19 @@ def grown_set(model: Any, particles: np.ndarray, threshold: float) -> tuple[np.n
     return np.concatenate([particles, points], axis=1), lo, hi
 
 
-def grown_points(model: Any, particles: np.ndarray, threshold: float,
-                 z: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def grown_points(model: Any, particles: np.ndarray, threshold: float, z: np.ndarray | None = None,
+                 shared: dict | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The ``GROWN_SET_POINTS`` scenarios a grown set adds to the particles ``[E, 9, d]``, and
     its interval ``(lo, hi)`` (see :func:`grown_set`); ``z`` is ``model.decision(particles)`` when the
-    caller has it (a contiguous copy: its extremes are read several times as fast as a strided view's)."""
-    z = model.decision(particles) if z is None else z
+    caller has it (a contiguous copy: its extremes are read several times as fast as a strided view's),
+    and ``shared`` keeps those extremes for the belief's other thresholds (:attr:`Belief.shared`)."""
+    shared = {} if shared is None else shared
+    if "extremes" not in shared:
+        z = model.decision(particles) if z is None else z
+        shared["extremes"] = z.min(axis=1), z.max(axis=1)
+    z_min, z_max = shared["extremes"]
     grow = (threshold - 1.0) * model.decision_domain_width
-    lo, hi = z.min(axis=1) - grow, z.max(axis=1) + grow
+    lo, hi = z_min - grow, z_max + grow
     z_points = lo[:, None] + (hi - lo)[:, None] * np.linspace(0.0, 1.0, GROWN_SET_POINTS)[None, :]
     return model.grown_scenarios(particles, z_points), lo, hi
 
@@ -453,21 +462,24 @@ class ProbeRobust:
             raise ValueError(f"plateau must be one of {', '.join(PLATEAU_MODES)}, got {self.plateau!r}")
 
     def retain(self, particles: np.ndarray, weights: np.ndarray, threshold: float,
-               z: np.ndarray | None = None) -> RetainedSet:
+               z: np.ndarray | None = None, shared: dict | None = None) -> RetainedSet:
         """The retained set at mass ``nu`` (``<= 1``) or the grown set of a threshold ``t > 1``;
-        ``z`` is ``model.decision(particles)`` when the caller has it (not computed, or copied, again)."""
+        ``z`` is ``model.decision(particles)`` when the caller has it (not computed, or copied, again),
+        ``shared`` the belief's :attr:`Belief.shared` (what a set of every particle reads is built once)."""
         model = self.model
+        shared = {} if shared is None else shared
+        if "reference" not in shared and (threshold > 1 or self.plateau == "hull"):
+            shared["reference"] = belief_reference(particles, weights)  # every particle's: any threshold's
         if self.plateau == "hull" and 1 - PLATEAU_EPSILON <= threshold <= 1:
             mask = np.ones_like(weights, dtype=bool)
             lo, hi = masked_interval(model.decision(particles), mask)
-            return RetainedSet(particles, mask, lo, hi, belief_reference(particles, weights))
+            return RetainedSet(particles, mask, lo, hi, shared["reference"])
         if threshold <= 1:
             mask, lo, hi, reference = self.kernels.retained_summary(
                 weights, threshold, model.decision(particles) if z is None else z, particles)
             return RetainedSet(particles, mask, lo, hi, reference)
-        points, lo, hi = grown_points(model, particles, threshold, z)
-        return RetainedSet(particles, np.ones_like(weights, dtype=bool), lo, hi, belief_reference(particles, weights),
-                           points)
+        points, lo, hi = grown_points(model, particles, threshold, z, shared)
+        return RetainedSet(particles, np.ones_like(weights, dtype=bool), lo, hi, shared["reference"], points)
 
     def choose(self, retained: RetainedSet, context: np.ndarray | None = None) -> Commitment:
         """Score every grid action over a retained set and pick one per episode."""
@@ -493,7 +505,7 @@ class ProbeRobust:
         on the margin) scored and one action chosen per episode."""
         memo = {} if memo is None else memo
         if "retained" not in memo:
-            memo["retained"] = self.retain(belief.particles, belief.weights, threshold, belief.z)
+            memo["retained"] = self.retain(belief.particles, belief.weights, threshold, belief.z, belief.shared)
         retained = memo["retained"]
         swept = memo.get("margins", {}).get(float(self.model.margin))
         if swept is not None:  # chosen already by a margin sweep of this set (decide_margins)
@@ -508,7 +520,7 @@ class ProbeRobust:
         ``choose_margins`` equals ``choose`` margin by margin (tested), so it is the same commitment."""
         memo = {} if memo is None else memo
         if "retained" not in memo:
-            memo["retained"] = self.retain(belief.particles, belief.weights, threshold, belief.z)
+            memo["retained"] = self.retain(belief.particles, belief.weights, threshold, belief.z, belief.shared)
         index, score = self.choose_margins(memo["retained"], margins, context)
         memo["margins"] = {float(g): (index[m], score[m]) for m, g in enumerate(margins)}
         return index, score
@@ -530,9 +542,10 @@ class ProbeRobust:
             chosen = [self.with_model(model).choose(retained, context) for model in models]
             return np.stack([c.index for c in chosen]), np.stack([np.asarray(c.score, dtype=float) for c in chosen])
         grid = np.asarray(self.model.action_grid, dtype=float).reshape(-1)
-        successes, kept = 0, 0
+        successes, kept = None, 0
         for (_, mask), (centre, half) in zip(retained.blocks(), parts):
-            successes = successes + self.kernels.margin_success_counts(centre, half, np.asarray(margins), mask, grid)
+            counts = self.kernels.margin_success_counts(centre, half, np.asarray(margins), mask, grid)
+            successes = counts if successes is None else np.add(successes, counts, out=successes)  # [M, E, A] once
             kept = kept + mask.sum(axis=-1)
         # As retained_scores: integer failures over the retained count, then select_action per margin.
         ties = np.stack([model.tie_break_cost(model.action_grid, retained.reference, context) for model in models])

@@ -328,8 +328,8 @@ def commit(
         t = float(thresholds[k] if isinstance(thresholds, Mapping) else thresholds)
         belief = _belief_at(trace, model, k, cache)
         memo = cache.setdefault(("set", executor.method, k, t, executor.memo_tag), {})
-        chosen = executor.decide(Belief(trace.states[k].particles, belief["weights"], belief["z"]), t,
-                                 trace.batch.episode_context, memo)
+        chosen = executor.decide(Belief(trace.states[k].particles, belief["weights"], belief["z"], belief["shared"]),
+                                 t, trace.batch.episode_context, memo)
         summary = functools.partial(_belief_summary, belief, model, z_true)
         frames.append(_episode_columns(trace, model, simulator, executor.method, k, chosen, summary, z_true,
                                        cache.setdefault("outcomes", {}), columns))
@@ -352,15 +352,16 @@ def _commit_plan(trace: BeliefTrace, executors: Sequence[Executor],
 
 
 def _belief_at(trace: BeliefTrace, model, k: int, cache: dict) -> dict[str, np.ndarray]:
-    """Budget ``k``'s belief as the executors read it (decision coordinates, weights), kept in
-    ``cache`` with its summary (:func:`_belief_summary`) once a column asks for that: margin-independent."""
+    """Budget ``k``'s belief as the executors read it (decision coordinates, weights, and what its sets of
+    every threshold share: ``Belief.shared``), kept in ``cache`` with its summary (:func:`_belief_summary`)
+    once a column asks for that: margin-independent."""
     belief = cache.get(("belief", k))
     if belief is None:
         state = trace.states[k]
         # Contiguous once here: the decision coordinate is a strided view of the particles, and
         # every kernel reading it (coverage, variance, the executor's retained set) copied it.
         z = np.ascontiguousarray(model.decision(state.particles), dtype=np.float64)
-        belief = cache[("belief", k)] = {"z": z, "weights": state.weights}
+        belief = cache[("belief", k)] = {"z": z, "weights": state.weights, "shared": {}}
     return belief
 
 

@@ -140,8 +140,8 @@ def sweep_margins(trace: BeliefTrace, model: Any, simulator: Any, *, executors: 
         (executor, k), memo = plan[p], memos[p]
         belief = _belief_at(trace, model, k, cache)  # the belief commit() reads (weights, z)
         t = float(thresholds[k] if isinstance(thresholds, Mapping) else thresholds)
-        index[:, :, p], predicted[:, :, p] = executor.decide_margins(
-            Belief(trace.states[k].particles, belief["weights"], belief["z"]), t, margins, context, memo)
+        state = Belief(trace.states[k].particles, belief["weights"], belief["z"], belief["shared"])
+        index[:, :, p], predicted[:, :, p] = executor.decide_margins(state, t, margins, context, memo)
 
     in_threads(choose, range(len(plan)))
     grid = np.asarray(model.action_grid, dtype=float).reshape(len(model.action_grid), -1)
