@@ -95,7 +95,8 @@ def normalized_weights(log_weights: np.ndarray) -> tuple[np.ndarray, np.ndarray,
     log_w = np.ascontiguousarray(log_weights, dtype=np.float64)
     row_max = np.max(log_w, axis=1)
     with np.errstate(invalid="ignore"):  # a row of -inf: reset in the kernel
-        shifted_exps = np.exp(log_w - np.where(np.isfinite(row_max), row_max, 0.0)[:, None])
+        shifted_exps = np.subtract(log_w, np.where(np.isfinite(row_max), row_max, 0.0)[:, None])
+        np.exp(shifted_exps, out=shifted_exps)  # in place: the same elementwise bits, one array fewer
     log_norm = _normalize(log_w, shifted_exps, row_max)
     weights = np.exp(log_w)
     return log_w, log_norm, weights, 1.0 / _sum_of_squares(weights)

@@ -96,6 +96,22 @@ def _succeeds(centre, half, margin, value):  # pragma: no cover - compiled
 
 
 @helper(inline=True)
+def _holds(centre, half, margin, value, side):  # pragma: no cover - compiled
+    """:func:`_succeeds` for an action on ``side`` of the centre (``+1`` right, ``-1`` left, ``0`` on it),
+    inside the interval at some margin (so ``half > 0`` and the centre finite): right of the centre
+    ``low <= centre < value`` at every margin (``centre - width`` rounds to at most ``centre`` for
+    ``width >= 0``), so only ``value < high`` is checked; left of it only ``low < value``."""
+    if side == 0:
+        return _succeeds(centre, half, margin, value)
+    width = half * margin
+    if side > 0:
+        high = centre + width
+        return value < (np.inf if high != high else high)
+    low = centre - width
+    return (np.inf if low != low else low) < value
+
+
+@helper(inline=True)
 def _grid_guess(value, origin, per_step, n):  # pragma: no cover - compiled
     """Where ``value`` falls on a grid of ``n`` actions if it were evenly spaced (clamped to ``[0, n]``):
     a first guess that :func:`_first_above` and :func:`_first_from` walk to the exact index."""
@@ -144,7 +160,8 @@ def _margin_counts(centre, half, margins, mask, actions):  # pragma: no cover - 
     largest margin holds nothing at any. So the margins under which an action succeeds are the
     first ``j`` of the list: each retained scenario visits only the actions inside its widest
     interval (found from the grid's spacing and walked exact: no binary search), finds ``j``
-    (guessed from the margins' spacing, then walked to the exact ``j`` with the predicate itself) and
+    (guessed from the margins' spacing, then walked to the exact ``j`` with the predicate itself, one
+    side of it for an action off the centre: :func:`_holds`) and
     adds one to ``hist[a, j]``; a row's counts are those histograms summed from the right. The same
     integers as counting each margin (``_scaled_counts``), for every margin."""
     n_e, n_s = mask.shape
@@ -171,15 +188,16 @@ def _margin_counts(centre, half, margins, mask, actions):  # pragma: no cover - 
             scale = 1.0 / h if 0.0 < h < np.inf else 0.0
             for a in range(first, last):
                 value = actions[a]
+                side = 1 if value > c else -1 if value < c else 0
                 # j: the margins at which the action succeeds are margins[:j] (j >= 1: it does at the
                 # widest). A guess from the spacing, then walked to the exact j with the predicate itself.
                 j = n_m
                 if scale > 0.0 and per_spacing > 0.0:
                     guess = (widest - abs(value - c) * scale) * per_spacing + 1.0
                     j = 1 if not guess >= 1.0 else n_m if guess > n_m else int(guess)
-                while j < n_m and _succeeds(c, h, margins[j], value):
+                while j < n_m and _holds(c, h, margins[j], value, side):
                     j += 1
-                while j > 1 and not _succeeds(c, h, margins[j - 1], value):
+                while j > 1 and not _holds(c, h, margins[j - 1], value, side):
                     j -= 1
                 hist[a, j] += 1
         for a in range(n_a):
@@ -195,8 +213,10 @@ def _margin_counts(centre, half, margins, mask, actions):  # pragma: no cover - 
 def _margin_choices(successes, kept, ties, tolerance):  # pragma: no cover - compiled
     """``core.executors.margin_choices`` row by row: the failure fraction of each action, then
     ``select_action``'s steps (the row's minimum, NaN if any; the actions within ``tolerance`` of it;
-    the first least tie cost among them, the others at infinity, the first NaN if any)."""
+    the first least tie cost among them, the others at infinity, the first NaN if any). ``ties`` is
+    ``[M, E, A]``, or ``[1, E, A]`` for every margin."""
     n_m, n_e, n_a = successes.shape
+    per_margin = ties.shape[0] > 1
     index = np.zeros((n_m, n_e), dtype=np.int64)
     score = np.empty((n_m, n_e))
     row = np.empty(n_a)
@@ -211,10 +231,11 @@ def _margin_choices(successes, kept, ties, tolerance):  # pragma: no cover - com
                     best = row[a]
             limit = best + tolerance
             chosen = 0
-            least = ties[m, e, 0] if row[0] <= limit else np.inf
+            tie = ties[m if per_margin else 0, e]
+            least = tie[0] if row[0] <= limit else np.inf
             if least == least:
                 for a in range(1, n_a):
-                    cost = ties[m, e, a] if row[a] <= limit else np.inf
+                    cost = tie[a] if row[a] <= limit else np.inf
                     if cost != cost:
                         chosen = a
                         break
@@ -226,7 +247,8 @@ def _margin_choices(successes, kept, ties, tolerance):  # pragma: no cover - com
 
 
 def margin_choices(successes: np.ndarray, kept: np.ndarray, ties: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """``core.executors.margin_choices``, compiled: no ``[M, E, A]`` scores, masks or costs formed."""
+    """``core.executors.margin_choices``, compiled: no ``[M, E, A]`` scores, masks or costs formed
+    (``ties`` ``[M, E, A]`` or ``[1, E, A]``)."""
     return _margin_choices(np.ascontiguousarray(successes, dtype=np.int64), np.ascontiguousarray(kept, dtype=np.int64),
                            np.ascontiguousarray(ties, dtype=np.float64), SCORE_TIE_TOLERANCE)
 

@@ -110,12 +110,13 @@ def margin_choices(successes: np.ndarray, kept: np.ndarray, ties: np.ndarray) ->
     """Every margin's action and its score from its success counts: ``(index [M, E], score [M, E])``.
 
     ``successes[M, E, A]``: retained scenarios under which each action succeeds at each margin;
-    ``kept[E]``: the retained count; ``ties[M, E, A]``: each margin's tie-break costs. The score is
-    the failure fraction ``(kept - successes) / max(kept, 1)`` (as :func:`retained_scores` makes it)
-    and the action :func:`select_action`'s, margin by margin (its steps are row by row, so every
-    margin's rows go in one call).
+    ``kept[E]``: the retained count; ``ties[M, E, A]``: each margin's tie-break costs, or ``[1, E, A]``
+    when every margin's are the same. The score is the failure fraction ``(kept - successes) / max(kept, 1)``
+    (as :func:`retained_scores` makes it) and the action :func:`select_action`'s, margin by margin (its
+    steps are row by row, so every margin's rows go in one call).
     """
     scores = (kept[None, :, None] - successes) / np.maximum(kept, 1)[None, :, None]
+    ties = np.broadcast_to(ties, scores.shape)
     index = select_action(scores.reshape(-1, scores.shape[-1]), ties.reshape(-1, ties.shape[-1])).reshape(scores.shape[:2])
     return index, np.take_along_axis(scores, index[:, :, None], axis=2)[:, :, 0]
 
@@ -548,8 +549,7 @@ class ProbeRobust:
             successes = counts if successes is None else np.add(successes, counts, out=successes)  # [M, E, A] once
             kept = kept + mask.sum(axis=-1)
         # As retained_scores: integer failures over the retained count, then select_action per margin.
-        ties = np.stack([model.tie_break_cost(model.action_grid, retained.reference, context) for model in models])
-        return self.kernels.margin_choices(successes, kept, ties)
+        return self.kernels.margin_choices(successes, kept, _margin_ties(models, retained.reference, context))
 
     def act(self, particles: np.ndarray, weights: np.ndarray, threshold: float,
             context: np.ndarray | None = None) -> Commitment:
@@ -563,6 +563,17 @@ class ProbeRobust:
             context: ``[E, c]`` observed context, if the family has one.
         """
         return self.choose(self.retain(particles, weights, threshold), context)
+
+
+def _margin_ties(models: Sequence[Any], reference: np.ndarray, context: np.ndarray | None) -> np.ndarray:
+    """Each margin's tie-break costs ``[M, E, A]``, or ``[1, E, A]`` when every margin's are the same bits
+    (a family whose tie cost does not read the margin): one ``[E, A]`` block read for every margin
+    instead of ``M`` copies stacked (``margin_choices`` takes either)."""
+    ties = [model.tie_break_cost(model.action_grid, reference, context) for model in models]
+    first = np.asarray(ties[0], dtype=float)
+    if all(np.asarray(t, dtype=float).tobytes() == first.tobytes() for t in ties[1:]):
+        return first[None]
+    return np.stack(ties)
 
 
 class BlindRobust(ProbeRobust):
