@@ -75,3 +75,7 @@ def test_median_over_particles_on_beliefs_and_views():
     for view in (particles, particles[:, :, 1:], particles[:, :1023], particles[::2, :, :1]):
         assert median_over_particles(view).tobytes() == np.median(view, axis=1).tobytes()
     assert median_over_particles(particles[:, :, 1:]).shape == (64, 2)
+    column = np.ascontiguousarray(particles[:, :, :1])  # partitioned as a copy, never in the caller's array
+    before = column.copy()
+    median_over_particles(column)
+    assert column.tobytes() == before.tobytes()

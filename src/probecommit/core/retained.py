@@ -165,9 +165,11 @@ def median_over_particles(values: np.ndarray) -> np.ndarray:
     n_e, n, m = values.shape
     if n < 2 or values.dtype != np.float64:
         return np.median(values, axis=1)
-    rows = np.ascontiguousarray(np.swapaxes(values, 1, 2)).reshape(n_e * m, n)
+    part = np.empty((n_e, m, n))  # a copy of our own, partitioned in place (never the caller's array)
+    part[...] = np.swapaxes(values, 1, 2)
+    part = part.reshape(n_e * m, n)
     half = n // 2
-    part = np.partition(rows, half, axis=1)
+    part.partition(half, axis=1)
     # As np.median: the mean of the middle pair (N even) or of the middle value alone (N odd).
     middle = part[:, half : half + 1]
     if n % 2 == 0:
