@@ -101,7 +101,7 @@ def draw_keys(rows: pd.DataFrame, probabilities: Mapping[int, tuple[float, float
     """E162: over the fresh draws, per budget, the raw and post-stratified original optimism and the band share
     (min, max, mean)."""
     out: dict[str, Any] = {"count": int(rows["draw"].nunique())}
-    for k in BUDGETS:
+    for k in sorted(int(b) for b in rows["k"].unique()):
         raw, std, share = [], [], []
         for _, d in rows[rows["k"] == k].groupby("draw", sort=True):
             sums, cov, hit, _ = ex20_band._strata_sums(d)
@@ -171,7 +171,7 @@ def calibrated_keys(rows: pd.DataFrame, probabilities: Mapping[int, tuple[float,
     out: dict[str, Any] = {"gamma": gamma, "gamma_satisfied": int(satisfied), "rank": rank,
                            "calibration_instances": int(scores["instance_id"].nunique())}
     cal_share = margin[np.isclose(margin["gamma"].to_numpy(float), grid[0])]
-    for k in BUDGETS:
+    for k in sorted(t["plain"]):
         s = f".k{k}"
         out.update({f"t_plain{s}": t["plain"][k], f"t_weighted{s}": t["weighted"][k],
                     f"cal_share_instance{s}": t["share"][k], f"p_design_instance{s}": probabilities[k][1],
