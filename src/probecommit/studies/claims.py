@@ -360,7 +360,9 @@ def _audit_explain(audit: list[Comparison]) -> tuple[Any, ...]:
             + tuple((f"E113[{c.label}]", (c.label,)) for c in audit if " original " in c.label)
             + tuple((f"E126[{c.label}]", (c.label,)) for c in audit if c.label.startswith("optimism original "))
             + tuple((f"E144[{c.label}]", (c.label,)) for c in audit if c.label.startswith("optimism original "))
-            + tuple((f"E146[{c.label}]", (c.label,)) for c in audit if c.label.startswith("cluster_coverage original ")))
+            + tuple((f"E146[{c.label}]", (c.label,)) for c in audit if c.label.startswith("cluster_coverage original "))
+            + (("E162", ("optimism original k=2",)),)
+            + tuple((f"E163[optimism calibrated k={k}]", (f"optimism calibrated k={k}",)) for k in (2, 3)))
 
 
 def _table_claims() -> list[Claim]:
@@ -2293,6 +2295,44 @@ def _experiments_ex20() -> list[Experiment]:
     return out
 
 
+def _experiments_ex23() -> list[Experiment]:
+    """The ex23 helper's experiments (E162, E163, ``studies/explain/ex23_band.py``; rules in docs/decisions.md,
+    "ex23", written and committed before the runs): Table III's optimism cells no experiment reached, at the
+    design's exact exposure to the misread band. E162: original k = 2 over E17's fresh draws, each post-stratified
+    as E144 (E17's range rule). E163: the calibrated arm with the calibration run weighted to the design's band
+    strata (threshold and margin) and the test run post-stratified (E144's rule)."""
+    f = f"{X}ex23_band."
+    d, c = f"{f}draws.", f"{f}calibrated."
+    out = [Experiment(
+        "E162", "Table III's optimism (original, k = 2) over fresh draws at the design's exposure to the misread band",
+        {"lo": f"{d}optimism_std.min.k2", "hi": f"{d}optimism_std.max.k2", "rlo": f"{d}optimism.min.k2",
+         "rhi": f"{d}optimism.max.k2", "slo": f"{d}share.min.k2", "shi": f"{d}share.max.k2",
+         "pd": f"{X}ex20_band.frozen.p_design.k2", "n": f"{d}count", "p": "paper:tab:audit.optimism_original.2"},
+        "each of {n:d} fresh draws of Split B's test generator post-stratified to the design's exact band "
+        "probability at two taps ({pd:.3f}; the draws' own shares {slo:.3f} to {shi:.3f}): original optimism ranges "
+        "{lo:.3f} to {hi:.3f} where the raw draws range {rlo:.3f} to {rhi:.3f} (paper {p:.3f}).",
+        supports=lambda v: v["lo"] <= _pv("tab:audit.optimism_original.2") <= v["hi"])]
+    for k in (2, 3):
+        s = f".k{k}"
+        out.append(Experiment(
+            f"E163[optimism calibrated k={k}]",
+            f"Table III's optimism (calibrated, k = {k}) with calibration and test at the design's band exposure",
+            {"e": f"{c}optimism_std{s}", "lo": f"{c}optimism_std_lo{s}", "hi": f"{c}optimism_std_hi{s}",
+             "raw": f"{c}optimism{s}", "sh": f"{c}share{s}", "pd": f"{c}p_design{s}", "tw": f"{c}t_weighted{s}",
+             "tp": f"{c}t_plain{s}", "g": f"{c}gamma", "g0": f"{I}table_insertion.margin_random",
+             "cs": f"{c}cal_share_instance{s}", "cp": f"{c}p_design_instance{s}",
+             "m": f"{I}table_audit.table.{AUDIT_K.index(k)}.optimism_calibrated",
+             "p": f"paper:tab:audit.optimism_calibrated.{k}"},
+            "the calibration run weighted to the design's band strata ({cs:.3f} of its instances exposed within k "
+            "taps, the design {cp:.3f}) gives t_k {tw:.3f} (ours {tp:.3f}) and margin {g:.2f} (ours {g0:.2f}); the "
+            "test run re-committed under them reads {raw:+.3f}, and post-stratified to the design's exposure ({sh:.3f} "
+            "of its trajectories hit the band, the design {pd:.3f}) {e:+.3f} [{lo:+.3f}, {hi:+.3f}] where our cell "
+            "is {m:+.3f} (paper {p:+.3f}).",
+            supports=lambda v, key=f"tab:audit.optimism_calibrated.{k}": (
+                v["lo"] <= _pv(key) <= v["hi"] and v["sh"] < v["pd"])))
+    return out
+
+
 for _experiment in (_experiments() + _experiments_more() + _experiments_ex3() + _experiments_ex4()
                     + _experiments_ex5() + _experiments_ex6() + _experiments_ex7()
                     + _experiments_ex8() + _experiments_ex9()
@@ -2300,7 +2340,8 @@ for _experiment in (_experiments() + _experiments_more() + _experiments_ex3() + 
                     + _experiments_ex14() + _experiments_ex15() + _experiments_ex16()
                     + _experiments_ex17() + _experiments_ex18() + _experiments_ex19()
                     + _experiments_ex22()
-                    + _experiments_ex20() + _experiments_ex21()):
+                    + _experiments_ex20() + _experiments_ex21()
+                    + _experiments_ex23()):
     EXPERIMENTS[_experiment.number] = _experiment
 
 

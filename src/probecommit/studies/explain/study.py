@@ -37,6 +37,7 @@ from probecommit.studies.explain import ex17
 from probecommit.studies.explain import ex19
 from probecommit.studies.explain import ex22
 from probecommit.studies.explain import ex20
+from probecommit.studies.explain import ex23
 from probecommit.studies.explain import ex21
 from probecommit.studies.explain import ex12_distinct, ex12_simultaneous
 from probecommit.studies.explain import ex15_readings, ex15_union
@@ -125,6 +126,7 @@ class Explain:
             *ex19.GROUPS,
             *ex22.GROUPS,
             *ex20.GROUPS,
+            *ex23.GROUPS,
             *ex21.GROUPS,
             ex12_distinct.GROUP, ex12_simultaneous.GROUP,
             ex15_readings.GROUP, ex15_union.GROUP,
@@ -532,6 +534,7 @@ class Explain:
                  self.aside(ex7.run, needs=()), self.aside(ex13.mixture, needs=()), self.aside(ex17.tiebreak, needs=()),
                  self.instance_generator, self.draw_runs, self.aside(draw_summaries, needs=()), self.boundary_fault,
                  self.aside(ex20.run, needs=()),  # E144-E146: the stored random test run and the fresh draws on disk
+                 self.aside(ex23.run, needs=()),  # E162/E163: the fresh draws and the Split B random runs, re-committed
                  self.robust, physx_coverage, self.physx,
                  lambda: (self.ready and self.ready(), self.gru()), lambda: more.run(self),
                  lambda: ex15_union.run(self), self.aside(ex18_grasp.run, needs=()),  # E133: frozen config only
