@@ -347,7 +347,7 @@ def _breadth_explain() -> tuple[Any, ...]:
             + tuple((f"E{140 + i}", cells) for i, cells in enumerate(EX19_WIDTH_ROWS.values()))
             + tuple((f"E{156 + i}", (f"{fam} probe_robust",)) for i, fam in enumerate(EXACT_POSTERIOR))
             + (("E158", ("hinge probe_robust",)),)
-            + tuple((f"E{174 + i}", (f"{fam} probe_robust",)) for i, fam in enumerate(EX25_UNIFORM)))
+            + tuple((number, (f"{fam} probe_robust",)) for number, fam, _, _ in EX25_PROBE_SETS))
 
 
 def _audit_explain(audit: list[Comparison]) -> tuple[Any, ...]:
@@ -2247,43 +2247,45 @@ def _e158() -> Experiment:
         supports=lambda v: v["ok"] == 1 and v["holds"] == 1 and v["h"] >= 1)
 
 
-#: Table II's rows whose Probe-Robust cells E174, E175 rerun with probes uniform over the frozen grid's span
-#: (``studies/explain/ex25_uniform.py``), in that order.
-EX25_UNIFORM = ("push1d", "hinge")
+#: E174..E177: Table II's rows whose Probe-Robust cells are rerun under each declared probe set
+#: (``studies/explain/ex25_uniform.py``): (number, family, the rows' part, what the probe set is).
+EX25_PROBE_SETS = (
+    ("E174", "push1d", "interval", "probes drawn uniformly over the frozen grid's span instead of its three points"),
+    ("E175", "hinge", "interval", "probes drawn uniformly over the frozen grid's span instead of its three points"),
+    ("E176", "hinge", "ends", "probes drawn from the frozen grid's two ends only (the fewest magnitudes that identify "
+                              "its coast)"),
+    ("E177", "push1d", "ends", "probes drawn from the frozen grid's two ends only"))
 
 
 def _experiments_ex25() -> list[Experiment]:
     """The ex25 helper's experiments (E174.., ``studies/explain/ex25_*.py``; rules in docs/decisions.md, "ex25",
-    written and committed before any run)."""
+    written and committed before each run): Table II's probed cells under probe sets the paper does not report."""
     out = []
-    for i, fam in enumerate(EX25_UNIFORM):
+    for number, fam, part, what in EX25_PROBE_SETS:
         b = f"{X}ex25_uniform.{fam}."
-        keys = {"n": f"{b}episodes", "pts": f"{X}ex25_uniform.points", "d": f"{b}premise_rel_diff",
-                "ok": f"{b}premise_holds", "p5": f"{b}paper.k5", "p2": f"{b}paper.k2_implied",
-                "pq": f"{b}paper.ratio_k2_k5", "in5": f"{b}k5_paper_inside", "in2": f"{b}k2_paper_inside",
-                "inq": f"{b}ratio_paper_inside", "outq": f"{b}grid_ratio_paper_outside", "holds": f"{b}holds"}
-        for part in ("grid", "interval"):
-            keys.update({f"{part}{k}": f"{b}{part}.k{k}" for k in (2, 5)})
-            keys.update({f"{part}{k}{e}": f"{b}{part}.k{k}_{e}" for k in (2, 5) for e in ("lo", "hi")})
-            keys.update({f"{part}q": f"{b}{part}.ratio_k2_k5", f"{part}qlo": f"{b}{part}.ratio_lo",
-                         f"{part}qhi": f"{b}{part}.ratio_hi"})
+        keys = {"n": f"{b}episodes", "d": f"{b}premise_rel_diff", "ok": f"{b}premise_holds", "p5": f"{b}paper.k5",
+                "p2": f"{b}paper.k2_implied", "pq": f"{b}paper.ratio_k2_k5", "in5": f"{b}{part}.k5_paper_inside",
+                "in2": f"{b}{part}.k2_paper_inside", "inq": f"{b}{part}.ratio_paper_inside",
+                "outq": f"{b}grid_ratio_paper_outside", "holds": f"{b}{part}.holds"}
+        for name, src in (("grid", "grid"), ("x", part)):
+            keys.update({f"{name}{k}": f"{b}{src}.k{k}" for k in (2, 5)})
+            keys.update({f"{name}{k}{e}": f"{b}{src}.k{k}_{e}" for k in (2, 5) for e in ("lo", "hi")})
+            keys.update({f"{name}q": f"{b}{src}.ratio_k2_k5", f"{name}qlo": f"{b}{src}.ratio_lo",
+                         f"{name}qhi": f"{b}{src}.ratio_hi"})
         out.append(Experiment(
-            f"E{174 + i}", f"{fam}'s Probe-Robust(2, 5) with its probes drawn uniformly over the frozen grid's span "
-            "instead of its three points (the paper's 'uniform random' probes, whose set it does not report), against "
-            "both curve points and the curve's shape",
+            number, f"{fam}'s Probe-Robust(2, 5) with {what} (the paper's 'uniform random' probes, whose set it does "
+            "not report), against both curve points and the curve's shape",
             keys,
             "the frozen config on its closed-form scene ({n:g} episodes a budget; the frozen three-point grid there "
-            "gives the stored Probe-Robust(5) to {d:.4f} relative, premise {ok:g} = holds), its probes drawn from "
-            "{pts:g} evenly spaced magnitudes over the grid's span: Probe-Robust(5) {interval5:.3f} [{interval5lo:.3f}, "
-            "{interval5hi:.3f}] (three points {grid5:.3f}; the paper's {p5:.3f} inside: {in5:g}, 1 = yes), "
-            "Probe-Robust(2) {interval2:.3f} [{interval2lo:.3f}, {interval2hi:.3f}] (three points {grid2:.3f}; the "
-            "paper's implied {p2:.3f} inside: {in2:g}), k = 2 over k = 5 {intervalq:.2f} [{intervalqlo:.2f}, "
-            "{intervalqhi:.2f}] where the three points give {gridq:.2f} [{gridqlo:.2f}, {gridqhi:.2f}] (the paper's "
-            "{pq:.2f} inside the interval draw's: {inq:g}; outside the three points': {outq:g}).",
+            "gives the stored Probe-Robust(5) to {d:.4f} relative, premise {ok:g} = holds), with " + what + ": "
+            "Probe-Robust(5) {x5:.3f} [{x5lo:.3f}, {x5hi:.3f}] (three points {grid5:.3f}; the paper's {p5:.3f} inside: "
+            "{in5:g}, 1 = yes), Probe-Robust(2) {x2:.3f} [{x2lo:.3f}, {x2hi:.3f}] (three points {grid2:.3f}; the "
+            "paper's implied {p2:.3f} inside: {in2:g}), k = 2 over k = 5 {xq:.2f} [{xqlo:.2f}, {xqhi:.2f}] where the "
+            "three points give {gridq:.2f} [{gridqlo:.2f}, {gridqhi:.2f}] (the paper's {pq:.2f} inside this probe "
+            "set's: {inq:g}; outside the three points': {outq:g}).",
             supports=lambda v: v["ok"] == 1 and v["holds"] == 1 and v["in5"] == 1 and v["in2"] == 1
             and v["inq"] == 1 and v["outq"] == 1))
     return out
-
 
 def _experiments_ex20() -> list[Experiment]:
     """The ex20 helper's experiments (E144..E146, ``studies/explain/ex20_band.py``; rules in docs/decisions.md,

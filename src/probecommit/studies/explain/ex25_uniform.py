@@ -27,8 +27,17 @@ POINTS = 201
 STORED = "ex25_uniform_rows.parquet"
 #: The budgets of the paper's curve the rule reads.
 BUDGETS = (2, 5)
-#: The parts of each family's rows: the frozen run, the frozen grid rerun, the interval draw.
-PARTS = ("stored", "grid", "interval")
+#: The parts of each family's rows: the frozen run, the frozen grid rerun, and the declared conditions: the interval
+#: draw (E174/E175) and the frozen grid's two ends (E176/E177).
+PARTS = ("stored", "grid", "interval", "ends")
+#: The declared conditions, each tested by its own rule.
+CONDITIONS = ("interval", "ends")
+
+
+def ends_grid(frozen: np.ndarray) -> tuple[float, ...]:
+    """The frozen grid's smallest and largest magnitude (E176/E177: the middle point dropped)."""
+    frozen = np.asarray(frozen, float).ravel()
+    return float(frozen.min()), float(frozen.max())
 
 
 def interval_grid(frozen: np.ndarray, points: int = POINTS) -> tuple[float, ...]:
@@ -38,7 +47,8 @@ def interval_grid(frozen: np.ndarray, points: int = POINTS) -> tuple[float, ...]
 
 
 def family_keys(rows: pd.DataFrame, family: str) -> dict[str, float]:
-    """One family's keys: each part's cells and k2 / k5 ratio with intervals, the premise and the declared rule."""
+    """One family's keys: each part's cells and k2 / k5 ratio with intervals, the premise and each declared rule
+    (E174/E175 on ``interval``, E176/E177 on ``ends``)."""
     from probecommit.studies.explain.ex16_reach import implied_k2
     from probecommit.studies.explain.ex22_exact import _cell
     from probecommit.studies.explain.ex22_magnitude import ratio_interval
@@ -46,7 +56,8 @@ def family_keys(rows: pd.DataFrame, family: str) -> dict[str, float]:
 
     p5, p2 = value(f"tab:breadth.{family}.probe_robust"), implied_k2(family)
     out: dict[str, float] = {"paper.k5": p5, "paper.k2_implied": p2, "paper.ratio_k2_k5": p2 / p5}
-    for part in PARTS:
+    present = [part for part in PARTS if (rows["part"] == part).any()]
+    for part in present:
         sel = rows[rows["part"] == part]
         for k in BUDGETS:
             m, lo, hi = _cell(sel[sel["k"] == k])
@@ -55,14 +66,18 @@ def family_keys(rows: pd.DataFrame, family: str) -> dict[str, float]:
         out.update({f"{part}.ratio_k2_k5": r, f"{part}.ratio_lo": rlo, f"{part}.ratio_hi": rhi})
     tolerance = FAMILIES[family][1]
     diff = abs(out["grid.k5"] - out["stored.k5"]) / out["stored.k5"]
-    flags = {"k5_paper_inside": out["interval.k5_lo"] <= p5 <= out["interval.k5_hi"],
-             "k2_paper_inside": out["interval.k2_lo"] <= p2 <= out["interval.k2_hi"],
-             "ratio_paper_inside": out["interval.ratio_lo"] <= p2 / p5 <= out["interval.ratio_hi"],
-             "grid_ratio_paper_outside": not out["grid.ratio_lo"] <= p2 / p5 <= out["grid.ratio_hi"]}
-    out.update({f"{name}": float(ok) for name, ok in flags.items()})
+    outside = not out["grid.ratio_lo"] <= p2 / p5 <= out["grid.ratio_hi"]
     out.update({"premise_rel_diff": diff, "premise_tolerance": tolerance, "premise_holds": float(diff <= tolerance),
-                "episodes": float(len(rows[(rows["part"] == "interval") & (rows["k"] == BUDGETS[-1])]))})
-    out["holds"] = float(diff <= tolerance and all(flags.values()))
+                "grid_ratio_paper_outside": float(outside),
+                "episodes": float(len(rows[(rows["part"] == "grid") & (rows["k"] == BUDGETS[-1])]))})
+    for part in CONDITIONS:
+        if part not in present:
+            continue
+        flags = {"k5_paper_inside": out[f"{part}.k5_lo"] <= p5 <= out[f"{part}.k5_hi"],
+                 "k2_paper_inside": out[f"{part}.k2_lo"] <= p2 <= out[f"{part}.k2_hi"],
+                 "ratio_paper_inside": out[f"{part}.ratio_lo"] <= p2 / p5 <= out[f"{part}.ratio_hi"]}
+        out.update({f"{part}.{name}": float(ok) for name, ok in flags.items()})
+        out[f"{part}.holds"] = float(diff <= tolerance and outside and all(flags.values()))
     return out
 
 
@@ -84,7 +99,7 @@ def _probe_rows(episodes: pd.DataFrame, family: str, part: str) -> pd.DataFrame:
 
 
 def family_rows(root: Path, family: str, quick: bool) -> pd.DataFrame:
-    """One family's stored rows: the frozen run, the frozen grid on the reruns' scene, the interval draw."""
+    """One family's stored rows: the frozen run, the frozen grid on the reruns' scene, the interval draw, the ends."""
     from probecommit.runner.build import build_model
     from probecommit.studies.explain.ex8_blind import run_dir
     from probecommit.studies.explain.ex16_reach import _config, episodes_with_grid
@@ -94,7 +109,8 @@ def family_rows(root: Path, family: str, quick: bool) -> pd.DataFrame:
     stored = pd.read_parquet(run_dir(root, family, quick) / "episodes.parquet")
     return pd.concat([_probe_rows(stored, family, "stored"),
                       _probe_rows(episodes_with_grid(config, None), family, "grid"),
-                      _probe_rows(episodes_with_grid(config, interval_grid(frozen)), family, "interval")],
+                      _probe_rows(episodes_with_grid(config, interval_grid(frozen)), family, "interval"),
+                      _probe_rows(episodes_with_grid(config, ends_grid(frozen)), family, "ends")],
                      ignore_index=True)
 
 
