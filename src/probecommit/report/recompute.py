@@ -883,7 +883,7 @@ STORED_SUMMARIES = (("mixture_noise", EXPLAIN_MIXTURE, "mixture_x"),
 
 #: Explain modules that recompute their own groups: ``recompute(folder, results)`` gives
 #: ``(values, sources, problems)`` (a group published without its stored rows is a problem).
-SELF_RECOMPUTING = ("ex7", "ex8", "ex11", "ex16", "ex19", "ex22")
+SELF_RECOMPUTING = ("ex7", "ex8", "ex11", "ex16", "ex19", "ex22", "ex25")
 
 #: Explain modules whose ``recompute(folder, results, boot)`` gives ``{key: (value, stored file)}`` under the
 #: insertion study's bootstrap settings, with ``STORED_BY_GROUP`` naming each group's rows.
@@ -957,7 +957,8 @@ RECOMPUTED = {
                "ex20's Table III original arm post-stratified on the design's exposure to the misread band; ex21's "
                "paper's-schedule band trajectories under the unstated weight and jitter-timing readings and without "
                "the first resampling's jitter; ex23's fresh draws post-stratified at every budget and the calibrated "
-               "arm under a band-weighted threshold and margin (its re-executed commits stored)",
+               "arm under a band-weighted threshold and margin (its re-executed commits stored); ex25's hinge and "
+               "push1d probed cells with probes uniform over the probe interval",
 }
 TRACED_ONLY = {
     "insertion": "the stored rows themselves (episodes, re-executed commits, replays); the re-split rows; the cover "

@@ -346,7 +346,8 @@ def _breadth_explain() -> tuple[Any, ...]:
             + (("E138", tuple(f"darts {c}" for c in EX19_DARTS_CELLS)), ("E139", ("push2d probe_robust",)))
             + tuple((f"E{140 + i}", cells) for i, cells in enumerate(EX19_WIDTH_ROWS.values()))
             + tuple((f"E{156 + i}", (f"{fam} probe_robust",)) for i, fam in enumerate(EXACT_POSTERIOR))
-            + (("E158", ("hinge probe_robust",)),))
+            + (("E158", ("hinge probe_robust",)),)
+            + tuple((number, (f"{fam} probe_robust",)) for number, fam, _, _ in EX25_PROBE_SETS))
 
 
 def _audit_explain(audit: list[Comparison]) -> tuple[Any, ...]:
@@ -2248,6 +2249,46 @@ def _e158() -> Experiment:
         supports=lambda v: v["ok"] == 1 and v["holds"] == 1 and v["h"] >= 1)
 
 
+#: E174..E177: Table II's rows whose Probe-Robust cells are rerun under each declared probe set
+#: (``studies/explain/ex25_uniform.py``): (number, family, the rows' part, what the probe set is).
+EX25_PROBE_SETS = (
+    ("E174", "push1d", "interval", "probes drawn uniformly over the frozen grid's span instead of its three points"),
+    ("E175", "hinge", "interval", "probes drawn uniformly over the frozen grid's span instead of its three points"),
+    ("E176", "hinge", "ends", "probes drawn from the frozen grid's two ends only (the fewest magnitudes that identify "
+                              "its coast)"),
+    ("E177", "push1d", "ends", "probes drawn from the frozen grid's two ends only"))
+
+
+def _experiments_ex25() -> list[Experiment]:
+    """The ex25 helper's experiments (E174.., ``studies/explain/ex25_*.py``; rules in docs/decisions.md, "ex25",
+    written and committed before each run): Table II's probed cells under probe sets the paper does not report."""
+    out = []
+    for number, fam, part, what in EX25_PROBE_SETS:
+        b = f"{X}ex25_uniform.{fam}."
+        keys = {"n": f"{b}episodes", "d": f"{b}premise_rel_diff", "ok": f"{b}premise_holds", "p5": f"{b}paper.k5",
+                "p2": f"{b}paper.k2_implied", "pq": f"{b}paper.ratio_k2_k5", "in5": f"{b}{part}.k5_paper_inside",
+                "in2": f"{b}{part}.k2_paper_inside", "inq": f"{b}{part}.ratio_paper_inside",
+                "outq": f"{b}grid_ratio_paper_outside", "holds": f"{b}{part}.holds"}
+        for name, src in (("grid", "grid"), ("x", part)):
+            keys.update({f"{name}{k}": f"{b}{src}.k{k}" for k in (2, 5)})
+            keys.update({f"{name}{k}{e}": f"{b}{src}.k{k}_{e}" for k in (2, 5) for e in ("lo", "hi")})
+            keys.update({f"{name}q": f"{b}{src}.ratio_k2_k5", f"{name}qlo": f"{b}{src}.ratio_lo",
+                         f"{name}qhi": f"{b}{src}.ratio_hi"})
+        out.append(Experiment(
+            number, f"{fam}'s Probe-Robust(2, 5) with {what} (the paper's 'uniform random' probes, whose set it does "
+            "not report), against both curve points and the curve's shape",
+            keys,
+            "the frozen config on its closed-form scene ({n:g} episodes a budget; the frozen three-point grid there "
+            "gives the stored Probe-Robust(5) to {d:.4f} relative, premise {ok:g} = holds), with " + what + ": "
+            "Probe-Robust(5) {x5:.3f} [{x5lo:.3f}, {x5hi:.3f}] (three points {grid5:.3f}; the paper's {p5:.3f} inside: "
+            "{in5:g}, 1 = yes), Probe-Robust(2) {x2:.3f} [{x2lo:.3f}, {x2hi:.3f}] (three points {grid2:.3f}; the "
+            "paper's implied {p2:.3f} inside: {in2:g}), k = 2 over k = 5 {xq:.2f} [{xqlo:.2f}, {xqhi:.2f}] where the "
+            "three points give {gridq:.2f} [{gridqlo:.2f}, {gridqhi:.2f}] (the paper's {pq:.2f} inside this probe "
+            "set's: {inq:g}; outside the three points': {outq:g}).",
+            supports=lambda v: v["ok"] == 1 and v["holds"] == 1 and v["in5"] == 1 and v["in2"] == 1
+            and v["inq"] == 1 and v["outq"] == 1))
+    return out
+
 def _experiments_ex20() -> list[Experiment]:
     """The ex20 helper's experiments (E144..E146, ``studies/explain/ex20_band.py``; rules in docs/decisions.md,
     "ex20", written before the runs): Table III's original arm post-stratified on the design's exact exposure to
@@ -2341,7 +2382,8 @@ for _experiment in (_experiments() + _experiments_more() + _experiments_ex3() + 
                     + _experiments_ex17() + _experiments_ex18() + _experiments_ex19()
                     + _experiments_ex22()
                     + _experiments_ex20() + _experiments_ex21()
-                    + _experiments_ex23()):
+                    + _experiments_ex23()
+                    + _experiments_ex25()):
     EXPERIMENTS[_experiment.number] = _experiment
 
 

@@ -39,6 +39,7 @@ from probecommit.studies.explain import ex22
 from probecommit.studies.explain import ex20
 from probecommit.studies.explain import ex23
 from probecommit.studies.explain import ex21
+from probecommit.studies.explain import ex25
 from probecommit.studies.explain import ex12_distinct, ex12_simultaneous
 from probecommit.studies.explain import ex15_readings, ex15_union
 from probecommit.studies.explain import ex18_grasp, ex18_share
@@ -128,6 +129,7 @@ class Explain:
             *ex20.GROUPS,
             *ex23.GROUPS,
             *ex21.GROUPS,
+            *ex25.GROUPS,
             ex12_distinct.GROUP, ex12_simultaneous.GROUP,
             ex15_readings.GROUP, ex15_union.GROUP,
             ex18_share.GROUP, ex18_grasp.GROUP)}
@@ -539,6 +541,7 @@ class Explain:
                  lambda: (self.ready and self.ready(), self.gru()), lambda: more.run(self),
                  lambda: ex15_union.run(self), self.aside(ex18_grasp.run, needs=()),  # E133: frozen config only
                  self.aside(ex22.exact, ex22.magnitude, needs=("breadth",)),  # E156-E158: stored breadth rows, closed forms
+                 self.aside(ex25.uniform, needs=("breadth",)),  # E174/E175: stored breadth rows, closed forms
                  lambda: ex19.run(self),  # E138 reads the prior sweep's darts runs (more.run)
                  lambda: ex4.run(self),
                  lambda: ex6.run(self, paper),
