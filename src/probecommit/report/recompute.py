@@ -887,7 +887,7 @@ SELF_RECOMPUTING = ("ex7", "ex8", "ex11", "ex16", "ex19", "ex22", "ex25")
 
 #: Explain modules whose ``recompute(folder, results, boot)`` gives ``{key: (value, stored file)}`` under the
 #: insertion study's bootstrap settings, with ``STORED_BY_GROUP`` naming each group's rows.
-BOOTSTRAPPED = ("ex6", "ex10", "ex13", "ex14", "ex17", "ex20", "ex21", "ex23")
+BOOTSTRAPPED = ("ex6", "ex10", "ex13", "ex14", "ex17", "ex20", "ex21", "ex23", "ex24")
 
 
 #: The stored tables each study's numbers are recomputed from: a publication without one fails verify
@@ -957,8 +957,10 @@ RECOMPUTED = {
                "ex20's Table III original arm post-stratified on the design's exposure to the misread band; ex21's "
                "paper's-schedule band trajectories under the unstated weight and jitter-timing readings and without "
                "the first resampling's jitter; ex23's fresh draws post-stratified at every budget and the calibrated "
-               "arm under a band-weighted threshold and margin (its re-executed commits stored); ex25's hinge and "
-               "push1d probed cells with probes uniform over the probe interval",
+               "arm under a band-weighted threshold and margin (its re-executed commits stored); ex24's the same "
+               "draws with the first tap's jitter removed alone, the jitter read as a variance, and post-stratified "
+               "to the first tap's band exposure; ex25's hinge and push1d probed cells with probes uniform over the "
+               "probe interval",
 }
 TRACED_ONLY = {
     "insertion": "the stored rows themselves (episodes, re-executed commits, replays); the re-split rows; the cover "

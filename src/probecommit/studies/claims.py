@@ -743,7 +743,7 @@ def _claims_commit_decision() -> list[Claim]:
               explain=(("E15", ("k=5",)), ("E16", ("k=1",)), ("E64", ("k=1", "k=5")), ("E88", ("k=1", "k=5")),
                        ("E106", ("k=1",)), ("E114[k=1]", ("k=1",)), ("E114[k=5]", ("k=5",)), ("E127", ("k=1",)),
                        ("E150[k=1]", ("k=1",)), ("E150[k=5]", ("k=5",)), ("E151[k=1]", ("k=1",)),
-                       ("E151[k=5]", ("k=5",)))))
+                       ("E151[k=5]", ("k=5",)), ("E168", ("k=1",)), ("E169", ("k=1",)), ("E170", ("k=1",)))))
     return c
 
 
@@ -2374,6 +2374,58 @@ def _experiments_ex23() -> list[Experiment]:
     return out
 
 
+#: E168's and E169's modes (``studies/explain/ex24_band.py``), each read by ex21's keeps-lost condition.
+EX24_MODES = {"E168": "tap1_unjittered", "E169": "variance"}
+
+
+def _experiments_ex24() -> list[Experiment]:
+    """The ex24 helper's experiments (``studies/explain/ex24*.py``; rules in docs/decisions.md, "ex24", committed
+    before the runs): T36's k = 1 AUC with the first tap's jitter tail removed alone (E168), the jitter read as a
+    variance (E169), and the stated filter's draws post-stratified to the first tap's band exposure (E170)."""
+    b = f"{X}ex24_band."
+    common = {"w0": f"{b}stated_reproduces_stored", "imp": f"{X}ex17_band.implied_share", "nd": f"{b}draws",
+              "pa1": "paper:T36-surprise.auc_k1", "pn": "paper:T36-surprise.escaped"}
+    spans = {f"{r}{q}": f"{b}{r}.{n}" for r in ("stated", "first_unjittered", *EX24_MODES.values())
+             for q, n in (("slo", "share.min"), ("shi", "share.max"), ("alo", "auc_k1.min"), ("ahi", "auc_k1.max"),
+                          ("elo", "n_escaped.min"), ("ehi", "n_escaped.max"))}
+    parts = {f"{r}_{c}": f"{b}{r}.all.escapes.{c}" for r in ("stated", "first_unjittered", "tap1_unjittered")
+             for c in ("band1", "first_resample_band", "other")}
+    causes = ("Split by cause over the {nd:d} draws, the stated filter's final-budget escapes are {stated_band1:d} "
+              "in the first tap's band, {stated_first_resample_band:d} in the band of the tap of the trajectory's "
+              "first resampling and {stated_other:d} neither; without each trajectory's first jitter (E151) "
+              "{first_unjittered_band1:d}, {first_unjittered_first_resample_band:d} and {first_unjittered_other:d} (a "
+              "truth in the misread band of the tap that first resamples its trajectory is contradicted there as "
+              "the first tap's band truths are at tap 1, and without that resampling's jitter stays lost). ")
+    tap1 = ("With the jitter removed only at tap 1's resampling (every later resampling jittered as stated, which "
+            "the paper's filter paragraph does not say), {tap1_unjittered_band1:d} first-tap band escapes stay, "
+            "{tap1_unjittered_first_resample_band:d} and {tap1_unjittered_other:d} others: the band escaped share "
+            "is {tap1_unjitteredslo:.3f} to {tap1_unjitteredshi:.3f} over the draws (the paper's k = 1 AUC needs "
+            "{imp:.3f}), escapes {tap1_unjitteredelo:d} to {tap1_unjitteredehi:d} (paper {pn:.0f}), and the k = 1 "
+            "AUC {tap1_unjitteredalo:.3f} to {tap1_unjitteredahi:.3f} (paper {pa1:.2f}; stated filter "
+            "{statedalo:.3f} to {statedahi:.3f}).")
+    variance = ("With the stated jitter's scales read as variances (standard deviations their square roots), the "
+                "band escaped share is {varianceslo:.3f} to {varianceshi:.3f} (needed {imp:.3f}), escapes "
+                "{varianceelo:d} to {varianceehi:d}, and the k = 1 AUC {variancealo:.3f} to {varianceahi:.3f} over {nd:d} draws of few "
+                "escapes (paper {pa1:.2f}).")
+    post = {"plo": f"{b}stated.auc_k1_post.min", "phi": f"{b}stated.auc_k1_post.max", "p": f"{b}p_band",
+            "xlo": f"{b}exposure.min", "xhi": f"{b}exposure.max", "tlo": f"{b}tap1_unjittered.auc_k1_post.min",
+            "thi": f"{b}tap1_unjittered.auc_k1_post.max"}
+    post_s = ("Weighted to the design's exposure to the first tap's band ({p:.4f}; the draws' exposures run from "
+              "{xlo:.4f} to {xhi:.4f}), the stated filter's k = 1 AUCs span {plo:.3f} to {phi:.3f} over the draws "
+              "against the raw {statedalo:.3f} to {statedahi:.3f} (paper {pa1:.2f}); with the first tap's jitter "
+              "also removed (E168) {tlo:.3f} to {thi:.3f}.")
+    return [
+        Experiment("E168", "T36's k = 1 AUC with the jitter removed at the first tap's resampling alone",
+                   {**common, **spans, **parts}, causes + tap1,
+                   supports=lambda v: _ex21_keeps_lost(v, "tap1_unjittered")),
+        Experiment("E169", "T36's k = 1 AUC with the stated jitter read as a variance",
+                   {**common, **spans}, variance, supports=lambda v: _ex21_keeps_lost(v, "variance")),
+        Experiment("E170", "T36's k = 1 AUC post-stratified to the design's exposure to the first tap's band",
+                   {**common, **spans, **post}, post_s,
+                   supports=lambda v: v["plo"] <= _pv("T36-surprise.auc_k1") <= v["phi"]),
+    ]
+
+
 for _experiment in (_experiments() + _experiments_more() + _experiments_ex3() + _experiments_ex4()
                     + _experiments_ex5() + _experiments_ex6() + _experiments_ex7()
                     + _experiments_ex8() + _experiments_ex9()
@@ -2382,7 +2434,7 @@ for _experiment in (_experiments() + _experiments_more() + _experiments_ex3() + 
                     + _experiments_ex17() + _experiments_ex18() + _experiments_ex19()
                     + _experiments_ex22()
                     + _experiments_ex20() + _experiments_ex21()
-                    + _experiments_ex23()
+                    + _experiments_ex23() + _experiments_ex24()
                     + _experiments_ex25()):
     EXPERIMENTS[_experiment.number] = _experiment
 

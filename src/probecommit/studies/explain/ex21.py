@@ -22,20 +22,23 @@ STORED_BY_GROUP = {"ex21_band": ex21_band.STORED}
 PAPER_RUNS = {"test": "B_test_cover_paper_schedule", "cal": "B_cal_cover_paper_schedule", "A": "A_cover_paper_schedule"}
 
 
-def _draw_rows(beliefs: Any, loaded: Any, final_k: int, inner: float, outer: float) -> pd.DataFrame:
-    """Every reading's rows of one run, with the run's stored final-budget escape beside each trajectory."""
+def _draw_rows(beliefs: Any, loaded: Any, final_k: int, inner: float, outer: float,
+               trajectory_rows: Any = ex21_band.trajectory_rows, readings: Any = ex21_band.READINGS) -> pd.DataFrame:
+    """Every reading's rows of one run, with the run's stored final-budget escape beside each trajectory (another
+    step's ``trajectory_rows`` and ``readings``: ex24's)."""
     e = loaded.episodes
     e = e[(e["method"] == "probe_robust") & (e["status"] == "ok") & (e["k"] == final_k)]
     stored = e[["instance_id", "repeat", "escaped"]].astype({"instance_id": str, "repeat": "int64"})
     stored = stored.rename(columns={"escaped": "stored_escaped_final"})
-    parts = [ex21_band.trajectory_rows(beliefs, r, final_k, inner, outer) for r in ex21_band.READINGS]
+    parts = [trajectory_rows(beliefs, r, final_k, inner, outer) for r in readings]
     rows = pd.concat(parts, ignore_index=True).merge(stored, on=["instance_id", "repeat"], how="left",
                                                      validate="many_to_one")
     return rows.assign(stored_escaped_final=rows["stored_escaped_final"].eq(True))
 
 
-def rows_of(paper_schedule: dict[str, Any], pool: Any, final_k: int, outer: float) -> pd.DataFrame:
-    """The stored rows: Split B test and calibration, Split A, and the re-split pool's two halves (E106's draws)."""
+def rows_of(paper_schedule: dict[str, Any], pool: Any, final_k: int, outer: float, **how: Any) -> pd.DataFrame:
+    """The stored rows: Split B test and calibration, Split A, and the re-split pool's two halves (E106's draws);
+    ``how``: ``_draw_rows``' ``trajectory_rows`` and ``readings`` for another step's replay (ex24)."""
     from probecommit.runner.replay import RunBeliefs
     from probecommit.tasks.insertion.model import TIP_RADIUS_MM
 
@@ -44,7 +47,7 @@ def rows_of(paper_schedule: dict[str, Any], pool: Any, final_k: int, outer: floa
         sources.append(("pool", pool))
     parts = []
     for draw, loaded in sources:
-        rows = _draw_rows(RunBeliefs.of(loaded, chunk_instances=None), loaded, final_k, -TIP_RADIUS_MM, outer)
+        rows = _draw_rows(RunBeliefs.of(loaded, chunk_instances=None), loaded, final_k, -TIP_RADIUS_MM, outer, **how)
         if draw == "pool":
             order = loaded.instances.sort_values("instance_index")["instance_id"].astype(str).to_numpy()
             first = set(order[: len(order) // 2])

@@ -39,6 +39,7 @@ from probecommit.studies.explain import ex22
 from probecommit.studies.explain import ex20
 from probecommit.studies.explain import ex23
 from probecommit.studies.explain import ex21
+from probecommit.studies.explain import ex24
 from probecommit.studies.explain import ex25
 from probecommit.studies.explain import ex12_distinct, ex12_simultaneous
 from probecommit.studies.explain import ex15_readings, ex15_union
@@ -129,6 +130,7 @@ class Explain:
             *ex20.GROUPS,
             *ex23.GROUPS,
             *ex21.GROUPS,
+            *ex24.GROUPS,
             *ex25.GROUPS,
             ex12_distinct.GROUP, ex12_simultaneous.GROUP,
             ex15_readings.GROUP, ex15_union.GROUP,
@@ -551,6 +553,7 @@ class Explain:
                  lambda: ex14.run(self, paper),
                  lambda: ex17.band(self, paper, COVER_SCHEDULE[0]),
                  self.aside(ex21.run, needs=()),  # E150/E151: the paper's-schedule runs and the pool's, stored
+                 self.aside(ex24.run, needs=()),  # E168-E170: the same stored runs, other replays
                  lambda: ex12_distinct.run(self),
                  lambda: ex18_share.run(self)]  # last: it waits for E118's and E119's rows
         self.run_steps(steps)
