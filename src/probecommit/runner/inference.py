@@ -163,8 +163,8 @@ def rollout(
     )
 
 
-#: The most ``[episodes x pseudo-truths, particles]`` elements one adaptive score pass holds per array (16 MB).
-ADAPTIVE_SCORE_ELEMENTS = 1 << 21
+#: The most ``[episodes x pseudo-truths, particles]`` elements one adaptive score pass holds per array (4 MB).
+ADAPTIVE_SCORE_ELEMENTS = 1 << 19
 
 
 def adaptive_scores(model: Any, likelihood: Any, particles: np.ndarray, weights: np.ndarray, grid: np.ndarray,

@@ -65,19 +65,3 @@ class Background:
             self._pool.shutdown(wait=True, cancel_futures=True)
             self._pool = None
 
-
-def in_own_process(fn: Callable[..., Any], *args: Any) -> Any:
-    """``fn(*args)`` (a module-level function of picklable arguments) in a fresh spawned process, waited for: its
-    result. For a step that must run in place (later steps read what it writes) but whose working memory would
-    otherwise stay in the explain process's peak: what it holds is given back when the process exits. Its engine
-    answers are shared within that process, as in the target's own (``schedule.run_target``)."""
-    with ProcessPoolExecutor(max_workers=1, max_tasks_per_child=1,
-                             mp_context=multiprocessing.get_context("spawn")) as pool:
-        return pool.submit(_with_shared_answers, fn, *args).result()
-
-
-def _with_shared_answers(fn: Callable[..., Any], *args: Any) -> Any:
-    from probecommit.tasks.base import shared_engine_answers
-
-    with shared_engine_answers():
-        return fn(*args)

@@ -21,9 +21,9 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from probecommit.runner.aside import in_own_process
 from probecommit.runner.config import config_data, parse_config
 from probecommit.studies.breadth import FAMILY_K, breadth_row, budget_curve, paper_config, quick_config
-from probecommit.studies.explain.background import in_own_process
 from probecommit.studies.explain.ex4_breadth import single_width
 from probecommit.studies.pricing import break_even
 
@@ -188,7 +188,7 @@ def sweep_keys(stored: pd.DataFrame, frozen: dict[str, dict[str, float] | None],
 def sweep_families(families: list[str], scales: list[float], runs: Path, engines: dict[str, str], repeats: int,
                    quick: bool) -> pd.DataFrame:
     """Every family's stored sweep rows (:func:`sweep_family`), in family order. Run in a process of its own
-    (``background.in_own_process``): its 24 runs' working memory (the blind arms' prior-sample losses, the runs'
+    (``runner.aside.in_own_process``): its 24 runs' working memory (the blind arms' prior-sample losses, the runs'
     traces) took the explain process from about 410 to 658 MB (issue 42, target 4); their runs are on disk for
     the later steps that read them (ex4's cone, ex19's darts)."""
     return pd.concat([sweep_family(family, scales, runs, engine=engines.get(family), repeats=repeats, quick=quick)
