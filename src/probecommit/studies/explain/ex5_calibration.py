@@ -198,7 +198,7 @@ def capture_keys(rows: pd.DataFrame) -> dict[str, float]:
 # ----------------------------------------------------------------------------- the step
 
 
-def _resplit_costs_of(pool: Path, *args: Any) -> pd.DataFrame:
+def resplit_costs_of(pool: Path, *args: Any) -> pd.DataFrame:
     """:func:`resplit_costs` on the frozen pool's run as the job loads it (``Explain.load``), in a process of its
     own (``run``)."""
     return resplit_costs(load_run(pool), *args)
@@ -225,7 +225,7 @@ def run(job: Any) -> None:
     # fresh pools' runs and the capture draws' pairs of traces leave with their part (one process held 611 MB).
     job.progress("explain: the cost of calibration over re-splits", 0, 1)
     r = p.resplits
-    cost = in_own_process(_resplit_costs_of, job.ins / "B_pool_cover", p.alpha, int(r["count"]), int(r["seed"]),
+    cost = in_own_process(resplit_costs_of, job.ins / "B_pool_cover", p.alpha, int(r["count"]), int(r["seed"]),
                           list(range(1, p.budgets["cover"] + 1)),
                           cfg["ex5_cost_resamples_quick" if quick else "ex5_cost_resamples"], p.bootstrap.seed)
     job.progress("explain: the re-split study on fresh pools", 0, 1)
