@@ -9,7 +9,8 @@ Usage::
 (the targets it reads), so the target itself runs from nothing. It runs as a side-by-side lane does
 (``report.schedule.run_target``, one worker, the command's Arrow pool and heap thresholds) in a child
 process; the resident memory (``VmRSS``) of that process and of every process it starts (explain's steps
-set aside, worker pools) is read from ``/proc`` every 0.2 s. Printed: each process's peak (MB) and when,
+set aside, worker pools) is read from ``/proc`` every 0.2 s, and its peak (``VmHWM``, the kernel's high-water
+mark, so no spike falls between polls). Printed: each process's peak (MB) and when it was first seen,
 the largest sum over the tree, wall seconds and the load average at start and end (peaks hardly depend
 on load; times do). ``--stacks``: a ``py-spy dump`` of a process each time its peak grows by 40 MB above
 250 MB (where it was when it grew), when py-spy is installed. ``--json PATH`` writes it all.
@@ -38,8 +39,8 @@ if __name__ == "__main__":
 """
 
 
-def tree_rss(root_pid: int) -> dict[int, int]:
-    """VmRSS (MB) of ``root_pid`` and every process below it."""
+def tree_rss(root_pid: int, field: str = "VmRSS") -> dict[int, int]:
+    """``field`` (MB; VmRSS now, VmHWM the kernel's peak so far) of ``root_pid`` and every process below it."""
     children: dict[int, list[int]] = {}
     for entry in os.listdir("/proc"):
         if entry.isdigit():
@@ -53,7 +54,7 @@ def tree_rss(root_pid: int) -> dict[int, int]:
         pid = stack.pop()
         stack += children.get(pid, [])
         try:
-            line = next(x for x in Path(f"/proc/{pid}/status").read_text().splitlines() if x.startswith("VmRSS:"))
+            line = next(x for x in Path(f"/proc/{pid}/status").read_text().splitlines() if x.startswith(field + ":"))
         except (OSError, StopIteration):
             continue
         out[pid] = int(line.split()[1]) // 1024
@@ -76,7 +77,7 @@ def sample(argv: list[str], stacks: bool, poll_s: float = 0.2) -> dict:
         now = round(time.perf_counter() - start, 1)
         sizes = tree_rss(proc.pid)
         most = max(most, sum(sizes.values()))
-        for pid, mb in sizes.items():
+        for pid, mb in tree_rss(proc.pid, "VmHWM").items():  # the kernel's peak: no spike falls between polls
             if mb > peaks.get(pid, (0,))[0]:
                 peaks[pid] = (mb, now, command_line(pid))
                 if stacks and mb >= 250 and mb >= dumped.get(pid, 0) + 40 and Path(spy).exists():

@@ -54,3 +54,19 @@ def test_a_replay_under_another_model_is_refused_unless_asked(adaptive_run):
         replay_episodes(loaded, {"model": {"boundary": "corrected"}})
     episodes, _ = replay_episodes(loaded, {"model": {"boundary": "corrected"}}, fixed_probes=True)
     assert set(episodes["variant"]) == {"corrected"}
+
+
+def test_scores_a_block_of_episodes_at_a_time_equal_the_whole_batch_bit_for_bit():
+    """The adaptive rollout scores blocks of episodes to bound its memory; no score may change."""
+    from probecommit.runner.inference import adaptive_scores
+
+    model = InsertionModel.deployed()
+    rng = np.random.default_rng(5)
+    particles = np.stack([rng.uniform(-12, 12, (7, 64)), rng.uniform(0.5, 2.0, (7, 64))], axis=-1)
+    weights = rng.random((7, 64))
+    weights /= weights.sum(axis=1, keepdims=True)
+    likelihood = GaussianLikelihood(0.5)
+    whole = expected_posterior_variance(model, likelihood, particles, weights, model.probe_grid)
+    for elements in (1, 32 * 64 * 2, 32 * 64 * 3, 1 << 30):  # blocks of 1, 2, 3 and all 7 episodes
+        np.testing.assert_array_equal(adaptive_scores(model, likelihood, particles, weights, model.probe_grid,
+                                                      elements), whole)

@@ -88,6 +88,16 @@ def test_run_breadth_quick_push1d(tmp_path):
     pd.testing.assert_frame_equal(out, again)
 
 
+def test_run_breadth_runs_each_family_in_a_process_of_its_own_with_the_same_table(tmp_path):
+    """The family's run moves to a process of its own for its memory (issue 42); its table is the in-place run's."""
+    from probecommit.runner.study import run_study
+    from probecommit.studies.breadth import paper_config, quick_config
+
+    out = run_breadth(["push1d"], tmp_path / "aside", quick=True, resamples=100)
+    episodes = run_study(quick_config(paper_config("push1d")), tmp_path / "here" / "push1d").episodes
+    pd.testing.assert_frame_equal(out, breadth_table({"push1d": episodes}, 5, resamples=100, seed=0), check_exact=True)
+
+
 @pytest.mark.mujoco
 def test_run_breadth_quick_mujoco_families(tmp_path):
     pytest.importorskip("mujoco")

@@ -163,6 +163,26 @@ def rollout(
     )
 
 
+#: The most ``[episodes x pseudo-truths, particles]`` elements one adaptive score pass holds per array (4 MB).
+ADAPTIVE_SCORE_ELEMENTS = 1 << 19
+
+
+def adaptive_scores(model: Any, likelihood: Any, particles: np.ndarray, weights: np.ndarray, grid: np.ndarray,
+                    elements: int = ADAPTIVE_SCORE_ELEMENTS) -> np.ndarray:
+    """``expected_posterior_variance`` of every episode, a block of episodes at a time.
+
+    Each episode's score reads its own row only, so blocks give the whole batch's scores bit for bit (tested),
+    while the ``[E x 32, N]`` likelihood and posterior arrays of a pass stay bounded (a unit of a few hundred
+    episodes at N = 1024 held about 200 MB per thread at once)."""
+    from probecommit.core.selectors import expected_posterior_variance
+
+    n_e, n = weights.shape
+    step = max(1, elements // (min(32, n) * n))
+    return np.concatenate([expected_posterior_variance(model, likelihood, particles[a:a + step], weights[a:a + step],
+                                                       grid) for a in range(0, n_e, step)]) if n_e else \
+        expected_posterior_variance(model, likelihood, particles, weights, grid)
+
+
 def rollout_adaptive(
     instances: pd.DataFrame,
     repeats: int,
@@ -178,7 +198,7 @@ def rollout_adaptive(
     recomputing beliefs from the stored probes under the same model reproduces this
     run exactly. The reading noise comes from each episode's rollout stream.
     """
-    from probecommit.core.selectors import choose_probes, expected_posterior_variance
+    from probecommit.core.selectors import choose_probes
 
     grid = np.asarray(model.probe_grid, dtype=float)
     truths, contexts = instance_arrays(instances, model)
@@ -197,8 +217,7 @@ def rollout_adaptive(
     error = np.full(n, "", dtype=object)
     state = pfilter.initial(infer)
     for j in range(budget):
-        scores = expected_posterior_variance(model, pfilter.likelihood, state.particles, state.weights, grid)
-        u[:, j] = grid[choose_probes(scores)]
+        u[:, j] = grid[choose_probes(adaptive_scores(model, pfilter.likelihood, state.particles, state.weights, grid))]
         for e in range(n):
             if status[e] != "ok":
                 y[e, j] = model.predict(u[e:e + 1, j], state.particles[e:e + 1, :1])[0, 0]  # keep the filter running

@@ -12,6 +12,7 @@ from typing import Mapping
 
 import pandas as pd
 
+from probecommit.runner.aside import in_own_process
 from probecommit.runner.calibration import calibrate
 from probecommit.runner.replay import load_run, replay_episodes
 from probecommit.store.safefile import write_text, write_with
@@ -155,6 +156,26 @@ def _records(frame: pd.DataFrame) -> list[dict]:
     return [{k: (v.item() if hasattr(v, "item") else v) for k, v in row.items()} for row in frame.to_dict("records")]
 
 
+def _plateau_part(cal_run: Path, test_run: Path) -> tuple[pd.DataFrame, list[pd.DataFrame]]:
+    commits: list[pd.DataFrame] = []
+    return plateau_comparison(cal_run, test_run, resamples=PLATEAU_RESAMPLES, record=commits), commits
+
+
+def _moves_part(runs: dict[str, Path]) -> tuple[pd.DataFrame, list[pd.DataFrame]]:
+    moved: list[pd.DataFrame] = []
+    return move_comparison(runs, record=moved), moved
+
+
+def _adaptive_part(runs: Path, adaptive_runs: dict[str, Path], out: Path, workers: int) -> pd.DataFrame:
+    """The adaptive comparison's stored rows: each run and schedule's, then the cover runs' (``reproduce_beyond``)."""
+    kept_rows: list[pd.DataFrame] = []
+    adaptive_comparison(adaptive_runs, out, workers=workers, record=kept_rows)
+    for label, run in (("B_test", "B_test_cover"), ("C", "C_cover")):
+        if (runs / run).is_dir():
+            kept_rows.append(summary_rows(load_run(runs / run).episodes).assign(run=label, schedule="cover"))
+    return pd.concat(kept_rows, ignore_index=True)
+
+
 def reproduce_beyond(insertion_runs: str | Path, out: str | Path, push1d_run: str | Path | None = None,
                      workers: int = 1, progress=None) -> dict:
     """All three beyond-the-paper comparisons on the insertion reproduction's run directories.
@@ -176,24 +197,18 @@ def reproduce_beyond(insertion_runs: str | Path, out: str | Path, push1d_run: st
     runs, out = Path(insertion_runs), Path(out)
     out.mkdir(parents=True, exist_ok=True)
     step = progress or (lambda *a: None)
+    # Each comparison in a process of its own (``runner.aside``): what one holds (a calibration's beliefs, a whole
+    # run's replays, the adaptive units' scores) leaves with it, so none sets the target's peak on top of another's.
     step("plateau: prefix vs hull", 0, 1)
-    commits: list[pd.DataFrame] = []
-    plateau = plateau_comparison(runs / "B_cal_random", runs / "B_test_random", resamples=PLATEAU_RESAMPLES,
-                                 record=commits)
+    plateau, commits = in_own_process(_plateau_part, runs / "B_cal_random", runs / "B_test_random")
     step("move: jitter vs mh", 0, 1)
-    moved: list[pd.DataFrame] = []
-    moves = move_comparison({"B_test": runs / "B_test_random", "C": runs / "C_random",
-                             "C_corrected": runs / "C_random_corrected"}, record=moved)
+    moves, moved = in_own_process(_moves_part, {"B_test": runs / "B_test_random", "C": runs / "C_random",
+                                                "C_corrected": runs / "C_random_corrected"})
     step("adaptive probes", 0, 1)
     adaptive_runs = {"B_test": runs / "B_test_random", "C": runs / "C_random"}
     if push1d_run is not None:
         adaptive_runs["push1d"] = Path(push1d_run)
-    kept_rows: list[pd.DataFrame] = []
-    adaptive_comparison(adaptive_runs, out / "runs", workers=workers, record=kept_rows)
-    for label, run in (("B_test", "B_test_cover"), ("C", "C_cover")):
-        if (runs / run).is_dir():
-            kept_rows.append(summary_rows(load_run(runs / run).episodes).assign(run=label, schedule="cover"))
-    stored = pd.concat(kept_rows, ignore_index=True)
+    stored = in_own_process(_adaptive_part, runs, adaptive_runs, out / "runs", workers)
     adaptive = adaptive_table(stored)
     for name, frame in (("plateau", plateau), ("moves", moves), ("adaptive", adaptive)):
         write_with(out / f"{name}.parquet", frame.to_parquet)

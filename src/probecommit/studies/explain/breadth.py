@@ -21,6 +21,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from probecommit.runner.aside import in_own_process
 from probecommit.runner.config import config_data, parse_config
 from probecommit.studies.breadth import FAMILY_K, breadth_row, budget_curve, paper_config, quick_config
 from probecommit.studies.explain.ex4_breadth import single_width
@@ -184,6 +185,16 @@ def sweep_keys(stored: pd.DataFrame, frozen: dict[str, dict[str, float] | None],
     return out
 
 
+def sweep_families(families: list[str], scales: list[float], runs: Path, engines: dict[str, str], repeats: int,
+                   quick: bool) -> pd.DataFrame:
+    """Every family's stored sweep rows (:func:`sweep_family`), in family order. Run in a process of its own
+    (``runner.aside.in_own_process``): its 24 runs' working memory (the blind arms' prior-sample losses, the runs'
+    traces) took the explain process from about 410 to 658 MB (issue 42, target 4); their runs are on disk for
+    the later steps that read them (ex4's cone, ex19's darts)."""
+    return pd.concat([sweep_family(family, scales, runs, engine=engines.get(family), repeats=repeats, quick=quick)
+                      for family in families], ignore_index=True)
+
+
 def run(root: Path, runs: Path, cfg: dict[str, Any], boot: dict[str, Any], quick: bool) -> tuple[dict[str, Any], pd.DataFrame]:
     """Every family's prior sweep and its span summary: the keys of ``explain:results.breadth_prior`` and the
     stored rows they are computed from (``STORED``)."""
@@ -191,8 +202,6 @@ def run(root: Path, runs: Path, cfg: dict[str, Any], boot: dict[str, Any], quick
     scales = [float(s) for s in cfg[f"breadth_prior_scales{suffix}"]]
     engines = cfg.get("breadth_prior_engines", {})
     families = cfg[f"breadth_prior_families{suffix}"]
-    stored = pd.concat([sweep_family(family, scales, runs, engine=engines.get(family),
-                                     repeats=int(cfg["breadth_prior_repeats"]), quick=quick) for family in families],
-                       ignore_index=True)
+    stored = in_own_process(sweep_families, families, scales, runs, engines, int(cfg["breadth_prior_repeats"]), quick)
     frozen = {family: None if quick else frozen_row(root, family) for family in families}
     return sweep_keys(stored, frozen, boot), stored

@@ -198,6 +198,12 @@ def capture_keys(rows: pd.DataFrame) -> dict[str, float]:
 # ----------------------------------------------------------------------------- the step
 
 
+def resplit_costs_of(pool: Path, *args: Any) -> pd.DataFrame:
+    """:func:`resplit_costs` on the frozen pool's run as the job loads it (``Explain.load``), in a process of its
+    own (``run``)."""
+    return resplit_costs(load_run(pool), *args)
+
+
 def summary(rows: pd.DataFrame) -> dict[str, float]:
     """Every key of the ``ex5_calibration`` group from the stored rows (the step and verify both call this)."""
     out: dict[str, float] = {}
@@ -213,18 +219,22 @@ def run(job: Any) -> None:
     p, cfg, quick = job.p, job.cfg, job.quick
     from probecommit.studies.explain.study import COVER_SCHEDULE
 
+    from probecommit.runner.aside import in_own_process
+
+    # Each part in a process of its own (issue 42, target 4): the pool's whole-run beliefs of the first, the
+    # fresh pools' runs and the capture draws' pairs of traces leave with their part (one process held 611 MB).
     job.progress("explain: the cost of calibration over re-splits", 0, 1)
     r = p.resplits
-    cost = resplit_costs(job.load("B_pool_cover"), p.alpha, int(r["count"]), int(r["seed"]),
-                         list(range(1, p.budgets["cover"] + 1)), cfg["ex5_cost_resamples_quick" if quick else
-                                                                     "ex5_cost_resamples"], p.bootstrap.seed)
+    cost = in_own_process(resplit_costs_of, job.ins / "B_pool_cover", p.alpha, int(r["count"]), int(r["seed"]),
+                          list(range(1, p.budgets["cover"] + 1)),
+                          cfg["ex5_cost_resamples_quick" if quick else "ex5_cost_resamples"], p.bootstrap.seed)
     job.progress("explain: the re-split study on fresh pools", 0, 1)
-    pools = fresh_pool_rows(p, COVER_SCHEDULE, job.runs, cfg["ex5_fresh_pools_quick" if quick else "ex5_fresh_pools"],
-                            job.workers)
+    pools = in_own_process(fresh_pool_rows, p, COVER_SCHEDULE, job.runs,
+                           cfg["ex5_fresh_pools_quick" if quick else "ex5_fresh_pools"], job.workers)
     job.progress("explain: Table III under a narrower capture window", 0, 1)
-    capture = capture_rows(p, job.runs, cfg["ex5_capture_scales_quick" if quick else "ex5_capture_scales"],
-                           cfg["ex5_capture_draws_quick" if quick else "ex5_capture_draws"], cfg["random_budgets"],
-                           job.workers)
+    capture = in_own_process(capture_rows, p, job.runs, cfg["ex5_capture_scales_quick" if quick else "ex5_capture_scales"],
+                             cfg["ex5_capture_draws_quick" if quick else "ex5_capture_draws"], cfg["random_budgets"],
+                             job.workers)
     rows = pd.concat([cost, pools, capture], ignore_index=True)
     job.stored[STORED] = rows
     job.res["ex5_calibration"].update(summary(rows))

@@ -167,7 +167,8 @@ def pools(runs: Path) -> list[str]:
 def run(job: Any) -> None:
     """E80..E83 on the root's frozen runs (after ex5's step, whose E55 rows E83 reads); fills
     ``job.res["ex9_calibration"]`` and stores the rows."""
-    from probecommit.studies.explain.ex5_calibration import resplit_costs
+    from probecommit.runner.aside import in_own_process
+    from probecommit.studies.explain.ex5_calibration import resplit_costs_of
 
     p, cfg, quick = job.p, job.cfg, job.quick
     r, k = p.resplits, p.budgets["cover"]
@@ -178,8 +179,10 @@ def run(job: Any) -> None:
         run_ = load_run(job.runs / name)
         cov = coverage_rows(name, run_.episodes, p.alpha, int(r["count"]), int(r["seed"]), k)
         frames.append(cov.assign(half=len(run_.instances) // 2))
-        cost = resplit_costs(run_, p.alpha, cost_splits, int(r["seed"]), list(range(1, k + 1)),
-                             int(cfg["ex9_cost_resamples_quick" if quick else "ex9_cost_resamples"]), p.bootstrap.seed)
+        # in a process of its own (issue 42): the pool's whole-run beliefs took this process to 533 MB
+        cost = in_own_process(resplit_costs_of, job.runs / name, p.alpha, cost_splits, int(r["seed"]),
+                              list(range(1, k + 1)),
+                              int(cfg["ex9_cost_resamples_quick" if quick else "ex9_cost_resamples"]), p.bootstrap.seed)
         frames.append(cost.assign(part="cost", pool=name))
     job.progress("explain: Table III's calibrated arm at the paper's margin", 0, 1)
     frames.append(margin_rows(job.load("B_cal_random"), job.load("B_test_random"), p.alpha, cfg["random_budgets"],
