@@ -62,10 +62,11 @@ def changes_section(doc: Doc) -> None:
     """What moved against the previous frozen results, and why (each cause is a change in this tree)."""
     doc.add("## What moved since the previous publication", "",
             "Against the frozen results before this publication (`git log -- results/paper`), compared key by key, "
-            "every number common to both is identical; only file paths and wall seconds differ. The speed changes "
-            "of this publication (a run's final tables joined as Arrow, even unit groups, three explain steps that "
-            "replay only the final budget they read) leave every table and key as it was.",
-            "New in this publication: the explain target's experiments E144-E146, E150, E151 and E156-E158 behind "
+            "every number common to both is identical; only file paths and wall seconds differ. The speed and "
+            "memory changes of this publication (calibrate's grown sets and margin sweep, the heavy steps of beyond, "
+            "breadth and explain run in processes of their own, adaptive probes scored in blocks) leave every table "
+            "and key as it was.",
+            "New in this publication: the explain target's experiments E162, E163, E168-E170 and E174-E177 behind "
             "the differences from the paper (see the list above) and the stored rows from which `verify` recomputes "
             "them.", "")
 
