@@ -19,7 +19,6 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Callable, Iterable, Sequence, TypeVar
 
-from probecommit.process.memory import release_free_heap
 from probecommit.runner.inference import BeliefTrace
 from probecommit.runner.replay import LoadedRun, RunBeliefs, load_run
 
@@ -57,11 +56,8 @@ class SharedBeliefs:
         return LoadedRun(loaded.path, loaded.config, loaded.instances, manifest=loaded.manifest, beliefs=view)
 
     def drop(self, path: str | Path) -> None:
-        """Forget a run's trace (no later step reads it), and give its pages back: a trace's arrays (a few MB
-        each) live in the C heap, which kept about 200 MB of them after each pair, so the next pair's two traces
-        came on top of the last ones' (the ex5 process set aside reached 596 MB; issue 42, target 4)."""
-        if self._held.pop(Path(path), None) is not None:
-            release_free_heap()
+        """Forget a run's trace (no later step reads it)."""
+        self._held.pop(Path(path), None)
 
     def __contains__(self, path: object) -> bool:
         return Path(path) in self._held  # type: ignore[arg-type]
