@@ -20,6 +20,8 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from probecommit.studies.explain.stored import over_families, recompute_stored
+
 #: The families (E124, E125 in this order): the declared reach grid (rounded to 0.01, docs/decisions.md, "ex16"),
 #: the engine the reruns use (None: the frozen run's own, already closed form) and the premise's tolerance
 #: (relative: the analytic scene against the stored MuJoCo cell; push1d's rerun is the stored run itself).
@@ -159,17 +161,9 @@ def family_rows(root: Path, family: str, quick: bool) -> pd.DataFrame:
 
 def run(root: Path, quick: bool = False) -> tuple[dict[str, Any], pd.DataFrame]:
     """The keys and the stored rows, for the families whose breadth runs are under ``root``."""
-    from probecommit.studies.explain.ex8_blind import run_dir
-
-    present = [f for f in FAMILIES if (run_dir(root, f, quick) / "episodes.parquet").is_file()]
-    if not present:
-        return {}, pd.DataFrame()
-    rows = pd.concat([family_rows(root, f, quick) for f in present], ignore_index=True)
-    return keys(rows), rows
+    return over_families(root, quick, FAMILIES, family_rows, keys)
 
 
 def recompute(folder: Path, published: dict[str, Any]) -> dict[str, Any]:
     """The keys again from a publication's stored rows (``verify``)."""
-    if not (folder / STORED).is_file() or not published:
-        return {}
-    return keys(pd.read_parquet(folder / STORED))
+    return recompute_stored(folder, published, STORED, keys)

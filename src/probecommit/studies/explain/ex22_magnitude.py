@@ -17,6 +17,8 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from probecommit.studies.explain.stored import recompute_stored
+
 #: The family, its declared scales (c = 1: the premise, the frozen grid on the closed-form scene) and the premise's
 #: tolerance (relative, the closed form against the stored MuJoCo cell; E94/E124's).
 FAMILY, SCALES, PREMISE = "hinge", (1.0, 1.25, 1.5, 1.75, 2.0), 0.05
@@ -112,6 +114,4 @@ def run(root: Path, quick: bool = False) -> tuple[dict[str, Any], pd.DataFrame]:
 
 def recompute(folder: Path, published: dict[str, Any]) -> dict[str, Any]:
     """The keys again from a publication's stored rows (``verify``)."""
-    if not (folder / STORED).is_file() or not published:
-        return {}
-    return keys(pd.read_parquet(folder / STORED))
+    return recompute_stored(folder, published, STORED, keys)

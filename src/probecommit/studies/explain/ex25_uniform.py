@@ -18,6 +18,8 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from probecommit.studies.explain.stored import over_families, recompute_stored
+
 #: The families (E174, E175 in this order): the reruns' engine (None: the frozen run's own, already closed form) and
 #: the premise's tolerance (relative: the frozen grid on that scene against the stored Probe-Robust(5) cell).
 FAMILIES = {"push1d": (None, 1e-9), "hinge": ("analytic", 0.05)}
@@ -116,17 +118,9 @@ def family_rows(root: Path, family: str, quick: bool) -> pd.DataFrame:
 
 def run(root: Path, quick: bool = False) -> tuple[dict[str, Any], pd.DataFrame]:
     """The keys and the stored rows, for the families whose breadth runs are under ``root``."""
-    from probecommit.studies.explain.ex8_blind import run_dir
-
-    present = [f for f in FAMILIES if (run_dir(root, f, quick) / "episodes.parquet").is_file()]
-    if not present:
-        return {}, pd.DataFrame()
-    rows = pd.concat([family_rows(root, f, quick) for f in present], ignore_index=True)
-    return keys(rows), rows
+    return over_families(root, quick, FAMILIES, family_rows, keys)
 
 
 def recompute(folder: Path, published: dict[str, Any]) -> dict[str, Any]:
     """The keys again from a publication's stored rows (``verify``)."""
-    if not (folder / STORED).is_file() or not published:
-        return {}
-    return keys(pd.read_parquet(folder / STORED))
+    return recompute_stored(folder, published, STORED, keys)

@@ -228,3 +228,26 @@ def recompute_group(folder: Path, results: Mapping[str, Any], group: str, stored
     problems = ([f"explain/{stored}: missing (the rows {group}'s keys are recomputed from)"]
                 if results.get(group) and not (folder / stored).is_file() else [])
     return values, dict.fromkeys(values, stored), problems
+
+
+def recompute_stored(folder: Path, published: Mapping[str, Any], name: str,
+                     keys: Callable[[pd.DataFrame], dict[str, Any]]) -> dict[str, Any]:
+    """A step's keys again from its stored rows ``name`` (``verify``); none when the rows are not there or the
+    publication holds none of the step's keys."""
+    if not (Path(folder) / name).is_file() or not published:
+        return {}
+    return keys(pd.read_parquet(Path(folder) / name))
+
+
+def over_families(root: Path, quick: bool, families: Sequence[str], family_rows: Callable[..., pd.DataFrame],
+                  keys: Callable[[pd.DataFrame], dict[str, Any]],
+                  files: Sequence[str] = ("episodes.parquet",)) -> tuple[dict[str, Any], pd.DataFrame]:
+    """The keys and stored rows of a step run per Table II family on the breadth runs under ``root``
+    (``family_rows(root, family, quick)``); a family whose run lacks one of ``files`` is left out."""
+    from probecommit.studies.explain.ex8_blind import run_dir
+
+    present = [f for f in families if all((run_dir(root, f, quick) / name).is_file() for name in files)]
+    if not present:
+        return {}, pd.DataFrame()
+    rows = pd.concat([family_rows(root, f, quick) for f in present], ignore_index=True)
+    return keys(rows), rows
