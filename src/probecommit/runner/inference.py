@@ -177,10 +177,12 @@ def adaptive_scores(model: Any, likelihood: Any, particles: np.ndarray, weights:
     from probecommit.core.selectors import expected_posterior_variance
 
     n_e, n = weights.shape
+    if n_e == 0:
+        return expected_posterior_variance(model, likelihood, particles, weights, grid)
     step = max(1, elements // (min(32, n) * n))
-    return np.concatenate([expected_posterior_variance(model, likelihood, particles[a:a + step], weights[a:a + step],
-                                                       grid) for a in range(0, n_e, step)]) if n_e else \
-        expected_posterior_variance(model, likelihood, particles, weights, grid)
+    blocks = [expected_posterior_variance(model, likelihood, particles[a:a + step], weights[a:a + step], grid)
+              for a in range(0, n_e, step)]
+    return np.concatenate(blocks)
 
 
 def rollout_adaptive(
