@@ -35,6 +35,20 @@ def label(scale: float) -> str:
     return f"c{round(scale * 100):03d}"
 
 
+def part_cells(sel: pd.DataFrame, part: str) -> dict[str, float]:
+    """One probe set's Probe-Robust(k) cells with their 95 % intervals and its k2/k5 ratio with its interval, keyed
+    under ``part`` (E158 here, E174-E177 in ``ex25_uniform``)."""
+    from probecommit.studies.explain.ex22_exact import _cell
+
+    out: dict[str, float] = {}
+    for k in BUDGETS:
+        m, lo, hi = _cell(sel[sel["k"] == k])
+        out.update({f"{part}.k{k}": m, f"{part}.k{k}_lo": lo, f"{part}.k{k}_hi": hi})
+    r, rlo, rhi = ratio_interval(sel)
+    out.update({f"{part}.ratio_k2_k5": r, f"{part}.ratio_lo": rlo, f"{part}.ratio_hi": rhi})
+    return out
+
+
 def ratio_interval(rows: pd.DataFrame, resamples: int = RESAMPLES, seed: int = SEED) -> tuple[float, float, float]:
     """Probe-Robust(2) / Probe-Robust(5) and its 95 % cluster-bootstrap interval: instances resampled with
     replacement, each drawn instance's episodes at both budgets kept together (percentiles 2.5, 97.5)."""
@@ -57,19 +71,13 @@ def ratio_interval(rows: pd.DataFrame, resamples: int = RESAMPLES, seed: int = S
 def keys(rows: pd.DataFrame) -> dict[str, Any]:
     """Keys of ``explain:results.ex22_magnitude`` from the stored rows (one function for the step and verify)."""
     from probecommit.studies.explain.ex16_reach import implied_k2
-    from probecommit.studies.explain.ex22_exact import _cell
     from probecommit.studies.paper_values import value
 
     p5, p2 = value(f"tab:breadth.{FAMILY}.probe_robust"), implied_k2(FAMILY)
     out: dict[str, Any] = {"paper.k5": p5, "paper.k2_implied": p2, "paper.ratio_k2_k5": p2 / p5,
                            "resamples": float(RESAMPLES)}
     for part in ("stored", *(label(c) for c in SCALES)):
-        sel = rows[rows["part"] == part]
-        for k in BUDGETS:
-            m, lo, hi = _cell(sel[sel["k"] == k])
-            out.update({f"{part}.k{k}": m, f"{part}.k{k}_lo": lo, f"{part}.k{k}_hi": hi})
-        r, rlo, rhi = ratio_interval(sel)
-        out.update({f"{part}.ratio_k2_k5": r, f"{part}.ratio_lo": rlo, f"{part}.ratio_hi": rhi})
+        out.update(part_cells(rows[rows["part"] == part], part))
     diff = abs(out[f"{label(1.0)}.k5"] - out["stored.k5"]) / out["stored.k5"]
     out.update({"premise_rel_diff": diff, "premise_tolerance": PREMISE, "premise_holds": float(diff <= PREMISE)})
     holding = []

@@ -52,20 +52,14 @@ def family_keys(rows: pd.DataFrame, family: str) -> dict[str, float]:
     """One family's keys: each part's cells and k2 / k5 ratio with intervals, the premise and each declared rule
     (E174/E175 on ``interval``, E176/E177 on ``ends``)."""
     from probecommit.studies.explain.ex16_reach import implied_k2
-    from probecommit.studies.explain.ex22_exact import _cell
-    from probecommit.studies.explain.ex22_magnitude import ratio_interval
+    from probecommit.studies.explain.ex22_magnitude import part_cells
     from probecommit.studies.paper_values import value
 
     p5, p2 = value(f"tab:breadth.{family}.probe_robust"), implied_k2(family)
     out: dict[str, float] = {"paper.k5": p5, "paper.k2_implied": p2, "paper.ratio_k2_k5": p2 / p5}
     present = [part for part in PARTS if (rows["part"] == part).any()]
     for part in present:
-        sel = rows[rows["part"] == part]
-        for k in BUDGETS:
-            m, lo, hi = _cell(sel[sel["k"] == k])
-            out.update({f"{part}.k{k}": m, f"{part}.k{k}_lo": lo, f"{part}.k{k}_hi": hi})
-        r, rlo, rhi = ratio_interval(sel)
-        out.update({f"{part}.ratio_k2_k5": r, f"{part}.ratio_lo": rlo, f"{part}.ratio_hi": rhi})
+        out.update(part_cells(rows[rows["part"] == part], part))
     tolerance = FAMILIES[family][1]
     diff = abs(out["grid.k5"] - out["stored.k5"]) / out["stored.k5"]
     outside = not out["grid.ratio_lo"] <= p2 / p5 <= out["grid.ratio_hi"]
