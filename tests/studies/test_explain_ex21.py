@@ -3,8 +3,6 @@ cases (exact answers)."""
 
 from __future__ import annotations
 
-from types import SimpleNamespace
-
 import numpy as np
 import pandas as pd
 import pytest
@@ -12,25 +10,11 @@ import pytest
 import probecommit.studies.claims as C
 from probecommit.core.belief import ParticleFilter, jitter_resampled
 from probecommit.studies.explain import ex21_band as B
-
-
-class _TwoLevels:
-    """A 1-D model: a tap at ``u`` reads 0 (pocket) when ``|u - x| < 1``, else 10 (top)."""
-
-    prior_low, prior_high, jitter_scale = np.array([-5.0]), np.array([5.0]), np.array([0.5])
-    reading_levels = (0.0, 10.0)
-
-    def predict(self, u, theta):
-        u = np.asarray(u, float).reshape(-1, 1)
-        return np.where(np.abs(u - theta[..., 0]) < 1.0, 0.0, 10.0)[..., None]
-
-    def add_reading_log_likelihood(self, u, theta, log_weights, level_ll):
-        top = self.predict(u, theta)[..., 0] == 10.0
-        return log_weights + np.where(top, level_ll[:, 1:2], level_ll[:, 0:1])
+from tests.studies.two_levels import TwoLevels, tap_batch
 
 
 def _filter(n: int = 8) -> ParticleFilter:
-    return ParticleFilter.gaussian(_TwoLevels(), 0.5, n_particles=n)
+    return ParticleFilter.gaussian(TwoLevels(), 0.5, n_particles=n)
 
 
 def test_copies_modes_hand_cases():
@@ -58,13 +42,8 @@ def test_contradicted_all():
     assert got.tolist() == [True, False]
 
 
-def _batch(u, y):
-    u, y = np.asarray(u, float), np.asarray(y, float)
-    return SimpleNamespace(u=u[..., None], y=y[..., None], n_episodes=u.shape[0])
-
-
 def test_linear_float64_equals_log_space_when_no_tap_contradicts_every_particle():
-    pf, batch = _filter(64), _batch([[0.0, 2.0, -3.0]] * 3, [[0.1, 9.8, 10.2]] * 3)
+    pf, batch = _filter(64), tap_batch([[0.0, 2.0, -3.0]] * 3, [[0.1, 9.8, 10.2]] * 3)
     rngs = lambda: [np.random.default_rng(i) for i in range(3)]  # noqa: E731
     ours = list(B._log_space(pf, "stated", batch, rngs(), 3))
     lin = list(B._linear(pf, np.float64, batch, rngs(), 3))
@@ -75,7 +54,7 @@ def test_linear_float64_equals_log_space_when_no_tap_contradicts_every_particle(
 def test_a_tap_contradicting_every_particle():
     # every particle far from 0 but one tap reads the pocket there: log space keeps the weights, linear resets;
     # float32 gives +inf surprise (the predictive density underflows), float64 a finite one
-    pf, batch = _filter(4), _batch([[0.0]], [[0.0]])
+    pf, batch = _filter(4), tap_batch([[0.0]], [[0.0]])
     state = pf.initial([np.random.default_rng(0)])
     assert np.all(np.abs(state.particles[0, :, 0]) > 1.0) or pytest.skip("a particle near 0 in this draw")
     [(_, _, res64, s64, _, every)] = list(B._linear(pf, np.float64, batch, [np.random.default_rng(0)], 1))

@@ -4,7 +4,6 @@ the split of escapes by cause, the keys and the rules on hand cases (exact answe
 from __future__ import annotations
 
 from itertools import product
-from types import SimpleNamespace
 
 import numpy as np
 import pandas as pd
@@ -16,26 +15,7 @@ import probecommit.studies.claims as C
 from probecommit.core.belief import ParticleFilter, jitter_resampled
 from probecommit.studies.explain import ex21_band
 from probecommit.studies.explain import ex24_band as B
-
-
-class _TwoLevels:
-    """A 1-D model: a tap at ``u`` reads 0 (pocket) when ``|u - x| < 1``, else 10 (top)."""
-
-    prior_low, prior_high, jitter_scale = np.array([-5.0]), np.array([5.0]), np.array([0.25])
-    reading_levels = (0.0, 10.0)
-
-    def predict(self, u, theta):
-        u = np.asarray(u, float).reshape(-1, 1)
-        return np.where(np.abs(u - theta[..., 0]) < 1.0, 0.0, 10.0)[..., None]
-
-    def add_reading_log_likelihood(self, u, theta, log_weights, level_ll):
-        top = self.predict(u, theta)[..., 0] == 10.0
-        return log_weights + np.where(top, level_ll[:, 1:2], level_ll[:, 0:1])
-
-
-def _batch(u, y):
-    u, y = np.asarray(u, float), np.asarray(y, float)
-    return SimpleNamespace(u=u[..., None], y=y[..., None], n_episodes=u.shape[0])
+from tests.studies.two_levels import TwoLevels, tap_batch
 
 
 def test_tap_kernel_hand_cases():
@@ -53,9 +33,9 @@ def test_tap_kernel_hand_cases():
 
 
 def test_taps_stated_is_ex21s_and_tap1_differs_only_where_tap1_resampled():
-    pf = ParticleFilter.gaussian(_TwoLevels(), 0.5, n_particles=64)
+    pf = ParticleFilter.gaussian(TwoLevels(0.25), 0.5, n_particles=64)
     # trajectory 0 reads the pocket at tap 1 (resamples there), trajectory 1 reads top (no resampling at tap 1)
-    batch = _batch([[0.0, 0.5, 3.0], [4.5, 0.0, 2.0]], [[0.1, 0.0, 10.0], [10.0, 0.2, 9.9]])
+    batch = tap_batch([[0.0, 0.5, 3.0], [4.5, 0.0, 2.0]], [[0.1, 0.0, 10.0], [10.0, 0.2, 9.9]])
     rngs = lambda: [np.random.default_rng(i) for i in range(2)]  # noqa: E731
     ours = list(ex21_band._log_space(pf, "stated", batch, rngs(), 3))
     stated = list(B.taps(pf, "stated", batch, rngs(), 3))
