@@ -13,7 +13,7 @@ from typing import Any
 
 import pandas as pd
 
-from probecommit.studies.explain import ex20_band
+from probecommit.studies.explain import ex20_band, stored
 
 #: Result groups this step fills (added to ``Explain.res``).
 GROUPS = ("ex20_band",)
@@ -54,9 +54,5 @@ def run(job: Any) -> None:
 
 def recompute(folder: Path, results: dict[str, Any], boot: dict[str, Any]) -> dict[str, tuple[Any, str]]:
     """``{"<group>.<key>": (value, stored file)}`` of every key this step publishes, from the stored rows."""
-    out: dict[str, tuple[Any, str]] = {}
-    name = ex20_band.STORED
-    if (folder / name).is_file() and results.get("ex20_band"):
-        for key, v in ex20_band.keys(pd.read_parquet(folder / name), boot).items():
-            out[f"ex20_band.{key}"] = (v, name)
-    return out
+    return stored.recompute_bootstrapped(folder, results, "ex20_band", ex20_band.STORED,
+                                         lambda rows: ex20_band.keys(rows, boot))

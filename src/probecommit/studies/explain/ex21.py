@@ -12,7 +12,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from probecommit.studies.explain import ex21_band
+from probecommit.studies.explain import ex21_band, stored
 
 #: Result groups this step fills (added to ``Explain.res``).
 GROUPS = ("ex21_band",)
@@ -74,8 +74,5 @@ def run(job: Any) -> None:
 
 def recompute(folder: Path, results: dict[str, Any], boot: dict[str, Any]) -> dict[str, tuple[Any, str]]:
     """``{"<group>.<key>": (value, stored file)}`` of every key this step publishes, from the stored rows."""
-    out: dict[str, tuple[Any, str]] = {}
-    if (folder / ex21_band.STORED).is_file() and results.get("ex21_band"):
-        for key, v in ex21_band.keys(pd.read_parquet(folder / ex21_band.STORED), **boot).items():
-            out[f"ex21_band.{key}"] = (v, ex21_band.STORED)
-    return out
+    return stored.recompute_bootstrapped(folder, results, "ex21_band", ex21_band.STORED,
+                                         lambda rows: ex21_band.keys(rows, **boot))

@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from probecommit.studies.explain import ex20, ex20_band, ex23_band
+from probecommit.studies.explain import ex20, ex20_band, ex23_band, stored
 
 #: Result groups this step fills (added to ``Explain.res``).
 GROUPS = ("ex23_band",)
@@ -106,9 +106,5 @@ def run(job: Any) -> None:
 
 def recompute(folder: Path, results: dict[str, Any], boot: dict[str, Any]) -> dict[str, tuple[Any, str]]:
     """``{"<group>.<key>": (value, stored file)}`` of every key this step publishes, from the stored rows."""
-    out: dict[str, tuple[Any, str]] = {}
-    name = ex23_band.STORED
-    if (folder / name).is_file() and results.get("ex23_band"):
-        for key, v in ex23_band.keys(pd.read_parquet(folder / name), boot).items():
-            out[f"ex23_band.{key}"] = (v, name)
-    return out
+    return stored.recompute_bootstrapped(folder, results, "ex23_band", ex23_band.STORED,
+                                         lambda rows: ex23_band.keys(rows, boot))

@@ -11,7 +11,7 @@ from typing import Any
 
 import pandas as pd
 
-from probecommit.studies.explain import ex24_band
+from probecommit.studies.explain import ex24_band, stored
 
 #: Result groups this step fills (added to ``Explain.res``).
 GROUPS = ("ex24_band",)
@@ -58,8 +58,5 @@ def run(job: Any) -> None:
 
 def recompute(folder: Path, results: dict[str, Any], boot: dict[str, Any]) -> dict[str, tuple[Any, str]]:
     """``{"<group>.<key>": (value, stored file)}`` of every key this step publishes, from the stored rows."""
-    out: dict[str, tuple[Any, str]] = {}
-    if (folder / ex24_band.STORED).is_file() and results.get("ex24_band"):
-        for key, v in ex24_band.keys(pd.read_parquet(folder / ex24_band.STORED), **boot).items():
-            out[f"ex24_band.{key}"] = (v, ex24_band.STORED)
-    return out
+    return stored.recompute_bootstrapped(folder, results, "ex24_band", ex24_band.STORED,
+                                         lambda rows: ex24_band.keys(rows, **boot))

@@ -230,6 +230,17 @@ def recompute_group(folder: Path, results: Mapping[str, Any], group: str, stored
     return values, dict.fromkeys(values, stored), problems
 
 
+def recompute_bootstrapped(folder: Path, results: Mapping[str, Any], group: str, name: str,
+                           summary: Callable[[pd.DataFrame], Mapping[str, Any]]) -> dict[str, tuple[Any, str]]:
+    """One bootstrapped group's keys from its stored rows ``name`` (``verify``, the contract of
+    ``report.recompute.BOOTSTRAPPED``): ``{"<group>.<key>": (value, name)}``; none when the rows are not there or
+    the group was not published. ``summary(rows)`` is the group's own keys function, with the bootstrap settings
+    bound by the caller."""
+    if not (Path(folder) / name).is_file() or not results.get(group):
+        return {}
+    return {f"{group}.{key}": (v, name) for key, v in summary(pd.read_parquet(Path(folder) / name)).items()}
+
+
 def recompute_stored(folder: Path, published: Mapping[str, Any], name: str,
                      keys: Callable[[pd.DataFrame], dict[str, Any]]) -> dict[str, Any]:
     """A step's keys again from its stored rows ``name`` (``verify``); none when the rows are not there or the
