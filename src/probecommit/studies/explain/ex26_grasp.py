@@ -13,6 +13,7 @@ signs as Table II reads them, with the blind-held truths' probed failures beside
 
 from __future__ import annotations
 
+import gc
 import math
 from contextlib import contextmanager
 from pathlib import Path
@@ -75,6 +76,7 @@ def rows_of(runs: Path, quick: bool, conditions: Sequence[tuple[str, float, floa
         with force_ceiling(float(limit)), squeeze_scale(float(c)):
             run_study(config, path, workers=1, threads=1)
             frames.append(condition_rows(config, path).assign(condition=name, ceiling=float(limit), c=float(c)))
+        gc.collect()  # the run's simulator and its compiled MuJoCo scenes go before the next run builds its own
     return pd.concat(frames, ignore_index=True)
 
 
