@@ -102,3 +102,20 @@ def test_t09_names_e179_and_not_e178():
     t09 = next(c for c in claims.CLAIMS if c.id == "T09-grasp")
     assert "E179" in t09.explain and "E178" not in t09.explain
     assert np.isfinite(claims.paper_values.value("T09-grasp.improve_min"))
+
+
+def test_verify_recomputes_the_keys_from_the_stored_rows(tmp_path):
+    from probecommit.report import recompute
+
+    rows = _rows({"a": (1.0, [(1.2, 0.0), (1.6, 1.0)]), "c": (0.0, [(1.2, 0.0), (2.0, 1.0)])})
+    keys = ex26_grasp.summary(rows)
+    rows.to_parquet(tmp_path / ex26_grasp.STORED)
+    assert ("ex26_grasp", ex26_grasp.STORED, "ex26_grasp") in recompute.STORED_SUMMARIES
+    out = recompute.Recomputed()
+    recompute._stored_summaries(tmp_path, {"ex26_grasp": keys}, out)
+    assert {k: v for k, v in out.values.items() if k.startswith("ex26_grasp.")} == {f"ex26_grasp.{k}": v
+                                                                                   for k, v in keys.items()}
+    (tmp_path / ex26_grasp.STORED).unlink()
+    missing = recompute.Recomputed()
+    recompute._stored_summaries(tmp_path, {"ex26_grasp": keys}, missing)
+    assert any(not ok and "ex26_grasp" in msg for ok, msg in missing.consistency)  # published keys need their rows

@@ -2333,7 +2333,9 @@ def _experiments_ex26() -> list[Experiment]:
         "squeeze lasting 100 ms (slip scale c = 4) gives, " + "; ".join(_ex26_sentence(p) for p in EX26_CEILINGS)
         + " (improvements {cap20_c4lo:.3f} to {cap20_c4hi:.3f} and {cap25_c4lo:.3f} to {cap25_c4hi:.3f}, against "
         "the paper's {plo:.2f} to {phi:.2f}: not the paper's spread). It counts, in E133's reading of the claim, only if at one of the two "
-        "ceilings no feasible truth worsens; the literal count (half improve) needs an even feasible count.",
+        "ceilings no feasible truth worsens: two unreported properties jointly, each at an earlier experiment's "
+        "declared value, paired after E133's outcome was seen; the literal count (half improve) needs an even "
+        "feasible count.",
         supports=_ex26_ceilings_hold)]
 
 
