@@ -550,7 +550,8 @@ def _claims_instances_and_comparisons() -> list[Claim]:
                      {"up": "breadth:results.sign_flip_over_truths.grasp.n_improve",
                       "down": "breadth:results.sign_flip_over_truths.grasp.n_worse",
                       "n": "breadth:results.sign_flip_over_truths.grasp.n_feasible"},
-                     lambda v: v["down"] == 0 and 2 * v["up"] == v["n"]),), explain=("E47", "E49", "E73", "E133")))
+                     lambda v: v["down"] == 0 and 2 * v["up"] == v["n"]),),
+              explain=("E47", "E49", "E73", "E133", "E179")))
     add(Claim("T10-gru", "Sec. V-A, Comparisons", "GRU matches the pipeline within the pre-registered equivalence margin",
               (Holds("equivalent", "difference's interval inside the margin", {"eq": "gru:results.equivalent"},
                      lambda v: bool(v["eq"])),
@@ -2289,6 +2290,61 @@ def _experiments_ex25() -> list[Experiment]:
             and v["inq"] == 1 and v["outq"] == 1))
     return out
 
+#: ex26's conditions, as key prefixes (``ex26_grasp.CONDITIONS``): the squeeze's slip scale c at the frozen 5 N
+#: ceiling (E178), and c = 4 at E133's two ceilings with 6 +- 1 feasible truths (E179).
+EX26_SCALES = ("c1", "c2", "c4")
+EX26_CEILINGS = ("cap20_c4", "cap25_c4")
+
+
+def _ex26_keys(prefixes: tuple[str, ...]) -> dict[str, str]:
+    d = f"{X}ex26_grasp."
+    names = {"f": "n_feasible", "i": "n_improve", "t": "n_tie", "w": "n_worse", "n": "ceiling", "c": "c",
+             "d": "worst_difference", "lo": "improve_min", "hi": "improve_max", "h": "held_truths",
+             "hs": "held_seeds", "hf": "held_failures", "hc": "held_crush", "hr": "held_grip_ratio",
+             "ht": "held_tie_chance", "low": "lowest_probed"}
+    return {f"{p}{short}": f"{d}{p}.{name}" for p in prefixes for short, name in names.items()}
+
+
+def _ex26_sentence(p: str) -> str:
+    """One condition's numbers in E178's and E179's sentences."""
+    return (f"at the ceiling {{{p}n:.1f}} N and c = {{{p}c:g}}: {{{p}f:.0f}} feasible, {{{p}i:.0f}} improve, "
+            f"{{{p}t:.0f}} tie, {{{p}w:.0f}} worsen (worst {{{p}d:+.4f}}); the blind grip holds {{{p}h:.0f}}, on "
+            f"which Probe-Robust(8) fails {{{p}hf:.0f}} of {{{p}hs:.0f}} seeds ({{{p}hc:.0f}} by crushing; grip "
+            f"median {{{p}hr:.2f}} F_lift; two such truths tie over 2 x 80 seeds with chance {{{p}ht:.3g}}); "
+            f"lowest probed success {{{p}low:.3f}}")
+
+
+def _experiments_ex26() -> list[Experiment]:
+    """The ex26 helper's experiments (E178, E179, ``studies/explain/ex26_grasp.py``; rules in docs/decisions.md,
+    "ex26", committed before the runs): grasp's blind-held truths against the squeeze's duration in MuJoCo."""
+    return [Experiment(
+        "E178", "grasp's blind-held truths against the squeeze's duration (slip scale c) in MuJoCo, at the frozen "
+        "force ceiling", _ex26_keys(EX26_SCALES),
+        "the frozen MuJoCo grasp study rerun with the squeeze lasting 50 sqrt(c) ms in the model and the engine "
+        "(its slip scale times c, nothing else changed) gives, " + "; ".join(_ex26_sentence(p) for p in EX26_SCALES)
+        + ". It counts only if no feasible truth worsens at c = 4; the feasible count is the ceiling's, so it "
+        "speaks to the worsening alone.",
+        supports=lambda v: v["c4w"] == 0),
+        Experiment(
+        "E179", "grasp's feasible truths and signs at E133's two ceilings near six feasible truths, with the "
+        "squeeze's slip scale at c = 4",
+        {**_ex26_keys(EX26_CEILINGS), "plo": "paper:T09-grasp.improve_min", "phi": "paper:T09-grasp.improve_max"},
+        "the frozen MuJoCo grasp study rerun at E133's ceilings (grips and squeezes cut at the ceiling) with the "
+        "squeeze lasting 100 ms (slip scale c = 4) gives, " + "; ".join(_ex26_sentence(p) for p in EX26_CEILINGS)
+        + " (improvements {cap20_c4lo:.3f} to {cap20_c4hi:.3f} and {cap25_c4lo:.3f} to {cap25_c4hi:.3f}, against "
+        "the paper's {plo:.2f} to {phi:.2f}: not the paper's spread). It counts, in E133's reading of the claim, only if at one of the two "
+        "ceilings no feasible truth worsens: two unreported properties jointly, each at an earlier experiment's "
+        "declared value, paired after E133's outcome was seen; the literal count (half improve) needs an even "
+        "feasible count.",
+        supports=_ex26_ceilings_hold)]
+
+
+def _ex26_ceilings_hold(v: Mapping[str, Any]) -> bool:
+    """E179's declared rule (E133's, at c = 4): at one of E133's two ceilings with 6 +- 1 feasible truths, no
+    feasible truth worsens."""
+    return any(abs(v[f"{p}f"] - EX18_PAPER_FEASIBLE) <= 1 and v[f"{p}w"] == 0 for p in EX26_CEILINGS)
+
+
 def _experiments_ex20() -> list[Experiment]:
     """The ex20 helper's experiments (E144..E146, ``studies/explain/ex20_band.py``; rules in docs/decisions.md,
     "ex20", written before the runs): Table III's original arm post-stratified on the design's exact exposure to
@@ -2435,7 +2491,7 @@ for _experiment in (_experiments() + _experiments_more() + _experiments_ex3() + 
                     + _experiments_ex22()
                     + _experiments_ex20() + _experiments_ex21()
                     + _experiments_ex23() + _experiments_ex24()
-                    + _experiments_ex25()):
+                    + _experiments_ex25() + _experiments_ex26()):
     EXPERIMENTS[_experiment.number] = _experiment
 
 

@@ -46,14 +46,14 @@ def force_ceiling(limit: float) -> Iterator[None]:
         GraspModel.action_grid, GraspModel.probe_grid = saved
 
 
-def ceiling_config(limit: float, quick: bool) -> Any:
-    """The frozen grasp config (MuJoCo), named after the ceiling (its run folder)."""
+def ceiling_config(limit: float, quick: bool, name: str | None = None) -> Any:
+    """The frozen grasp config (MuJoCo), named after the ceiling (its run folder) unless ``name`` is given."""
     from probecommit.runner.config import config_data, parse_config
     from probecommit.studies.breadth import paper_config, quick_config
 
     base = paper_config("grasp")
     data = config_data(quick_config(base) if quick else base)
-    data["name"] = f"grasp_force_ceiling{float(limit):g}"
+    data["name"] = name or f"grasp_force_ceiling{float(limit):g}"
     return parse_config(data)
 
 

@@ -44,6 +44,7 @@ from probecommit.studies.explain import ex25
 from probecommit.studies.explain import ex12_distinct, ex12_simultaneous
 from probecommit.studies.explain import ex15_readings, ex15_union
 from probecommit.studies.explain import ex18_grasp, ex18_share
+from probecommit.studies.explain import ex26_grasp
 from probecommit.studies.explain import gru as gru_study
 from probecommit.studies.explain.margin import margin_curve
 from probecommit.studies.paper_values import PRINTED
@@ -134,7 +135,7 @@ class Explain:
             *ex25.GROUPS,
             ex12_distinct.GROUP, ex12_simultaneous.GROUP,
             ex15_readings.GROUP, ex15_union.GROUP,
-            ex18_share.GROUP, ex18_grasp.GROUP)}
+            ex18_share.GROUP, ex18_grasp.GROUP, ex26_grasp.GROUP)}
         self.tables: dict[str, pd.DataFrame] = ReadDict(self.reads, "tables")
         #: Stored rows written beside results.json as they are, by file name (``more``'s steps).
         self.stored: dict[str, pd.DataFrame] = ReadDict(self.reads, "stored")
@@ -542,6 +543,7 @@ class Explain:
                  self.robust, physx_coverage, self.physx,
                  lambda: (self.ready and self.ready(), self.gru()), lambda: more.run(self),
                  lambda: ex15_union.run(self), self.aside(ex18_grasp.run, needs=()),  # E133: frozen config only
+                 self.aside(ex26_grasp.run, needs=()),  # E178/E179: frozen config only, squeeze patched
                  self.aside(ex22.exact, ex22.magnitude, needs=("breadth",)),  # E156-E158: stored breadth rows, closed forms
                  self.aside(ex25.uniform, needs=("breadth",)),  # E174/E175: stored breadth rows, closed forms
                  lambda: ex19.run(self),  # E138 reads the prior sweep's darts runs (more.run)
