@@ -2291,8 +2291,8 @@ def _experiments_ex25() -> list[Experiment]:
     return out
 
 #: E182..E184: the hinge's commit a torque (``studies/explain/ex27_torque.py``): (number, the rows' part, what it is).
-EX27_TORQUES = (("E182", "impulse", "an angular impulse"), ("E183", "d025", "a constant torque held 0.25 s"),
-                ("E184", "d1", "a constant torque held 1 s"))
+EX27_TORQUES = (("E182", "impulse", "an angular impulse"), ("E183", "d025", "a constant torque held a quarter second"),
+                ("E184", "d1", "a constant torque held one second"))
 
 
 def _experiments_ex27() -> list[Experiment]:
