@@ -23,10 +23,7 @@ def torque(job: Any) -> None:
     """E182..E184: Table II's hinge row with the commit a torque (impulse, 0.25 s, 1 s) on MuJoCo, against the
     paper's Blind-Bayes, both Probe-Robust curve points and its k2 / k5 ratio."""
     job.progress("explain: Table II's hinge row with the commit a torque", 0, 1)
-    keys, rows = ex27_torque.run(Path(job.root), bool(job.quick))
-    job.res["ex27_torque"].update(keys)
-    if len(rows):
-        job.stored[ex27_torque.STORED] = rows
+    stored.fill_group(job, "ex27_torque", ex27_torque.STORED, ex27_torque.run)
 
 
 def recompute(folder: Path, results: dict[str, Any]) -> tuple[dict[str, Any], dict[str, str], list[str]]:
