@@ -121,6 +121,8 @@ CASES: list[tuple[str, Edit]] = [
                                                   bump, "ex22_magnitude.")),
     ("stored-ex25-uniform-episode", edit_stored("ex25_uniform_rows.parquet", lambda t: t.part == "interval", "realized",
                                                 bump, "ex25_uniform.")),
+    ("stored-ex27-torque-episode", edit_stored("ex27_torque_rows.parquet", lambda t: t.part == "d025", "realized",
+                                               bump, "ex27_torque.")),
     ("json-ex7-signature", edit_results("explain", ["ex7_faults", "signature.particles.optimism_change"],
                                         lambda v: [v[0] + 0.0123, *v[1:]])),
     ("json-pybullet-stored-escape", edit_results("explain", ["pybullet_escape", "stored.escape_k8"],
@@ -196,6 +198,7 @@ CASES: list[tuple[str, Edit]] = [
     ("deleted-ex19-cone-rows-rehashed", delete_stored("ex19_cone_rows.parquet")),
     ("deleted-ex22-exact-rows-rehashed", delete_stored("ex22_exact_rows.parquet")),
     ("deleted-ex25-uniform-rows-rehashed", delete_stored("ex25_uniform_rows.parquet")),
+    ("deleted-ex27-torque-rows-rehashed", delete_stored("ex27_torque_rows.parquet")),
 ]
 
 

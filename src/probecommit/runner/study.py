@@ -71,12 +71,16 @@ class RunParts:
     counts that unit's engine calls and holds its answers. Sent to a worker process or a Ray
     task, a ``RunParts`` travels as the config's data (:meth:`__reduce__`) and is rebuilt there
     once per process (:func:`_parts_of_data`), not once per unit.
+
+    ``simulator``: a factory of each unit's simulator where the config's engine is not the scene (an experiment
+    whose commit is another push than the family's, run in its own process; None: the config's engine).
     """
 
     config: StudyConfig
     model: Any
     pfilter: Any
     executors: list
+    simulator: Any = None
 
     @classmethod
     def build(cls, config: StudyConfig) -> "RunParts":
@@ -261,7 +265,7 @@ def _episodes(parts: RunParts, instances: pd.DataFrame) -> tuple[Any, dict[str, 
     columns (``commit(..., as_columns=True)``; empty when every rollout failed) and the simulator
     (built here: one per unit or group, as it counts their engine calls)."""
     config, model, pfilter = parts.config, parts.model, parts.pfilter
-    simulator = build.build_simulator(config)
+    simulator = build.build_simulator(config) if parts.simulator is None else parts.simulator()
     schedule = config.probes.schedule
     if schedule == "adaptive":
         batch = rollout_adaptive(instances, config.repeats, config.probes.budget, model, pfilter, simulator, config.seed)

@@ -347,7 +347,8 @@ def _breadth_explain() -> tuple[Any, ...]:
             + tuple((f"E{140 + i}", cells) for i, cells in enumerate(EX19_WIDTH_ROWS.values()))
             + tuple((f"E{156 + i}", (f"{fam} probe_robust",)) for i, fam in enumerate(EXACT_POSTERIOR))
             + (("E158", ("hinge probe_robust",)),)
-            + tuple((number, (f"{fam} probe_robust",)) for number, fam, _, _ in EX25_PROBE_SETS))
+            + tuple((number, (f"{fam} probe_robust",)) for number, fam, _, _ in EX25_PROBE_SETS)
+            + tuple((number, ("hinge probe_robust",)) for number, _, _ in EX27_TORQUES))
 
 
 def _audit_explain(audit: list[Comparison]) -> tuple[Any, ...]:
@@ -2343,6 +2344,41 @@ def _ex26_ceilings_hold(v: Mapping[str, Any]) -> bool:
     """E179's declared rule (E133's, at c = 4): at one of E133's two ceilings with 6 +- 1 feasible truths, no
     feasible truth worsens."""
     return any(abs(v[f"{p}f"] - EX18_PAPER_FEASIBLE) <= 1 and v[f"{p}w"] == 0 for p in EX26_CEILINGS)
+#: E182..E184: the hinge's commit a torque (``studies/explain/ex27_torque.py``): (number, the rows' part, what it is).
+EX27_TORQUES = (("E182", "impulse", "an angular impulse"), ("E183", "d025", "a constant torque held a quarter second"),
+                ("E184", "d1", "a constant torque held one second"))
+
+
+def _experiments_ex27() -> list[Experiment]:
+    """The ex27 helper's experiments (E182..E184, ``studies/explain/ex27_torque.py``; rule in docs/decisions.md,
+    "ex27", committed before the runs): Table II's hinge row with the commit read as Table I's "torque"."""
+    b, out = f"{X}ex27_torque.", []
+    for number, part, what in EX27_TORQUES:
+        keys = {"n": f"{b}episodes", "d": f"{b}{part}.scene_max_diff", "ok": f"{b}{part}.premise_holds",
+                "p5": f"{b}paper.k5", "p2": f"{b}paper.k2_implied", "pq": f"{b}paper.ratio_k2_k5", "pb": f"{b}paper.bb",
+                "in5": f"{b}{part}.k5_paper_inside", "in2": f"{b}{part}.k2_paper_inside",
+                "inq": f"{b}{part}.ratio_paper_inside", "inb": f"{b}{part}.bb_paper_inside",
+                "outq": f"{b}stored_ratio_paper_outside", "holds": f"{b}{part}.holds"}
+        for name, src in (("s", "stored"), ("x", part)):
+            keys.update({f"{name}{c}": f"{b}{src}.{c}" for c in ("k2", "k5", "bb")})
+            keys.update({f"{name}{c}{e}": f"{b}{src}.{c}_{e}" for c in ("k2", "k5", "bb") for e in ("lo", "hi")})
+            keys.update({f"{name}q": f"{b}{src}.ratio_k2_k5", f"{name}qlo": f"{b}{src}.ratio_lo",
+                         f"{name}qhi": f"{b}{src}.ratio_hi"})
+        out.append(Experiment(
+            number, f"the hinge's row with its commit {what} from rest (Table I's 'coast / torque'; the duration "
+            "the paper omits, a declared sweep), against its Blind-Bayes, both curve points and the curve's shape",
+            keys,
+            "the frozen hinge on MuJoCo ({n:g} episodes a budget) with only the commit replaced by " + what + " "
+            "(MuJoCo's torque matches its closed form to {d:.4f} rad, premise {ok:g} = holds): Blind-Bayes {xbb:.3f} "
+            "[{xbblo:.3f}, {xbbhi:.3f}] (release speed {sbb:.3f}; the paper's {pb:.3f} inside: {inb:g}, 1 = yes), "
+            "Probe-Robust(5) {xk5:.3f} [{xk5lo:.3f}, {xk5hi:.3f}] (release speed {sk5:.3f}; the paper's {p5:.3f} "
+            "inside: {in5:g}), Probe-Robust(2) {xk2:.3f} [{xk2lo:.3f}, {xk2hi:.3f}] (release speed {sk2:.3f}; the "
+            "paper's implied {p2:.3f} inside: {in2:g}), k = 2 over k = 5 {xq:.2f} [{xqlo:.2f}, {xqhi:.2f}] where the "
+            "release speed gives {sq:.2f} [{sqlo:.2f}, {sqhi:.2f}] (the paper's {pq:.2f} inside the torque's: "
+            "{inq:g}; outside the release speed's: {outq:g}).",
+            supports=lambda v: v["ok"] == 1 and v["holds"] == 1 and v["in5"] == 1 and v["in2"] == 1
+            and v["inq"] == 1 and v["inb"] == 1 and v["outq"] == 1))
+    return out
 
 
 def _experiments_ex20() -> list[Experiment]:
@@ -2491,7 +2527,7 @@ for _experiment in (_experiments() + _experiments_more() + _experiments_ex3() + 
                     + _experiments_ex22()
                     + _experiments_ex20() + _experiments_ex21()
                     + _experiments_ex23() + _experiments_ex24()
-                    + _experiments_ex25() + _experiments_ex26()):
+                    + _experiments_ex25() + _experiments_ex26() + _experiments_ex27()):
     EXPERIMENTS[_experiment.number] = _experiment
 
 

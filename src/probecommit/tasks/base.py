@@ -524,6 +524,8 @@ class TargetMissSimulator(NoisySimulator):
     """
 
     query = "?"
+    #: The named query a commit runs, when not ``query`` (a commit that is another push than the probe).
+    commit_query: str | None = None
     outcome = "value"
     target = "target"
     not_finite = "{engine} {query} returned a non-finite value for action {action}"
@@ -535,7 +537,7 @@ class TargetMissSimulator(NoisySimulator):
     def execute(self, theta: np.ndarray, action: np.ndarray, context: np.ndarray | None = None) -> dict[str, Any]:
         if context is None:
             raise ValueError(f"the {self.family} outcome needs the {self.target} (context)")
-        value = float(self.cached(self.query, theta, np.ravel(action))[0])
+        value = float(self.cached(self.commit_query or self.query, theta, np.ravel(action))[0])
         if not np.isfinite(value):
             raise FloatingPointError(self.not_finite.format(engine=self.engine, query=self.query,
                                                             action=np.ravel(action).tolist()))

@@ -127,14 +127,23 @@ def episodes_with_grid(config: Any, grid: tuple[float, ...] | None) -> pd.DataFr
     """The episodes of ``config`` with the model's probe grid replaced by ``grid`` (None: the frozen grid), computed
     in memory unit by unit (the run's own seeding: per instance and repeat, so units do not change a number)."""
     from probecommit.runner import build
-    from probecommit.runner.instances import draw_instances
-    from probecommit.runner.study import RunParts, compute_unit, unit_names
 
     model = build.build_model(config)
     if grid is not None:  # the same model with another probe grid (a class attribute of every family)
         variant = type(f"{type(model).__name__}Reach", (type(model),), {"probe_grid": np.asarray(grid, float)[:, None]})
         model = variant(**{f: getattr(model, f) for f in model.__dataclass_fields__})
-    parts = RunParts(config, model, build.build_filter(model, config.belief), build.config_executors(config, model))
+    return episodes_of(config, model)
+
+
+def episodes_of(config: Any, model: Any, simulator: Any = None) -> pd.DataFrame:
+    """The episodes of ``config`` run with ``model`` (and each unit's simulator from the factory ``simulator``; None:
+    the config's engine), in memory unit by unit (E124's and ex27's reruns; the run's own seeding)."""
+    from probecommit.runner import build
+    from probecommit.runner.instances import draw_instances
+    from probecommit.runner.study import RunParts, compute_unit, unit_names
+
+    parts = RunParts(config, model, build.build_filter(model, config.belief), build.config_executors(config, model),
+                     simulator)
     instances = draw_instances(config, model)
     frames = []
     for unit, rows in unit_names(len(instances), config.unit_instances):

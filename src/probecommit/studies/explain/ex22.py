@@ -24,20 +24,14 @@ def exact(job: Any) -> None:
     """E156/E157: Table II's push1d and hinge Probe-Robust(2, 5) decided again on the exact posterior of each stored
     episode's own readings (no resampling, no jitter), the miss from the model at the truth."""
     job.progress("explain: Table II's probed cells under the exact posterior of the stored readings", 0, 1)
-    keys, rows = ex22_exact.run(Path(job.root), bool(job.quick))
-    job.res["ex22_exact"].update(keys)
-    if len(rows):
-        job.stored[ex22_exact.STORED] = rows
+    stored.fill_group(job, "ex22_exact", ex22_exact.STORED, ex22_exact.run)
 
 
 def magnitude(job: Any) -> None:
     """E158: the hinge's Probe-Robust(2, 5) with its frozen release speeds scaled by each declared factor (closed-form
     reruns), against both of the paper's curve points and its k2 / k5 ratio."""
     job.progress("explain: the hinge's probe magnitudes swept", 0, 1)
-    keys, rows = ex22_magnitude.run(Path(job.root), bool(job.quick))
-    job.res["ex22_magnitude"].update(keys)
-    if len(rows):
-        job.stored[ex22_magnitude.STORED] = rows
+    stored.fill_group(job, "ex22_magnitude", ex22_magnitude.STORED, ex22_magnitude.run)
 
 
 def recompute(folder: Path, results: dict[str, Any]) -> tuple[dict[str, Any], dict[str, str], list[str]]:

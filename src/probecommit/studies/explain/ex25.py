@@ -23,10 +23,7 @@ def uniform(job: Any) -> None:
     """E174/E175: Table II's push1d and hinge Probe-Robust(2, 5) with probes uniform over the frozen grid's span
     (closed-form reruns), against both of the paper's curve points and its k2 / k5 ratio."""
     job.progress("explain: Table II's probed cells with probes uniform over the probe interval", 0, 1)
-    keys, rows = ex25_uniform.run(Path(job.root), bool(job.quick))
-    job.res["ex25_uniform"].update(keys)
-    if len(rows):
-        job.stored[ex25_uniform.STORED] = rows
+    stored.fill_group(job, "ex25_uniform", ex25_uniform.STORED, ex25_uniform.run)
 
 
 def recompute(folder: Path, results: dict[str, Any]) -> tuple[dict[str, Any], dict[str, str], list[str]]:

@@ -217,6 +217,15 @@ def physx_coverage_keys(episodes: pd.DataFrame, k: int) -> dict[str, float]:
     return out
 
 
+def fill_group(job: Any, group: str, name: str, run: Callable[[Path, bool], tuple[dict[str, Any], pd.DataFrame]]) -> None:
+    """A stored-row step's keys into ``job.res[group]`` and its rows beside ``results.json`` as ``name`` (none when
+    the step found no run): ``run(root, quick) -> (keys, rows)``, so ``verify`` recomputes the keys from the rows."""
+    keys, rows = run(Path(job.root), bool(job.quick))
+    job.res[group].update(keys)
+    if len(rows):
+        job.stored[name] = rows
+
+
 def recompute_group(folder: Path, results: Mapping[str, Any], group: str, stored: str,
                     recompute: Callable[[Path, dict[str, Any]], Mapping[str, Any]]) -> tuple[dict[str, Any],
                                                                                          dict[str, str], list[str]]:

@@ -80,10 +80,14 @@ class MujocoHingeSimulator(TargetMissSimulator):
 
     def coast(self, f: float, b: float, m: float, speed: float) -> float:
         """Named query: the angle (rad) where the door stops after release at ``speed`` rad/s."""
-        mj = self._mj
         model, data = self._instance(f, b, m)
-        mj.mj_resetData(model, data)
+        self._mj.mj_resetData(model, data)
         data.qvel[0] = speed
+        return self.settle(model, data)
+
+    def settle(self, model: Any, data: Any) -> float:
+        """Step the door as it is until it stops (its angle, rad) or ``MAX_TIME_S`` passes (NaN)."""
+        mj = self._mj
         quiet = 0
         for _ in range(int(round(MAX_TIME_S / TIMESTEP_S))):
             mj.mj_step(model, data)

@@ -109,6 +109,11 @@ class CoastModel(TaskModelBase):
         u = np.asarray(u, dtype=float).reshape(theta.shape[0], 1)
         return self.outcome(u, theta[..., 0], theta[..., 1], theta[..., 2])[..., None]
 
+    def commit_outcome(self, action: np.ndarray, *latents: np.ndarray) -> np.ndarray:
+        """A commit's outcome: the coast's own (a variant whose commit is another push overrides it: the hinge's
+        torque of docs/decisions.md, "ex27")."""
+        return self.outcome(action, *latents)
+
     def loss(self, actions: np.ndarray, theta: np.ndarray, context: np.ndarray | None = None) -> np.ndarray:
         """Modeled miss ``[E, A, N]`` (``[A, S]`` for ``theta[S, d]`` and one target)."""
         if context is None:
@@ -117,9 +122,9 @@ class CoastModel(TaskModelBase):
         j = np.asarray(actions, dtype=float).reshape(-1)
         target = np.asarray(context, dtype=float)
         if theta.ndim == 2:
-            d = self.outcome(j[:, None], theta[None, :, 0], theta[None, :, 1], theta[None, :, 2])
+            d = self.commit_outcome(j[:, None], theta[None, :, 0], theta[None, :, 1], theta[None, :, 2])
             return np.abs(d - float(target.reshape(-1)[0])) / self.margin
-        d = self.outcome(j[None, :, None], theta[:, None, :, 0], theta[:, None, :, 1], theta[:, None, :, 2])
+        d = self.commit_outcome(j[None, :, None], theta[:, None, :, 0], theta[:, None, :, 1], theta[:, None, :, 2])
         return np.abs(d - target.reshape(-1, 1, 1)) / self.margin
 
 
