@@ -126,9 +126,14 @@ def redraws(target) -> bool:
 
 
 def progress_bar(description: str):
-    """A rich progress bar and a ``(done, total)`` callback that drives it."""
+    """A rich progress bar and a ``(done, total)`` callback that drives it. The command's work begins
+    here: its start-up objects are frozen out of the garbage collector's walks (``process/collector.py``)."""
     # Imported here: only the commands that run work draw a bar (``--help`` and the rest start without it).
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
+
+    from probecommit.process.collector import startup_done
+
+    startup_done()
 
     bar = Progress(
         TextColumn("{task.description}", style="bold", markup=False), BarColumn(), MofNCompleteColumn(),
