@@ -318,9 +318,11 @@ def use_system_arrow_pool() -> None:
 def main() -> None:  # pragma: no cover - entry point
     """The ``probecommit`` command: the app, then the process ends without the interpreter's
     teardown (:func:`probecommit.process.finish.exit_process`; an uncaught error ends as usual)."""
+    from probecommit.process.collector import defer_collection
     from probecommit.process.finish import exit_process
     from probecommit.process.memory import reuse_freed_arrays
 
+    defer_collection()  # until the work begins (the progress bar): process/collector.py
     use_system_arrow_pool()
     reuse_freed_arrays()
     try:
