@@ -867,6 +867,8 @@ EXPLAIN_EX15_UNION = "ex15_union_rows.parquet"
 EXPLAIN_EX18_SHARE = "ex18_share_rows.parquet"
 #: ex18's stored rows (``studies.explain.ex18_grasp.STORED``: E133's grasp reruns under each force ceiling).
 EXPLAIN_EX18_GRASP = "ex18_grasp_rows.parquet"
+#: ex28's stored rows (``studies.explain.ex28_plateau.STORED``: E186's re-splits with the W = 1 plateau as one tie).
+EXPLAIN_EX28_PLATEAU = "ex28_plateau_rows.parquet"
 #: ex7's stored rows (``studies.explain.ex7.STORED``: the fault surprise rows and the fresh draws).
 EXPLAIN_EX7 = ("ex7_fault_surprise.parquet", "ex7_dev_draws.parquet", "ex7_harness_draws.parquet")
 
@@ -879,7 +881,8 @@ STORED_SUMMARIES = (("mixture_noise", EXPLAIN_MIXTURE, "mixture_x"),
                     ("ex15_readings", EXPLAIN_EX15, "ex15_readings"),
                     ("ex15_union", EXPLAIN_EX15_UNION, "ex15_union"),
                     ("ex18_share", EXPLAIN_EX18_SHARE, "ex18_share"),
-                    ("ex18_grasp", EXPLAIN_EX18_GRASP, "ex18_grasp"))
+                    ("ex18_grasp", EXPLAIN_EX18_GRASP, "ex18_grasp"),
+                    ("ex28_plateau", EXPLAIN_EX28_PLATEAU, "ex28_plateau"))
 
 #: Explain modules that recompute their own groups: ``recompute(folder, results)`` gives
 #: ``(values, sources, problems)`` (a group published without its stored rows is a problem).
