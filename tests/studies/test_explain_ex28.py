@@ -86,3 +86,14 @@ def test_e186_is_registered_for_t14_coverage_only():
     assert e.supports({"h": 1.0}) and not e.supports({"h": 0.0})
     t14 = next(c for c in claims.CLAIMS if c.id == "T14-resplits")
     assert ("E186", ("held-out cluster coverage",)) in claims.explanations(t14)
+
+
+def test_verify_recomputes_the_group_from_its_stored_rows(tmp_path):
+    from probecommit.report import recompute
+
+    assert ("ex28_plateau", ex28.STORED, "ex28_plateau") in recompute.STORED_SUMMARIES
+    scores = [0.02 * (i + 1) for i in range(12)] + [1.0, 1.0, 1.2]
+    rows = pd.concat([ex28.pool_rows(p, _episodes(scores), 0.2, 4, 9) for p in ("B_pool_cover", "B_union_cover")],
+                     ignore_index=True)
+    rows.to_parquet(tmp_path / ex28.STORED)
+    assert ex28.summary(pd.read_parquet(tmp_path / ex28.STORED)) == ex28.summary(rows)

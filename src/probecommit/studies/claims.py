@@ -2117,8 +2117,8 @@ def _experiments_ex28() -> list[Experiment]:
         "coverage by at most {gm:.3f}: the level spans {llo:.3f} to {lhi:.3f}, the coverage {clo:.3f} to {chi:.3f} "
         "(without the ties {slo:.3f} to {shi:.3f}). Beside: the random protocol's Split B pool at k = 8 has "
         "{rp:.3f} of its clusters on the plateau, which lifts its coverage by {rg:.3f} at level {rl:.3f}. The "
-        "declared rule (level within 0.1 of the paper's, its SD at least 0.15, coverage within 0.05) holds on "
-        "{h:.0f} pool(s).",
+        "declared rule (level mean and coverage within the claim's own tolerances, the level's SD at least the "
+        "paper's less the level's tolerance) holds on {h:.0f} pool(s).",
         supports=lambda v: v["h"] >= 1)]
 
 
