@@ -869,6 +869,8 @@ EXPLAIN_EX18_SHARE = "ex18_share_rows.parquet"
 EXPLAIN_EX18_GRASP = "ex18_grasp_rows.parquet"
 #: ex26's stored rows (``studies.explain.ex26_grasp.STORED``: E178/E179's grasp reruns per squeeze duration).
 EXPLAIN_EX26_GRASP = "ex26_grasp_rows.parquet"
+#: ex28's stored rows (``studies.explain.ex28_plateau.STORED``: E186's re-splits with the W = 1 plateau as one tie).
+EXPLAIN_EX28_PLATEAU = "ex28_plateau_rows.parquet"
 #: ex7's stored rows (``studies.explain.ex7.STORED``: the fault surprise rows and the fresh draws).
 EXPLAIN_EX7 = ("ex7_fault_surprise.parquet", "ex7_dev_draws.parquet", "ex7_harness_draws.parquet")
 
@@ -882,7 +884,8 @@ STORED_SUMMARIES = (("mixture_noise", EXPLAIN_MIXTURE, "mixture_x"),
                     ("ex15_union", EXPLAIN_EX15_UNION, "ex15_union"),
                     ("ex18_share", EXPLAIN_EX18_SHARE, "ex18_share"),
                     ("ex18_grasp", EXPLAIN_EX18_GRASP, "ex18_grasp"),
-                    ("ex26_grasp", EXPLAIN_EX26_GRASP, "ex26_grasp"))
+                    ("ex26_grasp", EXPLAIN_EX26_GRASP, "ex26_grasp"),
+                    ("ex28_plateau", EXPLAIN_EX28_PLATEAU, "ex28_plateau"))
 
 #: Explain modules that recompute their own groups: ``recompute(folder, results)`` gives
 #: ``(values, sources, problems)`` (a group published without its stored rows is a problem).

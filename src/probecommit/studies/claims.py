@@ -605,7 +605,8 @@ def _claims_audit_and_calibration() -> list[Claim]:
                        ("E80", ("held-out cluster coverage",)), ("E83", ("margin optimistic",)),
                        ("E101", ("held-out cluster coverage",)),
                        *((number, ("level mean", "held-out cluster coverage", "margin optimistic"))
-                         for number in ("E118", "E119", "E132")))))
+                         for number in ("E118", "E119", "E132")),
+                       ("E186", ("held-out cluster coverage",)))))
     return c
 
 
@@ -2096,6 +2097,33 @@ def _experiments_ex18() -> list[Experiment]:
             supports=_ex18_grasp_holds)]
 
 
+def _experiments_ex28() -> list[Experiment]:
+    """The ex28 helper's experiment (``studies/explain/ex28_plateau.py``; rule in docs/decisions.md, "ex28"): T14's
+    held-out coverage and level by their mechanism, the W = 1 plateau counted as one covered tie (E186)."""
+    d = f"{X}ex28_plateau."
+    f, u, r = f"{d}B_pool_cover.", f"{d}B_union_cover.", f"{d}B_union_random."
+    keys = {"n": f"{d}cover.pools", "fp": f"{f}plateau_share", "fb": f"{f}beyond_share", "ft": f"{f}tie_max",
+            "fl": f"{f}level", "fc": f"{f}coverage_le", "up": f"{u}plateau_share", "uc": f"{u}coverage_le",
+            "pm": f"{d}cover.plateau_share_max", "gm": f"{d}cover.tie_gain_max", "llo": f"{d}cover.level_min",
+            "lhi": f"{d}cover.level_max", "clo": f"{d}cover.coverage_le_min", "chi": f"{d}cover.coverage_le_max",
+            "slo": f"{d}cover.coverage_lt_min", "shi": f"{d}cover.coverage_lt_max", "h": f"{d}pools_holding",
+            "rp": f"{r}plateau_share", "rg": f"{r}tie_gain", "rl": f"{r}level"}
+    return [Experiment(
+        "E186", "T14's held-out coverage by its mechanism: the W = 1 plateau (truths spanned only by zero-weight "
+        "particles) counted as one covered tie at the threshold", keys,
+        "held-out coverage above q / (M + 1) needs scores tied at the threshold, and the only tie our score "
+        "puts where a threshold lands is the W = 1 plateau. On the frozen pool no cluster sits on it ({fp:.3f}; "
+        "{fb:.3f} lie beyond the hull, the largest score two clusters share is {ft:.3f}): level {fl:.3f}, coverage "
+        "{fc:.3f}; on the literal Split B pool its share is {up:.3f} (coverage {uc:.3f}). Over the {n:.0f} stored "
+        "cover pools the plateau holds at most {pm:.3f} of the clusters and, counted as one covered tie, lifts "
+        "coverage by at most {gm:.3f}: the level spans {llo:.3f} to {lhi:.3f}, the coverage {clo:.3f} to {chi:.3f} "
+        "(without the ties {slo:.3f} to {shi:.3f}). Beside: the random protocol's Split B pool at k = 8 has "
+        "{rp:.3f} of its clusters on the plateau, which lifts its coverage by {rg:.3f} at level {rl:.3f}. The "
+        "declared rule (level mean and coverage within the claim's own tolerances, the level's SD at least the "
+        "paper's less the level's tolerance) holds on {h:.0f} pool(s).",
+        supports=lambda v: v["h"] >= 1)]
+
+
 #: E133's declared ceilings, as key prefixes (tenths of a newton per pad; ``ex18_grasp.CEILINGS``).
 EX18_CEILINGS = ("cap15", "cap20", "cap25", "cap30", "cap40", "cap50")
 
@@ -2527,7 +2555,7 @@ for _experiment in (_experiments() + _experiments_more() + _experiments_ex3() + 
                     + _experiments_ex22()
                     + _experiments_ex20() + _experiments_ex21()
                     + _experiments_ex23() + _experiments_ex24()
-                    + _experiments_ex25() + _experiments_ex26() + _experiments_ex27()):
+                    + _experiments_ex25() + _experiments_ex26() + _experiments_ex27() + _experiments_ex28()):
     EXPERIMENTS[_experiment.number] = _experiment
 
 
