@@ -34,6 +34,7 @@ from probecommit.store.probes import validate_probes
 from probecommit.store.rundir import RunDir
 from probecommit.store.yamlsafe import load_yaml
 from probecommit.store.schema import cache_frame, cache_records, component_names
+from probecommit.tasks.base import AnswerColumns
 
 import yaml
 from probecommit.errors import UsageError
@@ -245,11 +246,11 @@ class StoredAnswers:
             masks.append(rows)
         return masks
 
-    def records(self, masks: list[np.ndarray]) -> Iterator[dict[str, Any]]:
-        """The answers of the rows ``masks`` select, per table, as ``load_cache`` takes them."""
-        for (table, _), rows in zip(self._parts, masks):
-            if rows.any():
-                yield from cache_records(table.filter(pa.array(rows)).to_pandas(), self.latent_names)
+    def records(self, masks: list[np.ndarray]) -> AnswerColumns:
+        """The answers of the rows ``masks`` select, every table's in order, as ``load_cache`` takes them (columns)."""
+        parts = [cache_records(table.filter(pa.array(rows)).to_pandas(), self.latent_names)
+                 for (table, _), rows in zip(self._parts, masks) if rows.any()]
+        return AnswerColumns.join(parts) if parts else cache_records(None, self.latent_names)
 
     def table(self) -> pa.Table:
         """Every answer held, the run's then the engine's, as one Arrow table (each answer once)."""
