@@ -22,6 +22,7 @@ from probecommit.core.executors import Belief, Commitment, Executor
 from probecommit.accel import production
 from probecommit.runner.seeding import INFERENCE, ROLLOUT, episode_rngs
 from probecommit.store.schema import component_names
+from probecommit.tasks.base import CachedSimulator
 
 
 @dataclass
@@ -501,6 +502,15 @@ def outcome_keys(batch: ProbeBatch, episodes: np.ndarray, index: np.ndarray,
     return first, np.asarray(inverse).reshape(-1), keys
 
 
+def _realized_many(simulator, truths: np.ndarray, actions: np.ndarray, contexts: np.ndarray | None) -> list:
+    """``simulator.realized_many`` (each row's realized outcome or the error it raised), or for a
+    simulator without it, ``tasks.base.CachedSimulator.realized_many``'s call of ``execute`` a row."""
+    many = getattr(simulator, "realized_many", None)
+    if many is None:
+        return CachedSimulator.realized_many(simulator, truths, actions, contexts)
+    return many(truths, actions, contexts)
+
+
 def _execute(simulator, batch: ProbeBatch, action: np.ndarray, index: np.ndarray, n_actions: int,
              outcomes: dict):
     """Realized outcome of each episode's action: one ``execute`` per distinct (instance, action).
@@ -521,13 +531,13 @@ def _execute(simulator, batch: ProbeBatch, action: np.ndarray, index: np.ndarray
         # Every distinct action's engine query is needed below: run them in engine threads first.
         simulator.prefetch([simulator.execute_query_key(batch.truths[e], action[e], None if context is None else context[e])
                             for key, e in zip(keys, first) if key not in outcomes])
-    for u, (key, e) in enumerate(zip(keys, first)):
-        if key not in outcomes:
-            try:
-                ctx = None if context is None else context[e]
-                outcomes[key] = float(simulator.execute(batch.truths[e], action[e], ctx)["realized"])
-            except Exception as exc:  # noqa: BLE001 - mark the episodes, keep the study going
-                outcomes[key] = f"execute: {type(exc).__name__}: {exc}"
+    todo = [u for u, key in enumerate(keys) if key not in outcomes]
+    if todo:
+        rows = first[todo]
+        answers = _realized_many(simulator, batch.truths[rows], action[rows], None if context is None else context[rows])
+        for u, answer in zip(todo, answers):  # an error marks the episodes, the study goes on
+            outcomes[keys[u]] = f"execute: {type(answer).__name__}: {answer}" if isinstance(answer, Exception) else answer
+    for u, key in enumerate(keys):
         value = outcomes[key]
         if isinstance(value, str):
             values[u], errors[u] = np.nan, value

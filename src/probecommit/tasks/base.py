@@ -524,6 +524,21 @@ class CachedSimulator:
         """The keys of every answer held (taken by :meth:`load_cache` or given by the engine)."""
         return list(self._cache)
 
+    def realized_many(self, thetas: np.ndarray, actions: np.ndarray,
+                      contexts: np.ndarray | None = None) -> list[float | Exception]:
+        """Per row, ``float(execute(theta, action, context)["realized"])``, or the error it raised:
+        a commit's distinct (instance, aim) pairs executed in one call (``runner.inference``).
+        Rows are executed in order, so the engine is asked (and counted) as one call each would.
+        A simulator whose commit is one cached query may answer the rows without a call each."""
+        out: list[float | Exception] = []
+        for row in range(len(thetas)):
+            try:
+                out.append(float(self.execute(thetas[row], actions[row], None if contexts is None else contexts[row])
+                                 ["realized"]))
+            except Exception as exc:  # noqa: BLE001 - the caller marks the episodes failed
+                out.append(exc)
+        return out
+
     def load_cache(self, records: Iterable[dict[str, Any]]) -> list[tuple[str, tuple[float, ...], tuple[float, ...]]]:
         """Take stored answers (``cache_records`` rows of this engine; other engines' are skipped).
 
