@@ -492,11 +492,14 @@ def outcome_keys(batch: ProbeBatch, episodes: np.ndarray, index: np.ndarray,
     (whichever was executed first, so the answer also depended on thread timing).
     """
     flat = batch.instance_index.astype(np.int64)[episodes] * n_actions + np.asarray(index, dtype=np.int64)
-    if isinstance(batch.split, str):
-        codes, names = np.zeros(len(flat), dtype=np.int64), [batch.split]
-    else:
-        codes, names = pd.factorize(np.asarray(batch.split, dtype=object)[episodes])
-        codes, names = codes.astype(np.int64), list(names)
+    split = batch.split if isinstance(batch.split, str) else np.asarray(batch.split, dtype=object)
+    if isinstance(split, str) or (len(split) and bool((split == split[0]).all())):
+        # One split (a run's batch, even where it names the split per episode): no factorizing, one name.
+        name = str(split if isinstance(split, str) else split[0])
+        _, first, inverse = np.unique(flat, return_index=True, return_inverse=True)
+        return first, np.asarray(inverse).reshape(-1), [(name, f) for f in flat[first].tolist()]
+    codes, names = pd.factorize(split[episodes])
+    codes, names = codes.astype(np.int64), list(names)
     _, first, inverse = np.unique(flat * max(len(names), 1) + codes, return_index=True, return_inverse=True)
     keys = [(str(names[c]), f) for c, f in zip(codes[first].tolist(), flat[first].tolist())]
     return first, np.asarray(inverse).reshape(-1), keys
