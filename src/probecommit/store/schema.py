@@ -120,6 +120,19 @@ def cache_frame(records: list[dict], latent_names: tuple[str, ...]):
     return pd.DataFrame(cache_columns(records, latent_names), columns=["engine", "query", *latent_names, "arg", "value"])
 
 
+def answers_frame(answers: AnswerColumns, latent_names: tuple[str, ...]):
+    """:func:`cache_frame` of answers given as columns (``CachedSimulator.answer_columns``): the
+    same table, its columns made from the arrays (a replay keeps each chunk's engine answers)."""
+    import pandas as pd
+
+    if answers.thetas.shape[1] != len(latent_names):
+        return cache_frame(list(answers), latent_names)
+    columns = {"engine": list(answers.engines), "query": list(answers.queries),
+               **{name: answers.thetas[:, i] for i, name in enumerate(latent_names)},
+               "arg": answers.args.tolist(), "value": answers.values.tolist()}
+    return pd.DataFrame(columns, columns=["engine", "query", *latent_names, "arg", "value"])
+
+
 def cache_records(frame, latent_names: tuple[str, ...]) -> AnswerColumns:
     """Inverse of :func:`cache_frame`: the records a simulator's ``load_cache`` accepts, as columns
     (``tasks.base.AnswerColumns``: iterated, one dict a row).

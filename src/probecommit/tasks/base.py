@@ -520,6 +520,20 @@ class CachedSimulator:
         return [{"engine": self.engine, "query": k[0], "theta": list(k[1]), "arg": list(k[2]), "value": v.tolist()}
                 for k, v in items]
 
+    def answer_columns(self, keys: list[tuple[str, tuple[float, ...], tuple[float, ...]]]) -> AnswerColumns | None:
+        """:meth:`cache_records` of ``keys`` as columns (``AnswerColumns``: the same rows, iterated),
+        without a dict a row; None where the keys' latents, arguments or answers differ in length."""
+        if not keys:
+            return None
+        try:
+            columns = [np.asarray([key[1] for key in keys], dtype=float), np.asarray([key[2] for key in keys], dtype=float),
+                       np.asarray([self._cache[key] for key in keys], dtype=float)]
+        except ValueError:  # rows of different lengths
+            return None
+        if any(column.ndim != 2 for column in columns):
+            return None
+        return AnswerColumns([self.engine] * len(keys), [key[0] for key in keys], *columns)
+
     def answered_keys(self) -> list[tuple[str, tuple[float, ...], tuple[float, ...]]]:
         """The keys of every answer held (taken by :meth:`load_cache` or given by the engine)."""
         return list(self._cache)
