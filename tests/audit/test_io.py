@@ -220,3 +220,35 @@ def test_generated_inverted_intervals_are_refused(gap, row):
     bad.loc[row, "retained_hi"] = bad.loc[row, "retained_lo"] - gap
     with pytest.raises(EpisodeTableError, match="retained_lo > retained_hi"):
         validate_episodes(bad)
+
+
+def _spoiled(table: pd.DataFrame, how: str, row: int) -> pd.DataFrame:
+    """A copy of an episode table with one value of ``row`` made wrong in the way ``how`` names."""
+    bad = table.copy()
+    column, value = {"nan": ("predicted", np.nan), "inf": ("z_true", np.inf), "huge": ("hull_hi", 1e300),
+                     "negative": ("realized", -1.0), "inverted": ("hull_lo", bad.loc[row, "hull_hi"] + 1.0),
+                     "status": ("status", "lost"), "not binary": ("realized", 2.0)}[how]
+    bad.loc[row, column] = value
+    return bad
+
+
+@pytest.mark.parametrize("how", ["nan", "inf", "huge", "negative", "inverted", "status", "not binary", "none"])
+@pytest.mark.parametrize("row", [0, 5])
+def test_a_built_tables_values_are_refused_as_validate_episodes_refuses_them(how, row):
+    """``check_episode_values`` (a calibration's check of the tables its commits build) raises the
+    same error as ``validate_episodes`` on each wrong value of a table in the schema's types, and
+    nothing on a good table."""
+    from probecommit.audit.io import check_episode_values
+
+    table = synthetic_episodes(4, 2, (1, 2), n_particles=32, seed=3).assign(status="ok")
+    table.loc[7, ["status", "predicted", "realized"]] = ["failed", np.nan, np.nan]  # a failed row's NaN is allowed
+    bad = table if how == "none" else _spoiled(table, how, row)
+    try:
+        validate_episodes(bad, "t", structure=False)
+    except EpisodeTableError as exc:
+        with pytest.raises(EpisodeTableError) as mine:
+            check_episode_values(bad, "t")
+        assert str(mine.value) == str(exc)
+    else:
+        assert how == "none"
+        check_episode_values(bad, "t")

@@ -67,3 +67,29 @@ def test_a_single_runs_keys_are_its_instance_and_action():
     assert keys == [("s0", 1), ("s0", 4), ("s0", 5), ("s0", 10)]
     np.testing.assert_array_equal(inverse, [0, 0, 1, 2, 3, 3])
     np.testing.assert_array_equal(first, [0, 2, 3, 4])
+
+
+@settings(max_examples=30, deadline=None)
+@given(sizes=st.lists(st.integers(1, 4), min_size=1, max_size=3), n_actions=st.integers(2, 5), seed=st.integers(0, 2**16))
+def test_keys_of_a_batch_naming_one_split_per_episode_are_those_of_its_name(sizes, n_actions, seed):
+    """A batch naming its split per episode, every one the same (a run's), gets the keys, ``first`` and
+    ``inverse`` of the same batch naming it once; a pool of several splits, those of factorizing them."""
+    import pandas as pd
+
+    pooled = _pool(sizes, 2, pooled=True)
+    rng = np.random.default_rng(seed)
+    rows = rng.permutation(pooled.n_episodes)[: max(1, pooled.n_episodes // 2)]
+    index = rng.integers(n_actions, size=len(rows))
+    got = outcome_keys(pooled, rows, index, n_actions)
+    flat = pooled.instance_index[rows].astype(np.int64) * n_actions + index
+    codes, names = pd.factorize(np.asarray(pooled.split, dtype=object)[rows])
+    _, first, inverse = np.unique(flat * len(names) + codes, return_index=True, return_inverse=True)
+    assert got[2] == [(str(names[c]), f) for c, f in zip(codes[first].tolist(), flat[first].tolist())]
+    np.testing.assert_array_equal(got[0], first)
+    np.testing.assert_array_equal(got[1], inverse)
+    if len(sizes) == 1:
+        once = _pool(sizes, 2, pooled=False)
+        same = outcome_keys(once, rows, index, n_actions)
+        assert same[2] == got[2]
+        np.testing.assert_array_equal(same[0], got[0])
+        np.testing.assert_array_equal(same[1], got[1])

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from probecommit.tasks.base import NoisySimulator, TargetMissSimulator
 
@@ -164,6 +166,48 @@ def test_a_loaded_engine_cache_is_stored_once_per_distinct_value_and_written_bac
     fresh = sim.cached("slide", [3.0], [2.0])
     assert fresh[0] == 6.0 and not fresh.flags.writeable
     assert sim.engine_calls == {"slide": 1}
+
+
+def _loaded(records) -> tuple[list, list, list]:
+    """A fresh simulator's cache after ``load_cache(records)``: the keys taken, the cache's keys and values."""
+    sim = Ramp(noise_sigma=0.0)
+    taken = sim.load_cache(records)
+    return taken, list(sim._cache), list(sim._cache.values())
+
+
+def _bits(key: tuple) -> tuple:
+    """A cache key with its floats as bytes."""
+    return key[0], np.array(key[1], dtype=float).tobytes(), np.array(key[2], dtype=float).tobytes()
+
+
+def _sharing(objects: list) -> list[int]:
+    """Which earlier object each one is (the index of its first occurrence by identity)."""
+    return [next(i for i, other in enumerate(objects) if other is obj) for obj in objects]
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.lists(st.tuples(st.sampled_from(["toy", "other"]), st.sampled_from(["slide", "coast"]),
+                          st.sampled_from([0.0, -0.0, 1.5, float("nan"), float("inf")]),
+                          st.sampled_from([0.0, -0.0, 2.0]), st.sampled_from([0.0, -0.0, 1.0, float("nan")])),
+                max_size=12))
+def test_answers_loaded_as_columns_are_the_records_loaded_one_by_one(rows):
+    """``load_cache`` of ``AnswerColumns`` (a whole column at once) takes the same keys, answers
+    (bit for bit, read-only) and shares the same tuples and arrays as the same answers given one
+    record at a time: -0.0 apart from 0.0, another engine's rows skipped, a repeated key the last."""
+    from probecommit.tasks.base import AnswerColumns
+
+    def columns(width: int, at: int) -> np.ndarray:
+        return np.array([[row[at]] * width for row in rows], dtype=float).reshape(len(rows), width)
+
+    answers = AnswerColumns([r[0] for r in rows], [r[1] for r in rows], columns(2, 2), columns(1, 3), columns(1, 4))
+    whole, one_by_one = _loaded(answers), _loaded(list(answers))
+    for keys in (0, 1):  # compared by their bits (a NaN equals no other NaN object)
+        assert [_bits(key) for key in whole[keys]] == [_bits(key) for key in one_by_one[keys]]
+    assert [v.tobytes() for v in whole[2]] == [v.tobytes() for v in one_by_one[2]]
+    assert all(not v.flags.writeable and v.shape == (1,) for v in whole[2])
+    for part in (1, 2):
+        assert _sharing([key[part] for key in whole[1]]) == _sharing([key[part] for key in one_by_one[1]])
+    assert _sharing(whole[2]) == _sharing(one_by_one[2])
 
 
 def test_cached_answers_are_copies_so_the_engines_and_callers_arrays_stay_writable():

@@ -30,7 +30,7 @@ from probecommit.audit.conformal import (
     worst_budget_scores,
 )
 from probecommit.audit.gates import DEFAULT_TARGET_RATE, GatesResult, gates_from_tables
-from probecommit.audit.io import ok_episodes, validate_episodes
+from probecommit.audit.io import check_episode_values, ok_episodes, validate_episodes
 from probecommit.audit.margin import (
     GAMMA_GRID,
     MarginResult,
@@ -276,7 +276,11 @@ class _Run:
         def check_then_reduce(table: pd.DataFrame) -> Any:
             failed = self._failed()
             mine = failed.loc[failed["instance_id"].isin(table["instance_id"].unique())] if len(failed) else failed
-            self._validate(pd.concat([table, mine], ignore_index=True) if len(mine) else table)
+            whole = pd.concat([table, mine], ignore_index=True) if len(mine) else table
+            if self.structure_checked:  # a table commit built: its values checked, not converted again
+                check_episode_values(whole, f"{self.loaded.path} (re-executed)")
+            else:
+                self._validate(whole)
             return reducer(table)
 
         return check_then_reduce

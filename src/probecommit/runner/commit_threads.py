@@ -34,7 +34,7 @@ class LockedSimulator:
     other attribute is the simulator's own.
     """
 
-    _LOCKED = ("execute", "prefetch", "probe", "probe_batch", "execute_batch")
+    _LOCKED = ("execute", "prefetch", "probe", "probe_batch", "execute_batch", "realized_many")
 
     def __init__(self, simulator: Any) -> None:
         self._simulator = simulator

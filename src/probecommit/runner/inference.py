@@ -22,6 +22,7 @@ from probecommit.core.executors import Belief, Commitment, Executor
 from probecommit.accel import production
 from probecommit.runner.seeding import INFERENCE, ROLLOUT, episode_rngs
 from probecommit.store.schema import component_names
+from probecommit.tasks.base import CachedSimulator
 
 
 @dataclass
@@ -491,14 +492,26 @@ def outcome_keys(batch: ProbeBatch, episodes: np.ndarray, index: np.ndarray,
     (whichever was executed first, so the answer also depended on thread timing).
     """
     flat = batch.instance_index.astype(np.int64)[episodes] * n_actions + np.asarray(index, dtype=np.int64)
-    if isinstance(batch.split, str):
-        codes, names = np.zeros(len(flat), dtype=np.int64), [batch.split]
-    else:
-        codes, names = pd.factorize(np.asarray(batch.split, dtype=object)[episodes])
-        codes, names = codes.astype(np.int64), list(names)
+    split = batch.split if isinstance(batch.split, str) else np.asarray(batch.split, dtype=object)
+    if isinstance(split, str) or (len(split) and bool((split == split[0]).all())):
+        # One split (a run's batch, even where it names the split per episode): no factorizing, one name.
+        name = str(split if isinstance(split, str) else split[0])
+        _, first, inverse = np.unique(flat, return_index=True, return_inverse=True)
+        return first, np.asarray(inverse).reshape(-1), [(name, f) for f in flat[first].tolist()]
+    codes, names = pd.factorize(split[episodes])
+    codes, names = codes.astype(np.int64), list(names)
     _, first, inverse = np.unique(flat * max(len(names), 1) + codes, return_index=True, return_inverse=True)
     keys = [(str(names[c]), f) for c, f in zip(codes[first].tolist(), flat[first].tolist())]
     return first, np.asarray(inverse).reshape(-1), keys
+
+
+def _realized_many(simulator, truths: np.ndarray, actions: np.ndarray, contexts: np.ndarray | None) -> list:
+    """``simulator.realized_many`` (each row's realized outcome or the error it raised), or for a
+    simulator without it, ``tasks.base.CachedSimulator.realized_many``'s call of ``execute`` a row."""
+    many = getattr(simulator, "realized_many", None)
+    if many is None:
+        return CachedSimulator.realized_many(simulator, truths, actions, contexts)
+    return many(truths, actions, contexts)
 
 
 def _execute(simulator, batch: ProbeBatch, action: np.ndarray, index: np.ndarray, n_actions: int,
@@ -521,13 +534,13 @@ def _execute(simulator, batch: ProbeBatch, action: np.ndarray, index: np.ndarray
         # Every distinct action's engine query is needed below: run them in engine threads first.
         simulator.prefetch([simulator.execute_query_key(batch.truths[e], action[e], None if context is None else context[e])
                             for key, e in zip(keys, first) if key not in outcomes])
-    for u, (key, e) in enumerate(zip(keys, first)):
-        if key not in outcomes:
-            try:
-                ctx = None if context is None else context[e]
-                outcomes[key] = float(simulator.execute(batch.truths[e], action[e], ctx)["realized"])
-            except Exception as exc:  # noqa: BLE001 - mark the episodes, keep the study going
-                outcomes[key] = f"execute: {type(exc).__name__}: {exc}"
+    todo = [u for u, key in enumerate(keys) if key not in outcomes]
+    if todo:
+        rows = first[todo]
+        answers = _realized_many(simulator, batch.truths[rows], action[rows], None if context is None else context[rows])
+        for u, answer in zip(todo, answers):  # an error marks the episodes, the study goes on
+            outcomes[keys[u]] = f"execute: {type(answer).__name__}: {answer}" if isinstance(answer, Exception) else answer
+    for u, key in enumerate(keys):
         value = outcomes[key]
         if isinstance(value, str):
             values[u], errors[u] = np.nan, value

@@ -33,7 +33,8 @@ from probecommit.runner.inference import (
 from probecommit.store.probes import validate_probes
 from probecommit.store.rundir import RunDir
 from probecommit.store.yamlsafe import load_yaml
-from probecommit.store.schema import cache_frame, cache_records, component_names
+from probecommit.store.schema import answers_frame, cache_frame, cache_records, component_names
+from probecommit.tasks.base import AnswerColumns
 
 import yaml
 from probecommit.errors import UsageError
@@ -214,10 +215,12 @@ class StoredAnswers:
     def _append(self, table: pa.Table) -> None:
         self._parts.append((table, [np.asarray(table.column(name).to_numpy(), dtype=float) for name in self.latent_names]))
 
-    def add(self, records: list[dict[str, Any]]) -> None:
-        """Keep answers the engine gave (``cache_records`` rows), to give again with their chunk's."""
-        if records:
-            self._append(pa.Table.from_pandas(cache_frame(records, self.latent_names), preserve_index=False))
+    def add(self, records: list[dict[str, Any]] | AnswerColumns) -> None:
+        """Keep answers the engine gave (``cache_records`` rows, or ``answer_columns``), to give again with their chunk's."""
+        if records is not None and len(records):
+            frame = (answers_frame(records, self.latent_names) if isinstance(records, AnswerColumns)
+                     else cache_frame(records, self.latent_names))
+            self._append(pa.Table.from_pandas(frame, preserve_index=False))
 
     def merge_added(self) -> None:
         """Join the tables :meth:`add` made (one a chunk) into one, in order: a pass's chunks each
@@ -245,11 +248,11 @@ class StoredAnswers:
             masks.append(rows)
         return masks
 
-    def records(self, masks: list[np.ndarray]) -> Iterator[dict[str, Any]]:
-        """The answers of the rows ``masks`` select, per table, as ``load_cache`` takes them."""
-        for (table, _), rows in zip(self._parts, masks):
-            if rows.any():
-                yield from cache_records(table.filter(pa.array(rows)).to_pandas(), self.latent_names)
+    def records(self, masks: list[np.ndarray]) -> AnswerColumns:
+        """The answers of the rows ``masks`` select, every table's in order, as ``load_cache`` takes them (columns)."""
+        parts = [cache_records(table.filter(pa.array(rows)).to_pandas(), self.latent_names)
+                 for (table, _), rows in zip(self._parts, masks) if rows.any()]
+        return AnswerColumns.join(parts) if parts else cache_records(None, self.latent_names)
 
     def table(self) -> pa.Table:
         """Every answer held, the run's then the engine's, as one Arrow table (each answer once)."""
@@ -564,7 +567,9 @@ class RunBeliefs:
         self.simulator.forget_answers(taken)
         fresh = [key for key in self.simulator.answered_keys() if key not in self.answers.permanent]
         if fresh:
-            self.answers.add(self.simulator.cache_records(fresh))
+            as_columns = getattr(self.simulator, "answer_columns", None)
+            columns = None if as_columns is None else as_columns(fresh)
+            self.answers.add(columns if columns is not None else self.simulator.cache_records(fresh))
             self.simulator.forget_answers(fresh)
 
     def release(self) -> None:

@@ -7,10 +7,11 @@ audit's validation of a user's own log agree by construction.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Iterator
 
 import numpy as np
 import pyarrow as pa
+
+from probecommit.tasks.base import AnswerColumns
 
 
 @dataclass(frozen=True)
@@ -119,29 +120,37 @@ def cache_frame(records: list[dict], latent_names: tuple[str, ...]):
     return pd.DataFrame(cache_columns(records, latent_names), columns=["engine", "query", *latent_names, "arg", "value"])
 
 
-def cache_records(frame, latent_names: tuple[str, ...]) -> Iterator[dict]:
-    """Inverse of :func:`cache_frame`: the records a simulator's ``load_cache`` accepts.
+def answers_frame(answers: AnswerColumns, latent_names: tuple[str, ...]):
+    """:func:`cache_frame` of answers given as columns (``CachedSimulator.answer_columns``): the
+    same table, its columns made from the arrays (a replay keeps each chunk's engine answers)."""
+    import pandas as pd
 
-    Made one at a time as they are read (a replay loads every answer of a run, often 10^4
-    rows or more): no list of them is held beside the simulator's cache, whose small
-    objects would otherwise be interleaved with the freed records' in memory.
+    if answers.thetas.shape[1] != len(latent_names):
+        return cache_frame(list(answers), latent_names)
+    columns = {"engine": list(answers.engines), "query": list(answers.queries),
+               **{name: answers.thetas[:, i] for i, name in enumerate(latent_names)},
+               "arg": answers.args.tolist(), "value": answers.values.tolist()}
+    return pd.DataFrame(columns, columns=["engine", "query", *latent_names, "arg", "value"])
+
+
+def cache_records(frame, latent_names: tuple[str, ...]) -> AnswerColumns:
+    """Inverse of :func:`cache_frame`: the records a simulator's ``load_cache`` accepts, as columns
+    (``tasks.base.AnswerColumns``: iterated, one dict a row).
+
+    Whole columns are converted at once, and no list of per-row records is held beside the
+    simulator's cache (a replay loads every answer of a run, often 10^4 rows or more), whose
+    small objects would otherwise be interleaved with the freed records' in memory.
 
     Raises:
         ValueError: At the call, for a table without the family's columns.
     """
     if frame is None or not len(frame):
-        return iter(())
+        return AnswerColumns([], [], np.empty((0, len(latent_names))), np.empty((0, 0)), np.empty((0, 0)))
     missing = [c for c in ("engine", "query", *latent_names, "arg", "value") if c not in frame.columns]
     if missing:
         raise ValueError(f"engine cache lacks column(s) {', '.join(missing)}; it was written for another task family")
-    # Whole columns at once, converted to Python values a row at a time.
-    return _records(frame["engine"].tolist(), frame["query"].tolist(), frame[list(latent_names)].to_numpy(float),
-                    _float_rows(frame["arg"]), _float_rows(frame["value"]))
-
-
-def _records(engines: list, queries: list, thetas: np.ndarray, args, values) -> Iterator[dict]:
-    for e, q, t, a, v in zip(engines, queries, thetas, args, values):
-        yield {"engine": e, "query": q, "theta": t.tolist(), "arg": a.tolist(), "value": v.tolist()}
+    return AnswerColumns(frame["engine"].tolist(), frame["query"].tolist(), frame[list(latent_names)].to_numpy(float),
+                         _float_rows(frame["arg"]), _float_rows(frame["value"]))
 
 
 def float_matrix(items: list) -> np.ndarray | None:

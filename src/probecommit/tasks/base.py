@@ -296,6 +296,73 @@ _POOL: ThreadPoolExecutor | None = None
 _POOL_LOCK = threading.Lock()
 
 
+@dataclass(frozen=True)
+class AnswerColumns:
+    """Stored engine answers as columns (``store.schema.cache_records``): iterated, the records
+    :meth:`CachedSimulator.load_cache` takes, one dict a row; given whole to ``load_cache``, taken
+    a column at a time.
+
+    Why: a calibration in chunks gives its simulator each chunk's stored answers on every pass
+    (issue 42): some 30,000 records at E = 3072, built and read one dict at a time on the main
+    thread (~10 us each). As columns, the distinct latents, arguments and answers are found
+    by their bytes in one NumPy pass, and only the keys are made per row.
+
+    Attributes:
+        engines, queries: Per row, the engine and the query name.
+        thetas: ``[R, d]`` latent values.
+        args, values: ``[R, a]`` and ``[R, v]`` float arrays, or (rows of different lengths) lists of 1-D arrays.
+    """
+
+    engines: list
+    queries: list
+    thetas: np.ndarray
+    args: Any
+    values: Any
+
+    def __len__(self) -> int:
+        return len(self.engines)
+
+    def __iter__(self) -> Iterator[dict[str, Any]]:
+        for e, q, t, a, v in zip(self.engines, self.queries, self.thetas, self.args, self.values):
+            yield {"engine": e, "query": q, "theta": t.tolist(), "arg": a.tolist(), "value": v.tolist()}
+
+    @staticmethod
+    def join(parts: list["AnswerColumns"]) -> "AnswerColumns":
+        """Several tables' answers as one, in order (arrays stacked where their widths agree)."""
+        if len(parts) == 1:
+            return parts[0]
+
+        def stacked(columns: list) -> Any:
+            if all(isinstance(c, np.ndarray) for c in columns) and len({c.shape[1:] for c in columns}) == 1:
+                return np.concatenate(columns)
+            return [row for c in columns for row in c]
+
+        return AnswerColumns([e for p in parts for e in p.engines], [q for p in parts for q in p.queries],
+                             stacked([p.thetas for p in parts]), stacked([p.args for p in parts]),
+                             stacked([p.values for p in parts]))
+
+
+def _distinct_rows(rows: np.ndarray, make: Callable[[list], Any]) -> list:
+    """Per row of a float matrix, one object per distinct row (``make`` of its floats), matched by
+    the rows' bytes (so -0.0 and 0.0, or two NaNs' payloads, stay apart): what
+    :meth:`CachedSimulator.load_cache` shares row by row, for a whole column at once."""
+    if not len(rows):
+        return []
+    if rows.shape[1] == 0:
+        return [make([])] * len(rows)
+    bits = np.ascontiguousarray(rows, dtype=float).view(np.int64)
+    _, first, inverse = np.unique(bits, axis=0, return_index=True, return_inverse=True)
+    made = [make(row) for row in rows[first].tolist()]
+    return [made[i] for i in np.asarray(inverse).reshape(-1).tolist()]
+
+
+def _read_only(row: list) -> np.ndarray:
+    """A stored answer's array: a copy of its floats, read-only (shared by every caller)."""
+    value = np.array(row, dtype=float)
+    value.flags.writeable = False
+    return value
+
+
 def _forget_pool_in_child() -> None:
     """A forked child has none of the parent's threads: it makes its own pool on first use."""
     global _POOL, _POOL_LOCK
@@ -453,9 +520,38 @@ class CachedSimulator:
         return [{"engine": self.engine, "query": k[0], "theta": list(k[1]), "arg": list(k[2]), "value": v.tolist()}
                 for k, v in items]
 
+    def answer_columns(self, keys: list[tuple[str, tuple[float, ...], tuple[float, ...]]]) -> AnswerColumns | None:
+        """:meth:`cache_records` of ``keys`` as columns (``AnswerColumns``: the same rows, iterated),
+        without a dict a row; None where the keys' latents, arguments or answers differ in length."""
+        if not keys:
+            return None
+        try:
+            columns = [np.asarray([key[1] for key in keys], dtype=float), np.asarray([key[2] for key in keys], dtype=float),
+                       np.asarray([self._cache[key] for key in keys], dtype=float)]
+        except ValueError:  # rows of different lengths
+            return None
+        if any(column.ndim != 2 for column in columns):
+            return None
+        return AnswerColumns([self.engine] * len(keys), [key[0] for key in keys], *columns)
+
     def answered_keys(self) -> list[tuple[str, tuple[float, ...], tuple[float, ...]]]:
         """The keys of every answer held (taken by :meth:`load_cache` or given by the engine)."""
         return list(self._cache)
+
+    def realized_many(self, thetas: np.ndarray, actions: np.ndarray,
+                      contexts: np.ndarray | None = None) -> list[float | Exception]:
+        """Per row, ``float(execute(theta, action, context)["realized"])``, or the error it raised:
+        a commit's distinct (instance, aim) pairs executed in one call (``runner.inference``).
+        Rows are executed in order, so the engine is asked (and counted) as one call each would.
+        A simulator whose commit is one cached query may answer the rows without a call each."""
+        out: list[float | Exception] = []
+        for row in range(len(thetas)):
+            try:
+                out.append(float(self.execute(thetas[row], actions[row], None if contexts is None else contexts[row])
+                                 ["realized"]))
+            except Exception as exc:  # noqa: BLE001 - the caller marks the episodes failed
+                out.append(exc)
+        return out
 
     def load_cache(self, records: Iterable[dict[str, Any]]) -> list[tuple[str, tuple[float, ...], tuple[float, ...]]]:
         """Take stored answers (``cache_records`` rows of this engine; other engines' are skipped).
@@ -463,6 +559,9 @@ class CachedSimulator:
         Returns:
             The keys of the answers taken, for :meth:`forget_answers`.
         """
+        if isinstance(records, AnswerColumns) and all(isinstance(c, np.ndarray) and c.ndim == 2 for c in
+                                                      (records.thetas, records.args, records.values)):
+            return self._load_columns(records)
         # A run asks many queries of few latents and answers few distinct values: equal tuples
         # and values are stored once (matched by their bytes, so -0.0 stays -0.0), read-only.
         shared: dict[tuple, Any] = {}  # (kind, bytes) -> the one object kept
@@ -484,6 +583,20 @@ class CachedSimulator:
                 self._cache[key] = value
                 taken.append(key)
         return taken
+
+    def _load_columns(self, answers: AnswerColumns) -> list[tuple[str, tuple[float, ...], tuple[float, ...]]]:
+        """:meth:`load_cache` of answers as columns: the same keys, values and sharing (one tuple
+        per distinct latent and argument, one read-only array per distinct answer), each distinct
+        one made once for the whole column."""
+        mine = [i for i, engine in enumerate(answers.engines) if engine == self.engine]
+        if len(mine) < len(answers):
+            answers = AnswerColumns([answers.engines[i] for i in mine], [answers.queries[i] for i in mine],
+                                    answers.thetas[mine], answers.args[mine], answers.values[mine])
+        names = {q: sys.intern(str(q)) for q in set(answers.queries)}
+        keys = list(zip([names[q] for q in answers.queries], _distinct_rows(answers.thetas, tuple),
+                        _distinct_rows(answers.args, tuple)))
+        self._cache.update(zip(keys, _distinct_rows(answers.values, _read_only)))
+        return keys
 
     def forget_answers(self, keys: Iterable[tuple[str, tuple[float, ...], tuple[float, ...]]]) -> None:
         """Drop the answers of ``keys`` (a replay's finished chunk of instances: those :meth:`load_cache`
