@@ -294,16 +294,27 @@ def machine() -> dict[str, Any]:
     import os
     import platform
 
-    cpu = platform.processor() or platform.machine()
+    cpu, vector = platform.processor() or platform.machine(), "?"
     try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                cpu = line.split(":", 1)[1].strip()
-                break
+        info = Path("/proc/cpuinfo").read_text().splitlines()
     except OSError:
-        pass
-    return {"cpu": cpu, "cores": os.cpu_count() or 0, "platform": platform.platform(),
+        info = []
+    for line in info:
+        if line.startswith("model name"):
+            cpu = line.split(":", 1)[1].strip()
+        if line.startswith("flags") and vector == "?":
+            vector = _widest_vector_unit(set(line.split(":", 1)[1].split()))
+    return {"cpu": cpu, "vector": vector, "cores": os.cpu_count() or 0, "platform": platform.platform(),
             "python": platform.python_version(), "numpy": np.__version__}
+
+
+def _widest_vector_unit(flags: set[str]) -> str:
+    """The widest x86 vector extension the CPU reports: NumPy's and torch's kernels are chosen by it, which is why
+    two CPUs of one model name can still give different low digits (and the GRU's training amplifies them)."""
+    for flag, name in (("avx512f", "AVX-512"), ("avx2", "AVX2"), ("avx", "AVX"), ("sse4_2", "SSE4.2")):
+        if flag in flags:
+            return name
+    return "?"
 
 
 #: Targets that read another target's results when that has run under the same root, without

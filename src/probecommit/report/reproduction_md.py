@@ -243,9 +243,13 @@ def machine_section(doc: Doc) -> None:
     m = tree.get("machine")
     if m:
         doc.add(f"These results were produced on `{m.get('cpu', '?')}` ({doc.n(r + 'machine.cores', 'd')} logical "
-                f"cores, `{m.get('platform', '?')}`, Python `{m.get('python', '?')}`, NumPy `{m.get('numpy', '?')}`). "
-                "NumPy picks its vector routines by CPU, so on another CPU a few values can differ in the last "
-                "binary digit.", why=CONFIGURATION)
+                f"cores, widest vector unit `{m.get('vector', 'not recorded')}`, `{m.get('platform', '?')}`, Python "
+                f"`{m.get('python', '?')}`, NumPy `{m.get('numpy', '?')}`). NumPy and torch pick their vector routines "
+                "by the CPU, so on a CPU with other vector units a few values can differ in the last binary digit; "
+                "the GRU's training amplifies such digits over its steps, so its table can differ in the second or third "
+                "significant digit (measured on two hosts: docs/decisions.md, \"The GRU across CPUs\"). `verify` "
+                "recomputes every GRU number but the training loss from the stored episodes, so it checks a "
+                "reproduction made on any CPU.", why=CONFIGURATION)
     else:
         doc.add("The machine that produced these results was not recorded (their `reproduction.json` predates the "
                 "record); a reproduction now records it.")
