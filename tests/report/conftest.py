@@ -3,14 +3,13 @@
 from __future__ import annotations
 
 import fcntl
-import os
 import shutil
 from pathlib import Path
 
 import pytest
 
 
-def built_once(tmp_path_factory, name: str, targets: list[str]) -> Path:
+def built_once(request, name: str, targets: list[str]) -> Path:
     """``reproduce TARGETS --quick`` published into DIR/pub, once per run of the suite, returns DIR/pub.
 
     Under pytest-xdist (make test runs two workers) each worker has its own session, so a session fixture would be
@@ -25,9 +24,10 @@ def built_once(tmp_path_factory, name: str, targets: list[str]) -> Path:
         publish(done["targets"], base / "pub", timing=done)
         return base / "pub"
 
-    if os.environ.get("PYTEST_XDIST_WORKER") is None:
-        return build(tmp_path_factory.mktemp(name))
-    shared = tmp_path_factory.getbasetemp().parent  # the run's folder, above every worker's own
+    factory = request.getfixturevalue("tmp_path_factory")
+    if not hasattr(request.config, "workerinput"):  # not an xdist worker (a worker's config has its input)
+        return build(factory.mktemp(name))
+    shared = factory.getbasetemp().parent  # the run's folder, above every worker's own
     with open(shared / f"{name}.lock", "w") as lock:
         fcntl.flock(lock, fcntl.LOCK_EX)  # released when the file closes, also if the build raised
         if not (shared / name / "built").is_file():
@@ -38,17 +38,17 @@ def built_once(tmp_path_factory, name: str, targets: list[str]) -> Path:
 
 
 @pytest.fixture(scope="session")
-def publication(tmp_path_factory) -> Path:
+def publication(request) -> Path:
     """``reproduce insertion breadth cost robot --quick`` published into a scratch folder (DIR/results/paper)."""
-    return built_once(tmp_path_factory, "scratch", ["insertion", "breadth", "cost", "robot"])
+    return built_once(request, "scratch", ["insertion", "breadth", "cost", "robot"])
 
 
 @pytest.fixture(scope="session")
-def explain_publication(tmp_path_factory) -> Path:
+def explain_publication(request) -> Path:
     """``reproduce insertion breadth cost explain --quick`` (engines and GRU come with explain) published into a
     scratch folder: the explain step's stored tables beside its results. Its tamper cases run in two xdist groups
     (tests/report/test_verify_explain.py), which share this one build."""
-    return built_once(tmp_path_factory, "scratch_explain", ["insertion", "breadth", "cost", "explain"])
+    return built_once(request, "scratch_explain", ["insertion", "breadth", "cost", "explain"])
 
 
 @pytest.fixture(scope="session")
