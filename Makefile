@@ -39,7 +39,7 @@ demo: $(DEMO_STAMP) $(AOT_DIGEST)
 
 # The suite runs in two pytest-xdist workers (CI has two cores). loadgroup keeps the tests marked with one
 # xdist_group on one worker: tests/conftest.py groups those that share a fixture built once per module or
-# session, and marks what cannot run twice at once (Ray's local clusters). PARALLEL= runs it in one process.
+# session; the Ray tests (one local cluster at a time) name a group of their own. PARALLEL= runs it in one process.
 PARALLEL ?= -n 2 --dist loadgroup
 
 ## Create the venv, install every pinned extra, run the whole test suite (slow tests included).
