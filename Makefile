@@ -37,12 +37,17 @@ kernels: $(AOT_DIGEST)
 demo: $(DEMO_STAMP) $(AOT_DIGEST)
 	$(VENV)/bin/probecommit demo
 
+# The suite runs in two pytest-xdist workers (CI has two cores). loadgroup keeps the tests marked with one
+# xdist_group on one worker: tests/conftest.py groups those that share a fixture built once per module or
+# session; the Ray tests (one local cluster at a time) name a group of their own. PARALLEL= runs it in one process.
+PARALLEL ?= -n 2 --dist loadgroup
+
 ## Create the venv, install every pinned extra, run the whole test suite (slow tests included).
 ## Two system needs come from Debian's packages, installed here when missing (as root; it says what first):
 ## Chromium (the HTML reports are checked in a real browser) and software OpenGL (Mesa's EGL/llvmpipe
 ## and OSMesa: MuJoCo renders the scenes of Fig. 1 and Fig. 3 on the CPU).
 test: $(STAMP) $(AOT_DIGEST) system-packages
-	$(PY) -m pytest -q
+	$(PY) -m pytest -q $(PARALLEL)
 	@echo "browser screenshots of the reports: $(CURDIR)/build/screenshots/"
 
 #: Debian packages the tests and the scene renders use.
@@ -63,7 +68,7 @@ browser: system-packages
 
 ## The suite without tests marked slow.
 test-fast: $(STAMP) $(AOT_DIGEST)
-	$(PY) -m pytest -q -m "not slow"
+	$(PY) -m pytest -q $(PARALLEL) -m "not slow"
 
 ## Benchmarks: ratios measured side by side in one run, each printing its target (issue 42's first):
 ## end to end, MuJoCo overhead, calibrate at E = 3072 and 12288, reproduce all, --workers and Ray,

@@ -38,3 +38,38 @@ def cal_test_runs(root, seeds: tuple[int, int], count: int, repeats: int, **over
 @pytest.fixture
 def make_config():
     return small_config
+
+
+def _shared_fixture_group(items) -> str | None:
+    """The xdist group of one test module's items: the first session-scoped fixture of the test tree they use,
+    else the module itself when they use a module-scoped one; None when they share nothing built once."""
+    session, module = set(), False
+    for item in items:
+        info = getattr(item, "_fixtureinfo", None)
+        for defs in (info.name2fixturedefs.values() if info else ()):
+            fixture = defs[-1]
+            if not fixture.baseid.startswith("tests"):
+                continue  # pytest's own (tmp_path_factory is session-scoped, and cheap)
+            if fixture.scope == "session":
+                session.add(fixture.argname)
+            module = module or fixture.scope == "module"
+    if session:
+        return min(session)
+    return items[0].nodeid.split("::")[0] if module else None
+
+
+@pytest.hookimpl(tryfirst=True)
+def pytest_collection_modifyitems(config, items):
+    """Under ``pytest -n 2 --dist loadgroup`` (make test) every ungrouped test is its own unit of work, so the
+    tests of one module alternate between the two workers and each would build the module's (or the session's)
+    expensive fixture again. A module whose tests share such a fixture goes to one worker as one group (by the
+    session fixture's name, so every module reading the scratch publication shares one build), before xdist
+    reads the groups. Without xdist the mark does nothing."""
+    modules: dict[str, list] = {}
+    for item in items:
+        modules.setdefault(item.nodeid.split("::")[0], []).append(item)
+    for module_items in modules.values():
+        group = _shared_fixture_group(module_items)
+        for item in module_items if group else ():
+            if not item.get_closest_marker("xdist_group"):  # a test that names its own group keeps it
+                item.add_marker(pytest.mark.xdist_group(group))

@@ -74,10 +74,11 @@ def test_a_yaml_alias_bomb_is_refused_quickly(tmp_path):
     bomb = "\n".join(lines) + "\nname: *a8\n"
     path = tmp_path / "bomb.yaml"
     path.write_text(bomb)
-    start = time.perf_counter()
+    # CPU time, what a bomb costs (the wall clock also counts the tests of another xdist worker)
+    start = time.process_time()
     with pytest.raises(ConfigError):
         load_config(path)
-    assert time.perf_counter() - start < 2.0
+    assert time.process_time() - start < 2.0
 
 
 def test_particles_as_an_integral_float_and_a_directory_path(tmp_path):
@@ -143,10 +144,11 @@ def test_generated_alias_bombs_never_take_long(depth, width):
     with tempfile.TemporaryDirectory() as tmp:
         path = Path(tmp) / "bomb.yaml"
         path.write_text(text)
-        start = time.perf_counter()
+        # CPU time, what a bomb costs (the wall clock also counts the tests of another xdist worker)
+        start = time.process_time()
         with pytest.raises(ConfigError):
             load_config(path)
-        assert time.perf_counter() - start < 2.0
+        assert time.process_time() - start < 2.0
 
 
 def test_audit_intervals_are_whole_in_a_pipe(tmp_path):

@@ -23,8 +23,8 @@ def test_the_frozen_publication_verifies():
 
 
 @pytest.mark.slow
-def test_counts_are_by_kind_and_an_edit_lowers_nothing_but_fails(publication, tmp_path):
-    report = verify(publication)
+def test_counts_are_by_kind_and_an_edit_lowers_nothing_but_fails(publication, publication_report, tmp_path):
+    report = publication_report
     assert report.ok, report.failures[:5]
     assert all(report.counts[k] > 0 for k in ("recomputed", "traced", "identity", "range", "file"))
     # The headline counts published numbers, not checks: each recomputed value and each printed number once.
@@ -35,7 +35,8 @@ def test_counts_are_by_kind_and_an_edit_lowers_nothing_but_fails(publication, tm
     payload = json.loads(path.read_text())
     payload["results"]["text"]["escape_k8"][0] += 0.25
     path.write_text(json.dumps(payload))
-    assert any("text.escape_k8" in f for f in verify(copy).failures)
+    # The edit is a results.json number: its recomputation fails it; drawing the figures again checks nothing more.
+    assert any("text.escape_k8" in f for f in verify(copy, figures=False).failures)
 
 
 @pytest.mark.slow

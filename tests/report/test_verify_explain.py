@@ -202,6 +202,12 @@ CASES: list[tuple[str, Edit]] = [
 ]
 
 
+#: The cases in two xdist groups, one per worker of ``make test``: both read the one build of the publication
+#: (``conftest.built_once``), so the slowest stretch of the suite is halved instead of run on one worker.
+HALVES = [pytest.mark.xdist_group(f"explain_publication_{half}") for half in (0, 1)]
+
+
+@HALVES[0]
 def test_the_explain_publication_verifies_and_recomputes_explain(explain_publication):
     report = verify(explain_publication, figures=False)
     assert report.ok, report.failures[:5]
@@ -216,7 +222,8 @@ def test_the_explain_publication_verifies_and_recomputes_explain(explain_publica
     assert report.traced_only_kinds["not stored"] == 0, [n for n in report.notes if "not stored" in n]
 
 
-@pytest.mark.parametrize("name,edit", CASES, ids=[c[0] for c in CASES])
+@pytest.mark.parametrize("name,edit", [pytest.param(name, edit, id=name, marks=HALVES[i % 2])
+                                       for i, (name, edit) in enumerate(CASES)])
 def test_an_edit_to_explain_fails_verify_naming_file_and_number(pub, name, edit):
     expected = edit(pub)
     rehash(pub)

@@ -391,8 +391,8 @@ CASES: list[tuple[str, Edit, bool]] = [
 ]
 
 
-def test_the_scratch_publication_verifies(publication):
-    report = verify(publication)
+def test_the_scratch_publication_verifies(publication_report):
+    report = publication_report
     assert report.ok, report.failures[:5]
     assert report.counts["recomputed"] > 500 and report.counts["traced"] >= 20
     assert report.verified_numbers > 1000

@@ -102,6 +102,7 @@ def test_units_computed_in_groups_equal_units_computed_alone(tmp_path, make_conf
 
 @pytest.mark.ray
 @pytest.mark.slow
+@pytest.mark.xdist_group("ray")  # one Ray cluster at a time (tests/runner/test_ray_planted.py)
 def test_local_ray_matches_a_serial_run(tmp_path, make_config):
     ray = pytest.importorskip("ray")
     cfg = make_config(unit_instances=2)

@@ -26,6 +26,8 @@ from tests.conftest import small_config
 from tests.runner.test_resume import assert_same_tables
 
 ray = pytest.importorskip("ray")
+#: Two local Ray clusters at once (two pytest-xdist workers) share /tmp/ray: every Ray test runs in one worker.
+pytestmark = pytest.mark.xdist_group("ray")
 ROOT = Path(__file__).resolve().parents[2]
 
 CONFIG = dict(name="planted", instances={"count": 8}, belief={"particles": 64}, unit_instances=2)

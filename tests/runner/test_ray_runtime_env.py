@@ -18,6 +18,8 @@ from tests.conftest import small_config
 from tests.runner.test_resume import assert_same_tables
 
 ray = pytest.importorskip("ray")
+#: Two local Ray clusters at once (two pytest-xdist workers) share /tmp/ray: every Ray test runs in one worker.
+pytestmark = pytest.mark.xdist_group("ray")
 
 
 @pytest.mark.slow

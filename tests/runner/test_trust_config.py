@@ -109,7 +109,8 @@ ALIAS_BOMB = "anchors:\n  a: &a [1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0]\n" + ""
 @pytest.mark.parametrize("text", [MERGE_BOMB, ALIAS_BOMB, "[" * 5000 + "]" * 5000, "a:\n" + "".join(
     "  " * i + f"k{i}:\n" for i in range(1, 400)), "a: &a [1, *a]\n"], ids=["merge", "alias", "flow", "block", "cycle"])
 def test_yaml_bombs_are_refused_in_well_under_a_second(text, tmp_path):
-    start = time.perf_counter()
+    # CPU time, what a bomb costs (the wall clock also counts the tests of another xdist worker)
+    start = time.process_time()
     (tmp_path / "c.yaml").write_text(text)
     with pytest.raises(ConfigError, match="c.yaml: .*(nodes|nests|recursive)"):
         load_config(tmp_path / "c.yaml")
@@ -117,7 +118,7 @@ def test_yaml_bombs_are_refused_in_well_under_a_second(text, tmp_path):
 
     with pytest.raises(YamlError, match="nodes|nests|recursive"):
         load_yaml(text, "bomb.yaml")
-    assert time.perf_counter() - start < 2.0
+    assert time.process_time() - start < 2.0
 
 
 def test_a_bomb_in_an_existing_runs_config_yaml_is_refused_quickly(tmp_path):
@@ -126,12 +127,13 @@ def test_a_bomb_in_an_existing_runs_config_yaml_is_refused_quickly(tmp_path):
     run = RunDir(tmp_path / "run")
     run.path.mkdir()
     (run.path / "config.yaml").write_text(MERGE_BOMB)
-    start = time.perf_counter()
+    # CPU time, what a bomb costs (the wall clock also counts the tests of another xdist worker)
+    start = time.process_time()
     try:
         run.check_writable("name: x\n")
     except (RunDirError, ValueError) as exc:
         assert "Traceback" not in str(exc)
-    assert time.perf_counter() - start < 2.0
+    assert time.process_time() - start < 2.0
 
 
 @st.composite
@@ -153,12 +155,13 @@ def yaml_graphs(draw):
 def test_any_alias_and_merge_graph_is_read_or_refused_within_budget(text):
     from probecommit.store.yamlsafe import YamlError, load_yaml
 
-    start = time.perf_counter()
+    # CPU time, what a bomb costs (the wall clock also counts the tests of another xdist worker)
+    start = time.process_time()
     try:
         load_yaml(text, "g.yaml")
     except YamlError as exc:
         assert "g.yaml" in str(exc)
-    assert time.perf_counter() - start < 3.0
+    assert time.process_time() - start < 3.0
 
 
 def test_unsafe_tags_are_refused_in_one_line():
