@@ -24,7 +24,7 @@ from typing import Any, Sequence
 import numpy as np
 import pandas as pd
 
-from probecommit.process.memory import trim_heap
+from probecommit.process.memory import large_arrays_apart, trim_heap
 from probecommit.runner.calibration import calibrate
 from probecommit.runner.config import config_data, parse_config
 from probecommit.runner.replay import LoadedRun, RunBeliefs, load_run
@@ -54,22 +54,29 @@ def resplit_costs(pool: LoadedRun, alpha: float, count: int, seed: int, budgets:
     """Table IV's full-adjustment paired difference on each re-split (calibrated on one half over ``budgets``,
     measured on the other at the last budget): one row per split with ``difference, lo, hi, gamma`` and the
     held-out calibrated optimism at each budget, ``optimism_k<k>``."""
+    beliefs = RunBeliefs.of(pool, chunk_instances=None, budgets=list(budgets))
+    halves = split_halves(pool.instances["instance_id"].to_numpy(), count, seed)
+    with large_arrays_apart():  # each split's halves and commits on pages of their own, not heap fragments
+        return pd.DataFrame([_split_cost(pool, beliefs, n, cal_ids, test_ids, alpha, budgets, resamples, boot_seed)
+                             for n, (cal_ids, test_ids) in enumerate(halves)])
+
+
+def _split_cost(pool: LoadedRun, beliefs: RunBeliefs, n: int, cal_ids: np.ndarray, test_ids: np.ndarray, alpha: float,
+                budgets: Sequence[int], resamples: int, boot_seed: int) -> dict[str, Any]:
+    """:func:`resplit_costs`'s row of split ``n``; its copies go back before the next split's (issue 42, target 4)."""
     from probecommit.studies.insertion import subset_run
 
-    beliefs = RunBeliefs.of(pool, chunk_instances=None, budgets=list(budgets))
-    rows = []
-    for n, (cal_ids, test_ids) in enumerate(split_halves(pool.instances["instance_id"].to_numpy(), count, seed)):
-        res = calibrate(subset_run(pool, cal_ids, beliefs), subset_run(pool, test_ids, beliefs), alpha=alpha,
-                        budgets=list(budgets), resamples=resamples, seed=boot_seed + n)
-        diff = res.cost_differences
-        full = diff[(diff["baseline"] == "no calibration") & (diff["treatment"] == "set calibration + margin")].iloc[0]
-        # each budget's held-out calibrated optimism (ex9's E83 reads it; E55's keys do not)
-        held_out = {f"optimism_k{int(r['k'])}": float(r["optimism_calibrated"]) for r in res.table3.to_dict("records")}
-        rows.append({"part": "resplit_cost", "index": n, "difference": float(full["difference"]),
-                     "lo": float(full["lo"]), "hi": float(full["hi"]), "gamma": float(res.margin.gamma), **held_out})
-        del res, diff, full
-        trim_heap()  # a split's copies go back before the next split's (as ``resplit_table``; issue 42, target 4)
-    return pd.DataFrame(rows)
+    res = calibrate(subset_run(pool, cal_ids, beliefs), subset_run(pool, test_ids, beliefs), alpha=alpha,
+                    budgets=list(budgets), resamples=resamples, seed=boot_seed + n)
+    diff = res.cost_differences
+    full = diff[(diff["baseline"] == "no calibration") & (diff["treatment"] == "set calibration + margin")].iloc[0]
+    # each budget's held-out calibrated optimism (ex9's E83 reads it; E55's keys do not)
+    held_out = {f"optimism_k{int(r['k'])}": float(r["optimism_calibrated"]) for r in res.table3.to_dict("records")}
+    row = {"part": "resplit_cost", "index": n, "difference": float(full["difference"]), "lo": float(full["lo"]),
+           "hi": float(full["hi"]), "gamma": float(res.margin.gamma), **held_out}
+    del res, diff, full
+    trim_heap()
+    return row
 
 
 def cost_keys(rows: pd.DataFrame) -> dict[str, float]:
