@@ -163,8 +163,10 @@ def scale_rows(protocol: Any, paths: Sequence[Path], scale: float, budgets: Sequ
     from probecommit.studies.explain.shared_beliefs import SharedBeliefs, cyclic_pairs
 
     shared = SharedBeliefs(budgets)
-    _, pairs = cyclic_pairs(list(paths), lambda cal, test: pair_cells(shared.run(cal, budgets), shared.run(test, budgets),
-                                                                       budgets, protocol.alpha), shared)
+    with large_arrays_apart():  # two whole-run traces held: the pairs' arrays leave no holes in the heap
+        _, pairs = cyclic_pairs(list(paths), lambda cal, test: pair_cells(shared.run(cal, budgets),
+                                                                           shared.run(test, budgets), budgets,
+                                                                           protocol.alpha), shared)
     if len(paths) == 1:  # calibrated on itself, as ``paths[(i + 1) % 1]`` is
         pairs = [pair_cells(paths[0], paths[0], budgets, protocol.alpha)]
     return pd.DataFrame([{"part": "capture", "index": i, "scale": float(scale), **cells} for i, cells in enumerate(pairs)])
