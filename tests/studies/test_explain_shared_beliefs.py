@@ -25,8 +25,10 @@ def _same(a, b) -> None:
     assert repr(a) == repr(b)
 
 
-def test_calibrate_on_shared_beliefs_equals_recomputed(runs):
-    shared = SharedBeliefs()
+@pytest.mark.parametrize("kept", [None, [5, 1, 3]])
+def test_calibrate_on_shared_beliefs_equals_recomputed(runs, kept):
+    """Whether the shared trace holds every budget and the prior or only the budgets read (``budgets=``)."""
+    shared = SharedBeliefs(kept)
     budgets = [1, 3, 5]
     fresh = calibrate(runs["cal"], runs["test"], alpha=0.2, budgets=budgets, resamples=20, seed=1, chunk_instances=3)
     for _ in range(2):  # the shared trace survives a calibration's release of its own view
@@ -51,6 +53,10 @@ def test_gates_and_audit_on_shared_beliefs_equal_recomputed(runs):
 def test_shared_refuses_a_budget_the_run_lacks(runs):
     with pytest.raises(ValueError, match=r"budget\(s\) \[7\]"):
         SharedBeliefs().run(runs["cal"], [1, 7])
+    with pytest.raises(ValueError, match=r"budget\(s\) \[2\]"):  # not kept
+        SharedBeliefs([1, 3]).run(runs["cal"], [1, 2])
+    with pytest.raises(ValueError, match="the prior"):
+        SharedBeliefs([1, 3]).run(runs["cal"])
 
 
 class _Counting(SharedBeliefs):

@@ -331,6 +331,9 @@ class RunBeliefs:
     answers: StoredAnswers | None = None
     #: The trace of a run that is one chunk, kept across ``commit`` calls (with its reuse cache).
     _kept: tuple[BeliefTrace, dict] | None = field(default=None, repr=False)
+    #: A restriction's source (:meth:`restrict`): the whole run's kept trace and this run's rows of it, taken
+    #: on the first commit, so a re-split's test half is not copied while its calibration half is held.
+    _rows_of: tuple[BeliefTrace, np.ndarray] | None = field(default=None, repr=False)
 
     @classmethod
     def of(cls, run: str | Path | LoadedRun, config: StudyConfig | None = None,
@@ -427,7 +430,7 @@ class RunBeliefs:
             self._kept = self._whole_trace(), {}
         rows = np.flatnonzero(np.isin(self.batch.instance_id, list(instance_ids)))  # the run's order
         return RunBeliefs(self.config, self.model, self.simulator, self.pfilter, self.batch.subset(rows),
-                          [slice(0, len(rows))], self.kept_budgets, _kept=(self._kept[0].subset(rows), {}))
+                          [slice(0, len(rows))], self.kept_budgets, _rows_of=(self._kept[0], rows))
 
     @property
     def budgets(self) -> list[int]:
@@ -470,6 +473,9 @@ class RunBeliefs:
         several = len(self.chunks) > 1
         if several:
             trim_heap()  # what earlier calls freed goes back before the first chunk is computed
+        if self._rows_of is not None:  # a restriction's rows are copied when first committed (``restrict``)
+            whole, rows = self._rows_of
+            self._kept, self._rows_of = (whole.subset(rows), {}), None
         with large_arrays_apart() if several else contextlib.nullcontext():
             self._commit_chunks(parts, requests, keep, reduce, reuse, final, common)
         if self.answers is not None:
@@ -574,6 +580,7 @@ class RunBeliefs:
 
     def release(self) -> None:
         """Drop the kept trace of a one-chunk run (its last commit is done) and hand its pages back."""
+        self._rows_of = None
         if self._kept is not None:
             self._kept = None
             trim_heap()

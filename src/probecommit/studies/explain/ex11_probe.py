@@ -104,24 +104,38 @@ def _config(family: str, name: str, truths: list[list[float]] | None, engine: st
     return parse_config(data)
 
 
-def family_rows(root: Path, runs: Path, family: str, quick: bool, workers: int) -> pd.DataFrame:
-    """One family's stored rows: the frozen run's cell, the pool's scene on our truths, and the pool (run here)."""
+def _run_part(family: str, name: str, truths: list[list[float]] | None, engine: str | None, quick: bool, runs: Path,
+              workers: int) -> Path:
+    """One of the step's runs (:func:`_config`), in the process that calls it; its directory. Its units' large
+    arrays get pages of their own (``large_arrays_apart``): in the heap, a push2d Probe-Robust unit's blocks left
+    holes the next unit's did not fit, and the pool's run grew to 470-650 MB (216 MB apart, for about 10 s more CPU)."""
+    from probecommit.process.memory import large_arrays_apart
     from probecommit.runner.study import run_study
+
+    config = _config(family, name, truths, engine, quick)
+    with large_arrays_apart():
+        run_study(config, runs / config.name, workers=workers, threads=1)
+    return runs / config.name
+
+
+def family_rows(root: Path, runs: Path, family: str, quick: bool, workers: int) -> pd.DataFrame:
+    """One family's stored rows: the frozen run's cell, the pool's scene on our truths, and the pool (run here).
+    Each run is made in a process of its own (a config does not pickle, so it is built there from the family's
+    name; issue 42, target 4): a push2d Probe-Robust run's working memory leaves with it."""
+    from probecommit.runner.aside import in_own_process
     from probecommit.studies.explain.ex8_blind import _model, run_dir
 
     size, engine = FAMILIES[family]
     parts = [_truth_rows(run_dir(root, family, quick), "stored", family)]
     if engine is not None:
-        config = _config(family, f"ex11_{family}_scene", None, engine, quick)
-        run_study(config, runs / config.name, workers=workers, threads=1)
-        parts.append(_truth_rows(runs / config.name, "scene", family))
+        scene = in_own_process(_run_part, family, f"ex11_{family}_scene", None, engine, quick, runs, workers)
+        parts.append(_truth_rows(scene, "scene", family))
     else:  # the pool runs the frozen run's own engine: its scene on our truths is the stored run itself
         parts.append(parts[0].assign(part="scene"))
     model = _model(family)
     truths = pool_truths(model.prior_low, model.prior_high, QUICK_POOL if quick else size).tolist()
-    config = _config(family, f"ex11_{family}_pool", truths, engine, quick)
-    run_study(config, runs / config.name, workers=workers, threads=1)
-    parts.append(_truth_rows(runs / config.name, "pool", family))
+    pool = in_own_process(_run_part, family, f"ex11_{family}_pool", truths, engine, quick, runs, workers)
+    parts.append(_truth_rows(pool, "pool", family))
     return pd.concat(parts, ignore_index=True)
 
 

@@ -46,25 +46,44 @@ def union(runs: Sequence[Any]) -> Any:
                      runs[0].manifest)
 
 
-def union_rows(pool: Any, alpha: float, count: int, seed: int, k: int, boot_seed: int) -> pd.DataFrame:
-    """E118's per-split rows of ``pool`` with both calibrations' columns (``c5_*`` and ``c15_*``)."""
-    from probecommit.studies.explain.ex5_calibration import resplit_costs
+def union_rows(pool: Any, alpha: float, count: int, seed: int, k: int, boot_seed: int,
+               e55: pd.DataFrame | None = None) -> pd.DataFrame:
+    """E118's per-split rows of ``pool`` with both calibrations' columns (``c5_*`` and ``c15_*``); ``e55``: the
+    pool's :func:`~probecommit.studies.explain.ex5_calibration.resplit_costs` rows when computed already."""
     from probecommit.studies.insertion import resplit_table
 
     rows = ex15_readings.pool_rows(POOL, pool.episodes, alpha, count, seed)
     study = resplit_table(pool, alpha, count, seed, k, boot_seed)
-    e55 = resplit_costs(pool, alpha, count, seed, list(range(1, k + 1)), RESAMPLES, boot_seed)
+    if e55 is None:
+        e55 = pool_costs(pool, alpha, count, seed, k, boot_seed)
     return ex15_readings.margin_columns(rows, study, e55.drop(columns=["part", "lo", "hi", "gamma"]))
+
+
+def pool_costs(pool: Any, alpha: float, count: int, seed: int, k: int, boot_seed: int) -> pd.DataFrame:
+    """The pool's E55 rows (``resplit_costs`` over budgets 1..k); ``pool``: a ``LoadedRun`` or the runs folder."""
+    from probecommit.studies.explain.ex5_calibration import resplit_costs
+
+    pool = _union_of(pool) if isinstance(pool, Path) else pool
+    return resplit_costs(pool, alpha, count, seed, list(range(1, k + 1)), RESAMPLES, boot_seed)
+
+
+def _union_of(runs_dir: Path) -> Any:
+    from probecommit.runner.replay import load_run
+
+    return union([load_run(runs_dir / r) for r in RUNS])
 
 
 def rows_of(runs_dir: Path, alpha: float, count: int, seed: int, k: int, boot_seed: int) -> pd.DataFrame | None:
     """The step's rows from the insertion runs folder (None when a run is missing); picklable arguments only,
-    so the step can run in a process of its own."""
-    from probecommit.runner.replay import load_run
+    so the step can run in a process of its own. Its re-split costs run in a process of their own too (issue 42,
+    target 4): the pool's whole-run beliefs at every budget on top of what the re-split study left took this
+    process to 535 MB."""
+    from probecommit.runner.aside import in_own_process
 
     if not all((runs_dir / r / "episodes.parquet").is_file() for r in RUNS):
         return None
-    return union_rows(union([load_run(runs_dir / r) for r in RUNS]), alpha, count, seed, k, boot_seed)
+    e55 = in_own_process(pool_costs, runs_dir, alpha, count, seed, k, boot_seed)
+    return union_rows(_union_of(runs_dir), alpha, count, seed, k, boot_seed, e55)
 
 
 def run(explain: Any) -> None:

@@ -24,6 +24,7 @@ from typing import Any, Sequence
 import numpy as np
 import pandas as pd
 
+from probecommit.process.memory import large_arrays_apart, trim_heap
 from probecommit.runner.calibration import calibrate
 from probecommit.runner.config import config_data, parse_config
 from probecommit.runner.replay import LoadedRun, RunBeliefs, load_run
@@ -53,20 +54,29 @@ def resplit_costs(pool: LoadedRun, alpha: float, count: int, seed: int, budgets:
     """Table IV's full-adjustment paired difference on each re-split (calibrated on one half over ``budgets``,
     measured on the other at the last budget): one row per split with ``difference, lo, hi, gamma`` and the
     held-out calibrated optimism at each budget, ``optimism_k<k>``."""
+    beliefs = RunBeliefs.of(pool, chunk_instances=None, budgets=list(budgets))
+    halves = split_halves(pool.instances["instance_id"].to_numpy(), count, seed)
+    with large_arrays_apart():  # each split's halves and commits on pages of their own, not heap fragments
+        return pd.DataFrame([_split_cost(pool, beliefs, n, cal_ids, test_ids, alpha, budgets, resamples, boot_seed)
+                             for n, (cal_ids, test_ids) in enumerate(halves)])
+
+
+def _split_cost(pool: LoadedRun, beliefs: RunBeliefs, n: int, cal_ids: np.ndarray, test_ids: np.ndarray, alpha: float,
+                budgets: Sequence[int], resamples: int, boot_seed: int) -> dict[str, Any]:
+    """:func:`resplit_costs`'s row of split ``n``; its copies go back before the next split's (issue 42, target 4)."""
     from probecommit.studies.insertion import subset_run
 
-    beliefs = RunBeliefs.of(pool, chunk_instances=None, budgets=list(budgets))
-    rows = []
-    for n, (cal_ids, test_ids) in enumerate(split_halves(pool.instances["instance_id"].to_numpy(), count, seed)):
-        res = calibrate(subset_run(pool, cal_ids, beliefs), subset_run(pool, test_ids, beliefs), alpha=alpha,
-                        budgets=list(budgets), resamples=resamples, seed=boot_seed + n)
-        diff = res.cost_differences
-        full = diff[(diff["baseline"] == "no calibration") & (diff["treatment"] == "set calibration + margin")].iloc[0]
-        # each budget's held-out calibrated optimism (ex9's E83 reads it; E55's keys do not)
-        held_out = {f"optimism_k{int(r['k'])}": float(r["optimism_calibrated"]) for r in res.table3.to_dict("records")}
-        rows.append({"part": "resplit_cost", "index": n, "difference": float(full["difference"]),
-                     "lo": float(full["lo"]), "hi": float(full["hi"]), "gamma": float(res.margin.gamma), **held_out})
-    return pd.DataFrame(rows)
+    res = calibrate(subset_run(pool, cal_ids, beliefs), subset_run(pool, test_ids, beliefs), alpha=alpha,
+                    budgets=list(budgets), resamples=resamples, seed=boot_seed + n)
+    diff = res.cost_differences
+    full = diff[(diff["baseline"] == "no calibration") & (diff["treatment"] == "set calibration + margin")].iloc[0]
+    # each budget's held-out calibrated optimism (ex9's E83 reads it; E55's keys do not)
+    held_out = {f"optimism_k{int(r['k'])}": float(r["optimism_calibrated"]) for r in res.table3.to_dict("records")}
+    row = {"part": "resplit_cost", "index": n, "difference": float(full["difference"]), "lo": float(full["lo"]),
+           "hi": float(full["hi"]), "gamma": float(res.margin.gamma), **held_out}
+    del res, diff, full
+    trim_heap()
+    return row
 
 
 def cost_keys(rows: pd.DataFrame) -> dict[str, float]:
@@ -147,20 +157,33 @@ def pair_cells(cal: Path | LoadedRun, test: Path | LoadedRun, budgets: Sequence[
     return out
 
 
-def capture_rows(protocol: Any, runs: Path, scales: Sequence[float], count: int, budgets: Sequence[int],
-                 workers: int) -> pd.DataFrame:
-    """One row per (scale, pair): draw ``i`` tested under a calibration on draw ``i + 1`` (cyclic, as E19)."""
+def scale_rows(protocol: Any, paths: Sequence[Path], scale: float, budgets: Sequence[int]) -> pd.DataFrame:
+    """One scale's rows, one per pair: draw ``i`` tested under a calibration on draw ``i + 1`` (cyclic, as E19).
+    Each draw's beliefs are computed once for both pairs it is in, at ``budgets`` only (no other is read)."""
     from probecommit.studies.explain.shared_beliefs import SharedBeliefs, cyclic_pairs
 
-    rows, shared = [], SharedBeliefs()  # each draw's beliefs once for both pairs it is in
+    shared = SharedBeliefs(budgets)
+    with large_arrays_apart():  # two whole-run traces held: the pairs' arrays leave no holes in the heap
+        _, pairs = cyclic_pairs(list(paths), lambda cal, test: pair_cells(shared.run(cal, budgets),
+                                                                           shared.run(test, budgets), budgets,
+                                                                           protocol.alpha), shared)
+    if len(paths) == 1:  # calibrated on itself, as ``paths[(i + 1) % 1]`` is
+        pairs = [pair_cells(paths[0], paths[0], budgets, protocol.alpha)]
+    return pd.DataFrame([{"part": "capture", "index": i, "scale": float(scale), **cells} for i, cells in enumerate(pairs)])
+
+
+def capture_rows(protocol: Any, runs: Path, scales: Sequence[float], count: int, budgets: Sequence[int],
+                 workers: int) -> pd.DataFrame:
+    """Every scale's rows (:func:`scale_rows`). Each scale's draws, then its pairs, run in a process of their own
+    (issue 42, target 4): the draws' runs and the pairs' two whole-run traces leave with them (one process
+    holding every scale's reached 553 MB)."""
+    from probecommit.runner.aside import in_own_process
+
+    parts = []
     for scale in scales:
-        paths = capture_draws(protocol, runs, float(scale), count, workers)
-        _, pairs = cyclic_pairs(paths, lambda cal, test: pair_cells(shared.run(cal, budgets), shared.run(test, budgets),
-                                                                     budgets, protocol.alpha), shared)
-        if len(paths) == 1:  # calibrated on itself, as ``paths[(i + 1) % 1]`` is
-            pairs = [pair_cells(paths[0], paths[0], budgets, protocol.alpha)]
-        rows += [{"part": "capture", "index": i, "scale": float(scale), **cells} for i, cells in enumerate(pairs)]
-    return pd.DataFrame(rows)
+        paths = in_own_process(capture_draws, protocol, runs, float(scale), count, workers)
+        parts.append(in_own_process(scale_rows, protocol, paths, float(scale), list(budgets)))
+    return pd.concat(parts, ignore_index=True)
 
 
 def _inside(lo: float, hi: float, key: str) -> bool:
@@ -232,9 +255,9 @@ def run(job: Any) -> None:
     pools = in_own_process(fresh_pool_rows, p, COVER_SCHEDULE, job.runs,
                            cfg["ex5_fresh_pools_quick" if quick else "ex5_fresh_pools"], job.workers)
     job.progress("explain: Table III under a narrower capture window", 0, 1)
-    capture = in_own_process(capture_rows, p, job.runs, cfg["ex5_capture_scales_quick" if quick else "ex5_capture_scales"],
-                             cfg["ex5_capture_draws_quick" if quick else "ex5_capture_draws"], cfg["random_budgets"],
-                             job.workers)
+    capture = capture_rows(p, job.runs, cfg["ex5_capture_scales_quick" if quick else "ex5_capture_scales"],
+                           cfg["ex5_capture_draws_quick" if quick else "ex5_capture_draws"], cfg["random_budgets"],
+                           job.workers)
     rows = pd.concat([cost, pools, capture], ignore_index=True)
     job.stored[STORED] = rows
     job.res["ex5_calibration"].update(summary(rows))

@@ -27,22 +27,30 @@ U = TypeVar("U")
 
 
 class SharedBeliefs:
-    """Per run directory, its loaded run and its whole-run belief trace, kept until :meth:`drop`."""
+    """Per run directory, its loaded run and its whole-run belief trace, kept until :meth:`drop`.
 
-    def __init__(self) -> None:
+    ``budgets``: the only budgets any caller reads (None: every budget and the prior). A trace of five of a
+    run's eight budgets and no prior holds about half the arrays (issue 42, target 4: two runs are held at
+    once); an episode's belief at a budget does not depend on which budgets are kept, so the numbers are the same.
+    """
+
+    def __init__(self, budgets: Iterable[int] | None = None) -> None:
         self._held: dict[Path, tuple[LoadedRun, RunBeliefs, BeliefTrace]] = {}
+        self._budgets = None if budgets is None else sorted(dict.fromkeys(int(k) for k in budgets))
 
     def _whole(self, path: Path) -> tuple[LoadedRun, RunBeliefs, BeliefTrace]:
         path = Path(path)
         if path not in self._held:
             loaded = load_run(path)
-            beliefs = RunBeliefs.of(loaded, chunk_instances=None)  # one chunk: every budget and the prior
+            beliefs = RunBeliefs.of(loaded, chunk_instances=None, budgets=self._budgets)  # one chunk
             self._held[path] = loaded, beliefs, beliefs.trace(beliefs.chunks[0])
         return self._held[path]
 
     def run(self, path: str | Path, budgets: Iterable[int] | None = None) -> LoadedRun:
         """The run at ``path`` with beliefs at ``budgets`` (None: all, the prior too) from the shared trace:
         what ``load_for_commit(path, budgets=budgets)`` would compute, without computing it."""
+        if budgets is None and self._budgets is not None:
+            raise ValueError(f"every budget and the prior asked of beliefs kept at {self._budgets} only")
         loaded, whole, trace = self._whole(Path(path))
         if budgets is None:
             view = replace(whole, _kept=(trace, {}))

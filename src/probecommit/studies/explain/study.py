@@ -19,6 +19,7 @@ import pandas as pd
 import yaml
 
 from probecommit.audit.stats import paired_bootstrap
+from probecommit.process.memory import large_arrays_apart
 from probecommit.runner.replay import load_run
 from probecommit.studies.explain.replay_final import replay_at
 from probecommit.studies.explain import (calibration_rows, draw_audit, draw_faults, engines_x, generator, more, resplits,
@@ -347,7 +348,9 @@ class Explain:
         thresholds = {int(r["k"]): float(r["threshold"]) for r in res["table_audit"]["table"]}
         gamma = float(res["table_insertion"]["margin_random"])
         budgets, nominal = sorted(thresholds), 1 - self.p.alpha
-        shared = SharedBeliefs()  # each draw's beliefs once, for its audit, both its calibration pairs and gates
+        every = list(range(1, self.p.budgets["random"] + 1))  # the gates' budgets: every one the draws commit at
+        # each draw's beliefs once, for its audit, both its calibration pairs and gates; no prior (none reads it)
+        shared = SharedBeliefs(every)
 
         def audit(path: Path) -> dict[str, float]:
             return draw_audit.draw_cells(shared.run(path, budgets), thresholds, gamma, nominal=nominal, resamples=2, seed=0)
@@ -356,10 +359,17 @@ class Explain:
             """Table III's calibrated cells and the random-probe gates on ``test``, calibrated on ``cal``."""
             cells = draw_audit.fresh_calibration_cells(shared.run(cal, budgets), shared.run(test, budgets), budgets,
                                                        alpha=self.p.alpha)
-            return cells, draw_audit.fresh_gate_cells(shared.run(cal), shared.run(test), alpha=self.p.alpha)
+            return cells, draw_audit.fresh_gate_cells(shared.run(cal, every), shared.run(test, every), alpha=self.p.alpha)
 
         self.progress("explain: Table III on fresh draws", 0, len(drawn))
-        check, *fresh = [deployed.path for _, deployed, _ in drawn]
+        with large_arrays_apart():  # two whole-run traces held: the commits' arrays leave no holes in the heap
+            self._audit_draws([deployed.path for _, deployed, _ in drawn], audit, pair, shared, parts)
+
+    def _audit_draws(self, paths: list[Path], audit: Callable[[Path], dict[str, float]],
+                     pair: Callable[[Path, Path], tuple[dict[str, float], dict[str, float]]], shared: SharedBeliefs,
+                     parts: dict[str, list[dict[str, float]]]) -> None:
+        """:meth:`_draw_audit`'s loop: the first draw audited alone, the others in cyclic calibration pairs."""
+        check, *fresh = paths
         parts["audit"] = [audit(check)]
         shared.drop(check)
         if len(fresh) > 1:  # each fresh draw tested under a calibration on the next one (cyclic): both draws vary
