@@ -10,7 +10,7 @@ offending row. Row numbers are 0-based data rows; for CSV input the file line
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Iterable
+from typing import Any, Iterable
 
 import numpy as np
 import pandas as pd
@@ -240,8 +240,7 @@ def check_episode_values(table: pd.DataFrame, source: str = "episode table") -> 
     bad = ~np.isin(status, _OK_STATUS)
     if bad.any():
         row = int(np.flatnonzero(bad)[0])
-        raise EpisodeTableError(f"{source}: column 'status' must be 'ok' or 'failed', found {status[row]!r} "
-                                f"at {_where(row, False)}")
+        raise _status_error(source, status[row], row, False)
     ok = status == "ok"
     _check_values(table, ok, False, source, [])
     _check_losses(table, ok, source, False, None)
@@ -269,6 +268,11 @@ def _normalize_keys(df: pd.DataFrame, csv: bool, source: str) -> None:
         df[name] = _integer(df, name, csv, source)
 
 
+def _status_error(source: str, value: Any, row: int, csv: bool) -> EpisodeTableError:
+    """The one message for a status that is neither 'ok' nor 'failed' (normalized and value-only checks alike)."""
+    return EpisodeTableError(f"{source}: column 'status' must be 'ok' or 'failed', found {value!r} at {_where(row, csv)}")
+
+
 def _normalize_status(df: pd.DataFrame, csv: bool, source: str) -> np.ndarray:
     """``status`` as 'ok' or 'failed' ('ok' when absent or blank), in place; the ok rows ``[R]``.
     Read first: NaN outcomes are allowed on failed episodes."""
@@ -279,8 +283,7 @@ def _normalize_status(df: pd.DataFrame, csv: bool, source: str) -> np.ndarray:
         bad = ~status.isin(_OK_STATUS)
         if bad.any():
             row = int(np.flatnonzero(bad.to_numpy())[0])
-            raise EpisodeTableError(f"{source}: column 'status' must be 'ok' or 'failed', "
-                                    f"found {df['status'].iloc[row]!r} at {_where(row, csv)}")
+            raise _status_error(source, df["status"].iloc[row], row, csv)
         df["status"] = status.astype(str)
     else:
         df["status"] = "ok"
