@@ -357,6 +357,7 @@ def _audit_explain(audit: list[Comparison]) -> tuple[Any, ...]:
             + tuple((f"E19[{c.label}]", (c.label,)) for c in audit if " calibrated " in c.label)
             + tuple((f"E57[{c.label}]", (c.label,)) for c in audit if c.label.startswith("optimism "))
             + (("E82", ("optimism calibrated k=2", "optimism calibrated k=3")),)
+            + (("E191", ("optimism calibrated k=2", "optimism calibrated k=3")),)
             + tuple((f"E100[{c}]", (c,)) for c in ("cluster_coverage original k=5", "optimism original k=2",
                                                      "optimism original k=3"))
             + tuple((f"E113[{c.label}]", (c.label,)) for c in audit if " original " in c.label)
@@ -605,7 +606,7 @@ def _claims_audit_and_calibration() -> list[Claim]:
                        ("E101", ("held-out cluster coverage",)),
                        *((number, ("level mean", "held-out cluster coverage", "margin optimistic"))
                          for number in ("E118", "E119", "E132")),
-                       ("E186", ("held-out cluster coverage",)))))
+                       ("E186", ("held-out cluster coverage",)), ("E190", ("margin optimistic",)))))
     return c
 
 
@@ -2123,6 +2124,38 @@ def _experiments_ex28() -> list[Experiment]:
         supports=lambda v: v["h"] >= 1)]
 
 
+def _experiments_ex30() -> list[Experiment]:
+    """The ex30 helper's experiments (``studies/explain/ex30_fresh.py``; rules in docs/decisions.md, "ex30"): the
+    validation-tuned margin judged on fresh calibration episodes at each candidate gamma, a winner's curse (E190: T14's
+    optimistic share; E191: Table III's calibrated optimism at k = 2, 3)."""
+    s, t = f"{X}ex30_fresh.share.", f"{X}ex30_fresh.table."
+    share = {"n": f"{s}splits", "d": f"{s}draws", "sh": f"{s}share", "sp": f"{s}share_plain", "g": f"{s}gamma",
+             "gp": f"{s}gamma_plain", "cd": f"{s}cal_drawn", "ct": f"{s}cal_true", "h": f"{s}held",
+             "hp": f"{s}held_plain", "lo": f"{s}split_share_min", "hi": f"{s}split_share_max", "ok": f"{s}holds"}
+    table = {"gp": f"{t}gamma_plain", "d": f"{t}draws", "gm": f"{t}gamma_median", "glo": f"{t}gamma_min",
+             "ghi": f"{t}gamma_max", **{f"k{k}{e}": f"{t}optimism.k{k}{x}" for k in (2, 3)
+                                        for e, x in (("", ""), ("lo", ".lo"), ("hi", ".hi"))}, "ok": f"{t}holds"}
+    return [
+        Experiment(
+            "E190", "T14's margin share with each candidate gamma judged on fresh calibration episodes (a winner's "
+            "curse)", share,
+            "on the frozen pool's {n:.0f} re-splits at k = 5, each candidate gamma's calibration episodes redrawn "
+            "from the instances' stored repeats ({d:.0f} draws a split), the paper's rule selects gamma {g:.3f} on "
+            "average ({gp:.3f} without redrawing); the calibration half is {cd:+.4f} as drawn and {ct:+.4f} on its "
+            "stored episodes at the stop, the held-out half {h:+.4f} ({hp:+.4f} without). The held-out half is "
+            "optimistic on {sh:.3f} of the split draws (without redrawing {sp:.2f}; a split's share over its draws "
+            "ranges {lo:.2f} to {hi:.2f}).",
+            supports=lambda v: v["ok"] == 1.0),
+        Experiment(
+            "E191", "Table III's calibrated k = 2, 3 at the margin selected on fresh calibration episodes",
+            table,
+            "Table III's random calibration with each candidate's episodes redrawn from the stored repeats "
+            "({d:.0f} draws) selects gamma {glo:.2f} to {ghi:.2f} (median {gm:.2f}; {gp:.2f} without redrawing); "
+            "at the median the calibrated optimism is {k2:+.3f} [{k2lo:+.3f}, {k2hi:+.3f}] at k = 2 and {k3:+.3f} "
+            "[{k3lo:+.3f}, {k3hi:+.3f}] at k = 3.",
+            supports=lambda v: v["ok"] == 1.0)]
+
+
 #: E133's declared ceilings, as key prefixes (tenths of a newton per pad; ``ex18_grasp.CEILINGS``).
 EX18_CEILINGS = ("cap15", "cap20", "cap25", "cap30", "cap40", "cap50")
 
@@ -2554,7 +2587,8 @@ for _experiment in (_experiments() + _experiments_more() + _experiments_ex3() + 
                     + _experiments_ex22()
                     + _experiments_ex20() + _experiments_ex21()
                     + _experiments_ex23() + _experiments_ex24()
-                    + _experiments_ex25() + _experiments_ex26() + _experiments_ex27() + _experiments_ex28()):
+                    + _experiments_ex25() + _experiments_ex26() + _experiments_ex27() + _experiments_ex28()
+                    + _experiments_ex30()):
     EXPERIMENTS[_experiment.number] = _experiment
 
 

@@ -114,16 +114,17 @@ def optimism_keys(rows: pd.DataFrame) -> dict[str, float]:
 # ----------------------------------------------------------------------------- E82: the paper's margin
 
 
-def margin_rows(cal: Any, test: Any, alpha: float, budgets: Sequence[int], resamples: int, seed: int) -> pd.DataFrame:
+def margin_rows(cal: Any, test: Any, alpha: float, budgets: Sequence[int], resamples: int, seed: int,
+                gamma: float = PAPER_RANDOM_GAMMA) -> pd.DataFrame:
     """E82's rows: Table III's calibrated cells on ``test`` calibrated on ``cal`` with gamma fixed at the
-    paper's 0.62 (the margin grid {0.62}), one row per budget."""
+    paper's 0.62 (the margin grid {0.62}; E191 passes its own ``gamma``), one row per budget."""
     import warnings
 
     from probecommit.runner.calibration import calibrate
 
     with warnings.catch_warnings():  # the search warns that 0.62 leaves the calibration optimistic: expected here
         warnings.filterwarnings("ignore", message="no margin on the grid", category=RuntimeWarning)
-        res = calibrate(cal, test, alpha=alpha, budgets=list(budgets), margin_grid=(PAPER_RANDOM_GAMMA,),
+        res = calibrate(cal, test, alpha=alpha, budgets=list(budgets), margin_grid=(gamma,),
                         resamples=resamples, seed=seed)
     t3 = res.table3
     return pd.DataFrame({"part": "margin", "index": t3["k"].astype(int), "k": t3["k"].astype(int),
