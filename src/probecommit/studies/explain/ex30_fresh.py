@@ -53,13 +53,12 @@ class GridSums:
     the budgets committed, and their count (arrays gammas x instances x repeats; a missing trajectory counts 0)."""
 
     def __init__(self, gammas: list[float], tables: Sequence[pd.DataFrame]) -> None:
-        parts = [ok_episodes(t).assign(gamma=g) for g, t in zip(gammas, tables)]
-        rows = pd.concat(parts, ignore_index=True)
-        sums = rows.groupby(["gamma", "instance_id", "repeat"]).agg(
+        every = pd.concat([t.assign(gamma=g) for g, t in zip(gammas, tables)], ignore_index=True)
+        sums = ok_episodes(every).groupby(["gamma", "instance_id", "repeat"]).agg(
             p=("predicted", "sum"), r=("realized", "sum"), n=("predicted", "size"))
         self.gammas = list(gammas)
-        self.ids = np.array(sorted(rows["instance_id"].unique()))
-        repeats = sorted(rows["repeat"].unique())
+        self.ids = np.array(sorted(every["instance_id"].unique()))
+        repeats = sorted(every["repeat"].unique())  # a failed trajectory stays a slot a draw can take
         full = pd.MultiIndex.from_product([self.gammas, self.ids, repeats], names=sums.index.names)
         shape = (len(self.gammas), len(self.ids), len(repeats))
         sums = sums.reindex(full, fill_value=0)
