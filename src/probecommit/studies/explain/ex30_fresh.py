@@ -138,8 +138,8 @@ def share_rows(pool_dir: Any, alpha: float, count: int, seed: int, draws: int = 
     levels = [float(budget_thresholds(scores.loc[ids], alpha, [SHARE_BUDGET])[SHARE_BUDGET]) for ids, _ in halves]
     by_level = {t: grid_sums(cal, {SHARE_BUDGET: t}) for t in sorted(set(levels))}
     rng = np.random.default_rng(SHARE_SEED)
-    rows = [row for n, ((cal, test), t) in enumerate(zip(halves, levels))
-            for row in split_rows(by_level[t], n, cal, test, t, rng, draws)]
+    rows = [row for n, ((half, held), t) in enumerate(zip(halves, levels))
+            for row in split_rows(by_level[t], n, half, held, t, rng, draws)]
     return pd.DataFrame(rows)
 
 
