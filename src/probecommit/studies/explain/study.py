@@ -48,6 +48,7 @@ from probecommit.studies.explain import ex15_readings, ex15_union
 from probecommit.studies.explain import ex18_grasp, ex18_share
 from probecommit.studies.explain import ex26_grasp
 from probecommit.studies.explain import ex28_plateau
+from probecommit.studies.explain import ex31_shift
 from probecommit.studies.explain import gru as gru_study
 from probecommit.studies.explain.margin import margin_curve
 from probecommit.studies.paper_values import PRINTED
@@ -133,6 +134,7 @@ class Explain:
             *ex22.GROUPS,
             *ex20.GROUPS,
             *ex23.GROUPS,
+            *ex31_shift.GROUPS,
             *ex21.GROUPS,
             *ex24.GROUPS,
             *ex25.GROUPS,
@@ -551,7 +553,8 @@ class Explain:
                             ex28_plateau.run, needs=()),  # E118 (ex15_readings) joins the rows ex5 and ex9 store
                  self.aside(ex7.run, needs=()), self.aside(ex13.mixture, needs=()), self.aside(ex17.tiebreak, needs=()),
                  self.instance_generator, self.draw_runs, self.aside(draw_summaries, needs=()), self.boundary_fault,
-                 self.aside(ex20.run, needs=()),  # E144-E146: the stored random test run and the fresh draws on disk
+                 self.aside(ex20.run, ex31_shift.run, needs=()),  # E144-E146, E193: the stored random test run and the
+                 # fresh draws on disk
                  self.aside(ex23.run, needs=()),  # E162/E163: the fresh draws and the Split B random runs, re-committed
                  self.robust, physx_coverage, self.physx,
                  lambda: (self.ready and self.ready(), self.gru()), lambda: more.run(self),
