@@ -100,3 +100,11 @@ def test_verify_recomputes_every_key_from_the_stored_rows(tmp_path):
         ref = published[ex31_shift.GROUP][key.split(".", 1)[1]]
         assert (isinstance(v, float) and math.isnan(v) and math.isnan(ref)) or v == ref
     assert recompute_bootstrapped(tmp_path, {}, ex31_shift.GROUP, ex31_shift.STORED, lambda r: {}) == {}
+
+
+def test_wired_into_verify_and_the_explain_target():
+    from probecommit.report import recompute
+    from probecommit.studies.explain import study
+
+    assert "ex31_shift" in recompute.BOOTSTRAPPED and ex31_shift.STORED_BY_GROUP == {ex31_shift.GROUP: ex31_shift.STORED}
+    assert study.ex31_shift is ex31_shift
