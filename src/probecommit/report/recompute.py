@@ -896,7 +896,7 @@ SELF_RECOMPUTING = ("ex7", "ex8", "ex11", "ex16", "ex19", "ex22", "ex25", "ex27"
 
 #: Explain modules whose ``recompute(folder, results, boot)`` gives ``{key: (value, stored file)}`` under the
 #: insertion study's bootstrap settings, with ``STORED_BY_GROUP`` naming each group's rows.
-BOOTSTRAPPED = ("ex6", "ex10", "ex13", "ex14", "ex17", "ex20", "ex21", "ex23", "ex24")
+BOOTSTRAPPED = ("ex6", "ex10", "ex13", "ex14", "ex17", "ex20", "ex21", "ex23", "ex24", "ex31_shift")
 
 
 #: The stored tables each study's numbers are recomputed from: a publication without one fails verify
@@ -969,7 +969,8 @@ RECOMPUTED = {
                "arm under a band-weighted threshold and margin (its re-executed commits stored); ex24's the same "
                "draws with the first tap's jitter removed alone, the jitter read as a variance, and post-stratified "
                "to the first tap's band exposure; ex25's hinge and push1d probed cells with probes uniform over the "
-               "probe interval; ex27's hinge row with the commit a torque",
+               "probe interval; ex27's hinge row with the commit a torque; ex31's Table III original arm read one tap later, "
+               "post-stratified as ex20's",
 }
 TRACED_ONLY = {
     "insertion": "the stored rows themselves (episodes, re-executed commits, replays); the re-split rows; the cover "

@@ -365,7 +365,8 @@ def _audit_explain(audit: list[Comparison]) -> tuple[Any, ...]:
             + tuple((f"E144[{c.label}]", (c.label,)) for c in audit if c.label.startswith("optimism original "))
             + tuple((f"E146[{c.label}]", (c.label,)) for c in audit if c.label.startswith("cluster_coverage original "))
             + (("E162", ("optimism original k=2",)),)
-            + tuple((f"E163[optimism calibrated k={k}]", (f"optimism calibrated k={k}",)) for k in (2, 3)))
+            + tuple((f"E163[optimism calibrated k={k}]", (f"optimism calibrated k={k}",)) for k in (2, 3))
+            + (("E193", ("optimism original k=2",)),))
 
 
 def _table_claims() -> list[Claim]:
@@ -2156,6 +2157,46 @@ def _experiments_ex30() -> list[Experiment]:
             supports=lambda v: v["ok"] == 1.0)]
 
 
+#: E193's pairs (Table III budget k, taps read): every Table III budget whose k + 1 is stored (``ex31_shift.TAPS``).
+EX31_SHIFTED = ((1, 2), (2, 3), (3, 4), (5, 6))
+
+
+def _ex31_holds(v: dict[str, Any]) -> bool:
+    """E193's joint rule: each of the eight original-arm cells (optimism and cluster coverage at k = 1, 2, 3, 5)
+    inside our post-stratified interval at k + 1 taps."""
+    return all(v[f"lo{k}"] <= _pv(f"tab:audit.optimism_original.{k}") <= v[f"hi{k}"]
+               and v[f"clo{k}"] <= _pv(f"tab:audit.cluster_coverage_original.{k}") <= v[f"chi{k}"]
+               for k, _ in EX31_SHIFTED)
+
+
+def _experiments_ex31() -> list[Experiment]:
+    """The ex31 helper's experiment (E193, ``studies/explain/ex31_shift.py``; rule in docs/decisions.md, "ex31",
+    committed before its step computed any number): Table III's original arm read one tap later, ex20's
+    post-stratified estimator at k + 1 taps, joint over the eight cells whose k + 1 is stored."""
+    d = f"{X}ex31_shift."
+    keys: dict[str, str] = {"pe": "paper:T11-audit-trend.escape_k1", "e2": f"{d}escape.k2", "es2": f"{d}escape_std.k2",
+                            "n": f"{X}ex23_band.draws.count", "flo": f"{X}ex23_band.draws.optimism_std.min.k3",
+                            "fhi": f"{X}ex23_band.draws.optimism_std.max.k3"}
+    cells = []
+    for k, t in EX31_SHIFTED:
+        s = f".k{t}"
+        keys.update({f"o{k}": f"{d}optimism_std{s}", f"lo{k}": f"{d}optimism_std_lo{s}",
+                     f"hi{k}": f"{d}optimism_std_hi{s}", f"c{k}": f"{d}cluster_coverage_std{s}",
+                     f"clo{k}": f"{d}cluster_coverage_std_lo{s}", f"chi{k}": f"{d}cluster_coverage_std_hi{s}",
+                     f"p{k}": f"paper:tab:audit.optimism_original.{k}",
+                     f"q{k}": f"paper:tab:audit.cluster_coverage_original.{k}"})
+        cells.append(f"k = {k} at {t} taps: optimism {{o{k}:.3f}} [{{lo{k}:.3f}}, {{hi{k}:.4f}}] (paper {{p{k}:.3f}}), "
+                     f"cluster coverage {{c{k}:.3f}} [{{clo{k}:.3f}}, {{chi{k}:.3f}}] (paper {{q{k}:.2f}})")
+    return [Experiment(
+        "E193", "Table III's original arm with each budget read one tap later (k + 1 taps)", keys,
+        "how a budget counts its taps is never stated; read one tap later and post-stratified to the design's exact "
+        "band exposure, Table III's own run gives " + "; ".join(cells) + ". The declared rule needs all eight inside "
+        "(k = 8 would need a ninth tap, not run). Beside: escape at two taps {e2:.3f} ({es2:.3f} at the design's "
+        "exposure) against the paper's {pe:.1f} % at k = 1; over {n:d} fresh draws the standardized optimism at three "
+        "taps ranges {flo:.3f} to {fhi:.3f}.",
+        supports=_ex31_holds)]
+
+
 #: E133's declared ceilings, as key prefixes (tenths of a newton per pad; ``ex18_grasp.CEILINGS``).
 EX18_CEILINGS = ("cap15", "cap20", "cap25", "cap30", "cap40", "cap50")
 
@@ -2588,7 +2629,8 @@ for _experiment in (_experiments() + _experiments_more() + _experiments_ex3() + 
                     + _experiments_ex20() + _experiments_ex21()
                     + _experiments_ex23() + _experiments_ex24()
                     + _experiments_ex25() + _experiments_ex26() + _experiments_ex27() + _experiments_ex28()
-                    + _experiments_ex30()):
+                    + _experiments_ex30()
+                    + _experiments_ex31()):
     EXPERIMENTS[_experiment.number] = _experiment
 
 

@@ -35,8 +35,9 @@ def _design(loaded: Any) -> dict[str, float]:
             "r": TIP_RADIUS_MM, "delta": float(cfg.simulator.boundary_offset), "repeats": float(cfg.repeats)}
 
 
-def _rows(loaded: Any, draw: str) -> pd.DataFrame:
-    return ex20_band.band_rows(loaded.table("episodes"), loaded.table("probes"), loaded.instances, draw, _design(loaded))
+def _rows(loaded: Any, draw: str, budgets: tuple[int, ...] = ex20_band.BUDGETS) -> pd.DataFrame:
+    return ex20_band.band_rows(loaded.table("episodes"), loaded.table("probes"), loaded.instances, draw, _design(loaded),
+                               budgets)
 
 
 def run(job: Any) -> None:

@@ -49,6 +49,7 @@ from probecommit.studies.explain import ex18_grasp, ex18_share
 from probecommit.studies.explain import ex26_grasp
 from probecommit.studies.explain import ex28_plateau
 from probecommit.studies.explain import ex30_fresh
+from probecommit.studies.explain import ex31_shift
 from probecommit.studies.explain import gru as gru_study
 from probecommit.studies.explain.margin import margin_curve
 from probecommit.studies.paper_values import PRINTED
@@ -134,6 +135,7 @@ class Explain:
             *ex22.GROUPS,
             *ex20.GROUPS,
             *ex23.GROUPS,
+            *ex31_shift.GROUPS,
             *ex21.GROUPS,
             *ex24.GROUPS,
             *ex25.GROUPS,
@@ -553,7 +555,8 @@ class Explain:
                  self.aside(ex30_fresh.run, needs=()),  # E190, E191: the insertion study's stored runs only
                  self.aside(ex7.run, needs=()), self.aside(ex13.mixture, needs=()), self.aside(ex17.tiebreak, needs=()),
                  self.instance_generator, self.draw_runs, self.aside(draw_summaries, needs=()), self.boundary_fault,
-                 self.aside(ex20.run, needs=()),  # E144-E146: the stored random test run and the fresh draws on disk
+                 self.aside(ex20.run, ex31_shift.run, needs=()),  # E144-E146, E193: the stored random test run and the
+                 # fresh draws on disk
                  self.aside(ex23.run, needs=()),  # E162/E163: the fresh draws and the Split B random runs, re-committed
                  self.robust, physx_coverage, self.physx,
                  lambda: (self.ready and self.ready(), self.gru()), lambda: more.run(self),
