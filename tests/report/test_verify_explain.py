@@ -123,6 +123,8 @@ CASES: list[tuple[str, Edit]] = [
                                                 bump, "ex25_uniform.")),
     ("stored-ex27-torque-episode", edit_stored("ex27_torque_rows.parquet", lambda t: t.part == "d025", "realized",
                                                bump, "ex27_torque.")),
+    ("stored-ex32-floor-episode", edit_stored("ex32_floor_rows.parquet", lambda t: t.k == 5, "realized", bump,
+                                              "ex32_floor.")),
     ("json-ex7-signature", edit_results("explain", ["ex7_faults", "signature.particles.optimism_change"],
                                         lambda v: [v[0] + 0.0123, *v[1:]])),
     ("json-pybullet-stored-escape", edit_results("explain", ["pybullet_escape", "stored.escape_k8"],

@@ -892,7 +892,7 @@ STORED_SUMMARIES = (("mixture_noise", EXPLAIN_MIXTURE, "mixture_x"),
 
 #: Explain modules that recompute their own groups: ``recompute(folder, results)`` gives
 #: ``(values, sources, problems)`` (a group published without its stored rows is a problem).
-SELF_RECOMPUTING = ("ex7", "ex8", "ex11", "ex16", "ex19", "ex22", "ex25", "ex27")
+SELF_RECOMPUTING = ("ex7", "ex8", "ex11", "ex16", "ex19", "ex22", "ex25", "ex27", "ex32")
 
 #: Explain modules whose ``recompute(folder, results, boot)`` gives ``{key: (value, stored file)}`` under the
 #: insertion study's bootstrap settings, with ``STORED_BY_GROUP`` naming each group's rows.
@@ -970,7 +970,8 @@ RECOMPUTED = {
                "draws with the first tap's jitter removed alone, the jitter read as a variance, and post-stratified "
                "to the first tap's band exposure; ex25's hinge and push1d probed cells with probes uniform over the "
                "probe interval; ex27's hinge row with the commit a torque; ex31's Table III original arm read one tap later, "
-               "post-stratified as ex20's",
+               "post-stratified as ex20's; ex32's push1d, hinge and push2d probed cells against the action grid's floor "
+               "at each truth",
 }
 TRACED_ONLY = {
     "insertion": "the stored rows themselves (episodes, re-executed commits, replays); the re-split rows; the cover "

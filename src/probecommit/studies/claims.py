@@ -348,7 +348,8 @@ def _breadth_explain() -> tuple[Any, ...]:
             + tuple((f"E{156 + i}", (f"{fam} probe_robust",)) for i, fam in enumerate(EXACT_POSTERIOR))
             + (("E158", ("hinge probe_robust",)),)
             + tuple((number, (f"{fam} probe_robust",)) for number, fam, _, _ in EX25_PROBE_SETS)
-            + tuple((number, ("hinge probe_robust",)) for number, _, _ in EX27_TORQUES))
+            + tuple((number, ("hinge probe_robust",)) for number, _, _ in EX27_TORQUES)
+            + tuple((f"E{196 + i}", (f"{fam} probe_robust",)) for i, fam in enumerate(GRID_FLOORED)))
 
 
 def _audit_explain(audit: list[Comparison]) -> tuple[Any, ...]:
@@ -2482,6 +2483,45 @@ def _experiments_ex27() -> list[Experiment]:
     return out
 
 
+#: E196, E197: Table II's rows whose Probe-Robust cells are set against the action grid's floor
+#: (``studies/explain/ex32_floor.py``); push2d's floor is published beside, with no rule.
+GRID_FLOORED = ("push1d", "hinge")
+
+
+def _experiments_ex32() -> list[Experiment]:
+    """The ex32 helper's experiments (E196, E197, ``studies/explain/ex32_floor.py``; rule in docs/decisions.md,
+    "ex32", committed before any floor was computed): Table II's probed cells against the floor the action grid
+    alone puts on the miss at each instance's truth."""
+    out = []
+    for i, fam in enumerate(GRID_FLOORED):
+        b, p2d = f"{X}ex32_floor.{fam}.", f"{X}ex32_floor.push2d."
+        keys = {"n": f"{b}episodes", "md": f"{b}premise_model_rel_diff", "ok": f"{b}premise_holds",
+                "f": f"{b}floor.k5", "fmax": f"{b}floor_max", "share": f"{b}floor_share", "gap": f"{b}gap",
+                "cov": f"{b}floor_covers_gap", "h": f"{b}half_mean", "hmax": f"{b}half_max",
+                "p5": f"{b}paper.k5", "p2": f"{b}paper.k2_implied", "in5": f"{b}removed.k5_paper_inside",
+                "in2": f"{b}removed.k2_paper_inside", "holds": f"{b}holds",
+                "qf": f"{p2d}floor.k5", "qs": f"{p2d}stored.k5", "qshare": f"{p2d}floor_share"}
+        for name, src in (("s", "stored"), ("r", "removed")):
+            keys.update({f"{name}{c}": f"{b}{src}.{c}" for c in ("k2", "k5")})
+            keys.update({f"{name}{c}{e}": f"{b}{src}.{c}_{e}" for c in ("k2", "k5") for e in ("lo", "hi")})
+        out.append(Experiment(
+            f"E{196 + i}", f"{fam}'s Probe-Robust(2, 5) against the floor the action grid alone puts on the miss (the "
+            "best grid action under the true parameters; the grid the paper does not report for this family)",
+            keys,
+            "over the {n:g} stored Probe-Robust episodes a budget (the model's miss of the stored actions at the truth "
+            "gives the stored cell to {md:.2g} relative, premise {ok:g} = holds), the best grid action at each "
+            "instance's truth misses by {f:.4f} on average (largest {fmax:.4f}): {share:.3f} of our Probe-Robust(5) "
+            "{sk5:.3f} [{sk5lo:.3f}, {sk5hi:.3f}], against the {gap:.3f} by which it exceeds the paper's {p5:.3f} "
+            "(floor at least the gap: {cov:g}, 1 = yes). With a whole half step of the grid at the truth (mean "
+            "{h:.4f}, largest {hmax:.4f}) taken off every episode's miss, Probe-Robust(5) is {rk5:.3f} [{rk5lo:.3f}, "
+            "{rk5hi:.3f}] (the paper's inside: {in5:g}) and Probe-Robust(2) {rk2:.3f} [{rk2lo:.3f}, {rk2hi:.3f}] "
+            "(ours {sk2:.3f}; the paper's implied {p2:.3f} inside: {in2:g}). Beside: push2d's grid floor is {qf:.4f}, "
+            "{qshare:.3f} of its Probe-Robust(5) {qs:.3f}.",
+            supports=lambda v: v["ok"] == 1 and v["cov"] == 1 and v["in5"] == 1 and v["in2"] == 1
+            and v["holds"] == 1))
+    return out
+
+
 def _experiments_ex20() -> list[Experiment]:
     """The ex20 helper's experiments (E144..E146, ``studies/explain/ex20_band.py``; rules in docs/decisions.md,
     "ex20", written before the runs): Table III's original arm post-stratified on the design's exact exposure to
@@ -2630,7 +2670,7 @@ for _experiment in (_experiments() + _experiments_more() + _experiments_ex3() + 
                     + _experiments_ex23() + _experiments_ex24()
                     + _experiments_ex25() + _experiments_ex26() + _experiments_ex27() + _experiments_ex28()
                     + _experiments_ex30()
-                    + _experiments_ex31()):
+                    + _experiments_ex31() + _experiments_ex32()):
     EXPERIMENTS[_experiment.number] = _experiment
 
 

@@ -167,9 +167,9 @@ def keys(rows: pd.DataFrame) -> dict[str, Any]:
             for k, v in family_keys(part, str(family)).items()}
 
 
-def family_rows(root: Path, family: str, quick: bool) -> pd.DataFrame:
-    """One family's stored rows: the frozen Probe-Robust episodes, the model's miss of their actions, and the
-    exact replay at M and M / 4 (the same episodes in the same order in every part)."""
+def probed_episodes(root: Path, family: str, quick: bool) -> tuple[Any, float, pd.DataFrame]:
+    """The frozen breadth run's model, its nu, and its Probe-Robust episodes at ``BUDGETS`` (status ok) with each
+    instance's target (``ctx_*``) and truth (``true_*``) columns (shared by ex22 and ex32's floor)."""
     from probecommit.runner.build import build_model
     from probecommit.runner.config import load_config
     from probecommit.studies.explain.ex8_blind import run_dir
@@ -181,20 +181,34 @@ def family_rows(root: Path, family: str, quick: bool) -> pd.DataFrame:
     instances = pd.read_parquet(run / "instances.parquet")
     episodes = episodes[(episodes["method"] == "probe_robust") & episodes["k"].isin(BUDGETS)
                         & (episodes["status"] == "ok")].drop(columns=["z_true"], errors="ignore")
-    cols = ["instance_id", "ctx_target", *[f"true_{n}" for n in model.latent_names]]
-    episodes = episodes.merge(instances[cols], on="instance_id", how="left").reset_index(drop=True)
-    probes = pd.read_parquet(run / "probes.parquet")
+    cols = ["instance_id", *[c for c in instances.columns if c.startswith(("ctx_", "true_"))]]
+    return model, nu, episodes.merge(instances[cols], on="instance_id", how="left").reset_index(drop=True)
+
+
+def model_miss(model: Any, actions: np.ndarray, truth: np.ndarray, targets: np.ndarray) -> np.ndarray:
+    """The model's miss ``[E]`` of each row's action ``actions[E, a]`` at its truth ``truth[E, d]`` and target
+    ``targets[E, c]`` (one model call per row: rows differ in truth and target)."""
+    return np.array([float(np.asarray(model.loss(actions[i:i + 1], truth[i:i + 1], targets[i]))[0, 0])
+                     for i in range(len(actions))])
+
+
+def family_rows(root: Path, family: str, quick: bool) -> pd.DataFrame:
+    """One family's stored rows: the frozen Probe-Robust episodes, the model's miss of their actions, and the
+    exact replay at M and M / 4 (the same episodes in the same order in every part)."""
+    from probecommit.studies.explain.ex8_blind import run_dir
+
+    model, nu, episodes = probed_episodes(root, family, quick)
+    probes = pd.read_parquet(run_dir(root, family, quick) / "probes.parquet")
     truth = episodes[[f"true_{n}" for n in model.latent_names]].to_numpy(float)
     grid_action = episodes["action"].to_numpy(float)[:, None]
-    model_miss = np.array([float(np.asarray(model.loss(grid_action[i:i + 1], truth[i:i + 1], np.array([t])))[0, 0])
-                           for i, t in enumerate(episodes["ctx_target"].to_numpy(float))])
+    model_miss_ = model_miss(model, grid_action, truth, episodes[["ctx_target"]].to_numpy(float))
     size = QUICK_SAMPLE if quick else SAMPLE
     base = pd.DataFrame({"family": family, "instance_id": episodes["instance_id"].to_numpy(),
                          "repeat": episodes["repeat"].to_numpy(np.int64), "k": episodes["k"].to_numpy(np.int64),
                          "sample": float(size)})
     parts = [base.assign(part="stored", action=grid_action[:, 0], realized=episodes["realized"].to_numpy(float),
                          kept=np.nan),
-             base.assign(part="model", action=grid_action[:, 0], realized=model_miss, kept=np.nan)]
+             base.assign(part="model", action=grid_action[:, 0], realized=model_miss_, kept=np.nan)]
     for part, m in (("exact", size), ("exact_quarter", size // 4)):
         parts.append(pd.concat([base, replay(model, prior_sample(model, m), probes, episodes, nu)], axis=1)
                      .assign(part=part))

@@ -43,6 +43,7 @@ from probecommit.studies.explain import ex21
 from probecommit.studies.explain import ex24
 from probecommit.studies.explain import ex25
 from probecommit.studies.explain import ex27
+from probecommit.studies.explain import ex32
 from probecommit.studies.explain import ex12_distinct, ex12_simultaneous
 from probecommit.studies.explain import ex15_readings, ex15_union
 from probecommit.studies.explain import ex18_grasp, ex18_share
@@ -140,6 +141,7 @@ class Explain:
             *ex24.GROUPS,
             *ex25.GROUPS,
             *ex27.GROUPS,
+            *ex32.GROUPS,
             ex12_distinct.GROUP, ex12_simultaneous.GROUP,
             ex15_readings.GROUP, ex15_union.GROUP,
             ex18_share.GROUP, ex18_grasp.GROUP, ex26_grasp.GROUP, ex28_plateau.GROUP, ex30_fresh.GROUP)}
@@ -563,7 +565,7 @@ class Explain:
                  lambda: ex15_union.run(self), self.aside(ex18_grasp.run, needs=()),  # E133: frozen config only
                  self.aside(ex26_grasp.run, needs=()),  # E178/E179: frozen config only, squeeze patched
                  self.aside(ex22.exact, ex22.magnitude, needs=("breadth",)),  # E156-E158: stored breadth rows, closed forms
-                 self.aside(ex25.uniform, needs=("breadth",)),  # E174/E175: stored breadth rows, closed forms
+                 self.aside(ex25.uniform, ex32.floor, needs=("breadth",)),  # E174-E177, E196/E197: stored breadth rows
                  self.aside(ex27.torque, needs=("breadth",)),  # E182-E184: the stored hinge run, MuJoCo reruns
                  lambda: ex19.run(self),  # E138 reads the prior sweep's darts runs (more.run)
                  lambda: ex4.run(self),
