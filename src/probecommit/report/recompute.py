@@ -871,6 +871,8 @@ EXPLAIN_EX18_GRASP = "ex18_grasp_rows.parquet"
 EXPLAIN_EX26_GRASP = "ex26_grasp_rows.parquet"
 #: ex28's stored rows (``studies.explain.ex28_plateau.STORED``: E186's re-splits with the W = 1 plateau as one tie).
 EXPLAIN_EX28_PLATEAU = "ex28_plateau_rows.parquet"
+#: ex29's stored rows (``studies.explain.ex29_band.STORED``: E187's trajectories, k = 1 surprise and first-tap band).
+EXPLAIN_EX29_BAND = "ex29_band_rows.parquet"
 #: ex7's stored rows (``studies.explain.ex7.STORED``: the fault surprise rows and the fresh draws).
 EXPLAIN_EX7 = ("ex7_fault_surprise.parquet", "ex7_dev_draws.parquet", "ex7_harness_draws.parquet")
 
@@ -885,7 +887,8 @@ STORED_SUMMARIES = (("mixture_noise", EXPLAIN_MIXTURE, "mixture_x"),
                     ("ex18_share", EXPLAIN_EX18_SHARE, "ex18_share"),
                     ("ex18_grasp", EXPLAIN_EX18_GRASP, "ex18_grasp"),
                     ("ex26_grasp", EXPLAIN_EX26_GRASP, "ex26_grasp"),
-                    ("ex28_plateau", EXPLAIN_EX28_PLATEAU, "ex28_plateau"))
+                    ("ex28_plateau", EXPLAIN_EX28_PLATEAU, "ex28_plateau"),
+                    ("ex29_band", EXPLAIN_EX29_BAND, "ex29_band"))
 
 #: Explain modules that recompute their own groups: ``recompute(folder, results)`` gives
 #: ``(values, sources, problems)`` (a group published without its stored rows is a problem).
