@@ -748,7 +748,8 @@ def _claims_commit_decision() -> list[Claim]:
               explain=(("E15", ("k=5",)), ("E16", ("k=1",)), ("E64", ("k=1", "k=5")), ("E88", ("k=1", "k=5")),
                        ("E106", ("k=1",)), ("E114[k=1]", ("k=1",)), ("E114[k=5]", ("k=5",)), ("E127", ("k=1",)),
                        ("E150[k=1]", ("k=1",)), ("E150[k=5]", ("k=5",)), ("E151[k=1]", ("k=1",)),
-                       ("E151[k=5]", ("k=5",)), ("E168", ("k=1",)), ("E169", ("k=1",)), ("E170", ("k=1",)))))
+                       ("E151[k=5]", ("k=5",)), ("E168", ("k=1",)), ("E169", ("k=1",)), ("E170", ("k=1",)),
+                       ("E187", ("k=1",)))))
     return c
 
 
@@ -2198,6 +2199,40 @@ def _experiments_ex31() -> list[Experiment]:
         supports=_ex31_holds)]
 
 
+def _experiments_ex29() -> list[Experiment]:
+    """The ex29 helper's experiment (``studies/explain/ex29_band.py``; rule in docs/decisions.md, "ex29"): T36's
+    k = 1 AUC with the first tap's band lost at the rate the paper's own k = 1 escape implies (E187)."""
+    b = f"{X}ex29_band."
+    keys = {"pe": "paper:T11-audit-trend.escape_k1", "pb": f"{b}p_band_nine", "q1": f"{b}q1", "imp": f"{b}implied",
+            "pa1": "paper:T36-surprise.auc_k1", "nd": f"{b}draws", "slo": f"{b}band_share.min",
+            "shi": f"{b}band_share.max", "alo": f"{b}auc.min", "ahi": f"{b}auc.max", "qlo": f"{b}auc_q1.min",
+            "qhi": f"{b}auc_q1.max", "llo": f"{b}auc_all.min", "lhi": f"{b}auc_all.max", "ilo": f"{b}auc_implied.min",
+            "ihi": f"{b}auc_implied.max", "tlo": f"{b}top_first_escapes.min", "thi": f"{b}top_first_escapes.max",
+            "pn": "paper:T36-surprise.escaped", "h": f"{b}holds", "of": f"{b}ours.first_tap", "ot": f"{b}ours.tpr",
+            "ofp": f"{b}ours.fpr", "ob": f"{b}ours.binary", "oa": f"{b}ours.auc", "on": f"{b}ours.n_escaped",
+            "obe": f"{b}ours.band_escapes", "onb": f"{b}ours.n_band", "ra": f"{b}random.band_escaped_k1.at_first",
+            "rna": f"{b}random.n_band.at_first", "rl": f"{b}random.band_escaped_k1.all", "rn": f"{b}random.n_band.all",
+            "room": f"{b}top_first_room", "ft": f"{b}first_tap", "bp": f"{b}band_share.pooled",
+            "pr": f"{b}position_ratio", "qf": f"{b}q_first", "fl": f"{b}auc_q_first.min", "fh": f"{b}auc_q_first.max"}
+    return [Experiment(
+        "E187", "T36's k = 1 AUC with the first tap's band lost at the rate the paper's own k = 1 escape implies", keys,
+        "Our k = 1 AUC is below chance because our schedule's first tap ({of:.0f} mm) reads the pocket on "
+        "{ofp:.3f} of covered trajectories but {ot:.3f} of escaped ones ((1 + TPR - FPR) / 2 = {ob:.3f}, the AUC "
+        "{oa:.3f}): none of our {on:d} escapes lies in that tap's band ({obe:d} of {onb:d} band trajectories "
+        "escape); they are made by later taps, mostly outside the first tap's pocket region. Under the paper's schedule "
+        "the "
+        "paper's own k = 1 escape ({pe:.1f} %, all from a first tap's band, P(band) {pb:.3f}) says its filter loses "
+        "{q1:.3f} of a first tap's band, where its k = 1 AUC needs {imp:.3f}. Weighted to that loss (our draws lose "
+        "{slo:.3f} to {shi:.3f}), the k = 1 AUC of the {nd:d} draws is {qlo:.3f} to {qhi:.3f} (as run {alo:.3f} to "
+        "{ahi:.3f}; paper {pa1:.2f}); with the whole band lost {llo:.3f} to {lhi:.3f}, at the needed share {ilo:.3f} "
+        "to {ihi:.3f}: {tlo:.0f} to {thi:.0f} escapes per draw read top first, where {pa1:.2f} with {pn:.0f} "
+        "escapes leaves room for at most {room:.0f} even with no covered trajectory reading the pocket. Beside: our "
+        "draws lose {bp:.3f} of the {ft:.0f} mm tap's band, {pr:.2f} times the random run's {rl:.3f} over all first "
+        "positions ({rn:d} band trajectories; {ra:.3f} of the {rna:d} whose first random tap was at {ft:.0f} mm); "
+        "scaled by that ratio the paper's loss is {qf:.3f} and the AUCs {fl:.3f} to {fh:.3f}.",
+        supports=lambda v: v["h"] >= 1)]
+
+
 #: E133's declared ceilings, as key prefixes (tenths of a newton per pad; ``ex18_grasp.CEILINGS``).
 EX18_CEILINGS = ("cap15", "cap20", "cap25", "cap30", "cap40", "cap50")
 
@@ -2670,7 +2705,7 @@ for _experiment in (_experiments() + _experiments_more() + _experiments_ex3() + 
                     + _experiments_ex23() + _experiments_ex24()
                     + _experiments_ex25() + _experiments_ex26() + _experiments_ex27() + _experiments_ex28()
                     + _experiments_ex30()
-                    + _experiments_ex31() + _experiments_ex32()):
+                    + _experiments_ex29() + _experiments_ex31() + _experiments_ex32()):
     EXPERIMENTS[_experiment.number] = _experiment
 
 

@@ -31,7 +31,7 @@ def _paper_optimism() -> list[float]:
     return [value(f"tab:audit.optimism_original.{k}") for k in ex17_tiebreak.BUDGETS]
 
 
-def _paper_t36() -> tuple[int, float, float]:
+def paper_t36() -> tuple[int, float, float]:
     """The paper's T36 trajectories (escaped + covered), escapes and k = 1 AUC."""
     from probecommit.studies.paper_values import value
 
@@ -68,7 +68,7 @@ def band(job: Any, paper_schedule: dict[str, Any], first_tap: float) -> None:
               "sim_offset": float(config.simulator.boundary_offset)}
     rows = ex17_band.band_rows(surprise, instances, inputs)
     job.stored[ex17_band.STORED] = rows
-    job.res["ex17_band"].update(ex17_band.keys(rows, *_paper_t36(), DRAWS))
+    job.res["ex17_band"].update(ex17_band.keys(rows, *paper_t36(), DRAWS))
 
 
 def recompute(folder: Path, results: dict[str, Any], boot: dict[str, Any]) -> dict[str, tuple[Any, str]]:
@@ -76,7 +76,7 @@ def recompute(folder: Path, results: dict[str, Any], boot: dict[str, Any]) -> di
     out: dict[str, tuple[Any, str]] = {}
     for group, name, summary in (
             ("ex17_tiebreak", ex17_tiebreak.STORED, lambda r: ex17_tiebreak.keys(r, _paper_optimism(), boot)),
-            ("ex17_band", ex17_band.STORED, lambda r: ex17_band.keys(r, *_paper_t36(), DRAWS))):
+            ("ex17_band", ex17_band.STORED, lambda r: ex17_band.keys(r, *paper_t36(), DRAWS))):
         if (folder / name).is_file() and results.get(group):
             for key, v in summary(pd.read_parquet(folder / name)).items():
                 out[f"{group}.{key}"] = (v, name)

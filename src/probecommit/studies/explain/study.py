@@ -51,6 +51,7 @@ from probecommit.studies.explain import ex26_grasp
 from probecommit.studies.explain import ex28_plateau
 from probecommit.studies.explain import ex30_fresh
 from probecommit.studies.explain import ex31_shift
+from probecommit.studies.explain import ex29_band
 from probecommit.studies.explain import gru as gru_study
 from probecommit.studies.explain.margin import margin_curve
 from probecommit.studies.paper_values import PRINTED
@@ -144,7 +145,8 @@ class Explain:
             *ex32.GROUPS,
             ex12_distinct.GROUP, ex12_simultaneous.GROUP,
             ex15_readings.GROUP, ex15_union.GROUP,
-            ex18_share.GROUP, ex18_grasp.GROUP, ex26_grasp.GROUP, ex28_plateau.GROUP, ex30_fresh.GROUP)}
+            ex18_share.GROUP, ex18_grasp.GROUP, ex26_grasp.GROUP, ex28_plateau.GROUP, ex30_fresh.GROUP,
+            ex29_band.GROUP)}
         self.tables: dict[str, pd.DataFrame] = ReadDict(self.reads, "tables")
         #: Stored rows written beside results.json as they are, by file name (``more``'s steps).
         self.stored: dict[str, pd.DataFrame] = ReadDict(self.reads, "stored")
@@ -577,6 +579,7 @@ class Explain:
                  lambda: ex17.band(self, paper, COVER_SCHEDULE[0]),
                  self.aside(ex21.run, needs=()),  # E150/E151: the paper's-schedule runs and the pool's, stored
                  self.aside(ex24.run, needs=()),  # E168-E170: the same stored runs, other replays
+                 self.aside(ex29_band.run, needs=()),  # E187: the same stored runs, the claim's and Table III's
                  lambda: ex12_distinct.run(self),
                  lambda: ex18_share.run(self)]  # last: it waits for E118's and E119's rows
         self.run_steps(steps)
