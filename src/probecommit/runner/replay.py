@@ -449,8 +449,8 @@ class RunBeliefs:
         A pass over several chunks returns the C heap's free pages (``trim_heap``) when it starts
         and ends, not after each chunk: each chunk's arrays have the sizes of the last one's, so
         the heap's freed blocks take them, where pages handed back after every chunk were faulted
-        in again (calibrate at E = 3072: 730k page faults against 270k, 1.3 of 9 CPU seconds), for
-        a peak within 10-20 MB of trimming each chunk (decisions.md, spd23).
+        in again (calibrate at E = 3072: 734k page faults against 270k, 8-14 % of its CPU), for a
+        peak 10-20 MB above trimming each chunk, the same at E = 12288 (decisions.md, spd23).
 
         Args:
             requests: Per-table keyword arguments of ``runner.inference.commit``
