@@ -157,3 +157,67 @@ def test_verified_tables_are_read_from_an_arrow_buffer_as_from_the_file(runs):
     pd.testing.assert_frame_equal(run.read_verified("episodes", where, columns),
                                   pd.read_parquet(run.table_path("episodes"), filters=[("method", "in", where[1])],
                                                   columns=columns), check_exact=True)
+
+
+def test_a_pass_builds_its_first_trace_in_the_calling_thread_beside_the_second(runs, monkeypatch):
+    """With two CPUs a pass does not begin by waiting for the thread: chunk 0's beliefs are built in the
+    calling thread while the thread builds chunk 1's, and every later chunk's are built in the thread, each
+    once a pass (the rows are one thread's: the test above)."""
+    import threading
+
+    built = []
+    real_trace = RunBeliefs.trace
+
+    def trace(self, rows, keep_weights=False):
+        built.append((rows.start, threading.current_thread() is threading.main_thread()))
+        return real_trace(self, rows, keep_weights)
+
+    monkeypatch.setattr(RunBeliefs, "trace", trace)
+    monkeypatch.setenv("PROBECOMMIT_ENGINE_THREADS", "2")
+    beliefs = RunBeliefs.of(runs["cal"], chunk_instances=2)
+    starts = [rows.start for rows in beliefs.chunks]
+    assert len(starts) > 2
+    for _ in range(2):  # two passes, each the same
+        built.clear()
+        beliefs.commit([{"thresholds": 0.8}], reduce=[lambda table: None])
+        assert sorted(built) == [(start, start == 0) for start in starts]
+    assert not [t for t in threading.enumerate() if t.name.startswith("probecommit-trace")]
+
+
+def test_the_first_trace_built_while_the_test_run_loads_is_the_first_passs(runs, monkeypatch):
+    """``calibrate`` builds the calibration run's first beliefs in the thread while it loads the test run
+    (``RunBeliefs.first_trace_ahead``): once, and the pass does not build them again; a block that raises keeps
+    nothing and leaves no thread."""
+    import threading
+
+    built = []
+    real_trace = RunBeliefs.trace
+
+    def trace(self, rows, keep_weights=False):
+        built.append((id(self), rows.start, threading.current_thread() is threading.main_thread()))
+        return real_trace(self, rows, keep_weights)
+
+    monkeypatch.setattr(RunBeliefs, "trace", trace)
+    monkeypatch.setenv("PROBECOMMIT_ENGINE_THREADS", "2")
+    beliefs = RunBeliefs.of(runs["cal"], chunk_instances=2)
+    with pytest.raises(RuntimeError, match="planted"):
+        with beliefs.first_trace_ahead():
+            raise RuntimeError("planted")
+    assert beliefs._first is None
+    assert not [t for t in threading.enumerate() if t.name.startswith("probecommit-trace")]
+    with beliefs.first_trace_ahead():
+        pass
+    ahead = beliefs._first
+    again = real_trace(beliefs, beliefs.chunks[0], True)
+    np.testing.assert_array_equal(ahead.states[3].particles, again.states[3].particles)
+    built.clear()
+    beliefs.commit([{"thresholds": 0.8}], reduce=[lambda table: None])
+    assert sorted(start for _, start, _ in built) == [rows.start for rows in beliefs.chunks][1:]
+    assert beliefs._first is None
+
+    built.clear()
+    _calibrated(runs, True, 2)
+    firsts = [(who, main) for who, start, main in built if start == 0]
+    assert len(firsts) == 2 and len({who for who, _ in firsts}) == 2  # each run's first trace once
+    assert firsts[0][1] is False  # the calibration run's, in the thread
+    assert not [t for t in threading.enumerate() if t.name.startswith("probecommit-trace")]

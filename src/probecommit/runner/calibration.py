@@ -647,8 +647,9 @@ def calibrate(cal_run, test_run, alpha: float = DEFAULT_ALPHA, budgets: Sequence
         The calibration result.
     """
     cal = load_for_commit(cal_run, reuse, plateau, chunk_instances, budgets)
-    test = load_for_commit(test_run, reuse, plateau, chunk_instances, budgets)
-    _check_pair(cal, test)
+    with cal.beliefs.first_trace_ahead():  # built while the test run is loaded and the pair checked
+        test = load_for_commit(test_run, reuse, plateau, chunk_instances, budgets)
+        _check_pair(cal, test)
     budgets = _budgets(cal, budgets)
     _budgets(test, budgets)
     cost_budget = max(budgets) if cost_budget is None else int(cost_budget)
@@ -971,8 +972,9 @@ def gates(cal_run, test_run, alpha: float = DEFAULT_ALPHA, budgets: Sequence[int
         and the surprise AUC table of the raw test episodes.
     """
     cal = load_for_commit(cal_run, reuse, plateau, chunk_instances, budgets)
-    test = load_for_commit(test_run, reuse, plateau, chunk_instances, budgets)
-    _check_pair(cal, test)
+    with cal.beliefs.first_trace_ahead():  # built while the test run is loaded and the pair checked
+        test = load_for_commit(test_run, reuse, plateau, chunk_instances, budgets)
+        _check_pair(cal, test)
     budgets = _budgets(cal, budgets)
     _budgets(test, budgets)
     rec = Recorder(record)

@@ -10,6 +10,7 @@ from __future__ import annotations
 import contextlib
 import logging
 import time
+from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable, Iterable, Iterator, Mapping, Sequence
@@ -334,6 +335,8 @@ class RunBeliefs:
     #: A restriction's source (:meth:`restrict`): the whole run's kept trace and this run's rows of it, taken
     #: on the first commit, so a re-split's test half is not copied while its calibration half is held.
     _rows_of: tuple[BeliefTrace, np.ndarray] | None = field(default=None, repr=False)
+    #: The first chunk's trace, built before the next pass (:meth:`first_trace_ahead`), which takes it.
+    _first: BeliefTrace | None = field(default=None, repr=False)
 
     @classmethod
     def of(cls, run: str | Path | LoadedRun, config: StudyConfig | None = None,
@@ -445,6 +448,12 @@ class RunBeliefs:
         Each chunk's beliefs are computed once and every request is committed on them
         before the next chunk, so several commits cost one belief recomputation.
 
+        A pass over several chunks returns the C heap's free pages (``trim_heap``) when it starts
+        and ends, not after each chunk: each chunk's arrays have the sizes of the last one's, so
+        the heap's freed blocks take them, where pages handed back after every chunk were faulted
+        in again (calibrate at E = 3072: 734k page faults against 270k, 8-14 % of its CPU), for a
+        peak 10-20 MB above trimming each chunk, the same at E = 12288 (decisions.md, spd23).
+
         Args:
             requests: Per-table keyword arguments of ``runner.inference.commit``
                 (e.g. ``{"thresholds": t, "margin": g}``); ``via`` names another function of
@@ -494,8 +503,8 @@ class RunBeliefs:
                     self._commit_chunk(rows, parts, requests, keep, reduce, reuse, final, common, upcoming(i))
                 finally:  # a chunk that raised leaves no stored answer behind in the simulator either
                     self._put_back_answers(taken)
-                if several:
-                    trim_heap()  # the finished chunk's pages go back, so chunks do not pile up as heap fragments
+        if several:  # the pass's freed pages go back when it ends, not after each chunk (see commit)
+            trim_heap()
 
     @contextlib.contextmanager
     def _traces_ahead(self) -> Iterator[Callable[[int], BeliefTrace | None]]:
@@ -508,29 +517,61 @@ class RunBeliefs:
         is joined when the pass ends, raised or not: none outlives the call (a thread still
         running native code at interpreter exit can abort the process). Yields a function giving
         chunk ``i``'s trace (None: the chunk computes its own, as with one CPU).
-        """
-        from probecommit.tasks.base import engine_threads
 
-        if len(self.chunks) < 2 or self._kept is not None or engine_threads() < 2:
+        The first chunk's trace is built in the calling thread while the thread builds the
+        second's: a pass began with one CPU waiting for the first (~0.15 CPU s at 96 instances,
+        twice a calibration), and two traces are held then, as while any later chunk is committed.
+        """
+        first, self._first = self._first, None
+        if not self._ahead_possible():
             yield lambda i: None
             return
-        from concurrent.futures import ThreadPoolExecutor
-
         chunks = list(self.chunks)
         with ThreadPoolExecutor(max_workers=1, thread_name_prefix="probecommit-trace") as pool:
-            ahead = {0: pool.submit(self.trace, chunks[0], True)}
+            ahead: dict[int, Future] = {}
 
             def upcoming(i: int) -> BeliefTrace:
-                trace = ahead.pop(i).result()
-                if i + 1 < len(chunks):
+                nonlocal first
+                if i + 1 < len(chunks):  # queued behind chunk i's own (one thread): at most one ahead
                     ahead[i + 1] = pool.submit(self.trace, chunks[i + 1], True)
-                return trace
+                if i == 0 and first is not None:
+                    trace, first = first, None  # not held here once its chunk is done
+                    return trace
+                return ahead.pop(i).result() if i in ahead else self.trace(chunks[i], True)
 
             try:
                 yield upcoming
             finally:
                 for future in ahead.values():
                     future.cancel()
+
+    def _ahead_possible(self) -> bool:
+        """Whether a pass over this run builds its chunks' traces in a second thread (:meth:`_traces_ahead`)."""
+        from probecommit.tasks.base import engine_threads
+
+        return len(self.chunks) >= 2 and self._kept is None and engine_threads() >= 2
+
+    @contextlib.contextmanager
+    def first_trace_ahead(self) -> Iterator[None]:
+        """Within the block, the first chunk's trace is built in a second thread; the next pass takes it.
+
+        Why: a calibration's first pass waited for its first beliefs after loading the test run,
+        checking the pair and reading the stored scores (~0.1-0.2 s of one CPU at E = 3072), which
+        need none of them. Only where a pass would build its traces in a thread anyway; the thread is
+        joined when the block ends, and a block that raises keeps nothing. The trace is the one the
+        pass would build (its rows and seeds), so the tables are the same bits.
+        """
+        if not self._ahead_possible():
+            yield
+            return
+        with ThreadPoolExecutor(max_workers=1, thread_name_prefix="probecommit-trace") as pool:
+            future = pool.submit(self.trace, self.chunks[0], True)
+            try:
+                yield
+            except BaseException:
+                future.cancel()
+                raise
+            self._first = future.result()
 
     def _commit_chunk(self, rows: slice, parts: list[list[Any]], requests: Sequence[Mapping[str, Any]],
                       keep: list, reduce: list, reuse: bool, final: bool, common: dict[str, Any],
@@ -580,7 +621,7 @@ class RunBeliefs:
 
     def release(self) -> None:
         """Drop the kept trace of a one-chunk run (its last commit is done) and hand its pages back."""
-        self._rows_of = None
+        self._rows_of = self._first = None
         if self._kept is not None:
             self._kept = None
             trim_heap()
