@@ -13,7 +13,9 @@ temporary folder by each arm's own tree. Each arm times ``calibrate`` alone (the
 made before the clock starts) in a process of its own: CPU (user + sys of the process) and
 wall seconds. Prints each arm's times, the ratios to this tree, whether the calibration
 results are identical (the JSON of ``CalibrationResult.to_dict`` and the margin search
-table), the load average, and the target.
+table), the load average, and the target. The target is read on ``probecommit calibrate`` as
+a user runs it on this tree's runs: a process of its own, start-up, the command's heap
+settings and its written outputs included (the in-process time is a diagnostic).
 """
 
 from __future__ import annotations
@@ -21,6 +23,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import resource
 import subprocess
 import sys
 import tempfile
@@ -68,6 +71,20 @@ def run_arm(src: Path, out: Path, calibrate_import: str, count: int, extra: str 
     return json.loads(done.stdout.strip().splitlines()[-1])
 
 
+def run_command(src: Path, out: Path) -> dict:
+    """``probecommit calibrate`` as a user runs it, on the runs ``run_arm`` made in ``out``: a process of
+    its own (start-up, the command's heap settings and its written outputs included); wall and CPU
+    (user + sys of the child)."""
+    environment = {**os.environ, "PYTHONPATH": str(src)}
+    before, t0 = resource.getrusage(resource.RUSAGE_CHILDREN), time.perf_counter()
+    subprocess.run([sys.executable, "-m", "probecommit", "calibrate", "--cal", str(out / "B_cal"),
+                    "--test", str(out / "B_test"), "-o", str(out / "calibration")],
+                   capture_output=True, text=True, env=environment, check=True)
+    seconds, after = time.perf_counter() - t0, resource.getrusage(resource.RUSAGE_CHILDREN)
+    cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+    return {"seconds": seconds, "cpu": cpu}
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--instances", type=int, default=768, help="Instances per run (x 4 repeats = E).")
@@ -82,6 +99,7 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)
         arms = {"this tree": run_arm(src, tmp / "a", new_import, args.instances)}
+        command = run_command(src, tmp / "a")
         if args.reference:
             arms["this tree, reference path (reuse=False, NumPy)"] = run_arm(
                 src, tmp / "b", new_import, args.instances, ", reuse=False", {"PROBECOMMIT_KERNELS": "numpy"})
@@ -99,11 +117,13 @@ def main() -> None:
         same = json.dumps(arm["result"], sort_keys=True) == json.dumps(first["result"], sort_keys=True)
         print(f"  {name:50s} CPU {arm['cpu']:7.2f} s (main thread {arm.get('main_cpu', float('nan')):6.2f} s)  "
               f"wall {arm['seconds']:7.2f} s   CPU x{arm['cpu'] / first['cpu']:5.2f}   identical: {same}")
-    print(f"  target (issue 42): this tree <= {target:.0f} s at E = {episodes} on an idle 2-core machine: "
-          f"wall {first['seconds']:.2f} s, CPU {first['cpu']:.2f} s -> "
-          f"{'met' if first['seconds'] <= target else 'MISSED'} (wall; on a loaded machine CPU is the fairer reading: "
-          f"on an idle 2-core machine the wall is at least max(main-thread CPU, CPU / 2) = "
-          f"{max(first['main_cpu'], first['cpu'] / 2):.2f} s)")
+    print(f"  {'this tree, `probecommit calibrate` as a process':50s} CPU {command['cpu']:7.2f} s "
+          f"{'':26s}wall {command['seconds']:7.2f} s   (start-up, the command's heap settings and its writes included)")
+    print(f"  target (issue 42): the command <= {target:.0f} s at E = {episodes} on an idle 2-core machine: "
+          f"wall {command['seconds']:.2f} s, CPU {command['cpu']:.2f} s -> "
+          f"{'met' if command['seconds'] <= target else 'MISSED'} (in-process calibrate alone {first['seconds']:.2f} s, "
+          f"a diagnostic; on a loaded machine CPU is the fairer reading: the in-process wall is at least "
+          f"max(main-thread CPU, CPU / 2) = {max(first['main_cpu'], first['cpu'] / 2):.2f} s)")
 
 
 if __name__ == "__main__":
