@@ -62,17 +62,13 @@ def changes_section(doc: Doc) -> None:
     """What moved against the previous frozen results, and why (each cause is a change in this tree)."""
     doc.add("## What moved since the previous publication", "",
             "Against the frozen results before this publication (`git log -- results/paper`), compared key by key, "
-            "every number common to both is identical but the GRU's: only file paths and wall seconds differ "
-            "elsewhere. This publication was made on another host than the last one (see the machine above); the "
-            "GRU's training there gives other low digits, and every other target gives the same bits (measured on "
-            "both hosts: docs/decisions.md, \"The GRU across CPUs\"). On this host two full reproductions, before "
-            "and after this publication's speed and memory changes (the explain steps' large arrays kept apart "
-            "from the heap and their heaviest parts in processes of their own, calibrate's stored answers read as "
-            "columns, the collector deferred through start-up), gave every common key and stored table "
-            "identical, the GRU's included.",
-            "New in this publication: the explain target's experiments E178, E179, E182-E184 and E186 behind the "
-            "differences from the paper (see the list above) and the stored rows from which `verify` recomputes "
-            "them.", "")
+            "every number common to both is identical, the GRU's included (the same host made both; on another CPU "
+            "the GRU's training gives other low digits: docs/decisions.md, \"The GRU across CPUs\"): only file "
+            "paths and wall seconds differ. This publication's speed change (calibrate's heap trimmed once a pass, "
+            "its first beliefs built while the test run loads) moves no number.",
+            "New in this publication: the explain target's experiments E187, E190, E191, E193, E196 and E197 behind "
+            "the differences from the paper (see the list above; none of them holds, so no status moved) and the "
+            "stored rows from which `verify` recomputes them.", "")
 
 
 def render(frozen: Path, ledger: Ledger) -> str:
