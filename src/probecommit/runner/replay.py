@@ -448,12 +448,6 @@ class RunBeliefs:
         Each chunk's beliefs are computed once and every request is committed on them
         before the next chunk, so several commits cost one belief recomputation.
 
-        A pass over several chunks returns the C heap's free pages (``trim_heap``) when it starts
-        and ends, not after each chunk: each chunk's arrays have the sizes of the last one's, so
-        the heap's freed blocks take them, where pages handed back after every chunk were faulted
-        in again (calibrate at E = 3072: 734k page faults against 270k, 8-14 % of its CPU), for a
-        peak 10-20 MB above trimming each chunk, the same at E = 12288 (decisions.md, spd23).
-
         Args:
             requests: Per-table keyword arguments of ``runner.inference.commit``
                 (e.g. ``{"thresholds": t, "margin": g}``); ``via`` names another function of
@@ -503,8 +497,8 @@ class RunBeliefs:
                     self._commit_chunk(rows, parts, requests, keep, reduce, reuse, final, common, upcoming(i))
                 finally:  # a chunk that raised leaves no stored answer behind in the simulator either
                     self._put_back_answers(taken)
-        if several:  # the pass's freed pages go back when it ends, not after each chunk (see commit)
-            trim_heap()
+                if several:
+                    trim_heap()  # the finished chunk's pages go back, so chunks do not pile up as heap fragments
 
     @contextlib.contextmanager
     def _traces_ahead(self) -> Iterator[Callable[[int], BeliefTrace | None]]:
