@@ -64,8 +64,9 @@ def changes_section(doc: Doc) -> None:
             "Against the frozen results before this publication (`git log -- results/paper`), compared key by key, "
             "every number common to both is identical, the GRU's included (the same host made both; on another CPU "
             "the GRU's training gives other low digits: docs/decisions.md, \"The GRU across CPUs\"): only file "
-            "paths and wall seconds differ. This publication's speed change (calibrate's heap trimmed once a pass, "
-            "its first beliefs built while the test run loads) moves no number.",
+            "paths and wall seconds differ. This publication's code changes move no number: calibrate's first beliefs "
+            "built while the test run loads and, made after this run, only when the C heap's free pages are handed "
+            "back (docs/decisions.md, \"The reproduction's peak back under 500 MB\").",
             "New in this publication: the explain target's experiments E187, E190, E191, E193, E196 and E197 behind "
             "the differences from the paper (see the list above; none of them holds, so no status moved) and the "
             "stored rows from which `verify` recomputes them.", "")
