@@ -609,7 +609,8 @@ class Explain:
 
         The C heap's free pages go back after each step (``release_free_heap``): a step's peak then starts from
         what is live, not from the high-water mark of the steps before it (the last step's import of
-        ``scipy.stats``, about 50 MB, sat on top of earlier replays' freed heap: 526 MB, decisions.md "spd23")."""
+        ``scipy.stats``, about 50 MB, sat on top of earlier replays' freed heap: 526 MB; decisions.md, "The reproduction's
+        peak back under 500 MB")."""
         try:
             for i, step in enumerate(steps):
                 self.reads.step = i
