@@ -96,15 +96,22 @@ def select(sums: GridSums, rows: np.ndarray, draws: np.ndarray | None) -> tuple[
     if draws is not None:
         p, r, n = (np.take_along_axis(x, draws, axis=2) for x in (p, r, n))
     p_sum, r_sum, n_sum = (x.sum(axis=(1, 2)) for x in (p, r, n))
-    at = {g: m for m, g in enumerate(sums.gammas)}
+    m = rule_stop(sums.gammas, p_sum, r_sum)
+    return m, float((r_sum[m] - p_sum[m]) / n_sum[m])
+
+
+def rule_stop(gammas: Sequence[float], p_sum: np.ndarray, r_sum: np.ndarray) -> int:
+    """The position of the gamma the paper's rule (``audit.margin.select_margin``, its slack included) selects from
+    each candidate's summed predicted and realized failure (``p_sum``, ``r_sum`` in ``gammas``' order); the smallest
+    grid value when none passes, as the search does (shared with ex33's aim-noise search)."""
+    at = {g: m for m, g in enumerate(gammas)}
 
     def evaluate(gamma: float) -> pd.DataFrame:
         return pd.DataFrame({"predicted": [p_sum[at[gamma]]], "realized": [r_sum[at[gamma]]]})
 
     with warnings.catch_warnings():  # a draw no grid value satisfies takes the smallest, as the search does
         warnings.filterwarnings("ignore", message="no margin on the grid", category=RuntimeWarning)
-        m = at[select_margin(evaluate, sums.gammas).gamma]
-    return m, float((r_sum[m] - p_sum[m]) / n_sum[m])
+        return at[select_margin(evaluate, gammas).gamma]
 
 
 def draw_repeats(rng: np.random.Generator, sums: GridSums, count: int) -> np.ndarray:
@@ -126,9 +133,10 @@ def split_rows(sums: GridSums, n: int, cal: np.ndarray, test: np.ndarray, level:
     return out
 
 
-def share_rows(pool_dir: Any, alpha: float, count: int, seed: int, draws: int = SHARE_DRAWS) -> pd.DataFrame:
-    """E190's rows: the insertion study's ``count`` re-splits of the frozen pool at k = 5, each threshold's grid
-    committed once for the whole pool."""
+def resplit_levels(pool_dir: Any, alpha: float, count: int, seed: int) -> tuple[Any, list, Any, list[float]]:
+    """The insertion study's ``count`` re-splits of the pool at k = 5 as ``resplit_table`` draws them: the loaded
+    run, its halves (calibration, held-out ids), the run ready for commits at k = 5 and each split's t_5 from its
+    calibration half (shared with ex33's aim-noise re-splits)."""
     from probecommit.runner.replay import load_run
     from probecommit.studies.explain.ex5_calibration import split_halves
 
@@ -136,6 +144,13 @@ def share_rows(pool_dir: Any, alpha: float, count: int, seed: int, draws: int = 
     halves = split_halves(pool.instances["instance_id"].to_numpy(), count, seed)
     cal, scores = loaded(pool, [SHARE_BUDGET])
     levels = [float(budget_thresholds(scores.loc[ids], alpha, [SHARE_BUDGET])[SHARE_BUDGET]) for ids, _ in halves]
+    return pool, halves, cal, levels
+
+
+def share_rows(pool_dir: Any, alpha: float, count: int, seed: int, draws: int = SHARE_DRAWS) -> pd.DataFrame:
+    """E190's rows: the insertion study's ``count`` re-splits of the frozen pool at k = 5, each threshold's grid
+    committed once for the whole pool."""
+    _, halves, cal, levels = resplit_levels(pool_dir, alpha, count, seed)
     by_level = {t: grid_sums(cal, {SHARE_BUDGET: t}) for t in sorted(set(levels))}
     rng = np.random.default_rng(SHARE_SEED)
     rows = [row for n, ((half, held), t) in enumerate(zip(halves, levels))
@@ -236,4 +251,4 @@ def run(job: Any) -> None:
 
 
 __all__: Sequence[str] = ("run", "compute", "summary", "share_rows", "table_rows", "share_keys", "table_keys",
-                          "GridSums", "grid_sums", "select", "split_rows", "draw_repeats")
+                          "GridSums", "grid_sums", "select", "rule_stop", "resplit_levels", "split_rows", "draw_repeats")
