@@ -873,6 +873,8 @@ EXPLAIN_EX26_GRASP = "ex26_grasp_rows.parquet"
 EXPLAIN_EX28_PLATEAU = "ex28_plateau_rows.parquet"
 #: ex30's stored rows (``studies.explain.ex30_fresh.STORED``: E190's re-split draws, E191's selections and cells).
 EXPLAIN_EX30_FRESH = "ex30_fresh_rows.parquet"
+#: ex33's stored rows (``studies.explain.ex33_aim.STORED``: E199's re-split outcome draws, E200's cells).
+EXPLAIN_EX33_AIM = "ex33_aim_rows.parquet"
 #: ex29's stored rows (``studies.explain.ex29_band.STORED``: E187's trajectories, k = 1 surprise and first-tap band).
 EXPLAIN_EX29_BAND = "ex29_band_rows.parquet"
 #: ex7's stored rows (``studies.explain.ex7.STORED``: the fault surprise rows and the fresh draws).
@@ -891,7 +893,8 @@ STORED_SUMMARIES = (("mixture_noise", EXPLAIN_MIXTURE, "mixture_x"),
                     ("ex26_grasp", EXPLAIN_EX26_GRASP, "ex26_grasp"),
                     ("ex28_plateau", EXPLAIN_EX28_PLATEAU, "ex28_plateau"),
                     ("ex30_fresh", EXPLAIN_EX30_FRESH, "ex30_fresh"),
-                    ("ex29_band", EXPLAIN_EX29_BAND, "ex29_band"))
+                    ("ex29_band", EXPLAIN_EX29_BAND, "ex29_band"),
+                    ("ex33_aim", EXPLAIN_EX33_AIM, "ex33_aim"))
 
 #: Explain modules that recompute their own groups: ``recompute(folder, results)`` gives
 #: ``(values, sources, problems)`` (a group published without its stored rows is a problem).

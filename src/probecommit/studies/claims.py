@@ -359,6 +359,7 @@ def _audit_explain(audit: list[Comparison]) -> tuple[Any, ...]:
             + tuple((f"E57[{c.label}]", (c.label,)) for c in audit if c.label.startswith("optimism "))
             + (("E82", ("optimism calibrated k=2", "optimism calibrated k=3")),)
             + (("E191", ("optimism calibrated k=2", "optimism calibrated k=3")),)
+            + (("E200", ("optimism calibrated k=2", "optimism calibrated k=3")),)
             + tuple((f"E100[{c}]", (c,)) for c in ("cluster_coverage original k=5", "optimism original k=2",
                                                      "optimism original k=3"))
             + tuple((f"E113[{c.label}]", (c.label,)) for c in audit if " original " in c.label)
@@ -608,7 +609,8 @@ def _claims_audit_and_calibration() -> list[Claim]:
                        ("E101", ("held-out cluster coverage",)),
                        *((number, ("level mean", "held-out cluster coverage", "margin optimistic"))
                          for number in ("E118", "E119", "E132")),
-                       ("E186", ("held-out cluster coverage",)), ("E190", ("margin optimistic",)))))
+                       ("E186", ("held-out cluster coverage",)), ("E190", ("margin optimistic",)),
+                       ("E199", ("margin optimistic",)))))
     return c
 
 
@@ -2233,6 +2235,38 @@ def _experiments_ex29() -> list[Experiment]:
         supports=lambda v: v["h"] >= 1)]
 
 
+
+def _experiments_ex33() -> list[Experiment]:
+    """The ex33 helper's experiments (``studies/explain/ex33_aim.py``; rules in docs/decisions.md, "ex33"): execution
+    noise on the committed aim, s = the paper's probe noise 0.5 mm, which the model's predicted failure leaves out
+    (E199: T14's optimistic share with each execution's outcome drawn; E200: Table III's calibrated optimism at
+    k = 2, 3 on the noise-averaged failure)."""
+    s, t = f"{X}ex33_aim.share.", f"{X}ex33_aim.table."
+    share = {"n": f"{s}splits", "d": f"{s}draws", "sg": f"{s}sigma", "sh": f"{s}share", "g": f"{s}gamma",
+             "c": f"{s}cal", "h": f"{s}held", "sp": f"{s}plain.mean_share", "gp": f"{s}plain.mean_gamma",
+             "sm": f"{s}mean_share", "gm": f"{s}mean_gamma", "hm": f"{s}mean_held", "ok": f"{s}holds"}
+    table = {"sg": f"{t}sigma", "g": f"{t}gamma", "gp": f"{t}plain.gamma",
+             **{f"k{k}{e}": f"{t}{tag}optimism.k{k}{x}" for k in (2, 3) for tag, e0 in (("", ""), ("plain.", "p"))
+                for e, x in ((e0, ""), (f"{e0}lo", ".lo"), (f"{e0}hi", ".hi"))}, "ok": f"{t}holds"}
+    return [
+        Experiment(
+            "E199", "T14's margin share with a placement error on the committed aim (SD the paper's probe noise)",
+            share,
+            "with the peg placed at the aim plus a Gaussian error of SD {sg:.1f} mm (the paper's probe noise), each "
+            "execution's outcome drawn, on the frozen pool's {n:.0f} re-splits at k = 5 ({d:.0f} draws a split) the "
+            "paper's rule selects gamma {g:.3f} on average ({gp:.3f} without the error); the calibration half is "
+            "{c:+.4f} at the stop, the held-out half {h:+.4f}, optimistic on {sh:.3f} of the split draws (without "
+            "the error {sp:.2f}; noise averaged, no draws, {sm:.2f} at gamma {gm:.3f}, held-out {hm:+.4f}).",
+            supports=lambda v: v["ok"] == 1.0),
+        Experiment(
+            "E200", "Table III's calibrated k = 2, 3 with a placement error on the committed aim (SD the paper's probe "
+            "noise)", table,
+            "with the peg placed at the aim plus a Gaussian error of SD {sg:.1f} mm, the paper's rule on Table III's "
+            "random calibration (noise-averaged failure) selects gamma {g:.2f} ({gp:.2f} without the error); Table "
+            "III's calibrated optimism is then {k2:+.3f} [{k2lo:+.3f}, {k2hi:+.3f}] at k = 2 and {k3:+.3f} "
+            "[{k3lo:+.3f}, {k3hi:+.3f}] at k = 3 (without the error {k2p:+.3f} and {k3p:+.3f}, Table III's own).",
+            supports=lambda v: v["ok"] == 1.0)]
+
 #: E133's declared ceilings, as key prefixes (tenths of a newton per pad; ``ex18_grasp.CEILINGS``).
 EX18_CEILINGS = ("cap15", "cap20", "cap25", "cap30", "cap40", "cap50")
 
@@ -2705,7 +2739,7 @@ for _experiment in (_experiments() + _experiments_more() + _experiments_ex3() + 
                     + _experiments_ex23() + _experiments_ex24()
                     + _experiments_ex25() + _experiments_ex26() + _experiments_ex27() + _experiments_ex28()
                     + _experiments_ex30()
-                    + _experiments_ex29() + _experiments_ex31() + _experiments_ex32()):
+                    + _experiments_ex29() + _experiments_ex31() + _experiments_ex32() + _experiments_ex33()):
     EXPERIMENTS[_experiment.number] = _experiment
 
 

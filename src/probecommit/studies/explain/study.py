@@ -50,6 +50,7 @@ from probecommit.studies.explain import ex18_grasp, ex18_share
 from probecommit.studies.explain import ex26_grasp
 from probecommit.studies.explain import ex28_plateau
 from probecommit.studies.explain import ex30_fresh
+from probecommit.studies.explain import ex33_aim
 from probecommit.studies.explain import ex31_shift
 from probecommit.studies.explain import ex29_band
 from probecommit.studies.explain import gru as gru_study
@@ -146,7 +147,7 @@ class Explain:
             ex12_distinct.GROUP, ex12_simultaneous.GROUP,
             ex15_readings.GROUP, ex15_union.GROUP,
             ex18_share.GROUP, ex18_grasp.GROUP, ex26_grasp.GROUP, ex28_plateau.GROUP, ex30_fresh.GROUP,
-            ex29_band.GROUP)}
+            ex29_band.GROUP, ex33_aim.GROUP)}
         self.tables: dict[str, pd.DataFrame] = ReadDict(self.reads, "tables")
         #: Stored rows written beside results.json as they are, by file name (``more``'s steps).
         self.stored: dict[str, pd.DataFrame] = ReadDict(self.reads, "stored")
@@ -557,6 +558,7 @@ class Explain:
                  self.aside(ex5_calibration.run, ex9_calibration.run, ex12_simultaneous.run, ex15_readings.run,
                             ex28_plateau.run, needs=()),  # E118 (ex15_readings) joins the rows ex5 and ex9 store
                  self.aside(ex30_fresh.run, needs=()),  # E190, E191: the insertion study's stored runs only
+                 self.aside(ex33_aim.run, needs=()),  # E199, E200: the insertion study's stored runs only
                  self.aside(ex7.run, needs=()), self.aside(ex13.mixture, needs=()), self.aside(ex17.tiebreak, needs=()),
                  self.instance_generator, self.draw_runs, self.aside(draw_summaries, needs=()), self.boundary_fault,
                  self.aside(ex20.run, ex31_shift.run, needs=()),  # E144-E146, E193: the stored random test run and the
