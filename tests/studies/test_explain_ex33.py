@@ -111,25 +111,15 @@ def test_a_vanishing_error_draws_the_stored_outcomes(seed):
     assert len(vanishing) == 5 and all({k: r[k] for k in keep} == {k: rows[0][k] for k in keep} for r in vanishing)
 
 
-class _Test:
-    """A test run whose commit returns one fixed table (what ``cells`` reads of a loaded run)."""
-
-    def __init__(self, table: pd.DataFrame) -> None:
-        self.table = table
-
-    def commit(self, *requests):
-        return [self.table.copy() for _ in requests]
-
-
 def test_cells_replace_ok_realized_by_the_failure_probability():
     table = pd.DataFrame({"method": "probe_robust", "variant": "deployed", "instance_id": ["a", "a", "b", "b"],
                           "repeat": [0, 1, 0, 1], "k": 2, "status": ["ok", "ok", "ok", "failed"],
                           "predicted": [0.1, 0.1, 0.2, 0.2], "realized": [0.0, 0.0, 1.0, 1.0],
                           "action": [0.0, 1.7, 5.0, 5.0], "covered": True, "escaped": False})
-    plain = ex33.cells(_Test(table), TRUTHS, {2: 1.0}, 0.6, 0.0, [2], 50, 7)
+    plain = ex33.cells(table, TRUTHS, 0.6, 0.0, [2], 50, 7)
     assert plain[["sigma", "gamma", "k"]].iloc[0].tolist() == [0.0, 0.6, 2]
     assert math.isclose(plain["optimism"].iloc[0], (2 * (0.0 - 0.1) + (1.0 - 0.2)) / 3)  # over the ok episodes
-    noisy = ex33.cells(_Test(table), TRUTHS, {2: 1.0}, 0.6, 0.5, [2], 50, 7)
+    noisy = ex33.cells(table, TRUTHS, 0.6, 0.5, [2], 50, 7)
     q = ex33.failure_probability(np.array([0.0, 1.7, 5.0]), np.array([0.0, 0.0, 5.0]), np.array([1.0, 1.0, 2 / 3]), 0.5)
     assert math.isclose(noisy["optimism"].iloc[0], (q.sum() - 0.4) / 3, rel_tol=1e-12)
 

@@ -139,14 +139,13 @@ def share_rows(pool_dir: Any, alpha: float, count: int, seed: int, draws: int = 
                          for row in split_rows(by_level[t], n, half, held, t, rng, draws)])
 
 
-def cells(test: Any, truths: pd.DataFrame, thresholds: dict[int, float], gamma: float, sigma: float,
-          budgets: Sequence[int], resamples: int, seed: int) -> pd.DataFrame:
-    """Table III's calibrated cells on ``test`` committed at ``(t_k, gamma)``, each ok episode's realized failure
-    replaced by its failure probability under the placement error (``sigma`` 0: the stored outcomes), computed as
-    Table III computes them (``audit.metrics.audit_table``)."""
+def cells(table: pd.DataFrame, truths: pd.DataFrame, gamma: float, sigma: float, budgets: Sequence[int],
+          resamples: int, seed: int) -> pd.DataFrame:
+    """Table III's calibrated cells from the test run's ``table`` committed at ``(t_k, gamma)``, each ok episode's
+    realized failure replaced by its failure probability under the placement error (``sigma`` 0: the stored
+    outcomes), computed as Table III computes them (``audit.metrics.audit_table``)."""
     from probecommit.audit.metrics import audit_table
 
-    table = test.commit((dict(thresholds), gamma))[0]
     if sigma > 0:
         ok = table["status"].astype(str).eq("ok").to_numpy()
         t = truths.loc[table["instance_id"]]
@@ -174,8 +173,10 @@ def table_rows(cal_dir: Any, test_dir: Any, alpha: float, budgets: Sequence[int]
               for s in (*BESIDE, SIGMA)}
     del cal, grid
     test, _ = loaded(test_run, budgets)
+    distinct = sorted(set(chosen.values()), reverse=True)  # each selected gamma's test commit made once
+    tables = dict(zip(distinct, test.commit(*[(dict(thresholds), g) for g in distinct])))
     truths = truths_of(test_run)
-    return pd.concat([cells(test, truths, thresholds, g, s, budgets, resamples, seed) for s, g in chosen.items()],
+    return pd.concat([cells(tables[g], truths, g, s, budgets, resamples, seed) for s, g in chosen.items()],
                      ignore_index=True)
 
 
