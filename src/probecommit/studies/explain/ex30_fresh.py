@@ -204,8 +204,6 @@ def share_keys(rows: pd.DataFrame) -> dict[str, float]:
 def table_keys(rows: pd.DataFrame) -> dict[str, float]:
     """E191's keys (``table.``): the gamma without noise, the draws' median, min and max, each budget's calibrated
     optimism and interval at the median, and ``holds`` by the declared rule."""
-    from probecommit.studies.paper_values import value
-
     chosen, cells = rows[rows["part"] == "select"], rows[rows["part"] == "cells"]
     drawn = np.sort(chosen.loc[chosen["draw"] >= 0, "gamma"].to_numpy())
     out = {"gamma_plain": float(chosen.loc[chosen["draw"] < 0, "gamma"].iloc[0]), "draws": float(len(drawn)),
@@ -214,10 +212,17 @@ def table_keys(rows: pd.DataFrame) -> dict[str, float]:
         k = int(r["k"])
         out.update({f"optimism.k{k}": float(r["optimism"]), f"optimism.k{k}.lo": float(r["lo"]),
                     f"optimism.k{k}.hi": float(r["hi"])})
-    inside = [out[f"optimism.k{k}.lo"] <= float(value(f"tab:audit.optimism_calibrated.{k}")) <= out[f"optimism.k{k}.hi"]
-              for k in TABLE_K]
-    out["holds"] = float(all(inside))
+    out["holds"] = table_holds(out)
     return out
+
+
+def table_holds(keys: dict[str, float]) -> float:
+    """1.0 when the paper's calibrated optimism at each of :data:`TABLE_K` lies inside the interval the keys
+    ``optimism.k<k>.lo`` / ``.hi`` give (E191's rule; E200's too)."""
+    from probecommit.studies.paper_values import value
+
+    return float(all(keys[f"optimism.k{k}.lo"] <= float(value(f"tab:audit.optimism_calibrated.{k}"))
+                     <= keys[f"optimism.k{k}.hi"] for k in TABLE_K))
 
 
 def summary(rows: pd.DataFrame) -> dict[str, float]:
@@ -232,23 +237,33 @@ def summary(rows: pd.DataFrame) -> dict[str, float]:
 
 
 def compute(ins: Any, alpha: float, count: int, seed: int, budgets: Sequence[int], resamples: int,
-            boot_seed: int) -> pd.DataFrame:
-    """Both experiments' rows from the insertion study's runs folder ``ins`` (run in a process of its own)."""
-    return pd.concat([share_rows(ins / POOL, alpha, count, seed),
-                      table_rows(ins / TABLE_CAL, ins / TABLE_TEST, alpha, budgets, resamples, boot_seed)],
+            boot_seed: int, share: Any = None, table: Any = None) -> pd.DataFrame:
+    """Both experiments' rows from the insertion study's runs folder ``ins`` (run in a process of its own):
+    ``share(pool, alpha, count, seed)`` on the frozen pool and ``table(cal, test, alpha, budgets, resamples,
+    boot_seed)`` on Table III's random runs (this module's ``share_rows`` and ``table_rows`` unless given: ex33's
+    step passes its own)."""
+    share, table = share or share_rows, table or table_rows
+    return pd.concat([share(ins / POOL, alpha, count, seed),
+                      table(ins / TABLE_CAL, ins / TABLE_TEST, alpha, budgets, resamples, boot_seed)],
                      ignore_index=True)
 
 
 def run(job: Any) -> None:
     """The explain step (set aside to a process of its own): E190's and E191's rows and keys."""
     job.progress("explain: the margin judged on fresh calibration episodes (E190, E191)", 0, 1)
-    p, cfg = job.p, job.cfg
-    resamples = int(cfg["ex9_cost_resamples_quick" if job.quick else "ex9_cost_resamples"])
-    rows = compute(job.ins, p.alpha, int(p.resplits["count"]), int(p.resplits["seed"]), list(cfg["random_budgets"]),
-                   resamples, p.bootstrap.seed)
-    job.stored[STORED] = rows
-    job.res[GROUP].update(summary(rows))
+    resamples = int(job.cfg["ex9_cost_resamples_quick" if job.quick else "ex9_cost_resamples"])
+    store_rows(job, compute, summary, STORED, GROUP, resamples, int(job.p.bootstrap.seed))
+
+
+def store_rows(job: Any, compute: Any, summary: Any, stored: str, group: str, resamples: int, boot_seed: int) -> None:
+    """An insertion-runs step's rows (``compute`` with the insertion study's alpha, re-splits and random budgets)
+    stored as ``stored`` and their ``summary`` in ``group`` (ex30's and ex33's steps)."""
+    p = job.p
+    rows = compute(job.ins, p.alpha, int(p.resplits["count"]), int(p.resplits["seed"]),
+                   list(job.cfg["random_budgets"]), resamples, boot_seed)
+    job.stored[stored] = rows
+    job.res[group].update(summary(rows))
 
 
 __all__: Sequence[str] = ("run", "compute", "summary", "share_rows", "table_rows", "share_keys", "table_keys",
-                          "GridSums", "grid_sums", "select", "rule_stop", "resplit_levels", "split_rows", "draw_repeats")
+                          "GridSums", "grid_sums", "select", "rule_stop", "resplit_levels", "store_rows", "table_holds", "split_rows", "draw_repeats")

@@ -25,8 +25,9 @@ import numpy as np
 import pandas as pd
 
 from probecommit.audit.margin import GAMMA_GRID, margin_candidates
-from probecommit.studies.explain.ex30_fresh import (COLUMNS, POOL, SHARE_BUDGET, SHARE_TOL, TABLE_CAL, TABLE_K,
-                                                     TABLE_TEST, loaded, resplit_levels, rule_stop)
+from probecommit.studies.explain.ex30_fresh import COLUMNS, SHARE_BUDGET, SHARE_TOL
+from probecommit.studies.explain.ex30_fresh import compute as ex30_compute
+from probecommit.studies.explain.ex30_fresh import loaded, resplit_levels, rule_stop, store_rows, table_holds
 from probecommit.tasks.insertion.model import capture_half_width
 
 #: The stored rows, beside results.json.
@@ -207,18 +208,14 @@ def share_keys(rows: pd.DataFrame) -> dict[str, float]:
 
 def table_keys(rows: pd.DataFrame) -> dict[str, float]:
     """E200's keys (``table.``): at every SD (tagged), the selected gamma and each budget's calibrated optimism
-    with its interval; ``holds`` by the declared rule (the rule's SD)."""
-    from probecommit.studies.paper_values import value
-
+    with its interval; ``holds`` by the declared rule (the rule's SD, E191's test)."""
     out: dict[str, float] = {"sigma": SIGMA}
     for r in rows.to_dict("records"):
         k = int(r["k"])
         out[_tag(r["sigma"], "gamma")] = float(r["gamma"])
         out.update({_tag(r["sigma"], f"optimism.k{k}{x}"): float(r[c]) for x, c in (("", "optimism"), (".lo", "lo"),
                                                                                         (".hi", "hi"))})
-    inside = [out[f"optimism.k{k}.lo"] <= float(value(f"tab:audit.optimism_calibrated.{k}")) <= out[f"optimism.k{k}.hi"]
-              for k in TABLE_K]
-    out["holds"] = float(all(inside))
+    out["holds"] = table_holds(out)
     return out
 
 
@@ -235,19 +232,14 @@ def summary(rows: pd.DataFrame) -> dict[str, float]:
 def compute(ins: Any, alpha: float, count: int, seed: int, budgets: Sequence[int], resamples: int,
             boot_seed: int) -> pd.DataFrame:
     """Both experiments' rows from the insertion study's runs folder ``ins`` (run in a process of its own)."""
-    return pd.concat([share_rows(ins / POOL, alpha, count, seed),
-                      table_rows(ins / TABLE_CAL, ins / TABLE_TEST, alpha, budgets, resamples, boot_seed)],
-                     ignore_index=True)
+    return ex30_compute(ins, alpha, count, seed, budgets, resamples, boot_seed, share_rows, table_rows)
 
 
 def run(job: Any) -> None:
-    """The explain step (set aside to a process of its own): E199's and E200's rows and keys."""
+    """The explain step (set aside to a process of its own): E199's and E200's rows and keys, E200's bootstrap
+    Table III's own (the insertion study's resamples and seed)."""
     job.progress("explain: the margin items under execution noise on the aim (E199, E200)", 0, 1)
-    p, cfg = job.p, job.cfg
-    rows = compute(job.ins, p.alpha, int(p.resplits["count"]), int(p.resplits["seed"]), list(cfg["random_budgets"]),
-                   int(p.bootstrap.resamples), int(p.bootstrap.seed))
-    job.stored[STORED] = rows
-    job.res[GROUP].update(summary(rows))
+    store_rows(job, compute, summary, STORED, GROUP, int(job.p.bootstrap.resamples), int(job.p.bootstrap.seed))
 
 
 __all__: Sequence[str] = ("run", "compute", "summary", "share_rows", "table_rows", "share_keys", "table_keys", "cells",
