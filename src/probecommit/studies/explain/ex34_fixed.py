@@ -56,7 +56,7 @@ def prepended(loaded: Any, u0: float, tag: int) -> tuple[pd.DataFrame, pd.DataFr
     batch = dataclasses.replace(batch, u=np.concatenate([np.full((batch.n_episodes, 1, 1), u0), batch.u], axis=1),
                                 y=np.concatenate([y0[:, None, :], batch.y], axis=1))
     trace = build_trace(build_filter(model, cfg.belief), batch, cfg.seed, range(1, TAPS + 1), keep_prior=False)
-    episodes = commit(trace, model, sim, config_executors(cfg, model), thresholds=cfg.belief.nu)
+    episodes = commit(trace, model, sim, config_executors(cfg, model, ("probe_robust",)), thresholds=cfg.belief.nu)
     return episodes, batch.probes_frame()
 
 
