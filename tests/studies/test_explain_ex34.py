@@ -13,6 +13,8 @@ from probecommit.studies import claims
 from probecommit.studies.explain import ex20_band, ex34_fixed
 from probecommit.studies.paper_values import value
 
+from .recompute_contract import assert_bootstrapped_round_trip
+
 DESIGN = {"x_low": -10.0, "x_high": 10.0, "c_low": 0.7, "c_high": 1.3, "r": 1.2, "delta": 0.905, "repeats": 4.0}
 BOOT = {"resamples": 40, "seed": 7}
 CELLS = (2000, 60)
@@ -143,12 +145,5 @@ def test_verify_recomputes_every_key_from_the_stored_rows(tmp_path):
     from probecommit.report import recompute
 
     rows = _rows(3)
-    rows.to_parquet(tmp_path / ex34_fixed.STORED)
-    published = {ex34_fixed.GROUP: ex34_fixed.keys(rows, BOOT)}
-    got = ex34_fixed.recompute(tmp_path, published, BOOT)
-    assert set(got) == {f"{ex34_fixed.GROUP}.{k}" for k in published[ex34_fixed.GROUP]}
-    for key, (v, source) in got.items():
-        ref = published[ex34_fixed.GROUP][key.split(".", 1)[1]]
-        assert source == ex34_fixed.STORED
-        assert (isinstance(v, float) and math.isnan(v) and math.isnan(ref)) or v == ref
+    assert_bootstrapped_round_trip(tmp_path, ex34_fixed, rows, ex34_fixed.keys(rows, BOOT), BOOT)
     assert "ex34_fixed" in recompute.BOOTSTRAPPED
