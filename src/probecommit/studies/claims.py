@@ -2224,8 +2224,8 @@ def _ex34_cells(d: str, keys: dict[str, str], k: int) -> str:
                  f"blo{k}": f"{d}plus.optimism_std_lo{s}", f"bhi{k}": f"{d}plus.optimism_std_hi{s}",
                  f"p{k}": f"paper:tab:audit.optimism_original.{k}",
                  f"q{k}": f"paper:tab:audit.cluster_coverage_original.{k}"})
-    return (f"k = {k}: optimism {{o{k}:.3f}} [{{lo{k}:.3f}}, {{hi{k}:.3f}}] (paper {{p{k}:.3f}}; plus k random taps "
-            f"{{b{k}:.3f}} [{{blo{k}:.3f}}, {{bhi{k}:.3f}}]), cluster coverage {{c{k}:.3f}} [{{clo{k}:.3f}}, "
+    return (f"k = {k}: optimism {{o{k}:.3f}} [{{lo{k}:.3f}}, {{hi{k}:.3f}}] (paper {{p{k}:.3f}}; the fixed tap plus "
+            f"k random ones {{b{k}:.3f}} [{{blo{k}:.3f}}, {{bhi{k}:.3f}}]), cluster coverage {{c{k}:.3f}} [{{clo{k}:.3f}}, "
             f"{{chi{k}:.3f}}] (paper {{q{k}:.2f}})")
 
 
@@ -2241,7 +2241,7 @@ def _experiments_ex34() -> list[Experiment]:
         cells = "; ".join(_ex34_cells(d, keys, k) for k in EX34_BUDGETS)
         out.append(Experiment(
             number, f"Table III's original arm with one fixed tap {where}, before the random ones", keys,
-            f"with a tap {where} put before the stored random taps of Table III's own run (one MuJoCo tap per "
+            f"with a tap {where}, put before the stored random taps of Table III's own run (one MuJoCo tap per "
             "trajectory; it lies in the misread band of {f:.3f} of the prior box, a uniform tap {pu:.3f}) and k taps in "
             "all, post-stratified to that design's exact band exposure: " + cells + ". The declared rule needs all "
             "ten inside. Beside: escape at k = 1 {e1:.3f} ({es1:.3f} at the design's exposure) against the paper's "
