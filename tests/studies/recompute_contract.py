@@ -18,3 +18,18 @@ def assert_round_trip(tmp_path: Path, recompute: Callable[..., Any], group: str,
     assert values == published and problems == [] and set(sources.values()) == {stored}
     (tmp_path / stored).unlink()
     assert recompute(tmp_path, {group: keys})[2]  # published keys without their rows: a problem
+
+
+def assert_bootstrapped_round_trip(tmp_path: Path, module: Any, rows: pd.DataFrame, keys: dict[str, Any],
+                                   boot: dict[str, int]) -> None:
+    """``rows`` stored as ``module.STORED`` give back ``module.GROUP``'s published ``keys`` through ``module.recompute``
+    (a ``report.recompute.BOOTSTRAPPED`` module), each sourced to that file, NaN for NaN."""
+    import math
+
+    rows.to_parquet(tmp_path / module.STORED)
+    got = module.recompute(tmp_path, {module.GROUP: keys}, boot)
+    assert set(got) == {f"{module.GROUP}.{k}" for k in keys}
+    for key, (v, source) in got.items():
+        ref = keys[key.split(".", 1)[1]]
+        assert source == module.STORED
+        assert (isinstance(v, float) and math.isnan(v) and math.isnan(ref)) or v == ref, key

@@ -14,6 +14,8 @@ from probecommit.studies.explain import ex20_band, ex31_shift
 from probecommit.studies.explain.stored import recompute_bootstrapped
 from probecommit.studies.paper_values import value
 
+from .recompute_contract import assert_bootstrapped_round_trip
+
 DESIGN = {"x_low": -10.0, "x_high": 10.0, "c_low": 0.7, "c_high": 1.3, "r": 1.2, "delta": 0.905, "repeats": 4.0}
 BOOT = {"resamples": 50, "seed": 7}
 
@@ -91,14 +93,7 @@ def test_e193_is_registered_for_table_iii_original_k2_optimism_only():
 
 def test_verify_recomputes_every_key_from_the_stored_rows(tmp_path):
     rows = _rows(3)
-    rows.to_parquet(tmp_path / ex31_shift.STORED)
-    published = {ex31_shift.GROUP: ex31_shift.keys(rows, BOOT)}
-    got = ex31_shift.recompute(tmp_path, published, BOOT)
-    assert set(got) == {f"{ex31_shift.GROUP}.{k}" for k in published[ex31_shift.GROUP]}
-    for key, (v, source) in got.items():
-        assert source == ex31_shift.STORED
-        ref = published[ex31_shift.GROUP][key.split(".", 1)[1]]
-        assert (isinstance(v, float) and math.isnan(v) and math.isnan(ref)) or v == ref
+    assert_bootstrapped_round_trip(tmp_path, ex31_shift, rows, ex31_shift.keys(rows, BOOT), BOOT)
     assert recompute_bootstrapped(tmp_path, {}, ex31_shift.GROUP, ex31_shift.STORED, lambda r: {}) == {}
 
 

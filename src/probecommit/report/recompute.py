@@ -902,7 +902,7 @@ SELF_RECOMPUTING = ("ex7", "ex8", "ex11", "ex16", "ex19", "ex22", "ex25", "ex27"
 
 #: Explain modules whose ``recompute(folder, results, boot)`` gives ``{key: (value, stored file)}`` under the
 #: insertion study's bootstrap settings, with ``STORED_BY_GROUP`` naming each group's rows.
-BOOTSTRAPPED = ("ex6", "ex10", "ex13", "ex14", "ex17", "ex20", "ex21", "ex23", "ex24", "ex31_shift")
+BOOTSTRAPPED = ("ex6", "ex10", "ex13", "ex14", "ex17", "ex20", "ex21", "ex23", "ex24", "ex31_shift", "ex34_fixed")
 
 
 #: The stored tables each study's numbers are recomputed from: a publication without one fails verify
@@ -976,7 +976,8 @@ RECOMPUTED = {
                "draws with the first tap's jitter removed alone, the jitter read as a variance, and post-stratified "
                "to the first tap's band exposure; ex25's hinge and push1d probed cells with probes uniform over the "
                "probe interval; ex27's hinge row with the commit a torque; ex31's Table III original arm read one tap later, "
-               "post-stratified as ex20's; ex32's push1d, hinge and push2d probed cells against the action grid's floor "
+               "post-stratified as ex20's; ex34's Table III original arm with one fixed tap (-12 or 0 mm) before the "
+               "random ones; ex32's push1d, hinge and push2d probed cells against the action grid's floor "
                "at each truth",
 }
 TRACED_ONLY = {

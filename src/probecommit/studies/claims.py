@@ -368,7 +368,8 @@ def _audit_explain(audit: list[Comparison]) -> tuple[Any, ...]:
             + tuple((f"E146[{c.label}]", (c.label,)) for c in audit if c.label.startswith("cluster_coverage original "))
             + (("E162", ("optimism original k=2",)),)
             + tuple((f"E163[optimism calibrated k={k}]", (f"optimism calibrated k={k}",)) for k in (2, 3))
-            + (("E193", ("optimism original k=2",)),))
+            + (("E193", ("optimism original k=2",)),)
+            + tuple((number, ("optimism original k=2",)) for number in EX34_FIXED))
 
 
 def _table_claims() -> list[Claim]:
@@ -2201,6 +2202,56 @@ def _experiments_ex31() -> list[Experiment]:
         supports=_ex31_holds)]
 
 
+#: ex34's experiments: number -> (key prefix in ``ex34_fixed``, the fixed tap's position in words; ``ex34_fixed.POSITIONS``).
+EX34_FIXED = {"E203": ("cover_first", "at -12 mm, the cover schedule's first tap"),
+              "E204": ("centre", "at 0 mm, the centre of the tap grid and prior")}
+#: Table III's budgets, every one read by ex34's joint rule.
+EX34_BUDGETS = (1, 2, 3, 5, 8)
+
+
+def _ex34_holds(v: dict[str, Any]) -> bool:
+    """E203's (E204's) joint rule: each of the ten original-arm cells (optimism and cluster coverage at k = 1, 2, 3,
+    5, 8) inside our post-stratified interval with the fixed tap first (k taps in all)."""
+    return all(v[f"lo{k}"] <= _pv(f"tab:audit.optimism_original.{k}") <= v[f"hi{k}"]
+               and v[f"clo{k}"] <= _pv(f"tab:audit.cluster_coverage_original.{k}") <= v[f"chi{k}"]
+               for k in EX34_BUDGETS)
+
+
+def _ex34_cells(d: str, keys: dict[str, str], k: int) -> str:
+    """One budget's sentence part (and its keys into ``keys``): the rule's cells and the other reading's optimism."""
+    s = f".k{k}"
+    keys.update({f"o{k}": f"{d}optimism_std{s}", f"lo{k}": f"{d}optimism_std_lo{s}", f"hi{k}": f"{d}optimism_std_hi{s}",
+                 f"c{k}": f"{d}cluster_coverage_std{s}", f"clo{k}": f"{d}cluster_coverage_std_lo{s}",
+                 f"chi{k}": f"{d}cluster_coverage_std_hi{s}", f"b{k}": f"{d}plus.optimism_std{s}",
+                 f"blo{k}": f"{d}plus.optimism_std_lo{s}", f"bhi{k}": f"{d}plus.optimism_std_hi{s}",
+                 f"p{k}": f"paper:tab:audit.optimism_original.{k}",
+                 f"q{k}": f"paper:tab:audit.cluster_coverage_original.{k}"})
+    return (f"k = {k}: optimism {{o{k}:.3f}} [{{lo{k}:.3f}}, {{hi{k}:.3f}}] (paper {{p{k}:.3f}}; the fixed tap plus "
+            f"k random ones {{b{k}:.3f}} [{{blo{k}:.3f}}, {{bhi{k}:.3f}}]), cluster coverage {{c{k}:.3f}} [{{clo{k}:.3f}}, "
+            f"{{chi{k}:.3f}}] (paper {{q{k}:.2f}})")
+
+
+def _experiments_ex34() -> list[Experiment]:
+    """The ex34 helper's experiments (E203, E204; ``studies/explain/ex34_fixed.py``; rules in docs/decisions.md,
+    "ex34", committed before their numbers were computed): Table III's run rerun with one fixed tap before its
+    random ones, ex20's post-stratified estimator at the fixed-tap design's exposure, joint over the ten cells."""
+    out = []
+    for number, (label, where) in EX34_FIXED.items():
+        d = f"{X}ex34_fixed.{label}."
+        keys: dict[str, str] = {"f": f"{d}f_band", "e1": f"{d}escape.k1", "es1": f"{d}escape_std.k1",
+                                "pe": "paper:T11-audit-trend.escape_k1", "pu": f"{X}ex20_band.frozen.p_design.k1"}
+        cells = "; ".join(_ex34_cells(d, keys, k) for k in EX34_BUDGETS)
+        out.append(Experiment(
+            number, f"Table III's original arm with one fixed tap {where}, before the random ones", keys,
+            f"with a tap {where}, put before the stored random taps of Table III's own run (one MuJoCo tap per "
+            "trajectory; it lies in the misread band of {f:.3f} of the prior box, a uniform tap {pu:.3f}) and k taps in "
+            "all, post-stratified to that design's exact band exposure: " + cells + ". The declared rule needs all "
+            "ten inside. Beside: escape at k = 1 {e1:.3f} ({es1:.3f} at the design's exposure) against the paper's "
+            "{pe:.1f} %.",
+            supports=_ex34_holds))
+    return out
+
+
 def _experiments_ex29() -> list[Experiment]:
     """The ex29 helper's experiment (``studies/explain/ex29_band.py``; rule in docs/decisions.md, "ex29"): T36's
     k = 1 AUC with the first tap's band lost at the rate the paper's own k = 1 escape implies (E187)."""
@@ -2739,7 +2790,8 @@ for _experiment in (_experiments() + _experiments_more() + _experiments_ex3() + 
                     + _experiments_ex23() + _experiments_ex24()
                     + _experiments_ex25() + _experiments_ex26() + _experiments_ex27() + _experiments_ex28()
                     + _experiments_ex30()
-                    + _experiments_ex29() + _experiments_ex31() + _experiments_ex32() + _experiments_ex33()):
+                    + _experiments_ex29() + _experiments_ex31() + _experiments_ex32() + _experiments_ex33()
+                    + _experiments_ex34()):
     EXPERIMENTS[_experiment.number] = _experiment
 
 

@@ -44,10 +44,11 @@ def in_band(u: np.ndarray, x: np.ndarray, c: np.ndarray, r: float, delta: float)
 
 
 def design_probabilities(positions: Sequence[float], design: Mapping[str, float], budgets: Sequence[int] = BUDGETS,
-                         cells: tuple[int, int] = CELLS) -> dict[int, tuple[float, float]]:
+                         cells: tuple[int, int] = CELLS, fixed: float | None = None) -> dict[int, tuple[float, float]]:
     """``{k: (p_k, P_k)}``: the probability that a trajectory's first k taps hit the band (``p_k``) and that
     any of an instance's repeats does (``P_k``), under a uniform prior box and taps uniform and independent over
-    ``positions`` (midpoint rule on ``cells``)."""
+    ``positions`` (midpoint rule on ``cells``). ``fixed``: the first of the k taps is at that position in every
+    trajectory and the other k - 1 are random (ex34's design; a fixed tap misses the band in every repeat alike)."""
     nx, nc = cells
     x = design["x_low"] + (np.arange(nx) + 0.5) * (design["x_high"] - design["x_low"]) / nx
     c = design["c_low"] + (np.arange(nc) + 0.5) * (design["c_high"] - design["c_low"]) / nc
@@ -57,7 +58,11 @@ def design_probabilities(positions: Sequence[float], design: Mapping[str, float]
         b += in_band(u, xx, cc, design["r"], design["delta"])
     miss = 1.0 - b / len(positions)  # a tap misses the band
     reps = int(design["repeats"])
-    return {int(k): (float(np.mean(1.0 - miss ** k)), float(np.mean(1.0 - miss ** (reps * k)))) for k in budgets}
+    if fixed is None:
+        return {int(k): (float(np.mean(1.0 - miss ** k)), float(np.mean(1.0 - miss ** (reps * k)))) for k in budgets}
+    first = 1.0 - in_band(fixed, xx, cc, design["r"], design["delta"])  # the fixed tap misses the band
+    return {int(k): (float(np.mean(1.0 - first * miss ** (k - 1))), float(np.mean(1.0 - first * miss ** (reps * (k - 1)))))
+            for k in budgets}
 
 
 def band_rows(episodes: pd.DataFrame, probes: pd.DataFrame, instances: pd.DataFrame, draw: str,

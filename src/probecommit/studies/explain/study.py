@@ -52,6 +52,7 @@ from probecommit.studies.explain import ex28_plateau
 from probecommit.studies.explain import ex30_fresh
 from probecommit.studies.explain import ex33_aim
 from probecommit.studies.explain import ex31_shift
+from probecommit.studies.explain import ex34_fixed
 from probecommit.studies.explain import ex29_band
 from probecommit.studies.explain import gru as gru_study
 from probecommit.studies.explain.margin import margin_curve
@@ -139,6 +140,7 @@ class Explain:
             *ex20.GROUPS,
             *ex23.GROUPS,
             *ex31_shift.GROUPS,
+            *ex34_fixed.GROUPS,
             *ex21.GROUPS,
             *ex24.GROUPS,
             *ex25.GROUPS,
@@ -564,6 +566,7 @@ class Explain:
                  self.aside(ex20.run, ex31_shift.run, needs=()),  # E144-E146, E193: the stored random test run and the
                  # fresh draws on disk
                  self.aside(ex23.run, needs=()),  # E162/E163: the fresh draws and the Split B random runs, re-committed
+                 self.aside(ex34_fixed.run, needs=()),  # E203/E204: Table III's run, one MuJoCo tap put first, re-committed
                  self.robust, physx_coverage, self.physx,
                  lambda: (self.ready and self.ready(), self.gru()), lambda: more.run(self),
                  lambda: ex15_union.run(self), self.aside(ex18_grasp.run, needs=()),  # E133: frozen config only
