@@ -693,12 +693,13 @@ def run_study(
         return _run_units(parts, run, instances, workers, ray, ray_address, timing, progress, start, threads)
 
 
-def _groups(parts: "RunParts | dict", instances: InstanceTable, todo: list[tuple[str, slice]], repeats: int,
+def _groups(parts: "RunParts | dict", instances: "InstanceTable | pd.DataFrame", todo: list[tuple[str, slice]], repeats: int,
             parallel: int, particles: int = GROUP_PARTICLES) -> list[Job]:
     """The jobs: consecutive units to compute, in groups of about :data:`GROUP_EPISODES` episodes
     (:func:`compute_units`), and with several workers or threads, at least two groups each."""
     if not todo:
         return []
+    instances = InstanceTable.of(instances)
     per_unit = max(1, max(sl.stop - sl.start for _, sl in todo) * repeats)
     size = max(1, (GROUP_EPISODES * GROUP_PARTICLES) // (per_unit * max(particles, GROUP_PARTICLES)))
     if parallel > 1:  # enough groups to keep every worker busy
