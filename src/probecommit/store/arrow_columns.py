@@ -47,13 +47,23 @@ def _booleans(values: np.ndarray) -> pa.Array:
 
 def _strings(values: list) -> pa.Array:
     """Large strings of ``values`` (``str`` or None, None null)."""
-    valid = np.fromiter((v is not None for v in values), bool, len(values))
-    encoded = [v.encode("utf-8") if v is not None else b"" for v in values]
-    offsets = np.zeros(len(values) + 1, dtype=np.int64)
-    np.cumsum(np.fromiter(map(len, encoded), np.int64, len(values)), out=offsets[1:])
-    bitmap, nulls = _validity(valid)
-    buffers = [bitmap, pa.py_buffer(offsets), pa.py_buffer(b"".join(encoded))]
-    return pa.Array.from_buffers(pa.large_string(), len(values), buffers, null_count=nulls)
+    n = len(values)
+    nulls = None in values
+    present = [v for v in values if v is not None] if nulls else values
+    text = "".join(present)
+    if text.isascii():  # a character is a byte: lengths without encoding each value
+        lengths, data = np.fromiter(map(len, present), np.int64, len(present)), text.encode("ascii")
+    else:
+        encoded = [v.encode("utf-8") for v in present]
+        lengths, data = np.fromiter(map(len, encoded), np.int64, len(present)), b"".join(encoded)
+    valid = np.fromiter((v is not None for v in values), bool, n) if nulls else np.ones(n, dtype=bool)
+    sizes = np.zeros(n, dtype=np.int64)
+    sizes[valid] = lengths
+    offsets = np.zeros(n + 1, dtype=np.int64)
+    np.cumsum(sizes, out=offsets[1:])
+    bitmap, null_count = _validity(valid)
+    buffers = [bitmap, pa.py_buffer(offsets), pa.py_buffer(data)]
+    return pa.Array.from_buffers(pa.large_string(), n, buffers, null_count=null_count)
 
 
 def _float_lists(values: list) -> pa.Array | None:
@@ -77,7 +87,7 @@ def _offsets(offsets: np.ndarray) -> pa.Array:
 def _python_values(values: list) -> pa.Array | None:
     """An object column or a list, by the one kind of value it holds (None alongside any);
     None when it mixes kinds (pyarrow's inference then decides)."""
-    kinds = {type(v) for v in values} - {type(None)}
+    kinds = set(map(type, values)) - {type(None)}
     if not kinds:
         return pa.nulls(len(values))
     if kinds == {str}:

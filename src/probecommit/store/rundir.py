@@ -633,22 +633,11 @@ class RunDir:
                 self._written_episodes = table
         return self.write_manifest(manifest_extra)
 
-    def final_episodes(self) -> pd.DataFrame:
-        """The final episodes table as ``pd.read_parquet`` of its file gives it.
-
-        Converted from the Arrow table :meth:`finalize` wrote (what the file holds) when this
-        object wrote it, so a run does not read back and decode the file it just wrote (nor
-        import the Parquet dataset layer to do so); else read from the file.
-        """
-        import pandas as pd
-
-        table = self._written_episodes
-        return pd.read_parquet(self.table_path("episodes")) if table is None else table.to_pandas()
-
     def final_episodes_table(self) -> pa.Table:
         """The final episodes table as an Arrow table: the one :meth:`finalize` wrote when this object
-        wrote it, else read from the file (``ParquetFile``: ``pq.read_table`` imports the dataset layer,
-        and with it pandas). Its ``to_pandas()`` is :meth:`final_episodes`."""
+        wrote it (a run does not read back and decode the file it just wrote), else read from the file
+        (``ParquetFile``: ``pq.read_table`` imports the dataset layer, and with it pandas). Its
+        ``to_pandas()`` is what ``pd.read_parquet`` of the file gives."""
         table = self._written_episodes
         return pq.ParquetFile(self.table_path("episodes")).read() if table is None else table
 
