@@ -61,7 +61,7 @@ def budget_rows(episodes: pa.Table) -> list[dict[str, Any]] | None:
               (("failure", "realized"), ("predicted", "predicted"), ("coverage", "covered"), ("escape", "escaped"))}
     rows = []
     for m in sorted(set(method.tolist()), key=METHOD_ORDER.__getitem__):
-        for budget in np.unique(k[method == m]).tolist():
+        for budget in sorted(set(k[method == m].tolist())):
             at = (method == m) & (k == budget)
             row = {"method": m, "k": budget, "episodes": int(at.sum())}
             row.update({name: float(np.mean(column[at])) for name, column in values.items()})
