@@ -16,6 +16,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from probecommit.store.arrow_columns import column_array, indices, pandas_metadata, strings, to_numpy
+from probecommit.store.rundir import _inferred_array
 
 N = 4
 COLUMNS = {
@@ -40,22 +41,10 @@ COLUMNS = {
 }
 
 
-def _pyarrow_route(value, n_rows: int) -> pa.Array:
-    """What ``arrow_from_columns`` built before: ``pa.array(from_pandas=True)``, strings as large strings."""
-    if not isinstance(value, (list, np.ndarray)):
-        value = np.broadcast_to(np.asarray(value), (n_rows,))
-        if value.dtype.kind == "U":
-            value = value.astype(object)
-    if isinstance(value, np.ndarray) and value.dtype.kind == "U":
-        return pa.array(value, type=pa.large_string())
-    array = pa.array(value, from_pandas=True)
-    return array.cast(pa.large_string()) if pa.types.is_string(array.type) else array
-
-
 @pytest.mark.parametrize("name", sorted(COLUMNS))
 def test_a_column_built_from_buffers_equals_pyarrows_conversion(name):
     value = COLUMNS[name]
-    built, expected = column_array(value, N), _pyarrow_route(value, N)
+    built, expected = column_array(value, N), _inferred_array(value, N)  # what arrow_from_columns built before
     assert built is not None
     assert built.type == expected.type and built.null_count == expected.null_count
     assert built.equals(expected), (built, expected)
