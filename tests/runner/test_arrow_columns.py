@@ -140,3 +140,15 @@ def test_the_commands_summary_rows_equal_budget_summary(tmp_path):
         for name in ("failure", "predicted", "optimism", "coverage", "escape"):
             assert got[name] == pytest.approx(want[name], rel=1e-12, abs=1e-15)
     assert json.dumps(rows)  # plain Python values
+
+
+@pytest.mark.parametrize("resets", [[0, 2, None, 1], [None, None, None, None]], ids=["counts", "all null"])
+def test_a_results_reset_and_failed_rows_are_counted_as_the_dataframe_counts_them(resets):
+    from probecommit.runner.study import StudyResult
+
+    table = pa.table({"status": pa.array(["ok", "failed", None, "ok"]),
+                      "belief_resets": pa.array(resets, type=pa.int64() if resets[0] is not None else pa.null())})
+    result = StudyResult(None, {}, table)
+    frame = result.episodes
+    assert result.failed_episodes == int((frame["status"] != "ok").sum())
+    assert result.belief_reset_rows == int((frame["belief_resets"].fillna(0) > 0).sum())

@@ -73,7 +73,8 @@ class StudyResult:
 
         if "belief_resets" not in self.episodes_table.column_names:
             return 0
-        return int(np.sum(np.nan_to_num(to_numpy(self.episodes_table.column("belief_resets"))) > 0))
+        resets = to_numpy(self.episodes_table.column("belief_resets")).astype(float)  # a column of nulls: NaN
+        return int(np.sum(np.nan_to_num(resets) > 0))
 
 
 def unit_names(n_instances: int, unit_instances: int) -> list[tuple[str, slice]]:
