@@ -139,10 +139,12 @@ def arrow_from_columns(columns: dict[str, Any], n_rows: int, schema: tuple[Colum
 
     ``columns`` maps names to 1-D NumPy arrays or lists of ``n_rows`` values, or to scalars
     (broadcast). Converted as ``from_pandas`` converts them (NaN is null; strings are large
-    strings) and with the same pandas metadata (made once per column names and types from a
-    one-row frame), so the merge reads back the same frame; tested against ``arrow_table``.
+    strings) and with the same pandas metadata (made once per column names and types, as a
+    one-row frame gives it), so the merge reads back the same frame; tested against ``arrow_table``.
     A unit's tables are built this way: a DataFrame per table per unit cost more than the
-    unit's beliefs on a short study.
+    unit's beliefs on a short study. The columns and metadata are built from buffers, without
+    pandas (``store/arrow_columns.py``); a column of a kind it does not build goes through
+    pyarrow's inference and pandas' metadata, which import pandas.
     """
     if not columns or not n_rows:  # pandas decides an empty column's type: ask it (cheap when empty)
         import pandas as pd
