@@ -70,7 +70,7 @@ def _float_lists(values: list) -> pa.Array | None:
     """``list<double>`` of lists of finite floats (None otherwise: NaN inside a list is left to pyarrow)."""
     lengths = np.fromiter(map(len, values), np.int64, len(values))
     flat = [x for v in values for x in v]
-    if not all(type(x) is float or isinstance(x, np.floating) for x in flat):
+    if not all(type(x) is float or type(x) is np.float64 for x in flat):  # a float32 would make list<float>
         return None
     inner = np.array(flat, dtype=np.float64)
     if not np.isfinite(inner).all():
