@@ -7,6 +7,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from probecommit.runner import study
+from probecommit.runner.instances import InstanceTable
 from probecommit.runner.study import run_study, unit_names
 from probecommit.store import rundir
 from probecommit.store.rundir import RunDir
@@ -33,12 +34,12 @@ def test_a_groups_instances_are_its_units_rows_whether_sliced_or_gathered(done, 
     instances = pd.DataFrame({"instance_id": [f"t-{i}" for i in range(11)], "instance_index": np.arange(11),
                               "true_x": np.linspace(0.0, 1.0, 11)})
     todo = [(name, sl) for name, sl in unit_names(len(instances), 2) if name not in done]
-    jobs = study._groups(None, instances, todo, repeats=3, parallel=parallel)
+    jobs = study._groups(None, InstanceTable.of(instances), todo, repeats=3, parallel=parallel)
     assert [unit for _, _, units in jobs for unit, _ in units] == [name for name, _ in todo]
     at = 0
     for _, frame, units in jobs:
         rows = np.concatenate([np.arange(sl.start, sl.stop) for _, sl in todo[at:at + len(units)]])
-        pd.testing.assert_frame_equal(frame, instances.iloc[rows], check_exact=True)
+        pd.testing.assert_frame_equal(frame.to_frame(), instances.iloc[rows].reset_index(drop=True), check_exact=True)
         assert [n for _, n in units] == [sl.stop - sl.start for _, sl in todo[at:at + len(units)]]
         at += len(units)
 

@@ -43,18 +43,29 @@ def main_options(
     configure_logging(verbose, debug)
 
 
-def print_budget_table(episodes, title: str) -> None:
-    from probecommit.report.tables import budget_summary
+def _summary_rows(episodes) -> tuple[list, bool]:
+    """The per-budget rows of an episodes table (a DataFrame, or a run's Arrow table: read with NumPy
+    where ``budget_rows`` can, so a run's process never imports pandas) and whether outcomes are 0/1."""
+    from probecommit.report.tables import budget_rows, budget_summary
 
-    summary = budget_summary(episodes)
+    rows = None if hasattr(episodes, "iloc") else budget_rows(episodes)
+    if rows is not None:  # (np.unique would import numpy.ma: 10 ms)
+        from probecommit.store.arrow_columns import to_numpy
+
+        return rows, set(to_numpy(episodes.column("realized")).tolist()) <= {0.0, 1.0}
+    frame = episodes if hasattr(episodes, "iloc") else episodes.to_pandas()
+    return [row for _, row in budget_summary(frame).iterrows()], set(frame["realized"].dropna().unique()) <= {0.0, 1.0}
+
+
+def print_budget_table(episodes, title: str) -> None:
+    rows, binary = _summary_rows(episodes)
     # Short headers and labels: the table must fit 80 columns (pipes and CI logs).
-    binary = set(episodes["realized"].dropna().unique()) <= {0.0, 1.0}
     headers = ("method", "k", "n", "failure" if binary else "miss", "pred", "e_k", "cover", "escape", "failed")
     labels = {"blind_bayes": "Blind-Bayes", "blind_robust": "Blind-Robust", "probe_robust": "Probe-Robust"}
     table = Table(title=title, title_style="bold", box=box.SIMPLE_HEAD, padding=(0, 1), pad_edge=False)
     for col in headers:
         table.add_column(col, justify="right", no_wrap=True, min_width={"method": 12, "n": 3}.get(col, len(col)))
-    for _, row in summary.iterrows():
+    for row in rows:
         table.add_row(
             labels.get(str(row["method"]), safe(row["method"])), str(row["k"]), str(row["episodes"]),
             f"{row['failure']:.3f}", f"{row['predicted']:.3f}", f"{row['optimism']:+.3f}",
@@ -86,16 +97,15 @@ def _run(config, out: Path, workers: int, ray: Optional[str], threads: Optional[
 def warn_failed(result) -> None:
     """One warning line when some episodes failed (engine NaN or error), else nothing; and one
     when some beliefs lost every particle (the likelihood ruled all of them out)."""
-    episodes = result.episodes
-    if "belief_resets" in episodes and (episodes["belief_resets"].fillna(0) > 0).any():
-        hit = episodes[episodes["belief_resets"].fillna(0) > 0]
-        print_warning(f"{len(hit)} episode row(s) had a belief that lost every particle (every particle impossible "
+    resets = result.belief_reset_rows
+    if resets:
+        print_warning(f"{resets} episode row(s) had a belief that lost every particle (every particle impossible "
                       "under the likelihood; weights reset to uniform): see the 'belief_resets' column; is sigma too small?")
     failed = result.failed_episodes
     if failed:
         trajectories = result.manifest.get("failed_trajectories", 0)
         print_warning(
-            f"{failed} of {len(result.episodes)} episode rows failed ({trajectories} trajectories lost in rollout): "
+            f"{failed} of {result.episodes_table.num_rows} episode rows failed ({trajectories} trajectories lost in rollout): "
             "the engine returned NaN or raised; see the 'status' and 'error' columns of "
             f"{result.run_dir / 'episodes.parquet'}"
         )
@@ -136,7 +146,7 @@ def run(
 
     def one_run(cfg, run_dir: Path, title: str):
         result = _run(cfg, run_dir, workers, ray, threads)
-        print_budget_table(result.episodes, title)
+        print_budget_table(result.episodes_table, title)
         warn_failed(result)
         console.print(f"run directory: {safe(result.run_dir)}")
         return result

@@ -15,12 +15,14 @@ asked and counted once, as in one thread; only which thread asks first may diffe
 from __future__ import annotations
 
 import threading
-from typing import Any, Callable, Iterable, Mapping, Sequence
+from typing import TYPE_CHECKING, Any, Callable, Iterable, Mapping, Sequence
 
 import numpy as np
-import pandas as pd
 
 from probecommit.runner.inference import BeliefTrace, _commit_plan, commit
+
+if TYPE_CHECKING:
+    import pandas as pd
 
 #: Threads a chunk's commit is split over (the machines this targets have two CPUs or more).
 COMMIT_THREADS = 2
@@ -93,6 +95,8 @@ def commit_in_threads(trace: BeliefTrace, model: Any, simulator: Any, executors:
         parts[i] = part(groups[i])
 
     in_threads(run, range(len(groups)), COMMIT_THREADS)
+    import pandas as pd
+
     return pd.DataFrame(_interleave(parts, groups, [k for _, k in _commit_plan(trace, executors, thresholds)],
                                     trace.batch.n_episodes))
 

@@ -12,10 +12,9 @@ from __future__ import annotations
 import functools
 import math
 from dataclasses import dataclass, field
-from typing import Any, Callable, Iterable, Mapping, Sequence
+from typing import TYPE_CHECKING, Any, Callable, Iterable, Mapping, Sequence
 
 import numpy as np
-import pandas as pd
 
 from probecommit.core.belief import BeliefState, ParticleFilter
 from probecommit.core.executors import Belief, Commitment, Executor
@@ -23,6 +22,9 @@ from probecommit.accel import production
 from probecommit.runner.seeding import INFERENCE, ROLLOUT, episode_rngs
 from probecommit.store.schema import component_names
 from probecommit.tasks.base import CachedSimulator
+
+if TYPE_CHECKING:  # pandas is imported where a DataFrame is built: a run's own path builds none
+    import pandas as pd
 
 
 @dataclass
@@ -74,6 +76,8 @@ class ProbeBatch:
 
     def probes_frame(self) -> pd.DataFrame:
         """Long table ``instance_id, repeat, j, u.., y..`` of the successful episodes."""
+        import pandas as pd
+
         return pd.DataFrame(self.probes_columns())
 
     def probes_columns(self) -> dict[str, np.ndarray]:
@@ -97,9 +101,14 @@ def instance_arrays(instances: pd.DataFrame, model: Any) -> tuple[np.ndarray, np
         # Column by column: selecting several columns builds a DataFrame (~10 ms a unit).
         if not names:
             return np.empty((len(instances), 0))
-        return np.column_stack([instances[name].to_numpy(float) for name in names]).reshape(len(instances), -1)
+        return np.column_stack([np.asarray(instances[name], dtype=float) for name in names]).reshape(len(instances), -1)
 
     return matrix([f"true_{n}" for n in model.latent_names]), matrix([f"ctx_{n}" for n in model.context_names])
+
+
+def _first_split(instances: Any) -> str:
+    """The split of an instance table's first row ("" when it has none)."""
+    return str(np.asarray(instances["split"])[0]) if len(instances) else ""
 
 
 def rollout(
@@ -127,11 +136,11 @@ def rollout(
                             for theta in truths for j in range(budget)])
     rows = []
     # Column arrays, not iterrows: a Series per instance costs more than its taps on the analytic engine.
-    splits = instances["split"].astype(str).tolist()
-    indices = instances["instance_index"].to_numpy(np.int64).tolist()
+    splits = [str(s) for s in np.asarray(instances["split"]).tolist()]
+    indices = np.asarray(instances["instance_index"], dtype=np.int64).tolist()
     streams = episode_rngs(seed, [s for s in splits for _ in range(repeats)], [i for i in indices for _ in range(repeats)],
                            [r for _ in indices for r in range(repeats)], ROLLOUT)  # instance by instance, repeats inside
-    for i, (instance_id, index) in enumerate(zip(instances["instance_id"].to_numpy(), indices)):
+    for i, (instance_id, index) in enumerate(zip(np.asarray(instances["instance_id"]), indices)):
         theta = truths[i]
         for r in range(repeats):
             rng = streams[i * repeats + r]
@@ -148,7 +157,7 @@ def rollout(
             except Exception as exc:  # noqa: BLE001 - one bad engine query must not end the study
                 status, error = "failed", f"probe {j + 1}: {type(exc).__name__}: {exc}"
             rows.append((instance_id, index, r, theta, u, y, status, error, contexts[i]))
-    split = str(instances["split"].iloc[0]) if len(instances) else ""
+    split = _first_split(instances)
     n = len(rows)
     return ProbeBatch(
         split=split,
@@ -205,10 +214,10 @@ def rollout_adaptive(
 
     grid = np.asarray(model.probe_grid, dtype=float)
     truths, contexts = instance_arrays(instances, model)
-    meta = [(inst["instance_id"], int(inst["instance_index"]), r, i) for i, (_, inst) in enumerate(instances.iterrows())
-            for r in range(repeats)]
+    ids, indices = np.asarray(instances["instance_id"]).tolist(), np.asarray(instances["instance_index"]).tolist()
+    meta = [(iid, int(index), r, i) for i, (iid, index) in enumerate(zip(ids, indices)) for r in range(repeats)]
     n = len(meta)
-    split = str(instances["split"].iloc[0]) if len(instances) else ""
+    split = _first_split(instances)
     index = np.array([m[1] for m in meta], dtype=np.int64)
     rep = np.array([m[2] for m in meta], dtype=np.int64)
     rows = np.array([m[3] for m in meta], dtype=np.int64)
@@ -355,10 +364,12 @@ def commit(
         summary = functools.partial(_belief_summary, belief, model, z_true)
         frames.append(_episode_columns(trace, model, simulator, executor.method, k, chosen, summary, z_true,
                                        cache.setdefault("outcomes", {}), columns))
-    if not frames:
-        return {} if as_columns else pd.DataFrame()
-    out = _interleave_columns(frames, trace.batch.n_episodes)
-    return out if as_columns else pd.DataFrame(out)
+    out = _interleave_columns(frames, trace.batch.n_episodes) if frames else {}
+    if as_columns:
+        return out
+    import pandas as pd
+
+    return pd.DataFrame(out) if out else pd.DataFrame()
 
 
 def _commit_plan(trace: BeliefTrace, executors: Sequence[Executor],
@@ -498,6 +509,8 @@ def outcome_keys(batch: ProbeBatch, episodes: np.ndarray, index: np.ndarray,
         name = str(split if isinstance(split, str) else split[0])
         _, first, inverse = np.unique(flat, return_index=True, return_inverse=True)
         return first, np.asarray(inverse).reshape(-1), [(name, f) for f in flat[first].tolist()]
+    import pandas as pd
+
     codes, names = pd.factorize(split[episodes])
     codes, names = codes.astype(np.int64), list(names)
     _, first, inverse = np.unique(flat * max(len(names), 1) + codes, return_index=True, return_inverse=True)
@@ -555,6 +568,8 @@ def _execute(simulator, batch: ProbeBatch, action: np.ndarray, index: np.ndarray
 
 def failed_episode_rows(batch: ProbeBatch, variant: str) -> pd.DataFrame:
     """Episode rows for trajectories whose rollout failed (kept, counted, never scored)."""
+    import pandas as pd
+
     return pd.DataFrame(failed_episode_columns(batch, variant))
 
 

@@ -2,13 +2,15 @@
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
-import pandas as pd
 
 from probecommit.runner.config import StudyConfig
 from probecommit.runner.seeding import instance_rng
+
+if TYPE_CHECKING:
+    import pandas as pd
 
 
 def latin_hypercube(rng: np.random.Generator, n: int, d: int) -> np.ndarray:
@@ -17,7 +19,43 @@ def latin_hypercube(rng: np.random.Generator, n: int, d: int) -> np.ndarray:
     return (strata + rng.random((n, d))) / n
 
 
+class InstanceTable:
+    """An instance table as its columns (NumPy arrays, in table order): what a run's own path reads of its
+    instances (a column, a range of rows, the length) without a DataFrame, whose pandas import was about
+    0.2 s of a run's CPU (docs/decisions.md, "run: ..."). :meth:`to_frame` is :func:`draw_instances`' table."""
+
+    def __init__(self, columns: dict[str, np.ndarray]):
+        self.columns = columns
+
+    @classmethod
+    def of(cls, table: "InstanceTable | pd.DataFrame") -> "InstanceTable":
+        """``table`` as an :class:`InstanceTable` (a DataFrame's columns as its ``to_numpy`` gives them)."""
+        if isinstance(table, InstanceTable):
+            return table
+        return cls({str(name): table[name].to_numpy() for name in table.columns})
+
+    def __len__(self) -> int:
+        return len(next(iter(self.columns.values()))) if self.columns else 0
+
+    def __getitem__(self, name: str) -> np.ndarray:
+        return self.columns[name]
+
+    def rows(self, index: slice | np.ndarray) -> "InstanceTable":
+        """The rows ``index`` (a slice or positions), as ``DataFrame.iloc`` takes them."""
+        return InstanceTable({name: values[index] for name, values in self.columns.items()})
+
+    def to_frame(self) -> "pd.DataFrame":
+        import pandas as pd
+
+        return pd.DataFrame(self.columns)
+
+
 def draw_instances(config: StudyConfig, model: Any) -> pd.DataFrame:
+    """:func:`instance_table` as a DataFrame."""
+    return instance_table(config, model).to_frame()
+
+
+def instance_table(config: StudyConfig, model: Any) -> InstanceTable:
     """The instance table of a study: id, split, index, ``true_<latent>`` and ``ctx_<name>`` columns.
 
     Truths are ``count`` draws (uniform or Latin hypercube) from the truth box (the
@@ -41,15 +79,13 @@ def draw_instances(config: StudyConfig, model: Any) -> pd.DataFrame:
     truths = np.repeat(truths, len(contexts), axis=0)
     contexts = np.tile(contexts, (len(truths) // len(contexts), 1))
     n = len(truths)
-    table = pd.DataFrame(
-        {
-            "instance_id": [f"{cfg.split}-{i:04d}" for i in range(n)],
-            "split": cfg.split,
-            "instance_index": np.arange(n, dtype=np.int64),
-        }
-    )
+    columns = {
+        "instance_id": np.array([f"{cfg.split}-{i:04d}" for i in range(n)], dtype=object),
+        "split": np.full(n, cfg.split, dtype=object),
+        "instance_index": np.arange(n, dtype=np.int64),
+    }
     for j, name in enumerate(latent_names):
-        table[f"true_{name}"] = truths[:, j]
+        columns[f"true_{name}"] = np.ascontiguousarray(truths[:, j])
     for j, name in enumerate(context_names):
-        table[f"ctx_{name}"] = contexts[:, j]
-    return table
+        columns[f"ctx_{name}"] = np.ascontiguousarray(contexts[:, j])
+    return InstanceTable(columns)

@@ -17,12 +17,11 @@ import json
 import math
 import os
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Callable, Iterable, Iterator
+from typing import TYPE_CHECKING, Any, Callable, Iterable, Iterator
 
 import numpy as np
-import pandas as pd
 
 from probecommit.runner import build
 from probecommit.runner.config import StudyConfig, dump_config, parse_config
@@ -34,24 +33,48 @@ from probecommit.runner.inference import (
     rollout,
     rollout_adaptive,
 )
-from probecommit.runner.instances import draw_instances
+from probecommit.runner.instances import InstanceTable, instance_table
 from probecommit.store.rundir import RunDir, arrow_from_columns, arrow_table
 from probecommit.store.schema import EPISODE_COLUMNS, INSTANCE_COLUMNS, PROBE_COLUMNS, cache_columns
 from probecommit.errors import UnavailableError, UsageError
+
+if TYPE_CHECKING:  # pandas is imported where a DataFrame is built: a run's own path needs none
+    import pandas as pd
 
 logger = logging.getLogger(__name__)
 
 
 @dataclass
 class StudyResult:
+    """A run's directory, manifest and final episodes table. ``episodes_table`` is the Arrow table (what
+    the command's own summary reads); ``episodes``, the DataFrame, is converted on first use, since the
+    conversion imports pandas, which a run does not otherwise need (docs/decisions.md, "run: ...")."""
+
     run_dir: Path
     manifest: dict[str, Any]
-    episodes: pd.DataFrame
+    episodes_table: Any = field(repr=False)
+
+    @functools.cached_property
+    def episodes(self) -> pd.DataFrame:
+        """The final episodes table as ``pd.read_parquet`` of its file gives it."""
+        return self.episodes_table.to_pandas()
 
     @property
     def failed_episodes(self) -> int:
         """Episode rows marked failed (engine NaN or error), rollout rows included."""
-        return int((self.episodes["status"] != "ok").sum()) if "status" in self.episodes else 0
+        if "status" not in self.episodes_table.column_names:
+            return 0
+        return sum(status != "ok" for status in self.episodes_table.column("status").to_pylist())
+
+    @property
+    def belief_reset_rows(self) -> int:
+        """Episode rows whose belief lost every particle (``belief_resets`` > 0)."""
+        from probecommit.store.arrow_columns import to_numpy
+
+        if "belief_resets" not in self.episodes_table.column_names:
+            return 0
+        resets = to_numpy(self.episodes_table.column("belief_resets")).astype(float)  # a column of nulls: NaN
+        return int(np.sum(np.nan_to_num(resets) > 0))
 
 
 def unit_names(n_instances: int, unit_instances: int) -> list[tuple[str, slice]]:
@@ -105,7 +128,7 @@ def _parts(given: "RunParts | dict") -> RunParts:
     return given if isinstance(given, RunParts) else _parts_of_data(json.dumps(given, sort_keys=True))
 
 
-def compute_unit(parts: "RunParts | dict", instances: pd.DataFrame, unit: str) -> tuple[str, dict[str, Any], dict[str, Any]]:
+def compute_unit(parts: "RunParts | dict", instances: "InstanceTable | pd.DataFrame", unit: str) -> tuple[str, dict[str, Any], dict[str, Any]]:
     """Run one unit end to end in memory; returns ``(unit, tables, stats)``, the tables as
     the Arrow tables the run stores (converted here, in the worker, so the driver that
     writes them converts nothing).
@@ -115,11 +138,13 @@ def compute_unit(parts: "RunParts | dict", instances: pd.DataFrame, unit: str) -
     writes the run directory.
     """
     start = time.perf_counter()
-    parts = _parts(parts)
+    parts, instances = _parts(parts), InstanceTable.of(instances)
     model = parts.model
     batch, columns, simulator = _episodes(parts, instances)
     n_rows = len(next(iter(columns.values()))) if columns else 0
     if np.any(batch.status != "ok"):  # rare: through pandas, as the rows were always joined
+        import pandas as pd
+
         failed = pd.DataFrame(failed_episode_columns(batch, model.variant))
         frame = pd.concat([pd.DataFrame(columns), failed], ignore_index=True) if columns else failed
         episodes = arrow_table(frame, EPISODE_COLUMNS)
@@ -140,7 +165,7 @@ def compute_unit(parts: "RunParts | dict", instances: pd.DataFrame, unit: str) -
     probes = batch.probes_columns()
     cache = cache_columns(simulator.cache_records(), model.latent_names)
     tables = {
-        "instances": arrow_table(instances.reset_index(drop=True), INSTANCE_COLUMNS),
+        "instances": arrow_from_columns(instances.columns, len(instances), INSTANCE_COLUMNS),
         "probes": arrow_from_columns(probes, len(probes["instance_id"]), PROBE_COLUMNS),
         "engine_cache": arrow_from_columns(cache, len(cache["engine"])),
         "episodes": episodes,
@@ -156,7 +181,7 @@ GROUP_EPISODES = int(os.environ.get("PROBECOMMIT_GROUP_EPISODES", "256"))
 GROUP_PARTICLES = 1024
 
 
-def compute_units(parts: "RunParts | dict", instances: pd.DataFrame, units: list[tuple[str, int]]) -> list[tuple]:
+def compute_units(parts: "RunParts | dict", instances: "InstanceTable | pd.DataFrame", units: list[tuple[str, int]]) -> list[tuple]:
     """Several units computed as one batch of episodes and returned unit by unit: the
     ``(unit, tables, stats)`` of :func:`compute_unit` for each, with identical tables.
 
@@ -174,7 +199,7 @@ def compute_units(parts: "RunParts | dict", instances: pd.DataFrame, units: list
         instances: The units' instances, in unit order.
         units: ``(name, number of instances)`` of each unit, in order.
     """
-    parts = _parts(parts)
+    parts, instances = _parts(parts), InstanceTable.of(instances)
     one_by_one = functools.partial(_units_one_by_one, parts, instances, units)
     if len(units) == 1:
         return one_by_one()
@@ -206,7 +231,7 @@ def _truth_owners(truths: np.ndarray, units: list[tuple[str, int]]) -> dict[tupl
     return owner if len(owner) == len(truths) else None
 
 
-def _split_group(parts: RunParts, instances: pd.DataFrame, units: list[tuple[str, int]], batch: Any,
+def _split_group(parts: RunParts, instances: InstanceTable, units: list[tuple[str, int]], batch: Any,
                  columns: dict[str, Any], simulator: Any, by_unit: list[list[dict]], start: float) -> list[tuple]:
     """A group's results cut into its units' ``(unit, tables, stats)``.
 
@@ -218,7 +243,7 @@ def _split_group(parts: RunParts, instances: pd.DataFrame, units: list[tuple[str
     per_episode = n_rows // max(batch.n_episodes, 1)
     budget = batch.u.shape[1]
     probes = batch.probes_columns()
-    whole = {"instances": arrow_table(instances.reset_index(drop=True), INSTANCE_COLUMNS),
+    whole = {"instances": arrow_from_columns(instances.columns, len(instances), INSTANCE_COLUMNS),
              "probes": arrow_from_columns(probes, batch.n_episodes * budget, PROBE_COLUMNS),
              "episodes": arrow_from_columns(columns, n_rows, EPISODE_COLUMNS)}
     out, first_episode, first_instance = [], 0, 0
@@ -252,15 +277,15 @@ def _split_group(parts: RunParts, instances: pd.DataFrame, units: list[tuple[str
     return out
 
 
-def _units_one_by_one(parts: RunParts, instances: pd.DataFrame, units: list[tuple[str, int]]) -> list[tuple]:
+def _units_one_by_one(parts: RunParts, instances: InstanceTable, units: list[tuple[str, int]]) -> list[tuple]:
     out, at = [], 0
     for name, n in units:
-        out.append(compute_unit(parts, instances.iloc[at:at + n], name))
+        out.append(compute_unit(parts, instances.rows(slice(at, at + n)), name))
         at += n
     return out
 
 
-def _episodes(parts: RunParts, instances: pd.DataFrame) -> tuple[Any, dict[str, Any], Any]:
+def _episodes(parts: RunParts, instances: InstanceTable) -> tuple[Any, dict[str, Any], Any]:
     """Rollouts, beliefs and commits of ``instances``: the probe batch, the episode table's
     columns (``commit(..., as_columns=True)``; empty when every rollout failed) and the simulator
     (built here: one per unit or group, as it counts their engine calls)."""
@@ -287,7 +312,7 @@ def _episodes(parts: RunParts, instances: pd.DataFrame) -> tuple[Any, dict[str, 
     return batch, columns, simulator
 
 
-Job = tuple[RunParts, pd.DataFrame, list[tuple[str, int]]]
+Job = tuple[RunParts, InstanceTable, list[tuple[str, int]]]
 Result = list[tuple[str, dict[str, Any], dict[str, Any]]]
 
 
@@ -558,7 +583,7 @@ MAX_EPISODE_ROWS = 50_000_000
 EPISODE_ROW_BYTES = 400
 
 
-def preflight(config: StudyConfig, concurrency: int = 1, parts: RunParts | None = None) -> pd.DataFrame:
+def preflight(config: StudyConfig, concurrency: int = 1, parts: RunParts | None = None) -> InstanceTable:
     """Everything that can fail on a bad config, before anything is written.
 
     Builds the model, filter and executors (or takes them from ``parts``, the run's own) and
@@ -585,7 +610,7 @@ def preflight(config: StudyConfig, concurrency: int = 1, parts: RunParts | None 
     check_fits(rows * EPISODE_ROW_BYTES, f"the run's final tables ({rows:,} episode rows)",
                "instances, repeats, budgets or methods")
     build.build_simulator(config)
-    return draw_instances(config, model)
+    return instance_table(config, model)
 
 
 def output_rows(config: StudyConfig) -> int:
@@ -614,7 +639,7 @@ def run_study(
     progress: Callable[[int, int], None] | None = None,
     threads: int | None = None,
     parts: RunParts | None = None,
-    instances: pd.DataFrame | None = None,
+    instances: "InstanceTable | pd.DataFrame | None" = None,
 ) -> StudyResult:
     """Run (or resume) a study into ``out``.
 
@@ -643,6 +668,7 @@ def run_study(
     if instances is None:
         # A bad config fails here, the memory of the whole run at its concurrency too: no directory is created.
         instances = preflight(config, run_concurrency(config, workers, ray_address, threads), parts)
+    instances = InstanceTable.of(instances)
     run = RunDir(out)
     config_yaml = dump_config(config)
     run.check_writable(config_yaml)  # an incompatible directory too
@@ -652,7 +678,7 @@ def run_study(
         if run.is_complete() and not run.verify_digests():
             if progress:
                 progress(n_units, n_units)
-            return StudyResult(run.path, run.manifest(), pd.read_parquet(run.table_path("episodes")))
+            return StudyResult(run.path, run.manifest(), run.final_episodes_table())
         return None
 
     if (done := complete()) is not None:
@@ -668,12 +694,13 @@ def run_study(
         return _run_units(parts, run, instances, workers, ray, ray_address, timing, progress, start, threads)
 
 
-def _groups(parts: "RunParts | dict", instances: pd.DataFrame, todo: list[tuple[str, slice]], repeats: int,
+def _groups(parts: "RunParts | dict", instances: "InstanceTable | pd.DataFrame", todo: list[tuple[str, slice]], repeats: int,
             parallel: int, particles: int = GROUP_PARTICLES) -> list[Job]:
     """The jobs: consecutive units to compute, in groups of about :data:`GROUP_EPISODES` episodes
     (:func:`compute_units`), and with several workers or threads, at least two groups each."""
     if not todo:
         return []
+    instances = InstanceTable.of(instances)
     per_unit = max(1, max(sl.stop - sl.start for _, sl in todo) * repeats)
     size = max(1, (GROUP_EPISODES * GROUP_PARTICLES) // (per_unit * max(particles, GROUP_PARTICLES)))
     if parallel > 1:  # enough groups to keep every worker busy
@@ -687,7 +714,7 @@ def _groups(parts: "RunParts | dict", instances: pd.DataFrame, todo: list[tuple[
         group = todo[first:stop]
         rows = np.concatenate([np.arange(sl.start, sl.stop) for _, sl in group])
         contiguous = rows[-1] - rows[0] + 1 == len(rows)  # the usual case: a slice, not a gather
-        jobs.append((parts, instances.iloc[rows[0]:rows[-1] + 1] if contiguous else instances.iloc[rows],
+        jobs.append((parts, instances.rows(slice(rows[0], rows[-1] + 1) if contiguous else rows),
                      [(name, sl.stop - sl.start) for name, sl in group]))
     return jobs
 
@@ -758,4 +785,4 @@ def _run_units(parts: RunParts, run: RunDir, instances, workers, ray, ray_addres
             "resumed_units": len(units) - len(todo),
         },
     )
-    return StudyResult(run.path, manifest, run.final_episodes())
+    return StudyResult(run.path, manifest, run.final_episodes_table())

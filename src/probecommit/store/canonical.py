@@ -17,6 +17,7 @@ import numpy as np
 import pyarrow as pa
 import pyarrow.compute as pc
 
+from probecommit.store.arrow_columns import indices, strings, to_numpy
 from probecommit.store.schema import Column, float_matrix, vector_columns
 
 
@@ -51,7 +52,7 @@ def canonical_arrow(tables: dict[str, pa.Table | None], schemas: dict[str, tuple
     out = dict(tables)
     instances = tables.get("instances")
     if instances is not None and "instance_index" in instances.column_names:
-        instances = instances.take(np.argsort(_numpy(instances.column("instance_index")), kind="stable"))
+        instances = instances.take(indices(np.argsort(_numpy(instances.column("instance_index")), kind="stable")))
         out["instances"] = instances
     order = instance_order(instances)
     out["probes"] = by_instance(tables.get("probes"), ["instance_id", "repeat", "j"], order)
@@ -59,7 +60,7 @@ def canonical_arrow(tables: dict[str, pa.Table | None], schemas: dict[str, tuple
     cache = tables.get("engine_cache")
     rows = engine_cache_order(cache) if cache is not None else None
     if rows is not None:
-        out["engine_cache"] = cache.take(rows)
+        out["engine_cache"] = cache.take(indices(rows))
     for name, columns in schemas.items():
         if out.get(name) is not None:
             out[name] = with_schema_columns(out[name], columns)
@@ -72,7 +73,7 @@ def instance_order(instances: pa.Table | None) -> dict[str, int]:
     if instances is None or "instance_index" not in instances.column_names:
         return {}
     rows = np.argsort(_numpy(instances.column("instance_index")), kind="stable")
-    ids = [str(i) for i in instances.column("instance_id").take(rows).to_pylist()]
+    ids = [str(i) for i in instances.column("instance_id").take(indices(rows)).to_pylist()]
     return {iid: n for n, iid in enumerate(ids)}
 
 
@@ -84,9 +85,9 @@ def instance_positions(ids: Any, order: dict[str, int]) -> np.ndarray:
     values = ids if isinstance(ids, (pa.Array, pa.ChunkedArray)) else pa.array(np.asarray(ids, dtype=object).astype(str))
     if not pa.types.is_large_string(values.type):
         values = values.cast(pa.large_string())
-    known = pa.array(list(order), type=pa.large_string())
-    at = _numpy(pc.fill_null(pc.index_in(values, value_set=known), len(order)))
-    return at.astype(float)
+    at = _numpy(pc.index_in(values, value_set=strings(list(order)))).astype(float)
+    at[np.isnan(at)] = len(order)  # not in ``order``: after every instance
+    return at
 
 
 def by_instance(table: pa.Table | None, keys: list[str], order: dict[str, int]) -> pa.Table | None:
@@ -95,7 +96,7 @@ def by_instance(table: pa.Table | None, keys: list[str], order: dict[str, int]) 
         return table
     position = instance_positions(table.column("instance_id"), order) if order else np.zeros(table.num_rows)
     sort_keys = [position, _ranks(table.column("instance_id"))] + [_numpy(table.column(k)) for k in keys[1:]]
-    return table.take(np.lexsort(sort_keys[::-1]))
+    return table.take(indices(np.lexsort(sort_keys[::-1])))
 
 
 def with_schema_columns(table: pa.Table, columns: tuple[Column, ...]) -> pa.Table:
@@ -161,10 +162,10 @@ def _arrow_float_matrix(column: pa.ChunkedArray) -> np.ndarray | None:
     column = column.combine_chunks() if column.num_chunks != 1 else column.chunk(0)
     if column.null_count:
         return None
-    lengths = pc.list_value_length(column).to_numpy(zero_copy_only=False)
+    lengths = _numpy(pc.list_value_length(column))
     if len(lengths) and (lengths != lengths[0]).any():
         return None
-    flat = pc.list_flatten(column).to_numpy(zero_copy_only=False).astype(float, copy=False)
+    flat = _numpy(pc.list_flatten(column)).astype(float, copy=False)
     return flat.reshape(len(column), -1)
 
 
@@ -176,4 +177,5 @@ def _ranks(column: pa.ChunkedArray) -> np.ndarray:
 
 
 def _numpy(column: pa.ChunkedArray | pa.Array) -> np.ndarray:
-    return column.to_numpy(zero_copy_only=False) if isinstance(column, pa.Array) else column.to_numpy()
+    """``to_numpy`` of an array or column, read from its buffers where it can (no pandas import)."""
+    return to_numpy(column)

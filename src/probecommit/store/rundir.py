@@ -44,6 +44,7 @@ from probecommit.store.manifest_rules import ManifestError, read_manifest, sha25
 from probecommit.store.safefile import atomic_file
 from probecommit.store.yamlsafe import YamlError, load_yaml
 from probecommit.store import batches
+from probecommit.store.arrow_columns import column_array, indices, pandas_metadata
 from probecommit.store.canonical import (by_instance, canonical_arrow, engine_cache_order, instance_order,
                                          instance_positions, merge_arrow, with_schema_columns)
 from probecommit.store.schema import EPISODE_COLUMNS, INSTANCE_COLUMNS, PROBE_COLUMNS, Column, vector_columns
@@ -138,38 +139,47 @@ def arrow_from_columns(columns: dict[str, Any], n_rows: int, schema: tuple[Colum
 
     ``columns`` maps names to 1-D NumPy arrays or lists of ``n_rows`` values, or to scalars
     (broadcast). Converted as ``from_pandas`` converts them (NaN is null; strings are large
-    strings) and with the same pandas metadata (made once per column names and types from a
-    one-row frame), so the merge reads back the same frame; tested against ``arrow_table``.
+    strings) and with the same pandas metadata (made once per column names and types, as a
+    one-row frame gives it), so the merge reads back the same frame; tested against ``arrow_table``.
     A unit's tables are built this way: a DataFrame per table per unit cost more than the
-    unit's beliefs on a short study.
+    unit's beliefs on a short study. The columns and metadata are built from buffers, without
+    pandas (``store/arrow_columns.py``); a column of a kind it does not build goes through
+    pyarrow's inference and pandas' metadata, which import pandas.
     """
     if not columns or not n_rows:  # pandas decides an empty column's type: ask it (cheap when empty)
         import pandas as pd
 
         return arrow_table(pd.DataFrame(columns), schema)
-    arrays = []
-    for value in columns.values():
-        if not isinstance(value, (list, np.ndarray)):  # a scalar
-            value = np.broadcast_to(np.asarray(value), (n_rows,))
-            if value.dtype.kind == "U":
-                value = value.astype(object)
-        if isinstance(value, np.ndarray) and value.dtype.kind == "U":  # strings: large, as pandas' str dtype gives
-            array = pa.array(value, type=pa.large_string())
-        else:
-            array = pa.array(value, from_pandas=True)
-            if pa.types.is_string(array.type):
-                array = array.cast(pa.large_string())
-        arrays.append(array)
+    arrays = [column_array(value, n_rows) for value in columns.values()]
+    if any(array is None for array in arrays):  # a kind arrow_columns does not build: through pyarrow's inference
+        arrays = [_inferred_array(value, n_rows) for value in columns.values()]
     names = list(columns)
     key = tuple(zip(names, (a.type for a in arrays)))
     if key not in _PANDAS_METADATA:
-        import pandas as pd
-
-        sample = pd.DataFrame({name: (value[:1] if isinstance(value, (list, np.ndarray)) else value)
-                               for name, value in columns.items()}, index=range(1))
-        _PANDAS_METADATA[key] = pa.Schema.from_pandas(sample, preserve_index=False).metadata
+        _PANDAS_METADATA[key] = pandas_metadata(columns, arrays) or _sampled_metadata(columns)
     table = pa.Table.from_arrays(arrays, names=names).replace_schema_metadata(_PANDAS_METADATA[key])
     return _schema_typed(table, schema)
+
+
+def _inferred_array(value: Any, n_rows: int) -> pa.Array:
+    """``value`` through ``pa.array(from_pandas=True)`` (which imports pandas), strings as large strings."""
+    if not isinstance(value, (list, np.ndarray)):  # a scalar
+        value = np.broadcast_to(np.asarray(value), (n_rows,))
+        if value.dtype.kind == "U":
+            value = value.astype(object)
+    if isinstance(value, np.ndarray) and value.dtype.kind == "U":  # strings: large, as pandas' str dtype gives
+        return pa.array(value, type=pa.large_string())
+    array = pa.array(value, from_pandas=True)
+    return array.cast(pa.large_string()) if pa.types.is_string(array.type) else array
+
+
+def _sampled_metadata(columns: dict[str, Any]) -> dict[bytes, bytes] | None:
+    """The pandas metadata of a one-row DataFrame of the columns' first values, asked of pandas."""
+    import pandas as pd
+
+    sample = pd.DataFrame({name: (value[:1] if isinstance(value, (list, np.ndarray)) else value)
+                           for name, value in columns.items()}, index=range(1))
+    return pa.Schema.from_pandas(sample, preserve_index=False).metadata
 
 
 def atomic_write_parquet(path: Path, frame: pd.DataFrame, columns: tuple[Column, ...] = ()) -> pa.Table:
@@ -625,17 +635,13 @@ class RunDir:
                 self._written_episodes = table
         return self.write_manifest(manifest_extra)
 
-    def final_episodes(self) -> pd.DataFrame:
-        """The final episodes table as ``pd.read_parquet`` of its file gives it.
-
-        Converted from the Arrow table :meth:`finalize` wrote (what the file holds) when this
-        object wrote it, so a run does not read back and decode the file it just wrote (nor
-        import the Parquet dataset layer to do so); else read from the file.
-        """
-        import pandas as pd
-
+    def final_episodes_table(self) -> pa.Table:
+        """The final episodes table as an Arrow table: the one :meth:`finalize` wrote when this object
+        wrote it (a run does not read back and decode the file it just wrote), else read from the file
+        (``ParquetFile``: ``pq.read_table`` imports the dataset layer, and with it pandas). Its
+        ``to_pandas()`` is what ``pd.read_parquet`` of the file gives."""
         table = self._written_episodes
-        return pd.read_parquet(self.table_path("episodes")) if table is None else table.to_pandas()
+        return pq.ParquetFile(self.table_path("episodes")).read() if table is None else table
 
     def copy_table(self, source: "RunDir", name: str) -> None:
         """Final table ``name`` of another complete run, as it is (checked against its manifest)."""
@@ -649,7 +655,7 @@ class RunDir:
     def write_engine_cache(self, table: pa.Table) -> None:
         """The final engine cache from an Arrow table of answers (each once), put in canonical order."""
         rows = engine_cache_order(table)
-        atomic_write_arrow(self.table_path("engine_cache"), table if rows is None else table.take(rows))
+        atomic_write_arrow(self.table_path("engine_cache"), table if rows is None else table.take(indices(rows)))
 
     def write_manifest(self, manifest_extra: dict[str, Any]) -> dict[str, Any]:
         """The manifest, written last: versions and the sha256 of every final table and the config."""
