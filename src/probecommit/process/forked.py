@@ -20,6 +20,7 @@ import contextlib
 import importlib
 import multiprocessing
 import os
+import signal
 import threading
 from collections import deque
 from typing import Any, Callable, Iterator, Sequence
@@ -45,17 +46,10 @@ class _Job:
 
 
 class _Helper:
-    """One forked process and its pipe; jobs are answered in the order they were sent."""
+    """One helper's pipe; its jobs are answered in the order they were sent."""
 
-    def __init__(self, warm: Sequence[str], others: Sequence[Any] = ()) -> None:
-        context = multiprocessing.get_context("fork")
-        self.connection, theirs = context.Pipe()
-        # Its copy of our end and of the earlier helpers' pipes are closed in the helper: held open, a helper
-        # would never see its pipe's end.
-        self.process = context.Process(target=_serve, args=(theirs, tuple(warm), (*others, self.connection)),
-                                       daemon=True)
-        self.process.start()
-        theirs.close()
+    def __init__(self, connection: Any) -> None:
+        self.connection = connection
         self.waiting: deque[_Job] = deque()
         self.alive = True
 
@@ -80,35 +74,62 @@ class _Helper:
         job = self.waiting.popleft()
         job.done, job.outcome = True, outcome
 
-    def close(self) -> None:
-        """End the helper: it reads the end of its pipe and exits; one still working (the caller raised) is killed."""
-        self.connection.close()
-        if not self.waiting:
-            self.process.join(timeout=5)
-        if self.process.is_alive():
-            self.process.kill()
-            self.process.join()
+
+def _start(count: int, warm: Sequence[str]) -> tuple[list[_Helper], Any]:
+    """``count`` helpers: the first is forked from here, imports ``warm`` and then forks the others from
+    itself, so the imports are done once and their pages shared. Returns the helpers and the first's process."""
+    context = multiprocessing.get_context("fork")
+    pipes = [context.Pipe() for _ in range(count)]
+    ours, theirs = [mine for mine, _ in pipes], [other for _, other in pipes]
+    process = context.Process(target=_first, args=(ours, theirs, tuple(warm)), daemon=True)
+    process.start()
+    for end in theirs:
+        end.close()
+    return [_Helper(end) for end in ours], process
 
 
-def _serve(connection: Any, warm: tuple[str, ...], others: tuple[Any, ...]) -> None:
-    """A helper's life: import ``warm``, then answer each call sent until the pipe closes."""
-    for other in others:
-        other.close()
+def _first(ours: list[Any], theirs: list[Any], warm: tuple[str, ...]) -> None:
+    """The first helper: import ``warm``, fork one helper per further pipe, serve the first pipe, and wait
+    for the others to leave before leaving (each leaves when the caller closes its pipe)."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # a Ctrl-C is the caller's to handle; it then closes the pipes
+    for end in ours:  # held open here, a pipe would never reach its end
+        end.close()
     for name in warm:
         with contextlib.suppress(Exception):  # a job needing it raises the same error, and is reported
             importlib.import_module(name)
+    children = []
+    for i in range(1, len(theirs)):
+        pid = os.fork()
+        if pid == 0:
+            try:
+                for j, end in enumerate(theirs):
+                    if j != i:
+                        end.close()
+                _serve(theirs[i])
+            finally:
+                os._exit(0)
+        children.append(pid)
+    for end in theirs[1:]:
+        end.close()
+    _serve(theirs[0])
+    for pid in children:
+        os.waitpid(pid, 0)
+    os._exit(0)
+
+
+def _serve(connection: Any) -> None:
+    """Answer each call sent until the pipe closes (or the caller has gone)."""
     while True:
         try:
             fn, args, kwargs = connection.recv()
         except (EOFError, OSError):
-            break
+            return
         try:
             outcome = ("ok", fn(*args, **kwargs))
         except Exception as error:  # noqa: BLE001 - sent back and raised in the caller
             outcome = ("error", error)
         if not _send(connection, outcome):
-            break
-    os._exit(0)
+            return
 
 
 def _send(connection: Any, outcome: tuple[str, Any]) -> bool:
@@ -125,8 +146,8 @@ def _send(connection: Any, outcome: tuple[str, Any]) -> bool:
 class Helpers:
     """Submit calls to the helper with the fewest waiting jobs (or run them here when there is none)."""
 
-    def __init__(self, helpers: list[_Helper]) -> None:
-        self._helpers = helpers
+    def __init__(self, helpers: list[_Helper], process: Any = None) -> None:
+        self._helpers, self.process = helpers, process  # the first helper's process (None: no helpers)
 
     @property
     def count(self) -> int:
@@ -151,15 +172,18 @@ def can_fork() -> bool:
 
 @contextlib.contextmanager
 def forked_helpers(count: int, warm: Sequence[str] = ()) -> Iterator[Helpers]:
-    """``count`` helper processes that import the modules named in ``warm`` at once; closed (each
-    told to exit, then joined) when the block ends. None are forked where :func:`can_fork` is
-    false: the jobs then run in this process."""
-    helpers: list[_Helper] = []
+    """``count`` helper processes that import the modules named in ``warm`` at once; ended when the block
+    ends (each reads the end of its pipe; all are waited for, or killed when the block raised with jobs
+    still out). None are forked where :func:`can_fork` is false: the jobs then run in this process."""
+    helpers, process = ([], None) if count < 1 or not can_fork() else _start(count, warm)
     try:
-        if can_fork():
-            for _ in range(count):
-                helpers.append(_Helper(warm, [helper.connection for helper in helpers]))
-        yield Helpers(helpers)
+        yield Helpers(helpers, process)
     finally:
         for helper in helpers:
-            helper.close()
+            helper.connection.close()
+        if process is not None:
+            if not any(helper.waiting for helper in helpers):
+                process.join(timeout=5)
+            if process.is_alive():
+                process.kill()
+                process.join()
