@@ -21,8 +21,10 @@ settings and its written outputs included (the in-process time is a diagnostic).
 from __future__ import annotations
 
 import argparse
+import hashlib
 import json
 import os
+import re
 import resource
 import subprocess
 import sys
@@ -71,18 +73,22 @@ def run_arm(src: Path, out: Path, calibrate_import: str, count: int, extra: str 
     return json.loads(done.stdout.strip().splitlines()[-1])
 
 
-def run_command(src: Path, out: Path) -> dict:
+def run_command(src: Path, out: Path, name: str = "calibration") -> dict:
     """``probecommit calibrate`` as a user runs it, on the runs ``run_arm`` made in ``out``: a process of
     its own (start-up, the command's heap settings and its written outputs included); wall and CPU
-    (user + sys of the child)."""
+    (user + sys of the child and of its helper processes), and a digest of every file it wrote (the
+    report's minute stamp aside), so two trees' commands can be compared byte for byte."""
     environment = {**os.environ, "PYTHONPATH": str(src)}
     before, t0 = resource.getrusage(resource.RUSAGE_CHILDREN), time.perf_counter()
     subprocess.run([sys.executable, "-m", "probecommit", "calibrate", "--cal", str(out / "B_cal"),
-                    "--test", str(out / "B_test"), "-o", str(out / "calibration")],
+                    "--test", str(out / "B_test"), "-o", str(out / name)],
                    capture_output=True, text=True, env=environment, check=True)
     seconds, after = time.perf_counter() - t0, resource.getrusage(resource.RUSAGE_CHILDREN)
     cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
-    return {"seconds": seconds, "cpu": cpu}
+    digest = hashlib.sha256()
+    for path in sorted((out / name).iterdir()):
+        digest.update(path.name.encode() + re.sub(rb"written [0-9-]+ [0-9:]+ UTC", b"", path.read_bytes()))
+    return {"seconds": seconds, "cpu": cpu, "digest": digest.hexdigest()}
 
 
 def main() -> None:
@@ -108,6 +114,9 @@ def main() -> None:
                 old_import = ("try:\n    from probecommit.runner.calibration import calibrate\n"
                               "except ImportError:\n    from probecommit.audit.pipeline import calibrate")
                 arms[f"git {args.against}"] = run_arm(tree / "src", tmp / "c", old_import, args.instances)
+                # its command on this tree's runs, then this tree's again: A B A alternated
+                base_command = run_command(tree / "src", tmp / "a", "calibration-baseline")
+                again = run_command(src, tmp / "a", "calibration-again")
         load.append(os.getloadavg()[0])
     first = arms["this tree"]
     target = 5.0 if episodes <= 3072 else 30.0
@@ -119,6 +128,11 @@ def main() -> None:
               f"wall {arm['seconds']:7.2f} s   CPU x{arm['cpu'] / first['cpu']:5.2f}   identical: {same}")
     print(f"  {'this tree, `probecommit calibrate` as a process':50s} CPU {command['cpu']:7.2f} s "
           f"{'':26s}wall {command['seconds']:7.2f} s   (start-up, the command's heap settings and its writes included)")
+    if args.against:
+        for label, run in ((f"git {args.against}, its command on these runs", base_command),
+                           ("this tree's command again", again)):
+            print(f"  {label:50s} CPU {run['cpu']:7.2f} s {'':26s}wall {run['seconds']:7.2f} s   "
+                  f"outputs identical to this tree's: {run['digest'] == command['digest']}")
     print(f"  target (issue 42): the command <= {target:.0f} s at E = {episodes} on an idle 2-core machine: "
           f"wall {command['seconds']:.2f} s, CPU {command['cpu']:.2f} s -> "
           f"{'met' if command['seconds'] <= target else 'MISSED'} (in-process calibrate alone {first['seconds']:.2f} s, "

@@ -111,6 +111,28 @@ def test_cli_commands(tmp_path, runs):
     assert set(curves["signal"]) == {"raw", "adjusted", "posterior_variance", "oracle"}
 
 
+@pytest.mark.skipif("fork" not in __import__("multiprocessing").get_all_start_methods(), reason="no fork here")
+def test_calibrate_command_writes_the_same_files_with_and_without_helpers(tmp_path, runs, monkeypatch):
+    """The command draws its report in forked helper processes (``process.forked``): every file it writes
+    is the same bytes as when it draws them itself (the report's minute stamp aside)."""
+    import re
+
+    import probecommit.process.forked as forked
+    from probecommit.cli.app import app
+
+    written = {}
+    for helpers in (True, False):
+        monkeypatch.setattr(forked, "can_fork", lambda helpers=helpers: helpers)
+        out = tmp_path / str(helpers)
+        r = CliRunner().invoke(app, ["calibrate", "--cal", str(runs["cal"]), "--test", str(runs["test"]),
+                                     "-o", str(out), "--resamples", "100"])
+        assert r.exit_code == 0, r.output
+        written[helpers] = {p.name: re.sub(rb"written [0-9-]+ [0-9:]+ UTC", b"written", p.read_bytes())
+                            for p in out.iterdir()}
+    assert {"calibration.html", "calibration.png", "calibration.pdf", "table3.csv"} <= set(written[True])
+    assert written[True] == written[False]
+
+
 def test_runs_with_a_failed_trajectory(tmp_path, runs, monkeypatch):
     """A trajectory whose probing failed stays counted through calibration and gates."""
     import probecommit.runner.build as build

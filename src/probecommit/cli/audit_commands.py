@@ -137,14 +137,25 @@ def calibrate_command(
                    "(every particle: the conformal guarantee without exception). Default: the runs' config."),
 ) -> None:
     """Conformal thresholds and margin on --cal; their effect on --test (Tables III and IV)."""
+    from probecommit.process.forked import forked_helpers
     from probecommit.runner.calibration import calibrate
-    from probecommit.report.audit_report import calibration_figure, write_html_report
-    from probecommit.report.figures import save_figure
 
     if plateau is not None and plateau not in ("prefix", "hull"):
         raise UsageError(f"--plateau must be 'prefix' or 'hull', got {plateau!r}")
-    res = calibrate(cal, test, alpha, _parse_budgets(budgets), cost_budget=cost_budget, resamples=resamples, seed=seed,
-                    plateau=plateau)
+    # Two helpers import the report's modules while calibrate runs, then draw its figures beside each other.
+    with forked_helpers(2, warm=_REPORT_MODULES) as helpers:
+        res = calibrate(cal, test, alpha, _parse_budgets(budgets), cost_budget=cost_budget, resamples=resamples,
+                        seed=seed, plateau=plateau)
+        _write_calibration(res, cal, test, alpha, out, helpers)
+
+
+#: What the calibration report draws with (matplotlib), imported by the helpers ahead.
+_REPORT_MODULES = ("probecommit.report.audit_report", "probecommit.report.figures")
+
+
+def _write_calibration(res, cal: Path, test: Path, alpha: float, out: Optional[Path], helpers) -> None:
+    """Print Tables III and IV and write the outputs: the figure and the report's two sections are drawn by
+    ``helpers`` (or here) while the tables are printed and written."""
     from probecommit.report.vocabulary import default_output
 
     out = output_dir(out, default_output(test, "calibration"))  # created; a symlinked default refused
@@ -152,6 +163,8 @@ def calibrate_command(
                   f"simultaneous t = {_f(res.simultaneous_threshold)}; margin gamma = {res.margin.gamma:.2f}"
                   f"{'' if res.margin.satisfied else ' (rule not met on the grid)'}; "
                   f"distribution-free margin = {_f(res.distribution_free_margin)}")
+    figure = helpers.submit(_calibration_figure_section, res, 1 - alpha, out / "calibration.png")
+    audit = helpers.submit(_audit_section, res.audit_calibrated, 1 - alpha)
     t3 = Table(title="coverage and optimism on test (original -> calibrated)", title_style="bold")
     for col in ("k", "t_k", "cluster cov. original", "cluster cov. calibrated", "e_k original", "e_k calibrated"):
         t3.add_column(col, justify="right")
@@ -183,11 +196,34 @@ def calibrate_command(
     write_csv(res.cost, out / "cost.csv")
     write_csv(res.cost_differences, out / "cost_differences.csv")
     write_csv(res.margin.search, out / "margin_search.csv")
-    save_figure(calibration_figure(res.table3, 1 - alpha), out / "calibration.png")
-    report = write_html_report(out / "calibration.html", res.audit_calibrated, title="Calibration",
-                               calibration=res, nominal=1 - alpha,
-                               notes=f"calibration run {cal}, test run {test}; the audit table is the calibrated executor's.")
+    sections = audit.result() + figure.result()
+    report = helpers.submit(_write_report, out / "calibration.html", title="Calibration", nominal=1 - alpha,
+                            notes=f"calibration run {cal}, test run {test}; the audit table is the calibrated executor's.",
+                            sections=sections).result()
     console.print(f"report: {safe(report)}")
+
+
+def _calibration_figure_section(res, nominal: float, png: Path) -> list[str]:
+    """The calibration figure saved (PNG and PDF) and the report's calibration section (a helper's job)."""
+    from probecommit.report.audit_report import calibration_figure, calibration_section_html
+    from probecommit.report.figures import save_figure
+
+    save_figure(calibration_figure(res.table3, nominal), png)
+    return calibration_section_html(res)
+
+
+def _audit_section(audit_result, nominal: float) -> list[str]:
+    """The report's audit section (a helper's job)."""
+    from probecommit.report.audit_report import audit_section_html
+
+    return audit_section_html(audit_result, nominal)
+
+
+def _write_report(path: Path, **kwargs) -> Path:
+    """The report page around sections already drawn (a helper's job: it has matplotlib imported)."""
+    from probecommit.report.audit_report import write_html_report
+
+    return write_html_report(path, **kwargs)
 
 
 @user_errors

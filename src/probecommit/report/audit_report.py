@@ -13,7 +13,7 @@ import io
 import math
 from datetime import datetime, timezone
 from pathlib import Path
-from typing import Any
+from typing import Any, Sequence
 
 import matplotlib
 
@@ -375,7 +375,8 @@ def _warnings(table: pd.DataFrame, audit_result: Any) -> list[str]:
 def write_html_report(path: str | Path, audit_result=None, *, title: str = "probecommit audit",
                       calibration=None, gates=None, nominal: float = 0.8, notes: str = "",
                       images: list[tuple[str, Path]] | None = None,
-                      tables: list[tuple[str, pd.DataFrame]] | None = None, warnings: list[str] | None = None) -> Path:
+                      tables: list[tuple[str, pd.DataFrame]] | None = None, warnings: list[str] | None = None,
+                      sections: Sequence[str] = ()) -> Path:
     """Write the self-contained HTML report.
 
     Args:
@@ -390,6 +391,8 @@ def write_html_report(path: str | Path, audit_result=None, *, title: str = "prob
         images: ``(caption, png path)`` pairs embedded after the audit (e.g. a belief snapshot).
         tables: ``(heading, table)`` pairs shown after the images (e.g. a robot session's per-budget table).
         warnings: Extra warnings shown under the title (e.g. too few positions for the intervals).
+        sections: HTML already rendered, placed after the sections above (``probecommit calibrate`` draws
+            :func:`audit_section_html` and :func:`calibration_section_html` in helper processes).
 
     Returns:
         The written path.
@@ -397,12 +400,13 @@ def write_html_report(path: str | Path, audit_result=None, *, title: str = "prob
     path = Path(path)
     parts = _header_html(title, notes, warnings)
     if audit_result is not None:
-        parts += _audit_html(audit_result, nominal)
+        parts += audit_section_html(audit_result, nominal)
     parts += _extras_html(images, tables)
     if calibration is not None:
-        parts += _calibration_html(calibration)
+        parts += calibration_section_html(calibration)
     if gates is not None:
         parts += _gates_html(gates)
+    parts += sections
     doc = (f"<!DOCTYPE html><html><head><meta charset='utf-8'>"
            "<meta name='viewport' content='width=device-width, initial-scale=1'>"
            f"<title>{html.escape(title)}</title>"
@@ -428,7 +432,7 @@ def _header_html(title: str, notes: str, warnings: list[str] | None) -> list[str
     return parts
 
 
-def _audit_html(audit_result, nominal: float) -> list[str]:
+def audit_section_html(audit_result, nominal: float) -> list[str]:
     """The audit: its source and row counts (an ``AuditResult``; a bare table has none), its warnings,
     figure and table, and the surprise AUCs when the audit computed them."""
     table = audit_result if isinstance(audit_result, pd.DataFrame) else audit_result.table
@@ -462,7 +466,7 @@ def _extras_html(images: list[tuple[str, Path]] | None, tables: list[tuple[str, 
     return parts
 
 
-def _calibration_html(c) -> list[str]:
+def calibration_section_html(c) -> list[str]:
     """A ``CalibrationResult``: its thresholds and margins in one line, Table III and the cost of calibration."""
     parts = ["<h2>Calibration</h2>"]
     thr = ", ".join(f"t<sub>{k}</sub> = {_fmt(v)}" for k, v in c.thresholds.items())
