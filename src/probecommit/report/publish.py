@@ -64,11 +64,12 @@ def changes_section(doc: Doc) -> None:
             "Against the frozen results before this publication (`git log -- results/paper`), compared key by key, "
             "every number common to both is identical, the GRU's included (the same host made both; on another CPU "
             "the GRU's training gives other low digits: docs/decisions.md, \"The GRU across CPUs\"): only file "
-            "paths and wall seconds differ. This publication's code changes move no number: calibrate's first beliefs "
-            "built while the test run loads and, made after this run, only when the C heap's free pages are handed "
-            "back (docs/decisions.md, \"The reproduction's peak back under 500 MB\").",
-            "New in this publication: the explain target's experiments E187, E190, E191, E193, E196 and E197 behind "
-            "the differences from the paper (see the list above; none of them holds, so no status moved) and the "
+            "paths and wall seconds differ. This publication's code changes move no number: a run's process builds "
+            "its Arrow columns from their buffers instead of through pandas, and `probecommit calibrate` draws its "
+            "report in helper processes (docs/decisions.md, \"run:\" and \"cal:\"). The wall seconds above are "
+            "those of a run that shared its two cores with other work, so they are longer than an idle machine's.",
+            "New in this publication: the explain target's experiments E199, E200, E203 and E204 behind the "
+            "differences from the paper (see the list above; none of them holds, so no status moved) and the "
             "stored rows from which `verify` recomputes them.", "")
 
 
