@@ -68,19 +68,35 @@ def command_line(pid: int) -> str:
         return "?"
 
 
-def sample(argv: list[str], stacks: bool, poll_s: float = 0.2) -> dict:
-    """Run ``argv``, sampling its process tree; the per-process peaks."""
+def parent(pid: int) -> int:
+    """``pid``'s parent (0 once it is gone)."""
+    try:
+        return int(Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[1])
+    except (OSError, IndexError, ValueError):
+        return 0
+
+
+def sample(argv: list[str], stacks: bool, poll_s: float = 0.2, stacks_from: int = 250, stacks_step: int = 40,
+           env: dict[str, str] | None = None) -> dict:
+    """Run ``argv``, sampling its process tree; the per-process peaks, parents and resident memory over time.
+
+    ``stacks``: a ``py-spy dump`` of a process each time its peak grows by ``stacks_step`` MB from ``stacks_from``.
+    """
     spy = shutil.which("py-spy") or str(Path(sys.executable).with_name("py-spy"))
-    proc = subprocess.Popen(argv)
-    start, peaks, dumps, dumped, most = time.perf_counter(), {}, [], {}, 0
+    proc = subprocess.Popen(argv, env=env)
+    start, peaks, dumps, dumped, most, parents, series = time.perf_counter(), {}, [], {}, 0, {}, {}
     while proc.poll() is None:
         now = round(time.perf_counter() - start, 1)
         sizes = tree_rss(proc.pid)
         most = max(most, sum(sizes.values()))
+        for pid, mb in sizes.items():  # resident memory over time, a point each time it moves by 10 MB
+            parents.setdefault(pid, parent(pid))
+            if not series.get(pid) or abs(series[pid][-1][1] - mb) >= 10:
+                series.setdefault(pid, []).append((now, mb))
         for pid, mb in tree_rss(proc.pid, "VmHWM").items():  # the kernel's peak: no spike falls between polls
             if mb > peaks.get(pid, (0,))[0]:
                 peaks[pid] = (mb, now, command_line(pid))
-                if stacks and mb >= 250 and mb >= dumped.get(pid, 0) + 40 and Path(spy).exists():
+                if stacks and mb >= stacks_from and mb >= dumped.get(pid, 0) + stacks_step and Path(spy).exists():
                     dumped[pid] = mb
                     dump = subprocess.run([spy, "dump", "--nonblocking", "--pid", str(pid)], capture_output=True,
                                           text=True, timeout=60).stdout
@@ -88,7 +104,7 @@ def sample(argv: list[str], stacks: bool, poll_s: float = 0.2) -> dict:
         time.sleep(poll_s)
     return {"rc": proc.returncode, "wall_s": round(time.perf_counter() - start, 1), "tree_sum_peak_mb": most,
             "processes": sorted(([mb, s, pid, cmd] for pid, (mb, s, cmd) in peaks.items()), reverse=True),
-            "stacks": dumps}
+            "stacks": dumps, "root_pid": proc.pid, "parents": parents, "series": series}
 
 
 def main() -> None:
