@@ -12,8 +12,8 @@ process; the resident memory (``VmRSS``) of that process and of every process it
 set aside, worker pools) is read from ``/proc`` every 0.2 s, and its peak (``VmHWM``, the kernel's high-water
 mark, so no spike falls between polls). Printed: each process's peak (MB) and when it was first seen,
 the largest sum over the tree, wall seconds and the load average at start and end (peaks hardly depend
-on load; times do). ``--stacks``: a ``py-spy dump`` of a process each time its peak grows by 40 MB above
-250 MB (where it was when it grew), when py-spy is installed. ``--json PATH`` writes it all.
+on load; times do). ``--stacks``: a ``py-spy dump`` of a process each time its peak grows by ``--stacks-step``
+MB (40) from ``--stacks-from`` MB (250) (where it was when it grew), when py-spy is installed. ``--json PATH`` writes it all.
 Linux only (``/proc``).
 """
 
@@ -113,6 +113,8 @@ def main() -> None:
     parser.add_argument("--inputs", required=True, help="a finished reproduction's root (the targets it reads)")
     parser.add_argument("--root", required=True, help="a scratch root (replaced)")
     parser.add_argument("--stacks", action="store_true")
+    parser.add_argument("--stacks-from", type=int, default=250, help="MB: the first py-spy dump at this peak")
+    parser.add_argument("--stacks-step", type=int, default=40, help="MB: another dump each time the peak grows this much")
     parser.add_argument("--json")
     args = parser.parse_args()
     root = Path(args.root)
@@ -124,7 +126,8 @@ def main() -> None:
     lane = root / "_lane.py"
     lane.write_text(LANE)
     load = os.getloadavg()
-    result = sample([sys.executable, str(lane), args.target, str(root)], args.stacks)
+    result = sample([sys.executable, str(lane), args.target, str(root)], args.stacks, 0.2, args.stacks_from,
+                    args.stacks_step)
     result.update(target=args.target, load_start=load, load_end=os.getloadavg())
     for mb, s, pid, cmd in result["processes"][:8]:
         print(f"{mb:6d} MB at {s:7.1f} s  pid {pid}  {cmd}")
