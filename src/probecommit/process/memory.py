@@ -122,12 +122,12 @@ HEAP_REUSE_BYTES = 32 * 1024**2
 #: handed back and faulted in again each round (5700 faults, 3 us per episode-step of the next arm,
 #: ``benchmarks/belief.py``). The explicit trims between chunks and phases still bound the peak.
 HEAP_TOP_BYTES = 256 * 1024**2
-#: Heaps (glibc "arenas") the threads of a process allocate from: one. glibc gives a thread that
-#: finds the main heap busy a heap of its own, and each keeps up to :data:`HEAP_TOP_BYTES` of freed
-#: memory until the next explicit trim: a replay's trace thread (the next chunk's beliefs) and its
-#: commit thread then each held the freed temporaries of their last chunk, and how much of that
-#: coincided with the other's peak depended on the CPUs' load. The insertion target beside a
-#: CPU-bound process peaked at 426-455 MB, 396 MB with one heap (docs/decisions.md, "mem:").
+#: Heaps (glibc "arenas") the threads of a process allocate from: one. glibc gives each new thread
+#: a heap of its own (up to 8 per core), and each heap keeps up to :data:`HEAP_TOP_BYTES` of freed
+#: memory until the next explicit trim: a replay's trace thread (the next chunk's beliefs), the
+#: engine and commit threads can each hold their last chunk's freed temporaries while another
+#: thread peaks, by how much depending on how their work interleaves (the CPUs' load). The insertion
+#: target beside a CPU-bound process peaked at 426-455 MB, 396 MB with one heap (docs/decisions.md, "mem:").
 HEAP_ARENAS = 1
 #: The environment variables that set the thresholds when a process starts (a user's choice
 #: wins), each with its ``mallopt`` parameter and the command's value.
