@@ -16,13 +16,12 @@ was when it grew). Printed: the largest processes, their targets and when they p
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import sys
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from target_memory import sample  # noqa: E402
+from target_memory import measure  # noqa: E402
 
 
 def targets_of(result: dict, log: Path) -> dict[int, str]:
@@ -54,16 +53,7 @@ def main() -> None:
     env = dict(os.environ, PROBECOMMIT_TARGET_PIDS=str(log))
     rest = [a for a in args.rest if a != "--"]
     argv = [sys.executable, "-m", "probecommit", "reproduce", "all", "-o", args.out, *rest]
-    load = os.getloadavg()
-    result = sample(argv, args.stacks, 0.2, args.stacks_from, args.stacks_step, env)
-    names = targets_of(result, log)
-    result.update(load_start=load, load_end=os.getloadavg(), targets={str(k): v for k, v in names.items()})
-    for mb, s, pid, _cmd in result["processes"][:12]:
-        print(f"{mb:6d} MB at {s:8.1f} s  pid {pid}  {names.get(pid, '?')}")
-    print(f"rc {result['rc']}, wall {result['wall_s']} s, largest process {result['processes'][0][0]} MB, "
-          f"tree sum {result['tree_sum_peak_mb']} MB, load {load[0]:.1f} -> {result['load_end'][0]:.1f}")
-    if args.json:
-        Path(args.json).write_text(json.dumps(result, indent=1))
+    result = measure(argv, args, "reproduce all", lambda result: targets_of(result, log), env)
     sys.exit(result["rc"])
 
 

@@ -27,6 +27,7 @@ import subprocess
 import sys
 import time
 from pathlib import Path
+from typing import Callable
 
 LANE = """
 import sys
@@ -107,6 +108,23 @@ def sample(argv: list[str], stacks: bool, poll_s: float = 0.2, stacks_from: int 
             "stacks": dumps, "root_pid": proc.pid, "parents": parents, "series": series}
 
 
+def measure(argv: list[str], args: argparse.Namespace, label: str, names: Callable[[dict], dict[int, str]] | None = None,
+            env: dict[str, str] | None = None, extra: dict | None = None) -> dict:
+    """:func:`sample` of ``argv`` with ``args``' stack settings; prints its largest processes (named by ``names(result)``,
+    else by their command lines) and writes ``args.json``. The result."""
+    load = os.getloadavg()
+    result = sample(argv, args.stacks, 0.2, args.stacks_from, args.stacks_step, env)
+    named = names(result) if names else {}
+    result.update(extra or {}, load_start=load, load_end=os.getloadavg(), targets={str(k): v for k, v in named.items()})
+    for mb, s, pid, cmd in result["processes"][:12]:
+        print(f"{mb:6d} MB at {s:8.1f} s  pid {pid}  {named.get(pid, cmd)}")
+    print(f"{label}: rc {result['rc']}, wall {result['wall_s']} s, largest process {result['processes'][0][0]} MB, "
+          f"tree sum {result['tree_sum_peak_mb']} MB, load {load[0]:.1f} -> {result['load_end'][0]:.1f}")
+    if args.json:
+        Path(args.json).write_text(json.dumps(result, indent=1))
+    return result
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("target")
@@ -125,16 +143,7 @@ def main() -> None:
             shutil.copytree(folder, root / folder.name)
     lane = root / "_lane.py"
     lane.write_text(LANE)
-    load = os.getloadavg()
-    result = sample([sys.executable, str(lane), args.target, str(root)], args.stacks, 0.2, args.stacks_from,
-                    args.stacks_step)
-    result.update(target=args.target, load_start=load, load_end=os.getloadavg())
-    for mb, s, pid, cmd in result["processes"][:8]:
-        print(f"{mb:6d} MB at {s:7.1f} s  pid {pid}  {cmd}")
-    print(f"{args.target}: rc {result['rc']}, wall {result['wall_s']} s, largest process {result['processes'][0][0]} MB, "
-          f"tree sum {result['tree_sum_peak_mb']} MB, load {load[0]:.1f} -> {result['load_end'][0]:.1f}")
-    if args.json:
-        Path(args.json).write_text(json.dumps(result, indent=1))
+    result = measure([sys.executable, str(lane), args.target, str(root)], args, args.target, extra={"target": args.target})
     sys.exit(result["rc"])
 
 
