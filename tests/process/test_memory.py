@@ -56,7 +56,7 @@ before = resource.getrusage(resource.RUSAGE_SELF).ru_minflt
 for _ in range(20):
     step()
 print(taken, resource.getrusage(resource.RUSAGE_SELF).ru_minflt - before,
-      os.environ.get("MALLOC_MMAP_THRESHOLD_"), os.environ.get("MALLOC_TRIM_THRESHOLD_"))
+      os.environ.get("MALLOC_MMAP_THRESHOLD_"), os.environ.get("MALLOC_TRIM_THRESHOLD_"), os.environ.get("MALLOC_ARENA_MAX"))
 """
 
 
@@ -75,16 +75,17 @@ def test_reuse_freed_arrays_keeps_a_steps_arrays_in_the_heap():
     # glibc's defaults return the freed arrays past its trim threshold, so each step faults in
     # fresh pages (~900 per step here); with the command's thresholds the heap reuses them.
     _, default_faults, *_ = _steps("default")
-    taken, reuse_faults, mmap_env, trim_env = _steps("reuse")
+    taken, reuse_faults, mmap_env, trim_env, arenas_env = _steps("reuse")
     assert taken == "True"
-    assert (mmap_env, trim_env) == (str(memory.HEAP_REUSE_BYTES), str(memory.HEAP_TOP_BYTES))  # exported to workers
+    assert (mmap_env, trim_env, arenas_env) == (str(memory.HEAP_REUSE_BYTES), str(memory.HEAP_TOP_BYTES),
+                                                str(memory.HEAP_ARENAS))  # exported to workers
     assert int(default_faults) > 5000 and int(reuse_faults) < 500, (default_faults, reuse_faults)
 
 
 @pytest.mark.skipif(platform.libc_ver()[0] != "glibc" or memory._mallopt() is None, reason="the thresholds are glibc's")
 def test_reuse_freed_arrays_leaves_a_threshold_the_user_set():
-    _, _, mmap_env, trim_env = _steps("reuse", MALLOC_TRIM_THRESHOLD_="131072")
-    assert trim_env == "131072" and mmap_env == str(memory.HEAP_REUSE_BYTES)
+    _, _, mmap_env, trim_env, arenas_env = _steps("reuse", MALLOC_TRIM_THRESHOLD_="131072", MALLOC_ARENA_MAX="4")
+    assert trim_env == "131072" and arenas_env == "4" and mmap_env == str(memory.HEAP_REUSE_BYTES)
 
 
 def test_reuse_freed_arrays_without_mallopt(monkeypatch):

@@ -113,7 +113,7 @@ def _malloc_trim() -> Callable[[int], int] | None:
 
 
 #: glibc's ``mallopt`` parameters (malloc.h).
-_M_TRIM_THRESHOLD, _M_MMAP_THRESHOLD = -1, -3
+_M_TRIM_THRESHOLD, _M_MMAP_THRESHOLD, _M_ARENA_MAX = -1, -3, -8
 #: Freed blocks up to this size stay in the heap for reuse (larger ones get pages of their own).
 HEAP_REUSE_BYTES = 32 * 1024**2
 #: Free memory at the heap's top kept for the next step instead of handed back at each free.
@@ -122,10 +122,18 @@ HEAP_REUSE_BYTES = 32 * 1024**2
 #: handed back and faulted in again each round (5700 faults, 3 us per episode-step of the next arm,
 #: ``benchmarks/belief.py``). The explicit trims between chunks and phases still bound the peak.
 HEAP_TOP_BYTES = 256 * 1024**2
+#: Heaps (glibc "arenas") the threads of a process allocate from: one. glibc gives each new thread
+#: a heap of its own (up to 8 per core), and each heap keeps up to :data:`HEAP_TOP_BYTES` of freed
+#: memory until the next explicit trim: a replay's trace thread (the next chunk's beliefs), the
+#: engine and commit threads can each hold their last chunk's freed temporaries while another
+#: thread peaks, by how much depending on how their work interleaves (the CPUs' load). The insertion
+#: target beside a CPU-bound process peaked at 426-455 MB, 396 MB with one heap (docs/decisions.md, "mem:").
+HEAP_ARENAS = 1
 #: The environment variables that set the thresholds when a process starts (a user's choice
 #: wins), each with its ``mallopt`` parameter and the command's value.
 HEAP_ENV = {"MALLOC_MMAP_THRESHOLD_": (_M_MMAP_THRESHOLD, HEAP_REUSE_BYTES),
-            "MALLOC_TRIM_THRESHOLD_": (_M_TRIM_THRESHOLD, HEAP_TOP_BYTES)}
+            "MALLOC_TRIM_THRESHOLD_": (_M_TRIM_THRESHOLD, HEAP_TOP_BYTES),
+            "MALLOC_ARENA_MAX": (_M_ARENA_MAX, HEAP_ARENAS)}
 
 
 def heap_environment() -> dict[str, str]:
@@ -151,8 +159,9 @@ def reuse_freed_arrays() -> bool:
     its top; the explicit :func:`trim_heap` between chunks and :func:`release_free_heap` between
     phases still return the memory. The ``probecommit`` command calls this at start;
     a program importing probecommit keeps its own allocator settings unless it calls it.
-    A threshold set in the environment (``MALLOC_MMAP_THRESHOLD_``, ``MALLOC_TRIM_THRESHOLD_``)
-    is the user's and is left alone; the others are exported so worker processes start with them.
+    It also keeps every thread on one heap (:data:`HEAP_ARENAS`). A setting in the environment
+    (``MALLOC_MMAP_THRESHOLD_``, ``MALLOC_TRIM_THRESHOLD_``, ``MALLOC_ARENA_MAX``) is the user's and
+    is left alone; the others are exported so worker processes start with them.
 
     Returns:
         True when glibc took the setting, False where the C library has no ``mallopt``.

@@ -106,10 +106,20 @@ def run_target(name: str, root: str, quick: bool, workers: int, options: dict[st
     paper.OPTIONS.clear()
     paper.OPTIONS.update(options)
     paper.OPTIONS["_ready"] = late_needs(str(Path(root) / MARKERS), name)  # what it reads last, once done
+    _log_target(name)
     start = time.perf_counter()
     with shared_engine_answers():
         folder = paper.TARGETS[name].run(Path(root), quick, paper._noop, workers)
     return str(folder), time.perf_counter() - start
+
+
+def _log_target(name: str) -> None:
+    """Append ``pid target`` to ``$PROBECOMMIT_TARGET_PIDS`` when set: which process runs which target, for a
+    memory poller over the whole run (``benchmarks/run_memory.py``; the pool's processes look alike in ``ps``)."""
+    log = os.environ.get("PROBECOMMIT_TARGET_PIDS")
+    if log:
+        with open(log, "a", encoding="utf-8") as out:
+            out.write(f"{os.getpid()} {name} {time.time():.1f}\n")
 
 
 def _start_markers(markers: Path | None, order: Sequence[str], late: dict[str, tuple[str, ...]]) -> None:
