@@ -66,8 +66,8 @@ def changes_section(doc: Doc) -> None:
             "the GRU's training gives other low digits: docs/decisions.md, \"The GRU across CPUs\"): only file "
             "paths and wall seconds differ. This publication's code changes move no number: a run's process builds "
             "its Arrow columns from their buffers instead of through pandas, and `probecommit calibrate` draws its "
-            "report in helper processes (docs/decisions.md, \"run:\" and \"cal:\"). The wall seconds above are "
-            "those of a run that shared its two cores with other work, so they are longer than an idle machine's.",
+            "report in helper processes, and each process keeps one C heap (docs/decisions.md, \"run:\", \"cal:\" "
+            "and \"mem:\").",
             "New in this publication: the explain target's experiments E199, E200, E203 and E204 behind the "
             "differences from the paper (see the list above; none of them holds, so no status moved) and the "
             "stored rows from which `verify` recomputes them.", "")
