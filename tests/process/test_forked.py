@@ -116,8 +116,9 @@ def test_without_fork_every_job_runs_here(monkeypatch):
 
 
 _INTERRUPTED = """
-    import os, sys, time
+    import os, signal, sys, time
     from probecommit.process.forked import forked_helpers
+    signal.signal(signal.SIGINT, signal.default_int_handler)  # as in a terminal (see the test's docstring)
     with forked_helpers(2) as helpers:
         pids = {helpers.submit(os.getpid).result() for _ in range(8)}
         helpers.submit(time.sleep, 60)
@@ -130,7 +131,9 @@ _INTERRUPTED = """
 @pytest.mark.parametrize("group", [False, True], ids=["the command", "the terminal's process group"])
 def test_ctrl_c_ends_the_command_and_its_helpers_at_once(group):
     """Ctrl-C while the command waits for a job: it ends (KeyboardInterrupt) without waiting for the
-    helpers' running jobs, and the helpers are gone; sent to the command alone, or to its whole group."""
+    helpers' running jobs, and the helpers are gone; sent to the command alone, or to its whole group.
+    The child restores Python's Ctrl-C handler first: a test run started in the background by a
+    non-interactive shell (a CI job) passes SIGINT on ignored, and Python then installs none."""
     child = subprocess.Popen([sys.executable, "-c", textwrap.dedent(_INTERRUPTED)], stdout=subprocess.PIPE,
                              stderr=subprocess.PIPE, text=True, env={**os.environ, "PYTHONPATH": str(SRC)},
                              start_new_session=True)
