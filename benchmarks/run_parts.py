@@ -37,6 +37,7 @@ CPU: collections.Counter = collections.Counter()
 PIECES = [  # (owner, attribute, label): the label's indent shows what it is part of
     (study, "rollout", "rollout (taps drawn, engine answers)"),
     (study, "build_trace", "beliefs (build_trace)"),
+    (core_belief.ParticleFilter, "initial", "  prior particles drawn"),
     (core_belief.ParticleFilter, "update", "  filter updates"),
     (study, "commit", "commits and episode columns"),
     (inference, "_belief_at", "  decision coordinates made contiguous"),
@@ -46,7 +47,7 @@ PIECES = [  # (owner, attribute, label): the label's indent shows what it is par
     (rundir.RunDir, "add_unit", "units kept"),
     (rundir.RunDir, "commit_if_due", "batches written (group commit)"),
     (rundir.RunDir, "finalize", "finalize (final tables, manifest)"),
-    (rundir.RunDir, "final_episodes", "episodes table for the result"),
+    (rundir.RunDir, "final_episodes_table", "episodes table for the result"),
 ]
 
 
@@ -86,7 +87,7 @@ def main() -> None:
     print(f"CPU seconds, {args.instances * args.repeats} episodes, one thread:")
     print(f"  {'imports (runner, store, core; not the CLI)':54s} {IMPORTS:6.3f}")
     print(f"  {'run_study':54s} {total:6.3f}")
-    for label in [p[2] for p in PIECES[:5]] + ["  executors decide"] + [p[2] for p in PIECES[5:]]:
+    for label in [p[2] for p in PIECES[:6]] + ["  executors decide"] + [p[2] for p in PIECES[6:]]:
         print(f"    {label:52s} {CPU[label]:6.3f}")
 
 
