@@ -40,3 +40,24 @@ def test_a_hand_case():
     assert score.tolist() == [0.4]
     score, _, _ = fast_retained.coverage_with_hull(z, weights, np.array([2.5]), 4.0)  # p2 then p0
     assert score.tolist() == [0.7]
+
+
+@pytest.mark.parametrize("levels", [2, 16, 17, 40, None])
+def test_long_prefixes_of_few_or_many_weight_values_give_the_references_score_exactly(levels):
+    # A truth near the top of the belief needs one of the few particles above it: the covering prefix
+    # is long (hundreds of particles, of a few weight values or of many), and its sorted sum is the
+    # reference's cumulative sum, bit for bit.
+    rng = np.random.default_rng(levels or 0)
+    e, n = 40, 300
+    if levels is None:
+        weights = rng.random((e, n))
+    else:
+        weights = np.exp(-rng.integers(0, levels, (e, n)).astype(float) / 3)
+    weights /= weights.sum(axis=1, keepdims=True)
+    z = rng.uniform(-2, 2, (e, n))
+    z_true = np.sort(z, axis=1)[:, -3]  # two particles above the truth
+    got = fast_retained.coverage_with_hull(z, weights, z_true, 4.0)
+    want = retained.coverage_with_hull(z, weights, z_true, 4.0)
+    for a, b in zip(got, want):
+        np.testing.assert_array_equal(a, b)
+    assert np.median(got[0]) > 0.3  # long prefixes: a third of the mass and more
