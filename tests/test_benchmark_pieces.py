@@ -14,6 +14,6 @@ def test_run_parts_wraps_functions_that_exist(monkeypatch):
     module = importlib.util.module_from_spec(spec)
     monkeypatch.setitem(sys.modules, spec.name, module)
     spec.loader.exec_module(module)
-    missing = [f"{getattr(owner, '__name__', owner)}.{name}" for owner, name, _ in module.PIECES
+    missing = [f"{getattr(owner, '__name__', owner)}.{name}" for owner, name, _ in module.PIECES + module.COMMAND_PIECES
                if not callable(getattr(owner, name, None))]
     assert not missing, f"benchmarks/run_parts.py wraps names the package no longer has: {missing}"
