@@ -1274,6 +1274,11 @@ RESPLIT_STATS = (("level mean", "level_mean", "T14-resplits.level_mean", 1.0),
                  ("margin optimistic", "margin_optimistic_fraction", "T14-resplits.margin_optimistic_percent", 0.01))
 
 
+def _paper_in_range(paper: str, scale: float) -> Callable[[dict[str, Any]], bool]:
+    """E56's (and E205's) rule for one label: the paper's value, on the pools' scale, within their [lo, hi]."""
+    return lambda v: v["lo"] <= _pv(paper) * scale <= v["hi"]
+
+
 def _experiments_ex5() -> list[Experiment]:
     """The calibration items' experiments (E55..E58, ``studies/explain/ex5_calibration.py``; rules in
     docs/decisions.md, "ex5")."""
@@ -1294,7 +1299,7 @@ def _experiments_ex5() -> list[Experiment]:
             "over {n:d} fresh 192-instance pools of Split B's generator in MuJoCo under the paper's schedule, each "
             "re-split as ours, this statistic ranges {lo:.3f} to {hi:.3f} (pool means: level {lv:.3f}, held-out "
             "cluster coverage {cv:.3f}, margin optimistic {mo:.2f}).",
-            supports=lambda v, p=paper, s=scale: v["lo"] <= _pv(p) * s <= v["hi"]))
+            supports=_paper_in_range(paper, scale)))
     common = {"s": f"{cp}best_scale", "ok": f"{cp}best_meets_rule", "inside": f"{cp}best_inside",
               "tests": f"{cp}tests", "n": f"{cp}pairs", "glo": f"{cp}best.gamma.min", "ghi": f"{cp}best.gamma.max"}
     for arm in ("original", "calibrated"):
@@ -2269,7 +2274,7 @@ def _experiments_ex35() -> list[Experiment]:
             "three and more, each re-split as ours), this statistic ranges {lo:.3f} to {hi:.3f} (mean {m:.3f}, SD "
             "{sd:.3f} over pools; {at:d} pool(s) at or above the paper's value); [min, max] over that many pools is a "
             "{pl:.2f} prediction interval for one more pool, which the paper's is.",
-            supports=lambda v, p=paper, s=scale: v["lo"] <= _pv(p) * s <= v["hi"]))
+            supports=_paper_in_range(paper, scale)))
     return out
 
 
