@@ -71,6 +71,11 @@ def test_the_step_joins_e56s_stored_rows_before_the_pools_it_runs(monkeypatch, t
     assert rows["index"].tolist() == [0, 1, 2, 3, 4]
     assert rows["level_mean"].tolist() == pytest.approx([0.7, 0.8, 0.9, 0.3, 0.4])
     assert job.res[ex35.GROUP] == ex35.summary(rows)
+    alone = SimpleNamespace(**{**vars(job), "res": defaultdict(dict), "stored": {}})  # no E56 rows: all run here
+    ran.clear()
+    ex35.run(alone)
+    assert ran == [(0, 1), (1, 2), (2, 3), (3, 4), (4, 5)]
+    assert alone.stored[ex35.STORED]["index"].tolist() == [0, 1, 2, 3, 4]
     quick = SimpleNamespace(**{**vars(job), "quick": True, "res": defaultdict(dict), "stored": {}})
     ex35.run(quick)
     assert not quick.res and not quick.stored  # none in a quick run

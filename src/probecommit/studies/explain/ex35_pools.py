@@ -54,16 +54,17 @@ def pool_rows(job: Any, count: int) -> pd.DataFrame:
     """Pools ``0 .. count - 1``: E56's stored rows first (its step ran before, in this job), then the rest, each
     pool in a process of its own (its run and re-split tables leave with it)."""
     from probecommit.runner.aside import in_own_process
+    from probecommit.studies.explain.ex15_readings import _stored_part
     from probecommit.studies.explain.study import COVER_SCHEDULE
 
-    stored = job.stored.get(ex5_calibration.STORED)
-    e56 = stored[stored["part"] == "fresh_pool"] if stored is not None else pd.DataFrame()
-    e56 = e56.dropna(axis=1, how="all").sort_values("index").head(count)
-    if len(e56) and not np.array_equal(e56["index"].to_numpy(int), np.arange(len(e56))):
+    e56 = _stored_part(job, ex5_calibration.STORED, "fresh_pool")
+    e56 = [] if e56 is None else [e56.sort_values("index").head(count)]
+    done = len(e56[0]) if e56 else 0
+    if e56 and not np.array_equal(e56[0]["index"].to_numpy(int), np.arange(done)):
         raise ValueError("E56's stored fresh pools are not pools 0 .. n - 1")
     fresh = [in_own_process(ex5_calibration.fresh_pool_rows, job.p, COVER_SCHEDULE, job.runs, i + 1, job.workers, i)
-             for i in range(len(e56), count)]
-    return pd.concat([e56, *fresh], ignore_index=True)
+             for i in range(done, count)]
+    return pd.concat([*e56, *fresh], ignore_index=True)
 
 
 def run(job: Any) -> None:
