@@ -611,7 +611,8 @@ def _claims_audit_and_calibration() -> list[Claim]:
                        *((number, ("level mean", "held-out cluster coverage", "margin optimistic"))
                          for number in ("E118", "E119", "E132")),
                        ("E186", ("held-out cluster coverage",)), ("E190", ("margin optimistic",)),
-                       ("E199", ("margin optimistic",)))))
+                       ("E199", ("margin optimistic",)),
+                       *((f"E205[{label}]", (label,)) for label, *_ in RESPLIT_STATS))))
     return c
 
 
@@ -1267,6 +1268,17 @@ def _experiments_ex3() -> list[Experiment]:
     ]
 
 
+#: T14's re-split statistics a fresh-pool experiment tests (E56, E205): label, pool statistic, paper key, scale.
+RESPLIT_STATS = (("level mean", "level_mean", "T14-resplits.level_mean", 1.0),
+                 ("held-out cluster coverage", "heldout_cluster_coverage", "T14-resplits.heldout_cluster_coverage", 1.0),
+                 ("margin optimistic", "margin_optimistic_fraction", "T14-resplits.margin_optimistic_percent", 0.01))
+
+
+def _paper_in_range(paper: str, scale: float) -> Callable[[dict[str, Any]], bool]:
+    """E56's (and E205's) rule for one label: the paper's value, on the pools' scale, within their [lo, hi]."""
+    return lambda v: v["lo"] <= _pv(paper) * scale <= v["hi"]
+
+
 def _experiments_ex5() -> list[Experiment]:
     """The calibration items' experiments (E55..E58, ``studies/explain/ex5_calibration.py``; rules in
     docs/decisions.md, "ex5")."""
@@ -1279,11 +1291,7 @@ def _experiments_ex5() -> list[Experiment]:
         "IV's definition), the full adjustment's paired failure increase has mean {m:+.3f} (central 95 % of splits "
         "{lo:+.3f} to {hi:+.3f}); its interval lies above zero on {share:.2f} of the splits and below on {below:.2f}.",
         supports=lambda v: v["lo"] <= _pv("T13-cost-of-calibration.full") <= v["hi"] and v["share"] >= EX5_VERDICT_SHARE)]
-    for label, stat, paper, scale in (("level mean", "level_mean", "T14-resplits.level_mean", 1.0),
-                                      ("held-out cluster coverage", "heldout_cluster_coverage",
-                                       "T14-resplits.heldout_cluster_coverage", 1.0),
-                                      ("margin optimistic", "margin_optimistic_fraction",
-                                       "T14-resplits.margin_optimistic_percent", 0.01)):
+    for label, stat, paper, scale in RESPLIT_STATS:
         out.append(Experiment(
             f"E56[{label}]", f"the re-split study's {label} over fresh MuJoCo pools under the paper's schedule",
             {"lo": f"{fp}{stat}.min", "hi": f"{fp}{stat}.max", "n": f"{fp}pools", "lv": f"{fp}level_mean.mean",
@@ -1291,7 +1299,7 @@ def _experiments_ex5() -> list[Experiment]:
             "over {n:d} fresh 192-instance pools of Split B's generator in MuJoCo under the paper's schedule, each "
             "re-split as ours, this statistic ranges {lo:.3f} to {hi:.3f} (pool means: level {lv:.3f}, held-out "
             "cluster coverage {cv:.3f}, margin optimistic {mo:.2f}).",
-            supports=lambda v, p=paper, s=scale: v["lo"] <= _pv(p) * s <= v["hi"]))
+            supports=_paper_in_range(paper, scale)))
     common = {"s": f"{cp}best_scale", "ok": f"{cp}best_meets_rule", "inside": f"{cp}best_inside",
               "tests": f"{cp}tests", "n": f"{cp}pairs", "glo": f"{cp}best.gamma.min", "ghi": f"{cp}best.gamma.max"}
     for arm in ("original", "calibrated"):
@@ -2252,6 +2260,24 @@ def _experiments_ex34() -> list[Experiment]:
     return out
 
 
+def _experiments_ex35() -> list[Experiment]:
+    """The ex35 helper's experiment (E205, one per T14 label; ``studies/explain/ex35_pools.py``; rule in
+    docs/decisions.md, "ex35", committed before any new pool's number): E56 over 12 fresh pools, its rule unchanged."""
+    d = f"{X}ex35_pools."
+    out = []
+    for label, stat, paper, scale in RESPLIT_STATS:
+        out.append(Experiment(
+            f"E205[{label}]", f"the re-split study's {label} over 12 fresh MuJoCo pools under the paper's schedule",
+            {"lo": f"{d}{stat}.min", "hi": f"{d}{stat}.max", "m": f"{d}{stat}.mean", "sd": f"{d}{stat}.sd",
+             "n": f"{d}pools", "at": f"{d}{stat}.at_least_paper", "pl": f"{d}prediction_level"},
+            "over {n:d} fresh 192-instance pools of Split B's generator in MuJoCo under the paper's schedule (E56's "
+            "three and more, each re-split as ours), this statistic ranges {lo:.3f} to {hi:.3f} (mean {m:.3f}, SD "
+            "{sd:.3f} over pools; {at:d} pool(s) at or above the paper's value); [min, max] over that many pools is a "
+            "{pl:.2f} prediction interval for one more pool, which the paper's is.",
+            supports=_paper_in_range(paper, scale)))
+    return out
+
+
 def _experiments_ex29() -> list[Experiment]:
     """The ex29 helper's experiment (``studies/explain/ex29_band.py``; rule in docs/decisions.md, "ex29"): T36's
     k = 1 AUC with the first tap's band lost at the rate the paper's own k = 1 escape implies (E187)."""
@@ -2791,7 +2817,7 @@ for _experiment in (_experiments() + _experiments_more() + _experiments_ex3() + 
                     + _experiments_ex25() + _experiments_ex26() + _experiments_ex27() + _experiments_ex28()
                     + _experiments_ex30()
                     + _experiments_ex29() + _experiments_ex31() + _experiments_ex32() + _experiments_ex33()
-                    + _experiments_ex34()):
+                    + _experiments_ex34() + _experiments_ex35()):
     EXPERIMENTS[_experiment.number] = _experiment
 
 

@@ -111,9 +111,11 @@ def fresh_pool_row(protocol: Any, schedule: list[float], runs: Path, i: int, wor
     return {"part": "fresh_pool", "index": i, **{k: float(v) for k, v in summary(table).items()}}
 
 
-def fresh_pool_rows(protocol: Any, schedule: list[float], runs: Path, count: int, workers: int) -> pd.DataFrame:
-    """``count`` fresh pools (:func:`fresh_pool_row`), one row each."""
-    return pd.DataFrame([fresh_pool_row(protocol, schedule, runs, i, workers) for i in range(count)])
+def fresh_pool_rows(protocol: Any, schedule: list[float], runs: Path, count: int, workers: int,
+                    first: int = 0) -> pd.DataFrame:
+    """Fresh pools ``first .. count - 1`` (:func:`fresh_pool_row`), one row each: E56 runs the first ``count``, ex35's
+    E205 the ones after E56's (its rows are E56's stored ones)."""
+    return pd.DataFrame([fresh_pool_row(protocol, schedule, runs, i, workers) for i in range(first, count)])
 
 
 def pool_keys(rows: pd.DataFrame) -> dict[str, float]:

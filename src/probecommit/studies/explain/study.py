@@ -53,6 +53,7 @@ from probecommit.studies.explain import ex30_fresh
 from probecommit.studies.explain import ex33_aim
 from probecommit.studies.explain import ex31_shift
 from probecommit.studies.explain import ex34_fixed
+from probecommit.studies.explain import ex35_pools
 from probecommit.studies.explain import ex29_band
 from probecommit.studies.explain import gru as gru_study
 from probecommit.studies.explain.margin import margin_curve
@@ -149,7 +150,7 @@ class Explain:
             ex12_distinct.GROUP, ex12_simultaneous.GROUP,
             ex15_readings.GROUP, ex15_union.GROUP,
             ex18_share.GROUP, ex18_grasp.GROUP, ex26_grasp.GROUP, ex28_plateau.GROUP, ex30_fresh.GROUP,
-            ex29_band.GROUP, ex33_aim.GROUP)}
+            ex29_band.GROUP, ex33_aim.GROUP, ex35_pools.GROUP)}
         self.tables: dict[str, pd.DataFrame] = ReadDict(self.reads, "tables")
         #: Stored rows written beside results.json as they are, by file name (``more``'s steps).
         self.stored: dict[str, pd.DataFrame] = ReadDict(self.reads, "stored")
@@ -558,7 +559,8 @@ class Explain:
         steps = [self.missing, place_physx, lambda: self.committed_pool(paper), lambda: self.margins(paper),
                  self.resplits_paper_schedule,  # the steps set aside here read only the insertion study and it
                  self.aside(ex5_calibration.run, ex9_calibration.run, ex12_simultaneous.run, ex15_readings.run,
-                            ex28_plateau.run, needs=()),  # E118 (ex15_readings) joins the rows ex5 and ex9 store
+                            ex28_plateau.run, ex35_pools.run, needs=()),  # E118 (ex15_readings) joins the rows ex5 and
+                 # ex9 store; E205 (ex35_pools) E56's stored fresh pools, and runs the rest
                  self.aside(ex30_fresh.run, needs=()),  # E190, E191: the insertion study's stored runs only
                  self.aside(ex33_aim.run, needs=()),  # E199, E200: the insertion study's stored runs only
                  self.aside(ex7.run, needs=()), self.aside(ex13.mixture, needs=()), self.aside(ex17.tiebreak, needs=()),
