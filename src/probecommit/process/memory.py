@@ -226,9 +226,9 @@ def large_arrays_in_heap() -> Iterator[None]:
 
     Why: since the command keeps one heap per process (:data:`HEAP_ARENAS`), mapping each large
     array apart saves little of a calibration's peak but costs its page faults: ``probecommit
-    calibrate`` at E = 12288, 4.7 M faults and 10.9 s of system time against 2.7 M and 6.8 s in the
-    heap, its peak 512 against 525 MB (docs/decisions.md, "cal3:"). A command whose peak matters more
-    than its time (a reproduction's targets) keeps the blocks.
+    calibrate`` at E = 12288, 4.6 M faults and 11 s of system time against 2.6 M and 6.5-6.8 s in the
+    heap, its peak 513 against 530-532 MB (docs/decisions.md, "cal3:"). A command whose peak matters
+    more than its time (a reproduction's targets) keeps the blocks.
     """
     _in_heap.append(True)
     try:
