@@ -94,7 +94,8 @@ def test_reuse_freed_arrays_without_mallopt(monkeypatch):
 
 
 #: Whether a 3 MiB array gets pages of its own (glibc's mallinfo2: bytes in mmapped blocks), before,
-#: inside, inside a nested block of a 4 MiB threshold, after that block, and after ``large_arrays_apart``.
+#: inside, inside a nested block of a 4 MiB threshold, after that block, and after ``large_arrays_apart``;
+#: then within ``large_arrays_in_heap`` (whether a block there changed the threshold, and the array), and after.
 _APART = """
 import ctypes, sys
 import numpy as np
@@ -117,7 +118,10 @@ with memory.large_arrays_apart() as changed:
     with memory.large_arrays_apart(4 * 2**20):
         nested = apart()
     back = apart()
-print(changed, outside, inside, nested, back, apart())
+after = apart()
+with memory.large_arrays_in_heap(), memory.large_arrays_apart() as kept_changed:
+    kept = apart()
+print(changed, outside, inside, nested, back, after, kept_changed, kept, apart())
 """
 
 
@@ -133,8 +137,10 @@ def test_large_arrays_apart_maps_large_arrays_only_within_and_only_under_the_com
 
     # changed, outside, inside, nested, back, after: the command's 32 MiB threshold keeps 3 MiB in the heap
     # but within; a nested block's threshold (4 MiB) holds within it only, then the enclosing one's again.
-    assert run("reuse") == ["True", "False", "True", "False", "True", "False"]
+    # Within large_arrays_in_heap a block changes nothing (the array stays in the heap), and after it, neither.
+    assert run("reuse") == ["True", "False", "True", "False", "True", "False", "False", "False", "False"]
     # A threshold the user chose is theirs: left alone (here 1 MiB: every 3 MiB array is mapped).
-    assert run("reuse", MALLOC_MMAP_THRESHOLD_="1048576") == ["False", "True", "True", "True", "True", "True"]
+    assert run("reuse", MALLOC_MMAP_THRESHOLD_="1048576") == ["False", "True", "True", "True", "True", "True",
+                                                              "False", "True", "True"]
     # A program that never took the command's setting keeps glibc's dynamic threshold.
     assert run("plain")[0] == "False"

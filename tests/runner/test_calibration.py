@@ -133,6 +133,29 @@ def test_calibrate_command_writes_the_same_files_with_and_without_helpers(tmp_pa
     assert written[True] == written[False]
 
 
+def test_calibrate_command_keeps_its_large_arrays_in_the_heap(tmp_path, runs, monkeypatch):
+    """The command's ``calibrate`` runs within ``large_arrays_in_heap`` (its passes' arrays reused in the
+    heap, not mapped apart: docs/decisions.md, "cal3:"), and the setting ends with the command."""
+    import probecommit.process.forked as forked
+    import probecommit.runner.calibration as calibration
+    from probecommit.cli.app import app
+    from probecommit.errors import UsageError
+    from probecommit.process import memory
+
+    seen = []
+
+    def stop(*args, **kwargs):
+        seen.append(list(memory._in_heap))
+        raise UsageError("stopped here")
+
+    monkeypatch.setattr(forked, "can_fork", lambda: False)
+    monkeypatch.setattr(calibration, "calibrate", stop)
+    r = CliRunner().invoke(app, ["calibrate", "--cal", str(runs["cal"]), "--test", str(runs["test"]),
+                                 "-o", str(tmp_path / "c")])
+    assert "stopped here" in r.output and r.exit_code != 0
+    assert seen == [[True]] and memory._in_heap == []
+
+
 def test_runs_with_a_failed_trajectory(tmp_path, runs, monkeypatch):
     """A trajectory whose probing failed stays counted through calibration and gates."""
     import probecommit.runner.build as build

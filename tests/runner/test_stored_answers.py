@@ -42,3 +42,25 @@ def test_answers_of_different_lengths_are_left_to_the_records():
     sim._cache[("peg_depth", (1.0, 2.0), (3.0,))] = np.array([1.0])
     sim._cache[("peg_depth", (1.0, 2.0), (3.0, 4.0))] = np.array([1.0])
     assert sim.answer_columns(sim.answered_keys()) is None and sim.answer_columns([]) is None
+
+
+_VALUES = st.sampled_from([-0.0, 0.0, 1.5, -2.25, 3.0, float("nan")])
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.lists(st.tuples(_VALUES, _VALUES), min_size=1, max_size=12),
+       st.lists(st.tuples(_VALUES, _VALUES), min_size=1, max_size=4))
+def test_about_selects_the_rows_whose_every_latent_is_among_the_truths(thetas, truths):
+    """``about`` looks a column's distinct values up: the same rows as ``np.isin`` on every row (signed
+    zeros, NaN), for the run's table and for a table of answers added after it."""
+    stored = [{"engine": "analytic", "query": "peg_depth", "theta": [x, c], "arg": [float(i)], "value": [1.0]}
+              for i, (x, c) in enumerate(thetas)]
+    table = pa.Table.from_pandas(cache_frame(stored, LATENTS), preserve_index=False)
+    answers = StoredAnswers(table, LATENTS)
+    answers.add(stored)
+    truths = np.array(truths, dtype=float)
+    expected = np.ones(len(thetas), dtype=bool)
+    for j, name in enumerate(LATENTS):
+        expected &= np.isin(np.asarray(table.column(name).to_numpy(), dtype=float), truths[:, j])
+    masks = answers.about(truths)
+    assert len(masks) == 2 and all(mask.dtype == bool and np.array_equal(mask, expected) for mask in masks)

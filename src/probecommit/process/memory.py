@@ -201,7 +201,7 @@ def large_arrays_apart(threshold: int = APART_BYTES) -> Iterator[bool]:
         Whether the threshold was changed.
     """
     mallopt = _mallopt()
-    ours = os.environ.get("MALLOC_MMAP_THRESHOLD_") == str(HEAP_REUSE_BYTES)
+    ours = os.environ.get("MALLOC_MMAP_THRESHOLD_") == str(HEAP_REUSE_BYTES) and not _in_heap
     changed = mallopt is not None and ours and mallopt(_M_MMAP_THRESHOLD, threshold) == 1
     if changed:
         _apart_thresholds.append(threshold)
@@ -215,6 +215,26 @@ def large_arrays_apart(threshold: int = APART_BYTES) -> Iterator[bool]:
 
 #: The thresholds of the :func:`large_arrays_apart` blocks in force, innermost last.
 _apart_thresholds: list[int] = []
+#: The :func:`large_arrays_in_heap` blocks in force (none: :func:`large_arrays_apart` takes effect).
+_in_heap: list[bool] = []
+
+
+@contextlib.contextmanager
+def large_arrays_in_heap() -> Iterator[None]:
+    """Within the block, :func:`large_arrays_apart` changes nothing: large arrays stay in the heap,
+    where a freed one is reused by the next without faulting in fresh pages.
+
+    Why: since the command keeps one heap per process (:data:`HEAP_ARENAS`), mapping each large
+    array apart saves little of a calibration's peak but costs its page faults: ``probecommit
+    calibrate`` at E = 12288, 4.6 M faults and 11 s of system time against 2.6 M and 6.5-6.8 s in the
+    heap, its peak 513 against 530-532 MB (docs/decisions.md, "cal3:"). A command whose peak matters
+    more than its time (a reproduction's targets) keeps the blocks.
+    """
+    _in_heap.append(True)
+    try:
+        yield
+    finally:
+        _in_heap.pop()
 
 
 def trim_heap() -> bool:

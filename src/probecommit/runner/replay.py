@@ -201,8 +201,9 @@ class StoredAnswers:
 
     def __init__(self, table: pa.Table, latent_names: Sequence[str]) -> None:
         self.latent_names = tuple(latent_names)
-        #: Tables of answers with their latent columns as arrays: the run's, then the engine's.
-        self._parts: list[tuple[pa.Table, list[np.ndarray]]] = []
+        #: Tables of answers with each latent column as its distinct values and each row's place among
+        #: them (``np.unique``'s values and inverse): the run's, then the engine's.
+        self._parts: list[tuple[pa.Table, list[tuple[np.ndarray, np.ndarray]]]] = []
         #: Keys given for good (answers about no instance's truth: :meth:`give_unclaimed`).
         self.permanent: frozenset = frozenset()
         self._append(table)
@@ -214,7 +215,8 @@ class StoredAnswers:
         return set(latent_names) <= set(table.column_names) and truths.ndim == 2 and truths.shape[1] == len(latent_names)
 
     def _append(self, table: pa.Table) -> None:
-        self._parts.append((table, [np.asarray(table.column(name).to_numpy(), dtype=float) for name in self.latent_names]))
+        columns = [np.asarray(table.column(name).to_numpy(), dtype=float) for name in self.latent_names]
+        self._parts.append((table, [np.unique(column, return_inverse=True) for column in columns]))
 
     def add(self, records: list[dict[str, Any]] | AnswerColumns) -> None:
         """Keep answers the engine gave (``cache_records`` rows, or ``answer_columns``), to give again with their chunk's."""
@@ -239,13 +241,18 @@ class StoredAnswers:
 
     def about(self, truths: np.ndarray) -> list[np.ndarray]:
         """Per table, which rows may be about one of ``truths`` ``[M, d]`` (each latent among the
-        truths' values): every row a commit on those instances reads, and rarely a few more."""
+        truths' values): every row a commit on those instances reads, and rarely a few more.
+
+        A column's distinct values are looked up, not its rows (``np.isin`` compares by value, so
+        equal values get one answer: the same mask): the run's table was sorted again for every chunk
+        of every pass, which grew with the chunks times the answers (calibrate at E = 12,288: 0.77 of
+        the main thread's 29 CPU s, 0.05 of 7.9 at E = 3,072; docs/decisions.md, "cal3:")."""
         truths = np.asarray(truths, dtype=float).reshape(-1, len(self.latent_names))
         masks = []
-        for table, thetas in self._parts:
+        for table, columns in self._parts:
             rows = np.ones(table.num_rows, dtype=bool)
-            for column, values in zip(thetas, truths.T):
-                rows &= np.isin(column, values)
+            for (levels, place), values in zip(columns, truths.T):
+                rows &= np.isin(levels, values)[place.reshape(-1)]
             masks.append(rows)
         return masks
 
