@@ -143,3 +143,62 @@ def test_no_experiment_title_sentence_or_claim_text_types_a_decimal_number():
     typed += [f"{n}: {e.template}" for n, e in C.EXPERIMENTS.items()
               if decimal.search(re.sub(r"\{[^}]*\}", "", e.template))]
     assert not typed, typed
+
+
+#: Each table's registry keys ``tab:<t>.<a>.<b>``: which part names the paper's row (the other, the column, in
+#: the registry's order) and the columns kept (a caption's number, or a second value in one cell, is checked
+#: only by the test above).
+_ROW_PART = {"tab:breadth": (1, ("blind_bayes", "blind_robust", "probe_robust", "delta", "delta_lo", "delta_hi")),
+             "tab:audit": (2, None), "tab:insertion": (1, None), "tab:testc": (1, None), "tab:engines": (2, None),
+             "tab:hardware": (1, None), "tab:faults": (1, None)}
+
+
+def _paper_rows(text: str, table: str) -> list[list[str]]:
+    """The numbers of each row of the paper's tabular labelled ``table``, as printed, in reading order."""
+    body = text.split(f"\\label{{{table}}}", 1)[1]
+    body = body.split("\\begin{tabular}", 1)[1].split("\\end{tabular}", 1)[0]
+    return [re.findall(r"(?<![\w.])[+-]?\d+(?:\.\d+)?", row) for row in body.split("\\\\")]
+
+
+def _in_order(values: list[str], row: list[str]) -> bool:
+    it = iter(row)
+    return all(v in it for v in values)
+
+
+@pytest.mark.skipif(not PAPER_TEX.is_file(), reason="the paper's LaTeX source is not on this machine")
+def test_every_table_value_sits_in_its_row_of_the_paper():
+    """A value the paper prints can still be filed under the wrong cell (another arm, k or column): each
+    registry row's values must appear, in the registry's column order, in one row of the paper's table."""
+    text = PAPER_TEX.read_text()
+    for table, (part, columns) in _ROW_PART.items():
+        groups: dict[str, list[str]] = {}
+        for key, printed in P.PRINTED.items():
+            parts = key.split(".")
+            if parts[0] != table or len(parts) != 3 or (columns and parts[2] not in columns):
+                continue
+            if table == "tab:audit" and not parts[2].isdigit():
+                continue
+            groups.setdefault(parts[part], []).append(printed)
+        rows = _paper_rows(text, table)
+        assert groups, table
+        for name, values in groups.items():
+            assert any(_in_order(values, row) for row in rows), (table, name, values)
+
+
+def test_a_flag_is_printed_beside_its_legend():
+    """``{flag:g} = yes`` prints "0 = yes" when the flag is 0; a flag is printed as ``{flag:g}, 1 = yes``."""
+    bad = [(n, m.group(0)) for n, e in C.EXPERIMENTS.items()
+           for m in re.finditer(r"\{\w+(?::[^}]*)?\}\s*=\s*(?:yes|holds|no)\b", e.template)]
+    assert not bad, bad
+
+
+def test_a_surprise_cell_is_credited_only_to_an_experiment_on_surprise():
+    """An experiment explains only what its numbers measure: a surprise AUC cell is never credited to one whose
+    title and sentence say nothing of surprise (E7 on Table VIII's boundary row did)."""
+    for claim in C.CLAIMS:
+        labels = [c.label for c in claim.comparisons if "surprise" in c.label.lower()]
+        for number, covers in C.explanations(claim):
+            spoken = [lab for lab in labels if covers is None or any(lab.startswith(p) for p in covers)]
+            e = C.EXPERIMENTS[number]
+            text = (e.title + e.template).lower()
+            assert not spoken or "surprise" in text or "auc" in text, (claim.id, number, spoken)

@@ -158,8 +158,10 @@ def claims_section(doc: Doc) -> None:
     if "claims" not in doc.trees:
         return
     c = "claims:counts."
+    kinds = {kind: sum(claim.kind == kind for claim in CLAIMS) for kind in ("table", "figure", "text")}
     doc.add("## Every item of the paper, compared", "",
-            f"The paper has {doc.n(c + 'total', 'd')} items: 8 tables, 7 figures and 44 numbered quantitative claims in "
+            f"The paper has {doc.n(c + 'total', 'd')} items: {kinds['table']} tables, {kinds['figure']} figures and "
+            f"{kinds['text']} numbered quantitative claims in "
             "the text, each an entry of the claims registry (`src/probecommit/studies/claims.py`) with its comparison "
             f"rule. Computed at publish time: **{doc.n(c + 'reproduced', 'd')} reproduced**, "
             f"**{doc.n(c + 'differs, explained', 'd')} differ, explained by an experiment**, "
