@@ -709,6 +709,20 @@ def _claims_hardware() -> list[Claim]:
     return c
 
 
+#: T33's "four times" (the registry's "several times"): the least fold any reading of a multiple admits
+#: (decisions.md, "ruleB").
+SEVERAL_FOLD = 2.0
+
+
+def several_times(v: Mapping[str, float]) -> bool:
+    """Committed escape rate ``ec/nc`` at least :data:`SEVERAL_FOLD` times the rejected ``er/nr``.
+
+    Why cross-multiplied: a rejected pool with no escape has rate 0, and any committed escape
+    is then infinitely many times it; with no committed escape nothing is "times" anything.
+    """
+    return v["ec"] > 0 and v["ec"] * v["nr"] >= SEVERAL_FOLD * v["er"] * v["nc"]
+
+
 def _claims_commit_decision() -> list[Claim]:
     """The claims of Sec. VI, The commit decision (thresholds, gates, surprise)."""
     c: list[Claim] = []
@@ -731,10 +745,10 @@ def _claims_commit_decision() -> list[Claim]:
               explain=(("E23", ("posterior variance",)), ("E24", ("lowest",)), ("E63", ("lowest",)))))
     add(Claim("T33-committed-pool", "Sec. VI, The commit decision", "At 60 % commitment the committed pool holds "
               "escaped episodes at several times the rejected pool's rate",
-              tuple(Holds(sig, "escape rate among committed above that among rejected",
+              tuple(Holds(sig, f"escape rate among committed at least {SEVERAL_FOLD:g} x that among rejected",
                           {"ec": f"{g}{GATES[sig]}.escaped_committed", "nc": f"{g}{GATES[sig]}.n_committed",
                            "er": f"{g}{GATES[sig]}.escaped_rejected", "nr": f"{g}{GATES[sig]}.n_rejected"},
-                          lambda v: v["ec"] / v["nc"] > v["er"] / v["nr"])
+                          several_times)
                     for sig in ("raw", "adjusted", "posterior_variance")), explain=(("E1", ("raw",)), "E13")))
     add(Claim("T34-claimed-realized", "Sec. VI, The commit decision", "Selection re-creates optimism: claimed vs "
               "realized failure at commit",
