@@ -705,7 +705,9 @@ def _claims_hardware() -> list[Claim]:
               (Holds("coverage falls", "coverage below 1 at +-12 mm", {"c": f"{R}prior_by_mm.12.coverage"},
                      lambda v: v["c"] < 1),
                Holds("optimism", "optimism positive at +-12 mm", {"o": f"{R}prior_by_mm.12.optimism"},
-                     lambda v: v["o"] > 0)), simulated_rig=True))
+                     lambda v: v["o"] > 0))
+              + tuple(Near(f"{name} at +-12 mm", f"T29-replay-prior.{name}", f"{R}prior_by_mm.12.{name}",
+                           POINT_TOL * 2.5) for name in ("coverage", "escape", "optimism")), simulated_rig=True))
     return c
 
 
