@@ -405,10 +405,12 @@ def _table_claims() -> list[Claim]:
         testc.append(Paired(f"{row} old - corrected", _p(f"tab:testc.{row}", "diff", "diff_lo", "diff_hi"),
                             f"{I}table_testc.{row}.old_minus_corrected"))
         testc.append(Inside(f"{row} old", f"tab:testc.{row}.old", f"{I}table_testc.{row}.old"))
-        if row != "escape_random_k8" and row != "episode_coverage_random_k8":
-            testc.append(Inside(f"{row} corrected", f"tab:testc.{row}.corrected", f"{I}table_testc.{row}.corrected"))
-    testc.append(Near("set+margin old", "tab:testc.failure_cover_k5_setcal_margin.old",
-                      f"{I}table_testc.failure_cover_k5_setcal_margin.old", POINT_TOL * 2.5))
+        testc.append(Inside(f"{row} corrected", f"tab:testc.{row}.corrected", f"{I}table_testc.{row}.corrected"))
+    margin = "failure_cover_k5_setcal_margin"
+    testc += [Near(f"set+margin {col}", f"tab:testc.{margin}.{col}", f"{I}table_testc.{margin}.{col}", POINT_TOL * 2.5)
+              for col in ("old", "corrected")]
+    testc.append(Paired("set+margin old - corrected", _p(f"tab:testc.{margin}", "diff", "diff_lo", "diff_hi"),
+                        f"{I}table_testc.{margin}.old_minus_corrected"))
     engines = [Near(f"{col} {metric}", f"tab:engines.{col}.{metric}", f"{E}table.{col}.{metric}", POINT_TOL * 2.5)
                for col in ENGINE_COLUMNS for metric in ("support_escape", "episode_coverage", "optimism_e_k", "failure")]
     hardware = [Near(f"{taps} taps {col}", f"tab:hardware.{taps}.{col}", f"{R}table.{taps - 1}.{col}", POINT_TOL * 5)
