@@ -694,7 +694,11 @@ def _claims_hardware() -> list[Claim]:
     add(Claim("T26-hardware-optimism", "Sec. V-D", "Optimism near zero, every interval covering zero",
               tuple(Holds(f"{t} taps", "optimism interval covers zero",
                           {"lo": f"{R}table.{t - 1}.optimism_lo", "hi": f"{R}table.{t - 1}.optimism_hi"},
-                          lambda v: v["lo"] <= 0 <= v["hi"]) for t in range(1, 6)), simulated_rig=True,
+                          lambda v: v["lo"] <= 0 <= v["hi"]) for t in range(1, 6))
+              + tuple(Holds(f"{t} taps within bound", "|optimism| within the paper's bound of zero",
+                            {"o": f"{R}table.{t - 1}.optimism"},
+                            lambda v: abs(v["o"]) <= paper_values.value("T26-hardware-optimism.bound") + 1e-12)
+                      for t in range(1, 6)), simulated_rig=True,
               explain=("E33",)))
     add(Claim("T27-replay-deployed", "Sec. V-D, Fault injection", "Replayed as deployed, the taps reproduce the run",
               (Holds("reproduced", "every recorded decision reproduced", {"f": f"{R}replay_reproduced_fraction"},
