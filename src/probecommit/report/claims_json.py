@@ -13,7 +13,8 @@ from typing import Any
 
 from probecommit.report.ledger import resolve
 from probecommit.studies import paper_values
-from probecommit.studies.claims import CLAIMS, EXPERIMENTS, Outcome, counts, evaluate, explanations
+from probecommit.studies.claims import (CLAIMS, EXPERIMENTS, Outcome, counts, counts_simulated_rig, evaluate,
+                                        explanations)
 from probecommit.store.safefile import write_text
 
 CLAIMS_NAME = "claims.json"
@@ -57,7 +58,8 @@ def compute(root: str | Path) -> dict[str, Any]:
                             for c in claim.comparisons],
             "explain_candidates": [number for number, _ in explanations(claim)],
         }
-    return {"version": CLAIMS_VERSION, "counts": counts(outcomes), "claims": entries}
+    return {"version": CLAIMS_VERSION, "counts": counts(outcomes), "counts_simulated_rig": counts_simulated_rig(outcomes),
+            "claims": entries}
 
 
 def write(root: str | Path) -> Path:

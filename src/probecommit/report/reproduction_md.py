@@ -153,6 +153,19 @@ class Doc:
 # ----------------------------------------------------------------------------- the claims
 
 
+def _count(doc: Doc, status: str, words: str) -> str:
+    """``"22 reproduced (4 of them on the simulated rig)"``: a status's count and how many rest on the rig.
+
+    Why: a simulation of a physical-arm claim is not the arm; the opening says how many of each
+    count are such, from the registry's ``simulated_rig`` flag (``claims:counts_simulated_rig``).
+    """
+    text = f"{doc.n('claims:counts.' + status, 'd')} {words}"
+    rig = f"claims:counts_simulated_rig.{status}"
+    if doc.has(rig) and doc.value(rig):
+        text += f" ({doc.n(rig, 'd')} of them on the simulated rig)"
+    return text
+
+
 def claims_section(doc: Doc) -> None:
     """Status counts, the table of every paper item, then each difference with its experiment."""
     if "claims" not in doc.trees:
@@ -163,9 +176,10 @@ def claims_section(doc: Doc) -> None:
             f"The paper has {doc.n(c + 'total', 'd')} items: {kinds['table']} tables, {kinds['figure']} figures and "
             f"{kinds['text']} numbered quantitative claims in "
             "the text, each an entry of the claims registry (`src/probecommit/studies/claims.py`) with its comparison "
-            f"rule. Computed at publish time: **{doc.n(c + 'reproduced', 'd')} reproduced**, "
-            f"**{doc.n(c + 'differs, explained', 'd')} differ, explained by an experiment**, "
-            f"**{doc.n(c + 'differs, unexplained', 'd')} differ, unexplained**, **{doc.n(c + 'missing', 'd')} missing**. "
+            f"rule. Computed at publish time: **{_count(doc, 'reproduced', 'reproduced')}**, "
+            f"**{_count(doc, 'differs, explained', 'differ, explained by an experiment')}**, "
+            f"**{_count(doc, 'differs, unexplained', 'differ, unexplained')}**, "
+            f"**{_count(doc, 'missing', 'missing')}**. "
             "The statuses are in `results/paper/claims.json`; a comparison on the simulated rig is marked so.", "")
     rows = []
     for claim in CLAIMS:

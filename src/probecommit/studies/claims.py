@@ -2860,3 +2860,14 @@ def counts(outcomes: Mapping[str, Outcome]) -> dict[str, int]:
         out[o.status] += 1
     out["total"] = len(outcomes)
     return out
+
+
+def counts_simulated_rig(outcomes: Mapping[str, Outcome]) -> dict[str, int]:
+    """:func:`counts` over the claims whose status rests on the simulated rig (``Claim.simulated_rig``).
+
+    Why: the opening's counts would otherwise count a simulation of a physical-arm claim as
+    "reproduced" beside the simulation ones, with nothing in the count to say so. A ``physical``
+    claim is "missing" for the arm, not decided by the rig, so it is not among them.
+    """
+    rig = {c.id for c in CLAIMS if c.simulated_rig and not c.physical}
+    return counts({cid: o for cid, o in outcomes.items() if cid in rig})
