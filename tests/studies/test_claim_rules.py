@@ -8,14 +8,7 @@ from __future__ import annotations
 
 from probecommit.studies import claims as C
 from probecommit.studies import paper_values as P
-
-
-def _lookup(values):
-    def lookup(key):
-        if key not in values:
-            raise KeyError(key)
-        return values[key]
-    return lookup
+from tests.studies.test_claims import _lookup
 
 
 def _claim(cid):
