@@ -96,7 +96,8 @@ def table_V_testc(r: dict[str, Any], folder: Path) -> str:
     for key, row in res.items():
         if key == "failure_cover_k5_setcal_margin":
             fo, fn = row["old"], row["corrected"]
-            rows.append([key, fmt(fo), fmt(fn), f"{fo - fn:+.3f}" if isinstance(fo, float) else "--"])
+            rows.append([key, fmt(fo), fmt(fn), fmt(row["old_minus_corrected"], signed=True) if "old_minus_corrected" in row
+                         else f"{fo - fn:+.3f}" if isinstance(fo, float) else "--"])
         else:
             rows.append([key, fmt(row["old"][0]), fmt(row["corrected"][0]), fmt(row["old_minus_corrected"], signed=True)])
     return page(TITLES["table_V_testc"], md_table(["row", "old", "corrected", "old - corrected [95% CI]"], rows),

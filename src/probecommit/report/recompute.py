@@ -129,7 +129,7 @@ def _calibrated(folder: Path, runs: dict[str, pd.DataFrame], results: dict[str, 
     """Table IV Split B, Table III (both halves), the margins, Test C's set + margin row and the commit
     gates, from the stored re-executed commits and the runs' stored episodes (``runner.calibration``'s
     ``calibration_from_tables`` and ``gates_from_commits``: the functions ``calibrate`` and ``gates`` end in)."""
-    from probecommit.studies.insertion import CALIBRATIONS
+    from probecommit.studies.insertion import CALIBRATIONS, setmargin_paired
     from probecommit.runner.calibration import calibration_from_tables
 
     commits = pd.read_parquet(folder / COMMITS)
@@ -152,7 +152,8 @@ def _calibrated(folder: Path, runs: dict[str, pd.DataFrame], results: dict[str, 
     setmargin = {name: float(cal[f"testc_{name}"].cost.set_index("setting").loc["set calibration + margin", "failure"])
                  for name in ("old", "corrected")}
     v["table_testc.failure_cover_k5_setcal_margin"] = {
-        **setmargin, "simultaneous_threshold": {n: float(cal[f"testc_{n}"].simultaneous_threshold) for n in setmargin}}
+        **setmargin, "old_minus_corrected": setmargin_paired(cal["testc_old"], cal["testc_corrected"], **boot),
+        "simultaneous_threshold": {n: float(cal[f"testc_{n}"].simultaneous_threshold) for n in setmargin}}
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
         _gates(by_name["gates"], runs, results, alpha, boot, out)

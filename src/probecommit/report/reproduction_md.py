@@ -381,6 +381,8 @@ def _table_v(doc: Doc, i: str) -> None:
     t = f"{i}table_testc.failure_cover_k5_setcal_margin."
     rows += [("cover k=5 set+margin, old", "tab:testc.failure_cover_k5_setcal_margin.old", f"{t}old"),
              ("cover k=5 set+margin, corrected", "tab:testc.failure_cover_k5_setcal_margin.corrected", f"{t}corrected"),
+             ("cover k=5 set+margin, old - corrected (paired)", "tab:testc.failure_cover_k5_setcal_margin.diff",
+              f"{t}old_minus_corrected"),
              ("simultaneous threshold, corrected, cover", "T16-corrected-thresholds.cover",
               f"{t}simultaneous_threshold.corrected")]
     doc.table(_HEAD, _pair_rows(doc, rows))

@@ -554,6 +554,8 @@ class CalibrationResult:
         simultaneous_coverage: Test fraction of instances covered in all repeats
             and all budgets at the simultaneous threshold, with its interval.
         audit_original, audit_calibrated: Full test audit tables.
+        arms: Each arm's test episodes at ``cost_budget`` (the rows ``cost`` and ``cost_differences``
+            are computed from), so two calibrations' arms can be paired (Table V's set + margin row).
     """
 
     alpha: float
@@ -571,6 +573,7 @@ class CalibrationResult:
     simultaneous_coverage: dict[str, float]
     audit_original: pd.DataFrame = field(repr=False)
     audit_calibrated: pd.DataFrame = field(repr=False)
+    arms: dict[str, pd.DataFrame] = field(default_factory=dict, repr=False)
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-friendly summary (infinite thresholds as the string ``"inf"``)."""
@@ -833,7 +836,7 @@ def _summary(parts: CalibrationParts, *, alpha: float, budgets: list[int], cost_
         thresholds=t_k, simultaneous_threshold=t_sim, margin=parts.margin, distribution_free_margin=df_margin,
         table3=table3, summary=summary, cost=done["cost"],
         cost_differences=pd.DataFrame([done[pair] for pair in COST_PAIRS]), cost_budget=cost_budget,
-        simultaneous_coverage=done["simultaneous"], audit_original=a_orig, audit_calibrated=a_cal,
+        simultaneous_coverage=done["simultaneous"], audit_original=a_orig, audit_calibrated=a_cal, arms=arms,
     )
 
 
