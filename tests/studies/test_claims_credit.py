@@ -6,6 +6,7 @@ synthetic keys and by the registry's own credits, one test for each credit withd
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import pytest
@@ -105,3 +106,17 @@ def test_the_withdrawn_credits_leave_their_items_unexplained_on_the_publication(
                      "T32-gate-areas-random", "T26-hardware-optimism", "T09-grasp"):
         assert got[claim_id]["status"] != "differs, explained", claim_id
     assert got["T06-cover-failure-splits"]["experiment"] == "E9"
+
+
+_COUNT = re.compile(r"\b(\d+|two|three|four|five|six|seven|eight|nine|ten|eleven|twelve|twenty|fifty)\b")
+#: What a title may write in digits that is no design count: a budget, a policy's budgets, a dimension, an item's
+#: or experiment's number, a position in mm.
+_NOT_A_COUNT = re.compile(r"k = \d+(, \d+)*|Probe-Robust\(\d(, \d)?\)|\b[12]-D\b|\bT\d\d\b|\bE\d+\b|c = \d+|-?\d+ mm|k \+ 1")
+
+
+def test_a_title_types_no_count_its_sentence_prints():
+    """A count the sentence prints from a key (``{n:d}``) is not typed in the title: a run with fewer pools would
+    print a title its own sentence contradicts (E205's "12 fresh", E106's "five draws")."""
+    bad = [(n, e.title) for n, e in C.EXPERIMENTS.items()
+           if re.search(r"\{\w+:d\}", e.template) and _COUNT.search(_NOT_A_COUNT.sub("", e.title))]
+    assert not bad, bad

@@ -1295,7 +1295,7 @@ def _experiments_ex5() -> list[Experiment]:
     docs/decisions.md, "ex5")."""
     rc, fp, cp = f"{X}ex5_calibration.resplit_cost.", f"{X}ex5_calibration.fresh_pool.", f"{X}ex5_calibration.capture."
     out = [Experiment(
-        "E55", "the full adjustment's paired cost over the 50 re-splits of the MuJoCo pool",
+        "E55", "the full adjustment's paired cost over re-splits of the MuJoCo pool",
         {"n": f"{rc}splits", "m": f"{rc}estimate.mean", "lo": f"{rc}estimate.p025", "hi": f"{rc}estimate.p975",
          "share": f"{rc}share_above_zero", "below": f"{rc}share_below_zero"},
         "calibrating one half of our 192-instance MuJoCo cover pool and testing the other ({n:d} re-splits, Table "
@@ -1488,7 +1488,7 @@ def _experiments_ex9() -> list[Experiment]:
     cv, co, mg = f"{X}ex9_calibration.coverage.", f"{X}ex9_calibration.cost.", f"{X}ex9_calibration.margin."
     ro = f"{X}ex9_calibration.resplit_optimism."
     return [
-        Experiment("E80", "held-out cluster coverage with ties at the threshold counted covered, over four pools",
+        Experiment("E80", "held-out cluster coverage with ties at the threshold counted covered, over re-split pools",
                    {"n": f"{cv}pools", "s": f"{cv}splits", "lo": f"{cv}le.min", "hi": f"{cv}le.max",
                     "ltlo": f"{cv}lt.min", "lthi": f"{cv}lt.max", "id": f"{cv}identity", "tied": f"{cv}tied.max",
                     "share": f"{cv}splits_with_ties"},
@@ -1498,7 +1498,7 @@ def _experiments_ex9() -> list[Experiment]:
                    "of a pool's held-out clusters tie the threshold ({share:.2f} of the splits have a tie).",
                    supports=lambda v: v["lo"] <= _pv("T14-resplits.heldout_cluster_coverage") <= v["hi"]
                    and v["lo"] > v["id"] + EX9_TIE_EXCESS),
-        Experiment("E81", "the full adjustment's paired cost over re-splits of four pools under the paper's schedule",
+        Experiment("E81", "the full adjustment's paired cost over re-splits of several pools under the paper's schedule",
                    {"n": f"{co}pools", "s": f"{co}splits", "m": f"{co}estimate.mean", "lo": f"{co}estimate.p025",
                     "hi": f"{co}estimate.p975", "share": f"{co}share_above_zero", "below": f"{co}share_below_zero"},
                    "calibrating one half and testing the other of {n:d} 192-instance pools under the paper's cover "
@@ -1688,7 +1688,7 @@ def _experiments_ex13() -> list[Experiment]:
     su, mx = f"{X}ex13_surprise.", f"{X}ex13_mixture."
     draws = ("b_test", "b_cal", "a", "pool_0", "pool_1")
     return [
-        Experiment("E106", "the k = 1 surprise AUC over five draws of the generator under the paper's schedule",
+        Experiment("E106", "the k = 1 surprise AUC over draws of the generator under the paper's schedule",
                    {"lo": f"{su}auc_k1.min", "hi": f"{su}auc_k1.max", "lo5": f"{su}auc_k5.min", "hi5": f"{su}auc_k5.max",
                     "nlo": f"{su}n_escaped.min", "nhi": f"{su}n_escaped.max", "pn": "paper:T36-surprise.escaped",
                     "n": f"{su}draws", **{f"p{i}": f"{su}{d}.first_tap_pocket.escaped" for i, d in enumerate(draws)},
@@ -2278,7 +2278,7 @@ def _experiments_ex35() -> list[Experiment]:
     out = []
     for label, stat, paper, scale in RESPLIT_STATS:
         out.append(Experiment(
-            f"E205[{label}]", f"the re-split study's {label} over 12 fresh MuJoCo pools under the paper's schedule",
+            f"E205[{label}]", f"the re-split study's {label} over E56's fresh MuJoCo pools and more, under the paper's schedule",
             {"lo": f"{d}{stat}.min", "hi": f"{d}{stat}.max", "m": f"{d}{stat}.mean", "sd": f"{d}{stat}.sd",
              "n": f"{d}pools", "at": f"{d}{stat}.at_least_paper", "pl": f"{d}prediction_level"},
             "over {n:d} fresh 192-instance pools of Split B's generator in MuJoCo under the paper's schedule (E56's "
