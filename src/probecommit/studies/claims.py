@@ -445,7 +445,8 @@ def _table_claims() -> list[Claim]:
         Claim("tab:testc", "Table V (tab:testc)", "Confirmation on untouched instances (Test C)", tuple(testc),
               explain=()),  # E2 and E9 measure none of Test C's failed cells (credA)
         Claim("tab:engines", "Table VI (tab:engines)", "The audit across engines, random probes, k = 8",
-              tuple(engines), explain=(("E6", tuple(f"{EXACT}sapien/deployed {m}" for m in SAPIEN_EMULATED)), ("E45", ("pybullet/deployed support_escape",)),
+              tuple(engines), explain=(("E6", tuple(f"{EXACT}sapien/deployed {m}" for m in SAPIEN_EMULATED)),
+                                             ("E45", ("pybullet/deployed support_escape",)),
                                              ("E62", ("pybullet/deployed support_escape",)),
                                              ("E87", ("pybullet/deployed support_escape",)))),
         Claim("tab:hardware", "Table VII (tab:hardware)", "The run on the physical arm, by number of taps (ours: the "
