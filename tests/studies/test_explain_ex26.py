@@ -98,9 +98,10 @@ def test_e179_needs_six_give_or_take_one_feasible_and_no_worsening_at_one_ceilin
     assert not holds(_values(c4=(6, 0)))  # the frozen ceiling is E178's, not E179's
 
 
-def test_t09_names_e179_and_not_e178():
+def test_t09_credits_neither_e179_nor_e178():
+    """E179's rule drops the claim's "half improve" and its improvements are not the paper's spread (credA)."""
     t09 = next(c for c in claims.CLAIMS if c.id == "T09-grasp")
-    assert "E179" in t09.explain and "E178" not in t09.explain
+    assert "E179" not in t09.explain and "E178" not in t09.explain
     assert np.isfinite(claims.paper_values.value("T09-grasp.improve_min"))
 
 

@@ -72,7 +72,7 @@ def test_ex2_experiments_are_numbered_30_to_49_and_wired_to_their_claims():
     wired = {e if isinstance(e, str) else e[0] for cid in ("tab:breadth", "T01-pricing", "T07-cover-schedule",
                                                            "T26-hardware-optimism", "T28-replay-boundary", "T18-engine-scans",
                                                            "T42-robust-chosen") for e in by_id[cid].explain}
-    assert mine <= wired
+    assert mine - {"E33"} <= wired  # E33's own pooled 4-tap interval excludes zero: not credited with T26 (credA)
 
 
 def test_unresolved_choice_rule_by_hand():
