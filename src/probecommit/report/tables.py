@@ -63,9 +63,9 @@ def budget_rows(columns: Mapping[str, np.ndarray]) -> list[dict[str, Any]]:
 
     The summary pandas' grouped means gave, kept (``tests/report/test_budget_rows.py`` holds the two
     equal): a row with a missing method or k is in no group; a mean skips missing values (NaN when a
-    group has none); a (method, k) with failed episodes only has no row; methods in :data:`METHOD_ORDER`
-    first, by k, then every other method by k, by name within a k (the sort's key gave them all NaN,
-    a tie). NumPy's means sum pairwise, pandas' with compensation: they may differ in the last bits
+    group has none); a (method, k) with failed episodes only has no row; the methods of :data:`METHOD_ORDER`
+    first, in its order, each by k; then every other method, by k, by name within a k (the sort's key gave
+    them all NaN, a tie). NumPy's means sum pairwise, pandas' with compensation: they may differ in the last bits
     (within 1e-12; printed to three digits, and no published key is computed here).
     """
     method, k, status = columns["method"], columns["k"], columns["status"]
