@@ -44,17 +44,13 @@ def main_options(
 
 
 def _summary_rows(episodes) -> tuple[list, bool]:
-    """The per-budget rows of an episodes table (a DataFrame, or a run's Arrow table: read with NumPy
-    where ``budget_rows`` can, so a run's process never imports pandas) and whether outcomes are 0/1."""
-    from probecommit.report.tables import budget_rows, budget_summary
+    """The per-budget rows of an episodes table (a DataFrame, or a run's Arrow table, read with NumPy:
+    a run's process never imports pandas) and whether its outcomes are 0/1."""
+    from probecommit.report.tables import budget_rows, summary_columns
 
-    rows = None if hasattr(episodes, "iloc") else budget_rows(episodes)
-    if rows is not None:  # (np.unique would import numpy.ma: 10 ms)
-        from probecommit.store.arrow_columns import to_numpy
-
-        return rows, set(to_numpy(episodes.column("realized")).tolist()) <= {0.0, 1.0}
-    frame = episodes if hasattr(episodes, "iloc") else episodes.to_pandas()
-    return [row for _, row in budget_summary(frame).iterrows()], set(frame["realized"].dropna().unique()) <= {0.0, 1.0}
+    columns = summary_columns(episodes)
+    realized = columns["realized"]  # (np.unique would import numpy.ma: 10 ms)
+    return budget_rows(columns), set(realized[realized == realized].tolist()) <= {0.0, 1.0}
 
 
 def print_budget_table(episodes, title: str) -> None:

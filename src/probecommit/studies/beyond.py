@@ -81,8 +81,10 @@ def plateau_rows(result, mode: str) -> pd.DataFrame:
     return table
 
 
-def budget_summary(episodes: pd.DataFrame) -> pd.DataFrame:
-    """Failure (or miss), coverage, escape and optimism per budget of the probe-robust rows."""
+def probe_robust_by_budget(episodes: pd.DataFrame) -> pd.DataFrame:
+    """Failure (or miss), coverage, escape, optimism and posterior variance per budget of the ok probe-robust
+    rows: the adaptive comparison's numbers, which verify recomputes from the stored rows (not
+    :func:`probecommit.report.tables.budget_summary`, which is per method and counts failed rows)."""
     p = episodes[(episodes["method"] == "probe_robust") & (episodes["status"] == "ok")]
     grouped = p.groupby("k")
     return pd.DataFrame({
@@ -131,7 +133,7 @@ def adaptive_comparison(runs: Mapping[str, str | Path], out: str | Path, workers
 
 
 def summary_rows(episodes: pd.DataFrame) -> pd.DataFrame:
-    """The rows :func:`budget_summary` reads (ok probe-robust rows), what a publication stores per run and schedule."""
+    """The rows :func:`probe_robust_by_budget` reads (ok probe-robust rows), what a publication stores per run and schedule."""
     p = episodes[(episodes["method"] == "probe_robust") & (episodes["status"] == "ok")]
     return p[[c for c in STORED_COLUMNS if c in p.columns]].reset_index(drop=True)
 
@@ -140,7 +142,7 @@ def adaptive_table(rows: pd.DataFrame) -> pd.DataFrame:
     """The adaptive comparison's table from the stored rows of each run and schedule, in the order stored."""
     parts = []
     for (label, name), part in rows.groupby(["run", "schedule"], sort=False):
-        table = budget_summary(part)
+        table = probe_robust_by_budget(part)
         table.insert(0, "schedule", name)
         table.insert(0, "run", label)
         parts.append(table)
