@@ -64,8 +64,8 @@ def budget_rows(columns: Mapping[str, np.ndarray]) -> list[dict[str, Any]]:
     The summary pandas' grouped means gave, kept (``tests/report/test_budget_rows.py`` holds the two
     equal): a row with a missing method or k is in no group; a mean skips missing values (NaN when a
     group has none); a (method, k) with failed episodes only has no row; the methods of :data:`METHOD_ORDER`
-    first, in its order, each by k; then every other method, by k, by name within a k (the sort's key gave
-    them all NaN, a tie). NumPy's means sum pairwise, pandas' with compensation: they may differ in the last bits
+    first, in its order, each by k; then every other method by name, each by k (pandas' sort gave them all
+    NaN, a tie, and so listed them by k first: a method's rows apart). NumPy's means sum pairwise, pandas' with compensation: they may differ in the last bits
     (within 1e-12; printed to three digits, and no published key is computed here).
     """
     method, k, status = columns["method"], columns["k"], columns["status"]
@@ -75,7 +75,7 @@ def budget_rows(columns: Mapping[str, np.ndarray]) -> list[dict[str, Any]]:
     pairs = set(zip(method[ok].tolist(), k[ok].tolist()))
     is_method = {m: method == m for m in {m for m, _ in pairs}}
     rows = []
-    for m, budget in sorted(pairs, key=lambda p: (METHOD_ORDER.get(p[0], len(METHOD_ORDER)), p[1], p[0])):
+    for m, budget in sorted(pairs, key=lambda p: (METHOD_ORDER.get(p[0], len(METHOD_ORDER)), p[0], p[1])):
         group = is_method[m] & (k == budget)
         at = ok & group
         row = {"method": m, "k": budget, "episodes": int(np.count_nonzero(at))}
