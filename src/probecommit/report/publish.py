@@ -76,8 +76,9 @@ def changes_section(doc: Doc) -> None:
             "(\"ruleB:\"). Items that were \"explained\" by such a credit are now \"differs, unexplained\"; the "
             "opening counts say how many rest on the simulated rig.",
             "New in this publication: E205 (T14's re-split statistics over E56's fresh pools and more; its margin "
-            "share's range reaches the paper's value through one pool alone, docs/decisions.md, \"ex35\"), Table V's set + margin row's paired "
-            "old - corrected difference, and the stored rows from which `verify` recomputes them.", "")
+            "share's range reaches the paper's value through one pool alone, docs/decisions.md, \"ex35\"), Table V's "
+            "set + margin row's paired old - corrected difference, and the stored rows from which `verify` "
+            "recomputes them.", "")
 
 
 def render(frozen: Path, ledger: Ledger) -> str:
