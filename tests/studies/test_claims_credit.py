@@ -78,6 +78,17 @@ def test_withdrawn_credits_stay_withdrawn():
     assert not _spoken("T09-grasp", "E179")  # its rule drops "half improve"
 
 
+def test_e13_speaks_to_the_gates_it_measures_under_t33s_own_fold():
+    """E13 measures the raw gate's and posterior variance's pools under the paper's schedule, not the adjusted
+    gate's; it holds only if both ratios pass T33's rule (at least ``SEVERAL_FOLD`` x), as the claim does."""
+    assert _spoken("T33-committed-pool", "E13") == ["raw", "posterior_variance"]
+    e13 = C.EXPERIMENTS["E13"]
+    base = {"ratio": 3.0, "pv": 2.0, "ours": 0.7}
+    assert e13.supports(base)
+    assert not e13.supports({**base, "pv": 1.9}) and not e13.supports({**base, "ratio": 1.5})
+    assert not e13.supports({**base, "ours": 1.2})
+
+
 def test_a_per_cell_experiment_speaks_to_its_own_cell_only():
     """``E17[<label>]`` names the cell it measures: its cover is that label and nothing else."""
     for claim in C.CLAIMS:
@@ -95,7 +106,7 @@ def test_the_withdrawn_credits_leave_their_items_unexplained_on_the_publication(
     got = claims_json.compute(PAPER)["claims"]
     for claim_id in ("T05-escape-realizations", "T11-audit-trend", "tab:testc", "tab:insertion", "tab:engines",
                      "T18-engine-scans", "T21-physx-cluster-coverage", "T22-physx-paired", "T43-robust-filters",
-                     "T32-gate-areas-random", "T26-hardware-optimism", "T09-grasp"):
+                     "T32-gate-areas-random", "T26-hardware-optimism", "T09-grasp", "T33-committed-pool"):
         assert got[claim_id]["status"] != "differs, explained", claim_id
     assert got["T06-cover-failure-splits"]["experiment"] == "E9"
 
