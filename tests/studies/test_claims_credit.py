@@ -123,3 +123,24 @@ def test_a_title_types_no_count_its_sentence_prints():
     bad = [(n, e.title) for n, e in C.EXPERIMENTS.items()
            if re.search(r"\{\w+:d\}", e.template) and _COUNT.search(_NOT_A_COUNT.sub("", e.title))]
     assert not bad, bad
+
+
+def test_e41_to_e44_need_both_prices_at_one_width():
+    """T01's rule (each price within 10 %) must hold for both prices at one prior width, not across widths."""
+    from probecommit.studies import paper_values
+
+    e41 = C.EXPERIMENTS["E41"]  # darts: prices in % of the miss
+    paper = {k: paper_values.value(f"T01-pricing.{k}.darts") * 0.01 for k in C.PRICE_KINDS}
+    far = {f"{k}@{w:g}": 10 * paper[k] for w in C.PRICE_WIDTHS for k in C.PRICE_KINDS}
+    split = {**far, "blind_above@0.25": paper["blind_above"], "five_below@0.5": paper["five_below"]}
+    assert not e41.supports(split)  # each price matched, at different widths
+    assert e41.supports({**split, "five_below@0.25": 1.05 * paper["five_below"]})
+
+
+def test_the_price_widths_are_the_declared_scales_and_ours():
+    import yaml
+
+    from probecommit.studies.explain import study
+
+    config = yaml.safe_load((Path(study.__file__).resolve().parents[2] / "configs" / "paper" / "explain.yaml").read_text())
+    assert sorted(C.PRICE_WIDTHS) == sorted([*config["breadth_prior_scales"], 1.0])
