@@ -59,11 +59,12 @@ def test_each_table_III_cell_is_explained_only_by_its_own_range():
 def test_committed_pool_experiment_needs_the_order_to_follow_the_schedule():
     e = C.EXPERIMENTS["E13"]
     v = {"ec": 23, "nc": 231, "er": 5, "nr": 153, "ratio": 3.0, "lo": 1.1, "hi": 15.0, "pvc": 0.09, "pvr": 0.045,
-         "ours": 0.7, "pn": 50.0}
+         "pv": 2.0, "ours": 0.7, "pn": 50.0}
     assert e.supports(v)
     assert not e.supports({**v, "ours": 1.2})  # ours in the paper's order too: the schedule is not the cause
-    assert not e.supports({**v, "pvc": 0.04})  # posterior variance not reordered under the paper's schedule
+    assert not e.supports({**v, "pv": 0.9})  # posterior variance not reordered under the paper's schedule
     assert not e.supports({**v, "ratio": 0.9})
+    assert not e.supports({**v, "ratio": 1.5})  # reordered, but not T33's "several times" (at least SEVERAL_FOLD)
 
 
 def test_surprise_and_realized_experiments_test_the_paper_value():
