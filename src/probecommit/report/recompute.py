@@ -129,7 +129,7 @@ def _calibrated(folder: Path, runs: dict[str, pd.DataFrame], results: dict[str, 
     """Table IV Split B, Table III (both halves), the margins, Test C's set + margin row and the commit
     gates, from the stored re-executed commits and the runs' stored episodes (``runner.calibration``'s
     ``calibration_from_tables`` and ``gates_from_commits``: the functions ``calibrate`` and ``gates`` end in)."""
-    from probecommit.studies.insertion import CALIBRATIONS, setmargin_paired
+    from probecommit.studies.insertion import CALIBRATIONS, setmargin_failure, setmargin_paired
     from probecommit.runner.calibration import calibration_from_tables
 
     commits = pd.read_parquet(folder / COMMITS)
@@ -149,8 +149,7 @@ def _calibrated(folder: Path, runs: dict[str, pd.DataFrame], results: dict[str, 
         v[f"table_insertion.simultaneous_{name}"] = float(cal[name].simultaneous_threshold)
     v["table_audit.table"] = cal["random"].table3.to_dict("records")
     v["table_audit.summary"] = cal["random"].summary
-    setmargin = {name: float(cal[f"testc_{name}"].cost.set_index("setting").loc["set calibration + margin", "failure"])
-                 for name in ("old", "corrected")}
+    setmargin = {name: setmargin_failure(cal[f"testc_{name}"]) for name in ("old", "corrected")}
     v["table_testc.failure_cover_k5_setcal_margin"] = {
         **setmargin, "old_minus_corrected": setmargin_paired(cal["testc_old"], cal["testc_corrected"], **boot),
         "simultaneous_threshold": {n: float(cal[f"testc_{n}"].simultaneous_threshold) for n in setmargin}}

@@ -61,12 +61,13 @@ def budget_rows(columns: Mapping[str, np.ndarray]) -> list[dict[str, Any]]:
     """Per (method, k): ok episodes, failure, mean predicted, optimism, episode coverage, support escape
     and failed episodes (status != ok, a missing status included), as plain Python values, in NumPy.
 
-    The summary pandas' grouped means gave, kept (``tests/report/test_budget_rows.py`` holds the two
-    equal): a row with a missing method or k is in no group; a mean skips missing values (NaN when a
-    group has none); a (method, k) with failed episodes only has no row; the methods of :data:`METHOD_ORDER`
-    first, in its order, each by k; then every other method by name, each by k (pandas' sort gave them all
-    NaN, a tie, and so listed them by k first: a method's rows apart). NumPy's means sum pairwise, pandas' with compensation: they may differ in the last bits
-    (within 1e-12; printed to three digits, and no published key is computed here).
+    What pandas' grouped means gave, kept (``tests/report/test_budget_rows.py`` holds the two equal): a row
+    with a missing method or k is in no group; a mean skips missing values (NaN when a group has none); a
+    (method, k) with failed episodes only has no row. The order: the methods of :data:`METHOD_ORDER` first, in
+    its order, each by k; then every other method by name, each by k (pandas' sort gave those all NaN, a tie,
+    and so listed them by k first, a method's rows apart). NumPy's means sum pairwise, pandas' with
+    compensation: they may differ in the last bits (within 1e-12; printed to three digits, and no published
+    key is computed here).
     """
     method, k, status = columns["method"], columns["k"], columns["status"]
     keyed = np.fromiter((m is not None for m in method), bool, len(method)) & (k == k)

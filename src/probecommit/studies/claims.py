@@ -26,7 +26,6 @@ resolver) and a ``exists(pattern)`` (a glob over the results tree) from its call
 from __future__ import annotations
 
 import functools
-
 import math
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
@@ -528,9 +527,8 @@ def _claims_protocol_and_score() -> list[Claim]:
     c: list[Claim] = []
     add = c.append
     price = [Near(f"{kind} {fam}", f"T01-pricing.{kind}.{fam}", f"cost:results.prices.{fam}.{kind}",
-                  0.1 * paper_values.value(f"T01-pricing.{kind}.{fam}") * (1 if fam == "hinge" else 0.01),
-                  scale=1 if fam == "hinge" else 0.01)
-             for kind in ("blind_above", "five_below") for fam in ("darts", "push2d", "hinge", "push1d")]
+                  PRICE_TOL * _paper_price(kind, fam), scale=_price_scale(fam))
+             for kind in PRICE_KINDS for fam in PRICED]
     add(Claim("T01-pricing", "Sec. III, Probe protocol and cost", "Break-even probe prices per family (within 10 %)",
               tuple(price), explain=tuple((f"E{41 + i}", (f"blind_above {fam}", f"five_below {fam}"))
                                           for i, fam in enumerate(PRICED))
@@ -1083,6 +1081,19 @@ def _experiments_more() -> list[Experiment]:
 #: Table II's swept families (E35..E40, in the table's order) and the priced ones (E41..E44).
 PRIOR_SWEPT = ("push1d", "push2d", "push2d_pybullet", "darts", "hinge", "shuffleboard")
 PRICED = ("darts", "push2d", "hinge", "push1d")
+#: T01's two prices per family, and its rule: each within 10 % of the paper's.
+PRICE_KINDS = ("blind_above", "five_below")
+PRICE_TOL = 0.1
+
+
+def _price_scale(fam: str) -> float:
+    """The paper prints the hinge's prices in the miss's units and the others' in % of it."""
+    return 1 if fam == "hinge" else 0.01
+
+
+def _paper_price(kind: str, fam: str) -> float:
+    """The paper's price, in the miss's units."""
+    return _pv(f"T01-pricing.{kind}.{fam}") * _price_scale(fam)
 
 
 def _breadth_prior_experiments() -> list[Experiment]:
@@ -1120,18 +1131,16 @@ def _breadth_prior_experiments() -> list[Experiment]:
     return out
 
 
-#: The prior widths E41..E44 read a price at (``explain.yaml``'s ``breadth_prior_scales`` and our own, 1), and the
-#: two prices of T01. A width whose keys do not resolve (a quick run) makes the experiment explain nothing.
+#: The prior widths E41..E44 read a price at (``explain.yaml``'s ``breadth_prior_scales`` and our own, 1). A width
+#: whose keys do not resolve (a quick run) makes the experiment explain nothing.
 PRICE_WIDTHS = (0.125, 0.25, 0.5, 1.0, 1.25)
-PRICE_KINDS = ("blind_above", "five_below")
 
 
 def _prices_at_one_width(fam: str, v: dict[str, Any]) -> bool:
-    """T01's own rule (each price within 10 % of the paper's) for both prices at one prior width: the span over
-    widths let the two prices pass at different widths, which no one scene gives (rev, in docs/decisions.md)."""
-    scale = 1 if fam == "hinge" else 0.01
-    paper = {kind: _pv(f"T01-pricing.{kind}.{fam}") * scale for kind in PRICE_KINDS}
-    return any(all(abs(v[f"{kind}@{w:g}"] - paper[kind]) <= 0.1 * paper[kind] for kind in PRICE_KINDS)
+    """T01's own rule (each price within :data:`PRICE_TOL` of the paper's) for both prices at one prior width: the
+    span over widths let the two prices pass at different widths, which no one scene gives (rev, in docs/decisions.md)."""
+    paper = {kind: _paper_price(kind, fam) for kind in PRICE_KINDS}
+    return any(all(abs(v[f"{kind}@{w:g}"] - paper[kind]) <= PRICE_TOL * paper[kind] for kind in PRICE_KINDS)
                for w in PRICE_WIDTHS)
 
 
