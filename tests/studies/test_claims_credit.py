@@ -104,10 +104,14 @@ def test_the_withdrawn_credits_leave_their_items_unexplained_on_the_publication(
     from probecommit.report import claims_json
 
     got = claims_json.compute(PAPER)["claims"]
-    for claim_id in ("T05-escape-realizations", "T11-audit-trend", "tab:testc", "tab:insertion", "tab:engines",
-                     "T18-engine-scans", "T21-physx-cluster-coverage", "T22-physx-paired", "T43-robust-filters",
+    for claim_id in ("T05-escape-realizations", "T11-audit-trend", "tab:testc", "tab:engines",
+                     "T18-engine-scans", "T21-physx-cluster-coverage", "T43-robust-filters",
                      "T32-gate-areas-random", "T26-hardware-optimism", "T09-grasp", "T33-committed-pool"):
         assert got[claim_id]["status"] != "differs, explained", claim_id
+    # Explained since, each only through an experiment that measures its failed labels (E206, E207; the lead's
+    # 2026-11-28 section of docs/decisions.md), never through a withdrawn credit.
+    assert got["tab:insertion"]["experiment"] == "E9, E206"
+    assert got["T22-physx-paired"]["experiment"] == "E207"
     assert got["T06-cover-failure-splits"]["experiment"] == "E9"
 
 
@@ -144,3 +148,34 @@ def test_the_price_widths_are_the_declared_scales_and_ours():
 
     config = yaml.safe_load((Path(study.__file__).resolve().parents[2] / "configs" / "paper" / "explain.yaml").read_text())
     assert sorted(C.PRICE_WIDTHS) == sorted([*config["breadth_prior_scales"], 1.0])
+
+
+def test_e206_and_e207_speak_to_the_labels_they_measure():
+    assert _spoken("tab:insertion", "E206") == ["B cover k5 setcal"]
+    assert sorted(_spoken("T22-physx-paired", "E207")) == ["MJ offset", "own scan"]
+    assert not [c.id for c in C.CLAIMS if c.id not in ("tab:insertion", "T22-physx-paired")
+                and (_spoken(c.id, "E206") or _spoken(c.id, "E207"))]
+
+
+def _e207_values(paper_window: tuple[float, float, float], model_window: tuple[float, float, float]) -> dict:
+    v = {}
+    for w, triple in (("p", paper_window), ("m", model_window)):
+        for k in ("mj_offset", "own_scan"):
+            v[f"{w}{k}"], v[f"{w}{k}_lo"], v[f"{w}{k}_hi"] = triple
+    return v
+
+
+def test_e207_holds_only_if_the_window_and_not_the_boundary_gives_t22():
+    """The paper's T22 intervals both cover zero: under the paper's window both of ours must too, and under the
+    model's window at least one must not (else the window explains nothing)."""
+    rule = C.EXPERIMENTS["E207"].supports
+    covers, excludes = (0.01, -0.05, 0.06), (-0.06, -0.10, -0.02)
+    assert rule(_e207_values(covers, excludes))
+    assert not rule(_e207_values(covers, covers))  # the window changes nothing
+    assert not rule(_e207_values(excludes, excludes))  # the paper's window does not give the paper's T22
+
+
+def test_e206_holds_only_if_the_papers_set_calibrated_cell_lies_inside():
+    rule = C.EXPERIMENTS["E206"].supports
+    paper = C.paper_values.value("tab:insertion.B_cover_k5_setcal.est")
+    assert rule({"lo": paper - 0.01, "hi": paper + 0.01}) and not rule({"lo": paper + 0.001, "hi": paper + 0.1})

@@ -128,13 +128,19 @@ class Paired:
         return _keys_of(self.ours)
 
     def test(self, lookup: Lookup) -> bool:
-        est, lo, hi = _triple(lookup, self.ours)
-        p, plo, phi = (paper_values.value(k) for k in self.paper)
-        if not _finite(est, lo, hi):
-            return False
-        excludes, paper_excludes = lo > 0 or hi < 0, plo > 0 or phi < 0
-        same_sign = (est > 0) == (p > 0) or not paper_excludes and not excludes
-        return excludes == paper_excludes and same_sign
+        return paired_agrees(_triple(lookup, self.ours), self.paper)
+
+
+def paired_agrees(ours: tuple[float, float, float], paper: tuple[str, str, str]) -> bool:
+    """:class:`Paired`'s rule on one ``(estimate, lo, hi)`` against the paper's three keys (experiments
+    that test a paired claim under another condition apply the claim's own rule through this)."""
+    est, lo, hi = ours
+    p, plo, phi = (paper_values.value(k) for k in paper)
+    if not _finite(est, lo, hi):
+        return False
+    excludes, paper_excludes = lo > 0 or hi < 0, plo > 0 or phi < 0
+    same_sign = (est > 0) == (p > 0) or not paper_excludes and not excludes
+    return excludes == paper_excludes and same_sign
 
 
 @dataclass(frozen=True)
@@ -446,7 +452,8 @@ def _table_claims() -> list[Claim]:
         Claim("tab:audit", "Table III (tab:audit)", "Insertion audit, Split B, random probes", tuple(audit),
               explain=_audit_explain(audit)),
         Claim("tab:insertion", "Table IV (tab:insertion)", "Insertion failure by split and calibration setting",
-              tuple(insertion), explain=(("E9", ("A cover", f"{EXACT}B cover k5")),)),  # E9 ran without set calibration
+              tuple(insertion), explain=(("E9", ("A cover", f"{EXACT}B cover k5")),  # E9 ran without set calibration
+                                           ("E206", (f"{EXACT}B cover k5 setcal",)))),
         Claim("tab:testc", "Table V (tab:testc)", "Confirmation on untouched instances (Test C)", tuple(testc),
               explain=()),  # E2 and E9 measure none of Test C's failed cells (credA)
         Claim("tab:engines", "Table VI (tab:engines)", "The audit across engines, random probes, k = 8",
@@ -682,7 +689,7 @@ def _claims_correction_and_engines() -> list[Claim]:
               (Paired("MJ offset", _p("T22-physx-paired", "mj_offset", "mj_offset_lo", "mj_offset_hi"),
                       f"{E}paired.sapien/mj_offset"),
                Paired("own scan", _p("T22-physx-paired", "own_scan", "own_scan_lo", "own_scan_hi"),
-                      f"{E}paired.sapien/own_scan"))))
+                      f"{E}paired.sapien/own_scan")), explain=(("E207", (f"{EXACT}MJ offset", f"{EXACT}own scan")),)))
     return c
 
 
@@ -2872,6 +2879,44 @@ def _experiments_ex24() -> list[Experiment]:
     ]
 
 
+def _experiments_lead() -> list[Experiment]:
+    """The lead's experiments of 2026-11-28 (rules in docs/decisions.md, "lead, 2026-11-28"): two conditions another
+    experiment's step already runs, each judged by the item's own comparison rule (E206: Table IV's set-calibrated
+    cell under the paper's schedule; E207: T22's paired differences on the emulated PhysX scene)."""
+    cost = f"{X}committed_pool.schedule.B_test.paper_schedule.cost_table."
+    em = f"{X}physx_capture.emulated."
+    t22 = {v: _p("T22-physx-paired", v, f"{v}_lo", f"{v}_hi") for v in ("mj_offset", "own_scan")}
+    return [
+        Experiment("E206", "the paper's cover schedule with set calibration on the same instances",
+                   {"s": f"{cost}set_calibration", "lo": f"{cost}set_calibration.1", "hi": f"{cost}set_calibration.2",
+                    "m": f"{cost}set_calibration_margin", "n": f"{cost}no_calibration"},
+                   "run on the same Split B instances and repeats with the paper's schedule, calibrated on Split B cal "
+                   "as ours is, set calibration fails {s:.3f} [{lo:.3f}, {hi:.3f}] at k = 5 (without calibration "
+                   "{n:.3f}, with set calibration and the margin {m:.3f}).",
+                   supports=lambda v: v["lo"] <= _pv("tab:insertion.B_cover_k5_setcal.est") <= v["hi"]),
+        Experiment("E207", "T22's paired differences on the analytic scene given PhysX's reported boundary, with its "
+                   "reported capture window and with the model's",
+                   {**{f"{w}{v}{i}": f"{em}{cap}_capture.{v}.paired_failure{j}"
+                       for w, cap in (("p", "paper"), ("m", "model")) for v in t22 for i, j in (("", ""), ("_lo", ".1"),
+                                                                                                ("_hi", ".2"))},
+                    "cr": f"{X}physx_capture.ours.capture_ratio", "pcr": "paper:T18-engine-scans.sapien_ratio"},
+                   "with PhysX's reported boundary and capture window ({pcr:.2f} w(c)) the MuJoCo offset changes "
+                   "failure by {pmj_offset:+.3f} [{pmj_offset_lo:+.3f}, {pmj_offset_hi:+.3f}] and the scene's own "
+                   "offset by {pown_scan:+.3f} [{pown_scan_lo:+.3f}, {pown_scan_hi:+.3f}]; with the same boundary and "
+                   "the model's window (ours captures over {cr:.3f} w(c)) by {mmj_offset:+.3f} [{mmj_offset_lo:+.3f}, "
+                   "{mmj_offset_hi:+.3f}] and {mown_scan:+.3f} [{mown_scan_lo:+.3f}, {mown_scan_hi:+.3f}].",
+                   supports=lambda v: _t22_follows_the_window(v, t22)),
+    ]
+
+
+def _t22_follows_the_window(v: dict[str, Any], paper: dict[str, tuple[str, str, str]]) -> bool:
+    """E207's rule: under the paper's window both of T22's paired rules pass; under the model's window at least one
+    fails (the window, not the boundary, is what makes the paired differences the paper's)."""
+    agrees = {w: [paired_agrees((v[f"{w}{k}"], v[f"{w}{k}_lo"], v[f"{w}{k}_hi"]), keys) for k, keys in paper.items()]
+              for w in ("p", "m")}
+    return all(agrees["p"]) and not all(agrees["m"])
+
+
 for _experiment in (_experiments() + _experiments_more() + _experiments_ex3() + _experiments_ex4()
                     + _experiments_ex5() + _experiments_ex6() + _experiments_ex7()
                     + _experiments_ex8() + _experiments_ex9()
@@ -2884,7 +2929,7 @@ for _experiment in (_experiments() + _experiments_more() + _experiments_ex3() + 
                     + _experiments_ex25() + _experiments_ex26() + _experiments_ex27() + _experiments_ex28()
                     + _experiments_ex30()
                     + _experiments_ex29() + _experiments_ex31() + _experiments_ex32() + _experiments_ex33()
-                    + _experiments_ex34() + _experiments_ex35()):
+                    + _experiments_ex34() + _experiments_ex35() + _experiments_lead()):
     EXPERIMENTS[_experiment.number] = _experiment
 
 
