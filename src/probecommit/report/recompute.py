@@ -368,6 +368,7 @@ def _sweeps(folder: Path, results: dict[str, Any], session: pd.DataFrame, out: R
     from probecommit.robot.replay import sweep_rows
 
     stored = pd.read_parquet(folder / SWEEPS)
+    _prior_by_position(stored, session, results, out)
     resamples = int(results.get("sweep_resamples", DEFAULT_RESAMPLES))
     for fault in ("boundary", "prior"):
         table = sweep_rows(stored[stored["fault"] == fault], resamples=resamples, seed=DEFAULT_SEED)
@@ -389,6 +390,17 @@ def _sweeps(folder: Path, results: dict[str, Any], session: pd.DataFrame, out: R
                                     f"{len(joined)} matching robot_episodes.parquet's {len(session)}" if first is None else
                                     f"robot/{SWEEPS}: the deployed replay ({fault} sweep) episode {first['episode']} "
                                     f"{column} = {first[column]} but robot_episodes.parquet holds {first[column + '_session']}"))
+
+
+def _prior_by_position(stored: pd.DataFrame, session: pd.DataFrame, results: dict[str, Any], out: Recomputed) -> None:
+    """E222's split of the narrowed prior's replay by block position, from the stored sweep rows and the session's
+    episodes (the share it mixes at is the paper's, read from the published record)."""
+    from probecommit.studies.robot import prior_by_position
+
+    for size, rec in (results.get("prior_by_position") or {}).items():
+        got = prior_by_position(stored, session, float(size), share=rec.get("share"))
+        out.values.update({f"prior_by_position.{size}.{k}": v for k, v in got.items()})
+        out.sources.update(dict.fromkeys((f"prior_by_position.{size}.{k}" for k in got), SWEEPS))
 
 
 def gru(folder: Path, results: dict[str, Any]) -> Recomputed:

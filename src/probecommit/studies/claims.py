@@ -734,7 +734,8 @@ def _claims_hardware() -> list[Claim]:
                Holds("optimism", "optimism positive at +-12 mm", {"o": f"{R}prior_by_mm.12.optimism"},
                      lambda v: v["o"] > 0))
               + tuple(Near(f"{name} at +-12 mm", f"T29-replay-prior.{name}", f"{R}prior_by_mm.12.{name}",
-                           POINT_TOL * 2.5) for name in ("coverage", "escape", "optimism")), simulated_rig=True))
+                           POINT_TOL * 2.5) for name in ("coverage", "escape", "optimism")), simulated_rig=True,
+              explain=(("E222", tuple(f"{EXACT}{name} at +-12 mm" for name in ("coverage", "escape", "optimism"))),)))
     return c
 
 
@@ -2906,6 +2907,18 @@ def _experiments_lead() -> list[Experiment]:
                    "the model's window (ours captures over {cr:.3f} w(c)) by {mmj_offset:+.3f} [{mmj_offset_lo:+.3f}, "
                    "{mmj_offset_hi:+.3f}] and {mown_scan:+.3f} [{mown_scan_lo:+.3f}, {mown_scan_hi:+.3f}].",
                    supports=lambda v: _t22_follows_the_window(v, t22)),
+        Experiment("E222", "the narrowed prior's signature on the simulated rig by block position, at the share of "
+                   "positions beyond +-12 mm the paper's escape implies",
+                   {"n": f"{R}prior_by_position.12.positions", "s": f"{R}prior_by_position.12.share_beyond",
+                    "m": f"{R}prior_by_position.12.escape_is_beyond", "ob": f"{R}prior_by_position.12.optimism_beyond",
+                    "oi": f"{R}prior_by_position.12.optimism_inside", "ps": f"{R}prior_by_position.12.share",
+                    "o": f"{R}prior_by_position.12.optimism_at_share"},
+                   "replayed under the prior narrowed to +-12 mm, every episode of a block position beyond +-12 mm "
+                   "escapes and none inside does (on all {n:d} positions: {m:d}, 1 = yes), so coverage and escape are "
+                   "the share of positions beyond, {s:.3f} on our rig, which the paper's escape puts at {ps:.2f} (its "
+                   "positions are not reported); optimism is {ob:+.3f} beyond and {oi:+.3f} inside, {o:+.3f} at the "
+                   "paper's share (simulated rig).",
+                   supports=lambda v: v["m"] == 1 and abs(v["o"] - _pv("T29-replay-prior.optimism")) <= POINT_TOL * 2.5),
     ]
 
 

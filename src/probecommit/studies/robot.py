@@ -96,6 +96,16 @@ class RobotStudy:
     sweep_episodes: pd.DataFrame | None = None
     resamples: int = DEFAULT_RESAMPLES
 
+    def _prior_by_position(self) -> dict[str, Any]:
+        """E222's split of the narrowed prior's signature, at the share of positions beyond that the paper's escape
+        implies (its block positions are not reported); empty without stored sweep rows."""
+        if self.sweep_episodes is None:
+            return {}
+        from probecommit.studies.paper_values import value
+
+        return {f"{PRIOR_SIGNATURE_MM:g}": prior_by_position(self.sweep_episodes, self.episodes.rows,
+                                                             share=value("T29-replay-prior.escape"))}
+
     def payload(self) -> dict[str, Any]:
         rows = self.episodes.rows
         resolved = self.boundary[self.boundary["optimism_resolved"] & (self.boundary["size"] > 0)]
@@ -113,6 +123,7 @@ class RobotStudy:
                 "boundary_holds_to_mm": boundary_holds_to(self.boundary),
                 "optimism_pooled": float((rows["realized"] - rows["predicted"]).mean()),
                 "boundary_by_mm": sweep_by_size(self.boundary), "prior_by_mm": sweep_by_size(self.prior),
+                "prior_by_position": self._prior_by_position(),
                 "unscored": self.episodes.unscored,
                 "sweep_resamples": int(self.resamples),
             },
@@ -122,6 +133,37 @@ class RobotStudy:
 def sweep_by_size(sweep: pd.DataFrame) -> dict[str, Any]:
     """A fault sweep's rows by size (``"12"``, ``"38.6"``), so a claim can name one."""
     return {f"{float(r['size']):g}": r for r in json.loads(sweep.to_json(orient="records"))}
+
+
+#: The narrowed prior at which the paper reports its signature (Sec. V-D, T29), half-width in mm at rig scale.
+PRIOR_SIGNATURE_MM = 12.0
+
+
+def prior_by_position(sweep_episodes: pd.DataFrame, session: pd.DataFrame, size: float = PRIOR_SIGNATURE_MM,
+                      share: float | None = None) -> dict[str, Any]:
+    """The narrowed-prior replay at ``size`` split by where each block position lies: beyond the narrowed prior
+    (``|z| > size``) or inside it.
+
+    Why: escape and coverage under a narrowed prior are, if the belief cannot reach past its prior, the share of
+    positions beyond it, a property of where the blocks were put, which the paper does not report (E222). The
+    split measures that mechanism position by position (``escape_is_beyond``: every episode of a position beyond
+    escapes, none inside does) and gives each stratum's optimism, so the optimism at another share of positions
+    beyond (``share``, e.g. the one the paper's escape implies) is their mixture.
+    """
+    part = sweep_episodes[(sweep_episodes["fault"] == "prior") & (sweep_episodes["size"] == size)]
+    z = session.groupby("instance_id")["z_true"].first()
+    rows = part.assign(beyond=part["instance_id"].map(z).abs() > size,
+                       optimism=part["realized"].astype(float) - part["predicted"].astype(float))
+    per_position = rows.groupby("instance_id").agg(beyond=("beyond", "first"), escaped=("escaped", "mean"))
+    out: dict[str, Any] = {
+        "positions": int(len(per_position)), "share_beyond": float(per_position["beyond"].mean()),
+        "escape_is_beyond": int((per_position["escaped"] == per_position["beyond"].astype(float)).all()),
+        "optimism_beyond": float(rows.loc[rows["beyond"], "optimism"].mean()),
+        "optimism_inside": float(rows.loc[~rows["beyond"], "optimism"].mean())}
+    if share is not None:
+        out["share"] = float(share)
+        out["optimism_at_share"] = share * out["optimism_beyond"] + (1 - share) * out["optimism_inside"]
+    return out
 
 
 def boundary_holds_to(sweep: pd.DataFrame) -> float:
