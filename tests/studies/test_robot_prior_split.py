@@ -38,3 +38,23 @@ def test_e222_needs_the_mechanism_and_the_papers_optimism_at_its_share():
     rule = C.EXPERIMENTS["E222"].supports
     paper = C.paper_values.value("T29-replay-prior.optimism")
     assert rule({"m": 1, "o": paper + 0.04}) and not rule({"m": 0, "o": paper}) and not rule({"m": 1, "o": paper + 0.06})
+
+
+def test_e223_counts_a_session_only_if_the_papers_whole_sentence_holds_on_it():
+    """Two sessions of one position-budget each: one whose interval covers zero inside the bound, one whose
+    optimism is outside the bound though its interval covers zero: half the sessions give the paper's sentence."""
+    from probecommit.studies.explain.rig import optimism_summary
+
+    bound = C.paper_values.value("T26-hardware-optimism.bound")
+    rows = []
+    for session, realized in ((1, [0.0, 1.0] * 4), (2, [1.0, 1.0, 1.0, 0.0] * 2)):
+        rows += [{"session": session, "instance_id": f"p{i % 4}", "k": 1, "predicted": 0.5, "realized": r,
+                  "covered": True, "escaped": False, "entered": 1.0 - r, "aim_error": 1.0} for i, r in enumerate(realized)]
+    out, table = optimism_summary(pd.DataFrame(rows), {"resamples": 200, "seed": 0})
+    assert abs(table.loc[table["session"] == 2, "optimism"].iloc[0]) > bound  # 0.75 - 0.5
+    assert out["share_sessions_paper_outcome"] == 0.5
+
+
+def test_e223_needs_a_share_of_sessions_and_the_pooled_bound():
+    rule = C.EXPERIMENTS["E223"].supports
+    assert rule({"p": 0.4, "w": 0.05}) and not rule({"p": 0.0, "w": 0.05}) and not rule({"p": 0.4, "w": 0.2})

@@ -21,6 +21,7 @@ from probecommit.robot.replay import fault_sweep
 from probecommit.robot.simulated import simulate_session
 from probecommit.robot.table import robot_table, session_episodes
 from probecommit.runner.config import config_data, parse_config
+from probecommit.studies.paper_values import value
 from probecommit.studies.robot import BOUNDARY_SWEEP, boundary_holds_to, rig_config
 
 
@@ -64,11 +65,16 @@ def optimism_summary(pooled: pd.DataFrame, boot: dict[str, Any]) -> tuple[dict[s
         tables.append(t[["session", "taps", "optimism", "optimism_lo", "optimism_hi"]])
     table = pd.concat(tables, ignore_index=True)
     table["excludes_zero"] = (table["optimism_lo"] > 0) | (table["optimism_hi"] < 0)
-    per_session = table.groupby("session")["excludes_zero"].agg(["sum"])
+    table["outside_bound"] = table["optimism"].abs() > value("T26-hardware-optimism.bound") + 1e-12
+    per_session = table.groupby("session")[["excludes_zero", "outside_bound"]].sum()
     out: dict[str, Any] = {"sessions": int(pooled["session"].nunique()),
-                           "share_sessions_any_interval_excluding_zero": float((per_session["sum"] >= 1).mean()),
-                           "share_sessions_two_or_more_excluding_zero": float((per_session["sum"] >= 2).mean()),
-                           "share_intervals_excluding_zero": float(table["excludes_zero"].mean())}
+                           "share_sessions_any_interval_excluding_zero": float((per_session["excludes_zero"] >= 1).mean()),
+                           "share_sessions_two_or_more_excluding_zero": float((per_session["excludes_zero"] >= 2).mean()),
+                           "share_intervals_excluding_zero": float(table["excludes_zero"].mean()),
+                           # E223: the paper's whole sentence on one session (every interval covers zero, every
+                           # budget's optimism within its bound), as a share of the redrawn sessions.
+                           "share_sessions_paper_outcome": float(((per_session["excludes_zero"] == 0)
+                                                                  & (per_session["outside_bound"] == 0)).mean())}
     pooled = pooled.assign(cluster=pooled["session"].astype(str) + "/" + pooled["instance_id"].astype(str))
     worst = 0.0
     for k, g in pooled.groupby("k", sort=True):
