@@ -1,12 +1,12 @@
 """T43's optimism under the robust filters on other draws of the generator (E212, E213; ex37, issue #36; rules
 declared in ``docs/decisions.md``, "ex37", before any of their numbers).
 
-Why: T43 says the mixture and rejuvenation filters leave optimism above +0.29. On the harness draw the insertion
-study measures (its fault harness's base run under the boundary error) all three arms sit near +0.22, below the
-floor; E12 replayed Test C (another draw) with the mixture (+0.30), but the rejuvenation filter was never run off
-the harness draw. E212 is E12's twin: Test C's deployed run replayed with the chosen rejuvenation fraction. E213
-replays the 12 fresh harness draws E72 runs (``ex7_robust.harness_draw_table``) as the insertion study replays its
-harness (``insertion.robust``): under the deployed boundary, plain and with each chosen filter, so the draw-to-draw
+Why: T43 says the mixture and rejuvenation filters leave optimism above the paper's floor. On the harness draw the
+insertion study measures (its fault harness's base run under the boundary error) all three arms sit below it; E12
+replayed Test C (another draw) with the mixture, but the rejuvenation filter was never run off the harness draw.
+E212 is E12's twin: Test C's deployed run replayed with the chosen rejuvenation fraction. E213 replays the 12 fresh
+harness draws E72 runs (``ex7_robust.harness_draw``) as the insertion study replays its harness
+(``insertion.robust``): under the deployed boundary, plain and with each chosen filter, so the draw-to-draw
 spread of optimism, and each filter's gap to the deployed arm on the same probes, are measured. Every replay commits
 the final budget only (``replay_at``); every key is :func:`summary` of the stored rows (:data:`STORED`).
 """
@@ -28,8 +28,6 @@ ARMS = ("deployed", "mixture", "rejuvenation")
 FILTERS = ARMS[1:]
 #: Test C's stored deployed run (the insertion study's), E12's source.
 TESTC = "C_random"
-#: E213's declared "optimism stays": a filter's optimism within this of the deployed arm's on every draw.
-SAME_OPTIMISM = 0.05
 
 
 def arm_overrides(protocol: Any, chosen: Mapping[str, float]) -> dict[str, dict[str, Any]]:
@@ -75,20 +73,18 @@ def optimism(rows: pd.DataFrame) -> float:
     return float((rows["realized"].to_numpy(float) - rows["predicted"].to_numpy(float)).mean())
 
 
-def testc_keys(rows: pd.DataFrame, floor: float) -> dict[str, Any]:
-    """E212's keys: Test C's deployed and rejuvenation optimism, the latter's escape, and E212's rule (above the
-    paper's floor)."""
+def testc_keys(rows: pd.DataFrame) -> dict[str, Any]:
+    """E212's keys: Test C's deployed and rejuvenation optimism, and the latter's escape and episodes."""
     arm = lambda name: rows[rows["arm"] == name]  # noqa: E731
     out = {"testc.deployed.optimism": optimism(arm("deployed")), "testc.rejuvenation.optimism": optimism(arm("rejuvenation")),
            "testc.rejuvenation.escape": float(arm("rejuvenation")["escaped"].astype(float).mean()),
            "testc.n": int(len(arm("rejuvenation")))}
-    out["testc.holds"] = int(out["testc.rejuvenation.optimism"] > floor)
     return out
 
 
-def draws_keys(rows: pd.DataFrame, floor: float) -> dict[str, Any]:
-    """E213's keys: each draw's optimism per arm, each arm's mean, min and max over the draws, each filter's largest
-    |filter - deployed|, and per filter E213's rule (``<f>.floor_inside``, ``<f>.stays``, ``<f>.holds``)."""
+def draws_keys(rows: pd.DataFrame) -> dict[str, Any]:
+    """E213's keys: each draw's optimism per arm, each arm's mean, min and max over the draws, and each filter's
+    largest |filter - deployed| over the draws (``draws.<f>.max_gap``; E213's rule is the registry's)."""
     per = {(d, a): optimism(part) for (d, a), part in rows.groupby(["source", "arm"], sort=True)}
     names = sorted({d for d, _ in per})
     out: dict[str, Any] = {"draws.count": len(names)}
@@ -98,25 +94,19 @@ def draws_keys(rows: pd.DataFrame, floor: float) -> dict[str, Any]:
         out.update({f"draws.{arm}.optimism.mean": float(got.mean()), f"draws.{arm}.optimism.min": float(got.min()),
                     f"draws.{arm}.optimism.max": float(got.max())})
     for f in FILTERS:
-        gap = float(max(abs(per[(d, f)] - per[(d, "deployed")]) for d in names))
-        inside = out[f"draws.{f}.optimism.min"] <= floor <= out[f"draws.{f}.optimism.max"]
-        out.update({f"draws.{f}.max_gap": gap, f"draws.{f}.floor_inside": int(inside),
-                    f"draws.{f}.stays": int(gap <= SAME_OPTIMISM), f"draws.{f}.holds": int(inside and gap <= SAME_OPTIMISM)})
+        out[f"draws.{f}.max_gap"] = float(max(abs(per[(d, f)] - per[(d, "deployed")]) for d in names))
     return out
 
 
 def summary(rows: pd.DataFrame) -> dict[str, Any]:
     """Every key of ``explain:results.ex37_filters`` from the stored rows (what verify recomputes)."""
-    from probecommit.studies.paper_values import value
-
-    floor = float(value("T43-robust-filters.optimism_floor"))
-    out: dict[str, Any] = {"floor": floor}
+    out: dict[str, Any] = {}
     testc = rows[rows["source"] == "testc"]
     if len(testc):
-        out.update(testc_keys(testc, floor))
+        out.update(testc_keys(testc))
     draws = rows[rows["source"] != "testc"]
     if len(draws):
-        out.update(draws_keys(draws, floor))
+        out.update(draws_keys(draws))
     return out
 
 
