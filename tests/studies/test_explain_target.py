@@ -39,6 +39,12 @@ def test_reproduce_explain_quick(tmp_path):
     raw = next(r for r in ins["gates"]["summary"] if r["signal"] == "raw")
     assert res["committed_pool"]["ours.final_hull.escaped_committed"] == raw["escaped_committed"]
     assert res["committed_pool"]["ours.final_hull.escaped_rejected"] == raw["escaped_rejected"]
+    # E211's gates recomputed on the paper's-schedule runs give the raw pool E13 reads from the stored run (ex37).
+    for side in ("committed", "rejected"):
+        assert res["ex37_adjusted"][f"raw.escaped_{side}"] == \
+            res["committed_pool"][f"paper_schedule.final_hull.escaped_{side}"]
+    assert res["ex37_adjusted"]["raw.n_committed"] == res["committed_pool"]["paper_schedule.n_committed"]
+    assert res["ex37_filters"]["testc.deployed.optimism"] == pytest.approx(res["robust"]["testc.deployed.optimism"])
     # The emulated engine's stored outcomes equal the capture rule recomputed from its aims.
     for variant in ("deployed", "mj_offset", "own_scan"):
         assert res["physx_capture"][f"emulated.{variant}.stored_equals_recomputed"] == 1

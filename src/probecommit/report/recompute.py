@@ -889,6 +889,8 @@ EXPLAIN_EX30_FRESH = "ex30_fresh_rows.parquet"
 EXPLAIN_EX33_AIM = "ex33_aim_rows.parquet"
 #: ex35's stored rows (``studies.explain.ex35_pools.STORED``: E205's fresh pools, E56's three and the rest).
 EXPLAIN_EX35_POOLS = "ex35_pools_rows.parquet"
+#: ex37's stored rows (``studies.explain.ex37_filters.STORED``: E212's Test C replay, E213's harness draws' arms).
+EXPLAIN_EX37_FILTERS = "ex37_filters_rows.parquet"
 #: ex29's stored rows (``studies.explain.ex29_band.STORED``: E187's trajectories, k = 1 surprise and first-tap band).
 EXPLAIN_EX29_BAND = "ex29_band_rows.parquet"
 #: ex7's stored rows (``studies.explain.ex7.STORED``: the fault surprise rows and the fresh draws).
@@ -909,7 +911,8 @@ STORED_SUMMARIES = (("mixture_noise", EXPLAIN_MIXTURE, "mixture_x"),
                     ("ex30_fresh", EXPLAIN_EX30_FRESH, "ex30_fresh"),
                     ("ex29_band", EXPLAIN_EX29_BAND, "ex29_band"),
                     ("ex33_aim", EXPLAIN_EX33_AIM, "ex33_aim"),
-                    ("ex35_pools", EXPLAIN_EX35_POOLS, "ex35_pools"))
+                    ("ex35_pools", EXPLAIN_EX35_POOLS, "ex35_pools"),
+                    ("ex37_filters", EXPLAIN_EX37_FILTERS, "ex37_filters"))
 
 #: Explain modules that recompute their own groups: ``recompute(folder, results)`` gives
 #: ``(values, sources, problems)`` (a group published without its stored rows is a problem).
@@ -917,7 +920,8 @@ SELF_RECOMPUTING = ("ex7", "ex8", "ex11", "ex16", "ex19", "ex22", "ex25", "ex27"
 
 #: Explain modules whose ``recompute(folder, results, boot)`` gives ``{key: (value, stored file)}`` under the
 #: insertion study's bootstrap settings, with ``STORED_BY_GROUP`` naming each group's rows.
-BOOTSTRAPPED = ("ex6", "ex10", "ex13", "ex14", "ex17", "ex20", "ex21", "ex23", "ex24", "ex31_shift", "ex34_fixed")
+BOOTSTRAPPED = ("ex6", "ex10", "ex13", "ex14", "ex17", "ex20", "ex21", "ex23", "ex24", "ex31_shift", "ex34_fixed",
+                "ex37_adjusted")
 
 
 #: The stored tables each study's numbers are recomputed from: a publication without one fails verify
@@ -993,7 +997,9 @@ RECOMPUTED = {
                "probe interval; ex27's hinge row with the commit a torque; ex31's Table III original arm read one tap later, "
                "post-stratified as ex20's; ex34's Table III original arm with one fixed tap (-12 or 0 mm) before the "
                "random ones; ex32's push1d, hinge and push2d probed cells against the action grid's floor "
-               "at each truth; ex35's re-split statistics over twelve fresh pools",
+               "at each truth; ex35's re-split statistics over twelve fresh pools; ex37's commit gates' pools under the "
+               "paper's schedule (the adjusted gate's ratio and interval; threshold and margin traced) and the robust "
+               "filters' optimism on Test C and over the harness draws",
 }
 TRACED_ONLY = {
     "insertion": "the stored rows themselves (episodes, re-executed commits, replays); the re-split rows; the cover "

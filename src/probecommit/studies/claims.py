@@ -780,7 +780,7 @@ def _claims_commit_decision() -> list[Claim]:
                            "er": f"{g}{GATES[sig]}.escaped_rejected", "nr": f"{g}{GATES[sig]}.n_rejected"},
                           several_times)
                     for sig in ("raw", "adjusted", "posterior_variance")),
-              explain=(("E1", ("raw",)), ("E13", ("raw", "posterior_variance")))))
+              explain=(("E1", ("raw",)), ("E13", ("raw", "posterior_variance")), ("E211", (f"{EXACT}adjusted",)))))
     add(Claim("T34-claimed-realized", "Sec. VI, The commit decision", "Selection re-creates optimism: claimed vs "
               "realized failure at commit",
               (Holds("raw", "raw claims less than it realizes", {"c": f"{g}0.claimed", "r": f"{g}0.realized"},
@@ -865,7 +865,9 @@ def _claims_robust_filters() -> list[Claim]:
                        {"o": f"{I}robust.{f}.optimism"},
                        lambda v: v["o"] > paper_values.value("T43-robust-filters.optimism_floor"))
                  for f in ("mixture", "rejuvenation"))),
-              explain=(("E12", (f"{EXACT}optimism mixture",)),)))  # E12 measures the mixture only (credA)
+              explain=(("E12", (f"{EXACT}optimism mixture",)),  # E12 measures the mixture only (credA)
+                       ("E212", (f"{EXACT}optimism rejuvenation",)),
+                       *((f"E213[optimism {f}]", (f"{EXACT}optimism {f}",)) for f in ("mixture", "rejuvenation")))))
     add(Claim("T44-mixture-cost", "Sec. VI, Robust filters", "When the model is right the mixture costs failure",
               (Holds("costs", "failure with the mixture above failure without",
                      {"a": f"{I}robust.mixture_cost_when_right.0", "b": f"{I}robust.mixture_cost_when_right.1"},
@@ -2353,6 +2355,53 @@ def _experiments_ex35() -> list[Experiment]:
     return out
 
 
+def _experiments_ex37() -> list[Experiment]:
+    """The ex37 helper's experiments (``studies/explain/ex37_*.py``; rules in docs/decisions.md, "ex37", committed
+    before their numbers): T33's adjusted gate under the paper's schedule (E211), the rejuvenation filter on Test C
+    (E212, E12's twin), both filters over the 12 harness draws (E213, one per T43 optimism label)."""
+    a, f = f"{X}ex37_adjusted.", f"{X}ex37_filters."
+    out = [Experiment(
+        "E211", "the adjusted gate's committed pool under the paper's cover schedule, same instances",
+        {"ec": f"{a}adjusted.escaped_committed", "nc": f"{a}adjusted.n_committed", "er": f"{a}adjusted.escaped_rejected",
+         "nr": f"{a}adjusted.n_rejected", "cr": f"{a}adjusted.commit_rate", "ratio": f"{a}adjusted.final_hull.ratio",
+         "lo": f"{a}adjusted.final_hull.ratio.1", "hi": f"{a}adjusted.final_hull.ratio.2", "g": f"{a}gamma",
+         "rc": f"{a}raw.escaped_committed", "rr": f"{a}raw.escaped_rejected"},
+        "on E13's Split B test instances under the paper's schedule, with the gates computed as ours (the calibrated + "
+        "margin executor at the simultaneous threshold and margin {g:.2f}), the adjusted gate commits {nc:d} "
+        "trajectories ({cr:.3f}), {ec:d} escaped, against {er:d} of the {nr:d} rejected: ratio {ratio:.2f} "
+        "[{lo:.2f}, {hi:.2f}] (the raw gate on the same rows: {rc:d} escaped committed against {rr:d} rejected, E13's counts).",
+        supports=several_times),
+        Experiment(
+        "E212", "the chosen rejuvenation under the boundary error on another draw (E12's twin)",
+        {"to": f"{f}testc.rejuvenation.optimism", "td": f"{f}testc.deployed.optimism",
+         "te": f"{f}testc.rejuvenation.escape", "hr": f"{X}robust.harness.rejuvenation.optimism"},
+        "on Test C, another draw of the generator, the chosen rejuvenation under the boundary error leaves optimism "
+        "{to:+.3f} (deployed {td:+.3f}; escape {te:.3f}); on the harness draw {hr:+.3f}.",
+        supports=lambda v: v["to"] > _pv("T43-robust-filters.optimism_floor"))]
+    for name in ("mixture", "rejuvenation"):
+        d = f"{f}draws."
+        out.append(Experiment(
+            f"E213[optimism {name}]", f"the chosen {name} filter's optimism over fresh harness draws",
+            {"n": f"{d}count", "lo": f"{d}{name}.optimism.min", "hi": f"{d}{name}.optimism.max",
+             "m": f"{d}{name}.optimism.mean", "gap": f"{d}{name}.max_gap", "dlo": f"{d}deployed.optimism.min",
+             "dhi": f"{d}deployed.optimism.max"},
+            "over {n:d} fresh draws of the fault harness replayed under the boundary error, the " + name + " filter's "
+            "optimism ranges {lo:+.3f} to {hi:+.3f} (mean {m:+.3f}; deployed {dlo:+.3f} to {dhi:+.3f}) and lies within "
+            "{gap:.3f} of the deployed model's on every draw.",
+            supports=_ex37_stays))
+    return out
+
+
+#: E213's declared "optimism stays": on every draw a filter's optimism within this of the deployed model's.
+EX37_SAME_OPTIMISM = 0.05
+
+
+def _ex37_stays(v: dict[str, Any]) -> bool:
+    """E213's rule for one filter: the paper's floor within [min, max] of its optimism over the draws, and on every
+    draw its optimism within :data:`EX37_SAME_OPTIMISM` of the deployed model's (it does not repair optimism)."""
+    return v["lo"] <= _pv("T43-robust-filters.optimism_floor") <= v["hi"] and v["gap"] <= EX37_SAME_OPTIMISM
+
+
 def _experiments_ex29() -> list[Experiment]:
     """The ex29 helper's experiment (``studies/explain/ex29_band.py``; rule in docs/decisions.md, "ex29"): T36's
     k = 1 AUC with the first tap's band lost at the rate the paper's own k = 1 escape implies (E187)."""
@@ -2956,7 +3005,8 @@ for _experiment in (_experiments() + _experiments_more() + _experiments_ex3() + 
                     + _experiments_ex25() + _experiments_ex26() + _experiments_ex27() + _experiments_ex28()
                     + _experiments_ex30()
                     + _experiments_ex29() + _experiments_ex31() + _experiments_ex32() + _experiments_ex33()
-                    + _experiments_ex34() + _experiments_ex35() + _experiments_lead()):
+                    + _experiments_ex34() + _experiments_ex35() + _experiments_lead()
+                    + _experiments_ex37()):
     EXPERIMENTS[_experiment.number] = _experiment
 
 

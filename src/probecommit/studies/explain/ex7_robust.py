@@ -66,14 +66,20 @@ def harness_draw_table(protocol: Any, runs: Any, mixture: dict[str, Any], count:
     k, rows = protocol.budgets["random"], []
     for i in range(count):
         split = f"harness_draw_{i:02d}"
-        config = protocol.run_config(split, "B", split, "random", boundary="corrected",
-                                     seed_offset=protocol.faults.seed_offset)
-        run = _run(config, runs / split, workers)
+        run = harness_draw(protocol, runs, i, workers)
         right = _final(final_rows(run.episodes), k)
         mixed = _final(final_rows(replay_at(run, {"belief": mixture}, k)), k)  # only budget k committed
         rows.append({"draw": split, "right": float(right["realized"].mean()), "mixed": float(mixed["realized"].mean()),
                      "changed": float((right["action"].to_numpy() != mixed["action"].to_numpy()).mean())})
     return pd.DataFrame(rows, columns=["draw", "right", "mixed", "changed"])
+
+
+def harness_draw(protocol: Any, runs: Any, i: int, workers: int = 1) -> Any:
+    """Fresh draw ``i`` of the fault harness's base run (split ``harness_draw_<i>``, corrected model, random
+    probes, the harness's seed offset), run once under ``runs`` and loaded (E72's and ex37's E213's)."""
+    split = f"harness_draw_{i:02d}"
+    config = protocol.run_config(split, "B", split, "random", boundary="corrected", seed_offset=protocol.faults.seed_offset)
+    return _run(config, runs / split, workers)
 
 
 def _final(rows: pd.DataFrame, k: int) -> pd.DataFrame:
