@@ -2364,7 +2364,8 @@ def _experiments_ex36() -> list[Experiment]:
                    "at k = 1 {o1:.3f} [{o1lo:.3f}, {o1hi:.3f}] old and {c1:.3f} [{c1lo:.3f}, {c1hi:.3f}] corrected "
                    "(paired {d1:+.3f} [{d1lo:+.3f}, {d1hi:+.3f}]), at k = 5 {o5:.3f} [{o5lo:.3f}, {o5hi:.3f}] old and "
                    "{c5:.3f} [{c5lo:.3f}, {c5hi:.3f}] corrected (paired {d5:+.3f} [{d5lo:+.3f}, {d5hi:+.3f}]): {n:g} "
-                   "of Table V's six cover labels pass Table V's rule under it, {nf:g} of the three our schedule fails.",
+                   "of Table V's cover labels pass its rule under it ({nf:g} of those our schedule fails; the rule "
+                   "needs them all).",
                    supports=lambda v: v["h"] == 1),
         Experiment("E209", "Table V's random-probe episode coverage (old model, k = 8) over fresh draws of the generator",
                    {"n": f"{c}draws", "lo": f"{c}k8.min", "hi": f"{c}k8.max", "m": f"{c}k8.mean", "sd": f"{c}k8.sd",
