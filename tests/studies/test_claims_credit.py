@@ -89,6 +89,15 @@ def test_e13_speaks_to_the_gates_it_measures_under_t33s_own_fold():
     assert not e13.supports({**base, "ours": 1.2})
 
 
+def test_e208_and_e209_speak_only_to_the_test_c_labels_they_measure():
+    """E208 reruns Table V's cover cells under the paper's schedule: credited with the three our schedule fails, whole
+    labels (not the paired ones their prefixes name); E209 measures the random-probe coverage alone (ex36)."""
+    assert _spoken("tab:testc", "E208") == ["failure_cover_k5 corrected", "failure_cover_k1 old",
+                                            "failure_cover_k1 corrected"]
+    assert _spoken("tab:testc", "E209") == ["episode_coverage_random_k8 old"]
+    assert not [c.id for c in C.CLAIMS if c.id != "tab:testc" and (_spoken(c.id, "E208") or _spoken(c.id, "E209"))]
+
+
 def test_a_per_cell_experiment_speaks_to_its_own_cell_only():
     """``E17[<label>]`` names the cell it measures: its cover is that label and nothing else."""
     for claim in C.CLAIMS:

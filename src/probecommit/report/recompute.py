@@ -891,6 +891,8 @@ EXPLAIN_EX33_AIM = "ex33_aim_rows.parquet"
 EXPLAIN_EX35_POOLS = "ex35_pools_rows.parquet"
 #: ex37's stored rows (``studies.explain.ex37_filters.STORED``: E212's Test C replay, E213's harness draws' arms).
 EXPLAIN_EX37_FILTERS = "ex37_filters_rows.parquet"
+#: ex36's stored rows (``studies.explain.ex36_coverage.STORED``: E209's per-draw episode coverage, the check first).
+EXPLAIN_EX36_COVERAGE = "ex36_coverage_rows.parquet"
 #: ex29's stored rows (``studies.explain.ex29_band.STORED``: E187's trajectories, k = 1 surprise and first-tap band).
 EXPLAIN_EX29_BAND = "ex29_band_rows.parquet"
 #: ex7's stored rows (``studies.explain.ex7.STORED``: the fault surprise rows and the fresh draws).
@@ -912,7 +914,8 @@ STORED_SUMMARIES = (("mixture_noise", EXPLAIN_MIXTURE, "mixture_x"),
                     ("ex29_band", EXPLAIN_EX29_BAND, "ex29_band"),
                     ("ex33_aim", EXPLAIN_EX33_AIM, "ex33_aim"),
                     ("ex35_pools", EXPLAIN_EX35_POOLS, "ex35_pools"),
-                    ("ex37_filters", EXPLAIN_EX37_FILTERS, "ex37_filters"))
+                    ("ex37_filters", EXPLAIN_EX37_FILTERS, "ex37_filters"),
+                    ("ex36_coverage", EXPLAIN_EX36_COVERAGE, "ex36_coverage"))
 
 #: Explain modules that recompute their own groups: ``recompute(folder, results)`` gives
 #: ``(values, sources, problems)`` (a group published without its stored rows is a problem).
@@ -921,7 +924,7 @@ SELF_RECOMPUTING = ("ex7", "ex8", "ex11", "ex16", "ex19", "ex22", "ex25", "ex27"
 #: Explain modules whose ``recompute(folder, results, boot)`` gives ``{key: (value, stored file)}`` under the
 #: insertion study's bootstrap settings, with ``STORED_BY_GROUP`` naming each group's rows.
 BOOTSTRAPPED = ("ex6", "ex10", "ex13", "ex14", "ex17", "ex20", "ex21", "ex23", "ex24", "ex31_shift", "ex34_fixed",
-                "ex37_adjusted")
+                "ex37_adjusted", "ex36_testc")
 
 
 #: The stored tables each study's numbers are recomputed from: a publication without one fails verify

@@ -45,6 +45,15 @@ def schedule_runs(protocol: Protocol, schedule: list[float], runs: Path, workers
     return out
 
 
+def testc_schedule_runs(protocol: Protocol, schedule: list[float], runs: Path, workers: int = 1) -> tuple[LoadedRun, LoadedRun]:
+    """Test C's cover run under another cover schedule (probe executor only; split name ``C_cover``, hence Test C's
+    instances and tap-noise streams) and its replay under the corrected boundary, as the insertion study's ``C_cover``
+    and ``C_cover_corrected``."""
+    p = protocol.model_copy(update={"cover_schedule": [float(u) for u in schedule]})
+    old = _run(p.run_config("C_cover_paper_schedule", "C", "C_cover", "cover"), runs / "C_cover_paper_schedule", workers)
+    return old, corrected_replay(old.path, runs, protocol.delta)
+
+
 def corrected_replay(source: Path, runs: Path, delta: float) -> LoadedRun:
     """A stored run's probes re-inferred under the corrected boundary ``hg + delta``."""
     return _replay(source, runs / f"{source.name}_corrected", {"model": {"boundary": "corrected", "delta": float(delta)}})
