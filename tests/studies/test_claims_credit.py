@@ -188,3 +188,13 @@ def test_e206_holds_only_if_the_papers_set_calibrated_cell_lies_inside():
     rule = C.EXPERIMENTS["E206"].supports
     paper = C.paper_values.value("tab:insertion.B_cover_k5_setcal.est")
     assert rule({"lo": paper - 0.01, "hi": paper + 0.01}) and not rule({"lo": paper + 0.001, "hi": paper + 0.1})
+
+
+def test_e224_speaks_to_its_own_physx_offset_cell_only():
+    labels = [label for label, _ in C._physx_offset_cells()]
+    assert len(labels) == 8 and all(label.startswith(("sapien/mj_offset ", "sapien/own_scan ")) for label in labels)
+    for label in labels:
+        assert _spoken("tab:engines", f"E224[{label}]") == [label]
+    rule = C.EXPERIMENTS["E224[sapien/own_scan failure]"].supports
+    paper = C.paper_values.value("tab:engines.sapien/own_scan.failure")
+    assert rule({"e": paper + 0.049}) and not rule({"e": paper - 0.051})
