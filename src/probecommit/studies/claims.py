@@ -1347,10 +1347,8 @@ def _experiments_ex3() -> list[Experiment]:
     ]
 
 
-#: T14's re-split statistics a fresh-pool experiment tests (E56, E205): label, pool statistic, paper key, scale.
-RESPLIT_STATS = (("level mean", "level_mean", "T14-resplits.level_mean", 1.0),
-                 ("held-out cluster coverage", "heldout_cluster_coverage", "T14-resplits.heldout_cluster_coverage", 1.0),
-                 ("margin optimistic", "margin_optimistic_fraction", "T14-resplits.margin_optimistic_percent", 0.01))
+#: T14's re-split statistics (E56, E205): one table, in paper_values, read here and by ex35's step.
+RESPLIT_STATS = paper_values.RESPLIT_STATS
 
 
 def _paper_in_range(paper: str, scale: float) -> Callable[[dict[str, Any]], bool]:

@@ -306,5 +306,11 @@ LEGACY_KEYS = {"calibration.t5_cover": "T02-t5-cover.t5", "calibration.margin_co
                "scan.delta": "T15-scan.delta", "scan.shift_vs_deployed_mm": "T15-scan.shift",
                "text.escape_k8": "T05-escape-realizations.audit", "gates.oracle_commit_rate": "T35-oracle.commit_rate_percent"}
 PAPER: dict[str, Any] = {old: value(new) for old, new in LEGACY_KEYS.items()}
+
+#: T14's re-split statistics a fresh-pool experiment tests (E56, E205; the registry and ex35's step both read this one
+#: table): label, the pools' row column, paper key, and the scale that puts the paper's value on the rows' units.
+RESPLIT_STATS = (("level mean", "level_mean", "T14-resplits.level_mean", 1.0),
+                 ("held-out cluster coverage", "heldout_cluster_coverage", "T14-resplits.heldout_cluster_coverage", 1.0),
+                 ("margin optimistic", "margin_optimistic_fraction", "T14-resplits.margin_optimistic_percent", 0.01))
 PAPER["gates.oracle_commit_rate"] /= 100
 PAPER["cover.schedule"] = [int(u) for u in PRINTED["T07-cover-schedule.schedule"].strip("[]").split(",")]

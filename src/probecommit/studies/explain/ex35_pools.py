@@ -17,16 +17,14 @@ import numpy as np
 import pandas as pd
 
 from probecommit.studies.explain import ex5_calibration
-from probecommit.studies.paper_values import value as paper_value
+from probecommit.studies.paper_values import RESPLIT_STATS, value as paper_value
 
 #: The stored rows (one per fresh pool, ``ex5_calibration.fresh_pool_row``'s), beside results.json.
 STORED = "ex35_pools_rows.parquet"
 #: Result group.
 GROUP = "ex35_pools"
 #: The statistics the rule judges, with the paper's value each is compared to and its scale to a fraction.
-TESTED = {"level_mean": ("T14-resplits.level_mean", 1.0),
-          "heldout_cluster_coverage": ("T14-resplits.heldout_cluster_coverage", 1.0),
-          "margin_optimistic_fraction": ("T14-resplits.margin_optimistic_percent", 0.01)}
+TESTED = {stat: (key, scale) for _, stat, key, scale in RESPLIT_STATS}
 
 
 def paper_fraction(stat: str) -> float:
