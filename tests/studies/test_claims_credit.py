@@ -63,11 +63,13 @@ def test_e6_is_credited_only_with_the_sapien_deployed_cells_it_emulates():
         assert not _spoken(claim_id, "E6"), claim_id
 
 
-def test_t43_optimism_is_one_label_per_filter_and_e12_speaks_to_the_mixture_only():
+def test_t43_optimism_is_one_label_per_filter_and_only_the_fresh_draws_speak_to_it():
     rules = {c.label: c.rule for c in BY_ID["T43-robust-filters"].comparisons if c.label.startswith("optimism")}
     assert set(rules) == {"optimism mixture", "optimism rejuvenation"}
     assert rules["optimism mixture"].replace("mixture", "F") == rules["optimism rejuvenation"].replace("rejuvenation", "F")
-    assert _spoken("T43-robust-filters", "E12") == ["optimism mixture"]
+    assert _spoken("T43-robust-filters", "E12") == [] and _spoken("T43-robust-filters", "E212") == []  # Test C (rev2)
+    for f in ("mixture", "rejuvenation"):
+        assert _spoken("T43-robust-filters", f"E213[optimism {f}]") == [f"optimism {f}"]
 
 
 def test_withdrawn_credits_stay_withdrawn():
@@ -120,7 +122,9 @@ def test_the_withdrawn_credits_leave_their_items_unexplained_on_the_publication(
     # Explained since, each only through an experiment that measures its failed labels (E206, E207; the lead's
     # 2026-11-28 section of docs/decisions.md), never through a withdrawn credit.
     assert got["tab:insertion"]["experiment"] == "E9, E206"
-    assert got["T22-physx-paired"]["experiment"] == "E207"
+    # rev2: E207 speaks to T22's own scan only, E222 to T29's optimism only, E223 needs ours to be a draw too.
+    for claim_id in ("T22-physx-paired", "T29-replay-prior", "T26-hardware-optimism"):
+        assert got[claim_id]["status"] == "differs, unexplained", claim_id
     assert got["T06-cover-failure-splits"]["experiment"] == "E9"
 
 
@@ -161,7 +165,7 @@ def test_the_price_widths_are_the_declared_scales_and_ours():
 
 def test_e206_and_e207_speak_to_the_labels_they_measure():
     assert _spoken("tab:insertion", "E206") == ["B cover k5 setcal"]
-    assert sorted(_spoken("T22-physx-paired", "E207")) == ["MJ offset", "own scan"]
+    assert _spoken("T22-physx-paired", "E207") == ["own scan"]  # the MJ offset follows the boundary, not the window
     assert not [c.id for c in C.CLAIMS if c.id not in ("tab:insertion", "T22-physx-paired")
                 and (_spoken(c.id, "E206") or _spoken(c.id, "E207"))]
 
@@ -190,11 +194,10 @@ def test_e206_holds_only_if_the_papers_set_calibrated_cell_lies_inside():
     assert rule({"lo": paper - 0.01, "hi": paper + 0.01}) and not rule({"lo": paper + 0.001, "hi": paper + 0.1})
 
 
-def test_e224_speaks_to_its_own_physx_offset_cell_only():
-    labels = [label for label, _ in C._physx_offset_cells()]
-    assert len(labels) == 8 and all(label.startswith(("sapien/mj_offset ", "sapien/own_scan ")) for label in labels)
-    for label in labels:
-        assert _spoken("tab:engines", f"E224[{label}]") == [label]
-    rule = C.EXPERIMENTS["E224[sapien/own_scan failure]"].supports
-    paper = C.paper_values.value("tab:engines.sapien/own_scan.failure")
-    assert rule({"e": paper + 0.049}) and not rule({"e": paper - 0.051})
+def test_e224_speaks_to_its_whole_physx_offset_column_and_needs_all_four_cells():
+    for v in C.PHYSX_OFFSET_VARIANTS:
+        labels = [label for label, _ in C._physx_offset_cells(v)]
+        assert len(labels) == 4 and sorted(_spoken("tab:engines", f"E224[sapien/{v}]")) == sorted(labels)
+    rule = C.EXPERIMENTS["E224[sapien/own_scan]"].supports
+    near = {**{f"e{i}": 0.5 for i in range(4)}, **{f"p{i}": 0.5 + 0.049 for i in range(4)}}
+    assert rule(near) and not rule({**near, "e3": 0.5 + 0.049 + 0.051})

@@ -69,7 +69,8 @@ def test_e211_credited_with_the_adjusted_gate_only_and_its_keys_exist():
     assert ("E211", (f"{claims.EXACT}adjusted",)) in claims.explanations(t33)
     keys = {f"{claims.X}{ex37_adjusted.GROUP}.{k}" for k in ex37_adjusted.keys(_gate_rows(), BOOT)}
     keys |= {f"{k}.{i}" for k in keys for i in (1, 2)}
-    assert set(claims.EXPERIMENTS["E211"].keys.values()) <= keys
+    own = {v for v in claims.EXPERIMENTS["E211"].keys.values() if v.startswith(claims.X)}
+    assert own <= keys  # beside them: our schedule's adjusted pools (insertion) and the paper's escape count
 
 
 def test_verify_recomputes_e211_from_the_stored_rows(tmp_path):
@@ -121,13 +122,13 @@ def test_e212_and_e213_rules_at_their_edges():
 def test_e212_e213_credited_with_their_optimism_labels_and_their_keys_exist():
     t43 = next(c for c in claims.CLAIMS if c.id == "T43-robust-filters")
     got = claims.explanations(t43)
-    assert ("E212", (f"{claims.EXACT}optimism rejuvenation",)) in got
+    assert not [n for n, _ in got if n in ("E12", "E212")]  # Test C is an outlier draw: beside, uncredited (rev2)
     keys = {f"{claims.X}{ex37_filters.GROUP}.{k}" for k in ex37_filters.summary(_filter_rows())}
     keys.add(f"{claims.X}robust.harness.rejuvenation.optimism")
     assert set(claims.EXPERIMENTS["E212"].keys.values()) <= keys
     for f in ("mixture", "rejuvenation"):
         assert (f"E213[optimism {f}]", (f"{claims.EXACT}optimism {f}",)) in got
-        assert set(claims.EXPERIMENTS[f"E213[optimism {f}]"].keys.values()) <= keys
+        assert set(claims.EXPERIMENTS[f"E213[optimism {f}]"].keys.values()) <= keys | {f"{claims.X}robust.harness.deployed.optimism"}
 
 
 def test_arms_are_the_insertion_studys_chosen_filters_under_the_deployed_boundary():

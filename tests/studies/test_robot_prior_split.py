@@ -24,20 +24,21 @@ def test_two_positions_one_beyond_give_each_strata_and_the_mixture():
     sweep, session = _rows([("a", -15.0, [(0.2, 1.0, True), (0.4, 1.0, True)]),
                             ("b", 3.0, [(0.5, 0.0, False), (0.1, 0.0, False)])])
     got = prior_by_position(sweep, session, 12.0, share=0.25)
-    assert got["positions"] == 2 and got["share_beyond"] == 0.5 and got["escape_is_beyond"] == 1
+    assert got["positions"] == 2 and got["share_beyond"] == 0.5 and got["positions_escape_is_beyond"] == 2
     assert got["optimism_beyond"] == pytest.approx(0.7) and got["optimism_inside"] == pytest.approx(-0.3)
     assert got["optimism_at_share"] == pytest.approx(0.25 * 0.7 + 0.75 * -0.3)
 
 
 def test_a_position_inside_that_escapes_breaks_the_mechanism():
     sweep, session = _rows([("a", -15.0, [(0.2, 1.0, True)]), ("b", 3.0, [(0.5, 0.0, True)])])
-    assert prior_by_position(sweep, session, 12.0)["escape_is_beyond"] == 0
+    assert prior_by_position(sweep, session, 12.0)["positions_escape_is_beyond"] == 1
 
 
 def test_e222_needs_the_mechanism_and_the_papers_optimism_at_its_share():
     rule = C.EXPERIMENTS["E222"].supports
     paper = C.paper_values.value("T29-replay-prior.optimism")
-    assert rule({"m": 1, "o": paper + 0.04}) and not rule({"m": 0, "o": paper}) and not rule({"m": 1, "o": paper + 0.06})
+    assert rule({"m": 12, "n": 12, "o": paper + 0.04}) and not rule({"m": 11, "n": 12, "o": paper})
+    assert not rule({"m": 12, "n": 12, "o": paper + 0.06})
 
 
 def test_e223_counts_a_session_only_if_the_papers_whole_sentence_holds_on_it():
@@ -55,6 +56,18 @@ def test_e223_counts_a_session_only_if_the_papers_whole_sentence_holds_on_it():
     assert out["share_sessions_paper_outcome"] == 0.5
 
 
-def test_e223_needs_a_share_of_sessions_and_the_pooled_bound():
+def _e223(p: float, w: float, failed: int, sessions_as_many: int, n: int = 30) -> dict:
+    """E223's keys: our session fails ``failed`` labels (intervals excluding zero first, then bounds), and
+    ``sessions_as_many`` of ``n`` redrawn sessions fail at least as many."""
+    v = {"p": p, "w": w, "n": n, **{f"ge{j}": (n if j == 0 else sessions_as_many if j <= failed else 0) for j in range(11)}}
+    for t in range(1, 6):
+        bad = t <= failed
+        v[f"o{t}"], v[f"l{t}"], v[f"h{t}"] = (0.0, 0.01, 0.02) if bad else (0.0, -0.1, 0.1)
+    return v
+
+
+def test_e223_needs_both_sides_a_share_of_sessions_like_the_papers_and_ours_a_draw_of_the_design():
     rule = C.EXPERIMENTS["E223"].supports
-    assert rule({"p": 0.4, "w": 0.05}) and not rule({"p": 0.0, "w": 0.05}) and not rule({"p": 0.4, "w": 0.2})
+    assert C._rig_session_rank(_e223(0.4, 0.05, 3, 7))[:2] == (3, 7)
+    assert rule(_e223(0.4, 0.05, 3, 7)) and not rule(_e223(0.0, 0.05, 3, 7)) and not rule(_e223(0.4, 0.2, 3, 7))
+    assert not rule(_e223(0.4, 0.05, 5, 0))  # (0 + 1) / 31 < 0.05: ours is not a session the design gives

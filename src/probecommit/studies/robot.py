@@ -146,8 +146,8 @@ def prior_by_position(sweep_episodes: pd.DataFrame, session: pd.DataFrame, size:
 
     Why: escape and coverage under a narrowed prior are, if the belief cannot reach past its prior, the share of
     positions beyond it, a property of where the blocks were put, which the paper does not report (E222). The
-    split measures that mechanism position by position (``escape_is_beyond``: every episode of a position beyond
-    escapes, none inside does) and gives each stratum's optimism, so the optimism at another share of positions
+    split measures that mechanism position by position (``positions_escape_is_beyond``: the positions every episode
+    of which escapes if beyond and none if inside) and gives each stratum's optimism, so the optimism at another share of positions
     beyond (``share``, e.g. the one the paper's escape implies) is their mixture.
     """
     part = sweep_episodes[(sweep_episodes["fault"] == "prior") & (sweep_episodes["size"] == size)]
@@ -157,7 +157,7 @@ def prior_by_position(sweep_episodes: pd.DataFrame, session: pd.DataFrame, size:
     per_position = rows.groupby("instance_id").agg(beyond=("beyond", "first"), escaped=("escaped", "mean"))
     out: dict[str, Any] = {
         "positions": int(len(per_position)), "share_beyond": float(per_position["beyond"].mean()),
-        "escape_is_beyond": int((per_position["escaped"] == per_position["beyond"].astype(float)).all()),
+        "positions_escape_is_beyond": int((per_position["escaped"] == per_position["beyond"].astype(float)).sum()),
         "optimism_beyond": float(rows.loc[rows["beyond"], "optimism"].mean()),
         "optimism_inside": float(rows.loc[~rows["beyond"], "optimism"].mean())}
     if share is not None:

@@ -18,6 +18,8 @@ from typing import Any, Mapping, Sequence
 import numpy as np
 import pandas as pd
 
+from probecommit.studies.paper_values import value as paper_value
+
 #: Result group and its stored rows (the final-budget Probe-Robust rows of every arm, beside results.json).
 GROUP = "ex37_filters"
 GROUPS = (GROUP,)
@@ -95,6 +97,10 @@ def draws_keys(rows: pd.DataFrame) -> dict[str, Any]:
                     f"draws.{arm}.optimism.max": float(got.max())})
     for f in FILTERS:
         out[f"draws.{f}.max_gap"] = float(max(abs(per[(d, f)] - per[(d, "deployed")]) for d in names))
+    floor = paper_value("T43-robust-filters.optimism_floor")
+    above = {f: {d for d in names if per[(d, f)] > floor} for f in FILTERS}
+    out.update({f"draws.{f}.above_floor": len(above[f]) for f in FILTERS})
+    out["draws.all_filters_above_floor"] = len(set.intersection(*above.values()))  # the paper's sentence on one draw
     return out
 
 

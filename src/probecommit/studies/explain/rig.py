@@ -40,6 +40,8 @@ def redrawn_sessions(runs: Path, seeds: list[int], quick: bool = False) -> list[
 #: The stored rows (``explain/results/``): every redrawn session's episodes (the columns Table IX reads) and each
 #: session's boundary sweep summary; ``optimism_summary`` and ``boundary_summary`` read them (explain and verify).
 STORED_SESSIONS = "rig_redraws_sessions.parquet"
+#: The rig table's budgets (taps); T26 tests an interval and a bound at each.
+BUDGET_TAPS = (1, 2, 3, 4, 5)
 STORED_BOUNDARY = "rig_redraws_boundary.parquet"
 SESSION_COLUMNS = ("session", "instance_id", "k", "predicted", "realized", "covered", "escaped", "entered", "aim_error")
 
@@ -75,6 +77,9 @@ def optimism_summary(pooled: pd.DataFrame, boot: dict[str, Any]) -> tuple[dict[s
                            # budget's optimism within its bound), as a share of the redrawn sessions.
                            "share_sessions_paper_outcome": float(((per_session["excludes_zero"] == 0)
                                                                   & (per_session["outside_bound"] == 0)).mean())}
+    # E223's other side (rev2): how many sessions fail at least j of T26's ten labels, to rank our own session.
+    failing = (per_session["excludes_zero"] + per_session["outside_bound"]).to_numpy()
+    out.update({f"sessions_failing_at_least.{j}": int((failing >= j).sum()) for j in range(2 * len(BUDGET_TAPS) + 1)})
     pooled = pooled.assign(cluster=pooled["session"].astype(str) + "/" + pooled["instance_id"].astype(str))
     worst = 0.0
     for k, g in pooled.groupby("k", sort=True):
