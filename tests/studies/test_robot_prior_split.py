@@ -71,3 +71,17 @@ def test_e223_needs_both_sides_a_share_of_sessions_like_the_papers_and_ours_a_dr
     assert C._rig_session_rank(_e223(0.4, 0.05, 3, 7))[:2] == (3, 7)
     assert rule(_e223(0.4, 0.05, 3, 7)) and not rule(_e223(0.0, 0.05, 3, 7)) and not rule(_e223(0.4, 0.2, 3, 7))
     assert not rule(_e223(0.4, 0.05, 5, 0))  # (0 + 1) / 31 < 0.05: ours is not a session the design gives
+
+
+def test_e225_keys_come_from_the_central_sessions_under_their_own_prefix():
+    from probecommit.studies.explain.rig import keys
+
+    rows = [{"session": 1, "instance_id": f"p{i}", "k": 1, "predicted": 0.5, "realized": float(i % 2), "covered": True,
+             "escaped": False, "entered": 1.0, "aim_error": 1.0} for i in range(4)]
+    boundary = pd.DataFrame({"session": [1], "first_resolved_mm": [float("nan")], "holds_to_mm": [14.0],
+                             "sweep_end_mm": [14.0]})
+    central = pd.DataFrame(rows).assign(realized=1.0)  # optimism +0.5: beyond the bound
+    got = keys(pd.DataFrame(rows), boundary, {"resamples": 200, "seed": 0}, central)
+    assert got["optimism.share_sessions_paper_outcome"] == 1.0 and got["central.optimism.share_sessions_paper_outcome"] == 0.0
+    assert got["central.optimism.sessions_failing_at_least.1"] == 1
+    assert "central.optimism.sessions" in got and not any(k.startswith("central.") for k in keys(pd.DataFrame(rows), boundary, {"resamples": 200, "seed": 0}))

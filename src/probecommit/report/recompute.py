@@ -487,7 +487,8 @@ def explain(folder: Path, results: dict[str, Any]) -> Recomputed:
 
         setup = json.loads((folder.parent / "insertion" / "results.json").read_text())["results"]["setup"]["bootstrap"]
         boot = dict(resamples=int(setup["resamples"]), seed=int(setup["seed"]))
-        for key, value in rig.keys(*(pd.read_parquet(folder / name) for name in EXPLAIN_RIG), boot).items():
+        central = pd.read_parquet(folder / rig.STORED_CENTRAL) if (folder / rig.STORED_CENTRAL).is_file() else None
+        for key, value in rig.keys(*(pd.read_parquet(folder / name) for name in EXPLAIN_RIG), boot, central).items():
             out.values[f"rig_redraws.{key}"] = value
         out.sources["rig_redraws"] = " and ".join(EXPLAIN_RIG)
     _stored_summaries(folder, results, out)

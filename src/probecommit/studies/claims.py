@@ -721,7 +721,7 @@ def _claims_hardware() -> list[Claim]:
               + tuple(Holds(f"{t} taps within bound", "|optimism| within the paper's bound of zero",
                             {"o": f"{R}table.{t - 1}.optimism"},
                             lambda v: abs(v["o"]) <= paper_values.value("T26-hardware-optimism.bound") + 1e-12)
-                      for t in range(1, 6)), simulated_rig=True, explain=("E223",)))
+                      for t in range(1, 6)), simulated_rig=True, explain=("E223", "E225")))
     add(Claim("T27-replay-deployed", "Sec. V-D, Fault injection", "Replayed as deployed, the taps reproduce the run",
               (Holds("reproduced", "every recorded decision reproduced", {"f": f"{R}replay_reproduced_fraction"},
                      lambda v: v["f"] == 1.0),), simulated_rig=True))
@@ -3080,6 +3080,27 @@ def _experiments_physx_cells() -> list[Experiment]:
     return out
 
 
+def _e225() -> Experiment:
+    """E225 (declared in docs/decisions.md before its sessions ran): E223's paper side over the whole prior box, our
+    side over redraws in the box's central half, where the frozen session's positions fell."""
+    rr, cr = "explain:results.rig_redraws.optimism.", "explain:results.rig_redraws.central.optimism."
+    keys = {"n_full": f"{rr}sessions", "p": f"{rr}share_sessions_paper_outcome", "w": f"{rr}pooled_optimism.max_abs",
+            "n": f"{cr}sessions", "pc": f"{cr}share_sessions_paper_outcome", "wc": f"{cr}pooled_optimism.max_abs",
+            **{f"ge{j}": f"{cr}sessions_failing_at_least.{j}" for j in range(11)},
+            **{f"{c}{t}": f"{R}table.{t - 1}.optimism{s}" for t in range(1, 6) for c, s in (("o", ""), ("l", "_lo"),
+                                                                                            ("h", "_hi"))}}
+    return Experiment(
+        "E225", "the simulated rig's optimism sentence with the block positions redrawn in the central half of the "
+        "prior box, where the frozen session's fell", keys,
+        "over {n_full:d} sessions redrawn over the whole box the paper's whole sentence holds on {p:.3f} (pooled "
+        "optimism within {w:.3f} of zero); over {n:d} sessions with the positions drawn in the box's central half it "
+        "holds on {pc:.3f} (pooled within {wc:.3f}), and {ge3:d} of them fail three or more of its ten labels, {ge4:d} "
+        "four or more, {ge5:d} five or more: whether ours, counted among them, reaches the same least share as the "
+        "paper's side is the rule.",
+        supports=lambda v: v["p"] >= UNRESOLVED_CHOICE_SHARE and v["w"] <= _pv("T26-hardware-optimism.bound")
+        and _rig_session_rank(v)[2] >= UNRESOLVED_CHOICE_SHARE)
+
+
 def _rig_session_rank(v: dict[str, Any]) -> tuple[int, int, float]:
     """E223's two sides (rev2): our rig session's failed T26 labels (an interval excluding zero, or |optimism|
     beyond the paper's bound, at each of five budgets), the redrawn sessions failing as many or more, and that
@@ -3111,7 +3132,7 @@ for _experiment in (_experiments() + _experiments_more() + _experiments_ex3() + 
                     + _experiments_ex30()
                     + _experiments_ex29() + _experiments_ex31() + _experiments_ex32() + _experiments_ex33()
                     + _experiments_ex34() + _experiments_ex35() + _experiments_lead()
-                    + _experiments_ex36() + _experiments_ex37() + _experiments_physx_cells()):
+                    + _experiments_ex36() + _experiments_ex37() + _experiments_physx_cells() + [_e225()]):
     EXPERIMENTS[_experiment.number] = _experiment
 
 

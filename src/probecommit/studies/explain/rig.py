@@ -25,13 +25,19 @@ from probecommit.studies.paper_values import value
 from probecommit.studies.robot import BOUNDARY_SWEEP, boundary_holds_to, rig_config
 
 
-def redrawn_sessions(runs: Path, seeds: list[int], quick: bool = False) -> list[tuple[int, Path]]:
-    """The frozen rig protocol run once per instance seed (block positions redrawn), logs under ``runs``."""
+def redrawn_sessions(runs: Path, seeds: list[int], quick: bool = False,
+                     central: float | None = None) -> list[tuple[int, Path]]:
+    """The frozen rig protocol run once per instance seed (block positions redrawn), logs under ``runs``; with
+    ``central``, positions drawn within that fraction of the prior box's half-width (E225), clearance unchanged."""
     out = []
     for seed in seeds:
         data = config_data(rig_config(quick))
         data["instances"]["seed"] = int(seed)
-        path = runs / f"rig_redraw_{seed}"
+        if central is not None:
+            low, high = list(data["model"]["prior_low"]), list(data["model"]["prior_high"])
+            data["instances"]["truth_low"] = [low[0] * central, *low[1:]]
+            data["instances"]["truth_high"] = [high[0] * central, *high[1:]]
+        path = runs / (f"rig_redraw_{seed}" if central is None else f"rig_redraw_central_{seed}")
         simulate_session(path, parse_config(data))
         out.append((seed, path))
     return out
@@ -43,6 +49,8 @@ STORED_SESSIONS = "rig_redraws_sessions.parquet"
 #: The rig table's budgets (taps); T26 tests an interval and a bound at each.
 BUDGET_TAPS = (1, 2, 3, 4, 5)
 STORED_BOUNDARY = "rig_redraws_boundary.parquet"
+#: E225's sessions, positions drawn in the central part of the prior box (``rig_redraws_central`` of explain.yaml).
+STORED_CENTRAL = "rig_redraws_central_sessions.parquet"
 SESSION_COLUMNS = ("session", "instance_id", "k", "predicted", "realized", "covered", "escaped", "entered", "aim_error")
 
 
@@ -119,11 +127,15 @@ def boundary_summary(rows: pd.DataFrame) -> dict[str, Any]:
     return out
 
 
-def keys(sessions: pd.DataFrame, boundary: pd.DataFrame, boot: dict[str, Any]) -> dict[str, Any]:
-    """Keys of ``explain:results.rig_redraws`` from the stored rows (the explain step and verify both call this)."""
+def keys(sessions: pd.DataFrame, boundary: pd.DataFrame, boot: dict[str, Any],
+         central: pd.DataFrame | None = None) -> dict[str, Any]:
+    """Keys of ``explain:results.rig_redraws`` from the stored rows (the explain step and verify both call this);
+    ``central``: E225's sessions, under ``central.optimism.``."""
     opt, _ = optimism_summary(sessions, boot)
     out = {f"optimism.{k}": v for k, v in opt.items()}
     out.update({f"boundary.{k}": v for k, v in boundary_summary(boundary).items()})
+    if central is not None:
+        out.update({f"central.optimism.{k}": v for k, v in optimism_summary(central, boot)[0].items()})
     return out
 
 
@@ -133,5 +145,6 @@ def run(runs: Path, cfg: dict[str, Any], boot: dict[str, Any], quick: bool) -> t
     seeds = [int(cfg["rig_redraw_seed"]) + i for i in range(count)]
     sessions = redrawn_sessions(runs, seeds, quick)
     sizes = BOUNDARY_SWEEP[::7] if quick else BOUNDARY_SWEEP
-    tables = {STORED_SESSIONS: session_rows(sessions), STORED_BOUNDARY: boundary_rows(sessions, boot, sizes)}
-    return keys(tables[STORED_SESSIONS], tables[STORED_BOUNDARY], boot), tables
+    tables = {STORED_SESSIONS: session_rows(sessions), STORED_BOUNDARY: boundary_rows(sessions, boot, sizes),
+              STORED_CENTRAL: session_rows(redrawn_sessions(runs, seeds, quick, float(cfg["rig_redraws_central"])))}
+    return keys(tables[STORED_SESSIONS], tables[STORED_BOUNDARY], boot, tables[STORED_CENTRAL]), tables
