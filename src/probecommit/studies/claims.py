@@ -661,7 +661,8 @@ def _claims_correction_and_engines() -> list[Claim]:
                Near("PyBullet capture ratio", "T18-engine-scans.pybullet_ratio",
                     f"{E}scans.pybullet.capture.ratio_mean", 0.1),
                Near("PhysX capture ratio", "T18-engine-scans.sapien_ratio", f"{E}scans.sapien.capture.ratio_mean", 0.1)),
-              explain=(("E30", ("PyBullet capture",)),)))  # E6 restates our PhysX scan (credA)
+              explain=(("E30", ("PyBullet capture",)),  # E6 restates our PhysX scan (credA)
+                       *((n, (f"{EXACT}PhysX offset", f"{EXACT}PhysX capture ratio")) for n in ("E214", "E216")))))
     add(Claim("T19-pybullet-escape", "Sec. V-C, Across engines", "PyBullet escape climbs from k = 1 to 8",
               (Near("k=1", "T19-pybullet-escape.k1", f"{E}escape.pybullet/deployed.1", POINT_TOL * 2.5),
                Near("k=8", "T19-pybullet-escape.k8", f"{E}escape.pybullet/deployed.8", POINT_TOL * 2.5),
@@ -2345,6 +2346,30 @@ def _experiments_ex35() -> list[Experiment]:
     return out
 
 
+#: The ex38 helper's arms (``studies/explain/ex38_physx.py``): experiment, arm, what is swept.
+EX38_ARMS = (("E214", "contact_offset", "contact offset"), ("E216", "rest_offset", "rest offset"))
+
+
+def _experiments_ex38() -> list[Experiment]:
+    """The ex38 helper's experiments (E214, E216; ``studies/explain/ex38_physx.py``; rules in docs/decisions.md,
+    "ex38", committed before any scan off our setting): one unreported PhysX shape setting swept, the point chosen
+    by the paper's capture window, held only if that point also gives the paper's boundary (T18's tolerances)."""
+    out = []
+    for number, arm, what in EX38_ARMS:
+        d = f"{X}ex38_physx.{arm}."
+        keys = {"n": f"{d}points", "v": f"{d}chosen.value", "r": f"{d}chosen.ratio", "dl": f"{d}chosen.delta",
+                "r0": f"{d}p0.ratio", "d0": f"{d}p0.delta", "h": f"{d}holds",
+                "pr": "paper:T18-engine-scans.sapien_ratio", "pd": "paper:T18-engine-scans.sapien_offset"}
+        out.append(Experiment(
+            number, f"PhysX's {what} chosen by the paper's capture window, judged on its boundary", keys,
+            f"with every shape's {what} swept over {{n:d}} settings, all else ours (ours: capture {{r0:.3f}} x w(c), "
+            f"boundary hg {{d0:+.3f}} mm), the setting whose capture window is nearest the paper's {{pr:.2f}} x is "
+            "{v:.2e} m: capture {r:.3f} x, boundary hg {dl:+.3f} mm against the paper's {pd:+.3f}. The declared rule "
+            "needs both within T18's tolerances at that one setting.",
+            supports=lambda v: v["h"] == 1))
+    return out
+
+
 def _experiments_ex29() -> list[Experiment]:
     """The ex29 helper's experiment (``studies/explain/ex29_band.py``; rule in docs/decisions.md, "ex29"): T36's
     k = 1 AUC with the first tap's band lost at the rate the paper's own k = 1 escape implies (E187)."""
@@ -2884,7 +2909,7 @@ for _experiment in (_experiments() + _experiments_more() + _experiments_ex3() + 
                     + _experiments_ex25() + _experiments_ex26() + _experiments_ex27() + _experiments_ex28()
                     + _experiments_ex30()
                     + _experiments_ex29() + _experiments_ex31() + _experiments_ex32() + _experiments_ex33()
-                    + _experiments_ex34() + _experiments_ex35()):
+                    + _experiments_ex34() + _experiments_ex35() + _experiments_ex38()):
     EXPERIMENTS[_experiment.number] = _experiment
 
 

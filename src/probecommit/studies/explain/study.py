@@ -54,6 +54,7 @@ from probecommit.studies.explain import ex33_aim
 from probecommit.studies.explain import ex31_shift
 from probecommit.studies.explain import ex34_fixed
 from probecommit.studies.explain import ex35_pools
+from probecommit.studies.explain import ex38_physx
 from probecommit.studies.explain import ex29_band
 from probecommit.studies.explain import gru as gru_study
 from probecommit.studies.explain.margin import margin_curve
@@ -150,7 +151,7 @@ class Explain:
             ex12_distinct.GROUP, ex12_simultaneous.GROUP,
             ex15_readings.GROUP, ex15_union.GROUP,
             ex18_share.GROUP, ex18_grasp.GROUP, ex26_grasp.GROUP, ex28_plateau.GROUP, ex30_fresh.GROUP,
-            ex29_band.GROUP, ex33_aim.GROUP, ex35_pools.GROUP)}
+            ex29_band.GROUP, ex33_aim.GROUP, ex35_pools.GROUP, ex38_physx.GROUP)}
         self.tables: dict[str, pd.DataFrame] = ReadDict(self.reads, "tables")
         #: Stored rows written beside results.json as they are, by file name (``more``'s steps).
         self.stored: dict[str, pd.DataFrame] = ReadDict(self.reads, "stored")
@@ -563,6 +564,7 @@ class Explain:
                  # ex9 store; E205 (ex35_pools) E56's stored fresh pools, and runs the rest
                  self.aside(ex30_fresh.run, needs=()),  # E190, E191: the insertion study's stored runs only
                  self.aside(ex33_aim.run, needs=()),  # E199, E200: the insertion study's stored runs only
+                 self.aside(ex38_physx.run, needs=()),  # E214, E216: PhysX scans off the protocol alone
                  self.aside(ex7.run, needs=()), self.aside(ex13.mixture, needs=()), self.aside(ex17.tiebreak, needs=()),
                  self.instance_generator, self.draw_runs, self.aside(draw_summaries, needs=()), self.boundary_fault,
                  self.aside(ex20.run, ex31_shift.run, needs=()),  # E144-E146, E193: the stored random test run and the
