@@ -2358,13 +2358,13 @@ def _experiments_ex38() -> list[Experiment]:
     for number, arm, what in EX38_ARMS:
         d = f"{X}ex38_physx.{arm}."
         keys = {"n": f"{d}points", "v": f"{d}chosen.value", "r": f"{d}chosen.ratio", "dl": f"{d}chosen.delta",
-                "r0": f"{d}p0.ratio", "d0": f"{d}p0.delta", "h": f"{d}holds",
+                "r0": f"{d}p0.ratio", "d0": f"{d}p0.delta", "h": f"{d}holds", "sd": f"{d}chosen.ratio_sd",
                 "pr": "paper:T18-engine-scans.sapien_ratio", "pd": "paper:T18-engine-scans.sapien_offset"}
         out.append(Experiment(
             number, f"PhysX's {what} chosen by the paper's capture window, judged on its boundary", keys,
             f"with every shape's {what} swept over {{n:d}} settings, all else ours (ours: capture {{r0:.3f}} x w(c), "
             f"boundary hg {{d0:+.3f}} mm), the setting whose capture window is nearest the paper's {{pr:.2f}} x is "
-            "{v:.2e} m: capture {r:.3f} x, boundary hg {dl:+.3f} mm against the paper's {pd:+.3f}. The declared rule "
+            "{v:.2e} m: capture {r:.3f} x (SD {sd:.3f} over the truths), boundary hg {dl:+.3f} mm against the paper's {pd:+.3f}. The declared rule "
             "needs both within T18's tolerances at that one setting.",
             supports=lambda v: v["h"] == 1))
     return out

@@ -125,7 +125,7 @@ def arm_keys(rows: pd.DataFrame) -> dict[str, Any]:
     scanned = [p for p in points if not p["failed"]]
     if not scanned:
         return {**out, "holds": 0}
-    chosen = min(scanned, key=lambda p: abs(p["ratio"] - target))
+    chosen = min(scanned, key=lambda p: abs(p["ratio"] - target))  # a tie goes to the smallest setting
     ratio_ok = int(abs(chosen["ratio"] - target) <= RATIO_TOLERANCE)
     delta_ok = int(abs(chosen["delta"] - paper_delta) <= OFFSET_TOLERANCE_MM)
     return {**out, **{f"chosen.{k}": chosen[k] for k in ("value", "delta", "ratio", "ratio_sd")},
