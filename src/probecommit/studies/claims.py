@@ -672,7 +672,8 @@ def _claims_correction_and_engines() -> list[Claim]:
                Near("PyBullet capture ratio", "T18-engine-scans.pybullet_ratio",
                     f"{E}scans.pybullet.capture.ratio_mean", 0.1),
                Near("PhysX capture ratio", "T18-engine-scans.sapien_ratio", f"{E}scans.sapien.capture.ratio_mean", 0.1)),
-              explain=(("E30", ("PyBullet capture",)),)))  # E6 restates our PhysX scan (credA)
+              explain=(("E30", ("PyBullet capture",)),  # E6 restates our PhysX scan (credA)
+                       *((n, (f"{EXACT}PhysX offset", f"{EXACT}PhysX capture ratio")) for n in ("E214", "E216")))))
     add(Claim("T19-pybullet-escape", "Sec. V-C, Across engines", "PyBullet escape climbs from k = 1 to 8",
               (Near("k=1", "T19-pybullet-escape.k1", f"{E}escape.pybullet/deployed.1", POINT_TOL * 2.5),
                Near("k=8", "T19-pybullet-escape.k8", f"{E}escape.pybullet/deployed.8", POINT_TOL * 2.5),
@@ -2410,6 +2411,8 @@ def _ex37_stays(v: dict[str, Any]) -> bool:
     """E213's rule for one filter: the paper's floor within [min, max] of its optimism over the draws, and on every
     draw its optimism within :data:`EX37_SAME_OPTIMISM` of the deployed model's (it does not repair optimism)."""
     return v["lo"] <= _pv("T43-robust-filters.optimism_floor") <= v["hi"] and v["gap"] <= EX37_SAME_OPTIMISM
+
+
 #: Table V's cover labels our schedule fails, the ones E208's rule needs under the paper's schedule (ex36).
 TESTC_SCHEDULE_FAILING = ("failure_cover_k5 corrected", "failure_cover_k1 old", "failure_cover_k1 corrected")
 
@@ -2443,6 +2446,30 @@ def _experiments_ex36() -> list[Experiment]:
                    "its coverage is not tested here.",
                    supports=lambda v: v["lo"] <= _pv("tab:testc.episode_coverage_random_k8.old") <= v["hi"]),
     ]
+
+
+#: The ex38 helper's arms (``studies/explain/ex38_physx.py``): experiment, arm, what is swept.
+EX38_ARMS = (("E214", "contact_offset", "contact offset"), ("E216", "rest_offset", "rest offset"))
+
+
+def _experiments_ex38() -> list[Experiment]:
+    """The ex38 helper's experiments (E214, E216; ``studies/explain/ex38_physx.py``; rules in docs/decisions.md,
+    "ex38", committed before any scan off our setting): one unreported PhysX shape setting swept, the point chosen
+    by the paper's capture window, held only if that point also gives the paper's boundary (T18's tolerances)."""
+    out = []
+    for number, arm, what in EX38_ARMS:
+        d = f"{X}ex38_physx.{arm}."
+        keys = {"n": f"{d}points", "v": f"{d}chosen.value", "r": f"{d}chosen.ratio", "dl": f"{d}chosen.delta",
+                "r0": f"{d}p0.ratio", "d0": f"{d}p0.delta", "h": f"{d}holds", "sd": f"{d}chosen.ratio_sd",
+                "pr": "paper:T18-engine-scans.sapien_ratio", "pd": "paper:T18-engine-scans.sapien_offset"}
+        out.append(Experiment(
+            number, f"PhysX's {what} chosen by the paper's capture window, judged on its boundary", keys,
+            f"with every shape's {what} swept over {{n:d}} settings, all else ours (ours: capture {{r0:.3f}} x w(c), "
+            f"boundary hg {{d0:+.3f}} mm), the setting whose capture window is nearest the paper's {{pr:.2f}} x is "
+            "{v:.2e} m: capture {r:.3f} x (SD {sd:.3f} over the truths), boundary hg {dl:+.3f} mm against the paper's {pd:+.3f}. The declared rule "
+            "needs both within T18's tolerances at that one setting.",
+            supports=lambda v: v["h"] == 1))
+    return out
 
 
 def _experiments_ex29() -> list[Experiment]:
@@ -3132,7 +3159,8 @@ for _experiment in (_experiments() + _experiments_more() + _experiments_ex3() + 
                     + _experiments_ex30()
                     + _experiments_ex29() + _experiments_ex31() + _experiments_ex32() + _experiments_ex33()
                     + _experiments_ex34() + _experiments_ex35() + _experiments_lead()
-                    + _experiments_ex36() + _experiments_ex37() + _experiments_physx_cells() + [_e225()]):
+                    + _experiments_ex36() + _experiments_ex37() + _experiments_physx_cells() + [_e225()]
+                    + _experiments_ex38()):
     EXPERIMENTS[_experiment.number] = _experiment
 
 
