@@ -199,9 +199,9 @@ def _figure_png(fig) -> tuple[str, float | None]:
     """(base64 PNG, smallest text in image pixels); the figure is closed."""
     from probecommit.report.style import text_sizes
 
-    sizes = [size for size, _ in text_sizes(fig)]
     buf = io.BytesIO()
     fig.savefig(buf, format="png", dpi=HTML_DPI)
+    sizes = [size for size, _ in text_sizes(fig, drawn=True)]  # as the PNG's draw left them: no second draw
     plt.close(fig)
     return base64.b64encode(buf.getvalue()).decode("ascii"), (min(sizes) * HTML_DPI / 72 if sizes else None)
 
