@@ -341,7 +341,8 @@ def grown_points(model: Any, particles: np.ndarray, threshold: float, z: np.ndar
     """The ``GROWN_SET_POINTS`` scenarios a grown set adds to the particles ``[E, 9, d]``, and
     its interval ``(lo, hi)`` (see :func:`grown_set`); ``z`` is ``model.decision(particles)`` when the
     caller has it (a contiguous copy: its extremes are read several times as fast as a strided view's),
-    and ``shared`` keeps those extremes for the belief's other thresholds (:attr:`Belief.shared`)."""
+    and ``shared`` keeps those extremes, and the points' other latents where the model's
+    ``grown_scenarios`` takes them (``takes_centre``), for the belief's other thresholds (:attr:`Belief.shared`)."""
     shared = {} if shared is None else shared
     if "extremes" not in shared:
         z = model.decision(particles) if z is None else z
@@ -350,7 +351,12 @@ def grown_points(model: Any, particles: np.ndarray, threshold: float, z: np.ndar
     grow = (threshold - 1.0) * model.decision_domain_width
     lo, hi = z_min - grow, z_max + grow
     z_points = lo[:, None] + (hi - lo)[:, None] * np.linspace(0.0, 1.0, GROWN_SET_POINTS)[None, :]
-    return model.grown_scenarios(particles, z_points), lo, hi
+    if not getattr(model.grown_scenarios, "takes_centre", False):  # a family's own: all of it per threshold
+        return model.grown_scenarios(particles, z_points), lo, hi
+    key = ("centre", type(model).grown_centre)  # the particles' median, once per belief (docs/decisions.md, "cal4:")
+    if key not in shared:
+        shared[key] = model.grown_centre(particles)
+    return model.grown_scenarios(particles, z_points, centre=shared[key]), lo, hi
 
 
 @dataclass
