@@ -575,11 +575,21 @@ def _margin_ties(models: Sequence[Any], reference: np.ndarray, context: np.ndarr
     """Each margin's tie-break costs ``[M, E, A]``, or ``[1, E, A]`` when every margin's are the same bits
     (a family whose tie cost does not read the margin): one ``[E, A]`` block read for every margin
     instead of ``M`` copies stacked (``margin_choices`` takes either)."""
+    if _one_tie_cost(models):  # the same bits for every margin, known without computing them
+        return np.asarray(models[0].tie_break_cost(models[0].action_grid, reference, context), dtype=float)[None]
     ties = [model.tie_break_cost(model.action_grid, reference, context) for model in models]
     first = np.asarray(ties[0], dtype=float)
     if all(np.asarray(t, dtype=float).tobytes() == first.tobytes() for t in ties[1:]):
         return first[None]
     return np.stack(ties)
+
+
+def _one_tie_cost(models: Sequence[Any]) -> bool:
+    """Whether every model's tie cost is the same function of the actions and reference alone
+    (``tie_break_cost.reads_only_reference``) on the same action grid: then one block serves every margin."""
+    first = models[0]
+    return all(type(model) is type(first) and getattr(model.tie_break_cost, "reads_only_reference", False)
+               and np.array_equal(model.action_grid, first.action_grid) for model in models)
 
 
 class BlindRobust(ProbeRobust):
