@@ -73,8 +73,8 @@ def text_sizes(fig, drawn: bool = False) -> list[tuple[float, str]]:
     labels, tick labels, legends, annotations), as drawn after a layout pass.
 
     ``drawn``: the caller has just drawn ``fig`` (a ``savefig``), so its tick labels are
-    placed and the draw here is skipped: a whole draw of the figure, the largest part of
-    writing a report figure after its encoding (docs/decisions.md, "cal4:").
+    placed and the draw here is skipped: a whole draw of the figure, about as dear as the
+    ``savefig`` itself (docs/decisions.md, "cal4:").
     """
     from matplotlib.text import Text
 
