@@ -184,3 +184,25 @@ def test_blind_bayes_answers_each_context_once_per_executor_and_the_same_as_comp
     for got, rows in ((first, contexts), (again, contexts[[3, 1]])):
         want = [fresh.act_one(row) for row in rows]
         assert got[0].tolist() == [w[0] for w in want] and got[1].tolist() == [w[1] for w in want]
+
+
+def test_a_tie_cost_that_reads_only_the_reference_is_computed_once_for_every_margin(monkeypatch):
+    """Insertion declares its tie cost margin-free (``reads_only_reference``): the declaration holds (each
+    margin's block the same bits) and ``_margin_ties`` computes one block; undeclared, one per margin."""
+    from probecommit.core.executors import _margin_ties
+
+    base = InsertionModel.deployed()
+    models = [base.with_margin(g) for g in (0.5, 0.74, 1.0)]
+    reference = np.random.default_rng(3).standard_normal((7, 2)) * 5
+    per_margin = np.stack([m.tie_break_cost(m.action_grid, reference, None) for m in models])
+    assert all(block.tobytes() == per_margin[0].tobytes() for block in per_margin)
+    calls = []
+    real = InsertionModel.tie_break_cost
+    spy = lambda self, *args: calls.append(1) or real(self, *args)  # noqa: E731
+    spy.reads_only_reference = True
+    monkeypatch.setattr(InsertionModel, "tie_break_cost", spy)
+    np.testing.assert_array_equal(_margin_ties(models, reference, None), per_margin[:1])
+    assert len(calls) == 1
+    del spy.reads_only_reference  # undeclared: every margin's block, found equal, one kept
+    np.testing.assert_array_equal(_margin_ties(models, reference, None), per_margin[:1])
+    assert len(calls) == 1 + len(models)

@@ -89,3 +89,29 @@ def test_success_interval_is_its_parts_scaled_by_the_margin_bit_for_bit(name, ma
 def test_a_model_without_interval_parts_has_no_interval():
     assert Push1DModel().success_interval_parts(np.zeros((2, 3, 3))) is None
     assert Push1DModel().success_interval(np.zeros((2, 3, 3))) is None
+
+
+def test_a_grown_sets_median_is_computed_once_per_belief_and_a_familys_own_points_stay_its_own(monkeypatch):
+    """``grown_points`` keeps the default points' median in the belief's ``shared`` for its other thresholds
+    (the same points as computed afresh); a family overriding ``grown_scenarios`` (1-D push) is called whole."""
+    import probecommit.tasks.base as base
+    from probecommit.core.executors import grown_points
+    from probecommit.tasks.insertion.model import InsertionModel
+    from probecommit.tasks.push1d.model import MIN_FRICTION, Push1DModel
+
+    rng = np.random.default_rng(1)
+    particles = rng.standard_normal((5, 64, 2))
+    calls = []
+    real = base.median_over_particles
+    monkeypatch.setattr(base, "median_over_particles", lambda values: calls.append(1) or real(values))
+    model, shared = InsertionModel.deployed(), {}
+    for threshold in (1.2, 1.5, 1.2):
+        kept = grown_points(model, particles, threshold, shared=shared)
+        afresh = grown_points(model, particles, threshold)
+        for a, b in zip(kept, afresh):
+            np.testing.assert_array_equal(a, b)
+    assert len(calls) == 1 + 3  # once for the shared belief, once per unshared call
+    push = Push1DModel()  # its own grown_scenarios (friction kept positive), called whole with a shared belief
+    assert not getattr(push.grown_scenarios, "takes_centre", False)
+    grown, lo, _ = grown_points(push, push.sample_prior(rng, 128)[None], 30.0, shared={})
+    assert lo[0] < 0 and grown[0, 0, 0] == MIN_FRICTION

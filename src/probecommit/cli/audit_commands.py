@@ -211,8 +211,9 @@ def _calibration_figure_section(res, nominal: float, png: Path) -> list[str]:
     from probecommit.report.audit_report import calibration_figure, calibration_section_html
     from probecommit.report.figures import save_figure
 
-    save_figure(calibration_figure(res.table3, nominal), png)
-    return calibration_section_html(res)
+    figure = calibration_figure(res.table3, nominal)
+    save_figure(figure, png)
+    return calibration_section_html(res, figure)  # the same figure drawn again for the page, not rebuilt
 
 
 def _audit_section(audit_result, nominal: float) -> list[str]:

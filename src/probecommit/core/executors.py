@@ -341,7 +341,8 @@ def grown_points(model: Any, particles: np.ndarray, threshold: float, z: np.ndar
     """The ``GROWN_SET_POINTS`` scenarios a grown set adds to the particles ``[E, 9, d]``, and
     its interval ``(lo, hi)`` (see :func:`grown_set`); ``z`` is ``model.decision(particles)`` when the
     caller has it (a contiguous copy: its extremes are read several times as fast as a strided view's),
-    and ``shared`` keeps those extremes for the belief's other thresholds (:attr:`Belief.shared`)."""
+    and ``shared`` keeps those extremes, and the points' other latents where the model's
+    ``grown_scenarios`` takes them (``takes_centre``), for the belief's other thresholds (:attr:`Belief.shared`)."""
     shared = {} if shared is None else shared
     if "extremes" not in shared:
         z = model.decision(particles) if z is None else z
@@ -350,7 +351,12 @@ def grown_points(model: Any, particles: np.ndarray, threshold: float, z: np.ndar
     grow = (threshold - 1.0) * model.decision_domain_width
     lo, hi = z_min - grow, z_max + grow
     z_points = lo[:, None] + (hi - lo)[:, None] * np.linspace(0.0, 1.0, GROWN_SET_POINTS)[None, :]
-    return model.grown_scenarios(particles, z_points), lo, hi
+    if not getattr(model.grown_scenarios, "takes_centre", False):  # a family's own: all of it per threshold
+        return model.grown_scenarios(particles, z_points), lo, hi
+    key = ("centre", type(model).grown_centre)  # the particles' median, once per belief (docs/decisions.md, "cal4:")
+    if key not in shared:
+        shared[key] = model.grown_centre(particles)
+    return model.grown_scenarios(particles, z_points, centre=shared[key]), lo, hi
 
 
 @dataclass
@@ -569,11 +575,21 @@ def _margin_ties(models: Sequence[Any], reference: np.ndarray, context: np.ndarr
     """Each margin's tie-break costs ``[M, E, A]``, or ``[1, E, A]`` when every margin's are the same bits
     (a family whose tie cost does not read the margin): one ``[E, A]`` block read for every margin
     instead of ``M`` copies stacked (``margin_choices`` takes either)."""
+    if _one_tie_cost(models):  # the same bits for every margin, known without computing them
+        return np.asarray(models[0].tie_break_cost(models[0].action_grid, reference, context), dtype=float)[None]
     ties = [model.tie_break_cost(model.action_grid, reference, context) for model in models]
     first = np.asarray(ties[0], dtype=float)
     if all(np.asarray(t, dtype=float).tobytes() == first.tobytes() for t in ties[1:]):
         return first[None]
     return np.stack(ties)
+
+
+def _one_tie_cost(models: Sequence[Any]) -> bool:
+    """Whether every model's tie cost is the same function of the actions and reference alone
+    (``tie_break_cost.reads_only_reference``) on the same action grid: then one block serves every margin."""
+    first = models[0]
+    return all(type(model) is type(first) and getattr(model.tie_break_cost, "reads_only_reference", False)
+               and np.array_equal(model.action_grid, first.action_grid) for model in models)
 
 
 class BlindRobust(ProbeRobust):

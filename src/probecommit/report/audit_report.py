@@ -199,9 +199,9 @@ def _figure_png(fig) -> tuple[str, float | None]:
     """(base64 PNG, smallest text in image pixels); the figure is closed."""
     from probecommit.report.style import text_sizes
 
-    sizes = [size for size, _ in text_sizes(fig)]
     buf = io.BytesIO()
     fig.savefig(buf, format="png", dpi=HTML_DPI)
+    sizes = [size for size, _ in text_sizes(fig, drawn=True)]  # as the PNG's draw left them: no second draw
     plt.close(fig)
     return base64.b64encode(buf.getvalue()).decode("ascii"), (min(sizes) * HTML_DPI / 72 if sizes else None)
 
@@ -466,15 +466,18 @@ def _extras_html(images: list[tuple[str, Path]] | None, tables: list[tuple[str, 
     return parts
 
 
-def calibration_section_html(c) -> list[str]:
-    """A ``CalibrationResult``: its thresholds and margins in one line, Table III and the cost of calibration."""
+def calibration_section_html(c, figure=None) -> list[str]:
+    """A ``CalibrationResult``: its thresholds and margins in one line, Table III and the cost of calibration.
+    ``figure``: its calibration figure when the caller has drawn it already (saved to files: the same
+    figure, not built and laid out again; the page's PNG is drawn from it)."""
     parts = ["<h2>Calibration</h2>"]
     thr = ", ".join(f"t<sub>{k}</sub> = {_fmt(v)}" for k, v in c.thresholds.items())
     parts.append(f"<p>1 − α = {1 - c.alpha:.2f}, M = {c.n_calibration} calibration instances. "
                  f"Fixed-budget thresholds: {thr}. Simultaneous t = {_fmt(c.simultaneous_threshold)}. "
                  f"Margin γ = {c.margin.gamma:.2f}{'' if c.margin.satisfied else ' (rule not met on the grid)'}; "
                  f"distribution-free margin {_fmt(c.distribution_free_margin)}.</p>")
-    parts.append(figure_html(calibration_figure(c.table3, 1 - c.alpha), "calibration: cluster coverage and optimism per budget"))
+    figure = calibration_figure(c.table3, 1 - c.alpha) if figure is None else figure
+    parts.append(figure_html(figure, "calibration: cluster coverage and optimism per budget"))
     parts.append(table_html(c.table3))
     parts.append(table_html(pd.DataFrame([c.summary]), intervals=False))
     parts.append(f"<h3>Cost of calibration (failure at k = {c.cost_budget})</h3>")

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import io
 from pathlib import Path
 from typing import Sequence
 
@@ -15,7 +16,7 @@ import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 
 from probecommit.report.style import COLUMN  # noqa: E402  (applies the shared style)
-from probecommit.store.safefile import write_with  # noqa: E402
+from probecommit.store.safefile import write_bytes, write_with  # noqa: E402
 
 
 def save_figure(fig, path: str | Path, dpi: int | None = None, caption: str | None = None) -> Path:
@@ -34,13 +35,15 @@ def save_figure(fig, path: str | Path, dpi: int | None = None, caption: str | No
     png.parent.mkdir(parents=True, exist_ok=True)
     from probecommit.report.style import text_sizes
 
-    sizes = [size for size, _ in text_sizes(fig)]
+    pdf_meta = {"CreationDate": None, **({"Subject": caption} if caption else {})}
+    pdf = io.BytesIO()
+    fig.savefig(pdf, format="pdf", metadata=pdf_meta)  # first: its draw places the text the PNG's metadata reads
+    sizes = [size for size, _ in text_sizes(fig, drawn=True)]
     # the smallest text, so a page showing the PNG can keep it legible (HTML reports read it back)
     meta = {"MinFontPt": f"{min(sizes):.2f}" if sizes else "", "Dpi": str(dpi or 300)}
     png_meta = {**meta, **({"Description": caption} if caption else {})}
-    pdf_meta = {"CreationDate": None, **({"Subject": caption} if caption else {})}
     write_with(png, lambda buf: fig.savefig(buf, format="png", dpi=dpi or 300, metadata=png_meta))
-    write_with(png.with_suffix(".pdf"), lambda buf: fig.savefig(buf, format="pdf", metadata=pdf_meta))
+    write_bytes(png.with_suffix(".pdf"), pdf.getvalue())
     plt.close(fig)
     return png
 

@@ -68,12 +68,18 @@ def legend_above(ax_or_fig, handles=None, labels=None, ncol: int = 3, **kwargs):
                             handlelength=1.6, columnspacing=1.0, borderaxespad=0.2, **kwargs)
 
 
-def text_sizes(fig) -> list[tuple[float, str]]:
+def text_sizes(fig, drawn: bool = False) -> list[tuple[float, str]]:
     """``(size in pt, text)`` of every visible, non-empty Text artist of ``fig`` (titles,
-    labels, tick labels, legends, annotations), as drawn after a layout pass."""
+    labels, tick labels, legends, annotations), as drawn after a layout pass.
+
+    ``drawn``: the caller has just drawn ``fig`` (a ``savefig``), so its tick labels are
+    placed and the draw here is skipped: a whole draw of the figure, about as dear as the
+    ``savefig`` itself (docs/decisions.md, "cal4:").
+    """
     from matplotlib.text import Text
 
-    fig.canvas.draw()
+    if not drawn:
+        fig.canvas.draw()
     return [(t.get_fontsize(), t.get_text()) for t in fig.findobj(Text)
             if t.get_visible() and t.get_text().strip() and t.get_figure() is not None]
 

@@ -163,19 +163,31 @@ class TaskModelBase:
         """Default: the modeled loss of each action for the reference scenario (then lowest index)."""
         return self.loss(actions, np.asarray(reference)[:, None, :], context)[:, :, 0].astype(float)
 
-    def grown_scenarios(self, particles: np.ndarray, z_points: np.ndarray) -> np.ndarray:
+    def grown_scenarios(self, particles: np.ndarray, z_points: np.ndarray,
+                        centre: np.ndarray | None = None) -> np.ndarray:
         """Default: each point at the particles' per-coordinate median, its decision coordinate set.
 
         Valid for families whose decision coordinate is latent 0 (the default ``decision``);
-        a family with another decision coordinate overrides this.
+        a family with another decision coordinate overrides this. ``centre`` is
+        :meth:`grown_centre` of these particles when the caller kept it from another threshold.
         """
-        particles = np.asarray(particles)
-        centre = np.zeros((particles.shape[0], particles.shape[2]))
-        if particles.shape[2] > 1:  # latent 0 is replaced below: its median is not needed
-            centre[:, 1:] = median_over_particles(particles[:, :, 1:])
+        centre = self.grown_centre(particles) if centre is None else centre
         extra = np.repeat(centre[:, None, :], z_points.shape[1], axis=1)
         extra[..., 0] = z_points
         return extra
+
+    #: This ``grown_scenarios`` takes the belief-wide part, ``centre``, from its caller (an override does not):
+    #: a calibration grows each belief's set under ``t_k`` and ``t``, and the median is the same for both.
+    grown_scenarios.takes_centre = True  # type: ignore[attr-defined]
+
+    def grown_centre(self, particles: np.ndarray) -> np.ndarray:
+        """``[E, d]``: the default grown scenarios' other latents, the particles' median (latent 0 is
+        replaced by the points' decision coordinate, so its median is not computed: zero)."""
+        particles = np.asarray(particles)
+        centre = np.zeros((particles.shape[0], particles.shape[2]))
+        if particles.shape[2] > 1:
+            centre[:, 1:] = median_over_particles(particles[:, :, 1:])
+        return centre
 
     def check_sigma_and_margin(self) -> None:
         """Refuse a likelihood sigma that is not positive and finite, or a margin outside (0, 1.5]."""

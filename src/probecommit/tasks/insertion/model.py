@@ -100,6 +100,10 @@ class InsertionModel(TaskModelBase):
         a = np.asarray(actions, dtype=float).reshape(-1)
         return np.abs(a[None, :] - np.asarray(reference, dtype=float)[:, 0][:, None])
 
+    #: It reads the actions and the reference alone (no margin, no other field): a margin search computes
+    #: one block for all its margins instead of one per margin (``core.executors._margin_ties``).
+    tie_break_cost.reads_only_reference = True  # type: ignore[attr-defined]
+
     def reads_pocket(self, u: np.ndarray, theta: np.ndarray) -> np.ndarray:
         """Whether a tap at ``u[E]`` (or ``[E, 1]``) reads the pocket for each particle ``[E, N]``."""
         theta = np.asarray(theta)
