@@ -877,6 +877,8 @@ EXPLAIN_EX30_FRESH = "ex30_fresh_rows.parquet"
 EXPLAIN_EX33_AIM = "ex33_aim_rows.parquet"
 #: ex35's stored rows (``studies.explain.ex35_pools.STORED``: E205's fresh pools, E56's three and the rest).
 EXPLAIN_EX35_POOLS = "ex35_pools_rows.parquet"
+#: ex39's stored rows (``studies.explain.ex39_pybullet.STORED``: E218's PyBullet scans per plate contact).
+EXPLAIN_EX39_PYBULLET = "ex39_pybullet_rows.parquet"
 #: ex29's stored rows (``studies.explain.ex29_band.STORED``: E187's trajectories, k = 1 surprise and first-tap band).
 EXPLAIN_EX29_BAND = "ex29_band_rows.parquet"
 #: ex7's stored rows (``studies.explain.ex7.STORED``: the fault surprise rows and the fresh draws).
@@ -897,7 +899,8 @@ STORED_SUMMARIES = (("mixture_noise", EXPLAIN_MIXTURE, "mixture_x"),
                     ("ex30_fresh", EXPLAIN_EX30_FRESH, "ex30_fresh"),
                     ("ex29_band", EXPLAIN_EX29_BAND, "ex29_band"),
                     ("ex33_aim", EXPLAIN_EX33_AIM, "ex33_aim"),
-                    ("ex35_pools", EXPLAIN_EX35_POOLS, "ex35_pools"))
+                    ("ex35_pools", EXPLAIN_EX35_POOLS, "ex35_pools"),
+                    ("ex39_pybullet", EXPLAIN_EX39_PYBULLET, "ex39_pybullet"))
 
 #: Explain modules that recompute their own groups: ``recompute(folder, results)`` gives
 #: ``(values, sources, problems)`` (a group published without its stored rows is a problem).
@@ -981,7 +984,8 @@ RECOMPUTED = {
                "probe interval; ex27's hinge row with the commit a torque; ex31's Table III original arm read one tap later, "
                "post-stratified as ex20's; ex34's Table III original arm with one fixed tap (-12 or 0 mm) before the "
                "random ones; ex32's push1d, hinge and push2d probed cells against the action grid's floor "
-               "at each truth; ex35's re-split statistics over twelve fresh pools",
+               "at each truth; ex35's re-split statistics over twelve fresh pools; ex39's PyBullet scans over plate "
+               "contact stiffnesses",
 }
 TRACED_ONLY = {
     "insertion": "the stored rows themselves (episodes, re-executed commits, replays); the re-split rows; the cover "
