@@ -2359,11 +2359,11 @@ def _experiments_ex39() -> list[Experiment]:
          "eq": f"{d}rigid_equals_published", "ok": f"{d}holds",
          "pr": "paper:T18-engine-scans.pybullet_ratio", "psd": "paper:T18-engine-scans.pybullet_ratio_sd",
          "pd": "paper:T18-engine-scans.pybullet_offset"},
-        "over {n:d} plate contacts (rigid, ours and PyBullet's default, ratio {r0:.3f}; and stiffnesses 1e5 to 3e2 "
-        "N/m at damping ratios 0.1 and 1), the mean capture ratio nearest the paper's {pr:.2f} is {r:.3f} (k = {k:.0f} "
-        "N/m, zeta {z:.1f}); there the tap boundary is hg + {dl:.3f} mm (paper {pd:.3f}) and the per-truth ratio "
-        "spans {lo:.3f} to {hi:.3f}, SD {sd:.3f} against the paper's {psd:.2f} (the rule needs {f:.1f} of it). The "
-        "rigid point's scans equal the published ones: {eq:d}.",
+        "over {n:d} plate contacts (rigid, ours and PyBullet's default, ratio {r0:.3f}; and six stiffnesses at two "
+        "damping ratios, docs/decisions.md \"ex39\"), the mean capture ratio nearest the paper's {pr:.2f} is "
+        "{r:.3f} (k = {k:.0f} N/m, zeta {z:.1f}); there the tap boundary is hg + {dl:.3f} mm (paper {pd:.3f}) and the "
+        "per-truth ratio spans {lo:.3f} to {hi:.3f}, SD {sd:.3f} against the paper's {psd:.2f} (the rule needs "
+        "{f:.1f} of it). The rigid point's scans equal the published ones: {eq:d}.",
         supports=lambda v: v["ok"] == 1)]
 
 
