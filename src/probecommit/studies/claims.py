@@ -673,7 +673,8 @@ def _claims_correction_and_engines() -> list[Claim]:
                     f"{E}scans.pybullet.capture.ratio_mean", 0.1),
                Near("PhysX capture ratio", "T18-engine-scans.sapien_ratio", f"{E}scans.sapien.capture.ratio_mean", 0.1)),
               explain=(("E30", ("PyBullet capture",)),  # E6 restates our PhysX scan (credA)
-                       *((n, (f"{EXACT}PhysX offset", f"{EXACT}PhysX capture ratio")) for n in ("E214", "E216")))))
+                       *((n, (f"{EXACT}PhysX offset", f"{EXACT}PhysX capture ratio")) for n in ("E214", "E216")),
+                       ("E218", (f"{EXACT}PyBullet capture ratio",)))))
     add(Claim("T19-pybullet-escape", "Sec. V-C, Across engines", "PyBullet escape climbs from k = 1 to 8",
               (Near("k=1", "T19-pybullet-escape.k1", f"{E}escape.pybullet/deployed.1", POINT_TOL * 2.5),
                Near("k=8", "T19-pybullet-escape.k8", f"{E}escape.pybullet/deployed.8", POINT_TOL * 2.5),
@@ -2470,6 +2471,25 @@ def _experiments_ex38() -> list[Experiment]:
             "needs both within T18's tolerances at that one setting.",
             supports=lambda v: v["h"] == 1))
     return out
+def _experiments_ex39() -> list[Experiment]:
+    """The ex39 helper's experiment (E218; ``studies/explain/ex39_pybullet.py``; rule in docs/decisions.md, "ex39",
+    committed before the sweep's numbers): PyBullet's scans over a declared grid of plate contact stiffnesses, the
+    point chosen by the paper's capture ratio, the boundary and the ratio's spread judged there."""
+    d = f"{X}ex39_pybullet."
+    return [Experiment(
+        "E218", "PyBullet's capture window against a compliant plate contact (stiffness x damping grid)",
+        {"n": f"{d}points", "r": f"{d}chosen.ratio_mean", "k": f"{d}chosen.stiffness", "z": f"{d}chosen.zeta",
+         "r0": f"{d}rigid.ratio_mean", "dl": f"{d}chosen.delta", "sd": f"{d}chosen.ratio_sd",
+         "lo": f"{d}chosen.ratio_min", "hi": f"{d}chosen.ratio_max", "f": f"{d}sd_fraction",
+         "eq": f"{d}rigid_equals_published", "ok": f"{d}holds",
+         "pr": "paper:T18-engine-scans.pybullet_ratio", "psd": "paper:T18-engine-scans.pybullet_ratio_sd",
+         "pd": "paper:T18-engine-scans.pybullet_offset"},
+        "over {n:d} plate contacts (rigid, ours and PyBullet's default, ratio {r0:.3f}; and six stiffnesses at two "
+        "damping ratios, docs/decisions.md \"ex39\"), the mean capture ratio nearest the paper's {pr:.2f} is "
+        "{r:.3f} (k = {k:.0f} N/m, zeta {z:.1f}); there the tap boundary is hg + {dl:.3f} mm (paper {pd:.3f}) and the "
+        "per-truth ratio spans {lo:.3f} to {hi:.3f}, SD {sd:.3f} against the paper's {psd:.2f} (the rule needs "
+        "{f:.1f} of it). The rigid point's scans equal the published ones: {eq:d}.",
+        supports=lambda v: v["ok"] == 1)]
 
 
 def _experiments_ex29() -> list[Experiment]:
@@ -3160,7 +3180,7 @@ for _experiment in (_experiments() + _experiments_more() + _experiments_ex3() + 
                     + _experiments_ex29() + _experiments_ex31() + _experiments_ex32() + _experiments_ex33()
                     + _experiments_ex34() + _experiments_ex35() + _experiments_lead()
                     + _experiments_ex36() + _experiments_ex37() + _experiments_physx_cells() + [_e225()]
-                    + _experiments_ex38()):
+                    + _experiments_ex38() + _experiments_ex39()):
     EXPERIMENTS[_experiment.number] = _experiment
 
 

@@ -105,14 +105,18 @@ class PybulletInsertionSimulator(InsertionSimulator):
             is PyBullet's defaults); only for measuring what the settings do.
         collision_margin: Collision margin (m) on every body; None keeps PyBullet's
             default (only for measurements).
+        plate_contact: Further ``changeDynamics`` keywords for the plate (e.g. ``contactStiffness``
+            and ``contactDamping``: a compliant contact for every probe, which touches only the
+            plate); None keeps the rigid contact (only for measurements, ex39's E218).
         **kwargs: ``noise_sigma``, ``aim_offset``, passed to the base class.
     """
 
     engine = "pybullet"
 
     def __init__(self, physics: dict[str, Any] | None = None, collision_margin: float | None = COLLISION_MARGIN_M,
-                 **kwargs: Any) -> None:
+                 plate_contact: dict[str, Any] | None = None, **kwargs: Any) -> None:
         super().__init__(**kwargs)
+        self._plate_contact = dict(plate_contact or {})
         from probecommit.engines import pybullet as pbe  # lazy: importing this module needs no pybullet
 
         self._pbe = pbe
@@ -177,6 +181,8 @@ class PybulletInsertionSimulator(InsertionSimulator):
                                  basePosition=[0, 0, 0], physicsClientId=cid)
         # Friction is a product in Bullet: plate 1.0 x peg 0.3 = 0.3, plate x tip 0 = 0.
         self._pbe.mm_dynamics(body, -1, cid, margin=self._margin, lateralFriction=1.0)
+        if self._plate_contact:
+            p.changeDynamics(body, -1, physicsClientId=cid, **self._plate_contact)
         return body
 
     def _drop_plate(self, key: tuple[float, float], body: int) -> None:
