@@ -72,7 +72,9 @@ def changes_section(doc: Doc) -> None:
             "the paper's schedule (E208, which fails) and over fresh draws (E209), the adjusted gate under the paper's "
             "schedule (E211), the robust filters' optimism on Test C and over fresh harness draws (E212, E213), and "
             "the simulated rig's narrowed prior by block position and its optimism over redrawn sessions (E222, E223, "
-            "E225). A hostile reviewer's read of them before publishing (docs/decisions.md, \"rev2\") narrowed several "
+            "E225), and engine settings the paper does not report, each chosen by the capture window the paper "
+            "reports and judged on what else it reports (PhysX's contact and rest offsets, E214 and E216; PyBullet's "
+            "plate contact stiffness, E218; all three fail). A hostile reviewer's read of them before publishing (docs/decisions.md, \"rev2\") narrowed several "
             "credits to the labels each experiment tests rather than restates, and made \"the difference is the draw\" "
             "ask that our own draw, too, be one the design gives; the opening counts are after that read.", "")
 
