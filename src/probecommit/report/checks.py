@@ -21,6 +21,9 @@ import pandas as pd
 RATE_WORDS = ("failure", "coverage", "escape", "success", "commit_rate", "fail", "realized", "predicted")
 #: A key ending in a plural of those outcomes counts episodes (``held_failures``, ``escapes``): no rate.
 COUNT_ENDINGS = ("failures", "escapes", "successes")
+#: A key starting with what it counts (``n_``, a sum, or the units counted: ``sessions_failing_at_least``,
+#: ``positions_escape_is_beyond``) is a count, whatever outcome word follows.
+COUNT_PREFIXES = ("n_", "sum_", "sessions_", "positions_")
 TOLERANCE = 1e-9
 #: Non-finite numbers a result may hold, by (study, key pattern with list indices as #): a gate
 #: signal with no probability claim has no claimed failure.
@@ -68,7 +71,7 @@ def _is_rate(key: str) -> bool:
     word = re.split(r"\.", key)[-1].lower()
     if word.isdigit():
         word = key.split(".")[-2].lower()
-    if word.startswith(("n_", "sum_")) or "escaped_" in word or word.endswith(COUNT_ENDINGS):  # a count or a sum
+    if word.startswith(COUNT_PREFIXES) or "escaped_" in word or word.endswith(COUNT_ENDINGS):  # a count or a sum
         return False
     if any(tag in word for tag in ("diff", "minus", "change", "optimism", "delta", "gap", "paired", "_s", "auc", "fix")):
         return False
