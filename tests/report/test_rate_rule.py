@@ -44,6 +44,7 @@ def test_a_key_starting_with_what_it_counts_is_a_count(prefix, counted, word, ta
 
 
 def test_counted_units_hand_cases():
+    assert not _is_rate("ex36_testc.passes.failing_count")
     assert not _is_rate("rig_redraws.optimism.sessions_failing_at_least.3")
     assert not _is_rate("prior_by_position.12.positions_escape_is_beyond")
     assert _is_rate("prior_by_position.12.share_escape")

@@ -20,7 +20,7 @@ import pandas as pd
 #: Keys whose numbers are probabilities or rates.
 RATE_WORDS = ("failure", "coverage", "escape", "success", "commit_rate", "fail", "realized", "predicted")
 #: A key ending in a plural of those outcomes counts episodes (``held_failures``, ``escapes``): no rate.
-COUNT_ENDINGS = ("failures", "escapes", "successes")
+COUNT_ENDINGS = ("failures", "escapes", "successes", "count")
 #: A key starting with what it counts (``n_``, a sum, or the units counted: ``sessions_failing_at_least``,
 #: ``positions_escape_is_beyond``) is a count, whatever outcome word follows.
 COUNT_PREFIXES = ("n_", "sum_", "sessions_", "positions_")
