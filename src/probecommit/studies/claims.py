@@ -3077,8 +3077,7 @@ def _experiments_lead() -> list[Experiment]:
                     "lo4": "explain:results.rig_redraws.optimism.pooled_optimism.k4.1",
                     "hi4": "explain:results.rig_redraws.optimism.pooled_optimism.k4.2",
                     **{f"ge{j}": f"explain:results.rig_redraws.optimism.sessions_failing_at_least.{j}" for j in range(11)},
-                    **{f"{c}{t}": f"{R}table.{t - 1}.optimism{s}" for t in range(1, 6)
-                       for c, s in (("o", ""), ("l", "_lo"), ("h", "_hi"))}},
+                    **_rig_table_keys()},
                    "the frozen rig protocol on {n:d} fresh draws of its block positions (simulated rig): on {p:.3f} of "
                    "the sessions every optimism interval covers zero and every budget's optimism is within the paper's "
                    "bound, the paper's sentence whole. The rule also asks that our own session (Table VII's, which "
@@ -3134,8 +3133,7 @@ def _e225() -> Experiment:
     keys = {"n_full": f"{rr}sessions", "p": f"{rr}share_sessions_paper_outcome", "w": f"{rr}pooled_optimism.max_abs",
             "n": f"{cr}sessions", "pc": f"{cr}share_sessions_paper_outcome", "wc": f"{cr}pooled_optimism.max_abs",
             **{f"ge{j}": f"{cr}sessions_failing_at_least.{j}" for j in range(11)},
-            **{f"{c}{t}": f"{R}table.{t - 1}.optimism{s}" for t in range(1, 6) for c, s in (("o", ""), ("l", "_lo"),
-                                                                                            ("h", "_hi"))}}
+            **_rig_table_keys()}
     return Experiment(
         "E225", "the simulated rig's optimism sentence with the block positions redrawn in the central half of the "
         "prior box, where the frozen session's fell", keys,
@@ -3146,6 +3144,12 @@ def _e225() -> Experiment:
         "paper's side is the rule.",
         supports=lambda v: v["p"] >= UNRESOLVED_CHOICE_SHARE and v["w"] <= _pv("T26-hardware-optimism.bound")
         and _rig_session_rank(v)[2] >= UNRESOLVED_CHOICE_SHARE)
+
+
+def _rig_table_keys() -> dict[str, str]:
+    """Table VII's optimism and interval at each budget (``o<t>``, ``l<t>``, ``h<t>``): what E223 and E225 rank."""
+    return {f"{c}{t}": f"{R}table.{t - 1}.optimism{s}" for t in range(1, 6)
+            for c, s in (("o", ""), ("l", "_lo"), ("h", "_hi"))}
 
 
 def _rig_session_rank(v: dict[str, Any]) -> tuple[int, int, float]:
