@@ -81,7 +81,7 @@ def test_e225_keys_come_from_the_central_sessions_under_their_own_prefix():
     boundary = pd.DataFrame({"session": [1], "first_resolved_mm": [float("nan")], "holds_to_mm": [14.0],
                              "sweep_end_mm": [14.0]})
     central = pd.DataFrame(rows).assign(realized=1.0)  # optimism +0.5: beyond the bound
-    got = keys(pd.DataFrame(rows), boundary, {"resamples": 200, "seed": 0}, central)
+    got = keys(pd.DataFrame(rows), boundary, {"resamples": 200, "seed": 0}, {"central": central})
     assert got["optimism.share_sessions_paper_outcome"] == 1.0 and got["central.optimism.share_sessions_paper_outcome"] == 0.0
     assert got["central.optimism.sessions_failing_at_least.1"] == 1
     assert "central.optimism.sessions" in got and not any(k.startswith("central.") for k in keys(pd.DataFrame(rows), boundary, {"resamples": 200, "seed": 0}))

@@ -487,8 +487,9 @@ def explain(folder: Path, results: dict[str, Any]) -> Recomputed:
 
         setup = json.loads((folder.parent / "insertion" / "results.json").read_text())["results"]["setup"]["bootstrap"]
         boot = dict(resamples=int(setup["resamples"]), seed=int(setup["seed"]))
-        central = pd.read_parquet(folder / rig.STORED_CENTRAL) if (folder / rig.STORED_CENTRAL).is_file() else None
-        for key, value in rig.keys(*(pd.read_parquet(folder / name) for name in EXPLAIN_RIG), boot, central).items():
+        variants = {group: pd.read_parquet(folder / name) for group, name in rig.VARIANTS.items()
+                    if (folder / name).is_file()}
+        for key, value in rig.keys(*(pd.read_parquet(folder / name) for name in EXPLAIN_RIG), boot, variants).items():
             out.values[f"rig_redraws.{key}"] = value
         out.sources["rig_redraws"] = " and ".join(EXPLAIN_RIG)
     _stored_summaries(folder, results, out)

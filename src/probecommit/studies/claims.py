@@ -723,7 +723,7 @@ def _claims_hardware() -> list[Claim]:
               + tuple(Holds(f"{t} taps within bound", "|optimism| within the paper's bound of zero",
                             {"o": f"{R}table.{t - 1}.optimism"},
                             lambda v: abs(v["o"]) <= paper_values.value("T26-hardware-optimism.bound") + 1e-12)
-                      for t in range(1, 6)), simulated_rig=True, explain=("E223", "E225")))
+                      for t in range(1, 6)), simulated_rig=True, explain=("E223", "E225", "E230")))
     add(Claim("T27-replay-deployed", "Sec. V-D, Fault injection", "Replayed as deployed, the taps reproduce the run",
               (Holds("reproduced", "every recorded decision reproduced", {"f": f"{R}replay_reproduced_fraction"},
                      lambda v: v["f"] == 1.0),), simulated_rig=True))
@@ -3146,6 +3146,35 @@ def _e225() -> Experiment:
         and _rig_session_rank(v)[2] >= UNRESOLVED_CHOICE_SHARE)
 
 
+def _rig_streams_experiments() -> list[Experiment]:
+    """E230 and E231 (ex42, declared in docs/decisions.md before their sessions ran): the rig's redraws held the
+    frozen session's tap, particle and misread streams (the config's top seed); E230 redraws them with the
+    positions (both sides, as E223's), E231 keeps our positions and redraws the streams (credited with nothing)."""
+    sr, op = "explain:results.rig_redraws.streams.optimism.", "explain:results.rig_redraws.own_positions.optimism."
+    e230 = {"n": f"{sr}sessions", "p": f"{sr}share_sessions_paper_outcome", "w": f"{sr}pooled_optimism.max_abs",
+            **{f"ge{j}": f"{sr}sessions_failing_at_least.{j}" for j in range(11)}, **_rig_table_keys()}
+    e231 = {"n": f"{op}sessions", "p": f"{op}share_sessions_paper_outcome",
+            **{f"ge{j}": f"{op}sessions_failing_at_least.{j}" for j in range(11)}, **_rig_table_keys()}
+    return [
+        Experiment("E230", "the simulated rig's optimism sentence over sessions of the whole design: block positions "
+                   "and the tap, particle and misread streams redrawn together", e230,
+                   "E223's redraws held our session's streams (the rig config's top seed) and redrew only the "
+                   "positions; over {n:d} sessions with both redrawn the paper's whole sentence holds on {p:.3f} "
+                   "(pooled optimism within {w:.3f} of zero), and {ge3:d} fail three or more of its ten labels, "
+                   "{ge4:d} four or more, {ge5:d} five or more: whether ours, counted among them, reaches the same "
+                   "least share as the paper's side is the rule.",
+                   supports=lambda v: v["p"] >= UNRESOLVED_CHOICE_SHARE and v["w"] <= _pv("T26-hardware-optimism.bound")
+                   and _rig_session_rank(v)[2] >= UNRESOLVED_CHOICE_SHARE),
+        Experiment("E231", "our rig session's block positions with the tap, particle and misread streams redrawn "
+                   "(which input makes ours extreme; credited with no label)", e231,
+                   "over {n:d} sessions keeping our 12 block positions and redrawing the streams, the paper's whole "
+                   "sentence holds on {p:.3f}, and {ge3:d} fail three or more of T26's ten labels, {ge4:d} four or "
+                   "more, {ge5:d} five or more; it holds (our positions carry ours) if ours, counted among them, "
+                   "reaches the least share, and fails (our stream on these positions carries it) if not.",
+                   supports=lambda v: _rig_session_rank(v)[2] >= UNRESOLVED_CHOICE_SHARE),
+    ]
+
+
 def _rig_table_keys() -> dict[str, str]:
     """Table VII's optimism and interval at each budget (``o<t>``, ``l<t>``, ``h<t>``): what E223 and E225 rank."""
     return {f"{c}{t}": f"{R}table.{t - 1}.optimism{s}" for t in range(1, 6)
@@ -3183,7 +3212,7 @@ for _experiment in (_experiments() + _experiments_more() + _experiments_ex3() + 
                     + _experiments_ex30()
                     + _experiments_ex29() + _experiments_ex31() + _experiments_ex32() + _experiments_ex33()
                     + _experiments_ex34() + _experiments_ex35() + _experiments_lead()
-                    + _experiments_ex36() + _experiments_ex37() + _experiments_physx_cells() + [_e225()]
+                    + _experiments_ex36() + _experiments_ex37() + _experiments_physx_cells() + [_e225()] + _rig_streams_experiments()
                     + _experiments_ex38() + _experiments_ex39()):
     EXPERIMENTS[_experiment.number] = _experiment
 

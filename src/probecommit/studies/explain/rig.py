@@ -26,18 +26,27 @@ from probecommit.studies.robot import BOUNDARY_SWEEP, boundary_holds_to, rig_con
 
 
 def redrawn_sessions(runs: Path, seeds: list[int], quick: bool = False,
-                     central: float | None = None) -> list[tuple[int, Path]]:
+                     central: float | None = None, streams: bool = False,
+                     positions: int | None = None) -> list[tuple[int, Path]]:
     """The frozen rig protocol run once per instance seed (block positions redrawn), logs under ``runs``; with
-    ``central``, positions drawn within that fraction of the prior box's half-width (E225), clearance unchanged."""
+    ``central``, positions drawn within that fraction of the prior box's half-width (E225), clearance unchanged.
+
+    ``streams``: the session seed also replaces the config's top ``seed``, which keys the tap locations, particles
+    and misreads (E230; E33/E223/E225 hold them at the frozen session's); ``positions``: every session keeps the
+    block positions of that instance seed (E231: ours, 7) while its streams are redrawn."""
     out = []
     for seed in seeds:
         data = config_data(rig_config(quick))
-        data["instances"]["seed"] = int(seed)
+        data["instances"]["seed"] = int(seed if positions is None else positions)
+        if streams or positions is not None:
+            data["seed"] = int(seed)
         if central is not None:
             low, high = list(data["model"]["prior_low"]), list(data["model"]["prior_high"])
             data["instances"]["truth_low"] = [low[0] * central, *low[1:]]
             data["instances"]["truth_high"] = [high[0] * central, *high[1:]]
-        path = runs / (f"rig_redraw_{seed}" if central is None else f"rig_redraw_central_{seed}")
+        tag = ("central_" if central is not None else "") + ("streams_" if streams else "") + (
+            f"positions{positions}_" if positions is not None else "")
+        path = runs / f"rig_redraw_{tag}{seed}"
         simulate_session(path, parse_config(data))
         out.append((seed, path))
     return out
@@ -51,6 +60,12 @@ BUDGET_TAPS = (1, 2, 3, 4, 5)
 STORED_BOUNDARY = "rig_redraws_boundary.parquet"
 #: E225's sessions, positions drawn in the central part of the prior box (``rig_redraws_central`` of explain.yaml).
 STORED_CENTRAL = "rig_redraws_central_sessions.parquet"
+#: E230's sessions, every stream redrawn with the positions (``rig.yaml``'s top seed = the session's seed).
+STORED_STREAMS = "rig_redraws_streams_sessions.parquet"
+#: E231's sessions, our positions (``instances.seed`` of ``rig.yaml``) with the streams redrawn.
+STORED_OWN_POSITIONS = "rig_redraws_own_positions_sessions.parquet"
+#: The stored session sets beside E223's, by the key group each fills (``keys``; verify reads those present).
+VARIANTS = {"central": STORED_CENTRAL, "streams": STORED_STREAMS, "own_positions": STORED_OWN_POSITIONS}
 SESSION_COLUMNS = ("session", "instance_id", "k", "predicted", "realized", "covered", "escaped", "entered", "aim_error")
 
 
@@ -128,23 +143,28 @@ def boundary_summary(rows: pd.DataFrame) -> dict[str, Any]:
 
 
 def keys(sessions: pd.DataFrame, boundary: pd.DataFrame, boot: dict[str, Any],
-         central: pd.DataFrame | None = None) -> dict[str, Any]:
+         variants: dict[str, pd.DataFrame] | None = None) -> dict[str, Any]:
     """Keys of ``explain:results.rig_redraws`` from the stored rows (the explain step and verify both call this);
-    ``central``: E225's sessions, under ``central.optimism.``."""
+    ``variants``: the other session sets by group (``VARIANTS``: E225's ``central``, E230's ``streams``, E231's
+    ``own_positions``), each under ``<group>.optimism.``."""
     opt, _ = optimism_summary(sessions, boot)
     out = {f"optimism.{k}": v for k, v in opt.items()}
     out.update({f"boundary.{k}": v for k, v in boundary_summary(boundary).items()})
-    if central is not None:
-        out.update({f"central.optimism.{k}": v for k, v in optimism_summary(central, boot)[0].items()})
+    for group, rows in (variants or {}).items():
+        out.update({f"{group}.optimism.{k}": v for k, v in optimism_summary(rows, boot)[0].items()})
     return out
 
 
 def run(runs: Path, cfg: dict[str, Any], boot: dict[str, Any], quick: bool) -> tuple[dict[str, Any], dict[str, pd.DataFrame]]:
-    """Both redraw experiments: the keys of ``explain:results.rig_redraws`` and the stored rows by file name."""
+    """Every redraw experiment: the keys of ``explain:results.rig_redraws`` and the stored rows by file name."""
     count = int(cfg["rig_redraws_quick" if quick else "rig_redraws"])
     seeds = [int(cfg["rig_redraw_seed"]) + i for i in range(count)]
     sessions = redrawn_sessions(runs, seeds, quick)
     sizes = BOUNDARY_SWEEP[::7] if quick else BOUNDARY_SWEEP
+    own = int(config_data(rig_config(quick))["instances"]["seed"])
+    variants = {"central": session_rows(redrawn_sessions(runs, seeds, quick, float(cfg["rig_redraws_central"]))),
+                "streams": session_rows(redrawn_sessions(runs, seeds, quick, streams=True)),
+                "own_positions": session_rows(redrawn_sessions(runs, seeds, quick, positions=own))}
     tables = {STORED_SESSIONS: session_rows(sessions), STORED_BOUNDARY: boundary_rows(sessions, boot, sizes),
-              STORED_CENTRAL: session_rows(redrawn_sessions(runs, seeds, quick, float(cfg["rig_redraws_central"])))}
-    return keys(tables[STORED_SESSIONS], tables[STORED_BOUNDARY], boot, tables[STORED_CENTRAL]), tables
+              **{VARIANTS[group]: rows for group, rows in variants.items()}}
+    return keys(tables[STORED_SESSIONS], tables[STORED_BOUNDARY], boot, variants), tables
