@@ -3167,7 +3167,7 @@ def _rig_streams_experiments() -> list[Experiment]:
                    and _rig_session_rank(v)[2] >= UNRESOLVED_CHOICE_SHARE),
         Experiment("E231", "our rig session's block positions with the tap, particle and misread streams redrawn "
                    "(which input makes ours extreme; credited with no label)", e231,
-                   "over {n:d} sessions keeping our 12 block positions and redrawing the streams, the paper's whole "
+                   "over {n:d} sessions keeping our block positions and redrawing the streams, the paper's whole "
                    "sentence holds on {p:.3f}, and {ge3:d} fail three or more of T26's ten labels, {ge4:d} four or "
                    "more, {ge5:d} five or more; it holds (our positions carry ours) if ours, counted among them, "
                    "reaches the least share, and fails (our stream on these positions carries it) if not.",
