@@ -3088,8 +3088,7 @@ def _experiments_lead() -> list[Experiment]:
                    "Pooled over the sessions "
                    "optimism is never further than {w:.3f} from zero, though at four taps it is {o4:+.3f} [{lo4:+.3f}, "
                    "{hi4:+.3f}]: a small optimism the rig has, inside the paper's bound.",
-                   supports=lambda v: v["p"] >= UNRESOLVED_CHOICE_SHARE and v["w"] <= _pv("T26-hardware-optimism.bound")
-                   and _rig_session_rank(v)[2] >= UNRESOLVED_CHOICE_SHARE),
+                   supports=_rig_both_sides),
     ]
 
 
@@ -3142,8 +3141,7 @@ def _e225() -> Experiment:
         "holds on {pc:.3f} (pooled within {wc:.3f}), and {ge3:d} of them fail three or more of its ten labels, {ge4:d} "
         "four or more, {ge5:d} five or more: whether ours, counted among them, reaches the same least share as the "
         "paper's side is the rule.",
-        supports=lambda v: v["p"] >= UNRESOLVED_CHOICE_SHARE and v["w"] <= _pv("T26-hardware-optimism.bound")
-        and _rig_session_rank(v)[2] >= UNRESOLVED_CHOICE_SHARE)
+        supports=_rig_both_sides)
 
 
 def _rig_streams_experiments() -> list[Experiment]:
@@ -3163,8 +3161,7 @@ def _rig_streams_experiments() -> list[Experiment]:
                    "(pooled optimism within {w:.3f} of zero), and {ge3:d} fail three or more of its ten labels, "
                    "{ge4:d} four or more, {ge5:d} five or more: whether ours, counted among them, reaches the same "
                    "least share as the paper's side is the rule.",
-                   supports=lambda v: v["p"] >= UNRESOLVED_CHOICE_SHARE and v["w"] <= _pv("T26-hardware-optimism.bound")
-                   and _rig_session_rank(v)[2] >= UNRESOLVED_CHOICE_SHARE),
+                   supports=_rig_both_sides),
         Experiment("E231", "our rig session's block positions with the tap, particle and misread streams redrawn "
                    "(which input makes ours extreme; credited with no label)", e231,
                    "over {n:d} sessions keeping our block positions and redrawing the streams, the paper's whole "
@@ -3179,6 +3176,13 @@ def _rig_table_keys() -> dict[str, str]:
     """Table VII's optimism and interval at each budget (``o<t>``, ``l<t>``, ``h<t>``): what E223 and E225 rank."""
     return {f"{c}{t}": f"{R}table.{t - 1}.optimism{s}" for t in range(1, 6)
             for c, s in (("o", ""), ("l", "_lo"), ("h", "_hi"))}
+
+
+def _rig_both_sides(v: dict[str, Any]) -> bool:
+    """E223's, E225's and E230's rule (rev2): the paper's side (a share ``p`` of sessions give its whole sentence,
+    pooled optimism within its bound, ``w``) and ours (our session ranked among ``ge<j>``) at the same least share."""
+    return (v["p"] >= UNRESOLVED_CHOICE_SHARE and v["w"] <= _pv("T26-hardware-optimism.bound")
+            and _rig_session_rank(v)[2] >= UNRESOLVED_CHOICE_SHARE)
 
 
 def _rig_session_rank(v: dict[str, Any]) -> tuple[int, int, float]:
