@@ -62,13 +62,9 @@ def test_published_calibration_and_the_check_read_table_iii():
 @pytest.fixture(scope="module")
 def small_run(tmp_path_factory):
     """A small analytic random run with eight taps, committed at nu = 0.8 with the model's window."""
-    from probecommit.runner.replay import load_run
-    from probecommit.runner.study import run_study
-    from tests.conftest import small_config
+    from tests.conftest import table_iii_like_run
 
-    cfg = small_config(name="B_test_random", instances={"split": "test", "count": 5, "seed": 3},
-                       probes={"schedule": "random", "budget": 8})
-    return load_run(run_study(cfg, tmp_path_factory.mktemp("ex43") / "run").run_dir)
+    return table_iii_like_run(tmp_path_factory.mktemp("ex43"))
 
 
 def test_the_set_arm_at_nu_is_the_stored_commit_and_the_margin_arm_at_one_is_the_set_arm(small_run):
