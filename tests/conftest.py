@@ -22,6 +22,17 @@ def small_config(**overrides) -> "StudyConfig":  # noqa: F821
     return parse_config(data)
 
 
+def table_iii_like_run(root):
+    """A small analytic random run named as Table III's test run (5 instances, eight taps), loaded: what the explain
+    steps that re-commit Table III's own run (ex34, ex43) are tested on."""
+    from probecommit.runner.replay import load_run
+    from probecommit.runner.study import run_study
+
+    cfg = small_config(name="B_test_random", instances={"split": "test", "count": 5, "seed": 3},
+                       probes={"schedule": "random", "budget": 8})
+    return load_run(run_study(cfg, root / "run").run_dir)
+
+
 def cal_test_runs(root, seeds: tuple[int, int], count: int, repeats: int, **overrides) -> dict:
     """A calibration and a test run of the small config ("cal" and "test" splits, one instance seed each): the
     pair that calibration, gate, chunking, margin-search and report tests read. Returns their run directories."""

@@ -85,13 +85,9 @@ def test_keys_are_ex20s_cells_at_both_readings_and_same_seed_equal():
 @pytest.fixture(scope="module")
 def small_run(tmp_path_factory):
     """A small analytic random run with eight taps (the rerun puts its fixed tap before them)."""
-    from probecommit.runner.replay import load_run
-    from probecommit.runner.study import run_study
-    from tests.conftest import small_config
+    from tests.conftest import table_iii_like_run
 
-    cfg = small_config(name="B_test_random", instances={"split": "test", "count": 5, "seed": 3},
-                       probes={"schedule": "random", "budget": 8})
-    return load_run(run_study(cfg, tmp_path_factory.mktemp("ex34") / "run").run_dir)
+    return table_iii_like_run(tmp_path_factory.mktemp("ex34"))
 
 
 def test_the_rerun_puts_the_fixed_tap_first_and_keeps_the_stored_taps_after_it(small_run):

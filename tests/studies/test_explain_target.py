@@ -45,6 +45,11 @@ def test_reproduce_explain_quick(tmp_path):
             res["committed_pool"][f"paper_schedule.final_hull.escaped_{side}"]
     assert res["ex37_adjusted"]["raw.n_committed"] == res["committed_pool"]["paper_schedule.n_committed"]
     assert res["ex37_filters"]["testc.deployed.optimism"] == pytest.approx(res["robust"]["testc.deployed.optimism"])
+    # E232's check arm (Table III's run re-committed at the published t_k and margin) gives Table III's calibrated
+    # cells (ex43).
+    from probecommit.studies.explain import ex43_setonly
+
+    assert ex43_setonly.check_published(res["ex43_setonly"], ins["table_audit"]["table"]) == []
     # The emulated engine's stored outcomes equal the capture rule recomputed from its aims.
     for variant in ("deployed", "mj_offset", "own_scan"):
         assert res["physx_capture"][f"emulated.{variant}.stored_equals_recomputed"] == 1

@@ -932,7 +932,7 @@ SELF_RECOMPUTING = ("ex7", "ex8", "ex11", "ex16", "ex19", "ex22", "ex25", "ex27"
 #: Explain modules whose ``recompute(folder, results, boot)`` gives ``{key: (value, stored file)}`` under the
 #: insertion study's bootstrap settings, with ``STORED_BY_GROUP`` naming each group's rows.
 BOOTSTRAPPED = ("ex6", "ex10", "ex13", "ex14", "ex17", "ex20", "ex21", "ex23", "ex24", "ex31_shift", "ex34_fixed",
-                "ex37_adjusted", "ex36_testc")
+                "ex37_adjusted", "ex36_testc", "ex43_setonly")
 
 
 #: The stored tables each study's numbers are recomputed from: a publication without one fails verify
@@ -1011,7 +1011,8 @@ RECOMPUTED = {
                "at each truth; ex35's re-split statistics over twelve fresh pools; ex37's commit gates' pools under the "
                "paper's schedule (the adjusted gate's ratio and interval; threshold and margin traced) and the robust "
                "filters' optimism on Test C and over the harness draws; ex38's PhysX scans at each contact and rest "
-               "offset swept; ex39's PyBullet scans over plate contact stiffnesses",
+               "offset swept; ex39's PyBullet scans over plate contact stiffnesses; ex43's Table III calibrated arm "
+               "re-committed at the published levels without the margin (and with it, as a check)",
 }
 TRACED_ONLY = {
     "insertion": "the stored rows themselves (episodes, re-executed commits, replays); the re-split rows; the cover "

@@ -53,6 +53,7 @@ from probecommit.studies.explain import ex30_fresh
 from probecommit.studies.explain import ex33_aim
 from probecommit.studies.explain import ex31_shift
 from probecommit.studies.explain import ex34_fixed
+from probecommit.studies.explain import ex43_setonly
 from probecommit.studies.explain import ex35_pools
 from probecommit.studies.explain import ex36_coverage, ex36_testc
 from probecommit.studies.explain import ex37_adjusted, ex37_filters
@@ -146,6 +147,7 @@ class Explain:
             *ex23.GROUPS,
             *ex31_shift.GROUPS,
             *ex34_fixed.GROUPS,
+            *ex43_setonly.GROUPS,
             *ex21.GROUPS,
             *ex24.GROUPS,
             *ex25.GROUPS,
@@ -577,6 +579,7 @@ class Explain:
                  # stored random test run and the fresh draws on disk
                  self.aside(ex23.run, needs=()),  # E162/E163: the fresh draws and the Split B random runs, re-committed
                  self.aside(ex34_fixed.run, needs=()),  # E203/E204: Table III's run, one MuJoCo tap put first, re-committed
+                 self.aside(ex43_setonly.run, needs=()),  # E232: Table III's run re-committed at t_k without the margin
                  self.robust, physx_coverage, self.physx,
                  lambda: (self.ready and self.ready(), self.gru()), lambda: more.run(self),
                  lambda: ex15_union.run(self), self.aside(ex18_grasp.run, needs=()),  # E133: frozen config only
