@@ -127,9 +127,9 @@ def test_the_withdrawn_credits_leave_their_items_unexplained_on_the_publication(
     # rev2: E207 speaks to T22's own scan only, E222 to T29's optimism only, E223 needs ours to be a draw too.
     for claim_id in ("T22-physx-paired", "T29-replay-prior"):
         assert got[claim_id]["status"] == "differs, unexplained", claim_id
-    # ex42: T26 is explained only by E230 (the whole design redrawn), once its keys are published; never by E223/E225.
+    # rev3: T26 is explained only by E234 (E230's design confirmed on fresh seeds), never by E223/E225/E230.
     t26 = got["T26-hardware-optimism"]
-    assert t26["status"] == "differs, unexplained" or t26["experiment"] == "E230", t26
+    assert t26["status"] == "differs, unexplained" or t26["experiment"] == "E234", t26
     assert got["T06-cover-failure-splits"]["experiment"] == "E9"
 
 

@@ -29,9 +29,12 @@ def test_e231_reads_only_our_rank_among_sessions_with_our_positions():
     assert rule(_keys(0.0, 0.5, 5, 1)) and not rule(_keys(1.0, 0.0, 5, 0))
 
 
-def test_t26_credits_e230_and_not_e231():
+def test_t26_credits_only_the_confirmatory_e234_not_e230_or_e231():
+    """rev3: E230 is the one of four reference sets that does not reject; only its confirmation on fresh seeds
+    (E234, declared before it ran) may credit T26, under the same rule."""
     claim = next(c for c in C.CLAIMS if c.id == "T26-hardware-optimism")
-    assert "E230" in claim.explain and "E231" not in claim.explain
+    assert "E234" in claim.explain and "E230" not in claim.explain and "E231" not in claim.explain
+    assert C.EXPERIMENTS["E234"].supports is C.EXPERIMENTS["E230"].supports
 
 
 def test_stream_and_own_position_keys_come_under_their_own_groups():
@@ -45,7 +48,18 @@ def test_stream_and_own_position_keys_come_under_their_own_groups():
                {"streams": rows.assign(realized=1.0), "own_positions": rows})  # +0.5 beyond the bound; 0.0 within
     assert got["streams.optimism.sessions_failing_at_least.1"] == 1 and got["streams.optimism.sessions"] == 1
     assert got["own_positions.optimism.share_sessions_paper_outcome"] == 1.0
-    assert set(VARIANTS) == {"central", "streams", "own_positions"}
+    assert set(VARIANTS) == {"central", "streams", "own_positions", "confirm"}
+
+
+def test_e234_seeds_are_fresh_and_declared():
+    """E234's seeds overlap no other redraw's (E223/E225/E230/E231 use rig_redraw_seed onwards)."""
+    from probecommit.studies.explain.rig import confirm_seeds
+    from probecommit.studies.explain.study import load_explain_config
+
+    cfg = load_explain_config(None)
+    used = set(range(int(cfg["rig_redraw_seed"]), int(cfg["rig_redraw_seed"]) + int(cfg["rig_redraws"])))
+    fresh = confirm_seeds(cfg, quick=False)
+    assert len(fresh) == 200 and not used & set(fresh) and len(confirm_seeds(cfg, quick=True)) == 2
 
 
 @pytest.mark.slow

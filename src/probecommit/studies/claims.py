@@ -724,7 +724,7 @@ def _claims_hardware() -> list[Claim]:
               + tuple(Holds(f"{t} taps within bound", "|optimism| within the paper's bound of zero",
                             {"o": f"{R}table.{t - 1}.optimism"},
                             lambda v: abs(v["o"]) <= paper_values.value("T26-hardware-optimism.bound") + 1e-12)
-                      for t in range(1, 6)), simulated_rig=True, explain=("E223", "E225", "E230")))
+                      for t in range(1, 6)), simulated_rig=True, explain=("E223", "E225", "E234")))
     add(Claim("T27-replay-deployed", "Sec. V-D, Fault injection", "Replayed as deployed, the taps reproduce the run",
               (Holds("reproduced", "every recorded decision reproduced", {"f": f"{R}replay_reproduced_fraction"},
                      lambda v: v["f"] == 1.0),), simulated_rig=True))
@@ -3185,7 +3185,9 @@ def _rig_streams_experiments() -> list[Experiment]:
     positions (both sides, as E223's), E231 keeps our positions and redraws the streams (credited with nothing)."""
     sr, op = "explain:results.rig_redraws.streams.optimism.", "explain:results.rig_redraws.own_positions.optimism."
     e230 = {"n": f"{sr}sessions", "p": f"{sr}share_sessions_paper_outcome", "w": f"{sr}pooled_optimism.max_abs",
-            **{f"ge{j}": f"{sr}sessions_failing_at_least.{j}" for j in range(11)}, **_rig_table_keys()}
+            **{f"ge{j}": f"{sr}sessions_failing_at_least.{j}" for j in range(11)}, **_rig_table_keys(),
+            "e223": "explain:results.rig_redraws.optimism.sessions_failing_at_least.5",
+            "e231": f"{op}sessions_failing_at_least.5"}
     e231 = {"n": f"{op}sessions", "p": f"{op}share_sessions_paper_outcome",
             **{f"ge{j}": f"{op}sessions_failing_at_least.{j}" for j in range(11)}, **_rig_table_keys()}
     return [
@@ -3195,7 +3197,9 @@ def _rig_streams_experiments() -> list[Experiment]:
                    "positions; over {n:d} sessions with both redrawn the paper's whole sentence holds on {p:.3f} "
                    "(pooled optimism within {w:.3f} of zero), and {ge3:d} fail three or more of its ten labels, "
                    "{ge4:d} four or more, {ge5:d} five or more: whether ours, counted among them, reaches the same "
-                   "least share as the paper's side is the rule.",
+                   "least share as the paper's side is the rule. It is the fourth reference set asked this (E223's "
+                   "sessions have {e223:d} at five or more, E231's {e231:d}, E225's central ones none), so its "
+                   "outcome credits nothing: E234 asks it again on sessions never used (rev3).",
                    supports=_rig_both_sides),
         Experiment("E231", "our rig session's block positions with the tap, particle and misread streams redrawn "
                    "(which input makes ours extreme; credited with no label)", e231,
@@ -3205,6 +3209,22 @@ def _rig_streams_experiments() -> list[Experiment]:
                    "reaches the least share, and fails (our stream on these positions carries it) if not.",
                    supports=lambda v: _rig_session_rank(v)[2] >= UNRESOLVED_CHOICE_SHARE),
     ]
+
+
+def _e234() -> Experiment:
+    """E234 (declared in docs/decisions.md before its sessions ran): E230's design and rule on 200 sessions never
+    used, the one confirmatory test of T26 after four reference sets (rev3)."""
+    cf = "explain:results.rig_redraws.confirm.optimism."
+    keys = {"n": f"{cf}sessions", "p": f"{cf}share_sessions_paper_outcome", "w": f"{cf}pooled_optimism.max_abs",
+            **{f"ge{j}": f"{cf}sessions_failing_at_least.{j}" for j in range(11)}, **_rig_table_keys()}
+    return Experiment(
+        "E234", "the simulated rig's optimism sentence over fresh sessions of the whole design (E230's, confirmed on "
+        "seeds never used)", keys,
+        "over {n:d} fresh sessions, block positions and streams redrawn together, the paper's whole sentence holds on "
+        "{p:.3f} (pooled optimism within {w:.3f} of zero), and {ge3:d} fail three or more of its ten labels, {ge4:d} "
+        "four or more, {ge5:d} five or more: whether ours, counted among them, reaches the same least share as the "
+        "paper's side is the rule.",
+        supports=_rig_both_sides)
 
 
 def _rig_table_keys() -> dict[str, str]:
@@ -3251,7 +3271,7 @@ for _experiment in (_experiments() + _experiments_more() + _experiments_ex3() + 
                     + _experiments_ex30()
                     + _experiments_ex29() + _experiments_ex31() + _experiments_ex32() + _experiments_ex33()
                     + _experiments_ex34() + _experiments_ex35() + _experiments_lead()
-                    + _experiments_ex36() + _experiments_ex37() + _experiments_physx_cells() + [_e225()] + _rig_streams_experiments()
+                    + _experiments_ex36() + _experiments_ex37() + _experiments_physx_cells() + [_e225()] + _rig_streams_experiments() + [_e234()]
                     + _experiments_ex38() + _experiments_ex39() + _experiments_ex43()):
     EXPERIMENTS[_experiment.number] = _experiment
 

@@ -64,8 +64,11 @@ STORED_CENTRAL = "rig_redraws_central_sessions.parquet"
 STORED_STREAMS = "rig_redraws_streams_sessions.parquet"
 #: E231's sessions, our positions (``instances.seed`` of ``rig.yaml``) with the streams redrawn.
 STORED_OWN_POSITIONS = "rig_redraws_own_positions_sessions.parquet"
+#: E234's sessions: E230's design on seeds never used before (``rig_confirm_seed``, ``rig_confirm`` of explain.yaml).
+STORED_CONFIRM = "rig_redraws_confirm_sessions.parquet"
 #: The stored session sets beside E223's, by the key group each fills (``keys``; verify reads those present).
-VARIANTS = {"central": STORED_CENTRAL, "streams": STORED_STREAMS, "own_positions": STORED_OWN_POSITIONS}
+VARIANTS = {"central": STORED_CENTRAL, "streams": STORED_STREAMS, "own_positions": STORED_OWN_POSITIONS,
+            "confirm": STORED_CONFIRM}
 SESSION_COLUMNS = ("session", "instance_id", "k", "predicted", "realized", "covered", "escaped", "entered", "aim_error")
 
 
@@ -146,13 +149,19 @@ def keys(sessions: pd.DataFrame, boundary: pd.DataFrame, boot: dict[str, Any],
          variants: dict[str, pd.DataFrame] | None = None) -> dict[str, Any]:
     """Keys of ``explain:results.rig_redraws`` from the stored rows (the explain step and verify both call this);
     ``variants``: the other session sets by group (``VARIANTS``: E225's ``central``, E230's ``streams``, E231's
-    ``own_positions``), each under ``<group>.optimism.``."""
+    ``own_positions``, E234's ``confirm``), each under ``<group>.optimism.``."""
     opt, _ = optimism_summary(sessions, boot)
     out = {f"optimism.{k}": v for k, v in opt.items()}
     out.update({f"boundary.{k}": v for k, v in boundary_summary(boundary).items()})
     for group, rows in (variants or {}).items():
         out.update({f"{group}.optimism.{k}": v for k, v in optimism_summary(rows, boot)[0].items()})
     return out
+
+
+def confirm_seeds(cfg: dict[str, Any], quick: bool) -> list[int]:
+    """E234's session seeds: E230's design confirmed on seeds no other run uses (declared before they ran)."""
+    count = int(cfg["rig_confirm_quick" if quick else "rig_confirm"])
+    return [int(cfg["rig_confirm_seed"]) + i for i in range(count)]
 
 
 def run(runs: Path, cfg: dict[str, Any], boot: dict[str, Any], quick: bool) -> tuple[dict[str, Any], dict[str, pd.DataFrame]]:
@@ -164,7 +173,8 @@ def run(runs: Path, cfg: dict[str, Any], boot: dict[str, Any], quick: bool) -> t
     own = int(config_data(rig_config(quick))["instances"]["seed"])
     variants = {"central": session_rows(redrawn_sessions(runs, seeds, quick, float(cfg["rig_redraws_central"]))),
                 "streams": session_rows(redrawn_sessions(runs, seeds, quick, streams=True)),
-                "own_positions": session_rows(redrawn_sessions(runs, seeds, quick, positions=own))}
+                "own_positions": session_rows(redrawn_sessions(runs, seeds, quick, positions=own)),
+                "confirm": session_rows(redrawn_sessions(runs, confirm_seeds(cfg, quick), quick, streams=True))}
     tables = {STORED_SESSIONS: session_rows(sessions), STORED_BOUNDARY: boundary_rows(sessions, boot, sizes),
               **{VARIANTS[group]: rows for group, rows in variants.items()}}
     return keys(tables[STORED_SESSIONS], tables[STORED_BOUNDARY], boot, variants), tables
