@@ -83,25 +83,30 @@ def _ex39_job(tmp_path: Path) -> SimpleNamespace:
 
 
 def test_ex39s_pieces_are_its_grid_points_in_grid_order_softest_submitted_first(monkeypatch, tmp_path):
-    """The combined rows equal the one-process sweep's (``sweep`` then the published rows), row for row."""
+    """The combined rows equal the one-process sweep's (``sweep`` then the published rows), row for row, whether
+    each point is a piece (full) or all of them one (quick)."""
     def fake(truths, k, z, scan, sigma):
         rows = truths.assign(kind="capture", ratio=1.0 if np.isnan(k) else 1.0 + 100.0 / k, side="left")
         return rows.rename(columns={"true_x_hole": "x_hole", "true_c": "c"}).assign(engine="pybullet"), 0.0
 
     monkeypatch.setattr(ex39, "point_rows", fake)
     monkeypatch.setattr(ex39, "summary", lambda rows: {"n": len(rows)})
-    job = _ex39_job(tmp_path)
-    cut = ex39.pieces(job)
-    assert [args[1] for _, args in cut.calls] == list(range(13))
+    quick = _ex39_job(tmp_path)
+    full = SimpleNamespace(**{**vars(quick), "quick": False, "cfg": {"ex39_truths": 1}, "res": defaultdict(dict)})
+    cut = ex39.pieces(full)
+    assert [args[1] for _, args in cut.calls] == [(i,) for i in range(13)]
     assert [ex39.grid()[i][0] for i in cut.order()[:2]] == ["k300_z010", "k300_z100"] and cut.order()[-1] == 0
-    in_place(job, ex39.pieces)
+    assert [args[1] for _, args in ex39.pieces(quick).calls] == [tuple(range(13))]
     published = pd.read_parquet(tmp_path / "engines" / "results" / "engine_scans.parquet")
     truths = ex39.published_truths(published, 1)
     mine = published[published["instance_id"].isin(truths["instance_id"])].drop(columns="engine")
-    whole = pd.concat([ex39.sweep(truths, job.p.scan, 0.5), mine.assign(point=ex39.PUBLISHED, index=-1)],
+    whole = pd.concat([ex39.sweep(truths, quick.p.scan, 0.5), mine.assign(point=ex39.PUBLISHED, index=-1)],
                       ignore_index=True)
-    pd.testing.assert_frame_equal(job.stored[ex39.STORED], whole)
-    assert job.res[ex39.GROUP] == {"n": len(whole)}
+    for job in (quick, full):
+        job.stored = {}
+        in_place(job, ex39.pieces)
+        pd.testing.assert_frame_equal(job.stored[ex39.STORED], whole)
+        assert job.res[ex39.GROUP] == {"n": len(whole)}
 
 
 def test_ex38s_pieces_are_its_arms_the_bisection_with_its_grid(monkeypatch):

@@ -92,6 +92,12 @@ def grid_point(truths: pd.DataFrame, index: int, scan: dict[str, float], noise_s
     return rows.assign(point=name, index=index, stiffness=k, zeta=z), cpu
 
 
+def grid_points(truths: pd.DataFrame, indices: Sequence[int], scan: dict[str, float],
+                noise_sigma: float) -> list[tuple[pd.DataFrame, float]]:
+    """:func:`grid_point` of each of ``indices``, in that order (a piece of the sweep, ``pieces``)."""
+    return [grid_point(truths, index, scan, noise_sigma) for index in indices]
+
+
 def sweep(truths: pd.DataFrame, scan: dict[str, float], noise_sigma: float, points: Sequence[str] | None = None,
           progress: Any = None) -> pd.DataFrame:
     """The grid's scan rows (columns ``point, index, stiffness, zeta`` added), the points named in ``points``
@@ -153,7 +159,8 @@ def summary(rows: pd.DataFrame) -> dict[str, float]:
 def pieces(job: Any) -> Pieces | None:
     """The sweep cut into its grid points (``pieces``), on the engines study's stored development truths; None when
     its scan rows are not under the root. A softer plate is guessed to take longer (the peg sinks and settles
-    over more steps; the rigid point as the stiffest): only the order the points are submitted in."""
+    over more steps; the rigid point as the stiffest): only the order the points are submitted in. A quick run's
+    points (one truth, about 2-6 s of CPU each) are one piece: a process's start-up would be a third of each."""
     path = Path(job.root) / "engines" / "results" / "engine_scans.parquet"
     if not path.is_file():
         return None
@@ -161,14 +168,15 @@ def pieces(job: Any) -> Pieces | None:
     truths = published_truths(published, int(job.cfg["ex39_truths_quick" if job.quick else "ex39_truths"]))
     job.progress(f"explain: PyBullet's scans over {len(grid())} plate contacts (E218)", 0, 1)
     mine = published[(published["engine"] == "pybullet") & published["instance_id"].isin(truths["instance_id"])]
-    calls = [(grid_point, (truths, index, dict(job.p.scan), job.p.noise_sigma)) for index in range(len(grid()))]
-    costs = [0.0 if np.isnan(k) else 1.0 / k for _, k, _ in grid()]
-    return Pieces(calls, costs, functools.partial(combine, mine))
+    cuts = [tuple(range(len(grid())))] if job.quick else [(index,) for index in range(len(grid()))]
+    calls = [(grid_points, (truths, cut, dict(job.p.scan), job.p.noise_sigma)) for cut in cuts]
+    softness = [0.0 if np.isnan(k) else 1.0 / k for _, k, _ in grid()]
+    return Pieces(calls, [sum(softness[i] for i in cut) for cut in cuts], functools.partial(combine, mine))
 
 
-def combine(mine: pd.DataFrame, parts: list[tuple[pd.DataFrame, float]]) -> Filled:
+def combine(mine: pd.DataFrame, parts: list[list[tuple[pd.DataFrame, float]]]) -> Filled:
     """The grid points' rows in grid order, then the published scan's rows (``mine``), stored, and E218's keys."""
-    rows = pd.concat([part for part, _ in parts], ignore_index=True)
+    rows = pd.concat([rows for part in parts for rows, _ in part], ignore_index=True)
     rows = pd.concat([rows, mine.drop(columns="engine").assign(point=PUBLISHED, index=-1)], ignore_index=True)
     return {"res": {GROUP: summary(rows)}, "stored": {STORED: rows}}
 
@@ -180,5 +188,5 @@ def run(job: Any) -> None:
     in_place(job, pieces)
 
 
-__all__: Sequence[str] = ("run", "pieces", "combine", "grid_point", "summary", "sweep", "grid", "label", "plate_contact", "published_truths",
+__all__: Sequence[str] = ("run", "pieces", "combine", "grid_point", "grid_points", "summary", "sweep", "grid", "label", "plate_contact", "published_truths",
                           "point_rows", "point_keys", "STORED", "GROUP")
