@@ -50,6 +50,8 @@ def test_pieces_are_submitted_longest_first_ties_in_call_order():
     assert Pieces([None] * 4, [1.0, 5.0, 2.0, 5.0], _combine).order() == [1, 3, 2, 0]
     with pytest.raises(ValueError, match="3 pieces, 2 costs"):
         Pieces([None] * 3, [1.0, 2.0], _combine)
+    with pytest.raises(ValueError, match="no pieces"):
+        Pieces([], [], _combine)
 
 
 def test_a_split_sweep_fills_what_the_sweep_in_place_fills_where_it_would(tmp_path):

@@ -38,6 +38,8 @@ class Pieces:
     def __post_init__(self) -> None:
         if len(self.calls) != len(self.costs):
             raise ValueError(f"{len(self.calls)} pieces, {len(self.costs)} costs")
+        if not self.calls:  # nothing would hand the combined keys on
+            raise ValueError("a sweep of no pieces: its pieces(job) returns None instead")
 
     def order(self) -> list[int]:
         """The pieces' submission order: longest guessed cost first, ties in ``calls`` order."""
