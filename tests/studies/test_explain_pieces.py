@@ -54,7 +54,11 @@ def test_pieces_are_submitted_longest_first_ties_in_call_order():
         Pieces([], [], _combine)
 
 
-def test_a_split_sweep_fills_what_the_sweep_in_place_fills_where_it_would(tmp_path):
+@pytest.mark.parametrize("cpus", [None, 1])
+def test_a_split_sweep_fills_what_the_sweep_in_place_fills_where_it_would(tmp_path, monkeypatch, cpus):
+    """On several CPUs each piece in a process of its own; on one (``cpus=1``) inline, handed on at once."""
+    if cpus is not None:
+        monkeypatch.setattr("probecommit.studies.explain.background.os.cpu_count", lambda: cpus)
     jobs = {}
     for split in (True, False):
         job = jobs[split] = Explain(tmp_path, True, lambda *a: None, 1, {})
@@ -64,8 +68,10 @@ def test_a_split_sweep_fills_what_the_sweep_in_place_fills_where_it_would(tmp_pa
     assert jobs[True].res["gru"] == jobs[False].res["gru"]
     split, whole = jobs[True].stored["toy.parquet"], jobs[False].stored["toy.parquet"]
     pd.testing.assert_frame_equal(split.drop(columns="pid"), whole.drop(columns="pid"))
-    if (os.cpu_count() or 1) > 1:  # each piece in a fresh process of its own
+    if cpus is None and (os.cpu_count() or 1) > 1:  # each piece in a fresh process of its own
         assert split["pid"].nunique() == 3 and os.getpid() not in set(split["pid"])
+    if cpus == 1:
+        assert set(split["pid"]) == {os.getpid()}
 
 
 def test_a_later_step_reading_a_split_sweeps_keys_is_refused(tmp_path):
