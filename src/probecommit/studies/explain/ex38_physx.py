@@ -19,6 +19,7 @@ from typing import Any, Callable, Sequence
 import numpy as np
 import pandas as pd
 
+from probecommit.studies.explain.pieces import Filled, Pieces, in_place
 from probecommit.studies.paper_values import value as paper_value
 
 #: The stored rows (``engines.scan_rows`` per point, with ``arm``, ``value``, ``cpu_s``), beside results.json.
@@ -164,19 +165,32 @@ def arm_rows(protocol: Any, arm: str, grid: Sequence[float], count: int, refine:
     return sweep(arm, grid, evaluate, BISECTIONS if refine else 0)
 
 
-def run(job: Any) -> None:
-    """The explain step (set aside; reads only the protocol): stored rows and keys. Skipped without SAPIEN."""
+def pieces(job: Any) -> Pieces | None:
+    """The sweep cut into its arms (``pieces``), each arm's grid and bisection one piece (the bisection reads the
+    grid's ratios); None without SAPIEN or when the settings skip it. Reads only the protocol and the settings."""
     import importlib.util
 
     count = int(job.cfg["ex38_truths_quick" if job.quick else "ex38_truths"])
     if count < 0 or importlib.util.find_spec("sapien") is None:
-        return
+        return None
     grids = QUICK_GRIDS if job.quick else GRIDS
     job.progress("explain: PhysX contact and rest offset sweeps (E214, E216)", 0, 1)
-    rows = pd.concat([arm_rows(job.p, arm, grid, count, not job.quick) for arm, grid in grids.items()],
-                     ignore_index=True)
-    job.stored[STORED] = rows
-    job.res[GROUP].update(summary(rows))
+    refine = not job.quick
+    calls = [(arm_rows, (job.p, arm, grid, count, refine)) for arm, grid in grids.items()]
+    costs = [len(grid) + (BISECTIONS if refine else 0) for grid in grids.values()]  # the points it may scan
+    return Pieces(calls, costs, combine)
 
 
-__all__: Sequence[str] = ("run", "summary", "sweep", "point_rows", "shape_setting", "GRIDS", "STORED", "GROUP")
+def combine(parts: list[pd.DataFrame]) -> Filled:
+    """The arms' rows in arm order, stored, and their keys."""
+    rows = pd.concat(parts, ignore_index=True)
+    return {"res": {GROUP: summary(rows)}, "stored": {STORED: rows}}
+
+
+def run(job: Any) -> None:
+    """The explain step (reads only the protocol): stored rows and keys. Skipped without SAPIEN. The target sets
+    its arms aside as jobs of their own (``Explain.split(pieces)``)."""
+    in_place(job, pieces)
+
+
+__all__: Sequence[str] = ("run", "pieces", "combine", "summary", "sweep", "point_rows", "shape_setting", "GRIDS", "STORED", "GROUP")

@@ -14,6 +14,7 @@ Every key is :func:`summary` of the stored scan rows (:data:`STORED`), so verify
 
 from __future__ import annotations
 
+import functools
 import time
 from pathlib import Path
 from typing import Any, Sequence
@@ -22,6 +23,7 @@ import numpy as np
 import pandas as pd
 
 from probecommit.studies.engines import make_simulator, scan_boundary, scan_capture_window, scan_rows, scan_summaries
+from probecommit.studies.explain.pieces import Filled, Pieces, in_place
 from probecommit.studies.paper_values import value as paper_value
 from probecommit.tasks.insertion.sim_mujoco import PEG_MASS_KG
 
@@ -83,18 +85,31 @@ def point_rows(truths: pd.DataFrame, stiffness: float, zeta: float, scan: dict[s
     return scan_rows("pybullet", boundary, capture), time.process_time() - start
 
 
+def grid_point(truths: pd.DataFrame, index: int, scan: dict[str, float], noise_sigma: float) -> tuple[pd.DataFrame, float]:
+    """Grid point ``index``'s scan rows (columns ``point, index, stiffness, zeta`` added) and their CPU seconds."""
+    name, k, z = grid()[index]
+    rows, cpu = point_rows(truths, k, z, scan, noise_sigma)
+    return rows.assign(point=name, index=index, stiffness=k, zeta=z), cpu
+
+
+def grid_points(truths: pd.DataFrame, indices: Sequence[int], scan: dict[str, float],
+                noise_sigma: float) -> list[tuple[pd.DataFrame, float]]:
+    """:func:`grid_point` of each of ``indices``, in that order (a piece of the sweep, ``pieces``)."""
+    return [grid_point(truths, index, scan, noise_sigma) for index in indices]
+
+
 def sweep(truths: pd.DataFrame, scan: dict[str, float], noise_sigma: float, points: Sequence[str] | None = None,
           progress: Any = None) -> pd.DataFrame:
     """The grid's scan rows (columns ``point, index, stiffness, zeta`` added), the points named in ``points``
     only when given (the whole grid otherwise)."""
     step = progress or (lambda *a: None)
     parts = []
-    for index, (name, k, z) in enumerate(grid()):
+    for index, (name, _, _) in enumerate(grid()):
         if points is not None and name not in points:
             continue
-        rows, cpu = point_rows(truths, k, z, scan, noise_sigma)
+        rows, cpu = grid_point(truths, index, scan, noise_sigma)
         step(f"explain: E218 point {name} ({cpu:.0f} s CPU)", index + 1, len(grid()))
-        parts.append(rows.assign(point=name, index=index, stiffness=k, zeta=z))
+        parts.append(rows)
     return pd.concat(parts, ignore_index=True)
 
 
@@ -141,21 +156,37 @@ def summary(rows: pd.DataFrame) -> dict[str, float]:
     return out
 
 
-def run(job: Any) -> None:
-    """The explain step (set aside once the engines study is done): the sweep on its stored development truths,
-    the stored rows and the keys; nothing when the engines study's scan rows are not under the root."""
+def pieces(job: Any) -> Pieces | None:
+    """The sweep cut into its grid points (``pieces``), on the engines study's stored development truths; None when
+    its scan rows are not under the root. A softer plate is guessed to take longer (the peg sinks and settles
+    over more steps; the rigid point as the stiffest): only the order the points are submitted in. A quick run's
+    points (one truth, about 2-6 s of CPU each) are one piece: a process's start-up would be a third of each."""
     path = Path(job.root) / "engines" / "results" / "engine_scans.parquet"
     if not path.is_file():
-        return
+        return None
     published = pd.read_parquet(path)
     truths = published_truths(published, int(job.cfg["ex39_truths_quick" if job.quick else "ex39_truths"]))
     job.progress(f"explain: PyBullet's scans over {len(grid())} plate contacts (E218)", 0, 1)
-    rows = sweep(truths, job.p.scan, job.p.noise_sigma, progress=job.progress)
     mine = published[(published["engine"] == "pybullet") & published["instance_id"].isin(truths["instance_id"])]
+    cuts = [tuple(range(len(grid())))] if job.quick else [(index,) for index in range(len(grid()))]
+    calls = [(grid_points, (truths, cut, dict(job.p.scan), job.p.noise_sigma)) for cut in cuts]
+    softness = [0.0 if np.isnan(k) else 1.0 / k for _, k, _ in grid()]
+    return Pieces(calls, [sum(softness[i] for i in cut) for cut in cuts], functools.partial(combine, mine))
+
+
+def combine(mine: pd.DataFrame, parts: list[list[tuple[pd.DataFrame, float]]]) -> Filled:
+    """The grid points' rows in grid order, then the published scan's rows (``mine``), stored, and E218's keys."""
+    rows = pd.concat([rows for part in parts for rows, _ in part], ignore_index=True)
     rows = pd.concat([rows, mine.drop(columns="engine").assign(point=PUBLISHED, index=-1)], ignore_index=True)
-    job.stored[STORED] = rows
-    job.res[GROUP].update(summary(rows))
+    return {"res": {GROUP: summary(rows)}, "stored": {STORED: rows}}
 
 
-__all__: Sequence[str] = ("run", "summary", "sweep", "grid", "label", "plate_contact", "published_truths",
+def run(job: Any) -> None:
+    """The explain step (once the engines study is done): the sweep on its stored development truths, the stored
+    rows and the keys; nothing when the engines study's scan rows are not under the root. The target sets its
+    points aside as jobs of their own (``Explain.split(pieces)``)."""
+    in_place(job, pieces)
+
+
+__all__: Sequence[str] = ("run", "pieces", "combine", "grid_point", "grid_points", "summary", "sweep", "grid", "label", "plate_contact", "published_truths",
                           "point_rows", "point_keys", "STORED", "GROUP")

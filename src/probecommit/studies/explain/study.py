@@ -9,6 +9,7 @@ what each key measures.
 
 from __future__ import annotations
 
+import functools
 import json
 import re
 from pathlib import Path
@@ -26,6 +27,7 @@ from probecommit.studies.explain import (calibration_rows, draw_audit, draw_faul
                                          robust_rows, runs, stored, surprise_variants)
 from probecommit.studies.explain.shared_beliefs import SharedBeliefs, cyclic_pairs
 from probecommit.studies.explain.background import Background
+from probecommit.studies.explain import pieces
 from probecommit.studies.explain.lanes import ReadDict, Reads
 from probecommit.studies.explain import timing
 from probecommit.studies.explain.timing import StepClock
@@ -519,6 +521,33 @@ class Explain:
 
         return submit
 
+    def split(self, plan: Callable[[Any], pieces.Pieces | None], needs: tuple[str, ...] | None = None) -> Callable[[], Any]:
+        """A ``steps`` entry: the sweep ``plan(self)`` cuts into pieces (``pieces``), each set aside as a process of
+        its own, longest first; once the last is handed on, their results combined and merged as one job set aside
+        here (``aside``) would have been: the same keys in the same places, the same stored rows. ``plan`` runs
+        here (it reads the settings and stored inputs only); ``needs`` as :meth:`aside`'s."""
+        def submit() -> None:
+            if self.ready is not None and needs != ():
+                self.ready(needs)
+            cut = plan(self)
+            if cut is None:
+                return
+            places = {group: len(values) for group, values in self.res.items()}
+            label = _name(plan)
+            self.progress(f"explain: set aside to {len(cut.calls)} processes of their own: {label}", 0, 1)
+            job, results = self.reads.submitted(label), {}
+
+            def then(i: int, result: Any) -> None:
+                results[i] = result
+                if len(results) == len(cut.calls):  # the last piece handed on: all of them, merged as one job
+                    self._merge(pieces.gather(cut, results), places, job)
+
+            for i in cut.order():
+                fn, args = cut.calls[i]
+                self._hand_on(job, functools.partial(then, i), pieces.timed, fn, *args)
+
+        return submit
+
     def submit(self, then: Callable[[Any], None], fn: Callable[..., Any], *args: Any) -> Any:
         """``fn(*args)`` (a module-level function of picklable arguments) in a process of its own
         (``Background.submit``), its result handed to ``then`` in this process. What ``then`` writes into the
@@ -570,7 +599,7 @@ class Explain:
                  # ex9 store; E205 (ex35_pools) E56's stored fresh pools, and runs the rest
                  self.aside(ex30_fresh.run, needs=()),  # E190, E191: the insertion study's stored runs only
                  self.aside(ex33_aim.run, needs=()),  # E199, E200: the insertion study's stored runs only
-                 self.aside(ex38_physx.run, needs=()),  # E214, E216: PhysX scans off the protocol alone
+                 self.split(ex38_physx.pieces, needs=()),  # E214, E216: PhysX scans off the protocol alone, an arm a job
                  self.aside(ex36_testc.run, needs=()),  # E208: Test C's cover run rerun (MuJoCo), paper's schedule
                  self.aside(ex7.run, ex37_filters.run, needs=()),  # E212/E213 replay the harness draws ex7 runs
                  self.aside(ex13.mixture, needs=()), self.aside(ex17.tiebreak, needs=()),
@@ -587,7 +616,8 @@ class Explain:
                  self.aside(ex22.exact, ex22.magnitude, needs=("breadth",)),  # E156-E158: stored breadth rows, closed forms
                  self.aside(ex25.uniform, ex32.floor, needs=("breadth",)),  # E174-E177, E196/E197: stored breadth rows
                  self.aside(ex27.torque, needs=("breadth",)),  # E182-E184: the stored hinge run, MuJoCo reruns
-                 self.aside(ex39_pybullet.run, needs=("engines",)),  # E218: the engines study's stored scans, reruns
+                 self.split(ex39_pybullet.pieces, needs=("engines",)),  # E218: the engines study's stored scans, reruns,
+                 # a grid point a job
                  lambda: ex19.run(self),  # E138 reads the prior sweep's darts runs (more.run)
                  lambda: ex4.run(self),
                  lambda: ex6.run(self, paper),
