@@ -674,7 +674,8 @@ def _claims_correction_and_engines() -> list[Claim]:
                Near("PhysX capture ratio", "T18-engine-scans.sapien_ratio", f"{E}scans.sapien.capture.ratio_mean", 0.1)),
               explain=(("E30", ("PyBullet capture",)),  # E6 restates our PhysX scan (credA)
                        *((n, (f"{EXACT}PhysX offset", f"{EXACT}PhysX capture ratio")) for n in ("E214", "E216")),
-                       ("E218", (f"{EXACT}PyBullet capture ratio",)))))
+                       ("E218", (f"{EXACT}PyBullet capture ratio",)),
+                       ("E228", (f"{EXACT}PyBullet capture ratio",)))))
     add(Claim("T19-pybullet-escape", "Sec. V-C, Across engines", "PyBullet escape climbs from k = 1 to 8",
               (Near("k=1", "T19-pybullet-escape.k1", f"{E}escape.pybullet/deployed.1", POINT_TOL * 2.5),
                Near("k=8", "T19-pybullet-escape.k8", f"{E}escape.pybullet/deployed.8", POINT_TOL * 2.5),
@@ -2492,6 +2493,27 @@ def _experiments_ex39() -> list[Experiment]:
         supports=lambda v: v["ok"] == 1)]
 
 
+def _experiments_ex41() -> list[Experiment]:
+    """The ex41 helper's experiment (E228; ``studies/explain/ex41_slop.py``; rule in docs/decisions.md, "ex41",
+    committed before the sweep's numbers): PyBullet's scans over a declared grid of contact slops, the point chosen
+    by the paper's capture ratio, the boundary, the ratio's spread and its mean judged there."""
+    d = f"{X}ex41_slop."
+    return [Experiment(
+        "E228", "PyBullet's capture window against the contact slop (contactSlop grid)",
+        {"n": f"{d}points", "r": f"{d}chosen.ratio_mean", "s": f"{d}chosen.slop", "r0": f"{d}slop1um.ratio_mean",
+         "r1": f"{d}slop10um.ratio_mean", "dl": f"{d}chosen.delta", "sd": f"{d}chosen.ratio_sd",
+         "lo": f"{d}chosen.ratio_min", "hi": f"{d}chosen.ratio_max", "f": f"{d}sd_fraction",
+         "rt": f"{d}ratio_tolerance", "eq": f"{d}slop1um_equals_published", "ok": f"{d}holds",
+         "pr": "paper:T18-engine-scans.pybullet_ratio", "psd": "paper:T18-engine-scans.pybullet_ratio_sd",
+         "pd": "paper:T18-engine-scans.pybullet_offset"},
+        "over {n:d} contact slops (ours, ratio {r0:.3f}; PyBullet's default, {r1:.3f}; up to 3e-4 m, docs/decisions.md "
+        "\"ex41\"), the mean capture ratio nearest the paper's {pr:.2f} is {r:.3f} (slop {s:.0e} m; the rule needs it "
+        "within {rt:.1f}); there the tap boundary is hg + {dl:.3f} mm (paper {pd:.3f}) and the per-truth ratio spans "
+        "{lo:.3f} to {hi:.3f}, SD {sd:.3f} against the paper's {psd:.2f} (the rule needs {f:.1f} of it). Our point's "
+        "scans equal the published ones: {eq:d}.",
+        supports=lambda v: v["ok"] == 1)]
+
+
 def _experiments_ex29() -> list[Experiment]:
     """The ex29 helper's experiment (``studies/explain/ex29_band.py``; rule in docs/decisions.md, "ex29"): T36's
     k = 1 AUC with the first tap's band lost at the rate the paper's own k = 1 escape implies (E187)."""
@@ -3184,7 +3206,7 @@ for _experiment in (_experiments() + _experiments_more() + _experiments_ex3() + 
                     + _experiments_ex29() + _experiments_ex31() + _experiments_ex32() + _experiments_ex33()
                     + _experiments_ex34() + _experiments_ex35() + _experiments_lead()
                     + _experiments_ex36() + _experiments_ex37() + _experiments_physx_cells() + [_e225()]
-                    + _experiments_ex38() + _experiments_ex39()):
+                    + _experiments_ex38() + _experiments_ex39() + _experiments_ex41()):
     EXPERIMENTS[_experiment.number] = _experiment
 
 
