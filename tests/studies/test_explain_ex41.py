@@ -19,6 +19,8 @@ from probecommit.studies.explain import ex41_slop as ex41
 from probecommit.studies.paper_values import value
 from probecommit.tasks.insertion.model import capture_half_width
 
+from .recompute_contract import assert_stored_summary_round_trip
+
 PAPER_DELTA = value("T18-engine-scans.pybullet_offset")
 PAPER_RATIO = value("T18-engine-scans.pybullet_ratio")
 PAPER_SD = value("T18-engine-scans.pybullet_ratio_sd")
@@ -115,12 +117,4 @@ def test_e228_is_registered_for_t18s_pybullet_ratio_and_its_keys_exist():
 
 
 def test_verify_recomputes_the_group_from_its_stored_rows(tmp_path):
-    from probecommit.report import recompute
-
-    assert (ex41.GROUP, ex41.STORED, "ex41_slop") in recompute.STORED_SUMMARIES
-    rows = _rows((0.7, 1.7))
-    rows.to_parquet(tmp_path / ex41.STORED)
-    out = recompute.Recomputed()
-    recompute._stored_summaries(tmp_path, {ex41.GROUP: ex41.summary(rows)}, out)
-    assert {k: v for k, v in out.values.items() if k.startswith(ex41.GROUP + ".")} \
-        == {f"{ex41.GROUP}.{k}": v for k, v in ex41.summary(rows).items()}
+    assert_stored_summary_round_trip(tmp_path, ex41, _rows((0.7, 1.7)))

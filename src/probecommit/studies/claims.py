@@ -2472,6 +2472,16 @@ def _experiments_ex38() -> list[Experiment]:
             "needs both within T18's tolerances at that one setting.",
             supports=lambda v: v["h"] == 1))
     return out
+def _pybullet_sweep_keys(d: str, ours: str) -> dict[str, str]:
+    """The sentence keys every PyBullet setting sweep shares (E218, E228; ``ex39_pybullet.sweep_keys``): points,
+    the chosen point's ratio, boundary and spread, our scene's point ``ours`` and its check, the rule, the paper's."""
+    return {"n": f"{d}points", "r": f"{d}chosen.ratio_mean", "r0": f"{d}{ours}.ratio_mean", "dl": f"{d}chosen.delta",
+            "sd": f"{d}chosen.ratio_sd", "lo": f"{d}chosen.ratio_min", "hi": f"{d}chosen.ratio_max",
+            "f": f"{d}sd_fraction", "eq": f"{d}{ours}_equals_published", "ok": f"{d}holds",
+            "pr": "paper:T18-engine-scans.pybullet_ratio", "psd": "paper:T18-engine-scans.pybullet_ratio_sd",
+            "pd": "paper:T18-engine-scans.pybullet_offset"}
+
+
 def _experiments_ex39() -> list[Experiment]:
     """The ex39 helper's experiment (E218; ``studies/explain/ex39_pybullet.py``; rule in docs/decisions.md, "ex39",
     committed before the sweep's numbers): PyBullet's scans over a declared grid of plate contact stiffnesses, the
@@ -2479,12 +2489,7 @@ def _experiments_ex39() -> list[Experiment]:
     d = f"{X}ex39_pybullet."
     return [Experiment(
         "E218", "PyBullet's capture window against a compliant plate contact (stiffness x damping grid)",
-        {"n": f"{d}points", "r": f"{d}chosen.ratio_mean", "k": f"{d}chosen.stiffness", "z": f"{d}chosen.zeta",
-         "r0": f"{d}rigid.ratio_mean", "dl": f"{d}chosen.delta", "sd": f"{d}chosen.ratio_sd",
-         "lo": f"{d}chosen.ratio_min", "hi": f"{d}chosen.ratio_max", "f": f"{d}sd_fraction",
-         "eq": f"{d}rigid_equals_published", "ok": f"{d}holds",
-         "pr": "paper:T18-engine-scans.pybullet_ratio", "psd": "paper:T18-engine-scans.pybullet_ratio_sd",
-         "pd": "paper:T18-engine-scans.pybullet_offset"},
+        {**_pybullet_sweep_keys(d, "rigid"), "k": f"{d}chosen.stiffness", "z": f"{d}chosen.zeta"},
         "over {n:d} plate contacts (rigid, ours and PyBullet's default, ratio {r0:.3f}; and six stiffnesses at two "
         "damping ratios, docs/decisions.md \"ex39\"), the mean capture ratio nearest the paper's {pr:.2f} is "
         "{r:.3f} (k = {k:.0f} N/m, zeta {z:.1f}); there the tap boundary is hg + {dl:.3f} mm (paper {pd:.3f}) and the "
@@ -2500,12 +2505,8 @@ def _experiments_ex41() -> list[Experiment]:
     d = f"{X}ex41_slop."
     return [Experiment(
         "E228", "PyBullet's capture window against the contact slop (contactSlop grid)",
-        {"n": f"{d}points", "r": f"{d}chosen.ratio_mean", "s": f"{d}chosen.slop", "r0": f"{d}slop1um.ratio_mean",
-         "r1": f"{d}slop10um.ratio_mean", "dl": f"{d}chosen.delta", "sd": f"{d}chosen.ratio_sd",
-         "lo": f"{d}chosen.ratio_min", "hi": f"{d}chosen.ratio_max", "f": f"{d}sd_fraction",
-         "rt": f"{d}ratio_tolerance", "eq": f"{d}slop1um_equals_published", "ok": f"{d}holds",
-         "pr": "paper:T18-engine-scans.pybullet_ratio", "psd": "paper:T18-engine-scans.pybullet_ratio_sd",
-         "pd": "paper:T18-engine-scans.pybullet_offset"},
+        {**_pybullet_sweep_keys(d, "slop1um"), "s": f"{d}chosen.slop", "r1": f"{d}slop10um.ratio_mean",
+         "rt": f"{d}ratio_tolerance"},
         "over {n:d} contact slops (ours, ratio {r0:.3f}; PyBullet's default, {r1:.3f}; up to 3e-4 m, docs/decisions.md "
         "\"ex41\"), the mean capture ratio nearest the paper's {pr:.2f} is {r:.3f} (slop {s:.0e} m; the rule needs it "
         "within {rt:.1f}); there the tap boundary is hg + {dl:.3f} mm (paper {pd:.3f}) and the per-truth ratio spans "
