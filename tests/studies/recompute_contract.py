@@ -33,3 +33,17 @@ def assert_bootstrapped_round_trip(tmp_path: Path, module: Any, rows: pd.DataFra
         ref = keys[key.split(".", 1)[1]]
         assert source == module.STORED
         assert (isinstance(v, float) and math.isnan(v) and math.isnan(ref)) or v == ref, key
+
+
+def assert_stored_summary_round_trip(tmp_path: Path, module: Any, rows: pd.DataFrame) -> None:
+    """``module``'s group is one ``summary(rows)`` of its stored table (``report.recompute.STORED_SUMMARIES``):
+    ``rows`` stored as ``module.STORED`` give back every published key through verify's ``_stored_summaries``."""
+    from probecommit.report import recompute
+
+    assert (module.GROUP, module.STORED, module.__name__.rsplit(".", 1)[1]) in recompute.STORED_SUMMARIES
+    keys = module.summary(rows)
+    rows.to_parquet(tmp_path / module.STORED)
+    out = recompute.Recomputed()
+    recompute._stored_summaries(tmp_path, {module.GROUP: keys}, out)
+    assert {k: v for k, v in out.values.items() if k.startswith(module.GROUP + ".")} \
+        == {f"{module.GROUP}.{k}": v for k, v in keys.items()}

@@ -17,6 +17,8 @@ from probecommit.studies.explain import ex39_pybullet as ex39
 from probecommit.studies.paper_values import value
 from probecommit.tasks.insertion.model import capture_half_width
 
+from .recompute_contract import assert_stored_summary_round_trip
+
 PAPER_DELTA = value("T18-engine-scans.pybullet_offset")
 PAPER_SD = value("T18-engine-scans.pybullet_ratio_sd")
 TRUTHS = (("t0", 1.0, 1.0), ("t1", -2.0, 0.5))
@@ -144,12 +146,4 @@ def test_e218_is_registered_for_t18s_pybullet_ratio_and_its_keys_exist():
 
 
 def test_verify_recomputes_the_group_from_its_stored_rows(tmp_path):
-    from probecommit.report import recompute
-
-    assert (ex39.GROUP, ex39.STORED, "ex39_pybullet") in recompute.STORED_SUMMARIES
-    rows = _rows((1.0, 1.4))
-    rows.to_parquet(tmp_path / ex39.STORED)
-    out = recompute.Recomputed()
-    recompute._stored_summaries(tmp_path, {ex39.GROUP: ex39.summary(rows)}, out)
-    assert {k: v for k, v in out.values.items() if k.startswith(ex39.GROUP + ".")} \
-        == {f"{ex39.GROUP}.{k}": v for k, v in ex39.summary(rows).items()}
+    assert_stored_summary_round_trip(tmp_path, ex39, _rows((1.0, 1.4)))

@@ -899,6 +899,8 @@ EXPLAIN_EX36_COVERAGE = "ex36_coverage_rows.parquet"
 EXPLAIN_EX38_PHYSX = "ex38_physx_rows.parquet"
 #: ex39's stored rows (``studies.explain.ex39_pybullet.STORED``: E218's PyBullet scans per plate contact).
 EXPLAIN_EX39_PYBULLET = "ex39_pybullet_rows.parquet"
+#: ex41's stored rows (``studies.explain.ex41_slop.STORED``: E228's PyBullet scans per contact slop).
+EXPLAIN_EX41_SLOP = "ex41_slop_rows.parquet"
 #: ex29's stored rows (``studies.explain.ex29_band.STORED``: E187's trajectories, k = 1 surprise and first-tap band).
 EXPLAIN_EX29_BAND = "ex29_band_rows.parquet"
 #: ex7's stored rows (``studies.explain.ex7.STORED``: the fault surprise rows and the fresh draws).
@@ -923,7 +925,8 @@ STORED_SUMMARIES = (("mixture_noise", EXPLAIN_MIXTURE, "mixture_x"),
                     ("ex37_filters", EXPLAIN_EX37_FILTERS, "ex37_filters"),
                     ("ex36_coverage", EXPLAIN_EX36_COVERAGE, "ex36_coverage"),
                     ("ex38_physx", EXPLAIN_EX38_PHYSX, "ex38_physx"),
-                    ("ex39_pybullet", EXPLAIN_EX39_PYBULLET, "ex39_pybullet"))
+                    ("ex39_pybullet", EXPLAIN_EX39_PYBULLET, "ex39_pybullet"),
+                    ("ex41_slop", EXPLAIN_EX41_SLOP, "ex41_slop"))
 
 #: Explain modules that recompute their own groups: ``recompute(folder, results)`` gives
 #: ``(values, sources, problems)`` (a group published without its stored rows is a problem).
@@ -1011,8 +1014,9 @@ RECOMPUTED = {
                "at each truth; ex35's re-split statistics over twelve fresh pools; ex37's commit gates' pools under the "
                "paper's schedule (the adjusted gate's ratio and interval; threshold and margin traced) and the robust "
                "filters' optimism on Test C and over the harness draws; ex38's PhysX scans at each contact and rest "
-               "offset swept; ex39's PyBullet scans over plate contact stiffnesses; ex43's Table III calibrated arm "
-               "re-committed at the published levels without the margin (and with it, as a check)",
+               "offset swept; ex39's PyBullet scans over plate contact stiffnesses; ex41's over contact slops; ex43's "
+               "Table III calibrated arm re-committed at the published levels without the margin (and with it, as a "
+               "check)",
 }
 TRACED_ONLY = {
     "insertion": "the stored rows themselves (episodes, re-executed commits, replays); the re-split rows; the cover "

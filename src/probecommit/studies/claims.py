@@ -675,7 +675,8 @@ def _claims_correction_and_engines() -> list[Claim]:
                Near("PhysX capture ratio", "T18-engine-scans.sapien_ratio", f"{E}scans.sapien.capture.ratio_mean", 0.1)),
               explain=(("E30", ("PyBullet capture",)),  # E6 restates our PhysX scan (credA)
                        *((n, (f"{EXACT}PhysX offset", f"{EXACT}PhysX capture ratio")) for n in ("E214", "E216")),
-                       ("E218", (f"{EXACT}PyBullet capture ratio",)))))
+                       ("E218", (f"{EXACT}PyBullet capture ratio",)),
+                       ("E228", (f"{EXACT}PyBullet capture ratio",)))))
     add(Claim("T19-pybullet-escape", "Sec. V-C, Across engines", "PyBullet escape climbs from k = 1 to 8",
               (Near("k=1", "T19-pybullet-escape.k1", f"{E}escape.pybullet/deployed.1", POINT_TOL * 2.5),
                Near("k=8", "T19-pybullet-escape.k8", f"{E}escape.pybullet/deployed.8", POINT_TOL * 2.5),
@@ -2472,6 +2473,16 @@ def _experiments_ex38() -> list[Experiment]:
             "needs both within T18's tolerances at that one setting.",
             supports=lambda v: v["h"] == 1))
     return out
+def _pybullet_sweep_keys(d: str, ours: str) -> dict[str, str]:
+    """The sentence keys every PyBullet setting sweep shares (E218, E228; ``ex39_pybullet.sweep_keys``): points,
+    the chosen point's ratio, boundary and spread, our scene's point ``ours`` and its check, the rule, the paper's."""
+    return {"n": f"{d}points", "r": f"{d}chosen.ratio_mean", "r0": f"{d}{ours}.ratio_mean", "dl": f"{d}chosen.delta",
+            "sd": f"{d}chosen.ratio_sd", "lo": f"{d}chosen.ratio_min", "hi": f"{d}chosen.ratio_max",
+            "f": f"{d}sd_fraction", "eq": f"{d}{ours}_equals_published", "ok": f"{d}holds",
+            "pr": "paper:T18-engine-scans.pybullet_ratio", "psd": "paper:T18-engine-scans.pybullet_ratio_sd",
+            "pd": "paper:T18-engine-scans.pybullet_offset"}
+
+
 def _experiments_ex39() -> list[Experiment]:
     """The ex39 helper's experiment (E218; ``studies/explain/ex39_pybullet.py``; rule in docs/decisions.md, "ex39",
     committed before the sweep's numbers): PyBullet's scans over a declared grid of plate contact stiffnesses, the
@@ -2479,12 +2490,7 @@ def _experiments_ex39() -> list[Experiment]:
     d = f"{X}ex39_pybullet."
     return [Experiment(
         "E218", "PyBullet's capture window against a compliant plate contact (stiffness x damping grid)",
-        {"n": f"{d}points", "r": f"{d}chosen.ratio_mean", "k": f"{d}chosen.stiffness", "z": f"{d}chosen.zeta",
-         "r0": f"{d}rigid.ratio_mean", "dl": f"{d}chosen.delta", "sd": f"{d}chosen.ratio_sd",
-         "lo": f"{d}chosen.ratio_min", "hi": f"{d}chosen.ratio_max", "f": f"{d}sd_fraction",
-         "eq": f"{d}rigid_equals_published", "ok": f"{d}holds",
-         "pr": "paper:T18-engine-scans.pybullet_ratio", "psd": "paper:T18-engine-scans.pybullet_ratio_sd",
-         "pd": "paper:T18-engine-scans.pybullet_offset"},
+        {**_pybullet_sweep_keys(d, "rigid"), "k": f"{d}chosen.stiffness", "z": f"{d}chosen.zeta"},
         "over {n:d} plate contacts (rigid, ours and PyBullet's default, ratio {r0:.3f}; and six stiffnesses at two "
         "damping ratios, docs/decisions.md \"ex39\"), the mean capture ratio nearest the paper's {pr:.2f} is "
         "{r:.3f} (k = {k:.0f} N/m, zeta {z:.1f}); there the tap boundary is hg + {dl:.3f} mm (paper {pd:.3f}) and the "
@@ -2525,6 +2531,23 @@ def _experiments_ex43() -> list[Experiment]:
         "declared rule needs the paper's cells at k = 2 and 3 inside, and those at k = 1 and 8 (inside our published "
         "intervals) still inside.",
         supports=_ex43_holds)]
+
+
+def _experiments_ex41() -> list[Experiment]:
+    """The ex41 helper's experiment (E228; ``studies/explain/ex41_slop.py``; rule in docs/decisions.md, "ex41",
+    committed before the sweep's numbers): PyBullet's scans over a declared grid of contact slops, the point chosen
+    by the paper's capture ratio, the boundary, the ratio's spread and its mean judged there."""
+    d = f"{X}ex41_slop."
+    return [Experiment(
+        "E228", "PyBullet's capture window against the contact slop (contactSlop grid)",
+        {**_pybullet_sweep_keys(d, "slop1um"), "s": f"{d}chosen.slop", "r1": f"{d}slop10um.ratio_mean",
+         "rt": f"{d}ratio_tolerance"},
+        "over {n:d} contact slops (ours, ratio {r0:.3f}; PyBullet's default, {r1:.3f}; up to 3e-4 m, docs/decisions.md "
+        "\"ex41\"), the mean capture ratio nearest the paper's {pr:.2f} is {r:.3f} (slop {s:.0e} m; the rule needs it "
+        "within {rt:.1f}); there the tap boundary is hg + {dl:.3f} mm (paper {pd:.3f}) and the per-truth ratio spans "
+        "{lo:.3f} to {hi:.3f}, SD {sd:.3f} against the paper's {psd:.2f} (the rule needs {f:.1f} of it). Our point's "
+        "scans equal the published ones: {eq:d}.",
+        supports=lambda v: v["ok"] == 1)]
 
 
 def _experiments_ex29() -> list[Experiment]:
@@ -3272,7 +3295,7 @@ for _experiment in (_experiments() + _experiments_more() + _experiments_ex3() + 
                     + _experiments_ex29() + _experiments_ex31() + _experiments_ex32() + _experiments_ex33()
                     + _experiments_ex34() + _experiments_ex35() + _experiments_lead()
                     + _experiments_ex36() + _experiments_ex37() + _experiments_physx_cells() + [_e225()] + _rig_streams_experiments() + [_e234()]
-                    + _experiments_ex38() + _experiments_ex39() + _experiments_ex43()):
+                    + _experiments_ex38() + _experiments_ex39() + _experiments_ex41() + _experiments_ex43()):
     EXPERIMENTS[_experiment.number] = _experiment
 
 

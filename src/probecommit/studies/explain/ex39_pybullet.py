@@ -75,8 +75,16 @@ def point_rows(truths: pd.DataFrame, stiffness: float, zeta: float, scan: dict[s
                noise_sigma: float) -> tuple[pd.DataFrame, float]:
     """One grid point: the engines study's boundary and capture scans of ``truths`` in a fresh PyBullet simulator
     with that plate contact; the scan rows (``scan_rows``) and the CPU seconds they took."""
+    return scan_point(truths, scan, noise_sigma, plate_contact=plate_contact(stiffness, zeta))
+
+
+def scan_point(truths: pd.DataFrame, scan: dict[str, float], noise_sigma: float,
+               **settings: Any) -> tuple[pd.DataFrame, float]:
+    """The engines study's boundary and capture scans of ``truths`` in a fresh PyBullet simulator built with
+    ``settings`` (the simulator's keywords: one swept setting, all else the published scene); the scan rows
+    (``scan_rows``) and the CPU seconds they took. Shared by every PyBullet setting sweep (E218, E228)."""
     start = time.process_time()
-    sim = make_simulator("pybullet", noise_sigma=noise_sigma, plate_contact=plate_contact(stiffness, zeta))
+    sim = make_simulator("pybullet", noise_sigma=noise_sigma, **settings)
     try:
         boundary = scan_boundary(sim, truths, scan["step"], scan["half_range"], scan["tolerance"])
         capture = scan_capture_window(sim, truths)
@@ -123,17 +131,18 @@ def point_keys(rows: pd.DataFrame) -> dict[str, float]:
             "sides_entering_beyond": c["sides_entering_beyond"]}
 
 
-def _same_scans(a: pd.DataFrame, b: pd.DataFrame) -> bool:
+def same_scans(a: pd.DataFrame, b: pd.DataFrame) -> bool:
     """Whether two points' boundary and capture rows are equal (the rigid rerun against the published scan)."""
     cols = ["kind", "instance_id", "side", "offset", "half_width", "window"]
     a, b = (x[cols].sort_values(cols[:3]).reset_index(drop=True) for x in (a, b))
     return len(a) == len(b) and bool(a.equals(b))
 
 
-def summary(rows: pd.DataFrame) -> dict[str, float]:
-    """E218's keys from the stored rows: every point's summary (``<point>.*``), the point nearest the paper's
-    capture ratio (``chosen.*``, ties to the first in grid order), rule parts (a) and (b) and ``holds``, and
-    ``rigid_equals_published`` (the rigid point's rows against the published scan's, when stored)."""
+def sweep_keys(rows: pd.DataFrame, settings: Sequence[str], reference: str) -> dict[str, float]:
+    """A PyBullet setting sweep's keys from its stored rows (E218, E228): every point's summary (``<point>.*``),
+    the point nearest the paper's capture ratio (``chosen.*`` with its ``settings`` columns, ties to the first in
+    grid order), the boundary and spread parts of the rule, and ``<reference>_equals_published`` (the
+    ``reference`` point's rows, our published scene, against the published scan's, when stored)."""
     paper_ratio, paper_sd = paper_value("T18-engine-scans.pybullet_ratio"), paper_value("T18-engine-scans.pybullet_ratio_sd")
     paper_delta = paper_value("T18-engine-scans.pybullet_offset")
     out: dict[str, float] = {"sd_fraction": SD_FRACTION, "boundary_tolerance_mm": BOUNDARY_TOLERANCE_MM}
@@ -145,26 +154,57 @@ def summary(rows: pd.DataFrame) -> dict[str, float]:
     chosen = min(order.itertuples(), key=lambda r: (abs(per[r.point]["ratio_mean"] - paper_ratio), r.index))
     c = per[chosen.point]
     out.update({f"chosen.{k}": v for k, v in c.items()})
-    out.update({"chosen.stiffness": float(chosen.stiffness), "chosen.zeta": float(chosen.zeta),
-                "chosen.index": int(chosen.index), "points": int(len(per))})
+    out.update({f"chosen.{k}": float(getattr(chosen, k)) for k in settings})
+    out.update({"chosen.index": int(chosen.index), "points": int(len(per))})
     out["boundary_ok"] = int(abs(c["delta"] - paper_delta) <= BOUNDARY_TOLERANCE_MM)
     out["spread_ok"] = int(c["ratio_sd"] >= SD_FRACTION * paper_sd)
-    out["holds"] = int(out["boundary_ok"] and out["spread_ok"])
     published = rows[rows["point"] == PUBLISHED]
-    if len(published) and RIGID in per:
-        out["rigid_equals_published"] = int(_same_scans(swept[swept["point"] == RIGID], published))
+    if len(published) and reference in per:
+        out[f"{reference}_equals_published"] = int(same_scans(swept[swept["point"] == reference], published))
     return out
 
 
+def summary(rows: pd.DataFrame) -> dict[str, float]:
+    """E218's keys from the stored rows (:func:`sweep_keys` over stiffness and zeta, the rigid point our scene) and
+    ``holds``: rule parts (a) and (b)."""
+    out = sweep_keys(rows, ("stiffness", "zeta"), RIGID)
+    out["holds"] = int(out["boundary_ok"] and out["spread_ok"])
+    return out
+
+
+def _published_scans(job: Any) -> pd.DataFrame | None:
+    """The engines study's stored scan rows under the job's root (None before that study ran)."""
+    path = Path(job.root) / "engines" / "results" / "engine_scans.parquet"
+    return pd.read_parquet(path) if path.is_file() else None
+
+
+def run_sweep(job: Any, truths_key: str, title: str, sweep_rows: Any, stored: str, group: str, keys: Any,
+              points: Sequence[str] | None = None) -> None:
+    """A PyBullet setting sweep as one explain step (E228): ``sweep_rows(truths, scan, noise_sigma, points,
+    progress)`` on the engines study's stored development truths (``job.cfg[truths_key]``, ``<truths_key>_quick``
+    in a quick run), the published scan's rows of those truths added (point :data:`PUBLISHED`), stored as
+    ``stored`` and summarised by ``keys`` into ``group``; nothing when the engines study's scan rows are not under
+    the root."""
+    published = _published_scans(job)
+    if published is None:
+        return
+    truths = published_truths(published, int(job.cfg[f"{truths_key}_quick" if job.quick else truths_key]))
+    job.progress(title, 0, 1)
+    rows = sweep_rows(truths, job.p.scan, job.p.noise_sigma, points, job.progress)
+    mine = published[(published["engine"] == "pybullet") & published["instance_id"].isin(truths["instance_id"])]
+    rows = pd.concat([rows, mine.drop(columns="engine").assign(point=PUBLISHED, index=-1)], ignore_index=True)
+    job.stored[stored] = rows
+    job.res[group].update(keys(rows))
+
+
 def pieces(job: Any) -> Pieces | None:
-    """The sweep cut into its grid points (``pieces``), on the engines study's stored development truths; None when
-    its scan rows are not under the root. A softer plate is guessed to take longer (the peg sinks and settles
+    """E218's sweep cut into its grid points (``pieces``), on the engines study's stored development truths; None
+    when its scan rows are not under the root. A softer plate is guessed to take longer (the peg sinks and settles
     over more steps; the rigid point as the stiffest): only the order the points are submitted in. A quick run's
     points (one truth, about 2-6 s of CPU each) are one piece: a process's start-up would be a third of each."""
-    path = Path(job.root) / "engines" / "results" / "engine_scans.parquet"
-    if not path.is_file():
+    published = _published_scans(job)
+    if published is None:
         return None
-    published = pd.read_parquet(path)
     truths = published_truths(published, int(job.cfg["ex39_truths_quick" if job.quick else "ex39_truths"]))
     job.progress(f"explain: PyBullet's scans over {len(grid())} plate contacts (E218)", 0, 1)
     mine = published[(published["engine"] == "pybullet") & published["instance_id"].isin(truths["instance_id"])]
@@ -188,5 +228,6 @@ def run(job: Any) -> None:
     in_place(job, pieces)
 
 
-__all__: Sequence[str] = ("run", "pieces", "combine", "grid_point", "grid_points", "summary", "sweep", "grid", "label", "plate_contact", "published_truths",
-                          "point_rows", "point_keys", "STORED", "GROUP")
+__all__: Sequence[str] = ("run", "pieces", "combine", "grid_point", "grid_points", "summary", "sweep", "grid",
+                          "label", "plate_contact", "published_truths", "point_rows", "scan_point", "point_keys",
+                          "same_scans", "sweep_keys", "run_sweep", "STORED", "GROUP")

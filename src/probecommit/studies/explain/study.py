@@ -61,6 +61,7 @@ from probecommit.studies.explain import ex36_coverage, ex36_testc
 from probecommit.studies.explain import ex37_adjusted, ex37_filters
 from probecommit.studies.explain import ex38_physx
 from probecommit.studies.explain import ex39_pybullet
+from probecommit.studies.explain import ex41_slop
 from probecommit.studies.explain import ex29_band
 from probecommit.studies.explain import gru as gru_study
 from probecommit.studies.explain.margin import margin_curve
@@ -159,7 +160,8 @@ class Explain:
             ex15_readings.GROUP, ex15_union.GROUP,
             ex18_share.GROUP, ex18_grasp.GROUP, ex26_grasp.GROUP, ex28_plateau.GROUP, ex30_fresh.GROUP,
             ex29_band.GROUP, ex33_aim.GROUP, ex35_pools.GROUP, *ex36_testc.GROUPS, ex36_coverage.GROUP,
-            ex37_adjusted.GROUP, ex37_filters.GROUP, ex38_physx.GROUP, ex39_pybullet.GROUP)}
+            ex37_adjusted.GROUP, ex37_filters.GROUP, ex38_physx.GROUP, ex39_pybullet.GROUP,
+            ex41_slop.GROUP)}
         self.tables: dict[str, pd.DataFrame] = ReadDict(self.reads, "tables")
         #: Stored rows written beside results.json as they are, by file name (``more``'s steps).
         self.stored: dict[str, pd.DataFrame] = ReadDict(self.reads, "stored")
@@ -616,6 +618,8 @@ class Explain:
                  self.aside(ex22.exact, ex22.magnitude, needs=("breadth",)),  # E156-E158: stored breadth rows, closed forms
                  self.aside(ex25.uniform, ex32.floor, needs=("breadth",)),  # E174-E177, E196/E197: stored breadth rows
                  self.aside(ex27.torque, needs=("breadth",)),  # E182-E184: the stored hinge run, MuJoCo reruns
+                 self.aside(ex41_slop.run, needs=("engines",)),  # E228: the same stored truths, contact slops (one
+                 # job of about 300 s, submitted before E218's shorter points)
                  self.split(ex39_pybullet.pieces, needs=("engines",)),  # E218: the engines study's stored scans, reruns,
                  # a grid point a job
                  lambda: ex19.run(self),  # E138 reads the prior sweep's darts runs (more.run)
