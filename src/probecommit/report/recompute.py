@@ -897,6 +897,8 @@ EXPLAIN_EX37_FILTERS = "ex37_filters_rows.parquet"
 EXPLAIN_EX36_COVERAGE = "ex36_coverage_rows.parquet"
 #: ex38's stored rows (``studies.explain.ex38_physx.STORED``: E214's and E216's PhysX scan rows per point).
 EXPLAIN_EX38_PHYSX = "ex38_physx_rows.parquet"
+#: ex40's stored rows (``studies.explain.ex40_solver.STORED``: E226's PhysX scan rows per solver iteration count).
+EXPLAIN_EX40_SOLVER = "ex40_solver_rows.parquet"
 #: ex39's stored rows (``studies.explain.ex39_pybullet.STORED``: E218's PyBullet scans per plate contact).
 EXPLAIN_EX39_PYBULLET = "ex39_pybullet_rows.parquet"
 #: ex41's stored rows (``studies.explain.ex41_slop.STORED``: E228's PyBullet scans per contact slop).
@@ -926,6 +928,7 @@ STORED_SUMMARIES = (("mixture_noise", EXPLAIN_MIXTURE, "mixture_x"),
                     ("ex36_coverage", EXPLAIN_EX36_COVERAGE, "ex36_coverage"),
                     ("ex38_physx", EXPLAIN_EX38_PHYSX, "ex38_physx"),
                     ("ex39_pybullet", EXPLAIN_EX39_PYBULLET, "ex39_pybullet"),
+                    ("ex40_solver", EXPLAIN_EX40_SOLVER, "ex40_solver"),
                     ("ex41_slop", EXPLAIN_EX41_SLOP, "ex41_slop"))
 
 #: Explain modules that recompute their own groups: ``recompute(folder, results)`` gives
@@ -1014,9 +1017,9 @@ RECOMPUTED = {
                "at each truth; ex35's re-split statistics over twelve fresh pools; ex37's commit gates' pools under the "
                "paper's schedule (the adjusted gate's ratio and interval; threshold and margin traced) and the robust "
                "filters' optimism on Test C and over the harness draws; ex38's PhysX scans at each contact and rest "
-               "offset swept; ex39's PyBullet scans over plate contact stiffnesses; ex41's over contact slops; ex43's "
-               "Table III calibrated arm re-committed at the published levels without the margin (and with it, as a "
-               "check)",
+               "offset swept; ex39's PyBullet scans over plate contact stiffnesses; ex40's PhysX scans at each solver "
+               "iteration count swept; ex41's PyBullet scans over contact slops; ex43's Table III calibrated arm "
+               "re-committed at the published levels without the margin (and with it, as a check)",
 }
 TRACED_ONLY = {
     "insertion": "the stored rows themselves (episodes, re-executed commits, replays); the re-split rows; the cover "

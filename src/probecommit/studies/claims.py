@@ -674,7 +674,7 @@ def _claims_correction_and_engines() -> list[Claim]:
                     f"{E}scans.pybullet.capture.ratio_mean", 0.1),
                Near("PhysX capture ratio", "T18-engine-scans.sapien_ratio", f"{E}scans.sapien.capture.ratio_mean", 0.1)),
               explain=(("E30", ("PyBullet capture",)),  # E6 restates our PhysX scan (credA)
-                       *((n, (f"{EXACT}PhysX offset", f"{EXACT}PhysX capture ratio")) for n in ("E214", "E216")),
+                       *((n, (f"{EXACT}PhysX offset", f"{EXACT}PhysX capture ratio")) for n in ("E214", "E216", "E226")),
                        ("E218", (f"{EXACT}PyBullet capture ratio",)),
                        ("E228", (f"{EXACT}PyBullet capture ratio",)))))
     add(Claim("T19-pybullet-escape", "Sec. V-C, Across engines", "PyBullet escape climbs from k = 1 to 8",
@@ -2550,6 +2550,25 @@ def _experiments_ex41() -> list[Experiment]:
         supports=lambda v: v["ok"] == 1)]
 
 
+def _experiments_ex40() -> list[Experiment]:
+    """The ex40 helper's experiment (E226; ``studies/explain/ex40_solver.py``; rule in docs/decisions.md, "ex40",
+    committed before the sweep on more than two truths): PhysX's solver iteration counts swept on both probes, the
+    point chosen by the paper's capture window, held only if it also gives the paper's boundary (ex38's rule)."""
+    d = f"{X}ex40_solver."
+    keys = {"n": f"{d}points", "pi": f"{d}chosen.position_iterations", "vi": f"{d}chosen.velocity_iterations",
+            "r": f"{d}chosen.ratio", "dl": f"{d}chosen.delta", "sd": f"{d}chosen.ratio_sd", "r0": f"{d}p0.ratio",
+            "d0": f"{d}p0.delta", "h": f"{d}holds", "pr": "paper:T18-engine-scans.sapien_ratio",
+            "pd": "paper:T18-engine-scans.sapien_offset"}
+    return [Experiment(
+        "E226", "PhysX's solver iterations chosen by the paper's capture window, judged on its boundary", keys,
+        "with the probes' (position, velocity) solver iterations swept over {n:d} counts from ours to the solver's "
+        "floor, all else ours (ours: capture {r0:.3f} x w(c), boundary hg {d0:+.3f} mm), the count whose capture "
+        "window is nearest the paper's {pr:.2f} x is ({pi:.0f}, {vi:.0f}): capture {r:.3f} x (SD {sd:.3f} over the "
+        "truths), boundary hg {dl:+.3f} mm against the paper's {pd:+.3f}. The declared rule needs both within T18's "
+        "tolerances at that one count.",
+        supports=lambda v: v["h"] == 1)]
+
+
 def _experiments_ex29() -> list[Experiment]:
     """The ex29 helper's experiment (``studies/explain/ex29_band.py``; rule in docs/decisions.md, "ex29"): T36's
     k = 1 AUC with the first tap's band lost at the rate the paper's own k = 1 escape implies (E187)."""
@@ -3295,7 +3314,7 @@ for _experiment in (_experiments() + _experiments_more() + _experiments_ex3() + 
                     + _experiments_ex29() + _experiments_ex31() + _experiments_ex32() + _experiments_ex33()
                     + _experiments_ex34() + _experiments_ex35() + _experiments_lead()
                     + _experiments_ex36() + _experiments_ex37() + _experiments_physx_cells() + [_e225()] + _rig_streams_experiments() + [_e234()]
-                    + _experiments_ex38() + _experiments_ex39() + _experiments_ex41() + _experiments_ex43()):
+                    + _experiments_ex38() + _experiments_ex39() + _experiments_ex40() + _experiments_ex41() + _experiments_ex43()):
     EXPERIMENTS[_experiment.number] = _experiment
 
 

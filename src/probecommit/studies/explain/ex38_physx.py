@@ -49,19 +49,28 @@ def shape_setting(arm: str, value: float) -> dict[str, float]:
     raise ValueError(f"unknown arm {arm!r}")
 
 
-def point_rows(arm: str, value: float, truths: pd.DataFrame, noise_sigma: float, scan: dict[str, float]) -> pd.DataFrame:
-    """One point: the engines study's boundary and capture scans in SAPIEN with the point's shape setting
-    (``engines.scan_rows``), or one ``failed`` row when a scan raises; its CPU seconds on every row."""
+def scan_point(settings: dict[str, Any], truths: pd.DataFrame, noise_sigma: float,
+               scan: dict[str, float]) -> pd.DataFrame:
+    """The engines study's boundary and capture scans in SAPIEN with the given simulator overrides (``scene_config``,
+    ``body``, ``shape``; ``engines.scan_rows``), or one ``failed`` row when a scan raises; its CPU seconds on every
+    row. One function for every PhysX setting sweep (ex38's shape offsets, ex40's solver iterations)."""
     from probecommit.studies.engines import make_simulator, scan_boundary, scan_capture_window, scan_rows
 
     start = time.process_time()
-    sim = make_simulator("sapien", noise_sigma=noise_sigma, shape=shape_setting(arm, value))
+    sim = make_simulator("sapien", noise_sigma=noise_sigma, **settings)
     try:
         boundary = scan_boundary(sim, truths, scan["step"], scan["half_range"], scan["tolerance"])
         rows = scan_rows("sapien", boundary, scan_capture_window(sim, truths))
     except RuntimeError as error:  # no pocket reading, or a peg entering out to the range's edge
         rows = pd.DataFrame({"kind": ["failed"], "error": [str(error)], "engine": ["sapien"]})
-    return rows.assign(arm=arm, value=float(value), cpu_s=time.process_time() - start)
+    return rows.assign(cpu_s=time.process_time() - start)
+
+
+def point_rows(arm: str, value: float, truths: pd.DataFrame, noise_sigma: float, scan: dict[str, float]) -> pd.DataFrame:
+    """One point: :func:`scan_point` with the point's shape setting, tagged with its arm and value."""
+    rows = scan_point({"shape": shape_setting(arm, value)}, truths, noise_sigma, scan)
+    cpu = rows.pop("cpu_s")
+    return rows.assign(arm=arm, value=float(value), cpu_s=cpu)
 
 
 def point_ratio(rows: pd.DataFrame) -> float:
@@ -193,4 +202,4 @@ def run(job: Any) -> None:
     in_place(job, pieces)
 
 
-__all__: Sequence[str] = ("run", "pieces", "combine", "summary", "sweep", "point_rows", "shape_setting", "GRIDS", "STORED", "GROUP")
+__all__: Sequence[str] = ("run", "pieces", "combine", "summary", "sweep", "point_rows", "scan_point", "shape_setting", "GRIDS", "STORED", "GROUP")

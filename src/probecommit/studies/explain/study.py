@@ -61,6 +61,7 @@ from probecommit.studies.explain import ex36_coverage, ex36_testc
 from probecommit.studies.explain import ex37_adjusted, ex37_filters
 from probecommit.studies.explain import ex38_physx
 from probecommit.studies.explain import ex39_pybullet
+from probecommit.studies.explain import ex40_solver
 from probecommit.studies.explain import ex41_slop
 from probecommit.studies.explain import ex29_band
 from probecommit.studies.explain import gru as gru_study
@@ -161,7 +162,7 @@ class Explain:
             ex18_share.GROUP, ex18_grasp.GROUP, ex26_grasp.GROUP, ex28_plateau.GROUP, ex30_fresh.GROUP,
             ex29_band.GROUP, ex33_aim.GROUP, ex35_pools.GROUP, *ex36_testc.GROUPS, ex36_coverage.GROUP,
             ex37_adjusted.GROUP, ex37_filters.GROUP, ex38_physx.GROUP, ex39_pybullet.GROUP,
-            ex41_slop.GROUP)}
+            ex40_solver.GROUP, ex41_slop.GROUP)}
         self.tables: dict[str, pd.DataFrame] = ReadDict(self.reads, "tables")
         #: Stored rows written beside results.json as they are, by file name (``more``'s steps).
         self.stored: dict[str, pd.DataFrame] = ReadDict(self.reads, "stored")
@@ -602,6 +603,7 @@ class Explain:
                  self.aside(ex30_fresh.run, needs=()),  # E190, E191: the insertion study's stored runs only
                  self.aside(ex33_aim.run, needs=()),  # E199, E200: the insertion study's stored runs only
                  self.split(ex38_physx.pieces, needs=()),  # E214, E216: PhysX scans off the protocol alone, an arm a job
+                 self.aside(ex40_solver.run, needs=()),  # E226: PhysX solver iteration sweep, the protocol alone
                  self.aside(ex36_testc.run, needs=()),  # E208: Test C's cover run rerun (MuJoCo), paper's schedule
                  self.aside(ex7.run, ex37_filters.run, needs=()),  # E212/E213 replay the harness draws ex7 runs
                  self.aside(ex13.mixture, needs=()), self.aside(ex17.tiebreak, needs=()),
