@@ -2473,6 +2473,8 @@ def _experiments_ex38() -> list[Experiment]:
             "needs both within T18's tolerances at that one setting.",
             supports=lambda v: v["h"] == 1))
     return out
+
+
 def _pybullet_sweep_keys(d: str, ours: str) -> dict[str, str]:
     """The sentence keys every PyBullet setting sweep shares (E218, E228; ``ex39_pybullet.sweep_keys``): points,
     the chosen point's ratio, boundary and spread, our scene's point ``ours`` and its check, the rule, the paper's."""
