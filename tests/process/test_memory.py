@@ -144,3 +144,51 @@ def test_large_arrays_apart_maps_large_arrays_only_within_and_only_under_the_com
                                                               "False", "True", "True"]
     # A program that never took the command's setting keeps glibc's dynamic threshold.
     assert run("plain")[0] == "False"
+
+
+def test_heap_mappings_reads_the_heap_lines_of_maps(tmp_path):
+    maps = tmp_path / "maps"
+    maps.write_text("55d0c0000000-55d0c0021000 r--p 00000000 08:01 1 /usr/bin/python3.11\n"
+                    "55d0c1000000-55d0c3000000 rw-p 00000000 00:00 0                          [heap]\n"
+                    "55d0c3000000-55d0c3400000 rw-p 00000000 00:00 0                          [heap]\n"
+                    "7f0000000000-7f0000021000 rw-p 00000000 00:00 0 \n"
+                    "7ffd00000000-7ffd00021000 rw-p 00000000 00:00 0                          [stack]\n")
+    assert memory.heap_mappings(str(maps)) == [(0x55D0C1000000, 0x55D0C3000000), (0x55D0C3000000, 0x55D0C3400000)]
+    assert memory.heap_mappings(str(tmp_path / "absent")) == []
+
+
+def test_trim_heap_advises_huge_pages_within_the_block_only(monkeypatch):
+    """Within ``heap_in_huge_pages`` the heap is advised at its start and after every trim; not outside."""
+    calls = []
+    monkeypatch.setattr(memory, "advise_huge_heap", lambda: calls.append(len(memory._huge)) or 1)
+    monkeypatch.setattr(memory, "_malloc_trim", lambda: (lambda pad: 1))
+    memory.trim_heap()
+    with memory.heap_in_huge_pages():
+        memory.trim_heap()
+        memory.trim_heap()
+    memory.trim_heap()
+    assert calls == [1, 1, 1] and memory._huge == []
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux") or memory._madvise() is None
+                    or not memory.heap_mappings(), reason="madvise and /proc/self/maps are Linux's")
+def test_advise_huge_heap_marks_the_heap_for_huge_pages():
+    """The kernel records the advice on the heap's mappings (``hg`` among smaps' ``VmFlags``), where it has
+    transparent huge pages at all; in a process of its own, so the test leaves no advice behind."""
+    import os
+    import subprocess
+
+    if not os.path.exists("/sys/kernel/mm/transparent_hugepage/enabled"):
+        pytest.skip("this kernel has no transparent huge pages")
+    code = ("from probecommit.process import memory\n"
+            "advised = memory.advise_huge_heap()\n"
+            "flags, heap = [], False\n"
+            "for line in open('/proc/self/smaps'):\n"
+            "    if '-' in line.split()[0] and not line.startswith('VmFlags'):\n"
+            "        heap = line.rstrip().endswith('[heap]')\n"
+            "    elif heap and line.startswith('VmFlags:'):\n"
+            "        flags.append('hg' in line.split())\n"
+            "print(advised, len(flags), all(flags))\n")
+    advised, mappings, marked = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                                               check=True).stdout.split()
+    assert int(advised) == int(mappings) >= 1 and marked == "True"
