@@ -135,8 +135,7 @@ def test_calibrate_command_writes_the_same_files_with_and_without_helpers(tmp_pa
 
 def test_calibrate_command_keeps_its_large_arrays_in_the_heap(tmp_path, runs, monkeypatch):
     """The command's ``calibrate`` runs within ``large_arrays_in_heap`` (its passes' arrays reused in the
-    heap, not mapped apart: docs/decisions.md, "cal3:") and ``heap_in_huge_pages`` ("cal5:"), and the
-    settings end with the command."""
+    heap, not mapped apart: docs/decisions.md, "cal3:"), and the setting ends with the command."""
     import probecommit.process.forked as forked
     import probecommit.runner.calibration as calibration
     from probecommit.cli.app import app
@@ -146,7 +145,7 @@ def test_calibrate_command_keeps_its_large_arrays_in_the_heap(tmp_path, runs, mo
     seen = []
 
     def stop(*args, **kwargs):
-        seen.append((list(memory._in_heap), list(memory._huge)))
+        seen.append(list(memory._in_heap))
         raise UsageError("stopped here")
 
     monkeypatch.setattr(forked, "can_fork", lambda: False)
@@ -154,7 +153,7 @@ def test_calibrate_command_keeps_its_large_arrays_in_the_heap(tmp_path, runs, mo
     r = CliRunner().invoke(app, ["calibrate", "--cal", str(runs["cal"]), "--test", str(runs["test"]),
                                  "-o", str(tmp_path / "c")])
     assert "stopped here" in r.output and r.exit_code != 0
-    assert seen == [([True], [True])] and memory._in_heap == [] and memory._huge == []
+    assert seen == [[True]] and memory._in_heap == []
 
 
 def test_runs_with_a_failed_trajectory(tmp_path, runs, monkeypatch):

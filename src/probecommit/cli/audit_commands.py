@@ -138,16 +138,15 @@ def calibrate_command(
 ) -> None:
     """Conformal thresholds and margin on --cal; their effect on --test (Tables III and IV)."""
     from probecommit.process.forked import forked_helpers
-    from probecommit.process.memory import heap_in_huge_pages, large_arrays_in_heap
+    from probecommit.process.memory import large_arrays_in_heap
     from probecommit.runner.calibration import calibrate
 
     if plateau is not None and plateau not in ("prefix", "hull"):
         raise UsageError(f"--plateau must be 'prefix' or 'hull', got {plateau!r}")
     # Two helpers import the report's modules while calibrate runs, then draw its figures beside each other.
-    # Its passes keep their large arrays in the heap: reused, not faulted in afresh (docs/decisions.md, "cal3:"),
-    # and the heap given back between chunks comes back in huge pages, not 4 KiB at a time ("cal5:").
+    # Its passes keep their large arrays in the heap: reused, not faulted in afresh (docs/decisions.md, "cal3:").
     with forked_helpers(2, warm=_REPORT_MODULES) as helpers:
-        with large_arrays_in_heap(), heap_in_huge_pages():
+        with large_arrays_in_heap():
             res = calibrate(cal, test, alpha, _parse_budgets(budgets), cost_budget=cost_budget, resamples=resamples,
                             seed=seed, plateau=plateau)
         _write_calibration(res, cal, test, alpha, out, helpers)

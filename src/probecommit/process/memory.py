@@ -241,8 +241,7 @@ def trim_heap() -> bool:
     """Return the C heap's free pages to the system (glibc's ``malloc_trim``; no garbage collection).
 
     Cheap enough between the chunks of a long loop, so that each chunk's arrays go back
-    before the next chunk's are allocated instead of piling up as heap fragments. Within
-    :func:`heap_in_huge_pages`, the heap's mappings (grown since) are then asked for huge pages.
+    before the next chunk's are allocated instead of piling up as heap fragments.
 
     Returns:
         True when the heap was trimmed (glibc), False where the C library cannot.
@@ -251,72 +250,7 @@ def trim_heap() -> bool:
     if trim is None:
         return False
     trim(0)
-    if _huge:
-        advise_huge_heap()
     return True
-
-
-#: Linux's ``madvise`` advice ``MADV_HUGEPAGE`` (asm-generic/mman-common.h).
-_MADV_HUGEPAGE = 14
-#: The :func:`heap_in_huge_pages` blocks in force.
-_huge: list[bool] = []
-
-
-@functools.lru_cache(maxsize=1)
-def _madvise() -> Callable[[int, int, int], int] | None:
-    """The C library's ``madvise``, or None where it has none."""
-    try:
-        function = ctypes.CDLL(None).madvise
-    except (OSError, AttributeError):
-        return None
-    function.argtypes, function.restype = [ctypes.c_void_p, ctypes.c_size_t, ctypes.c_int], ctypes.c_int
-    return function
-
-
-def heap_mappings(maps: str = "/proc/self/maps") -> list[tuple[int, int]]:
-    """The address ranges of the C heap's mappings (``[heap]`` in Linux's ``maps``); none where unreadable."""
-    try:
-        with open(maps) as handle:
-            lines = [line.split()[0] for line in handle if line.rstrip().endswith("[heap]")]
-    except OSError:
-        return []
-    return [tuple(int(end, 16) for end in span.split("-")) for span in lines]  # type: ignore[misc]
-
-
-def advise_huge_heap() -> int:
-    """Ask the kernel for transparent huge pages (``MADV_HUGEPAGE``) over the C heap's mappings as they
-    are now (a part the heap grows by later is a mapping of its own: asked for at the next call).
-
-    Returns:
-        How many mappings took the advice (0 where there is no ``madvise`` or ``[heap]``, or the
-        kernel has no huge pages).
-    """
-    madvise = _madvise()
-    if madvise is None:
-        return 0
-    return sum(madvise(start, end - start, _MADV_HUGEPAGE) == 0 for start, end in heap_mappings())
-
-
-@contextlib.contextmanager
-def heap_in_huge_pages() -> Iterator[None]:
-    """Within the block, the C heap is asked for transparent huge pages, at its start and after each
-    :func:`trim_heap`; the advice stays on the mappings after it.
-
-    Why: a pass over a run in chunks trims the heap after each chunk (so chunks do not pile up as
-    fragments), and the next chunk faults the same addresses in again, a 4 KiB page at a time:
-    ``probecommit calibrate`` at E = 3,072, about 0.7 M faults, 1.8-2.2 s of system time. Where the
-    kernel gives huge pages only when asked (``transparent_hugepage/enabled`` = ``madvise``, the
-    common default), the same memory comes back in 2 MiB pages: about 0.4 M faults, 0.4 s less CPU,
-    and as much less on the main thread, the peak up to ~30 MB higher (docs/decisions.md, "cal5:").
-    Where huge pages are always (or never) used, the advice changes nothing. Not taken by the
-    reproduction, whose peak is target 4's.
-    """
-    _huge.append(True)
-    advise_huge_heap()
-    try:
-        yield
-    finally:
-        _huge.pop()
 
 
 def release_free_heap() -> bool:
