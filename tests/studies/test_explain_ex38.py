@@ -11,6 +11,8 @@ from probecommit.studies import claims
 from probecommit.studies.explain import ex38_physx as ex38
 from probecommit.studies.paper_values import value
 
+from .recompute_contract import assert_stored_summary_round_trip
+
 PAPER_RATIO = value("T18-engine-scans.sapien_ratio")
 PAPER_DELTA = value("T18-engine-scans.sapien_offset")
 
@@ -90,16 +92,9 @@ def test_tolerances_are_t18s_and_e214_e216_speak_to_t18s_physx_labels_only():
 
 
 def test_verify_recomputes_the_group_from_its_stored_rows(tmp_path):
-    from probecommit.report import recompute
-
-    assert (ex38.GROUP, ex38.STORED, "ex38_physx") in recompute.STORED_SUMMARIES
     rows = pd.concat([_point("contact_offset", 1e-4, [0.9, 0.9], [0.99]), _point("contact_offset", 1e-2, [-0.2, -0.2], [0.5])],
                      ignore_index=True)
-    rows.to_parquet(tmp_path / ex38.STORED)
-    out = recompute.Recomputed()
-    recompute._stored_summaries(tmp_path, {ex38.GROUP: ex38.summary(rows)}, out)
-    assert {k: v for k, v in out.values.items() if k.startswith(ex38.GROUP + ".")} \
-        == {f"{ex38.GROUP}.{k}": v for k, v in ex38.summary(rows).items()}
+    assert_stored_summary_round_trip(tmp_path, ex38, rows)
 
 
 def test_our_setting_is_the_engines_studys_scene():

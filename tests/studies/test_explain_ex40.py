@@ -11,6 +11,8 @@ from probecommit.studies import claims
 from probecommit.studies.explain import ex40_solver as ex40
 from probecommit.studies.paper_values import value
 
+from .recompute_contract import assert_stored_summary_round_trip
+
 PAPER_RATIO = value("T18-engine-scans.sapien_ratio")
 PAPER_DELTA = value("T18-engine-scans.sapien_offset")
 
@@ -65,15 +67,8 @@ def test_e226_speaks_to_t18s_physx_labels_with_its_keys():
 
 
 def test_verify_recomputes_the_group_from_its_stored_rows(tmp_path):
-    from probecommit.report import recompute
-
-    assert (ex40.GROUP, ex40.STORED, "ex40_solver") in recompute.STORED_SUMMARIES
     rows = pd.concat([_point(0, [0.9, 0.9], [0.99]), _point(5, [0.9, 0.9], [0.6])], ignore_index=True)
-    rows.to_parquet(tmp_path / ex40.STORED)
-    out = recompute.Recomputed()
-    recompute._stored_summaries(tmp_path, {ex40.GROUP: ex40.summary(rows)}, out)
-    assert {k: v for k, v in out.values.items() if k.startswith(ex40.GROUP + ".")} \
-        == {f"{ex40.GROUP}.{k}": v for k, v in ex40.summary(rows).items()}
+    assert_stored_summary_round_trip(tmp_path, ex40, rows)
 
 
 def test_our_count_is_the_engines_studys_scene():
