@@ -3228,9 +3228,7 @@ def _rig_streams_experiments() -> list[Experiment]:
     frozen session's tap, particle and misread streams (the config's top seed); E230 redraws them with the
     positions (both sides, as E223's), E231 keeps our positions and redraws the streams (credited with nothing)."""
     sr, op = "explain:results.rig_redraws.streams.optimism.", "explain:results.rig_redraws.own_positions.optimism."
-    e230 = {"n": f"{sr}sessions", "p": f"{sr}share_sessions_paper_outcome", "w": f"{sr}pooled_optimism.max_abs",
-            **{f"ge{j}": f"{sr}sessions_failing_at_least.{j}" for j in range(11)}, **_rig_table_keys(),
-            "e223": "explain:results.rig_redraws.optimism.sessions_failing_at_least.5",
+    e230 = {**_rig_sessions_keys(sr), "e223": "explain:results.rig_redraws.optimism.sessions_failing_at_least.5",
             "e231": f"{op}sessions_failing_at_least.5"}
     e231 = {"n": f"{op}sessions", "p": f"{op}share_sessions_paper_outcome",
             **{f"ge{j}": f"{op}sessions_failing_at_least.{j}" for j in range(11)}, **_rig_table_keys()}
@@ -3258,9 +3256,7 @@ def _rig_streams_experiments() -> list[Experiment]:
 def _e234() -> Experiment:
     """E234 (declared in docs/decisions.md before its sessions ran): E230's design and rule on 200 sessions never
     used, the one confirmatory test of T26 after four reference sets (rev3)."""
-    cf = "explain:results.rig_redraws.confirm.optimism."
-    keys = {"n": f"{cf}sessions", "p": f"{cf}share_sessions_paper_outcome", "w": f"{cf}pooled_optimism.max_abs",
-            **{f"ge{j}": f"{cf}sessions_failing_at_least.{j}" for j in range(11)}, **_rig_table_keys()}
+    keys = _rig_sessions_keys("explain:results.rig_redraws.confirm.optimism.")
     return Experiment(
         "E234", "the simulated rig's optimism sentence over fresh sessions of the whole design (E230's, confirmed on "
         "seeds never used)", keys,
@@ -3269,6 +3265,14 @@ def _e234() -> Experiment:
         "four or more, {ge5:d} five or more: whether ours, counted among them, reaches the same least share as the "
         "paper's side is the rule.",
         supports=_rig_both_sides)
+
+
+def _rig_sessions_keys(group: str) -> dict[str, str]:
+    """What ``_rig_both_sides`` reads of one set of redrawn sessions (keys under ``group``): their count, the
+    paper's side (``p``, ``w``), how many fail at least j labels (``ge<j>``), and our Table VII (E230, E234)."""
+    return {"n": f"{group}sessions", "p": f"{group}share_sessions_paper_outcome",
+            "w": f"{group}pooled_optimism.max_abs",
+            **{f"ge{j}": f"{group}sessions_failing_at_least.{j}" for j in range(11)}, **_rig_table_keys()}
 
 
 def _rig_table_keys() -> dict[str, str]:
