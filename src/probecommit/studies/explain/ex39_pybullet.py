@@ -178,6 +178,13 @@ def _published_scans(job: Any) -> pd.DataFrame | None:
     return pd.read_parquet(path) if path.is_file() else None
 
 
+def _published_rows(published: pd.DataFrame, truths: pd.DataFrame) -> pd.DataFrame:
+    """The engines study's published PyBullet scan rows of ``truths``, as a sweep's point :data:`PUBLISHED` (the
+    check that our setting's point reproduces them)."""
+    mine = published[(published["engine"] == "pybullet") & published["instance_id"].isin(truths["instance_id"])]
+    return mine.drop(columns="engine").assign(point=PUBLISHED, index=-1)
+
+
 def run_sweep(job: Any, truths_key: str, title: str, sweep_rows: Any, stored: str, group: str, keys: Any,
               points: Sequence[str] | None = None) -> None:
     """A PyBullet setting sweep as one explain step (E228): ``sweep_rows(truths, scan, noise_sigma, points,
@@ -191,8 +198,7 @@ def run_sweep(job: Any, truths_key: str, title: str, sweep_rows: Any, stored: st
     truths = published_truths(published, int(job.cfg[f"{truths_key}_quick" if job.quick else truths_key]))
     job.progress(title, 0, 1)
     rows = sweep_rows(truths, job.p.scan, job.p.noise_sigma, points, job.progress)
-    mine = published[(published["engine"] == "pybullet") & published["instance_id"].isin(truths["instance_id"])]
-    rows = pd.concat([rows, mine.drop(columns="engine").assign(point=PUBLISHED, index=-1)], ignore_index=True)
+    rows = pd.concat([rows, _published_rows(published, truths)], ignore_index=True)
     job.stored[stored] = rows
     job.res[group].update(keys(rows))
 
@@ -207,17 +213,17 @@ def pieces(job: Any) -> Pieces | None:
         return None
     truths = published_truths(published, int(job.cfg["ex39_truths_quick" if job.quick else "ex39_truths"]))
     job.progress(f"explain: PyBullet's scans over {len(grid())} plate contacts (E218)", 0, 1)
-    mine = published[(published["engine"] == "pybullet") & published["instance_id"].isin(truths["instance_id"])]
     cuts = [tuple(range(len(grid())))] if job.quick else [(index,) for index in range(len(grid()))]
     calls = [(grid_points, (truths, cut, dict(job.p.scan), job.p.noise_sigma)) for cut in cuts]
     softness = [0.0 if np.isnan(k) else 1.0 / k for _, k, _ in grid()]
-    return Pieces(calls, [sum(softness[i] for i in cut) for cut in cuts], functools.partial(combine, mine))
+    return Pieces(calls, [sum(softness[i] for i in cut) for cut in cuts], functools.partial(combine, _published_rows(published, truths)))
 
 
 def combine(mine: pd.DataFrame, parts: list[list[tuple[pd.DataFrame, float]]]) -> Filled:
-    """The grid points' rows in grid order, then the published scan's rows (``mine``), stored, and E218's keys."""
+    """The grid points' rows in grid order, then the published scan's rows (``mine``, :func:`_published_rows`),
+    stored, and E218's keys."""
     rows = pd.concat([rows for part in parts for rows, _ in part], ignore_index=True)
-    rows = pd.concat([rows, mine.drop(columns="engine").assign(point=PUBLISHED, index=-1)], ignore_index=True)
+    rows = pd.concat([rows, mine], ignore_index=True)
     return {"res": {GROUP: summary(rows)}, "stored": {STORED: rows}}
 
 
